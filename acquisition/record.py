@@ -1,0 +1,490 @@
+"""The flowcurve record format (``flowcurve-record``, version 1): read, write, amend.
+
+A record is one UTF-8 CSV file that is enough to re-identify a test years later::
+
+    # flowcurve-record: 1
+    # status: complete
+    # test: tension
+    # specimen.d0_mm: 6.0
+    # ...
+    time_s,force_N,crosshead_mm,temperature_C
+    0.000000,12.5,0.000000,20.1
+    # event: 0.512 heater_on set-point 600 C
+    ...
+
+* The header is ``# key: value`` lines. Keys carry their unit (``specimen.d0_mm``); the
+  value is the text after the first ``": "``.
+* Then one row of column names (with units: ``time_s``, ``force_N``, ``crosshead_mm``,
+  optionally ``extensometer_mm``, ``temperature_C`` and more), then the samples.
+* ``# event: <time_s> <name> [text]`` lines may stand anywhere among the samples; they log
+  what happened during the test (start, heater on/off, soak reached, fault, stop).
+* ``status`` is ``recording`` while the test runs; the writer sets it to ``complete`` (or
+  ``aborted``) at the end by rewriting the header atomically. A file still saying
+  ``recording`` was cut short (power cut, ``kill -9``): it stays readable and
+  :func:`recover_record` completes its header.
+
+The writer flushes to the operating system on every block and ``fsync``-s at least every
+second, so a crash loses at most the last second of samples.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from flowcurve.errors import RecordError
+
+FORMAT_NAME = "flowcurve-record"
+FORMAT_VERSION = 1
+
+REQUIRED_COLUMNS = ("time_s", "force_N", "crosshead_mm")
+OPTIONAL_COLUMNS = ("extensometer_mm", "temperature_C")
+
+TEST_TYPES = ("tension", "compression")
+
+# Metadata keys the format knows; others are kept as they are.
+SPECIMEN_KEYS = {
+    "tension": ("specimen.d0_mm", "specimen.l0_mm"),
+    "compression": ("specimen.d0_mm", "specimen.h0_mm"),
+}
+KNOWN_KEYS = (
+    "flowcurve-record",
+    "status",
+    "test",
+    "material",
+    "operator",
+    "date",
+    "specimen.id",
+    "nominal_temperature_C",
+    "crosshead_speed_mm_per_s",
+    "rig.frame_stiffness_N_per_um",
+    "specimen.d0_mm",
+    "specimen.l0_mm",
+    "specimen.h0_mm",
+    "specimen.extensometer_gauge_mm",
+    "post.lu_mm",
+    "post.dk_mm",
+    "post.du_mm",
+    "post.neck_radius_mm",
+    "post.hk_mm",
+    "post.dmax_mm",
+    "post.smax_mm2",
+)
+
+STATUS_RECORDING = "recording"
+STATUS_COMPLETE = "complete"
+STATUS_ABORTED = "aborted"
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something that happened during a test, at ``time_s`` on the record's clock."""
+
+    time_s: float
+    name: str
+    text: str = ""
+
+
+@dataclass
+class Record:
+    """A test record: metadata, samples (a DataFrame with unit-named columns) and events."""
+
+    meta: dict[str, str]
+    data: pd.DataFrame
+    source: str = "<memory>"
+    events: list[Event] = field(default_factory=list)
+    truncated: bool = False  # the file was cut short (status 'recording' or a partial last line)
+    warnings: list[str] = field(default_factory=list)
+
+    # -- metadata access -------------------------------------------------------------------
+    @property
+    def test(self) -> str:
+        test = self.meta.get("test", "").strip().lower()
+        if test not in TEST_TYPES:
+            raise RecordError(
+                self.source,
+                f"metadata 'test' must be one of {', '.join(TEST_TYPES)}, not {test!r}",
+            )
+        return test
+
+    @property
+    def name(self) -> str:
+        return Path(self.source).stem if self.source != "<memory>" else self.meta.get("specimen.id", "record")
+
+    def number(self, key: str, default: float | None = None, *, required: bool = False) -> float | None:
+        """The metadata value ``key`` as a float; a clear error if required and missing."""
+        raw = self.meta.get(key)
+        if raw is None or str(raw).strip() == "":
+            if required:
+                raise RecordError(self.source, f"required metadata '{key}' is missing (add '# {key}: <value>' to the header or give it as an option)")
+            return default
+        try:
+            value = float(str(raw).strip())
+        except ValueError:
+            raise RecordError(self.source, f"metadata '{key}' is not a number: {raw!r}") from None
+        if not math.isfinite(value):
+            raise RecordError(self.source, f"metadata '{key}' is not finite: {raw!r}")
+        return value
+
+    def positive(self, key: str, default: float | None = None, *, required: bool = False) -> float | None:
+        """Like :meth:`number`, and the value must be > 0."""
+        value = self.number(key, default, required=required)
+        if value is not None and value <= 0:
+            raise RecordError(self.source, f"metadata '{key}' must be > 0, got {value:g}")
+        return value
+
+    def column(self, name: str) -> np.ndarray:
+        """A sample column as a float array; a clear error if the record lacks it."""
+        if name not in self.data.columns:
+            raise RecordError(self.source, f"the record has no column '{name}' (columns: {', '.join(self.data.columns)})")
+        return self.data[name].to_numpy(dtype=float)
+
+    def has(self, name: str) -> bool:
+        return name in self.data.columns and bool(self.data[name].notna().any())
+
+
+# -- reading --------------------------------------------------------------------------------
+
+
+def is_native(path: str | os.PathLike) -> bool:
+    """True when the file starts with the ``# flowcurve-record:`` line."""
+    with open(path, "rb") as fh:
+        head = fh.read(64)
+    return head.lstrip(b"\xef\xbb\xbf").startswith(b"# " + FORMAT_NAME.encode())
+
+
+def parse_header_line(line: str) -> tuple[str, str] | None:
+    """``'# key: value'`` → ``('key', 'value')``; ``None`` for a line that is not metadata."""
+    if not line.startswith("#"):
+        return None
+    body = line[1:].strip()
+    key, sep, value = body.partition(":")
+    if not sep or not key.strip() or " " in key.strip():
+        return None
+    return key.strip(), value.strip()
+
+
+def read_record(path: str | os.PathLike) -> Record:
+    """Read a flowcurve record. Raises :class:`RecordError` naming file, line and column."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise RecordError(path, "no such file") from None
+    except IsADirectoryError:
+        raise RecordError(path, "is a folder, not a record file") from None
+    except OSError as exc:
+        raise RecordError(path, f"cannot be read ({exc.strerror})") from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise RecordError(path, "is not UTF-8 text", line=line) from None
+    return parse_record_text(text, source=str(path))
+
+
+def parse_record_text(text: str, source: str = "<memory>") -> Record:
+    if not text.strip():
+        raise RecordError(source, "the file is empty")
+    meta: dict[str, str] = {}
+    pos = 0
+    line_no = 0
+    n = len(text)
+    # header: '# key: value' lines (and blank lines) up to the column-name row
+    while pos < n:
+        end = text.find("\n", pos)
+        end = n if end < 0 else end
+        line = text[pos:end].rstrip("\r")
+        line_no += 1
+        if line.startswith("#"):
+            kv = parse_header_line(line)
+            if kv is not None:
+                meta[kv[0]] = kv[1]
+            pos = end + 1
+            continue
+        if not line.strip():
+            pos = end + 1
+            continue
+        break
+    version = meta.get(FORMAT_NAME)
+    if version is None:
+        raise RecordError(source, f"not a {FORMAT_NAME} file (the first line must be '# {FORMAT_NAME}: {FORMAT_VERSION}')", line=1)
+    if version.strip() != str(FORMAT_VERSION):
+        raise RecordError(source, f"{FORMAT_NAME} version {version!r} is not supported (this flowcurve reads version {FORMAT_VERSION})", line=1)
+    if pos >= n:
+        raise RecordError(source, "the record has a header but no column row and no samples", line=line_no)
+    names_line = line_no
+    end = text.find("\n", pos)
+    end = n if end < 0 else end
+    columns = [c.strip() for c in text[pos:end].rstrip("\r").split(",")]
+    missing = [c for c in REQUIRED_COLUMNS if c not in columns]
+    if missing:
+        raise RecordError(source, f"missing column(s) {', '.join(missing)} in the column row (found: {', '.join(columns)})", line=names_line)
+    if len(set(columns)) != len(columns):
+        raise RecordError(source, "duplicate column names in the column row", line=names_line)
+    body_start = end + 1
+    body = text[body_start:]
+    warnings: list[str] = []
+    truncated = meta.get("status", STATUS_COMPLETE) == STATUS_RECORDING
+    # a partial last line (crash mid-write) is dropped
+    if body and not body.endswith("\n"):
+        cut = body.rfind("\n")
+        dropped = body[cut + 1 :]
+        body = body[: cut + 1] if cut >= 0 else ""
+        if dropped.strip() and not dropped.startswith("#"):
+            truncated = True
+            warnings.append("the last line was incomplete (the file was cut short) and was dropped")
+    events = _extract_events(body, source, names_line)
+    data = _parse_samples(body, columns, source, names_line)
+    if data.empty:
+        raise RecordError(source, "the record has no samples (header only)", line=names_line)
+    if truncated:
+        warnings.append(f"the record was cut short (status '{meta.get('status', '?')}'); run 'flowcurve recover' to complete its header")
+    return Record(meta=meta, data=data, source=source, events=events, truncated=truncated, warnings=warnings)
+
+
+def _extract_events(body: str, source: str, names_line: int) -> list[Event]:
+    events = []
+    pos = 0 if body.startswith("#") else body.find("\n#")
+    while pos >= 0:
+        start = pos if body.startswith("#", pos) else pos + 1
+        end = body.find("\n", start)
+        end = len(body) if end < 0 else end
+        kv = parse_header_line(body[start:end].rstrip("\r"))
+        if kv and kv[0] == "event":
+            t, _, rest = kv[1].partition(" ")
+            name, _, txt = rest.partition(" ")
+            try:
+                events.append(Event(float(t), name, txt))
+            except ValueError:
+                line = names_line + body.count("\n", 0, start) + 1
+                raise RecordError(source, f"event time is not a number: {t!r}", line=line) from None
+        pos = body.find("\n#", end)
+    return events
+
+
+def _parse_samples(body: str, columns: list[str], source: str, names_line: int) -> pd.DataFrame:
+    if not body.strip():
+        return pd.DataFrame(columns=columns, dtype=float)
+    try:
+        data = pd.read_csv(
+            io.StringIO(body),
+            names=columns,
+            header=None,
+            comment="#",
+            dtype=float,
+            engine="c",
+            skip_blank_lines=True,
+        )
+    except (ValueError, pd.errors.ParserError):
+        _raise_bad_cell(body, columns, source, names_line)
+        raise  # pragma: no cover - _raise_bad_cell always raises
+    return data
+
+
+def _raise_bad_cell(body: str, columns: list[str], source: str, names_line: int) -> None:
+    """Find the first malformed line/cell (slow path, only on error) and raise with its place."""
+    for i, line in enumerate(body.split("\n")):
+        line = line.rstrip("\r")
+        if not line.strip() or line.startswith("#"):
+            continue
+        cells = line.split(",")
+        line_no = names_line + i + 1
+        if len(cells) != len(columns):
+            raise RecordError(source, f"{len(cells)} cells where the column row has {len(columns)}", line=line_no)
+        for name, cell in zip(columns, cells):
+            if cell.strip() == "":
+                continue  # an empty cell is a missing value
+            try:
+                float(cell)
+            except ValueError:
+                raise RecordError(source, f"not a number: {cell.strip()!r}", line=line_no, column=name) from None
+    raise RecordError(source, "the samples cannot be parsed as numbers")
+
+
+# -- writing --------------------------------------------------------------------------------
+
+
+def format_header(meta: Mapping[str, object]) -> str:
+    """The ``# key: value`` header, ``flowcurve-record`` first, then the keys in order."""
+    lines = [f"# {FORMAT_NAME}: {FORMAT_VERSION}"]
+    for key, value in meta.items():
+        if key == FORMAT_NAME or value is None:
+            continue
+        text = _format_value(value)
+        if "\n" in text or " " in key or ":" in key:
+            raise ValueError(f"metadata {key!r} cannot be written on one header line")
+        lines.append(f"# {key}: {text}")
+    return "\n".join(lines) + "\n"
+
+
+def _format_value(value: object) -> str:
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def write_record(path: str | os.PathLike, record: Record) -> Path:
+    """Write a whole record atomically (temp file, fsync, rename)."""
+    path = Path(path)
+    buf = io.StringIO()
+    buf.write(format_header(record.meta))
+    record.data.to_csv(buf, index=False, lineterminator="\n", float_format="%.9g")
+    for ev in record.events:
+        buf.write(f"# event: {ev.time_s:.3f} {ev.name} {ev.text}".rstrip() + "\n")
+    _atomic_write_text(path, buf.getvalue())
+    return path
+
+
+class RecordWriter:
+    """Writes a record while the test runs, so that a crash loses at most ``fsync_every_s``.
+
+    Use as a context manager; leaving the block by an exception marks the record aborted
+    (with the reason) but keeps every sample written so far::
+
+        with RecordWriter(path, meta, ["time_s", "force_N", "crosshead_mm"]) as rec:
+            rec.append_rows(block)        # rows: sequences of floats, in column order
+            rec.event(t, "heater_off", "soak reached")
+        # the header now says status: complete
+    """
+
+    def __init__(self, path: str | os.PathLike, meta: Mapping[str, object], columns: Sequence[str], *, fsync_every_s: float = 1.0, float_format: str = "%.6f"):
+        missing = [c for c in REQUIRED_COLUMNS if c not in columns]
+        if missing:
+            raise ValueError(f"a record needs the columns {missing}")
+        self.path = Path(path)
+        self.columns = list(columns)
+        self.meta = {FORMAT_NAME: FORMAT_VERSION, "status": STATUS_RECORDING, **dict(meta)}
+        self.meta["status"] = STATUS_RECORDING
+        self.fsync_every_s = fsync_every_s
+        self.float_format = float_format
+        self.rows_written = 0
+        self._last_fsync = time.monotonic()
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._fh = open(self.path, "w", encoding="utf-8", newline="\n")
+        self._fh.write(format_header(self.meta))
+        self._fh.write(",".join(self.columns) + "\n")
+        self._sync(force=True)
+
+    # rows ----------------------------------------------------------------------------------
+    def append_rows(self, rows: Iterable[Sequence[float]] | np.ndarray) -> None:
+        arr = np.asarray(rows, dtype=float)
+        if arr.size == 0:
+            return
+        arr = np.atleast_2d(arr)
+        if arr.shape[1] != len(self.columns):
+            raise ValueError(f"rows have {arr.shape[1]} values, the record has {len(self.columns)} columns")
+        buf = io.StringIO()
+        np.savetxt(buf, arr, delimiter=",", fmt=self.float_format)
+        self._fh.write(buf.getvalue().replace("nan", ""))
+        self.rows_written += arr.shape[0]
+        self._sync()
+
+    def event(self, time_s: float, name: str, text: str = "") -> None:
+        if " " in name or not name:
+            raise ValueError("event names are single words, e.g. heater_on")
+        self._fh.write(f"# event: {time_s:.3f} {name} {text}".rstrip() + "\n")
+        self._sync()
+
+    def _sync(self, force: bool = False) -> None:
+        self._fh.flush()
+        now = time.monotonic()
+        if force or now - self._last_fsync >= self.fsync_every_s:
+            os.fsync(self._fh.fileno())
+            self._last_fsync = now
+
+    # end -----------------------------------------------------------------------------------
+    def close(self, status: str = STATUS_COMPLETE, extra_meta: Mapping[str, object] | None = None) -> Path:
+        """Finish the record: fsync, then rewrite its header with the final status."""
+        if self._fh.closed:
+            return self.path
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+        self._fh.close()
+        meta = dict(extra_meta or {})
+        meta["status"] = status
+        meta.setdefault("samples", self.rows_written)
+        amend_record(self.path, meta)
+        return self.path
+
+    def __enter__(self) -> "RecordWriter":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close(STATUS_COMPLETE)
+        else:
+            reason = "interrupted" if exc_type is KeyboardInterrupt else f"{exc_type.__name__}: {exc}"
+            self.close(STATUS_ABORTED, {"abort_reason": " ".join(str(reason).split())})
+
+
+def amend_record(path: str | os.PathLike, updates: Mapping[str, object]) -> Path:
+    """Set or replace metadata keys of a record file in place (atomic rewrite of the file).
+
+    Used to complete the header at the end of a test, to add post-test measurements later,
+    and by :func:`recover_record`. Samples and events are copied byte for byte.
+    """
+    path = Path(path)
+    text = path.read_text(encoding="utf-8-sig")
+    meta: dict[str, str] = {}
+    pos = 0
+    while pos < len(text):
+        end = text.find("\n", pos)
+        end = len(text) if end < 0 else end
+        line = text[pos:end].rstrip("\r")
+        if not line.startswith("#") and line.strip():
+            break
+        kv = parse_header_line(line)
+        if kv is not None:
+            meta[kv[0]] = kv[1]
+        pos = end + 1
+    if FORMAT_NAME not in meta:
+        raise RecordError(path, f"not a {FORMAT_NAME} file", line=1)
+    for key, value in updates.items():
+        if value is None:
+            meta.pop(key, None)
+        else:
+            meta[key] = _format_value(value)
+    _atomic_write_text(path, format_header(meta) + text[pos:])
+    return path
+
+
+def recover_record(path: str | os.PathLike) -> tuple[Path, Record]:
+    """Complete the header of a record cut short: drop a partial last line, set status.
+
+    Returns the path and the record as read after recovery.
+    """
+    path = Path(path)
+    text = path.read_text(encoding="utf-8-sig")
+    if text and not text.endswith("\n"):
+        text = text[: text.rfind("\n") + 1]
+        _atomic_write_text(path, text)
+    record = read_record(path)
+    last_t = float(record.data["time_s"].iloc[-1]) if len(record.data) else 0.0
+    amend_record(path, {"status": STATUS_ABORTED, "abort_reason": record.meta.get("abort_reason", "recovered after the recording was cut short"), "samples": len(record.data), "recovered_last_time_s": f"{last_t:.3f}"})
+    return path, read_record(path)
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise

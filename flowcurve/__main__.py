@@ -1,0 +1,3 @@
+from flowcurve.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,55 @@
+"""Errors a user can act on.
+
+Every error the suite raises on purpose derives from :class:`FlowcurveError`; the command
+line prints it as one line (``flowcurve: error: ...``) and exits non-zero, never with a
+traceback. The message must name what is wrong and where: the file (line, column), the
+device, the configuration key.
+"""
+
+from __future__ import annotations
+
+
+class FlowcurveError(Exception):
+    """An error reported to the user as one line, with exit code 2."""
+
+    exit_code = 2
+
+
+class RecordError(FlowcurveError):
+    """A record file that cannot be read or lacks what is needed.
+
+    The message names the file and, where it applies, the line (1-based) and the column.
+    """
+
+    def __init__(self, path, message: str, line: int | None = None, column: str | None = None):
+        self.path = str(path)
+        self.line = line
+        self.column = column
+        where = self.path
+        if line is not None:
+            where += f", line {line}"
+        if column is not None:
+            where += f", column '{column}'"
+        super().__init__(f"{where}: {message}")
+
+
+class IdentificationError(FlowcurveError):
+    """The data cannot give the requested result (e.g. inputs outside a method's range)."""
+
+
+class ConfigError(FlowcurveError):
+    """A rig configuration that is missing, malformed or out of range (names the key)."""
+
+
+class DeviceError(FlowcurveError):
+    """A device that does not answer, answers wrongly or reports a fault (names the device)."""
+
+    exit_code = 3
+
+    def __init__(self, device: str, message: str):
+        self.device = device
+        super().__init__(f"{device}: {message}")
+
+
+class SafetyError(DeviceError):
+    """Over-temperature, open thermocouple, stuck heater: the heating was stopped."""

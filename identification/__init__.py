@@ -1,0 +1,1 @@
+"""From records to true stress-strain curves, hardening, friction and Johnson-Cook constants."""

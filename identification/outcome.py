@@ -1,0 +1,60 @@
+"""What an identification hands to the command line and the reports.
+
+Tension and compression identifications both return an :class:`Identification`; the
+``identify`` command writes it as ``result.json``, ``true_curve.csv`` and PNG plots, so the
+two test types share one output path.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import pandas as pd
+
+TRUE_CURVE_COLUMNS = ("true_plastic_strain", "true_stress_MPa")
+
+
+@dataclass
+class Identification:
+    """Results of identifying one record.
+
+    result: the JSON-able dict written to ``result.json`` (keys carry units: ``Rm_MPa``).
+    true_curve: DataFrame with at least the columns of :data:`TRUE_CURVE_COLUMNS`.
+    plots: name → function(path) that draws one PNG; called by :meth:`write`.
+    """
+
+    result: dict
+    true_curve: pd.DataFrame
+    plots: dict[str, Callable[[Path], None]] = field(default_factory=dict)
+
+    def write(self, outdir: str | Path) -> Path:
+        outdir = Path(outdir)
+        outdir.mkdir(parents=True, exist_ok=True)
+        (outdir / "result.json").write_text(json.dumps(to_jsonable(self.result), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+        self.true_curve.to_csv(outdir / "true_curve.csv", index=False, float_format="%.6g", lineterminator="\n")
+        for name, draw in self.plots.items():
+            draw(outdir / f"{name}.png")
+        return outdir
+
+
+def to_jsonable(value):
+    """numpy scalars/arrays → Python; NaN/inf → None (JSON has no NaN)."""
+    if isinstance(value, dict):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return [to_jsonable(v) for v in value.tolist()]
+    if isinstance(value, (np.floating, float)):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value

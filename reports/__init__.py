@@ -1,0 +1,1 @@
+"""Material cards, plots and test reports."""

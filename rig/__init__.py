@@ -1,0 +1,1 @@
+"""Drivers for the rig's serial devices and their virtual twins (pseudo-terminals)."""
