@@ -18,7 +18,8 @@ from flowcurve.errors import FlowcurveError
 # Packages that contribute sub-commands, in the order they appear in --help.
 COMMAND_MODULES = (
     "acquisition.cli",  # run, demo, recover, annotate
-    "identification.cli",  # identify, fit
+    "identification.cli",  # identify
+    "identification.series_cli",  # fit
     "reports.cli",  # card, report
     "rig.cli",  # rig check, rig virtual
 )

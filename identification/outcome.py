@@ -25,11 +25,16 @@ class Identification:
 
     result: the JSON-able dict written to ``result.json`` (keys carry units: ``Rm_MPa``).
     true_curve: DataFrame with at least the columns of :data:`TRUE_CURVE_COLUMNS`.
-    plots: name → function(path) that draws one PNG; called by :meth:`write`.
+    curves: named intermediate curves for plots and comparison (e.g. "raw_diagram",
+        "corrected_diagram", "engineering", "true", "fit", one per correction method), each a
+        DataFrame with unit-named columns.
+    plots: name → function(path) that draws one PNG; the command line fills it from
+        ``reports`` (identification does not import reports) and :meth:`write` calls them.
     """
 
     result: dict
     true_curve: pd.DataFrame
+    curves: dict[str, pd.DataFrame] = field(default_factory=dict)
     plots: dict[str, Callable[[Path], None]] = field(default_factory=dict)
 
     def write(self, outdir: str | Path) -> Path:
