@@ -254,21 +254,15 @@ def parse_record_text(text: str, source: str = "<memory>") -> Record:
 
 def _extract_events(body: str, source: str, names_line: int) -> list[Event]:
     events = []
-    pos = 0 if body.startswith("#") else body.find("\n#")
-    while pos >= 0:
-        start = pos if body.startswith("#", pos) else pos + 1
-        end = body.find("\n", start)
-        end = len(body) if end < 0 else end
-        kv = parse_header_line(body[start:end].rstrip("\r"))
+    for line in _comment_lines(body):
+        kv = parse_header_line(line.rstrip("\r"))
         if kv and kv[0] == "event":
             t, _, rest = kv[1].partition(" ")
             name, _, txt = rest.partition(" ")
             try:
                 events.append(Event(float(t), name, txt))
             except ValueError:
-                line = names_line + body.count("\n", 0, start) + 1
-                raise RecordError(source, f"event time is not a number: {t!r}", line=line) from None
-        pos = body.find("\n#", end)
+                raise RecordError(source, f"event time is not a number: {t!r} ('{line.strip()}')") from None
     return events
 
 
@@ -288,7 +282,21 @@ def _parse_samples(body: str, columns: list[str], source: str, names_line: int) 
     except (ValueError, pd.errors.ParserError):
         _raise_bad_cell(body, columns, source, names_line)
         raise  # pragma: no cover - _raise_bad_cell always raises
+    # pandas pads a short row with NaN silently; a comma count (C speed) catches it
+    comment_commas = sum(line.count(",") for line in _comment_lines(body))
+    if body.count(",") - comment_commas != len(data) * (len(columns) - 1):
+        _raise_bad_cell(body, columns, source, names_line)
     return data
+
+
+def _comment_lines(body: str):
+    pos = 0 if body.startswith("#") else body.find("\n#")
+    while pos >= 0:
+        start = pos if body.startswith("#", pos) else pos + 1
+        end = body.find("\n", start)
+        end = len(body) if end < 0 else end
+        yield body[start:end]
+        pos = body.find("\n#", end)
 
 
 def _raise_bad_cell(body: str, columns: list[str], source: str, names_line: int) -> None:
