@@ -1,0 +1,252 @@
+"""Synchronized sampling: one worker thread per device, one clock, rows on the force clock.
+
+Each device is read in its own thread at its own rate (:class:`Channel`). Every sample is
+stamped with :func:`time.monotonic` relative to the test start (one clock for all). The
+load cell is the fastest channel and the reference: :func:`merge_block` turns each force
+sample into exactly one record row, with the other channels **linearly interpolated** at
+the force sample's time from their own streams. A force sample is released only once every
+other stream has a sample at or after its time (so nothing is extrapolated); at the end of
+the test the remaining ones are released with the last value held ("latest-before").
+Before a stream's first sample its first value is held (the crosshead has not moved yet).
+
+A device whose reads fail ``max_failures`` times in a row, or that gives nothing for
+``silence_s``, puts the sampler in a fault state naming the device; the procedure stops
+the test and keeps what was recorded.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Iterable, Sequence
+
+import numpy as np
+
+from flowcurve.errors import DeviceError
+
+# A read function returns one value, a list of values (a streamed block; each is stamped
+# when the block arrives, spaced by ``period_s`` backwards), or a list of (t, value) pairs
+# already stamped on the sampler's clock.
+ReadFn = Callable[[], "float | Sequence[float] | Sequence[tuple[float, float]] | None"]
+
+
+@dataclass
+class Stream:
+    """A growing, thread-safe series of (time_s, value) samples of one channel."""
+
+    name: str
+    _t: list[float] = field(default_factory=list)
+    _v: list[float] = field(default_factory=list)
+    _lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def extend(self, times: Iterable[float], values: Iterable[float]) -> None:
+        times, values = list(times), list(values)
+        with self._lock:
+            self._t.extend(times)
+            self._v.extend(values)
+
+    def snapshot(self, start: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """Copies of the samples from index ``start`` on."""
+        with self._lock:
+            return np.array(self._t[start:], dtype=float), np.array(self._v[start:], dtype=float)
+
+    def __len__(self) -> int:
+        with self._lock:
+            return len(self._t)
+
+    def last(self) -> tuple[float, float] | None:
+        with self._lock:
+            return (self._t[-1], self._v[-1]) if self._t else None
+
+    def last_time(self) -> float:
+        with self._lock:
+            return self._t[-1] if self._t else -np.inf
+
+
+def interpolate_at(t: np.ndarray, ts: np.ndarray, vs: np.ndarray) -> np.ndarray:
+    """Linear interpolation of the stream (ts, vs) at times t; ends held; NaN if empty."""
+    if ts.size == 0:
+        return np.full(t.shape, np.nan)
+    return np.interp(t, ts, vs)  # holds the first/last value outside the stream
+
+
+def releasable(force_t: np.ndarray, other_last_t: Sequence[float], final: bool) -> int:
+    """How many leading force samples every other stream already brackets (all at the end)."""
+    if final or not len(other_last_t):
+        return force_t.size
+    horizon = min(other_last_t)
+    return int(np.searchsorted(force_t, horizon, side="right"))
+
+
+def merge_block(force_t: np.ndarray, force: np.ndarray, others: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """Rows ``[time_s, force, other_1, ...]``: one per force sample, others interpolated."""
+    cols = [force_t, force] + [interpolate_at(force_t, ts, vs) for ts, vs in others]
+    return np.column_stack(cols) if force_t.size else np.empty((0, len(cols)))
+
+
+class Channel(threading.Thread):
+    """Reads one device in its own thread and appends stamped samples to its stream."""
+
+    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str], None] | None = None):
+        super().__init__(name=f"flowcurve-{name}", daemon=True)
+        self.device = name
+        self.read = read
+        self.clock = clock
+        self.period_s = period_s
+        self.max_failures = max_failures
+        self.silence_s = silence_s
+        self.on_fault = on_fault
+        self.stream = Stream(name)
+        self.reads = 0
+        self.last_data_s = clock()
+        self.error: str | None = None
+        self._stop_event = threading.Event()
+
+    def stop(self) -> None:
+        self._stop_event.set()
+
+    def run(self) -> None:
+        failures = 0
+        self.last_data_s = self.clock()
+        next_due = self.clock()
+        while not self._stop_event.is_set():
+            try:
+                got = self.read()
+            except Exception as exc:  # a device error of any kind: count it, then give up
+                failures += 1
+                if failures >= self.max_failures:
+                    self._fault(f"{failures} reads in a row failed; last: {_one_line(exc)}")
+                    return
+                continue
+            now = self.clock()
+            failures = 0
+            n = self._store(got, now)
+            if n:
+                self.last_data_s = now
+                self.reads += 1
+            elif now - self.last_data_s > self.silence_s:
+                self._fault(f"no data for {now - self.last_data_s:.1f} s")
+                return
+            if self.period_s > 0:
+                next_due += self.period_s
+                delay = next_due - self.clock()
+                if delay > 0:
+                    self._stop_event.wait(delay)
+                else:
+                    next_due = self.clock()
+
+    def _store(self, got, now: float) -> int:
+        if got is None:
+            return 0
+        if np.isscalar(got):
+            self.stream.extend([now], [float(got)])
+            return 1
+        items = list(got)
+        if not items:
+            return 0
+        if isinstance(items[0], tuple):
+            self.stream.extend([p[0] for p in items], [float(p[1]) for p in items])
+        else:
+            k = len(items)
+            step = self.period_s if k > 1 else 0.0
+            self.stream.extend([now - (k - 1 - i) * step for i in range(k)], [float(v) for v in items])
+        return len(items)
+
+    def _fault(self, message: str) -> None:
+        self.error = message
+        if self.on_fault:
+            self.on_fault(self.device, message)
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+class Sampler:
+    """Runs the channels and merges their streams on the reference (force) channel.
+
+    ``channels`` maps column name → Channel; the first one is the reference. Use
+    :meth:`take_rows` periodically to get the newly complete rows, and :meth:`finish`
+    at the end to stop the threads and get the rest.
+    """
+
+    def __init__(self, channels: dict[str, Channel]):
+        if not channels:
+            raise ValueError("a sampler needs at least the force channel")
+        self.channels = channels
+        self.columns = list(channels)
+        self._ref = channels[self.columns[0]]
+        self._others = [channels[c] for c in self.columns[1:]]
+        self._released = 0
+        self._other_start = [0] * len(self._others)
+        self._fault: DeviceError | None = None
+        self._fault_lock = threading.Lock()
+        for ch in channels.values():
+            ch.on_fault = self._on_fault
+
+    @property
+    def row_columns(self) -> list[str]:
+        """Column names of the rows :meth:`take_rows` returns: time_s, then the channels."""
+        return ["time_s", *self.columns]
+
+    def _on_fault(self, device: str, message: str) -> None:
+        with self._fault_lock:
+            if self._fault is None:
+                self._fault = DeviceError(device, message)
+
+    @property
+    def fault(self) -> DeviceError | None:
+        """The first device failure, or None."""
+        return self._fault
+
+    @property
+    def released(self) -> int:
+        return self._released
+
+    def start(self) -> "Sampler":
+        for ch in self.channels.values():
+            ch.start()
+        return self
+
+    def take_rows(self, final: bool = False) -> np.ndarray:
+        """Rows for the force samples not yet released that all streams now bracket."""
+        ft, fv = self._ref.stream.snapshot(self._released)
+        n = releasable(ft, [ch.stream.last_time() for ch in self._others], final)
+        if n == 0:
+            return np.empty((0, len(self.columns) + 1))
+        others = [ch.stream.snapshot(start) for ch, start in zip(self._others, self._other_start)]
+        rows = merge_block(ft[:n], fv[:n], others)
+        self._released += n
+        # keep only the stream tails the next force samples can need (one sample before)
+        for i, (ts, _) in enumerate(others):
+            self._other_start[i] += max(0, int(np.searchsorted(ts, ft[n - 1], side="right")) - 1)
+        return rows
+
+    def check_silence(self, now: float | None = None) -> DeviceError | None:
+        """Fault a channel whose read hangs (no data for its ``silence_s``); the first fault."""
+        for ch in self.channels.values():
+            now_ = ch.clock() if now is None else now
+            if ch.is_alive() and now_ - ch.last_data_s > ch.silence_s:
+                self._on_fault(ch.device, f"no answer for {now_ - ch.last_data_s:.1f} s")
+        return self._fault
+
+    def stop(self, timeout_s: float = 2.0) -> None:
+        for ch in self.channels.values():
+            ch.stop()
+        for ch in self.channels.values():
+            if ch.is_alive() and ch is not threading.current_thread():
+                ch.join(timeout_s)
+
+    def finish(self) -> np.ndarray:
+        """Stop the threads and release every remaining force sample (last values held)."""
+        self.stop()
+        return self.take_rows(final=True)
+
+    def latest(self) -> dict[str, float]:
+        """The newest value of each channel (for the live view); NaN when none yet."""
+        out = {}
+        for name, ch in self.channels.items():
+            last = ch.stream.last()
+            out[name] = last[1] if last else float("nan")
+        return out

@@ -1,0 +1,144 @@
+"""Synchronized sampling with fake devices: nothing lost, nothing duplicated, correct merge."""
+
+import itertools
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from acquisition.sampler import Channel, Sampler, interpolate_at, merge_block, releasable
+
+
+def make_clock():
+    t0 = time.monotonic()
+    return lambda: time.monotonic() - t0
+
+
+def counter_read(n_max, period_s, clock):
+    """A fake load cell: sends 0, 1, 2, ... n_max-1 then nothing (returns None)."""
+    it = iter(range(n_max))
+
+    def read():
+        time.sleep(period_s)
+        return next(it, None)
+
+    return read
+
+
+def test_merge_block_interpolates_linear_streams_exactly():
+    ft = np.array([0.05, 0.15, 0.25, 0.35])
+    ts = np.array([0.0, 0.1, 0.2, 0.3, 0.4])
+    rows = merge_block(ft, np.arange(4.0), [(ts, 2.0 * ts + 1.0)])
+    # a linear law is reproduced exactly by linear interpolation
+    np.testing.assert_allclose(rows[:, 2], 2.0 * ft + 1.0, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(rows[:, 1], np.arange(4.0))
+
+
+def test_releasable_waits_for_the_slowest_stream():
+    ft = np.array([0.1, 0.2, 0.3, 0.4])
+    assert releasable(ft, [0.25, 0.5], final=False) == 2
+    assert releasable(ft, [0.25, -np.inf], final=False) == 0
+    assert releasable(ft, [0.25, -np.inf], final=True) == 4
+
+
+def test_interpolate_holds_ends_and_nan_when_empty():
+    out = interpolate_at(np.array([-1.0, 5.0]), np.array([0.0, 1.0]), np.array([3.0, 4.0]))
+    np.testing.assert_array_equal(out, [3.0, 4.0])
+    assert np.isnan(interpolate_at(np.array([1.0]), np.array([]), np.array([]))).all()
+
+
+def test_every_force_sample_appears_exactly_once_and_in_order():
+    clock = make_clock()
+    n = 600
+    speed = 0.5  # mm/s, the fake crosshead position is speed * t on the same clock
+    force = Channel("loadcell", counter_read(n, 0.0005, clock), clock, silence_s=5)
+    enc = Channel("encoder", lambda: speed * clock(), clock, period_s=0.01)
+    temp = Channel("furnace", lambda: 20.0 + clock(), clock, period_s=0.03)
+    sampler = Sampler({"force_N": force, "crosshead_mm": enc, "temperature_C": temp}).start()
+    blocks = []
+    while len(force.stream) < n:
+        blocks.append(sampler.take_rows())
+        time.sleep(0.01)
+    blocks.append(sampler.finish())
+    rows = np.vstack(blocks)
+    np.testing.assert_array_equal(rows[:, 1], np.arange(n))  # each sent value once, in order
+    assert np.all(np.diff(rows[:, 0]) >= 0)
+    # interpolated channels follow their laws at the force times (inside their streams)
+    ts_enc, _ = enc.stream.snapshot()
+    inside = (rows[:, 0] >= ts_enc[0]) & (rows[:, 0] <= ts_enc[-1])
+    assert inside.sum() > n // 2
+    np.testing.assert_allclose(rows[inside, 2], speed * rows[inside, 0], atol=2e-4)
+    ts_t, _ = temp.stream.snapshot()
+    inside_t = (rows[:, 0] >= ts_t[0]) & (rows[:, 0] <= ts_t[-1])
+    np.testing.assert_allclose(rows[inside_t, 3], 20.0 + rows[inside_t, 0], atol=2e-3)
+
+
+def test_streamed_blocks_are_stamped_and_kept():
+    clock = make_clock()
+    counter = itertools.count()
+    sent = []
+
+    def block_read():
+        time.sleep(0.005)
+        if len(sent) >= 500:
+            return []
+        vals = [next(counter) for _ in range(5)]
+        sent.extend(vals)
+        return vals
+
+    force = Channel("loadcell", block_read, clock, period_s=0.001, silence_s=5)
+    enc = Channel("encoder", lambda: clock(), clock, period_s=0.005)
+    sampler = Sampler({"force_N": force, "crosshead_mm": enc}).start()
+    got = []
+    while len(force.stream) < 500:
+        got.append(sampler.take_rows())
+        time.sleep(0.005)
+    got.append(sampler.finish())
+    rows = np.vstack(got)
+    np.testing.assert_array_equal(rows[:, 1], np.array(sent, dtype=float))
+    assert np.all(np.diff(rows[:, 0]) >= 0)
+
+
+def test_failing_device_is_named_and_recorded_samples_kept():
+    clock = make_clock()
+    calls = itertools.count()
+
+    def dying_encoder():
+        if next(calls) > 20:
+            raise OSError("device reports readiness to read but returned no data")
+        return 1.0
+
+    force = Channel("loadcell", lambda: (time.sleep(0.002), 5.0)[1], clock)
+    enc = Channel("encoder", dying_encoder, clock, period_s=0.002, max_failures=3)
+    sampler = Sampler({"force_N": force, "crosshead_mm": enc}).start()
+    deadline = time.monotonic() + 5
+    while sampler.fault is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    rows = sampler.finish()
+    assert sampler.fault is not None
+    assert str(sampler.fault).startswith("encoder: ")
+    assert "returned no data" in str(sampler.fault)
+    assert len(rows) > 0 and np.all(rows[:, 2] == 1.0)
+
+
+def test_silent_device_returning_nothing_is_a_fault():
+    clock = make_clock()
+    force = Channel("loadcell", lambda: (time.sleep(0.01), None)[1], clock, silence_s=0.2)
+    sampler = Sampler({"force_N": force}).start()
+    force.join(3)
+    sampler.stop()
+    assert sampler.fault is not None and "loadcell" in str(sampler.fault) and "no data" in str(sampler.fault)
+
+
+def test_hanging_read_is_caught_by_check_silence():
+    clock = make_clock()
+    release = threading.Event()
+    force = Channel("loadcell", lambda: 1.0, clock, period_s=0.005)
+    enc = Channel("encoder", lambda: (release.wait(5), 0.0)[1], clock, silence_s=0.1)
+    sampler = Sampler({"force_N": force, "crosshead_mm": enc}).start()
+    time.sleep(0.3)
+    fault = sampler.check_silence()
+    release.set()
+    sampler.finish()
+    assert fault is not None and str(fault).startswith("encoder: no answer")
