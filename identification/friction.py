@@ -1,0 +1,311 @@
+"""Friction at the platens of a compression (upsetting) test, and the flow-curve corrections.
+
+Pure functions on post-test measurements and on (mean pressure, strain) arrays; equation
+numbers refer to seed 004, section 3.1.3 (see METHODS.md §4). All lengths in mm, stresses
+in MPa, strains are logarithmic (true) strains.
+
+Friction from the barrelled specimen (each returns a :class:`FrictionResult`):
+
+* ``bulge_regression`` (default): the seed's FE regression (3.18) inverted for the mean
+  Coulomb coefficient μ (3.19).
+* ``ebrahimi_najafizadeh``: the barrelling method of Ebrahimi & Najafizadeh (2004) for the
+  Tresca friction factor m; converted to μ by equating the Tresca shear stress m·σ_f/√3 with
+  the Coulomb shear stress μ·p at p ≈ σ_f, i.e. μ = m/√3 (the small-μ equivalence; it is also
+  exactly the μ for which the Siebel mean pressures of the two friction laws agree). The μ for
+  which the exact Coulomb slab pressure equals the Tresca slab pressure at the final geometry
+  is reported alongside as ``mu_equal_slab_pressure``.
+
+Corrections turning the mean pressure p = P/S (S from volume constancy) and the strain into
+flow stress and strain (:data:`CORRECTIONS`): ``k_sigma`` (the seed's K_σ/K_ε regressions
+(3.21)–(3.27), default), ``siebel`` (p/σ_f = 1 + 2μr/(3h)) and ``slab`` (the exact Coulomb
+slab solution p/σ_f = 2(e^c − c − 1)/c², c = 2μr/h).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from scipy.optimize import brentq
+
+from flowcurve.errors import IdentificationError
+
+FRICTION_METHODS = ("bulge_regression", "ebrahimi_najafizadeh")
+DEFAULT_FRICTION_METHOD = "bulge_regression"
+
+# (3.18) regression constants: ΔR/h = C·ε^P·(1 − exp(−K·μ^Q))
+BULGE_C = 0.0683
+BULGE_P = 0.83
+BULGE_K = 26.7
+BULGE_Q = 1.53
+
+
+@dataclass(frozen=True)
+class FrictionResult:
+    """The friction identified by one method: μ, the inputs it used, extra figures (e.g. m)."""
+
+    method: str
+    mu: float
+    inputs: dict[str, float] = field(default_factory=dict)
+    extra: dict[str, float] = field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        return {"method": self.method, "mu": self.mu, "inputs": dict(self.inputs), **self.extra}
+
+
+# -- geometry -------------------------------------------------------------------------------
+
+
+def nominal_diameter(d0_mm, h0_mm, h_mm):
+    """Diameter of the friction-free cylinder of height h (volume constancy)."""
+    # (3.17)/(3.28) d_n = d0·√(h0/h)
+    return d0_mm * np.sqrt(h0_mm / np.asarray(h_mm, dtype=float))
+
+
+def bulge_excess(d_max_mm, d_n_mm):
+    """Radial excess of the bulge over the friction-free cylinder."""
+    # (3.29) ΔR = (d_φ − d_n)/2
+    return (d_max_mm - d_n_mm) / 2.0
+
+
+def height_strain(h_mm, h0_mm):
+    """Logarithmic compressive strain (positive for shortening)."""
+    # (3.31) ε_p = −ln(h/h0)
+    return -np.log(np.asarray(h_mm, dtype=float) / h0_mm)
+
+
+def diameter_from_area(area_mm2):
+    """Diameter of the circle of area S (largest cross-section S_max → d_φ)."""
+    # d_φ = √(4·S_max/π)
+    return np.sqrt(4.0 * np.asarray(area_mm2, dtype=float) / math.pi)
+
+
+# -- bulge regression (3.18)/(3.19) ---------------------------------------------------------
+
+
+def bulge_ratio(eps_p, mu):
+    """ΔR/h predicted by the seed's FE regression for strain ε_p and friction μ."""
+    # (3.18) ΔR/h = 0.0683·ε_p^0.83·(1 − exp(−26.7·μ^1.53))
+    eps_p = np.asarray(eps_p, dtype=float)
+    mu = np.asarray(mu, dtype=float)
+    return BULGE_C * eps_p**BULGE_P * (1.0 - np.exp(-BULGE_K * mu**BULGE_Q))
+
+
+def mu_from_bulge_ratio(delta_r_over_h: float, eps_p: float) -> float:
+    """Mean Coulomb friction μ from the bulge ratio ΔR/h at strain ε_p (inverse of (3.18)).
+
+    Raises IdentificationError outside the regression's range: ε_p ≤ 0, a negative bulge, or a
+    bulge the regression cannot produce at any μ (logarithm argument ≤ 0).
+    """
+    if not (math.isfinite(delta_r_over_h) and math.isfinite(eps_p)):
+        raise IdentificationError(f"bulge regression (3.19): inputs must be finite (ΔR/h = {delta_r_over_h}, ε_p = {eps_p})")
+    if eps_p <= 0:
+        raise IdentificationError(f"bulge regression (3.19): the strain ε_p = {eps_p:.4g} must be > 0 (the final height must be below the initial height)")
+    if delta_r_over_h < 0:
+        raise IdentificationError(f"bulge regression (3.19): negative bulge ΔR/h = {delta_r_over_h:.4g} (the measured maximum diameter is smaller than the volume-constant diameter d_n; check d0, h0, hk and dmax)")
+    saturation = BULGE_C * eps_p**BULGE_P
+    arg = 1.0 - delta_r_over_h / saturation
+    if arg <= 0:
+        raise IdentificationError(
+            f"bulge regression (3.19): ΔR/h = {delta_r_over_h:.4g} is beyond what (3.18) gives at any friction "
+            f"for ε_p = {eps_p:.4g} (at most {saturation:.4g}); logarithm argument {arg:.4g} ≤ 0"
+        )
+    # (3.19) μ = [ln(1 − (ΔR/h)·ε_p^−0.83/0.0683)/(−26.7)]^(1/1.53)
+    return float((math.log(arg) / -BULGE_K) ** (1.0 / BULGE_Q))
+
+
+def _measured_max_diameter(d_max_mm: float | None, s_max_mm2: float | None) -> tuple[float, dict[str, float]]:
+    if d_max_mm is not None:
+        return float(d_max_mm), {"dmax_mm": float(d_max_mm)}
+    if s_max_mm2 is not None:
+        if s_max_mm2 <= 0:
+            raise IdentificationError(f"the largest cross-section area S_max = {s_max_mm2:g} mm² must be > 0")
+        return float(diameter_from_area(s_max_mm2)), {"smax_mm2": float(s_max_mm2)}
+    raise IdentificationError("friction needs the bulge: give the maximum diameter 'post.dmax_mm' or the largest cross-section area 'post.smax_mm2'")
+
+
+def _check_geometry(d0_mm: float, h0_mm: float, hk_mm: float) -> None:
+    for name, v in (("d0", d0_mm), ("h0", h0_mm), ("hk", hk_mm)):
+        if not (math.isfinite(v) and v > 0):
+            raise IdentificationError(f"friction: {name} = {v} mm must be a positive number")
+    if hk_mm >= h0_mm:
+        raise IdentificationError(f"friction: the final height hk = {hk_mm:g} mm must be below the initial height h0 = {h0_mm:g} mm")
+
+
+def friction_bulge_regression(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None) -> FrictionResult:
+    """Mean friction μ from the post-test shape by the seed's regression ((3.28), (3.29), (3.31), (3.19)).
+
+    Give the measured maximum (bulge) diameter ``d_max_mm`` or the largest cross-section area
+    ``s_max_mm2`` (the diameter takes precedence when both are given).
+    """
+    _check_geometry(d0_mm, h0_mm, hk_mm)
+    d_max, used = _measured_max_diameter(d_max_mm, s_max_mm2)
+    d_n = float(nominal_diameter(d0_mm, h0_mm, hk_mm))
+    delta_r = float(bulge_excess(d_max, d_n))
+    eps_p = float(height_strain(hk_mm, h0_mm))
+    mu = mu_from_bulge_ratio(delta_r / hk_mm, eps_p)
+    inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
+    extra = {"d_max_mm": d_max, "d_n_mm": d_n, "delta_R_mm": delta_r, "eps_p": eps_p}
+    return FrictionResult("bulge_regression", mu, inputs, extra)
+
+
+# -- Ebrahimi–Najafizadeh (2004) ------------------------------------------------------------
+
+
+def barrel_top_radius(r0_mm, h0_mm, h_mm, r_max_mm):
+    """Top-face radius of a barrelled cylinder from volume constancy, parabolic-barrel volume.
+
+    The barrel volume π·h·(2R_M² + R_T²)/3 (a parabolic profile to first order in R_M − R_T)
+    equals π·R0²·h0, so R_T = √(3·R0²·h0/h − 2·R_M²).
+    """
+    # R_T = √(3·R0²·h0/h − 2·R_M²)
+    return np.sqrt(3.0 * r0_mm**2 * h0_mm / h_mm - 2.0 * np.asarray(r_max_mm, dtype=float) ** 2)
+
+
+def barrelling_parameter(r_max_mm, r_top_mm, r_mean_mm, h_mm, dh_mm):
+    """Barrelling parameter b of Ebrahimi & Najafizadeh."""
+    # b = 4·(ΔR/R)·(h/Δh), ΔR = R_M − R_T
+    return 4.0 * (r_max_mm - r_top_mm) / r_mean_mm * (h_mm / dh_mm)
+
+
+def friction_factor_from_barrelling(b, r_mean_mm, h_mm):
+    """Tresca friction factor m from the barrelling parameter b."""
+    # m = (R/h)·b / (4/√3 − 2b/(3√3))
+    return (r_mean_mm / h_mm) * b / (4.0 / math.sqrt(3.0) - 2.0 * b / (3.0 * math.sqrt(3.0)))
+
+
+def mu_from_friction_factor(m):
+    """Coulomb μ equivalent to the Tresca factor m: m·σ_f/√3 = μ·p at p ≈ σ_f."""
+    # μ = m/√3 (equal Siebel mean pressures: 1 + 2μr/(3h) = 1 + 2mr/(3√3·h))
+    return np.asarray(m, dtype=float) / math.sqrt(3.0)
+
+
+def mu_equal_slab_pressure(m: float, r_over_h: float) -> float:
+    """Coulomb μ whose exact slab mean pressure equals the Tresca slab pressure for factor m.
+
+    Solves 2(e^c − c − 1)/c² = 1 + 2m·r/(3√3·h) with c = 2μr/h.
+    """
+    target = 1.0 + 2.0 * m * r_over_h / (3.0 * math.sqrt(3.0))
+    if m <= 0:
+        return 0.0
+    f = lambda mu: float(slab_factor(mu, r_over_h, 1.0)) - target  # noqa: E731
+    hi = 1.0
+    while f(hi) < 0:
+        hi *= 2.0
+    return float(brentq(f, 0.0, hi, xtol=1e-12))
+
+
+def friction_ebrahimi_najafizadeh(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, d_top_mm: float | None = None) -> FrictionResult:
+    """Friction factor m (and μ = m/√3) by the barrelling method of Ebrahimi & Najafizadeh (2004).
+
+    The top-face diameter ``d_top_mm`` is used when measured; otherwise it follows from volume
+    constancy with a parabolic barrel (:func:`barrel_top_radius`).
+    """
+    _check_geometry(d0_mm, h0_mm, hk_mm)
+    d_max, used = _measured_max_diameter(d_max_mm, s_max_mm2)
+    r0, r_max = d0_mm / 2.0, d_max / 2.0
+    r_mean = float(nominal_diameter(d0_mm, h0_mm, hk_mm)) / 2.0
+    if r_max < r_mean:
+        raise IdentificationError(f"Ebrahimi-Najafizadeh: negative bulge (maximum radius {r_max:.4g} mm below the volume-constant radius {r_mean:.4g} mm)")
+    if d_top_mm is not None:
+        r_top = d_top_mm / 2.0
+        used["dtop_mm"] = float(d_top_mm)
+    else:
+        radicand = 3.0 * r0**2 * h0_mm / hk_mm - 2.0 * r_max**2
+        if radicand <= 0:
+            raise IdentificationError(f"Ebrahimi-Najafizadeh: a maximum diameter of {d_max:.4g} mm is too large for a barrel of this volume (no top-face radius satisfies volume constancy)")
+        r_top = float(barrel_top_radius(r0, h0_mm, hk_mm, r_max))
+    if r_top > r_max:
+        raise IdentificationError(f"Ebrahimi-Najafizadeh: the top-face radius {r_top:.4g} mm exceeds the maximum radius {r_max:.4g} mm")
+    dh = h0_mm - hk_mm
+    b = float(barrelling_parameter(r_max, r_top, r_mean, hk_mm, dh))
+    m = float(friction_factor_from_barrelling(b, r_mean, hk_mm))
+    if not (0.0 <= m <= 1.0):
+        raise IdentificationError(f"Ebrahimi-Najafizadeh: friction factor m = {m:.4g} is outside [0, 1] (barrelling parameter b = {b:.4g}); the bulge is not a friction barrel")
+    mu = float(mu_from_friction_factor(m))
+    inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
+    extra = {"m": m, "b": b, "R_mean_mm": r_mean, "R_max_mm": r_max, "R_top_mm": r_top, "mu_equal_slab_pressure": mu_equal_slab_pressure(m, r_mean / hk_mm)}
+    return FrictionResult("ebrahimi_najafizadeh", mu, inputs, extra)
+
+
+def identify_friction(method: str, d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, d_top_mm: float | None = None) -> FrictionResult:
+    """Friction by the named method (one of :data:`FRICTION_METHODS`)."""
+    if method == "bulge_regression":
+        return friction_bulge_regression(d0_mm, h0_mm, hk_mm, d_max_mm=d_max_mm, s_max_mm2=s_max_mm2)
+    if method == "ebrahimi_najafizadeh":
+        return friction_ebrahimi_najafizadeh(d0_mm, h0_mm, hk_mm, d_max_mm=d_max_mm, s_max_mm2=s_max_mm2, d_top_mm=d_top_mm)
+    raise IdentificationError(f"unknown friction method {method!r} (choose from {', '.join(FRICTION_METHODS)})")
+
+
+# -- corrections of the flow curve ----------------------------------------------------------
+
+
+def k_sigma(mu, eps_p):
+    """The seed's stress correction factor K_σ(μ, ε_p)."""
+    # (3.24) K_σ = 1 + 0.2166μ + 1.344μ·ε_p − 0.5512μ² − 1.8164μ·ε_p²
+    eps_p = np.asarray(eps_p, dtype=float)
+    return 1.0 + 0.2166 * mu + 1.344 * mu * eps_p - 0.5512 * mu**2 - 1.8164 * mu * eps_p**2
+
+
+def k_eps(mu, eps_p):
+    """The seed's strain correction factor K_ε(μ, ε_p)."""
+    # (3.27) K_ε = 1 + 4.353μ − 1.05·ε_p·μ
+    eps_p = np.asarray(eps_p, dtype=float)
+    return 1.0 + 4.353 * mu - 1.05 * eps_p * mu
+
+
+def siebel_factor(mu, radius_mm, height_mm):
+    """Mean pressure over flow stress by Siebel's approximation."""
+    # p/σ_f = 1 + 2μr/(3h)
+    return 1.0 + 2.0 * mu * np.asarray(radius_mm, dtype=float) / (3.0 * np.asarray(height_mm, dtype=float))
+
+
+def slab_factor(mu, radius_mm, height_mm):
+    """Mean pressure over flow stress by the exact Coulomb slab solution (no sticking)."""
+    # p/σ_f = 2(e^c − c − 1)/c², c = 2μr/h
+    c = np.asarray(2.0 * mu * np.asarray(radius_mm, dtype=float) / np.asarray(height_mm, dtype=float), dtype=float)
+    small = np.abs(c) < 1e-3
+    cs = np.where(small, 1.0, c)  # avoid 0/0 where the series is used
+    exact = 2.0 * (np.expm1(cs) - cs) / cs**2
+    series = 1.0 + c / 3.0 + c**2 / 12.0 + c**3 / 60.0  # Taylor series of the same function
+    return np.where(small, series, exact)
+
+
+def correct_k_sigma(strain, pressure_MPa, mu, radius_mm=None, height_mm=None):
+    """(strain, σ_n) → (ε_t, σ_t) by the seed's regressions."""
+    # (3.21) σ_t = K_σ·σ_n, (3.25) ε_t = K_ε·ε_n
+    strain = np.asarray(strain, dtype=float)
+    return k_eps(mu, strain) * strain, k_sigma(mu, strain) * np.asarray(pressure_MPa, dtype=float)
+
+
+def correct_siebel(strain, pressure_MPa, mu, radius_mm, height_mm):
+    """(strain, p) → (strain, σ_f) with Siebel's mean-pressure factor."""
+    # σ_f = p / (1 + 2μr/(3h))
+    return np.asarray(strain, dtype=float), np.asarray(pressure_MPa, dtype=float) / siebel_factor(mu, radius_mm, height_mm)
+
+
+def correct_slab(strain, pressure_MPa, mu, radius_mm, height_mm):
+    """(strain, p) → (strain, σ_f) with the exact Coulomb slab factor."""
+    # σ_f = p·c²/(2(e^c − c − 1)), c = 2μr/h
+    return np.asarray(strain, dtype=float), np.asarray(pressure_MPa, dtype=float) / slab_factor(mu, radius_mm, height_mm)
+
+
+CORRECTIONS: dict[str, Callable] = {
+    "k_sigma": correct_k_sigma,
+    "siebel": correct_siebel,
+    "slab": correct_slab,
+}
+DEFAULT_CORRECTION = "k_sigma"
+
+
+def correct(method: str, strain, pressure_MPa, mu, radius_mm, height_mm):
+    """Apply the named correction (one of :data:`CORRECTIONS`) → (strain, flow stress MPa)."""
+    try:
+        fn = CORRECTIONS[method]
+    except KeyError:
+        raise IdentificationError(f"unknown friction correction {method!r} (choose from {', '.join(CORRECTIONS)})") from None
+    if not (math.isfinite(mu) and mu >= 0):
+        raise IdentificationError(f"friction correction: μ = {mu} must be a finite number ≥ 0")
+    return fn(strain, pressure_MPa, mu, radius_mm, height_mm)
