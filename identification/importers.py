@@ -108,7 +108,7 @@ MAPPED_COLUMNS: dict[str, tuple[str, str]] = {
     "extensometer": ("extensometer_mm", "length"),
     "temperature": ("temperature_C", "temperature"),
 }
-REQUIRED_MAPPED = ("time", "force", "crosshead")
+REQUIRED_MAPPED = ("force", "crosshead")  # time may be derived from the crosshead speed
 
 
 class UnitError(RecordError):
@@ -173,7 +173,19 @@ def load_record(path: str | os.PathLike, *, columns: Mapping[str, tuple[str, str
         for key, value in meta.items():
             if value is not None:
                 record.meta[key] = str(value)
+    if "time_s" not in record.data.columns:
+        _derive_time(record)
     return record
+
+
+def _derive_time(record: Record) -> None:
+    """A CSV without a time column: time from the crosshead travel at the stated speed."""
+    speed = record.positive("crosshead_speed_mm_per_s")
+    if speed is None:
+        raise RecordError(record.source, "no time column mapped and no crosshead speed to derive it from (give --column time=NAME:UNIT, or the speed as metadata crosshead_speed_mm_per_s)")
+    crosshead = record.data["crosshead_mm"].to_numpy(dtype=float)
+    record.data.insert(0, "time_s", (crosshead - crosshead[0]) / speed)  # t = Δl / v
+    record.warnings.append(f"no time column: time derived from the crosshead travel at {speed:g} mm/s")
 
 
 def _check_readable(path: Path) -> None:

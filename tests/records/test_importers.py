@@ -131,12 +131,24 @@ def test_mapped_csv_errors(tmp_path):
         load_record(path, columns={**cols, "force": ("Kraft", "kN")})
     with pytest.raises(RecordError, match="unknown unit 'kgs'"):
         load_record(path, columns={**cols, "force": ("Load", "kgs")})
-    with pytest.raises(RecordError, match="lacks time"):
-        load_record(path, columns={"force": ("Load", "kN"), "crosshead": ("Extension", "mm")})
+    with pytest.raises(RecordError, match="lacks crosshead"):
+        load_record(path, columns={"force": ("Load", "kN"), "time": ("Time", "s")})
+    good = tmp_path / "good.csv"
+    good.write_text("Time,Load,Extension\n0,1,0\n1,2,0.5\n", encoding="utf-8")
+    with pytest.raises(RecordError, match="no time column mapped and no crosshead speed"):
+        load_record(good, columns={"force": ("Load", "kN"), "crosshead": ("Extension", "mm")})
     units = tmp_path / "units.csv"
     units.write_text("Time,Load,Extension\ns,kN,mm\n0,1,0\n", encoding="utf-8")
     with pytest.raises(RecordError, match="the mapping says 'N' but the file's units row says 'kN'; check units"):
         load_record(units, columns={**cols, "force": ("Load", "N")})
+
+
+def test_time_derived_from_crosshead_speed(tmp_path):
+    path = tmp_path / "notime.csv"
+    path.write_text("Load;Extension\nkN;mm\n0;0\n1;0,5\n2;1,5\n", encoding="utf-8")
+    rec = load_record(path, columns={"force": ("Load", None), "crosshead": ("Extension", None)}, meta={"crosshead_speed_mm_per_s": "0.01"})
+    np.testing.assert_allclose(rec.column("time_s"), [0.0, 50.0, 150.0])
+    assert list(rec.data.columns)[0] == "time_s" and any("derived" in w for w in rec.warnings)
 
 
 def test_file_level_errors(tmp_path):

@@ -1,0 +1,195 @@
+"""``flowcurve identify``: records in, true curves, results, hardening constants and plots out."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+from flowcurve.errors import FlowcurveError, RecordError
+
+DEFAULT_OUT = "flowcurve-results"
+
+# command-line option → metadata key it sets (geometry and post-test measurements, in mm)
+META_OPTIONS = {
+    "test": "test",
+    "d0": "specimen.d0_mm",
+    "l0": "specimen.l0_mm",
+    "h0": "specimen.h0_mm",
+    "lu": "post.lu_mm",
+    "dk": "post.dk_mm",
+    "hk": "post.hk_mm",
+    "dmax": "post.dmax_mm",
+    "smax": "post.smax_mm2",
+    "neck_radius": "post.neck_radius_mm",
+    "frame_stiffness": "rig.frame_stiffness_N_per_um",
+    "speed": "crosshead_speed_mm_per_s",
+}
+
+EPILOG = """\
+examples:
+  flowcurve identify runs/T600-01.csv
+      a native record: geometry and post-test measurements come from its header
+  flowcurve identify 46NT71.csv --out results
+      an INSTRON export (tab-separated key/value header, force in kN) is recognised
+  flowcurve identify export.csv --column force=Load:kN --column crosshead=Extension:mm \\
+      --column time=Time:s --test tension --d0 6 --l0 30 --lu 4.1 --dk 3.9
+      any CSV: name its columns and units; give the geometry the file lacks
+  flowcurve identify C1.csv --friction-correction siebel --hardening three-point
+
+Options override what a record's header says. Each record gets DIR/<record name>/ with
+result.json, true_curve.csv and PNG plots. With several records, one that fails is reported
+in one line and the others are still identified; the exit code is then non-zero.
+"""
+
+
+def _choices(module: str, name: str):
+    """Allowed values published by another module (None → accept any, that module decides)."""
+    try:
+        mod = __import__(module, fromlist=[name])
+        return tuple(getattr(mod, name))
+    except (ImportError, AttributeError):
+        return None
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "identify",
+        help="identify true stress-strain curves, ISO 6892-1 results and hardening constants from records",
+        description=(
+            "Turn test records into results: the corrected indicator diagram (frame compliance, "
+            "toe), engineering and true curves, E, Rp0.2, Rm, Ag, A, Z, neck (tension) or "
+            "friction (compression) corrections, and a hardening law fitted to the true curve. "
+            "Reads native flowcurve records, INSTRON exports, and any CSV through --column."
+        ),
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("records", nargs="+", metavar="RECORD", help="record file(s) to identify")
+    p.add_argument("--out", metavar="DIR", default=DEFAULT_OUT, help=f"folder for the results, one sub-folder per record (default: ./{DEFAULT_OUT})")
+    p.add_argument("--column", action="append", default=[], metavar="QUANTITY=COLUMN[:UNIT]",
+                   help="for a plain CSV: which column holds time, force, crosshead, extensometer or temperature, "
+                        "and its unit (e.g. force=Load:kN, crosshead=Extension:in, temperature=T:K); without a unit "
+                        "the file's units row is used. Repeat per column. Units are converted, never guessed.")
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG plots (faster for long series)")
+    g = p.add_argument_group("specimen and test (override the record's header)")
+    g.add_argument("--test", choices=("tension", "compression"), help="kind of test, for files that do not say")
+    g.add_argument("--d0", type=float, metavar="MM", help="initial specimen diameter, mm")
+    g.add_argument("--l0", type=float, metavar="MM", help="initial gauge length (tension), mm")
+    g.add_argument("--h0", type=float, metavar="MM", help="initial specimen height (compression), mm")
+    g.add_argument("--lu", type=float, metavar="MM", help="gauge length measured after fracture (tension), mm")
+    g.add_argument("--dk", type=float, metavar="MM", help="smallest diameter at the fracture (tension), mm")
+    g.add_argument("--neck-radius", type=float, metavar="MM", help="profile radius of the neck at fracture (tension), mm; without it a/R is estimated (Le Roy)")
+    g.add_argument("--hk", type=float, metavar="MM", help="specimen height after the test (compression), mm")
+    g.add_argument("--dmax", type=float, metavar="MM", help="largest (bulge) diameter after the test (compression), mm")
+    g.add_argument("--smax", type=float, metavar="MM2", help="largest cross-section area after the test (compression), mm², instead of --dmax")
+    g.add_argument("--speed", type=float, metavar="MM_PER_S", help="crosshead speed, mm/s (needed when a CSV has no time column)")
+    g.add_argument("--frame-stiffness", type=float, metavar="N_PER_UM", help="stiffness of the machine frame and grips, N/µm, subtracted from the crosshead travel (rig figure: 136)")
+    g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="any other metadata key, e.g. --set nominal_temperature_C=600")
+    m = p.add_argument_group("methods")
+    m.add_argument("--no-extensometer", action="store_true", help="use the corrected crosshead travel even when the record has an extensometer channel")
+    m.add_argument("--neck-correction", choices=("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
+    m.add_argument("--hardening", choices=("lsq", "three-point"), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
+    m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n)")
+    m.add_argument("--friction-method", choices=_choices("identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default: the seed's bulge regression)")
+    m.add_argument("--friction-correction", choices=_choices("identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default k_sigma; all are computed)")
+    p.set_defaults(func=run)
+
+
+def _meta_from_args(args) -> dict[str, str]:
+    meta = {}
+    for attr, key in META_OPTIONS.items():
+        value = getattr(args, attr, None)
+        if value is not None:
+            meta[key] = repr(value) if isinstance(value, float) else str(value)
+    for item in args.set:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip() or " " in key.strip():
+            raise RecordError("--set", f"{item!r} is not KEY=VALUE (e.g. nominal_temperature_C=600)")
+        meta[key.strip()] = value.strip()
+    return meta
+
+
+def _options_from_args(args) -> dict:
+    return {
+        "use_extensometer": False if args.no_extensometer else None,
+        "neck_correction": args.neck_correction,
+        "hardening": args.hardening,
+        "law": args.law,
+        "friction_method": args.friction_method,
+        "friction_correction": args.friction_correction,
+    }
+
+
+def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool = True):
+    """Load, identify and write one record; returns (identification, result folder)."""
+    from identification.identify import identify
+    from identification.importers import load_record
+
+    record = load_record(path, columns=columns, meta=meta)
+    ident = identify(record, **options)
+    if plots:
+        from reports.plots import add_plots
+
+        add_plots(ident)
+    folder = ident.write(out / record.name)
+    return ident, folder
+
+
+def _fmt(value, spec: str = ".4g") -> str:
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return format(value, spec)
+    return "—"
+
+
+def summary_lines(result: dict) -> list[str]:
+    """A short table of one result: strength figures, hardening constants, friction."""
+    h = result.get("hardening") or {}
+    lines = [
+        f"  E {_fmt(result.get('E_MPa'), '.0f')} MPa   Rp0.2 {_fmt(result.get('Rp02_MPa'), '.1f')} MPa   "
+        f"Rm {_fmt(result.get('Rm_MPa'), '.1f')} MPa   Ag {_fmt(result.get('Ag_pct'), '.2f')} %   "
+        f"A {_fmt(result.get('A_pct'), '.2f')} %   Z {_fmt(result.get('Z_pct'), '.1f')} %",
+    ]
+    if h:
+        consts = "   ".join(f"{k.removesuffix('_MPa')} {_fmt(h[k])}{' MPa' if k.endswith('_MPa') else ''}"
+                           for k in ("A_MPa", "B_MPa", "n", "K_MPa", "eps0", "sigma0_MPa", "Q_MPa", "b") if k in h)
+        lines.append(f"  hardening {h.get('law', '?')} ({h.get('method', '?')}): {consts}   fit error {_fmt(h.get('fit_error_pct'), '.2f')} %")
+    if result.get("test") == "compression":
+        methods = result.get("friction") or {}
+        extra = "   ".join(f"{k} {_fmt(v, '.3f')}" for k, v in methods.items() if isinstance(v, (int, float)))
+        lines.append(f"  friction μ {_fmt(result.get('friction_mu'), '.3f')}" + (f"   ({extra})" if extra else ""))
+    return lines
+
+
+def run(args) -> int:
+    from identification.importers import parse_column_option
+
+    columns = dict(parse_column_option(c) for c in args.column) or None
+    meta = _meta_from_args(args)
+    options = _options_from_args(args)
+    out = Path(args.out)
+    failed = 0
+    for path in args.records:
+        try:
+            ident, folder = identify_file(path, columns=columns, meta=meta, options=options, out=out, plots=not args.no_plots)
+        except FlowcurveError as exc:
+            failed += 1
+            print(f"flowcurve: error: {exc}", file=sys.stderr)
+            continue
+        except Exception as exc:  # a bug, not bad input: one line per record, the others still run
+            if os.environ.get("FLOWCURVE_DEBUG"):
+                raise
+            failed += 1
+            print(f"flowcurve: internal error on {path}: {type(exc).__name__}: {exc} (set FLOWCURVE_DEBUG=1 for the traceback, and please report it)", file=sys.stderr)
+            continue
+        result = ident.result
+        print(f"{path}: {result.get('test', '?')} → {folder}")
+        for line in summary_lines(result):
+            print(line)
+        for warning in result.get("warnings") or []:
+            print(f"  warning: {warning}")
+    if failed:
+        print(f"flowcurve: {failed} of {len(args.records)} record(s) failed", file=sys.stderr)
+        return 2
+    return 0

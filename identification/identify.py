@@ -1,0 +1,158 @@
+"""Identify one record, whatever its test: common sanity checks, then tension or compression.
+
+:func:`identify` checks what every test needs (enough samples, a force that rises above the
+noise, stresses of a plausible size for the declared units and geometry), then hands the
+record to :func:`identification.tension.identify_tension` or
+:func:`identification.compression.identify_compression`, and completes the result's
+``record`` block and ``warnings`` so that series fits can use the result folder alone.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import math
+
+import numpy as np
+
+from acquisition.record import Record
+from flowcurve.errors import IdentificationError, RecordError
+from identification.outcome import Identification
+
+MIN_SAMPLES = 20
+# a force rise smaller than this many noise standard deviations is no test at all
+MIN_RISE_IN_NOISE = 10.0
+# peak engineering stress outside this range means the force or diameter units are wrong
+PLAUSIBLE_STRESS_MPa = (2.0, 5000.0)
+
+DISPATCH = {
+    "tension": ("identification.tension", "identify_tension"),
+    "compression": ("identification.compression", "identify_compression"),
+}
+GAUGE_KEY = {"tension": "specimen.l0_mm", "compression": "specimen.h0_mm"}
+
+
+def force_noise_N(force_N: np.ndarray) -> float:
+    """Noise standard deviation of a force signal, robust to the test's own trend.
+
+    From the median absolute successive difference: for white noise σ, diff has σ√2 and
+    MAD·1.4826 estimates a standard deviation.
+    """
+    d = np.diff(force_N)
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(2.0))
+
+
+def check_record(record: Record) -> list[str]:
+    """The checks every identification needs; returns warnings, raises on unusable records."""
+    test = record.test
+    source = record.source
+    n = len(record.data)
+    if n < MIN_SAMPLES:
+        raise RecordError(source, f"only {n} samples; an identification needs at least {MIN_SAMPLES}")
+    force = record.column("force_N")
+    finite = np.isfinite(force)
+    if finite.sum() < MIN_SAMPLES:
+        raise RecordError(source, f"only {int(finite.sum())} samples with a force value", column="force_N")
+    force = force[finite]
+    head = force[: max(5, len(force) // 50)]
+    baseline = float(np.median(head))
+    rise = float(np.max(np.abs(force - baseline)))
+    noise = force_noise_N(force)
+    if rise <= MIN_RISE_IN_NOISE * noise or rise == 0.0:
+        raise RecordError(source, f"force never rises above noise (largest change {rise:.3g} N, noise {noise:.3g} N); is this the right column?", column="force_N")
+    d0 = record.positive("specimen.d0_mm", required=True)
+    record.positive(GAUGE_KEY[test], required=True)
+    area_mm2 = math.pi * d0**2 / 4.0
+    peak_MPa = float(np.max(np.abs(force))) / area_mm2
+    lo, hi = PLAUSIBLE_STRESS_MPa
+    if not lo <= peak_MPa <= hi:
+        raise RecordError(source, f"peak engineering stress {peak_MPa:.3g} MPa (force {np.max(np.abs(force)):.4g} N on d0 = {d0:g} mm) is outside {lo:g}–{hi:g} MPa; check units of force and diameter")
+    warnings = list(record.warnings)
+    if record.truncated and not any("cut short" in w for w in warnings):
+        warnings.append("the record was cut short; results cover only the samples recorded")
+    return warnings
+
+
+def _identifier(test: str):
+    module_name, func_name = DISPATCH[test]
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as exc:
+        if exc.name == module_name:
+            raise IdentificationError(f"{test} identification is not available in this installation ({module_name} is missing)") from None
+        raise
+    return getattr(module, func_name)
+
+
+def _accepted(func, options: dict) -> tuple[dict, list[str]]:
+    """Split options into those ``func`` accepts and the names it does not."""
+    params = inspect.signature(func).parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return options, []
+    accepted = {k: v for k, v in options.items() if k in params}
+    return accepted, sorted(set(options) - set(accepted))
+
+
+def record_summary(record: Record) -> dict:
+    """The ``record`` block of ``result.json``: where the data came from and at what conditions."""
+    test = record.test
+    meta = record.meta
+    speed = record.number("crosshead_speed_mm_per_s")
+    gauge = record.number(GAUGE_KEY[test])
+    rate = speed / gauge if speed is not None and gauge else None
+    specimen = {k.split(".", 1)[1]: _number_or_text(v) for k, v in meta.items() if k.startswith("specimen.")}
+    post = {k.split(".", 1)[1]: _number_or_text(v) for k, v in meta.items() if k.startswith("post.")}
+    published = {k.split(".", 1)[1]: _number_or_text(v) for k, v in meta.items() if k.startswith("published.")}
+    summary = {
+        "path": record.source,
+        "name": record.name,
+        "test": test,
+        "material": meta.get("material"),
+        "nominal_temperature_C": record.number("nominal_temperature_C"),
+        "crosshead_speed_mm_per_s": speed,
+        "strain_rate_per_s": rate,  # nominal: crosshead speed / gauge length (or height)
+        "samples": int(len(record.data)),
+        "truncated": bool(record.truncated),
+        "specimen": specimen,
+        "post": post,
+    }
+    if published:
+        summary["published"] = published
+    return summary
+
+
+def _number_or_text(value: str):
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return value
+    return number if math.isfinite(number) else value
+
+
+def identify(record: Record, **options) -> Identification:
+    """Identify a tension or compression record (dispatch on ``record.test``).
+
+    options: passed on to the test's identification when it accepts them (``None`` values are
+    dropped, so callers can pass every command-line option); options it does not know are
+    reported in the result's warnings rather than silently lost.
+    """
+    warnings = check_record(record)
+    func = _identifier(record.test)
+    given = {k: v for k, v in options.items() if v is not None}
+    accepted, ignored = _accepted(func, given)
+    ident = func(record, **accepted)
+    result = ident.result
+    result.setdefault("test", record.test)
+    summary = record_summary(record)
+    block = result.setdefault("record", {})
+    for key, value in summary.items():
+        if block.get(key) is None:
+            block[key] = value
+    if ignored:
+        warnings.append(f"option(s) not used by {record.test} identification: {', '.join(ignored)}")
+    old = list(result.get("warnings") or [])
+    result["warnings"] = old + [w for w in warnings if w not in old]
+    return ident
