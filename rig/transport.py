@@ -1,0 +1,323 @@
+"""Serial transport: one owner and one lock per port, explicit time-outs, framing helpers.
+
+Every port is opened through :func:`serial.serial_for_url`, so a driver runs unchanged on a
+real port, a pseudo-terminal (``/dev/pts/N``), ``loop://``, ``spy://`` (traffic log) or
+``socket://host:port``. Replies are framed by length (binary: :meth:`read_exactly`) or by
+terminator (ASCII: :meth:`read_until`), each against a deadline. A missing reply raises
+``DeviceError(device, "no answer to 'MSV?' within 0.2 s")``; a port that vanishes (OSError,
+SerialException) raises ``DeviceError(device, "port /dev/... disappeared")``.
+
+Retries are the caller's decision: :meth:`exchange` repeats a command only when told it is
+safe (reads and idempotent settings), never for commands with one-off side effects.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from contextlib import contextmanager
+from typing import Callable
+
+import serial
+
+from flowcurve.errors import DeviceError
+from rig.codecs import ProtocolError, dcon
+
+# Ports currently open, by URL → the owning transport. One owner per port.
+_OWNERS: dict[str, "SerialTransport"] = {}
+_OWNERS_LOCK = threading.Lock()
+_UNSHARED_SCHEMES = ("loop://",)  # every loop:// open is a port of its own
+
+
+def _owned_key(url: str, opener: Callable | None) -> object | None:
+    """The key of a port in the owner table (a custom opener is a port namespace of its own)."""
+    if url.startswith(_UNSHARED_SCHEMES):
+        return None
+    return url if opener is None else (opener, url)
+
+
+class SerialTransport:
+    """The single owner of one serial port.
+
+    ``opener`` (default :func:`serial.serial_for_url`) is called as
+    ``opener(url, baudrate=..., parity=..., bytesize=..., stopbits=..., timeout=...)``;
+    tests pass a fake that checks the bytes written and feeds replies.
+    """
+
+    def __init__(self, url: str, *, name: str = "device", baudrate: int = 9600,
+                 parity: str = "N", bytesize: int = 8, stopbits: float = 1,
+                 timeout_s: float = 0.2, opener: Callable | None = None):
+        self.url = url
+        self.name = name
+        self.settings = dict(baudrate=baudrate, parity=parity, bytesize=bytesize, stopbits=stopbits)
+        self.timeout_s = timeout_s
+        self.lock = threading.RLock()
+        self._opener = opener or serial.serial_for_url
+        self._key = _owned_key(url, opener)
+        self._port = None
+        self._pending = bytearray()  # bytes read past the end of the last frame
+
+    # -- life cycle -------------------------------------------------------------------
+    def open(self) -> "SerialTransport":
+        if self._port is not None:
+            return self
+        key = self._key
+        with _OWNERS_LOCK:
+            owner = _OWNERS.get(key) if key is not None else None
+            if owner is not None and owner is not self:
+                raise DeviceError(self.name, f"port {self.url} is already open by '{owner.name}'")
+            try:
+                self._port = self._opener(self.url, timeout=self.timeout_s, **self.settings)
+            except (OSError, serial.SerialException, ValueError) as exc:
+                raise DeviceError(self.name, f"cannot open port {self.url}: {_reason(exc)}") from None
+            if key is not None:
+                _OWNERS[key] = self
+        return self
+
+    def close(self) -> None:
+        port, self._port = self._port, None
+        with _OWNERS_LOCK:
+            if self._key is not None and _OWNERS.get(self._key) is self:
+                del _OWNERS[self._key]
+        if port is not None:
+            try:
+                port.close()
+            except (OSError, serial.SerialException):
+                pass
+
+    @property
+    def is_open(self) -> bool:
+        return self._port is not None
+
+    def __enter__(self) -> "SerialTransport":
+        return self.open()
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    @contextmanager
+    def locked(self):
+        """Hold the port for a sequence of exchanges that must not be interleaved."""
+        with self.lock:
+            yield self
+
+    # -- raw I/O ----------------------------------------------------------------------
+    def _require_port(self):
+        if self._port is None:
+            self.open()
+        return self._port
+
+    def write(self, data: bytes) -> None:
+        port = self._require_port()
+        try:
+            port.write(data)
+            port.flush()
+        except (OSError, serial.SerialException):
+            raise self._disappeared() from None
+
+    def discard_input(self) -> None:
+        """Forget anything received but not yet read (stale frames, late replies)."""
+        port = self._require_port()
+        self._pending.clear()
+        try:
+            port.reset_input_buffer()
+        except (OSError, serial.SerialException):
+            raise self._disappeared() from None
+
+    def _read_some(self, size: int, deadline: float) -> bytes:
+        port = self._require_port()
+        remaining = deadline - time.monotonic()
+        if remaining <= 0:
+            return b""
+        try:
+            port.timeout = remaining
+            waiting = port.in_waiting
+            return port.read(max(size, min(waiting, 4096)) if waiting else size)
+        except (OSError, serial.SerialException, TypeError):
+            # TypeError: pyserial's posix read on a vanished file descriptor
+            raise self._disappeared() from None
+
+    def read_exactly(self, n: int, timeout: float | None = None, *, what: str = "a reply") -> bytes:
+        """Exactly ``n`` bytes before the deadline, else :class:`DeviceError` (framing by length)."""
+        timeout = self.timeout_s if timeout is None else timeout
+        deadline = time.monotonic() + timeout
+        with self.lock:
+            while len(self._pending) < n:
+                chunk = self._read_some(n - len(self._pending), deadline)
+                if not chunk and time.monotonic() >= deadline:
+                    # a partial frame stays buffered: a stream keeps its framing, and an
+                    # exchange discards input before it writes anyway
+                    raise self._timeout(what, timeout, bytes(self._pending))
+                self._pending += chunk
+            frame = bytes(self._pending[:n])
+            del self._pending[:n]
+            return frame
+
+    def read_until(self, terminator: bytes = b"\r", timeout: float | None = None, *,
+                   what: str = "a reply", max_bytes: int = 256) -> bytes:
+        """Bytes up to and including ``terminator`` before the deadline (framing by terminator)."""
+        timeout = self.timeout_s if timeout is None else timeout
+        deadline = time.monotonic() + timeout
+        with self.lock:
+            while True:
+                end = self._pending.find(terminator)
+                if end >= 0:
+                    end += len(terminator)
+                    frame = bytes(self._pending[:end])
+                    del self._pending[:end]
+                    return frame
+                if len(self._pending) > max_bytes:
+                    got = bytes(self._pending)
+                    self._pending.clear()
+                    raise DeviceError(self.name, f"garbled answer to {what}: no {terminator!r} "
+                                                 f"in {len(got)} bytes ({got[:40]!r}...)")
+                chunk = self._read_some(1, deadline)
+                if not chunk and time.monotonic() >= deadline:
+                    got = bytes(self._pending)
+                    self._pending.clear()
+                    raise self._timeout(what, timeout, got)
+                self._pending += chunk
+
+    # -- exchanges --------------------------------------------------------------------
+    def exchange(self, command: bytes, *, length: int | None = None, terminator: bytes | None = b"\r",
+                 timeout: float | None = None, retries: int = 0, what: str | None = None,
+                 parse: Callable[[bytes], object] | None = None):
+        """Send ``command`` and read its reply (by ``length`` if given, else by ``terminator``).
+
+        ``retries`` > 0 repeats the whole exchange after a time-out or a reply that ``parse``
+        rejects (ValueError) — pass it only for reads and idempotent settings. Returns the
+        reply bytes, or ``parse(reply)``. ``terminator=None`` with no length: nothing is read.
+        """
+        what = what or _describe(command)
+        with self.lock:
+            for attempt in range(retries + 1):
+                last = attempt == retries
+                self.discard_input()
+                self.write(command)
+                if length is None and terminator is None:
+                    return None
+                try:
+                    if length is not None:
+                        raw = self.read_exactly(length, timeout, what=what)
+                    else:
+                        raw = self.read_until(terminator, timeout, what=what)
+                    return parse(raw) if parse else raw
+                except DeviceError as exc:
+                    if last or "disappeared" in str(exc):
+                        raise
+                except ValueError as exc:
+                    if last:
+                        raise DeviceError(self.name, f"garbled answer to {what}: {exc}") from None
+        raise AssertionError("unreachable")
+
+    def send(self, command: bytes) -> None:
+        """Send a command that has no reply (``STP``, ``~**``, ``#**``, address selection)."""
+        with self.lock:
+            self.write(command)
+
+    # -- errors -----------------------------------------------------------------------
+    def _timeout(self, what: str, timeout: float, got: bytes) -> DeviceError:
+        partial = f" (only {len(got)} bytes: {got[:40]!r})" if got else ""
+        return DeviceError(self.name, f"no answer to {what} within {timeout:g} s{partial}")
+
+    def _disappeared(self) -> DeviceError:
+        self.close()
+        return DeviceError(self.name, f"port {self.url} disappeared")
+
+
+DCON_READ_RETRIES = 2  # reads and idempotent DCON settings may be repeated
+
+
+class DconDevice:
+    """What the DCON devices share: framing, checksum, silent-on-error time-outs."""
+
+    def __init__(self, port_url, *, name: str, address: int, baudrate: int, parity: str,
+                 timeout_s: float, checksum: bool, opener=None):
+        if not 0 <= address <= 0xFF:
+            raise ValueError(f"DCON address must be 0..255, got {address}")
+        self.name = name
+        self.address = address
+        self.checksum = checksum
+        if isinstance(port_url, SerialTransport):
+            self.transport = port_url
+        else:
+            self.transport = SerialTransport(port_url, name=name, baudrate=baudrate, parity=parity,
+                                             timeout_s=timeout_s, opener=opener)
+
+    def open(self):
+        self.transport.open()
+        return self
+
+    def close(self) -> None:
+        self.transport.close()
+
+    def __enter__(self):
+        return self.open()
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def query(self, lead: str, body: str = "", *, retries: int = DCON_READ_RETRIES,
+              timeout: float | None = None, broadcast: bool = False) -> dcon.Reply:
+        """Send one framed command and return its decoded reply (silence → DeviceError)."""
+        raw_command = dcon.frame(lead, None if broadcast else self.address, body,
+                                 use_checksum=self.checksum)
+        what = "'" + raw_command.decode("ascii").strip() + "'"
+        self.open()
+        return self.transport.exchange(raw_command, terminator=dcon.CR, retries=retries,
+                                       timeout=timeout, what=what, parse=self._parse)
+
+    def _parse(self, raw: bytes) -> dcon.Reply:
+        return dcon.parse_reply(raw, use_checksum=self.checksum)
+
+    def send(self, lead: str, body: str = "", *, broadcast: bool = False) -> None:
+        """A command without reply (``~**``, ``#**``)."""
+        self.open()
+        self.transport.send(dcon.frame(lead, None if broadcast else self.address, body,
+                                       use_checksum=self.checksum))
+
+    def decode(self, func, reply: dcon.Reply, *args, **kwargs):
+        """Run a reply decoder; a malformed reply becomes a DeviceError naming the device."""
+        try:
+            return func(reply, *args, **kwargs)
+        except ProtocolError as exc:
+            raise DeviceError(self.name, f"garbled reply: {exc}") from None
+
+    def configuration(self) -> dcon.Configuration:
+        """``$AA2``: address, type, baud, format and checksum flag as the module reports them."""
+        return self.decode(dcon.parse_configuration, self.query("$", "2"))
+
+    def module_name(self) -> str:
+        """``$AAM`` → e.g. ``7011`` (the text after the address)."""
+        return self.decode(dcon.expect_ack, self.query("$", "M"), self.address, "$AAM")
+
+    def firmware(self) -> str:
+        """``$AAF`` → the firmware version text."""
+        return self.decode(dcon.expect_ack, self.query("$", "F"), self.address, "$AAF")
+
+    def host_ok(self) -> None:
+        """``~**``: tell every module on the line that the host is alive (no reply)."""
+        self.send("~", broadcast=True)
+
+    def watchdog_status(self) -> int:
+        """``~AA0`` → status byte; ``dcon.WATCHDOG_TIMED_OUT`` (04) when the host went silent."""
+        return self.decode(dcon.parse_watchdog_status, self.query("~", "0"), self.address)
+
+    def clear_watchdog(self) -> None:
+        """``~AA1``: clear the watchdog status (idempotent)."""
+        self.decode(dcon.expect_ack, self.query("~", "1"), self.address, "~AA1")
+
+    def set_watchdog(self, enabled: bool, timeout_s: float) -> None:
+        """``~AA3EVV``: host watchdog on/off with its time-out (idempotent)."""
+        self.decode(dcon.expect_ack, self.query("~", dcon.watchdog_body(enabled, timeout_s)),
+                    self.address, "~AA3EVV")
+
+
+def _describe(command: bytes) -> str:
+    text = command.decode("ascii", "replace").strip("\r\n;").replace(";", " ")
+    return f"'{text}'"
+
+
+def _reason(exc: Exception) -> str:
+    text = str(exc).strip() or type(exc).__name__
+    return text.splitlines()[0]

@@ -1,0 +1,100 @@
+"""LoadCell driver through command/reply pairs (the AED command set of PROTOCOLS.md)."""
+
+import pytest
+
+from flowcurve.errors import DeviceError
+from rig.codecs import aed
+from rig.loadcell import LoadCell
+
+
+def cell(fake, **kw):
+    kw.setdefault("nominal_load_N", 100_000.0)
+    return LoadCell("fake://amp", timeout_s=0.05, opener=fake.opener, **kw)
+
+
+def test_identify(fake_port):
+    fake = fake_port([(b";IDN?;", b'HBM,"AED104         ","1234   ",P20\r\n')])
+    assert cell(fake).identify()["model"] == "AED104"
+    assert fake.open_kwargs["parity"] == "E" and fake.open_kwargs["baudrate"] == 9600
+
+
+def test_configure_sends_settings_and_checks_acks(fake_port):
+    fake = fake_port([(b";ICR0;", b"0\r\n"), (b";ASF3;", b"0\r\n"), (b";COF8;", b"0\r\n")])
+    lc = cell(fake)
+    lc.configure(rate_code=0, filter=3, fmt=8)
+    assert lc.fmt.frame_length == 6 and lc.fmt.has_status
+
+
+def test_refused_setting_is_a_device_error(fake_port):
+    fake = fake_port()  # an impossible code is caught before anything is sent
+    with pytest.raises(ValueError):
+        cell(fake).configure(rate_code=9)
+    assert fake.log == []
+    fake2 = fake_port([(b";ASF5;", b"?\r\n")])
+    with pytest.raises(DeviceError, match=r"^load cell: refused 'ASF5'"):
+        cell(fake2).configure(filter=5)
+
+
+def test_tare_is_retried_after_silence(fake_port):
+    fake = fake_port([(b";TAR;", None), (b";TAR;", b"0\r\n")])
+    cell(fake).tare()
+
+
+def test_read_ascii_in_newtons(fake_port):
+    # COF3: nominal load = 1 000 000 counts; 250 000 counts of a 100 kN cell = 25 kN
+    fake = fake_port([(b";MSV?;", b"+0250000\r\n")])
+    s = cell(fake).read()
+    assert s.force_N == pytest.approx(25_000.0) and s.counts == 250_000 and not s.overload
+
+
+def test_read_binary_with_status_and_overload(fake_port):
+    fmt = aed.output_format(8)
+    frame = aed.encode_msv(-2_560_000, fmt, status=aed.GROSS_OVERFLOW)  # -nominal/2, overflow
+    fake = fake_port([(b";MSV?;", frame)])
+    s = cell(fake, output_format=8).read()
+    assert s.force_N == pytest.approx(-50_000.0) and s.overload and s.status == aed.GROSS_OVERFLOW
+    fake2 = fake_port([(b";MSV?;", frame)])
+    with pytest.raises(DeviceError, match="overload"):
+        cell(fake2, output_format=8, raise_on_overload=True).read()
+
+
+def test_calibration_per_count_is_on_the_4_byte_scale(fake_port):
+    fake = fake_port([(b";MSV?;", b"+1000000\r\n")])
+    # 0.01 N per count of 5 120 000 → nominal 51 200 N, read in ASCII at full scale
+    s = cell(fake, nominal_load_N=None, calibration_N_per_count=0.01).read()
+    assert s.force_N == pytest.approx(51_200.0)
+
+
+def test_silence_names_the_device_and_command(fake_port):
+    fake = fake_port([(b";MSV?;", None)] * 3)
+    with pytest.raises(DeviceError, match=r"^load cell: no answer to 'MSV\?' within 0.05 s$"):
+        cell(fake).read()
+
+
+def test_stream_framed_by_length_even_with_crlf_inside(fake_port):
+    fmt = aed.output_format(0)
+    counts = [0x0D0A0D, -5, 5_120_000, 0x0A0D0A]  # values whose bytes are CR/LF
+    fake = fake_port([(b";MSV?0;", b"".join(aed.encode_msv(c, fmt) for c in counts[:3])),
+                      (b";STP;", None)])
+    lc = cell(fake, output_format=0)
+    lc.start_stream()
+    with pytest.raises(DeviceError, match="while streaming"):
+        lc.read()
+    first = lc.read_stream(2, timeout=0.2)
+    fake.feed(aed.encode_msv(counts[3], fmt)[:3])  # a frame cut in the middle ...
+    rest = lc.read_stream(10, timeout=0.05)
+    fake.feed(aed.encode_msv(counts[3], fmt)[3:])  # ... completes in the next call
+    last = lc.read_stream(10, timeout=0.05)
+    assert [s.counts for s in first + rest + last] == counts
+    assert all(a.t_monotonic_s <= b.t_monotonic_s for a, b in zip(first, first[1:]))
+    lc.stop_stream()
+    assert not lc.streaming
+
+
+def test_silent_stream_raises(fake_port):
+    fake = fake_port([(b";MSV?0;", None)])
+    lc = cell(fake, output_format=3)
+    lc.start_stream()
+    lc.stream_silence_s = 0.05
+    with pytest.raises(DeviceError, match="silent"):
+        lc.read_stream(5, timeout=0.1)
