@@ -1,0 +1,301 @@
+"""Tension identification (METHODS.md §2–§3, seed 3.1.2): record → ISO 6892-1 results, true
+stress–strain curve, neck-corrected fracture point and hardening law.
+
+The strain comes from the extensometer when the record has one (``use_extensometer=None``
+decides automatically), otherwise from the crosshead: frame compliance removed (§2.1), toe
+compensated, and scaled to the measured elongation post.lu_mm when it was measured (3.1).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from acquisition.record import Record
+from flowcurve.errors import IdentificationError, RecordError
+from identification import iso6892
+from identification.identify import record_summary
+from identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, fit_hardening, three_point_fit
+from identification.indicator import compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
+from identification.necking import METHODS as NECK_METHODS
+from identification.necking import neck_corrections
+from identification.outcome import Identification
+
+TRUE_STRESS_FORMS = ("gost_3_6", "constant_volume")
+HARDENING_METHODS = ("least_squares", "three_point")
+DEFAULT_MODULUS_WINDOW = (0.10, 0.80)  # fractions of the modulus reference stress
+MODULUS_REFERENCES = ("Rp02", "Rm")
+FIT_POINTS = 30  # the uniform range is resampled to this many points, evenly in εp
+MIN_YIELD_OFFSET = 0.002
+
+
+def true_stress_gost(eng_stress_MPa, log_strain, K_MPa: float):
+    """True stress with the lateral contraction of (3.4)–(3.5), the corrected (3.6):
+    σ_t = (3K/2)·[√((1 − ε)² + (4/3)·σ_e/K) − (1 − ε)]."""
+    one_minus = 1.0 - np.asarray(log_strain, dtype=float)
+    s = np.asarray(eng_stress_MPa, dtype=float)
+    # (3.6) corrected: factor 3K/2, not 2/(3K). Written as 2σ_e/(√(...) + (1 − ε)) to avoid
+    # cancellation when σ_e ≪ K (identical algebraically).
+    return 2.0 * s / (np.sqrt(one_minus**2 + (4.0 / 3.0) * s / K_MPa) + one_minus)
+
+
+def true_stress_constant_volume(eng_stress_MPa, eng_strain):
+    """True stress at constant volume: σ_t = σ_e·(1 + e)."""
+    return np.asarray(eng_stress_MPa, dtype=float) * (1.0 + np.asarray(eng_strain, dtype=float))
+
+
+def true_plastic_strain(log_strain, true_stress_MPa, E_MPa: float):
+    """True plastic strain (3.7): εp = ε − σ_t/E."""
+    return np.asarray(log_strain, dtype=float) - np.asarray(true_stress_MPa, dtype=float) / E_MPa
+
+
+def bulk_modulus(E_MPa: float, poisson: float) -> float:
+    """K = E/(3(1 − 2ν))."""
+    if not -1.0 < poisson < 0.5:
+        raise IdentificationError(f"Poisson's ratio must lie in (-1, 0.5), got {poisson!r}")
+    return E_MPa / (3.0 * (1.0 - 2.0 * poisson))
+
+
+def _increasing(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Keep the points where x strictly exceeds every earlier x (noise makes εp wobble)."""
+    keep = np.ones(x.size, dtype=bool)
+    keep[1:] = x[1:] > np.maximum.accumulate(x)[:-1]
+    return x[keep], y[keep]
+
+
+def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndarray, l0: float, options: dict) -> dict:
+    """Displacement (mm), the length it refers to (mm) and how it was obtained."""
+    has_ext = record.has("extensometer_mm")
+    if use_extensometer and not has_ext:
+        raise RecordError(record.source, "use_extensometer was requested but the record has no extensometer channel", column="extensometer_mm")
+    warnings: list[str] = []
+    if has_ext and use_extensometer is not False:
+        ext = record.column("extensometer_mm")
+        gauge = record.positive("specimen.extensometer_gauge_mm", default=l0)
+        if "specimen.extensometer_gauge_mm" not in record.meta:
+            warnings.append(f"specimen.extensometer_gauge_mm missing: the extensometer gauge length is taken as l0 = {l0:g} mm")
+        return {"disp": ext - ext[0], "length": gauge, "source": "extensometer", "stiffness": None, "scalable": False, "warnings": warnings}
+    cross = record.column("crosshead_mm")
+    disp = cross - cross[0]
+    stiffness = options.get("frame_stiffness_N_per_um")
+    if stiffness is None:
+        stiffness = record.positive("rig.frame_stiffness_N_per_um")
+    if stiffness is not None:
+        disp = remove_frame_compliance(disp, force - force[0], stiffness)
+    else:
+        warnings.append("no frame stiffness (rig.frame_stiffness_N_per_um): the crosshead displacement still includes the frame; strains and E are not the specimen's")
+    length = options.get("crosshead_length_mm") or record.positive("specimen.parallel_length_mm", default=l0)
+    return {"disp": disp, "length": float(length), "source": "crosshead", "stiffness": stiffness, "scalable": True, "warnings": warnings}
+
+
+def identify_tension(record: Record, *, use_extensometer: bool | None = None, frame_stiffness_N_per_um: float | None = None,
+                     crosshead_length_mm: float | None = None, toe: bool = True, scale: bool = True,
+                     modulus_window: tuple[float, float] = DEFAULT_MODULUS_WINDOW, modulus_reference: str = "Rp02",
+                     E_MPa: float | None = None, poisson: float = 0.3, true_stress: str = "gost_3_6",
+                     neck: str = "davidenkov", law: str = "johnson_cook", hardening: str = "least_squares",
+                     fracture_weight: float | None = None) -> Identification:
+    """Identify a tension record: ISO 6892-1 results, true curve, fracture point, hardening law.
+
+    use_extensometer: None = use the extensometer channel when the record has one.
+    frame_stiffness_N_per_um: overrides rig.frame_stiffness_N_per_um (crosshead path).
+    crosshead_length_mm: length the crosshead elongation refers to (default: the parallel
+        length if given, else l0); with post.lu_mm measured and ``scale`` it is l0 (3.1).
+    modulus_window: E is regressed over (lo, hi) × the reference stress (Rp0.2, iterated,
+        or Rm); the window in MPa is reported. E_MPa fixes the modulus instead.
+    true_stress: "gost_3_6" (the corrected (3.6), with ν = ``poisson``) or "constant_volume".
+    neck: the neck correction used for the fracture point (all are reported).
+    law, hardening: the hardening law and method of the main fit; the others are reported.
+    fracture_weight: weight of the fracture point in the least squares (default √N, so that
+        it counts as much as the N points of the uniform range).
+    """
+    if true_stress not in TRUE_STRESS_FORMS:
+        raise IdentificationError(f"true_stress must be one of {', '.join(TRUE_STRESS_FORMS)}, not {true_stress!r}")
+    if neck not in NECK_METHODS:
+        raise IdentificationError(f"neck must be one of {', '.join(NECK_METHODS)}, not {neck!r}")
+    if hardening not in HARDENING_METHODS:
+        raise IdentificationError(f"hardening must be one of {', '.join(HARDENING_METHODS)}, not {hardening!r}")
+    if modulus_reference not in MODULUS_REFERENCES:
+        raise IdentificationError(f"modulus_reference must be one of {', '.join(MODULUS_REFERENCES)}, not {modulus_reference!r}")
+    lo_frac, hi_frac = (float(v) for v in modulus_window)
+    if not 0 <= lo_frac < hi_frac <= 1:
+        raise IdentificationError(f"modulus_window must be fractions 0 ≤ lo < hi ≤ 1, got {modulus_window!r}")
+
+    warnings: list[str] = []
+    d0 = record.positive("specimen.d0_mm", required=True)
+    l0 = record.positive("specimen.l0_mm", required=True)
+    s0 = record.positive("specimen.s0_mm2", default=math.pi * d0**2 / 4.0)  # F0 = π d0²/4
+    force = record.column("force_N")
+    ok = np.isfinite(force)
+    if not ok.all():
+        warnings.append(f"{int((~ok).sum())} samples without a force value were left out")
+    data = record.data[ok].reset_index(drop=True)
+    force = force[ok]
+    sub = Record(meta=record.meta, data=data, source=record.source)
+    i_m = iso6892.max_force_index(force)
+    Fm = float(force[i_m])
+    if Fm <= 0 or i_m == 0 or Fm - force[0] <= 0.05 * abs(Fm):
+        raise RecordError(record.source, "the force never rises: no tension test in this record (check the force column and its sign)", column="force_N")
+    eng_stress = force / s0
+    Rm = Fm / s0
+    if Rm > MAX_STRESS_MPa:
+        raise IdentificationError(f"{record.source}: Rm = {Rm:.4g} MPa is implausible - check units of force (N) and diameter (mm)")
+
+    src = _strain_source(sub, use_extensometer, force, l0, {"frame_stiffness_N_per_um": frame_stiffness_N_per_um, "crosshead_length_mm": crosshead_length_mm})
+    warnings += src["warnings"]
+    disp0 = src["disp"]
+    lu = record.positive("post.lu_mm")
+    scale_factor = None
+    length = src["length"]
+    if src["scalable"] and scale and lu is not None:
+        if lu <= l0:
+            raise IdentificationError(f"{record.source}: post.lu_mm = {lu:g} mm is not longer than l0 = {l0:g} mm")
+        length = l0
+
+    # E, the toe and Rp0.2 depend on each other through the window: iterate to a fixed point
+    ref = 0.5 * Rm if modulus_reference == "Rp02" else Rm
+    toe_mm = 0.0
+    for _ in range(4):
+        window_MPa = (lo_frac * ref, hi_frac * ref)
+        disp = disp0
+        if toe:
+            disp, toe_mm = compensate_toe(disp0, force, window_N=(window_MPa[0] * s0, window_MPa[1] * s0))
+        if src["scalable"] and scale and lu is not None:
+            disp, scale_factor = scale_to_measured(disp, lu - l0)  # (3.1) K_l = Δl_p / max Δl
+        strain = disp / length
+        mod = fit_modulus(strain, eng_stress, window_MPa)
+        E = float(E_MPa) if E_MPa is not None else mod.E_MPa
+        Rp02, _ = iso6892.offset_yield_strength(strain, eng_stress, E, MIN_YIELD_OFFSET, start_MPa=window_MPa[0])
+        if modulus_reference == "Rm" or abs(Rp02 - ref) <= 1e-6 * Rp02:
+            break
+        ref = Rp02
+    if np.nanmax(np.abs(strain)) > MAX_STRAIN:
+        raise IdentificationError(f"{record.source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
+    if E > 1e6 or E < 1e3:
+        warnings.append(f"apparent modulus {E:.4g} MPa is far from any metal's: check units, the frame stiffness or the window")
+
+    # ISO 6892-1 results
+    e_m = float(strain[i_m])
+    Ag = float(iso6892.plastic_extension_pct(e_m, Rm, E))
+    i_k = iso6892.fracture_index(force)
+    if lu is not None:
+        A, A_method = iso6892.elongation_after_fracture_pct(l0, lu), "measured gauge length after fracture (post.lu_mm)"
+    else:
+        A = float(iso6892.plastic_extension_pct(strain[i_k], eng_stress[i_k], E))
+        A_method = f"{src['source']} at fracture, elastic part removed (no post.lu_mm)"
+    su = record.positive("post.sk_mm2")
+    dk = record.positive("post.dk_mm")
+    su_source = "post.sk_mm2" if su is not None else None
+    if su is None and dk is not None:
+        su, su_source = math.pi * dk**2 / 4.0, "post.dk_mm"
+    Z = iso6892.reduction_of_area_pct(s0, su) if su is not None else None
+
+    # true curve (uniform range up to Fm)
+    log_strain = np.log1p(strain)  # (3.2) ε = ln((l0 + Δl)/l0)
+    if true_stress == "gost_3_6":
+        sig_t = true_stress_gost(eng_stress, log_strain, bulk_modulus(E, poisson))
+    else:
+        sig_t = true_stress_constant_volume(eng_stress, strain)
+    eps_p = true_plastic_strain(log_strain, sig_t, E)
+    uni = slice(0, i_m + 1)
+    eps_u = float(log_strain[i_m])
+    ep_u, sig_u = _increasing(eps_p[uni], sig_t[uni])
+    in_range = ep_u >= 0
+    true_curve = pd.DataFrame({"true_plastic_strain": ep_u[in_range], "true_stress_MPa": sig_u[in_range]})
+    sig_t_rp = float(np.interp(MIN_YIELD_OFFSET, ep_u, sig_u)) if ep_u[-1] > MIN_YIELD_OFFSET else None
+    eps_p_at_Rm = float(eps_p[i_m])
+
+    # fracture point with the neck corrections
+    fracture: dict = {}
+    if su is not None:
+        eps_f = math.log(s0 / su)  # (3.13) ε_f = ln(F0/Fk)
+        avg = float(force[i_k] / su)  # P_k / F_k
+        neck_radius = record.positive("post.neck_radius_mm")
+        dk_for_neck = dk if dk is not None else math.sqrt(4.0 * su / math.pi)
+        fracture = neck_corrections(avg, eps_f, eps_u, d_k_mm=dk_for_neck, neck_radius_mm=neck_radius)
+        fracture.update({"true_strain": eps_f, "avg_stress_MPa": avg, "force_N": float(force[i_k]), "area_source": su_source})
+    else:
+        warnings.append("no post.dk_mm or post.sk_mm2: no reduction of area, fracture point or neck correction; the hardening law is fitted to the uniform range only")
+
+    # hardening
+    sel = ep_u >= MIN_YIELD_OFFSET
+    if sel.sum() < 4:
+        raise IdentificationError(f"{record.source}: the uniform range has fewer than 4 points beyond 0.2 % plastic strain; no hardening law")
+    grid = np.linspace(ep_u[sel][0], ep_u[sel][-1], FIT_POINTS)
+    fit_sig = np.interp(grid, ep_u[sel], sig_u[sel])
+    weight = math.sqrt(FIT_POINTS) if fracture_weight is None else float(fracture_weight)
+    extra = [(fracture["true_strain"], fracture[neck]["stress_MPa"], weight)] if fracture else []
+    three_points = None
+    if fracture and sig_t_rp is not None:
+        three_points = [(MIN_YIELD_OFFSET, sig_t_rp), (eps_p_at_Rm, float(sig_t[i_m])), (fracture["true_strain"], fracture[neck]["stress_MPa"])]
+    fits: dict = {}
+    for name in ("johnson_cook", "swift", "voce"):
+        try:
+            fits[f"least_squares_{name}"] = fit_hardening(grid, fit_sig, name, extra_points=extra)
+        except IdentificationError as exc:
+            warnings.append(f"least-squares {name} fit failed: {exc}")
+        if three_points is not None:
+            try:
+                fits[f"three_point_{name}"] = three_point_fit(three_points, name, curve=(grid, fit_sig))
+            except IdentificationError as exc:
+                warnings.append(f"three-point {name} fit failed: {exc}")
+    main_key = f"{hardening}_{law}"
+    if main_key not in fits:
+        raise IdentificationError(f"{record.source}: the {hardening.replace('_', ' ')} {law} fit is not available" + (" (it needs the fracture point: post.dk_mm)" if hardening == "three_point" else ""))
+    main = fits[main_key]
+
+    eps_end = fracture.get("true_strain", float(grid[-1]))
+    fit_eps = np.linspace(0.0, eps_end, 200)
+    curves = {
+        "raw_diagram": data[[c for c in ("time_s", "force_N", "crosshead_mm", "extensometer_mm") if c in data.columns]].copy(),
+        "corrected_diagram": pd.DataFrame({"elongation_mm": disp, "force_N": force}),
+        "engineering": pd.DataFrame({"engineering_strain": strain, "engineering_stress_MPa": eng_stress}),
+        "true": pd.DataFrame({"true_strain": log_strain[uni], "true_plastic_strain": eps_p[uni], "true_stress_MPa": sig_t[uni]}),
+        "fit": pd.DataFrame({"true_plastic_strain": fit_eps, "true_stress_MPa": main(fit_eps)}),
+    }
+    if fracture:
+        curves["fracture_point"] = pd.DataFrame({"true_plastic_strain": [fracture["true_strain"]], "true_stress_MPa": [fracture[neck]["stress_MPa"]]})
+
+    result = {
+        "test": "tension",
+        "E_MPa": E,
+        "E_stderr_MPa": mod.E_stderr_MPa if E_MPa is None else None,
+        "Rp02_MPa": Rp02,
+        "Rm_MPa": Rm,
+        "Fm_N": Fm,
+        "Ag_pct": Ag,
+        "Agt_pct": 100.0 * e_m,
+        "A_pct": A,
+        "A_method": A_method,
+        "Z_pct": Z,
+        "uniform_true_strain": eps_u,
+        "uniform_true_plastic_strain": eps_p_at_Rm,
+        "fracture_true_strain": fracture.get("true_strain"),
+        "fracture_true_stress_MPa": fracture[neck]["stress_MPa"] if fracture else None,
+        "fracture_avg_stress_MPa": fracture.get("avg_stress_MPa"),
+        "neck_corrections": {k: v for k, v in fracture.items() if k in NECK_METHODS or k.startswith("a_over_R")},
+        "hardening": {**main.as_dict(), "fracture_point_weight": weight if extra else None},
+        "hardening_alternatives": {k: f.as_dict() for k, f in fits.items() if k != main_key},
+        "three_points": [{"true_plastic_strain": e, "true_stress_MPa": s} for e, s in three_points] if three_points else None,
+        "modulus_window_MPa": list(window_MPa),
+        "methods": {
+            "strain_source": src["source"],
+            "strain_length_mm": length,
+            "frame_stiffness_N_per_um": src["stiffness"],
+            "toe_compensation_mm": toe_mm if toe else None,
+            "scale_factor_Kl": scale_factor,
+            "modulus": "fixed by option E_MPa" if E_MPa is not None else f"linear regression over {lo_frac:g}–{hi_frac:g} × {modulus_reference} of the first loading",
+            "modulus_r2": mod.r2,
+            "Rp02": "offset method, ISO 6892-1: intersection with the 0.2 % line of slope E",
+            "Ag": "plastic extension at maximum force, 100·(e_m − Rm/E)",
+            "Z": "(S0 − Su)/S0" if Z is not None else None,
+            "true_stress": "(3.6) corrected, K = E/(3(1 − 2ν))" if true_stress == "gost_3_6" else "σ_e(1 + e), constant volume",
+            "poisson": poisson,
+            "neck_correction": neck,
+            "hardening": f"{hardening} {law}",
+        },
+        "warnings": warnings,
+    }
+    result["record"] = record_summary(record)
+    return Identification(result=result, true_curve=true_curve, curves=curves)
