@@ -1,0 +1,657 @@
+"""Johnson–Cook constants from a test series: one global least-squares fit, or stepwise.
+
+A series is a list of :class:`SeriesMember` — the true curve σ(εp) of one test with the strain
+rate and temperature it was run at — built from records (identified with
+:func:`identification.identify.identify`) or from the result folders of ``flowcurve identify``.
+
+* :func:`fit_global` — A, B, n, C, m in one least-squares problem over all curves (lmfit, the
+  default);
+* :func:`fit_stepwise` — the classic procedure: A, B, n at the reference condition (with
+  :func:`identification.hardening.fit_hardening`), then C from the reference-temperature
+  records at higher rates, then m from the records above the reference temperature;
+* :func:`fit_series` — both, plus the covered range and the tabulated curves per condition:
+  everything ``fit.json`` holds (schema in ``docs/fit-json.md``).
+
+The model and its conventions (T* clamped to [0, 1], no rate effect below ε̇0) are those of
+:mod:`identification.johnson_cook`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import lmfit
+import numpy as np
+import pandas as pd
+
+from acquisition.record import Record
+from flowcurve.errors import IdentificationError, RecordError
+from identification.hardening import fit_hardening
+from identification.johnson_cook import (CONVENTIONS, EQUATION, homologous_temperature, johnson_cook_reduced,
+                                         log_rate_ratio)
+from identification.outcome import TRUE_CURVE_COLUMNS
+
+PARAMS = ("A", "B", "n", "C", "m")
+KEYS = {"A": "A_MPa", "B": "B_MPa", "n": "n", "C": "C", "m": "m"}
+BOUNDS = {"A": (0.0, np.inf), "B": (0.0, np.inf), "n": (1e-3, 1.5), "C": (0.0, 5.0), "m": (1e-3, 20.0)}
+
+PLASTIC_START = 0.002  # εp where the plastic range starts (the 0.2 % offset)
+MAX_POINTS = 60  # points per record in a fit, so that every record weighs the same
+# the reference condition of the stepwise procedure
+REF_TEMPERATURE_TOL_C = 5.0
+REF_RATE_FACTOR = 1.25
+# two records are at the same condition (one tabulated curve) within these
+SAME_TEMPERATURE_C = 1.0
+SAME_RATE_REL = 0.02
+# distinct conditions: clamped ln ε̇* and T* differing by more than these
+DISTINCT_LOG_RATE = 0.05
+DISTINCT_T_STAR = 1e-3
+
+
+# -- members ------------------------------------------------------------------------------
+
+
+@dataclass
+class SeriesMember:
+    """One test of a series: its true curve and the conditions it was run at."""
+
+    name: str
+    plastic_strain: np.ndarray
+    stress_MPa: np.ndarray
+    strain_rate_per_s: float
+    temperature_C: float
+    source: str = "<memory>"
+    kind: str = "given"  # "record", "result" (folder of flowcurve identify) or "given"
+    test: str | None = None
+    strain_rate_source: str = "given"
+    temperature_source: str = "given"
+    friction_mu: float | None = None
+    E_MPa: float | None = None
+    poisson_ratio: float | None = None
+
+    def __post_init__(self):
+        where = self.source if self.source != "<memory>" else self.name
+        eps = np.asarray(self.plastic_strain, dtype=float).ravel()
+        sig = np.asarray(self.stress_MPa, dtype=float).ravel()
+        if eps.shape != sig.shape:
+            raise RecordError(where, f"true curve: {eps.size} strains but {sig.size} stresses")
+        ok = np.isfinite(eps) & np.isfinite(sig)
+        eps, sig = eps[ok], sig[ok]
+        order = np.argsort(eps, kind="stable")
+        eps, sig = eps[order], sig[order]
+        if eps.size < 4 or np.ptp(eps) <= 0:
+            raise RecordError(where, f"true curve has {eps.size} usable points; a series fit needs at least 4 over a strain range")
+        if np.min(eps) < 0 or np.min(sig) <= 0:
+            raise RecordError(where, "true curve must have εp ≥ 0 and stress > 0 (MPa)")
+        self.plastic_strain, self.stress_MPa = eps, sig
+        for value, what, hint in ((self.strain_rate_per_s, "strain rate", "strain_rate_per_s"),
+                                  (self.temperature_C, "temperature", "nominal_temperature_C")):
+            if value is None or not math.isfinite(float(value)):
+                raise RecordError(where, f"the {what} of this test is unknown (give {hint})")
+        self.strain_rate_per_s = float(self.strain_rate_per_s)
+        self.temperature_C = float(self.temperature_C)
+        if self.strain_rate_per_s <= 0:
+            raise RecordError(where, f"strain rate must be > 0, got {self.strain_rate_per_s:g} 1/s")
+
+    def fit_points(self, max_points: int = MAX_POINTS) -> tuple[np.ndarray, np.ndarray]:
+        """The curve on at most ``max_points`` points evenly spaced in εp (all points if fewer)."""
+        eps, sig = self.plastic_strain, self.stress_MPa
+        if eps.size <= max_points:
+            return eps, sig
+        grid = np.linspace(eps[0], eps[-1], max_points)
+        return grid, np.interp(grid, eps, sig)
+
+
+def strain_rate_from_record(record: Record, E_MPa: float, plastic_start: float = PLASTIC_START) -> tuple[float, np.ndarray]:
+    """Plastic strain rate (1/s) of a record from its data, and the plastic-range sample mask.
+
+    The specimen's true strain from the crosshead (frame compliance removed when the record
+    states the frame stiffness), εp = ε − σ/E, and the least-squares slope of εp against time
+    over the plastic range: from the first sample with εp ≥ ``plastic_start`` to the force
+    maximum (tension) or the end of loading (compression).
+    """
+    test = record.test
+    t = record.column("time_s")
+    force = np.abs(record.column("force_N"))
+    d = np.abs(record.column("crosshead_mm") - record.column("crosshead_mm")[0])
+    stiffness = record.positive("rig.frame_stiffness_N_per_um")
+    if stiffness:
+        from identification.indicator import remove_frame_compliance
+
+        d = np.abs(remove_frame_compliance(d, force, stiffness))
+    area0 = math.pi * record.positive("specimen.d0_mm", required=True) ** 2 / 4.0
+    if test == "tension":
+        eps = np.log1p(d / record.positive("specimen.l0_mm", required=True))  # (3.2)
+        sigma = force / area0 * np.exp(eps)  # volume constancy: F0/F = l/l0
+        end = int(np.nanargmax(force))
+    else:
+        h0 = record.positive("specimen.h0_mm", required=True)
+        eps = -np.log(np.clip(1.0 - d / h0, 1e-9, None))  # (3.31)
+        sigma = force / area0 * np.exp(-eps)  # (3.30) S = F0·h0/h
+        end = int(np.nanargmax(d))
+    if not E_MPa or not math.isfinite(E_MPa) or E_MPa <= 0:
+        raise IdentificationError(f"{record.source}: no modulus E_MPa to separate the elastic strain; the strain rate cannot be computed from the data")
+    from identification.tension import true_plastic_strain
+
+    eps_p = true_plastic_strain(eps, sigma, E_MPa)  # (3.7)
+    mask = np.zeros(t.size, dtype=bool)
+    mask[: end + 1] = True
+    mask &= np.isfinite(eps_p) & np.isfinite(t)
+    started = np.maximum.accumulate(np.where(mask, eps_p, -np.inf)) >= plastic_start
+    mask &= started
+    if mask.sum() < 3 or np.ptp(t[mask]) <= 0:
+        raise IdentificationError(f"{record.source}: fewer than 3 samples in the plastic range (εp ≥ {plastic_start:g}); the strain rate cannot be computed from the data")
+    slope = float(np.polyfit(t[mask], eps_p[mask], 1)[0])
+    if not slope > 0:
+        raise IdentificationError(f"{record.source}: the plastic strain does not grow with time ({slope:.3g} 1/s); check the time_s and crosshead_mm columns")
+    return slope, mask
+
+
+def member_from_record(record: Record, **identify_options) -> SeriesMember:
+    """Identify a record (tension or compression) and make it a series member.
+
+    Strain rate from the data (:func:`strain_rate_from_record`); temperature the mean of the
+    ``temperature_C`` column over the plastic range, else ``nominal_temperature_C``.
+    """
+    from identification.identify import identify
+
+    ident = identify(record, **identify_options)
+    result = ident.result
+    rate, mask = strain_rate_from_record(record, result.get("E_MPa"))
+    if record.has("temperature_C") and np.isfinite(record.column("temperature_C")[mask]).any():
+        temperature, t_source = float(np.nanmean(record.column("temperature_C")[mask])), "data"
+    else:
+        temperature = record.number("nominal_temperature_C")
+        t_source = "nominal"
+        if temperature is None:
+            raise RecordError(record.source, "the test temperature is unknown: add '# nominal_temperature_C: <value>' to the header or a temperature_C column")
+    curve = ident.true_curve
+    return SeriesMember(name=record.name, plastic_strain=curve[TRUE_CURVE_COLUMNS[0]].to_numpy(float),
+                        stress_MPa=curve[TRUE_CURVE_COLUMNS[1]].to_numpy(float), strain_rate_per_s=rate,
+                        temperature_C=temperature, source=record.source, kind="record", test=record.test,
+                        strain_rate_source="data", temperature_source=t_source,
+                        friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
+                        poisson_ratio=_number(result.get("poisson_ratio")))
+
+
+def member_from_result(folder: str | Path) -> SeriesMember:
+    """A series member from a result folder of ``flowcurve identify`` (result.json + true_curve.csv).
+
+    Strain rate: ``record.strain_rate_per_s`` of result.json, else crosshead speed / gauge
+    length (l0 in tension, h0 in compression); temperature ``record.nominal_temperature_C``.
+    """
+    folder = Path(folder)
+    path = folder / "result.json"
+    try:
+        result = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise RecordError(folder, "no result.json: not a result folder of 'flowcurve identify'") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise RecordError(path, f"is not valid JSON ({exc})") from None
+    if not isinstance(result, dict):
+        raise RecordError(path, "is not a JSON object")
+    block = result.get("record") or {}
+    test = result.get("test") or block.get("test")
+    temperature = _number(block.get("nominal_temperature_C"))
+    if temperature is None:
+        raise RecordError(path, "record.nominal_temperature_C is missing: the temperature of this test is unknown")
+    rate = _number(block.get("strain_rate_per_s"))
+    rate_source = "result.json"
+    if rate is None:
+        speed = _number(block.get("crosshead_speed_mm_per_s"))
+        specimen = block.get("specimen") or {}
+        gauge_key = "h0_mm" if test == "compression" else "l0_mm"
+        gauge = _number(specimen.get(gauge_key) if isinstance(specimen, dict) else None)
+        if gauge is None:
+            gauge = _number(block.get(f"specimen.{gauge_key}"))
+        if speed is None or not gauge:
+            raise RecordError(path, f"the strain rate is unknown: record.strain_rate_per_s is missing and so is record.crosshead_speed_mm_per_s or the specimen {gauge_key}")
+        rate, rate_source = speed / gauge, "crosshead speed / gauge length"
+    curve_path = folder / "true_curve.csv"
+    try:
+        curve = pd.read_csv(curve_path)
+    except FileNotFoundError:
+        raise RecordError(folder, "no true_curve.csv in the result folder") from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise RecordError(curve_path, f"cannot be read as CSV ({exc})") from None
+    missing = [c for c in TRUE_CURVE_COLUMNS if c not in curve.columns]
+    if missing:
+        raise RecordError(curve_path, f"missing column(s) {', '.join(missing)}")
+    try:
+        eps = curve[TRUE_CURVE_COLUMNS[0]].to_numpy(float)
+        sig = curve[TRUE_CURVE_COLUMNS[1]].to_numpy(float)
+    except ValueError:
+        raise RecordError(curve_path, "the curve holds cells that are not numbers") from None
+    return SeriesMember(name=str(block.get("name") or folder.name), plastic_strain=eps, stress_MPa=sig,
+                        strain_rate_per_s=rate, temperature_C=temperature, source=str(folder), kind="result",
+                        test=test, strain_rate_source=rate_source, temperature_source="nominal",
+                        friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
+                        poisson_ratio=_number(result.get("poisson_ratio")))
+
+
+def load_members(paths: Iterable[str | Path], **identify_options) -> list[SeriesMember]:
+    """Series members from record files, result folders, or folders of result folders."""
+    from identification.importers import load_record
+
+    members: list[SeriesMember] = []
+    for p in paths:
+        p = Path(p)
+        if p.is_dir():
+            if (p / "result.json").exists():
+                members.append(member_from_result(p))
+                continue
+            subs = sorted(d for d in p.iterdir() if d.is_dir() and (d / "result.json").exists())
+            if not subs:
+                raise RecordError(p, "is a folder without result.json and without result folders of 'flowcurve identify'")
+            members.extend(member_from_result(d) for d in subs)
+        elif p.exists():
+            members.append(member_from_record(load_record(p), **identify_options))
+        else:
+            raise RecordError(p, "no such file or folder")
+    names = [m.name for m in members]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise IdentificationError(f"two series members have the same name {', '.join(dup)}; rename one (names label the per-record errors and plots)")
+    return members
+
+
+def _number(value) -> float | None:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return None
+    return number if math.isfinite(number) else None
+
+
+# -- reference and what the series can determine ------------------------------------------
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The stated inputs of the model: ε̇0 (1/s), T_r and T_m (°C), with where they came from."""
+
+    strain_rate_per_s: float
+    temperature_C: float
+    melt_temperature_C: float
+    strain_rate_source: str = "given"
+    temperature_source: str = "given"
+
+    def reduced(self, member: SeriesMember) -> tuple[float, float]:
+        """(clamped ln ε̇*, clamped T*) of a member."""
+        return (float(log_rate_ratio(member.strain_rate_per_s, self.strain_rate_per_s)),
+                float(homologous_temperature(member.temperature_C, self.temperature_C, self.melt_temperature_C)))
+
+
+def make_reference(members: Sequence[SeriesMember], *, ref_strain_rate_per_s: float | None = None,
+                   ref_temperature_C: float | None = None, melt_temperature_C: float | None = None) -> Reference:
+    """The reference condition: given values, else the lowest rate / temperature of the series.
+
+    The melting temperature is a property of the material and must be given.
+    """
+    if not members:
+        raise IdentificationError("the series is empty: give at least one record or result folder")
+    rate_src = temp_src = "given"
+    if ref_strain_rate_per_s is None:
+        ref_strain_rate_per_s, rate_src = min(m.strain_rate_per_s for m in members), "lowest in the series"
+    if ref_temperature_C is None:
+        ref_temperature_C, temp_src = min(m.temperature_C for m in members), "lowest in the series"
+    if not (math.isfinite(ref_strain_rate_per_s) and ref_strain_rate_per_s > 0):
+        raise IdentificationError(f"the reference strain rate must be > 0 1/s, got {ref_strain_rate_per_s:g}")
+    if melt_temperature_C is None:
+        raise IdentificationError("the melting temperature is needed for T* = (T - T_ref)/(T_melt - T_ref): give it (--melt-temp, °C)")
+    if not melt_temperature_C > ref_temperature_C:
+        raise IdentificationError(f"the melting temperature ({melt_temperature_C:g} °C) must be above the reference temperature ({ref_temperature_C:g} °C)")
+    hot = [m.name for m in members if m.temperature_C >= melt_temperature_C]
+    if hot:
+        raise IdentificationError(f"record(s) {', '.join(hot)} at or above the melting temperature {melt_temperature_C:g} °C: check --melt-temp (°C, not K)")
+    return Reference(float(ref_strain_rate_per_s), float(ref_temperature_C), float(melt_temperature_C), rate_src, temp_src)
+
+
+def _distinct(values: Sequence[float], tol: float) -> list[float]:
+    out: list[float] = []
+    for v in sorted(values):
+        if not out or v - out[-1] > tol:
+            out.append(v)
+    return out
+
+
+def check_identifiable(members: Sequence[SeriesMember], ref: Reference, fixed: dict[str, float]) -> None:
+    """Refuse, with the reason, to fit C or m from a series that cannot determine it."""
+    reduced = [ref.reduced(m) for m in members]
+    if "C" not in fixed and len(_distinct([r[0] for r in reduced], DISTINCT_LOG_RATE)) < 2:
+        rates = ", ".join(sorted({f"{m.strain_rate_per_s:.3g}" for m in members}))
+        raise IdentificationError(
+            f"the series has one strain rate only as the model sees it (rates {rates} 1/s with the reference "
+            f"{ref.strain_rate_per_s:g} 1/s; rates below the reference count as the reference): C cannot be identified - "
+            "add records at other rates or fix C (--fix-C VALUE)")
+    if "m" not in fixed and len(_distinct([r[1] for r in reduced], DISTINCT_T_STAR)) < 2:
+        temps = ", ".join(sorted({f"{m.temperature_C:g}" for m in members}))
+        raise IdentificationError(
+            f"the series has one temperature only as the model sees it ({temps} °C with the reference "
+            f"{ref.temperature_C:g} °C; temperatures below the reference count as the reference): m cannot be identified - "
+            "add records at other temperatures or fix m (--fix-m VALUE)")
+    bad = {k: v for k, v in fixed.items() if k not in ("C", "m")}
+    if bad:
+        raise IdentificationError(f"only C and m can be fixed, not {', '.join(bad)}")
+    for k, v in fixed.items():
+        lo, hi = BOUNDS[k]
+        if not (lo <= v <= hi):
+            raise IdentificationError(f"fixed {k} = {v:g} is outside its range [{lo:g}, {hi:g}]")
+
+
+# -- fits ---------------------------------------------------------------------------------
+
+
+@dataclass
+class JohnsonCookFit:
+    """Identified Johnson–Cook constants with their uncertainties and the quality of fit."""
+
+    method: str
+    params: dict[str, float]
+    stderr: dict[str, float | None]
+    reference: Reference
+    fixed: dict[str, float] = field(default_factory=dict)
+    correlations: dict[str, dict[str, float]] = field(default_factory=dict)
+    fit_error_pct: float = float("nan")
+    rms_error_pct: float = float("nan")
+    record_errors: dict[str, dict[str, float]] = field(default_factory=dict)
+    report: str = ""
+
+    def __call__(self, eps_p, strain_rate_per_s, temperature_C):
+        """Flow stress (MPa) of the identified model."""
+        r = self.reference
+        return johnson_cook_reduced(eps_p, log_rate_ratio(strain_rate_per_s, r.strain_rate_per_s),
+                                    homologous_temperature(temperature_C, r.temperature_C, r.melt_temperature_C),
+                                    **self.params)
+
+    def as_dict(self) -> dict:
+        """The parameter block of fit.json (keys with units, see docs/fit-json.md)."""
+        out: dict = {"method": self.method}
+        for p in PARAMS:
+            out[KEYS[p]] = float(self.params[p])
+        for p in PARAMS:
+            se = self.stderr.get(p)
+            out[f"{KEYS[p]}_stderr"] = None if se is None or not math.isfinite(se) else float(se)
+        out["fixed"] = {p: float(v) for p, v in self.fixed.items()}
+        out["correlations"] = {KEYS[p]: {KEYS[q]: float(c) for q, c in row.items()} for p, row in self.correlations.items()}
+        out["fit_error_pct"] = float(self.fit_error_pct)
+        out["rms_error_pct"] = float(self.rms_error_pct)
+        out["record_errors"] = self.record_errors
+        out["report"] = self.report
+        return out
+
+
+def _stack(members: Sequence[SeriesMember], ref: Reference, max_points: int):
+    """All fit points: εp, σ, clamped ln ε̇*, clamped T*, and each point's member index."""
+    cols = [[], [], [], [], []]
+    for i, m in enumerate(members):
+        eps, sig = m.fit_points(max_points)
+        lr, ts = ref.reduced(m)
+        for col, values in zip(cols, (eps, sig, np.full(eps.size, lr), np.full(eps.size, ts), np.full(eps.size, i))):
+            col.append(values)
+    eps, sig, lr, ts, idx = (np.concatenate(c) for c in cols)
+    return eps, sig, lr, ts, idx.astype(int)
+
+
+def _errors(fit: JohnsonCookFit, members: Sequence[SeriesMember], max_points: int) -> None:
+    """Fill the overall and per-record errors (max and RMS of |σ_model/σ − 1|, %)."""
+    all_rel = []
+    for m in members:
+        eps, sig = m.fit_points(max_points)
+        rel = fit(eps, m.strain_rate_per_s, m.temperature_C) / sig - 1.0
+        all_rel.append(rel)
+        fit.record_errors[m.name] = {"fit_error_pct": float(100 * np.max(np.abs(rel))),
+                                     "rms_error_pct": float(100 * np.sqrt(np.mean(rel**2)))}
+    rel = np.concatenate(all_rel)
+    fit.fit_error_pct = float(100 * np.max(np.abs(rel)))
+    fit.rms_error_pct = float(100 * np.sqrt(np.mean(rel**2)))
+
+
+def _start_static(members: Sequence[SeriesMember], ref: Reference, max_points: int) -> dict[str, float]:
+    """Start values of A, B, n: a hardening fit to the members nearest the reference condition."""
+    reduced = [ref.reduced(m) for m in members]
+    best = min(reduced, key=lambda r: (r[1], r[0]))
+    near = [m for m, r in zip(members, reduced) if abs(r[1] - best[1]) <= DISTINCT_T_STAR and abs(r[0] - best[0]) <= DISTINCT_LOG_RATE]
+    pts = [m.fit_points(max_points) for m in near]
+    hf = fit_hardening(np.concatenate([p[0] for p in pts]), np.concatenate([p[1] for p in pts]), "johnson_cook")
+    return {"A": max(hf.params["A"], 0.0), "B": hf.params["B"], "n": float(np.clip(hf.params["n"], 0.01, 1.5))}
+
+
+def fit_global(members: Sequence[SeriesMember], ref: Reference, *, fixed: dict[str, float] | None = None,
+               max_points: int = MAX_POINTS) -> JohnsonCookFit:
+    """# (2.19) A, B, n, C, m in one least-squares problem over all true curves (lmfit).
+
+    Residuals in MPa; each record contributes at most ``max_points`` points evenly spaced in εp.
+    ``fixed`` holds constants that are not fitted (``{"m": 1.0}``).
+    """
+    fixed = dict(fixed or {})
+    check_identifiable(members, ref, fixed)
+    eps, sig, lr, ts, _ = _stack(members, ref, max_points)
+    start = {**_start_static(members, ref, max_points), "C": 0.01, "m": 1.0}
+    params = lmfit.Parameters()
+    for p in PARAMS:
+        lo, hi = BOUNDS[p]
+        value = fixed.get(p, start[p])
+        params.add(p, value=float(np.clip(value, lo, hi)), min=lo, max=hi, vary=p not in fixed)
+
+    def residual(pars):
+        v = pars.valuesdict()
+        return johnson_cook_reduced(eps, lr, ts, v["A"], v["B"], v["n"], v["C"], v["m"]) - sig
+
+    result = lmfit.minimize(residual, params, method="least_squares")
+    if not result.success:
+        raise IdentificationError(f"the global Johnson-Cook fit did not converge: {result.message}")
+    fit = JohnsonCookFit(method="global", params={p: float(result.params[p].value) for p in PARAMS},
+                         stderr={p: (None if p in fixed or result.params[p].stderr is None else float(result.params[p].stderr)) for p in PARAMS},
+                         reference=ref, fixed=fixed,
+                         correlations={p: {q: float(c) for q, c in (result.params[p].correl or {}).items()} for p in PARAMS if p not in fixed},
+                         report=lmfit.fit_report(result))
+    _errors(fit, members, max_points)
+    return fit
+
+
+def _is_reference_temperature(m: SeriesMember, ref: Reference) -> bool:
+    return m.temperature_C <= ref.temperature_C + REF_TEMPERATURE_TOL_C
+
+
+def _fit_one(name: str, func, points, start: float, what: str) -> tuple[float, float | None, str]:
+    """Least squares of one constant ``name`` with the others fixed (a stepwise step)."""
+    eps, sig, lr, ts = points
+    lo, hi = BOUNDS[name]
+    params = lmfit.Parameters()
+    params.add(name, value=start, min=lo, max=hi)
+    result = lmfit.minimize(lambda p: func(p[name].value, eps, lr, ts) - sig, params, method="least_squares")
+    if not result.success:
+        raise IdentificationError(f"stepwise fit of {name} ({what}) did not converge: {result.message}")
+    se = result.params[name].stderr
+    return float(result.params[name].value), (None if se is None else float(se)), lmfit.fit_report(result)
+
+
+def fit_stepwise(members: Sequence[SeriesMember], ref: Reference, *, fixed: dict[str, float] | None = None,
+                 max_points: int = MAX_POINTS) -> JohnsonCookFit:
+    """The classic stepwise identification: A, B, n, then C, then m.
+
+    1. A, B, n: :func:`identification.hardening.fit_hardening` on the records at the reference
+       condition (T within 5 °C of T_r or below it, ε̇ ≤ 1.25·ε̇0);
+    2. C: records at the reference temperature, A, B, n fixed;
+    3. m: records above the reference temperature, A, B, n, C fixed.
+    Each step's uncertainties are conditional on the constants of the previous steps.
+    """
+    fixed = dict(fixed or {})
+    check_identifiable(members, ref, fixed)
+    at_ref_t = [m for m in members if _is_reference_temperature(m, ref)]
+    at_ref = [m for m in at_ref_t if m.strain_rate_per_s <= REF_RATE_FACTOR * ref.strain_rate_per_s]
+    if not at_ref:
+        raise IdentificationError(
+            f"stepwise fit needs records at the reference condition ({ref.temperature_C:g} °C, "
+            f"{ref.strain_rate_per_s:g} 1/s); none is within {REF_TEMPERATURE_TOL_C:g} °C and a factor {REF_RATE_FACTOR:g} of the rate")
+    pts = [m.fit_points(max_points) for m in at_ref]
+    hf = fit_hardening(np.concatenate([p[0] for p in pts]), np.concatenate([p[1] for p in pts]), "johnson_cook")
+    A, B, n = hf.params["A"], hf.params["B"], hf.params["n"]
+    stderr: dict[str, float | None] = {p: hf.stderr.get(p) for p in ("A", "B", "n")}
+    reports = ["[[Step 1: A, B, n at the reference condition]]", hf.report]
+
+    def points(group):
+        eps, sig, lr, ts, _ = _stack(group, ref, max_points)
+        return eps, sig, lr, ts
+
+    if "C" in fixed:
+        C, stderr["C"] = fixed["C"], None
+    else:
+        faster = [m for m in at_ref_t if ref.reduced(m)[0] > DISTINCT_LOG_RATE]
+        if not faster:
+            raise IdentificationError(
+                f"stepwise fit: no record at the reference temperature ({ref.temperature_C:g} °C) above the reference rate "
+                f"{ref.strain_rate_per_s:g} 1/s, so step 2 cannot give C; use the global fit or fix C (--fix-C VALUE)")
+        C, stderr["C"], rep = _fit_one("C", lambda c, e, lr, ts: johnson_cook_reduced(e, lr, 0.0, A, B, n, c, 1.0),
+                                       points(at_ref_t), 0.01, "reference-temperature records")
+        reports += ["[[Step 2: C at the reference temperature]]", rep]
+    if "m" in fixed:
+        m_, stderr["m"] = fixed["m"], None
+    else:
+        hot = [m for m in members if not _is_reference_temperature(m, ref)]
+        if not hot:
+            raise IdentificationError(
+                f"stepwise fit: no record more than {REF_TEMPERATURE_TOL_C:g} °C above the reference temperature "
+                f"{ref.temperature_C:g} °C, so step 3 cannot give m; fix m (--fix-m VALUE)")
+        m_, stderr["m"], rep = _fit_one("m", lambda mm, e, lr, ts: johnson_cook_reduced(e, lr, ts, A, B, n, C, mm),
+                                        points(hot), 1.0, "records above the reference temperature")
+        reports += ["[[Step 3: m above the reference temperature]]", rep]
+    fit = JohnsonCookFit(method="stepwise", params={"A": A, "B": B, "n": n, "C": C, "m": m_}, stderr=stderr,
+                         reference=ref, fixed=fixed,
+                         correlations={p: {q: c for q, c in hf.correlations.get(p, {}).items()} for p in ("A", "B", "n")},
+                         report="\n".join(reports))
+    _errors(fit, members, max_points)
+    return fit
+
+
+# -- the whole series ---------------------------------------------------------------------
+
+
+@dataclass
+class ConditionCurve:
+    """The measured true curve at one (temperature, strain rate), averaged over its records."""
+
+    temperature_C: float
+    strain_rate_per_s: float
+    records: list[str]
+    table: pd.DataFrame  # columns true_plastic_strain, true_stress_MPa
+
+    @property
+    def filename(self) -> str:
+        return f"T{self.temperature_C:.0f}C_rate{self.strain_rate_per_s:.3g}_per_s.csv"
+
+
+def condition_curves(members: Sequence[SeriesMember], max_points: int = MAX_POINTS) -> list[ConditionCurve]:
+    """Group the records by condition and tabulate one curve each (mean over the shared εp range)."""
+    groups: list[list[SeriesMember]] = []
+    for m in sorted(members, key=lambda m: (m.temperature_C, m.strain_rate_per_s)):
+        for g in groups:
+            g0 = g[0]
+            if (abs(g0.temperature_C - m.temperature_C) <= SAME_TEMPERATURE_C
+                    and abs(m.strain_rate_per_s / g0.strain_rate_per_s - 1.0) <= SAME_RATE_REL):
+                g.append(m)
+                break
+        else:
+            groups.append([m])
+    out = []
+    for g in groups:
+        lo = max(m.plastic_strain[0] for m in g)
+        hi = min(m.plastic_strain[-1] for m in g)
+        if hi <= lo:  # no shared range: keep the longest curve
+            g = [max(g, key=lambda m: np.ptp(m.plastic_strain))]
+            lo, hi = g[0].plastic_strain[0], g[0].plastic_strain[-1]
+        grid = np.linspace(lo, hi, max_points) if len(g) > 1 or g[0].plastic_strain.size > max_points else g[0].plastic_strain
+        stress = np.mean([np.interp(grid, m.plastic_strain, m.stress_MPa) for m in g], axis=0)
+        out.append(ConditionCurve(float(np.mean([m.temperature_C for m in g])),
+                                  float(np.exp(np.mean([np.log(m.strain_rate_per_s) for m in g]))),
+                                  [m.name for m in g],
+                                  pd.DataFrame({TRUE_CURVE_COLUMNS[0]: grid, TRUE_CURVE_COLUMNS[1]: stress})))
+    return out
+
+
+@dataclass
+class SeriesFit:
+    """Everything ``flowcurve fit`` writes: the chosen fit, the other for comparison, the series."""
+
+    method: str
+    fit: JohnsonCookFit
+    global_fit: JohnsonCookFit | None
+    stepwise_fit: JohnsonCookFit | None
+    stepwise_note: str | None
+    members: list[SeriesMember]
+    curves: list[ConditionCurve]
+    warnings: list[str] = field(default_factory=list)
+
+    def covered_range(self) -> dict[str, list[float]]:
+        """The plastic strain, strain rate (1/s) and temperature (°C) the constants were identified on."""
+        ms = self.members
+        return {"plastic_strain": [min(float(m.plastic_strain[0]) for m in ms), max(float(m.plastic_strain[-1]) for m in ms)],
+                "strain_rate_per_s": [min(m.strain_rate_per_s for m in ms), max(m.strain_rate_per_s for m in ms)],
+                "temperature_C": [min(m.temperature_C for m in ms), max(m.temperature_C for m in ms)]}
+
+    def as_dict(self) -> dict:
+        """fit.json (docs/fit-json.md) without the file references of records and curves."""
+        ref = self.fit.reference
+        top = self.fit.as_dict()
+        out: dict = {"schema": "flowcurve-fit/1", "model": "johnson_cook", "method": self.method,
+                     "equation": EQUATION, "conventions": CONVENTIONS}
+        out.update({k: v for k, v in top.items() if k not in ("method", "record_errors", "report")})
+        out.update({"ref_strain_rate_per_s": ref.strain_rate_per_s, "ref_strain_rate_source": ref.strain_rate_source,
+                    "ref_temperature_C": ref.temperature_C, "ref_temperature_source": ref.temperature_source,
+                    "melt_temperature_C": ref.melt_temperature_C})
+        ms = self.members
+        out["range"] = self.covered_range()
+        out["records"] = [{"name": m.name, "source": m.source, "kind": m.kind, "test": m.test,
+                           "temperature_C": m.temperature_C, "temperature_source": m.temperature_source,
+                           "strain_rate_per_s": m.strain_rate_per_s, "strain_rate_source": m.strain_rate_source,
+                           "plastic_strain": [float(m.plastic_strain[0]), float(m.plastic_strain[-1])],
+                           "points": int(m.fit_points()[0].size), **self.fit.record_errors[m.name]} for m in ms]
+        out["curves"] = [{"temperature_C": c.temperature_C, "strain_rate_per_s": c.strain_rate_per_s,
+                          "file": f"curves/{c.filename}", "records": c.records,
+                          "plastic_strain": [float(c.table.iloc[0, 0]), float(c.table.iloc[-1, 0])],
+                          "model_stress_at_zero_strain_MPa": float(self.fit(0.0, c.strain_rate_per_s, c.temperature_C))}
+                         for c in self.curves]
+        out["global"] = self.global_fit.as_dict() if self.global_fit else None
+        out["stepwise"] = self.stepwise_fit.as_dict() if self.stepwise_fit else None
+        out["stepwise_note"] = self.stepwise_note
+        mus = [m.friction_mu for m in ms if m.test == "compression" and m.friction_mu is not None]
+        out["friction_mu"] = float(np.mean(mus)) if mus else None
+        out["friction_mu_records"] = len(mus)
+        Es = [m.E_MPa for m in ms if m.E_MPa is not None]
+        out["E_MPa"] = float(np.mean(Es)) if Es else None
+        out["E_MPa_source"] = ("mean of the records' E_MPa (apparent modulus of the indicator diagram unless an extensometer was used)"
+                               if Es else None)
+        nus = [m.poisson_ratio for m in ms if m.poisson_ratio is not None]
+        out["poisson_ratio"] = float(np.mean(nus)) if nus else None
+        out["warnings"] = list(self.warnings)
+        return out
+
+
+def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_strain_rate_per_s: float | None = None,
+               ref_temperature_C: float | None = None, melt_temperature_C: float | None = None,
+               fixed: dict[str, float] | None = None, max_points: int = MAX_POINTS) -> SeriesFit:
+    """Fit the series by ``method`` ("global" or "stepwise") and the other one for comparison."""
+    if method not in ("global", "stepwise"):
+        raise IdentificationError(f"unknown fit method {method!r}; choose global or stepwise")
+    members = list(members)
+    ref = make_reference(members, ref_strain_rate_per_s=ref_strain_rate_per_s, ref_temperature_C=ref_temperature_C,
+                         melt_temperature_C=melt_temperature_C)
+    fixed = dict(fixed or {})
+    warnings = [f"{k} was not identified but fixed at {v:g} by the user" for k, v in fixed.items()]
+    stepwise, note = None, None
+    if method == "stepwise":
+        stepwise = fit_stepwise(members, ref, fixed=fixed, max_points=max_points)
+    else:
+        try:
+            stepwise = fit_stepwise(members, ref, fixed=fixed, max_points=max_points)
+        except IdentificationError as exc:
+            note = f"no stepwise comparison: {exc}"
+    glob = fit_global(members, ref, fixed=fixed, max_points=max_points)
+    chosen = glob if method == "global" else stepwise
+    return SeriesFit(method=method, fit=chosen, global_fit=glob, stepwise_fit=stepwise, stepwise_note=note,
+                     members=members, curves=condition_curves(members, max_points), warnings=warnings)

@@ -1,0 +1,144 @@
+"""``flowcurve fit``: Johnson–Cook constants from a series of records or result folders.
+
+Writes ``fit.json`` (schema in ``docs/fit-json.md``), the tabulated true curves per
+(temperature, rate) in ``curves/`` and one plot per record (plus an overview) in ``plots/``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+from identification.outcome import to_jsonable
+from identification.series import MAX_POINTS, SeriesFit, fit_series, load_members
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "fit",
+        help="Johnson-Cook constants (A, B, n, C, m) from a series of tests",
+        description=(
+            "Fit the Johnson-Cook flow stress sigma = (A + B*eps_p^n)(1 + C ln(rate/ref_rate))(1 - T*^m) "
+            "to the true curves of a series of tests (records, result folders of 'flowcurve identify', "
+            "or folders of them). T* is clamped to [0, 1] and there is no rate effect below the "
+            "reference rate. Writes fit.json, curves/*.csv and plots/*.png."
+        ),
+    )
+    p.add_argument("inputs", nargs="+", metavar="RECORD_OR_DIR", help="record files, result folders, or folders of result folders")
+    p.add_argument("--out", default="fit", metavar="DIR", help="output folder (default: ./fit)")
+    p.add_argument("--ref-rate", type=float, metavar="1/s", help="reference strain rate (default: the lowest rate of the series)")
+    p.add_argument("--ref-temp", type=float, metavar="C", help="reference temperature, °C (default: the lowest of the series)")
+    p.add_argument("--melt-temp", type=float, metavar="C", help="melting temperature of the material, °C (required)")
+    p.add_argument("--method", choices=("global", "stepwise"), default="global",
+                   help="global least squares over all curves (default) or the classic stepwise procedure; the other is reported for comparison")
+    p.add_argument("--fix-C", type=float, metavar="VALUE", help="do not identify C, use this value (e.g. for a series at one rate)")
+    p.add_argument("--fix-m", type=float, metavar="VALUE", help="do not identify m, use this value (e.g. for a series at one temperature)")
+    p.add_argument("--max-points", type=int, default=MAX_POINTS, metavar="N", help=f"points per record in the fit (default {MAX_POINTS})")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    members = load_members(args.inputs)
+    fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
+    series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
+                        melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points)
+    out = write_fit(series, args.out)
+    print(summary(series, out))
+    return 0
+
+
+def _safe(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", name) or "record"
+
+
+def write_fit(series: SeriesFit, outdir: str | Path) -> Path:
+    """Write fit.json, curves/*.csv and plots/*.png into ``outdir``; returns the fit.json path."""
+    outdir = Path(outdir)
+    (outdir / "curves").mkdir(parents=True, exist_ok=True)
+    (outdir / "plots").mkdir(parents=True, exist_ok=True)
+    data = series.as_dict()
+    for c in series.curves:
+        c.table.to_csv(outdir / "curves" / c.filename, index=False, float_format="%.6g", lineterminator="\n")
+    plots = _plots(series, outdir / "plots")
+    curve_of = {name: f"curves/{c.filename}" for c in series.curves for name in c.records}
+    for rec in data["records"]:
+        rec["curve"] = curve_of.get(rec["name"])
+        rec["plot"] = plots.get(rec["name"])
+    path = outdir / "fit.json"
+    path.write_text(json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    return path
+
+
+def _plots(series: SeriesFit, folder: Path) -> dict[str, str]:
+    """One PNG per record (measured curve, the chosen fit, the other method dashed) and an overview."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    other = series.stepwise_fit if series.method == "global" else series.global_fit
+    written: dict[str, str] = {}
+    fig_all, ax_all = plt.subplots(figsize=(7, 5))
+    for i, m in enumerate(series.members):
+        eps = m.plastic_strain
+        grid = np.linspace(0.0, eps[-1], 200)
+        label = f"{m.temperature_C:.0f} °C, {m.strain_rate_per_s:.3g} 1/s"
+        fig, ax = plt.subplots(figsize=(6, 4.5))
+        ax.plot(eps, m.stress_MPa, ".", ms=3, color="0.3", label=f"{m.name} (measured)")
+        ax.plot(grid, series.fit(grid, m.strain_rate_per_s, m.temperature_C), "-", color="C0",
+                label=f"{series.fit.method} fit (max error {series.fit.record_errors[m.name]['fit_error_pct']:.2g} %)")
+        if other is not None:
+            ax.plot(grid, other(grid, m.strain_rate_per_s, m.temperature_C), "--", color="C1", label=f"{other.method} fit")
+        ax.set(xlabel="true plastic strain", ylabel="true stress, MPa", title=label)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        name = f"plots/{_safe(m.name)}.png"
+        fig.tight_layout()
+        fig.savefig(folder / Path(name).name, dpi=110)
+        plt.close(fig)
+        written[m.name] = name
+        color = f"C{i % 10}"
+        ax_all.plot(eps, m.stress_MPa, ".", ms=2, color=color)
+        ax_all.plot(grid, series.fit(grid, m.strain_rate_per_s, m.temperature_C), "-", color=color, label=f"{m.name}: {label}")
+    ax_all.set(xlabel="true plastic strain", ylabel="true stress, MPa", title=f"Johnson-Cook, {series.method} fit (lines) and records (dots)")
+    ax_all.grid(alpha=0.3)
+    ax_all.legend(fontsize=7)
+    fig_all.tight_layout()
+    fig_all.savefig(folder / "all_records.png", dpi=110)
+    plt.close(fig_all)
+    return written
+
+
+def summary(series: SeriesFit, path: Path) -> str:
+    """What the terminal shows after a fit: constants ± one standard error, range, errors."""
+    f = series.fit
+    ref = f.reference
+    units = {"A": " MPa", "B": " MPa", "n": "", "C": "", "m": ""}
+    lines = [f"Johnson-Cook, {series.method} fit over {len(series.members)} records "
+             f"(ref. rate {ref.strain_rate_per_s:g} 1/s [{ref.strain_rate_source}], ref. temperature {ref.temperature_C:g} °C "
+             f"[{ref.temperature_source}], melting {ref.melt_temperature_C:g} °C)"]
+    for p, v in f.params.items():
+        se = f.stderr.get(p)
+        tag = " (fixed, not identified)" if p in f.fixed else (f" ± {se:.3g}" if se is not None else " (no uncertainty)")
+        lines.append(f"  {p} = {v:.5g}{units[p]}{tag}")
+    d = series.covered_range()
+    lines.append(f"  identified on: plastic strain {d['plastic_strain'][0]:.3g}–{d['plastic_strain'][1]:.3g}, "
+                 f"rate {d['strain_rate_per_s'][0]:.3g}–{d['strain_rate_per_s'][1]:.3g} 1/s, "
+                 f"temperature {d['temperature_C'][0]:.4g}–{d['temperature_C'][1]:.4g} °C")
+    lines.append(f"  error: max {f.fit_error_pct:.2f} %, rms {f.rms_error_pct:.2f} %")
+    for m in series.members:
+        e = f.record_errors[m.name]
+        lines.append(f"    {m.name}: {m.temperature_C:.4g} °C, {m.strain_rate_per_s:.3g} 1/s ({m.strain_rate_source}): "
+                     f"max {e['fit_error_pct']:.2f} %, rms {e['rms_error_pct']:.2f} %")
+    other = series.stepwise_fit if series.method == "global" else series.global_fit
+    if other is not None:
+        lines.append(f"  {other.method} for comparison: " + ", ".join(f"{p} = {v:.4g}" for p, v in other.params.items())
+                     + f" (max error {other.fit_error_pct:.2f} %)")
+    elif series.stepwise_note:
+        lines.append(f"  {series.stepwise_note}")
+    lines += [f"  warning: {w}" for w in series.warnings]
+    lines.append(f"wrote {path}")
+    return "\n".join(lines)
