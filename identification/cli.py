@@ -11,6 +11,9 @@ from flowcurve.errors import FlowcurveError, RecordError
 
 DEFAULT_OUT = "flowcurve-results"
 
+# --hardening value → the identification's method name
+HARDENING_CHOICES = {"lsq": "least_squares", "three-point": "three_point"}
+
 # command-line option → metadata key it sets (geometry and post-test measurements, in mm)
 META_OPTIONS = {
     "test": "test",
@@ -89,8 +92,8 @@ def register(subparsers) -> None:
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="any other metadata key, e.g. --set nominal_temperature_C=600")
     m = p.add_argument_group("methods")
     m.add_argument("--no-extensometer", action="store_true", help="use the corrected crosshead travel even when the record has an extensometer channel")
-    m.add_argument("--neck-correction", choices=("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
-    m.add_argument("--hardening", choices=("lsq", "three-point"), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
+    m.add_argument("--neck-correction", choices=_choices("identification.necking", "METHODS") or ("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
+    m.add_argument("--hardening", choices=tuple(HARDENING_CHOICES), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
     m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n)")
     m.add_argument("--friction-method", choices=_choices("identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default: the seed's bulge regression)")
     m.add_argument("--friction-correction", choices=_choices("identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default k_sigma; all are computed)")
@@ -114,8 +117,8 @@ def _meta_from_args(args) -> dict[str, str]:
 def _options_from_args(args) -> dict:
     return {
         "use_extensometer": False if args.no_extensometer else None,
-        "neck_correction": args.neck_correction,
-        "hardening": args.hardening,
+        "neck": args.neck_correction,
+        "hardening": HARDENING_CHOICES.get(args.hardening),
         "law": args.law,
         "friction_method": args.friction_method,
         "friction_correction": args.friction_correction,
@@ -175,7 +178,8 @@ def run(args) -> int:
             ident, folder = identify_file(path, columns=columns, meta=meta, options=options, out=out, plots=not args.no_plots)
         except FlowcurveError as exc:
             failed += 1
-            print(f"flowcurve: error: {exc}", file=sys.stderr)
+            message = str(exc) if str(path) in str(exc) else f"{path}: {exc}"  # always name the file
+            print(f"flowcurve: error: {message}", file=sys.stderr)
             continue
         except Exception as exc:  # a bug, not bad input: one line per record, the others still run
             if os.environ.get("FLOWCURVE_DEBUG"):

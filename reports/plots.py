@@ -95,9 +95,9 @@ def draw_diagram(ident: Identification, path: Path) -> None:
             if disp is None or force is None:
                 continue
             x, y = _thin(df[disp].to_numpy(dtype=float), force[0])
-            ax.plot(x, y, label=f"{name.replace('_', ' ')}", **style)
-            ax.set_xlabel(axis_label(disp))
+            ax.plot(x, y, label=f"{name.replace('_', ' ')}: {axis_label(disp).split(' (')[0]}", **style)
             ax.set_ylabel(force[1])
+        ax.set_xlabel("displacement (mm)")
         ax.set_title(_title(ident, "indicator diagram"))
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best")
@@ -107,31 +107,47 @@ def draw_diagram(ident: Identification, path: Path) -> None:
         plt.close(fig)
 
 
+def _plot(ax, df: pd.DataFrame, x: str, y: str, **style) -> None:
+    xs, ys = _thin(df[x].to_numpy(dtype=float), df[y].to_numpy(dtype=float))
+    ax.plot(xs, ys, **style)
+
+
 def draw_stress_strain(ident: Identification, path: Path) -> None:
-    """Engineering and true curves with the hardening fit, stress (MPa) against strain."""
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    """Left: engineering and true curves against total strain. Right: true stress against
+    true plastic strain with the hardening fit (and the neck-corrected fracture point)."""
+    curves = ident.curves
+    total = [n for n in ("engineering", "true") if n in curves and _stress_pair(curves[n])]
+    fig, axes = plt.subplots(1, 2 if total else 1, figsize=(12 if total else 7, 4.5), squeeze=False)
     try:
-        names = [n for n in ("engineering", "true") if n in ident.curves]
-        names += sorted(n for n in ident.curves if n.startswith("true_"))
-        xlabel = None
-        for i, name in enumerate(names):
-            pair = _stress_pair(ident.curves[name])
-            if pair is None:
-                continue
-            df = ident.curves[name]
-            x, y = _thin(df[pair[0]].to_numpy(dtype=float), df[pair[1]].to_numpy(dtype=float))
-            ax.plot(x, y, lw=1.3, color=f"C{i}", label=name.replace("_", " "))
-            xlabel = xlabel or axis_label(pair[0])
-        fit = ident.curves.get("fit")
-        if fit is not None and _stress_pair(fit) is not None:
-            fx, fy = _stress_pair(fit)
-            ax.plot(fit[fx], fit[fy], "k--", lw=1.2, label=_fit_label(ident))
-            xlabel = xlabel or axis_label(fx)
-        ax.set_xlabel(xlabel or "strain (–)")
-        ax.set_ylabel("stress (MPa)")
-        ax.set_title(_title(ident, "stress-strain curves"))
+        if total:
+            ax = axes[0][0]
+            for i, name in enumerate(total):
+                x, y = _stress_pair(curves[name])
+                _plot(ax, curves[name], x, y, lw=1.3, color=f"C{i}", label=f"{name} ({axis_label(x).split(' (')[0]})")
+            ax.set_xlabel("strain (–)")
+            ax.set_ylabel("stress (MPa)")
+            ax.set_title("engineering and true curves")
+            ax.grid(True, alpha=0.3)
+            ax.legend(loc="best")
+        ax = axes[0][-1]
+        plastic = [n for n in ("true", *sorted(n for n in curves if n.startswith("true_"))) if n in curves]
+        for i, name in enumerate(plastic):
+            df = curves[name]
+            y = _column(df, (r"stress.*_MPa$",))
+            if "true_plastic_strain" in df.columns and y:
+                _plot(ax, df, "true_plastic_strain", y, lw=1.3, color=f"C{i + 1}", label=name.replace("_", " "))
+        fit = curves.get("fit")
+        if fit is not None and "true_plastic_strain" in fit.columns:
+            _plot(ax, fit, "true_plastic_strain", _column(fit, (r"_MPa$",)), color="k", ls="--", lw=1.2, label=_fit_label(ident))
+        point = curves.get("fracture_point")
+        if point is not None and "true_plastic_strain" in point.columns:
+            ax.plot(point["true_plastic_strain"], point[_column(point, (r"_MPa$",))], "rs", label="fracture (neck-corrected)")
+        ax.set_xlabel(axis_label("true_plastic_strain"))
+        ax.set_ylabel(axis_label("true_stress_MPa"))
+        ax.set_title("flow curve and hardening fit")
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best")
+        fig.suptitle(_title(ident, "stress-strain curves"))
         fig.tight_layout()
         fig.savefig(path, dpi=110)
     finally:
