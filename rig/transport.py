@@ -21,7 +21,7 @@ from typing import Callable
 import serial
 
 from flowcurve.errors import DeviceError
-from rig.codecs import ProtocolError, dcon
+from rig.codecs import dcon
 
 # Ports currently open, by URL → the owning transport. One owner per port.
 _OWNERS: dict[str, "SerialTransport"] = {}
@@ -225,6 +225,13 @@ class SerialTransport:
         return DeviceError(self.name, f"port {self.url} disappeared")
 
 
+class _Decoded:
+    """A decoded DCON reply value (distinguishes it from a bare Reply)."""
+
+    def __init__(self, value):
+        self.value = value
+
+
 DCON_READ_RETRIES = 2  # reads and idempotent DCON settings may be repeated
 
 
@@ -257,18 +264,31 @@ class DconDevice:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def query(self, lead: str, body: str = "", *, retries: int = DCON_READ_RETRIES,
-              timeout: float | None = None, broadcast: bool = False) -> dcon.Reply:
-        """Send one framed command and return its decoded reply (silence → DeviceError)."""
-        raw_command = dcon.frame(lead, None if broadcast else self.address, body,
-                                 use_checksum=self.checksum)
-        what = "'" + raw_command.decode("ascii").strip() + "'"
-        self.open()
-        return self.transport.exchange(raw_command, terminator=dcon.CR, retries=retries,
-                                       timeout=timeout, what=what, parse=self._parse)
+    def query(self, lead: str, body: str = "", decoder=None, *args,
+              retries: int = DCON_READ_RETRIES, timeout: float | None = None):
+        """Send one framed command; return ``decoder(reply, *args)`` (or the :class:`dcon.Reply`).
 
-    def _parse(self, raw: bytes) -> dcon.Reply:
-        return dcon.parse_reply(raw, use_checksum=self.checksum)
+        Silence (the DCON answer to a wrong address, syntax or checksum) and garbled replies
+        are retried ``retries`` times, then raise DeviceError; a ``?`` is a definite refusal:
+        DeviceError at once (or the refused Reply when there is no decoder).
+        """
+        raw_command = dcon.frame(lead, self.address, body, use_checksum=self.checksum)
+        what = "'" + raw_command.decode("ascii").strip() + "'"
+
+        def parse(raw: bytes):
+            reply = dcon.parse_reply(raw, use_checksum=self.checksum)
+            if reply.refused or decoder is None:
+                return reply
+            return _Decoded(decoder(reply, *args))
+
+        self.open()
+        got = self.transport.exchange(raw_command, terminator=dcon.CR, retries=retries,
+                                      timeout=timeout, what=what, parse=parse)
+        if isinstance(got, _Decoded):
+            return got.value
+        if got.refused and decoder is not None:
+            raise DeviceError(self.name, f"refused {what} (answered '?')")
+        return got
 
     def send(self, lead: str, body: str = "", *, broadcast: bool = False) -> None:
         """A command without reply (``~**``, ``#**``)."""
@@ -276,24 +296,17 @@ class DconDevice:
         self.transport.send(dcon.frame(lead, None if broadcast else self.address, body,
                                        use_checksum=self.checksum))
 
-    def decode(self, func, reply: dcon.Reply, *args, **kwargs):
-        """Run a reply decoder; a malformed reply becomes a DeviceError naming the device."""
-        try:
-            return func(reply, *args, **kwargs)
-        except ProtocolError as exc:
-            raise DeviceError(self.name, f"garbled reply: {exc}") from None
-
     def configuration(self) -> dcon.Configuration:
         """``$AA2``: address, type, baud, format and checksum flag as the module reports them."""
-        return self.decode(dcon.parse_configuration, self.query("$", "2"))
+        return self.query("$", "2", dcon.parse_configuration)
 
     def module_name(self) -> str:
         """``$AAM`` → e.g. ``7011`` (the text after the address)."""
-        return self.decode(dcon.expect_ack, self.query("$", "M"), self.address, "$AAM")
+        return self.query("$", "M", dcon.expect_ack, self.address, "$AAM")
 
     def firmware(self) -> str:
         """``$AAF`` → the firmware version text."""
-        return self.decode(dcon.expect_ack, self.query("$", "F"), self.address, "$AAF")
+        return self.query("$", "F", dcon.expect_ack, self.address, "$AAF")
 
     def host_ok(self) -> None:
         """``~**``: tell every module on the line that the host is alive (no reply)."""
@@ -301,16 +314,15 @@ class DconDevice:
 
     def watchdog_status(self) -> int:
         """``~AA0`` → status byte; ``dcon.WATCHDOG_TIMED_OUT`` (04) when the host went silent."""
-        return self.decode(dcon.parse_watchdog_status, self.query("~", "0"), self.address)
+        return self.query("~", "0", dcon.parse_watchdog_status, self.address)
 
     def clear_watchdog(self) -> None:
         """``~AA1``: clear the watchdog status (idempotent)."""
-        self.decode(dcon.expect_ack, self.query("~", "1"), self.address, "~AA1")
+        self.query("~", "1", dcon.expect_ack, self.address, "~AA1")
 
     def set_watchdog(self, enabled: bool, timeout_s: float) -> None:
         """``~AA3EVV``: host watchdog on/off with its time-out (idempotent)."""
-        self.decode(dcon.expect_ack, self.query("~", dcon.watchdog_body(enabled, timeout_s)),
-                    self.address, "~AA3EVV")
+        self.query("~", dcon.watchdog_body(enabled, timeout_s), dcon.expect_ack, self.address, "~AA3EVV")
 
 
 def _describe(command: bytes) -> str:

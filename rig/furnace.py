@@ -1,0 +1,228 @@
+"""The furnace: I-7011-class DCON module (type-K thermocouple in, heater on a digital output)
+and the temperature controller that holds a set-point with it.
+
+Safety rules kept here: the heater is never switched on at or above the maximum temperature;
+an open thermocouple (over-range reading confirmed by ``$AAB``) or an over-temperature
+switches the heater off and raises :class:`~flowcurve.errors.SafetyError`; ``heater_off``
+never raises and retries; :meth:`Furnace.arm_watchdog` makes the module switch the heater
+off by itself when the PC stops talking; closing the furnace switches the heater off.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+
+from flowcurve.errors import DeviceError, FlowcurveError, SafetyError
+from rig.codecs import dcon
+from rig.transport import DconDevice
+
+HEATER_OFF_ATTEMPTS = 3
+
+
+class Furnace(DconDevice):
+    """The furnace module: ``temperature_C()``, ``heater(on)``, ``heater_off()``, watchdog."""
+
+    def __init__(self, port_url, *, name: str = "furnace", address: int = 1, heater_do_bit: int = 0,
+                 max_temperature_C: float = 900.0, baudrate: int = 9600, parity: str = "N",
+                 timeout_s: float = 0.3, checksum: bool = False,
+                 data_format: int = dcon.FORMAT_ENGINEERING, type_code: int = 0x0F, opener=None):
+        super().__init__(port_url, name=name, address=address, baudrate=baudrate, parity=parity,
+                         timeout_s=timeout_s, checksum=checksum, opener=opener)
+        if heater_do_bit not in (0, 1):
+            raise ValueError(f"the I-7011 has digital outputs 0 and 1, not {heater_do_bit}")
+        if not max_temperature_C > 0:
+            raise ValueError(f"maximum temperature must be positive, got {max_temperature_C}")
+        self.heater_mask = 1 << heater_do_bit
+        self.max_temperature_C = float(max_temperature_C)
+        self.data_format = data_format
+        self.full_scale_C = dcon.FULL_SCALE_C.get(type_code, dcon.FULL_SCALE_C[0x0F])
+        self.heater_is_on = False
+        self.watchdog_armed = False
+
+    def close(self) -> None:
+        """Heater off (best effort), then release the port."""
+        if self.transport.is_open:
+            self.heater_off()
+        super().close()
+
+    # -- temperature ------------------------------------------------------------------
+    def temperature_C(self) -> float:
+        """``#AA`` → thermocouple temperature in °C.
+
+        An over- or under-range reading is checked with ``$AAB``: an open thermocouple, or a
+        reading out of range, switches the heater off and raises :class:`SafetyError`.
+        """
+        value, text = self.query("#", "", self._reading)
+        if math.isfinite(value):
+            return value
+        try:
+            is_open = self.open_thermocouple()
+        except FlowcurveError:
+            is_open = None
+        self.heater_off()
+        if is_open:
+            raise SafetyError(self.name, "thermocouple open (over-range reading confirmed by $AAB); heater off")
+        side = "over" if value > 0 else "under"
+        raise SafetyError(self.name, f"temperature reading {side} range ('>{text}'); heater off")
+
+    def _reading(self, reply: dcon.Reply) -> tuple[float, str]:
+        value = dcon.parse_analog(reply, data_format=self.data_format, full_scale=self.full_scale_C)
+        return value, reply.body
+
+    def open_thermocouple(self) -> bool:
+        """``$AAB`` → True when the module detects an open thermocouple."""
+        return self.query("$", "B", dcon.parse_open_thermocouple, self.address)
+
+    # -- heater -----------------------------------------------------------------------
+    def _write_outputs(self, outputs: int) -> None:
+        # @AADOdd is idempotent: safe to repeat after a lost reply
+        reply = self.query("@", dcon.digital_output_body(outputs))
+        if reply.refused:
+            raise DeviceError(self.name, "refused '@AADO' (the alarm owns the digital outputs?)")
+        if reply.lead != "!":
+            raise DeviceError(self.name, f"garbled reply to '@AADO': '{reply.lead}{reply.body}'")
+
+    def heater(self, on: bool) -> None:
+        """Switch the heater; refuses to switch it on at or above the maximum temperature."""
+        if not on:
+            self._write_outputs(0)
+            self.heater_is_on = False
+            return
+        t = self.temperature_C()
+        if t >= self.max_temperature_C:
+            self.heater_off()
+            raise SafetyError(self.name, f"heater not switched on: {t:.1f} C is at or above the "
+                                         f"maximum {self.max_temperature_C:g} C")
+        self._write_outputs(self.heater_mask)
+        self.heater_is_on = True
+
+    def heater_off(self) -> bool:
+        """Heater off, best effort: retries, never raises. True if the module acknowledged."""
+        for _ in range(HEATER_OFF_ATTEMPTS):
+            try:
+                self._write_outputs(0)
+                self.heater_is_on = False
+                return True
+            except Exception:  # noqa: BLE001 - on a way out nothing may stop the next attempt
+                continue
+        return False
+
+    def digital_io(self) -> dict[str, int]:
+        """``@AADI`` → alarm state, digital outputs, digital inputs."""
+        return self.query("@", "DI", dcon.parse_digital_io)
+
+    # -- host watchdog ----------------------------------------------------------------
+    def arm_watchdog(self, timeout_s: float) -> None:
+        """Heater-off as the DO power-on and safe value (``~AA5PPSS``), then enable the host
+        watchdog (``~AA3EVV``): the heater goes off by itself if ``~**`` stops for ``timeout_s``."""
+        self.query("~", dcon.safe_value_body(0, 0), dcon.expect_ack, self.address, "~AA5PPSS")
+        self.set_watchdog(True, timeout_s)
+        self.host_ok()
+        self.watchdog_armed = True
+
+    def disarm_watchdog(self) -> None:
+        """Disable the host watchdog (after the heater is off)."""
+        self.set_watchdog(False, 0.1)
+        self.watchdog_armed = False
+
+
+class TemperatureController:
+    """Holds a furnace at ``setpoint_C`` with a time-proportioned heater output.
+
+    Each ``period_s`` a PI law on the error to a ramped set-point (rising at most
+    ``max_rate_C_per_min``) gives the duty cycle; within the period the heater is on for
+    ``duty × period_s``. Above ``max_temperature_C`` the heater is switched off and
+    :class:`SafetyError` raised. Call :meth:`step` from a loop (``now`` in monotonic s).
+    """
+
+    def __init__(self, furnace: Furnace, setpoint_C: float, *, max_temperature_C: float,
+                 max_rate_C_per_min: float, period_s: float = 2.0, kp_per_C: float = 0.05,
+                 ki_per_C_s: float = 0.0005, clock=time.monotonic):
+        self.max_temperature_C = min(float(max_temperature_C), furnace.max_temperature_C)
+        if not setpoint_C < self.max_temperature_C:
+            raise ValueError(f"set-point {setpoint_C:g} C is not below the maximum "
+                             f"{self.max_temperature_C:g} C")
+        if not (max_rate_C_per_min > 0 and period_s > 0):
+            raise ValueError("heating rate and period must be positive")
+        self.furnace = furnace
+        self.setpoint_C = float(setpoint_C)
+        self.max_rate_C_per_s = max_rate_C_per_min / 60.0
+        self.period_s = float(period_s)
+        self.kp = kp_per_C
+        self.ki = ki_per_C_s
+        self.clock = clock
+        self.ramp_C: float | None = None
+        self.integral = 0.0
+        self.duty = 0.0
+        self.temperature_C: float | None = None
+        self._last_t: float | None = None
+        self._period_start: float | None = None
+        self._history: deque[tuple[float, float]] = deque(maxlen=200_000)
+
+    def step(self, now: float | None = None) -> dict[str, float | bool]:
+        """Read the temperature, update ramp and duty, switch the heater; returns the state."""
+        now = self.clock() if now is None else now
+        try:
+            t = self.furnace.temperature_C()  # SafetyError on an open thermocouple (heater off)
+        except DeviceError:
+            self.furnace.heater_off()
+            raise
+        self.temperature_C = t
+        if t > self.max_temperature_C:
+            self.furnace.heater_off()
+            raise SafetyError(self.furnace.name, f"over-temperature: {t:.1f} C above the maximum "
+                                                 f"{self.max_temperature_C:g} C; heater off")
+        dt = 0.0 if self._last_t is None else max(0.0, now - self._last_t)
+        self._last_t = now
+        self._update_ramp(t, dt)
+        if self._period_start is None or now - self._period_start >= self.period_s:
+            self._period_start = now
+            self._update_duty(t)
+        want_on = (now - self._period_start) < self.duty * self.period_s
+        if want_on != self.furnace.heater_is_on:
+            if want_on:
+                self.furnace.heater(True)
+            else:
+                self.furnace.heater(False)
+        if self.furnace.watchdog_armed:
+            self.furnace.host_ok()
+        self._update_soak(t, now)
+        return {"temperature_C": t, "ramp_setpoint_C": self.ramp_C, "duty": self.duty,
+                "heater_on": self.furnace.heater_is_on}
+
+    def _update_ramp(self, t: float, dt: float) -> None:
+        # rate limit: the working set-point rises at most max_rate x dt, from the start temperature
+        if self.ramp_C is None:
+            self.ramp_C = min(t, self.setpoint_C)
+        self.ramp_C = min(self.setpoint_C, self.ramp_C + self.max_rate_C_per_s * dt)
+
+    def _update_duty(self, t: float) -> None:
+        # PI on the duty cycle, integrating only while the output is not saturated (anti-windup)
+        error = self.ramp_C - t
+        candidate = self.integral + error * self.period_s
+        duty = self.kp * error + self.ki * candidate
+        if 0.0 <= duty <= 1.0 or (duty > 1.0 and error < 0) or (duty < 0.0 and error > 0):
+            self.integral = candidate
+        self.duty = min(1.0, max(0.0, self.kp * error + self.ki * self.integral))
+
+    def _update_soak(self, t: float, now: float) -> None:
+        # history since the ramp reached the set-point, for soaked(); a ramp restart clears it
+        if self.ramp_C < self.setpoint_C:
+            self._history.clear()
+        else:
+            self._history.append((now, t))
+
+    def soaked(self, tolerance: float = 2.0, hold_s: float = 60.0) -> bool:
+        """True once the temperature has stayed within ±``tolerance`` °C of the set-point for
+        the last ``hold_s`` seconds, counted from when the ramp reached the set-point."""
+        if not self._history or self._history[-1][0] - self._history[0][0] < hold_s:
+            return False
+        end = self._history[-1][0]
+        return all(abs(t - self.setpoint_C) <= tolerance
+                   for when, t in reversed(self._history) if end - when <= hold_s)
+
+    def stop(self) -> None:
+        """Heater off (best effort)."""
+        self.furnace.heater_off()
