@@ -41,6 +41,11 @@ BULGE_P = 0.83
 BULGE_K = 26.7
 BULGE_Q = 1.53
 
+# A measured diameter less than half this reading resolution (mm) below the volume-constant
+# diameter d_n is read as "no bulge" (μ = 0) rather than as a negative bulge; on the radius
+# that is a quarter of it.
+DIAMETER_RESOLUTION_MM = 0.01
+
 
 @dataclass(frozen=True)
 class FrictionResult:
@@ -144,6 +149,8 @@ def friction_bulge_regression(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max
     d_max, used = _measured_max_diameter(d_max_mm, s_max_mm2)
     d_n = float(nominal_diameter(d0_mm, h0_mm, hk_mm))
     delta_r = float(bulge_excess(d_max, d_n))
+    if -DIAMETER_RESOLUTION_MM / 4 <= delta_r < 0:
+        delta_r = 0.0  # within the reading resolution of d_max: no bulge, μ = 0
     eps_p = float(height_strain(hk_mm, h0_mm))
     mu = mu_from_bulge_ratio(delta_r / hk_mm, eps_p)
     inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
@@ -207,6 +214,8 @@ def friction_ebrahimi_najafizadeh(d0_mm: float, h0_mm: float, hk_mm: float, *, d
     d_max, used = _measured_max_diameter(d_max_mm, s_max_mm2)
     r0, r_max = d0_mm / 2.0, d_max / 2.0
     r_mean = float(nominal_diameter(d0_mm, h0_mm, hk_mm)) / 2.0
+    if r_mean - DIAMETER_RESOLUTION_MM / 4 <= r_max < r_mean:
+        r_max = r_mean  # within the reading resolution of d_max: no bulge
     if r_max < r_mean:
         raise IdentificationError(f"Ebrahimi-Najafizadeh: negative bulge (maximum radius {r_max:.4g} mm below the volume-constant radius {r_mean:.4g} mm)")
     if d_top_mm is not None:

@@ -184,3 +184,11 @@ def test_unknown_names_are_clear():
         fr.correct("bridgman", [0.1], [100.0], 0.1, 4.0, 3.0)
     with pytest.raises(IdentificationError, match="μ"):
         fr.correct("slab", [0.1], [100.0], float("nan"), 4.0, 3.0)
+
+
+def test_no_bulge_within_reading_resolution_is_no_friction():
+    d_n = 6.0 * math.sqrt(7.0 / 3.5)
+    for method in fr.FRICTION_METHODS:
+        assert fr.identify_friction(method, 6.0, 7.0, 3.5, d_max_mm=d_n - 0.004).mu == pytest.approx(0.0, abs=1e-12)
+        with pytest.raises(IdentificationError, match="negative bulge"):
+            fr.identify_friction(method, 6.0, 7.0, 3.5, d_max_mm=d_n - 0.02)
