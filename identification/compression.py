@@ -33,6 +33,7 @@ from identification import friction as fr
 from identification.hardening import fit_hardening
 from identification.indicator import fit_modulus, remove_frame_compliance, scale_to_measured
 from identification.outcome import Identification
+from identification.tension import true_plastic_strain
 
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
 MAX_FIT_POINTS = 600  # the hardening fit uses at most this many points, evenly spread in strain
@@ -56,15 +57,6 @@ def loading_branch_end(travel_mm: np.ndarray, force_N: np.ndarray, near: float =
     return int(candidates[np.nanargmax(force_N[candidates])])
 
 
-def plastic_strain(strain, stress_MPa, E_MPa: float | None):
-    """Plastic part of a (compressive, positive) true strain."""
-    # (3.7) ε_p = ε − σ/E
-    strain = np.asarray(strain, dtype=float)
-    if E_MPa is None:
-        return strain.copy()
-    return strain - np.asarray(stress_MPa, dtype=float) / E_MPa
-
-
 def offset_yield(eps_p, stress_MPa, offset: float = YIELD_OFFSET) -> float | None:
     """Stress where the plastic strain first reaches ``offset`` (running maximum, interpolated)."""
     eps_run = np.maximum.accumulate(np.asarray(eps_p, dtype=float))
@@ -76,6 +68,13 @@ def offset_yield(eps_p, stress_MPa, offset: float = YIELD_OFFSET) -> float | Non
     e0, e1 = eps_run[i - 1], eps_run[i]
     w = 0.0 if e1 == e0 else (offset - e0) / (e1 - e0)
     return float(stress_MPa[i - 1] + w * (stress_MPa[i] - stress_MPa[i - 1]))
+
+
+def plastic_strain(strain, stress_MPa, E_MPa: float | None):
+    """Plastic part of a (compressive, positive) true strain; the total strain when E is unknown."""
+    if E_MPa is None:
+        return np.asarray(strain, dtype=float).copy()
+    return true_plastic_strain(strain, stress_MPa, E_MPa)  # (3.7) ε_p = ε − σ/E
 
 
 def _fit_subset(eps_p: np.ndarray, start: float) -> np.ndarray:

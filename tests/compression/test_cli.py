@@ -1,0 +1,60 @@
+"""``flowcurve identify`` on a synthetic compression record written in the native format."""
+
+from __future__ import annotations
+
+import json
+
+import pandas as pd
+import pytest
+
+from acquisition.record import read_record, write_record
+from flowcurve.cli import main
+
+
+def test_identify_command_writes_the_compression_result(tmp_path, make_record, capsys):
+    record, truth = make_record(seed=11)
+    path = write_record(tmp_path / "C1.csv", record)
+    out = tmp_path / "out"
+    code = main(["identify", str(path), "--out", str(out), "--friction-correction", "slab"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    folder = out / "C1"
+    result = json.loads((folder / "result.json").read_text())
+    for key in ("test", "E_MPa", "Rp02_MPa", "friction_mu", "friction", "hardening", "record", "warnings", "methods"):
+        assert key in result, key
+    assert result["test"] == "compression"
+    assert result["friction_mu"] == pytest.approx(truth["mu"], abs=1e-3)
+    assert set(result["friction"]) == {"bulge_regression", "ebrahimi_najafizadeh"}
+    h = result["hardening"]
+    assert {"law", "A_MPa", "B_MPa", "n", "fit_error_pct"} <= set(h)
+    rec = result["record"]
+    for key in ("path", "material", "nominal_temperature_C", "crosshead_speed_mm_per_s", "strain_rate_per_s", "specimen"):
+        assert key in rec, key
+    assert rec["specimen"]["h0_mm"] == pytest.approx(6.982)
+    curve = pd.read_csv(folder / "true_curve.csv")
+    assert list(curve.columns) == ["true_plastic_strain", "true_stress_MPa"]
+    assert curve["true_plastic_strain"].max() == pytest.approx(truth["eps_p_end"], abs=0.02)  # no E via CLI: total strain
+    pngs = sorted(p.name for p in folder.glob("*.png"))
+    assert "corrections.png" in pngs and "diagram.png" in pngs and "stress_strain.png" in pngs
+    assert all((folder / p).stat().st_size > 1000 for p in pngs)
+    assert "friction" in captured.out
+
+
+def test_identify_command_missing_height_is_one_line(tmp_path, make_record, capsys):
+    record, _ = make_record(drop=("post.hk_mm",))
+    path = write_record(tmp_path / "C2.csv", record)
+    code = main(["identify", str(path), "--out", str(tmp_path / "out"), "--no-plots"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert any("post.hk_mm" in line and "C2.csv" in line for line in err)
+    assert not any("Traceback" in line for line in err)
+
+
+def test_identify_command_options_fill_the_post_measurements(tmp_path, make_record):
+    record, truth = make_record(drop=("post.hk_mm", "post.dmax_mm"))
+    path = write_record(tmp_path / "C3.csv", record)
+    code = main(["identify", str(path), "--out", str(tmp_path / "out"), "--no-plots", "--hk", f"{truth['hk']:.4f}", "--dmax", f"{truth['dmax']:.4f}"])
+    assert code == 0
+    result = json.loads((tmp_path / "out" / "C3" / "result.json").read_text())
+    assert result["friction_mu"] == pytest.approx(truth["mu"], abs=1e-3)
+    assert read_record(path).meta.get("post.hk_mm") is None  # options do not rewrite the record
