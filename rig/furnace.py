@@ -159,6 +159,8 @@ class TemperatureController:
         self.temperature_C: float | None = None
         self._last_t: float | None = None
         self._period_start: float | None = None
+        self._target_on_s = 0.0
+        self._on_s = 0.0
         self._history: deque[tuple[float, float]] = deque(maxlen=200_000)
 
     def step(self, now: float | None = None) -> dict[str, float | bool]:
@@ -176,11 +178,18 @@ class TemperatureController:
                                                  f"{self.max_temperature_C:g} C; heater off")
         dt = 0.0 if self._last_t is None else max(0.0, now - self._last_t)
         self._last_t = now
+        if self.furnace.heater_is_on:
+            self._on_s += dt  # heater-on time delivered since the last step
         self._update_ramp(t, dt)
         if self._period_start is None or now - self._period_start >= self.period_s:
             self._period_start = now
             self._update_duty(t)
-        want_on = (now - self._period_start) < self.duty * self.period_s
+            # time-proportioning: on for duty x period, plus what the last period owed
+            # (the loop's step size quantizes on-times; carrying the rest keeps the mean exact)
+            carry = min(self.period_s, max(-self.period_s, self._target_on_s - self._on_s))
+            self._target_on_s = max(0.0, self.duty * self.period_s + carry)
+            self._on_s = 0.0
+        want_on = self._target_on_s - self._on_s > 0.5 * dt
         if want_on != self.furnace.heater_is_on:
             if want_on:
                 self.furnace.heater(True)

@@ -1,0 +1,101 @@
+"""TemperatureController against the virtual-rig engineer's thermal model (rig.physics).
+
+The model furnace below is the physics of the virtual rig (first-order losses growing with
+temperature, 5 s dead time, thermocouple noise) driven in simulated time; the controller
+sees it through the same calls it makes on a real :class:`rig.furnace.Furnace`.
+"""
+
+import random
+
+import pytest
+
+from flowcurve.errors import SafetyError
+from rig.furnace import TemperatureController
+
+physics = pytest.importorskip("rig.physics")
+
+
+class ModelFurnace:
+    """The furnace calls a controller makes, answered by the physical model."""
+
+    name = "furnace"
+
+    def __init__(self, params=None, max_temperature_C=900.0, seed=0):
+        self.model = physics.Furnace(params or physics.FurnaceParams())
+        self.max_temperature_C = max_temperature_C
+        self.heater_is_on = False
+        self.watchdog_armed = False
+        self.offs = 0
+        self.rng = random.Random(seed)
+
+    def temperature_C(self):
+        return self.model.temperature_C + self.rng.gauss(0.0, self.model.p.thermocouple_noise_C)
+
+    def heater(self, on):
+        if on and self.temperature_C() >= self.max_temperature_C:
+            raise SafetyError(self.name, "at max")
+        self.model.set_heater(on)
+        self.heater_is_on = on
+
+    def heater_off(self):
+        self.offs += 1
+        self.model.set_heater(False)
+        self.heater_is_on = False
+        return True
+
+    def host_ok(self):
+        pass
+
+
+def run(controller, furnace, duration_s, dt=0.25, t0=0.0, until=None):
+    """Step the controller every dt seconds of model time; returns [(t, true T, ramp)]."""
+    trace, t = [], t0
+    while t < t0 + duration_s:
+        state = controller.step(t)
+        trace.append((t, furnace.model.temperature_C, state["ramp_setpoint_C"]))
+        furnace.model.step(dt)
+        t += dt
+        if until and until(controller):
+            break
+    return trace, t
+
+
+@pytest.mark.parametrize("setpoint", [300.0, 600.0, 850.0])
+def test_holds_plus_minus_2_C_after_the_soak(setpoint):
+    furnace = ModelFurnace()
+    ctl = TemperatureController(furnace, setpoint, max_temperature_C=900.0, max_rate_C_per_min=60.0)
+    trace, t = run(ctl, furnace, 4 * 3600, until=lambda c: c.soaked(tolerance=2.0, hold_s=120.0))
+    assert ctl.soaked(tolerance=2.0, hold_s=120.0), "never soaked within 4 h of model time"
+    hold, _ = run(ctl, furnace, 1800, t0=t)  # half an hour at the set-point
+    deviations = [abs(T - setpoint) for _, T, _ in hold]
+    assert max(deviations) <= 2.0
+    assert 0.0 < ctl.duty < 1.0
+
+
+def test_heating_rate_is_limited():
+    furnace = ModelFurnace()
+    rate = 20.0  # C/min, well below what the heater can do (about 100 C/min when cold)
+    ctl = TemperatureController(furnace, 500.0, max_temperature_C=900.0, max_rate_C_per_min=rate)
+    trace, _ = run(ctl, furnace, 1200)
+    # the ramped set-point rises at exactly the limit; the furnace follows it, with a lag
+    (t1, _, r1), (t2, _, r2) = trace[100], trace[2000]
+    assert (r2 - r1) / (t2 - t1) * 60.0 == pytest.approx(rate, rel=1e-6)
+    window = 240  # 60 s of samples
+    for (ta, Ta, _), (tb, Tb, _) in zip(trace[::window], trace[window::window]):
+        assert (Tb - Ta) / (tb - ta) * 60.0 <= rate * 1.25
+
+
+def test_over_temperature_cuts_the_heater():
+    furnace = ModelFurnace(max_temperature_C=900.0)
+    ctl = TemperatureController(furnace, 400.0, max_temperature_C=450.0, max_rate_C_per_min=100.0)
+    run(ctl, furnace, 600)
+    furnace.model.set_relay_stuck(True)  # the relay welds shut: the heater stays on
+    with pytest.raises(SafetyError, match="over-temperature: 45[0-9.]+ C above the maximum 450 C"):
+        run(ctl, furnace, 3600)
+    assert furnace.offs >= 1 and not furnace.heater_is_on
+
+
+def test_setpoint_at_or_above_max_is_refused():
+    with pytest.raises(ValueError, match="not below the maximum"):
+        TemperatureController(ModelFurnace(max_temperature_C=700.0), 800.0,
+                              max_temperature_C=900.0, max_rate_C_per_min=10.0)
