@@ -1,0 +1,61 @@
+"""Virtual crosshead encoder counter box on a pty — docs/encoder-protocol.md (version 1).
+
+DCON framing and host watchdog from :class:`rig.virtual.dcon.DconDevice`; a 32-bit up/down
+counter of quadrature counts that wraps modulo 2**32 (``initial_count`` lets a test start
+it just below the wrap), read binary (``#AAN``), Gray-coded (``$AAGN``), latched by the
+``#**`` broadcast and read back by ``$AAZN``, reset to zero by ``$AA6N``.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Callable
+
+from rig.codecs.encoder import binary_to_gray
+from rig.virtual.dcon import CHECKSUM_BIT, DconDevice
+
+MASK32 = 0xFFFFFFFF
+
+
+class EncoderBox(DconDevice):
+    """``read_counts()`` returns the encoder's whole counts since the test start (an int)."""
+
+    name = "encoder"
+
+    def __init__(self, read_counts: Callable[[], int], *, address: int = 0x02,
+                 checksum_on: bool = False, initial_count: int = 0, **kw):
+        super().__init__(address=address, checksum_on=checksum_on, **kw)
+        self.read_counts = read_counts
+        self._offset = initial_count - read_counts()
+        self.latched = 0
+
+    def count(self) -> int:
+        """The 32-bit counter value now (0 … 2**32 − 1)."""
+        return (self._offset + self.read_counts()) & MASK32
+
+    def broadcast(self, text: str) -> None:
+        if text == "#**":
+            self.latched = self.count()
+
+    def command(self, lead: str, body: str) -> str | None:
+        aa = self.aa
+        if lead == "#" and body == "0":
+            return f">{self.count():08X}"
+        if lead == "$":
+            if body == "G0":
+                return f">{binary_to_gray(self.count()):08X}"
+            if body == "Z0":
+                return f">{self.latched:08X}"
+            if body == "60":
+                self._offset = -self.read_counts()
+                return f"!{aa}"
+            if body == "2":
+                return f"!{aa}0006{CHECKSUM_BIT if self.checksum_on else 0:02X}"
+            if body == "M":
+                return f"!{aa}7083FC"
+            if body == "F":
+                return f"!{aa}A1.0"
+            return None
+        if lead == "~" and re.fullmatch(r"[0-3].*", body):
+            return self.watchdog_command(body)
+        return None

@@ -1,0 +1,209 @@
+"""The virtual rig: the physical model and the three device twins on pseudo-terminals.
+
+::
+
+    with VirtualRig("12Kh18N10T", test="tension", speed_mm_per_s=0.01, time_scale=200) as rig:
+        config = rig.config()          # a RigConfig pointing at rig.ports
+        ...                            # drivers talk to rig.ports["loadcell"] etc.
+        rig.start_crosshead()          # the operator starts the machine
+        rig.inject("furnace", "silence")
+
+**One model clock.** Model time = wall-clock time since the rig started × ``time_scale``.
+Every read by a device first advances the model to that time, so the load cell, the
+encoder and the furnace always see one consistent state. ``time_scale=100`` runs a
+10 µm/s test a hundred times faster: a 30-minute tension test in 18 s, a furnace heat-up
+of 10 minutes in 6 s; the devices' own timing (output rate ``ICR``, DCON host watchdog)
+stays in real time, as the host sees it.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+from flowcurve.errors import ConfigError
+from rig.physics import FurnaceParams, RigModel, Specimen
+from rig.virtual.aed import AEDAmplifier
+from rig.virtual.dcon import I7011
+from rig.virtual.encoder_box import EncoderBox
+from rig.virtual.faults import MODEL_FAULTS, WIRE_FAULTS
+
+DEVICES = ("loadcell", "encoder", "furnace")
+
+
+class VirtualRig:
+    """Context manager running the model and the three devices (see the module docstring)."""
+
+    def __init__(self, material="12Kh18N12M3TL", test: str = "tension", specimen: Specimen | None = None, *,
+                 temperature_C: float | None = None, speed_mm_per_s: float = 0.01,
+                 time_scale: float = 1.0, seed: int = 0, frame_stiffness_N_per_um: float = 136.0,
+                 friction_mu: float = 0.1, force_noise_N: float = 3.0, nominal_load_N: float = 100e3,
+                 furnace: FurnaceParams = FurnaceParams(), stroke_limit_mm: float | None = None,
+                 loadcell_address: int = 31, furnace_address: int = 0x01, encoder_address: int = 0x02,
+                 checksum: bool = False, encoder_initial_count: int = 0, aed_settings: dict | None = None):
+        if not time_scale > 0:
+            raise ConfigError(f"time_scale: must be positive, got {time_scale}")
+        self.time_scale = float(time_scale)
+        self.model = RigModel(material, test, specimen, speed_mm_per_s=speed_mm_per_s,
+                              frame_stiffness_N_per_um=frame_stiffness_N_per_um, friction_mu=friction_mu,
+                              furnace=furnace, initial_temperature_C=temperature_C,
+                              force_noise_N=force_noise_N, stroke_limit_mm=stroke_limit_mm, seed=seed)
+        self.nominal_load_N = float(nominal_load_N)
+        self.checksum = checksum
+        self._lock = threading.RLock()
+        self._t0 = time.monotonic()
+        self._running = False
+        self.devices: dict = {}
+        try:
+            self.devices["loadcell"] = AEDAmplifier(self._loadcell_sample, nominal_load_N=nominal_load_N,
+                                                    address=loadcell_address, settings=aed_settings, seed=seed + 1)
+            self.devices["encoder"] = EncoderBox(self._encoder_counts, address=encoder_address,
+                                                 checksum_on=checksum, initial_count=encoder_initial_count,
+                                                 seed=seed + 2)
+            self.devices["furnace"] = I7011(self._thermocouple, self._set_heater, address=furnace_address,
+                                            checksum_on=checksum, seed=seed + 3)
+        except BaseException:
+            self.close()
+            raise
+
+    # -- clock and model access (called from the device threads) --------------------------
+    def now(self) -> float:
+        """Model time in seconds."""
+        return (time.monotonic() - self._t0) * self.time_scale
+
+    def sync(self) -> RigModel:
+        """Advance the model to the present model time and return it (hold :attr:`lock`)."""
+        with self._lock:
+            self.model.advance_to(self.now())
+            return self.model
+
+    @property
+    def lock(self) -> threading.RLock:
+        return self._lock
+
+    def _loadcell_sample(self):
+        with self._lock:
+            m = self.sync()
+            return m.time_s, m.measured_force_N(), not m.moving
+
+    def _encoder_counts(self) -> int:
+        with self._lock:
+            return self.sync().encoder_counts()
+
+    def _thermocouple(self) -> float:
+        with self._lock:
+            return self.sync().thermocouple_C()
+
+    def _set_heater(self, on: bool) -> None:
+        with self._lock:
+            self.sync().set_heater(on)
+
+    # -- life cycle ---------------------------------------------------------------------
+    def start(self) -> "VirtualRig":
+        with self._lock:
+            self._t0 = time.monotonic() - self.model.time_s / self.time_scale
+        for dev in self.devices.values():
+            dev.start()
+        self._running = True
+        return self
+
+    def close(self) -> None:
+        """Stop every device thread and close every pty (idempotent)."""
+        for dev in self.devices.values():
+            dev.close()
+        self._running = False
+
+    def __enter__(self) -> "VirtualRig":
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # -- what the tests and the operator do ----------------------------------------------
+    @property
+    def ports(self) -> dict[str, str]:
+        """Serial port paths: ``{"loadcell": "/dev/pts/N", "encoder": ..., "furnace": ...}``."""
+        return {name: dev.port for name, dev in self.devices.items()}
+
+    def start_crosshead(self) -> None:
+        with self._lock:
+            self.sync().start_crosshead()
+
+    def stop_crosshead(self) -> None:
+        with self._lock:
+            self.sync().stop_crosshead()
+
+    def inject(self, device: str, fault: str, **kw) -> None:
+        """Switch a fault on: wire faults (``silence``, ``drop``, ``garble``, ``delay``,
+        ``unplug``) on any device; ``open_thermocouple`` and ``relay_stuck`` on the furnace."""
+        dev = self._device(device)
+        if fault in MODEL_FAULTS.get(device, ()):
+            with self._lock:
+                m = self.sync()
+                if fault == "open_thermocouple":
+                    m.thermocouple_open = True
+                else:
+                    m.furnace.set_relay_stuck(True)
+            return
+        if fault not in WIRE_FAULTS:
+            known = WIRE_FAULTS + MODEL_FAULTS.get(device, ())
+            raise ConfigError(f"{device}: unknown fault '{fault}' (known: {', '.join(known)})")
+        if fault == "unplug":
+            dev.unplug()
+        else:
+            dev.faults.inject(fault, **kw)
+            dev.wake()
+
+    def clear(self, device: str) -> None:
+        """All faults of a device off (an unplugged device stays unplugged)."""
+        dev = self._device(device)
+        dev.faults.clear()
+        if device == "furnace":
+            with self._lock:
+                m = self.sync()
+                m.thermocouple_open = False
+                m.furnace.set_relay_stuck(False)
+        dev.wake()
+
+    def _device(self, device: str):
+        if device not in self.devices:
+            raise ConfigError(f"device: unknown virtual device '{device}' (known: {', '.join(DEVICES)})")
+        return self.devices[device]
+
+    def post_test_measurements(self) -> dict[str, str]:
+        """``post.*`` record keys the operator would measure on the specimen now."""
+        with self._lock:
+            return self.sync().post_test_measurements()
+
+    def metadata(self) -> dict[str, str]:
+        """Record metadata describing the virtual test (material, specimen, speed, frame)."""
+        m = self.model
+        s = m.specimen
+        meta = {
+            "test": m.test,
+            "material": m.material.name,
+            "nominal_temperature_C": f"{m.furnace.temperature_C:.1f}",
+            "crosshead_speed_mm_per_s": f"{m.speed_mm_per_s:g}",
+            "rig.frame_stiffness_N_per_um": f"{m.frame_stiffness_N_per_um:g}",
+            "specimen.d0_mm": f"{s.d0_mm:g}",
+        }
+        meta["specimen.l0_mm" if m.test == "tension" else "specimen.h0_mm"] = f"{s.length0_mm:g}"
+        return meta
+
+    def config(self):
+        """A RigConfig for the drivers pointing at this rig's ports (``rig.config.virtual_config``)."""
+        from rig.config import virtual_config  # the drivers' module; imported late on purpose
+
+        return virtual_config(**self.config_kwargs())
+
+    def config_kwargs(self) -> dict:
+        """What :meth:`config` passes to ``virtual_config``."""
+        return {
+            "ports": self.ports,
+            "frame_stiffness_N_per_um": self.model.frame_stiffness_N_per_um,
+            "nominal_load_N": self.nominal_load_N,
+            "loadcell_address": self.devices["loadcell"].address,
+            "furnace_address": self.devices["furnace"].address,
+            "encoder_address": self.devices["encoder"].address,
+            "checksum": self.checksum,
+        }
