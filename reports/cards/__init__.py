@@ -16,10 +16,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from flowcurve import __version__
 from flowcurve.errors import FlowcurveError
-from identification.hardening import johnson_cook_static
+from identification.johnson_cook import johnson_cook
 from reports.units import UnitSystem, get_unit_system
 
 FORMATS = ("lsdyna", "abaqus", "radioss", "calculix")
@@ -33,7 +34,7 @@ class CardError(FlowcurveError):
 # Constants a card may need: attribute → (fit.json key, command-line option, what it is).
 CONSTANTS = {
     "E_MPa": ("E_MPa", "--E", "Young's modulus in MPa"),
-    "poisson": ("poisson", "--poisson", "Poisson's ratio"),
+    "poisson": ("poisson_ratio", "--poisson", "Poisson's ratio"),
     "density_kg_per_m3": ("density_kg_per_m3", "--density", "density in kg/m3"),
     "specific_heat_J_per_kgK": ("specific_heat_J_per_kgK", "--cp", "specific heat in J/(kg K)"),
     "melt_temperature_C": ("melt_temperature_C", "--melt-temp", "melting temperature in °C"),
@@ -51,6 +52,7 @@ class FlowCurve:
     plastic_strain: np.ndarray
     stress_MPa: np.ndarray
     origin: str = "measured"  # "measured" (identified true curve) or "Johnson-Cook"
+    model_stress_at_zero_MPa: float | None = None  # fit.json's value for this condition
 
 
 @dataclass
@@ -80,26 +82,24 @@ class CardData:
     conductivity_W_per_mK: float | None = None
     expansion_per_K: float | None = None
     fracture: dict[str, float] = field(default_factory=dict)  # D1..D5 if identified
+    fixed: dict[str, float] = field(default_factory=dict)  # constants given, not identified
+    warnings: list[str] = field(default_factory=list)
     curves: list[FlowCurve] = field(default_factory=list)
     source_path: str = "<memory>"
 
     # -- the law ---------------------------------------------------------------------------
     def flow_stress_MPa(self, eps_p, strain_rate_per_s=None, temperature_C=None):
-        """(2.19) Johnson–Cook flow stress, with the conventions of METHODS.md §5:
-        no rate effect below ε̇0, T* clamped to [0, 1]."""
+        """(2.19) Johnson–Cook flow stress in MPa, with the conventions of METHODS.md §5."""
         rate = self.ref_strain_rate_per_s if strain_rate_per_s is None else strain_rate_per_s
         temp = self.ref_temperature_C if temperature_C is None else temperature_C
-        static = johnson_cook_static(eps_p, self.A_MPa, self.B_MPa, self.n)
-        rate_factor = 1.0 + self.C * max(0.0, math.log(rate / self.ref_strain_rate_per_s))
-        return static * rate_factor * self.thermal_factor(temp)
-
-    def thermal_factor(self, temperature_C: float) -> float:
-        """(2.19) third bracket 1 − T*^m, T* = (T − T_r)/(T_m − T_r) clamped to [0, 1]."""
-        if temperature_C <= self.ref_temperature_C:
-            return 1.0
-        melt = self.require("melt_temperature_C")
-        t_star = min(1.0, (temperature_C - self.ref_temperature_C) / (melt - self.ref_temperature_C))
-        return 1.0 - t_star**self.m
+        melt = self.melt_temperature_C
+        if melt is None:
+            if temp > self.ref_temperature_C:
+                self.require("melt_temperature_C")
+            melt = self.ref_temperature_C + 1.0  # T* is clamped to 0 at or below T_ref anyway
+        return johnson_cook(eps_p, rate, temp, A=self.A_MPa, B=self.B_MPa, n=self.n, C=self.C, m=self.m,
+                            ref_strain_rate_per_s=self.ref_strain_rate_per_s,
+                            ref_temperature_C=self.ref_temperature_C, melt_temperature_C=melt)
 
     def require(self, name: str) -> float:
         """A constant the card needs; a one-line error naming the option that supplies it."""
@@ -147,31 +147,50 @@ def _number(fit: dict, key: str, path, default=None, *, required=False, positive
 
 
 def _curves(fit: dict, path) -> list[FlowCurve]:
+    """The tabulated true curves of ``fit.json`` (``curves[].file``, relative to its folder)."""
+    folder = Path(path).parent
     curves = []
     for i, c in enumerate(fit.get("curves") or []):
         where = f"curves[{i}]"
         try:
-            eps = np.asarray(c["true_plastic_strain"], dtype=float)
-            sig = np.asarray(c["true_stress_MPa"], dtype=float)
             temp = float(c["temperature_C"])
             rate = float(c["strain_rate_per_s"])
+            file = folder / c["file"]
         except KeyError as exc:
             raise CardError(f"{path}: {where} lacks '{exc.args[0]}'") from None
         except (TypeError, ValueError):
             raise CardError(f"{path}: {where} holds values that are not numbers") from None
-        if eps.shape != sig.shape or eps.ndim != 1 or eps.size < 2:
-            raise CardError(f"{path}: {where}: 'true_plastic_strain' and 'true_stress_MPa' must be lists of equal length ≥ 2")
-        if not (np.all(np.isfinite(eps)) and np.all(np.isfinite(sig))):
-            raise CardError(f"{path}: {where} holds NaN or infinite values")
-        curves.append(FlowCurve(temp, rate, eps, sig, "measured"))
+        try:
+            table = pd.read_csv(file, comment="#")
+            eps = table["true_plastic_strain"].to_numpy(dtype=float)
+            sig = table["true_stress_MPa"].to_numpy(dtype=float)
+        except FileNotFoundError:
+            raise CardError(f"{path}: {where}: curve file {file} is missing") from None
+        except KeyError as exc:
+            raise CardError(f"{file}: no column {exc.args[0]!r} (expected true_plastic_strain,true_stress_MPa)") from None
+        except (ValueError, pd.errors.ParserError) as exc:
+            raise CardError(f"{file}: not a readable curve table: {exc}") from None
+        if eps.size < 2 or not (np.all(np.isfinite(eps)) and np.all(np.isfinite(sig))):
+            raise CardError(f"{file}: a curve needs at least 2 finite points")
+        zero = c.get("model_stress_at_zero_strain_MPa")
+        curves.append(FlowCurve(temp, rate, eps, sig, "measured", None if zero is None else float(zero)))
     return curves
+
+
+def _sources(fit: dict) -> list[str]:
+    out = []
+    for r in fit.get("records") or []:
+        if isinstance(r, dict):
+            name, source = r.get("name"), r.get("source")
+            out.append(f"{name} ({source})" if name and source and str(source) != name else str(name or source))
+        else:
+            out.append(str(r))
+    return out
 
 
 def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
     """A :class:`CardData` from a parsed ``fit.json``; ``overrides`` (e.g. ``E_MPa=2.1e5``) win."""
     rng = fit.get("range") or {}
-    sources = fit.get("source_records") or fit.get("sources") or []
-    sources = [s if isinstance(s, str) else str(s.get("path") or s.get("name") or s) for s in sources]
     stderr = {k[: -len("_stderr")]: fit[k] for k in fit if k.endswith("_stderr")}
     data = CardData(
         A_MPa=_number(fit, "A_MPa", path, required=True),
@@ -186,17 +205,19 @@ def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
         plastic_strain_range=_pair(rng.get("plastic_strain"), "range.plastic_strain", path),
         strain_rate_range_per_s=_pair(rng.get("strain_rate_per_s"), "range.strain_rate_per_s", path),
         temperature_range_C=_pair(rng.get("temperature_C"), "range.temperature_C", path),
-        sources=sources,
+        sources=_sources(fit),
         method=str(fit.get("method", "unknown")),
         material=str(fit.get("material", "material")),
         friction_mu=_number(fit, "friction_mu", path),
         E_MPa=_number(fit, "E_MPa", path, positive=True),
-        poisson=_number(fit, "poisson", path),
+        poisson=_number(fit, "poisson_ratio", path),
         density_kg_per_m3=_number(fit, "density_kg_per_m3", path, positive=True),
         specific_heat_J_per_kgK=_number(fit, "specific_heat_J_per_kgK", path, positive=True),
         conductivity_W_per_mK=_number(fit, "conductivity_W_per_mK", path, positive=True),
         expansion_per_K=_number(fit, "expansion_per_K", path),
         fracture={k: float(fit[k]) for k in ("D1", "D2", "D3", "D4", "D5") if fit.get(k) is not None},
+        fixed={str(k): float(v) for k, v in (fit.get("fixed") or {}).items()},
+        warnings=[str(w) for w in fit.get("warnings") or []],
         curves=_curves(fit, path),
         source_path=str(path),
     )
@@ -251,15 +272,20 @@ def start_at_zero(card: CardData, curve: FlowCurve) -> FlowCurve:
     """The curve beginning at zero plastic strain (solvers require it, METHODS.md §7).
 
     A measured curve starts at εp ≈ 0.002 (Rp0.2): the missing first point is the fitted
-    law at εp = 0 for the curve's rate and temperature, not above the first measured stress.
+    model at εp = 0 for the curve's condition (fit.json's ``model_stress_at_zero_strain_MPa``,
+    else the law), not above the first measured stress. The cards say so.
     """
     eps, sig = curve.plastic_strain, curve.stress_MPa
     if eps[0] <= 0.0:
         eps = eps.copy()
         eps[0] = 0.0
         return FlowCurve(curve.temperature_C, curve.strain_rate_per_s, eps, sig, curve.origin)
-    s0 = min(float(card.flow_stress_MPa(0.0, curve.strain_rate_per_s, curve.temperature_C)), float(sig[0]))
-    return FlowCurve(curve.temperature_C, curve.strain_rate_per_s, np.concatenate([[0.0], eps]), np.concatenate([[s0], sig]), curve.origin)
+    s0 = curve.model_stress_at_zero_MPa
+    if s0 is None:
+        s0 = float(card.flow_stress_MPa(0.0, curve.strain_rate_per_s, curve.temperature_C))
+    s0 = min(s0, float(sig[0]))
+    return FlowCurve(curve.temperature_C, curve.strain_rate_per_s, np.concatenate([[0.0], eps]),
+                     np.concatenate([[s0], sig]), curve.origin, curve.model_stress_at_zero_MPa)
 
 
 def law_curve(card: CardData, temperature_C: float, strain_rate_per_s: float, rows: int = 60) -> FlowCurve:
@@ -361,6 +387,12 @@ def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_not
         "WARNING: valid only on the range above. Extrapolation beyond it (larger strains, the",
         "  high strain rates and temperatures of machining) is the user's risk.",
     ]
+    if card.fixed:
+        lines.append("NOT identified but given by the user: " + ", ".join(f"{k} = {v:g}" for k, v in card.fixed.items()))
+    for warning in card.warnings:
+        lines.append(f"fit warning: {warning}")
+    if card.curves:
+        lines.append("tabulated curves: measured true curves; their first point (zero plastic strain) is the fitted model's")
     if card.friction_mu is not None:
         lines.append(f"friction coefficient mu = {card.friction_mu:.4g} (specimen-platen, identified from barrelling)")
     return lines
