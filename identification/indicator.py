@@ -41,12 +41,12 @@ def scale_to_measured(displacement_mm, measured_final_mm: float) -> tuple[np.nda
     return disp * k, k
 
 
-def first_loading(force_N, up_to_N: float) -> int:
-    """Index of the first sample at or above ``up_to_N`` (the end of the first loading branch)."""
-    force = np.asarray(force_N, dtype=float)
-    above = np.nonzero(force >= up_to_N)[0]
+def first_loading(y, up_to: float, unit: str = "N") -> int:
+    """Index of the first sample at or above ``up_to`` (the end of the first loading branch)."""
+    y = np.asarray(y, dtype=float)
+    above = np.nonzero(y >= up_to)[0]
     if above.size == 0:
-        raise IdentificationError(f"the force never reaches {up_to_N:.4g} N")
+        raise IdentificationError(f"the loading curve never reaches {up_to:.4g} {unit}, the top of the fit window")
     return int(above[0])
 
 
@@ -68,7 +68,7 @@ class LineFit:
         return -self.intercept / self.slope
 
 
-def fit_line_in_window(x, y, lo: float, hi: float, *, min_points: int = 5) -> LineFit:
+def fit_line_in_window(x, y, lo: float, hi: float, *, min_points: int = 5, unit: str = "N") -> LineFit:
     """Least-squares line through the points of the first rise of ``y`` with lo ≤ y ≤ hi.
 
     Only the samples before ``y`` first exceeds ``hi`` are used, so unloading loops and the
@@ -78,11 +78,11 @@ def fit_line_in_window(x, y, lo: float, hi: float, *, min_points: int = 5) -> Li
     y = np.asarray(y, dtype=float)
     if not hi > lo:
         raise IdentificationError(f"fit window must have hi > lo, got ({lo:.4g}, {hi:.4g})")
-    end = first_loading(y, hi)
+    end = first_loading(y, hi, unit)
     idx = np.arange(end + 1)
     idx = idx[(y[idx] >= lo) & (y[idx] <= hi) & np.isfinite(x[idx])]
     if idx.size < min_points:
-        raise IdentificationError(f"only {idx.size} samples between {lo:.4g} and {hi:.4g} on the first loading; need {min_points} for a line (sample faster or widen the window)")
+        raise IdentificationError(f"only {idx.size} samples between {lo:.4g} and {hi:.4g} {unit} on the first loading; need {min_points} for a line (sample faster or widen the window)")
     xs, ys = x[idx], y[idx]
     A = np.column_stack([xs, np.ones_like(xs)])
     coef, *_ = np.linalg.lstsq(A, ys, rcond=None)
@@ -130,7 +130,7 @@ class ModulusFit:
 
 def fit_modulus(strain, stress_MPa, window_MPa: tuple[float, float]) -> ModulusFit:
     """Apparent modulus by linear regression of stress on strain over ``window_MPa`` (§2.3)."""
-    line = fit_line_in_window(strain, stress_MPa, *window_MPa)
+    line = fit_line_in_window(strain, stress_MPa, *window_MPa, unit="MPa")
     if line.slope <= 0:
         raise IdentificationError(f"the stress does not rise with strain between {window_MPa[0]:.4g} and {window_MPa[1]:.4g} MPa: no modulus")
     return ModulusFit(line.slope, line.slope_stderr, line.intercept, line.r2, line.n_points, line.window)
