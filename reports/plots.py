@@ -31,7 +31,7 @@ UNIT_LABELS = {
     "C": "°C", "mm2": "mm²", "per_s": "1/s", "um": "µm",
 }
 DIMENSIONLESS = ("strain", "ratio", "mu", "factor")
-MAX_POINTS = 5000  # points drawn per line; longer curves are thinned evenly
+MAX_POINTS = 2000  # points drawn per line; longer curves are thinned evenly
 
 
 def axis_label(column: str) -> str:
@@ -85,7 +85,7 @@ def _stress_pair(df: pd.DataFrame) -> tuple[str, str] | None:
 
 def draw_diagram(ident: Identification, path: Path) -> None:
     """Raw and corrected indicator diagram, force (kN) against displacement (mm)."""
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
     try:
         for name, style in (("raw_diagram", dict(color="0.55", lw=1.0)), ("corrected_diagram", dict(color="C0", lw=1.4))):
             df = ident.curves.get(name)
@@ -101,7 +101,6 @@ def draw_diagram(ident: Identification, path: Path) -> None:
         ax.set_title(_title(ident, "indicator diagram"))
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best")
-        fig.tight_layout()
         fig.savefig(path, dpi=110)
     finally:
         plt.close(fig)
@@ -117,7 +116,7 @@ def draw_stress_strain(ident: Identification, path: Path) -> None:
     true plastic strain with the hardening fit (and the neck-corrected fracture point)."""
     curves = ident.curves
     total = [n for n in ("engineering", "true") if n in curves and _stress_pair(curves[n])]
-    fig, axes = plt.subplots(1, 2 if total else 1, figsize=(12 if total else 7, 4.5), squeeze=False)
+    fig, axes = plt.subplots(1, 2 if total else 1, figsize=(12 if total else 7, 4.5), squeeze=False, layout="constrained")
     try:
         if total:
             ax = axes[0][0]
@@ -148,7 +147,6 @@ def draw_stress_strain(ident: Identification, path: Path) -> None:
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best")
         fig.suptitle(_title(ident, "stress-strain curves"))
-        fig.tight_layout()
         fig.savefig(path, dpi=110)
     finally:
         plt.close(fig)
@@ -157,7 +155,7 @@ def draw_stress_strain(ident: Identification, path: Path) -> None:
 def draw_corrections(ident: Identification, path: Path) -> None:
     """The true curve of every friction correction, one panel each, same axes, fit overlaid."""
     names = sorted(n for n in ident.curves if n.startswith("true_") and _stress_pair(ident.curves[n]))
-    fig, axes = plt.subplots(1, max(1, len(names)), figsize=(3.6 * max(1, len(names)), 4), sharey=True, squeeze=False)
+    fig, axes = plt.subplots(1, max(1, len(names)), figsize=(3.6 * max(1, len(names)), 4), sharey=True, squeeze=False, layout="constrained")
     try:
         fit = ident.curves.get("fit")
         for ax, name in zip(axes[0], names):
@@ -174,7 +172,6 @@ def draw_corrections(ident: Identification, path: Path) -> None:
             ax.legend(loc="lower right", fontsize="small")
         axes[0][0].set_ylabel("true stress (MPa)")
         fig.suptitle(_title(ident, "true curves by friction correction"))
-        fig.tight_layout()
         fig.savefig(path, dpi=110)
     finally:
         plt.close(fig)
