@@ -1,0 +1,323 @@
+"""Rig configuration: a TOML file with sections ``[loadcell]``, ``[encoder]``, ``[furnace]``,
+``[frame]``, validated on load into frozen dataclasses.
+
+Unknown keys, wrong types and out-of-range values raise :class:`ConfigError` naming the file
+and the key (``rig.toml: [furnace] max_temperature_C: must be in 0 < x <= 1370, got 2000``).
+``[furnace]`` is optional (a rig without a furnace); the others are required. See
+``rig/example-rig.toml`` for every key with its meaning.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any
+
+from flowcurve.errors import ConfigError
+from rig.codecs import aed
+
+PARITIES = ("N", "E", "O")
+BAUDS = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200)
+
+
+def _in(lo, hi, *, lo_open=False):
+    def check(v):
+        ok = (lo < v if lo_open else lo <= v) and v <= hi
+        return None if ok else f"must be in {lo} {'<' if lo_open else '<='} x <= {hi}, got {v}"
+    return check
+
+
+def _one_of(choices):
+    return lambda v: None if v in choices else f"must be one of {', '.join(map(str, choices))}, got {v!r}"
+
+
+def _cof(v):
+    try:
+        aed.output_format(v)
+    except ValueError as exc:
+        return str(exc)
+    return None
+
+
+@dataclass(frozen=True)
+class SerialConfig:
+    """What every device section has: the port and its line settings."""
+
+    port: str
+    baud: int = 9600
+    parity: str = "N"
+    timeout_s: float = 0.2
+    address: int = 0
+
+    def transport_kwargs(self, name: str) -> dict[str, Any]:
+        return dict(name=name, baudrate=self.baud, parity=self.parity, timeout_s=self.timeout_s)
+
+
+@dataclass(frozen=True)
+class LoadCellConfig(SerialConfig):
+    parity: str = "E"
+    address: int = 31
+    nominal_load_N: float | None = None
+    calibration_N_per_count: float | None = None
+    output_format: int = 3
+    rate_code: int = 0
+    filter: int = 5
+    select_address: bool = False
+
+    def create(self, **kw):
+        """A :class:`rig.loadcell.LoadCell` for this section (port not opened yet)."""
+        from rig.loadcell import LoadCell
+
+        return LoadCell(self.port, address=self.address, nominal_load_N=self.nominal_load_N,
+                        calibration_N_per_count=self.calibration_N_per_count,
+                        output_format=self.output_format, select_address=self.select_address,
+                        **self.transport_kwargs("load cell"), **kw)
+
+    @property
+    def settings(self) -> dict[str, int]:
+        """Keyword arguments of :meth:`rig.loadcell.LoadCell.configure` for this section."""
+        return {"rate_code": self.rate_code, "filter": self.filter, "fmt": self.output_format}
+
+
+@dataclass(frozen=True)
+class EncoderConfig(SerialConfig):
+    address: int = 2
+    checksum: bool = False
+    counts_per_rev: int = 10_000
+    gear_ratio: float = 1.0
+    screw_lead_mm: float = 100.0
+
+    def create(self, **kw):
+        """A :class:`rig.encoder.CrossheadEncoder` for this section."""
+        from rig.encoder import CrossheadEncoder
+
+        return CrossheadEncoder(self.port, address=self.address, checksum=self.checksum,
+                                counts_per_rev=self.counts_per_rev, gear_ratio=self.gear_ratio,
+                                screw_lead_mm=self.screw_lead_mm,
+                                **self.transport_kwargs("crosshead encoder"), **kw)
+
+
+@dataclass(frozen=True)
+class FurnaceConfig(SerialConfig):
+    address: int = 1
+    timeout_s: float = 0.3
+    checksum: bool = False
+    heater_do_bit: int = 0
+    max_temperature_C: float = 900.0
+    max_heating_rate_C_per_min: float = 30.0
+    watchdog_timeout_s: float = 10.0
+    control_period_s: float = 2.0
+    kp_per_C: float = 0.05
+    ki_per_C_s: float = 0.0005
+
+    def create(self, **kw):
+        """A :class:`rig.furnace.Furnace` for this section."""
+        from rig.furnace import Furnace
+
+        return Furnace(self.port, address=self.address, checksum=self.checksum,
+                       heater_do_bit=self.heater_do_bit, max_temperature_C=self.max_temperature_C,
+                       **self.transport_kwargs("furnace"), **kw)
+
+    def controller(self, furnace, setpoint_C: float, **kw):
+        """A :class:`rig.furnace.TemperatureController` with this section's limits and tuning."""
+        from rig.furnace import TemperatureController
+
+        return TemperatureController(furnace, setpoint_C, max_temperature_C=self.max_temperature_C,
+                                     max_rate_C_per_min=self.max_heating_rate_C_per_min,
+                                     period_s=self.control_period_s, kp_per_C=self.kp_per_C,
+                                     ki_per_C_s=self.ki_per_C_s, **kw)
+
+
+@dataclass(frozen=True)
+class FrameConfig:
+    stiffness_N_per_um: float = 136.0
+    max_force_N: float = 100_000.0
+
+
+@dataclass(frozen=True)
+class RigConfig:
+    """The whole rig; ``furnace`` is None on a rig without one; ``source`` is the file read."""
+
+    loadcell: LoadCellConfig
+    encoder: EncoderConfig
+    furnace: FurnaceConfig | None
+    frame: FrameConfig
+    source: str = "<virtual>"
+
+
+_SERIAL_CHECKS = {
+    "port": (str, lambda v: None if v.strip() else "must not be empty"),
+    "baud": (int, _one_of(BAUDS)),
+    "parity": (str, _one_of(PARITIES)),
+    "timeout_s": (float, _in(0.0, 10.0, lo_open=True)),
+}
+SCHEMA: dict[str, tuple[type, dict[str, tuple[type, Any]]]] = {
+    "loadcell": (LoadCellConfig, _SERIAL_CHECKS | {
+        "address": (int, _in(0, 99)),
+        "nominal_load_N": (float, _in(0.0, 1e7, lo_open=True)),
+        "calibration_N_per_count": (float, _in(0.0, 1.0, lo_open=True)),
+        "output_format": (int, _cof),
+        "rate_code": (int, _in(0, 7)),
+        "filter": (int, _in(0, 8)),
+        "select_address": (bool, None),
+    }),
+    "encoder": (EncoderConfig, _SERIAL_CHECKS | {
+        "address": (int, _in(0, 255)),
+        "checksum": (bool, None),
+        "counts_per_rev": (int, _in(1, 10**7)),
+        "gear_ratio": (float, _in(0.0, 1000.0, lo_open=True)),
+        "screw_lead_mm": (float, _in(0.0, 1000.0, lo_open=True)),
+    }),
+    "furnace": (FurnaceConfig, _SERIAL_CHECKS | {
+        "address": (int, _in(0, 255)),
+        "checksum": (bool, None),
+        "heater_do_bit": (int, _in(0, 1)),
+        "max_temperature_C": (float, _in(0.0, 1370.0, lo_open=True)),
+        "max_heating_rate_C_per_min": (float, _in(0.0, 200.0, lo_open=True)),
+        "watchdog_timeout_s": (float, _in(0.1, 25.5)),
+        "control_period_s": (float, _in(0.1, 60.0)),
+        "kp_per_C": (float, _in(0.0, 10.0)),
+        "ki_per_C_s": (float, _in(0.0, 1.0)),
+    }),
+    "frame": (FrameConfig, {
+        "stiffness_N_per_um": (float, _in(0.0, 1e6, lo_open=True)),
+        "max_force_N": (float, _in(0.0, 1e8, lo_open=True)),
+    }),
+}
+REQUIRED_SECTIONS = ("loadcell", "encoder", "frame")
+
+
+def _value(where: str, key: str, value: Any, kind: type, check) -> Any:
+    if kind is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
+        raise ConfigError(f"{where} {key}: must be {_TYPE_NAMES[kind]}, got {type(value).__name__} {value!r}")
+    if kind is float and not math.isfinite(value):
+        raise ConfigError(f"{where} {key}: must be finite, got {value}")
+    if kind is str:
+        value = value.strip()
+        if key == "parity":
+            value = value.upper()
+    problem = check(value) if check else None
+    if problem:
+        raise ConfigError(f"{where} {key}: {problem}")
+    return value
+
+
+_TYPE_NAMES = {int: "an integer", float: "a number", str: "a string", bool: "true or false"}
+
+
+def _section(origin: str, name: str, table: Any):
+    cls, checks = SCHEMA[name]
+    where = f"{origin}: [{name}]"
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where}: must be a table, got {table!r}")
+    values = {}
+    for key, value in table.items():
+        if key not in checks:
+            known = ", ".join(f.name for f in fields(cls))
+            raise ConfigError(f"{where} {key}: unknown key (known: {known})")
+        values[key] = _value(where, key, value, *checks[key])
+    if "port" in checks and "port" not in values:
+        raise ConfigError(f"{where} port: missing (a device path, e.g. /dev/ttyUSB0, or a pyserial URL)")
+    if name == "loadcell":
+        given = [k for k in ("nominal_load_N", "calibration_N_per_count") if k in values]
+        if len(given) != 1:
+            raise ConfigError(f"{where} nominal_load_N: give exactly one of nominal_load_N and "
+                              f"calibration_N_per_count (got {len(given)})")
+    return cls(**values)
+
+
+def parse_config(data: dict, origin: str = "<config>") -> RigConfig:
+    """Validate an already-parsed TOML document (``origin`` names it in errors)."""
+    for name in data:
+        if name not in SCHEMA:
+            raise ConfigError(f"{origin}: [{name}]: unknown section (known: {', '.join(SCHEMA)})")
+    for name in REQUIRED_SECTIONS:
+        if name not in data:
+            raise ConfigError(f"{origin}: [{name}]: missing section")
+    sections = {name: _section(origin, name, data[name]) for name in data}
+    config = RigConfig(sections["loadcell"], sections["encoder"], sections.get("furnace"),
+                       sections["frame"], origin)
+    ports = [s.port for s in (config.loadcell, config.encoder, config.furnace)
+             if s is not None and not s.port.startswith("loop://")]
+    if len(set(ports)) != len(ports):
+        raise ConfigError(f"{origin}: two devices share one port ({', '.join(ports)}); each needs its own")
+    return config
+
+
+def load_config(path) -> RigConfig:
+    """Read and validate a rig TOML file."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such rig configuration file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read: {exc}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    return parse_config(data, str(path))
+
+
+# Unprefixed keyword arguments of virtual_config and the sections they go to.
+_SHORTCUTS = {"nominal_load_N": ("loadcell",), "frame_stiffness_N_per_um": ("frame",),
+              "checksum": ("encoder", "furnace"), "max_temperature_C": ("furnace",)}
+
+
+def virtual_config(ports: dict[str, str], **overrides) -> RigConfig:
+    """A configuration for the virtual rig's pseudo-terminals, validated like a file.
+
+    ``ports`` maps ``loadcell``, ``encoder`` (and ``furnace``) to port paths. Overrides are
+    ``<section>_<key>=value`` (``furnace_max_temperature_C=500``, ``loadcell_address=5``) or the
+    shortcuts ``nominal_load_N``, ``frame_stiffness_N_per_um``, ``checksum``, ``max_temperature_C``.
+    """
+    data: dict[str, dict] = {"loadcell": {"nominal_load_N": 100_000.0}, "encoder": {}, "frame": {}}
+    for name, port in ports.items():
+        if name not in ("loadcell", "encoder", "furnace"):
+            raise ConfigError(f"<virtual>: ports: unknown device {name!r}")
+        data.setdefault(name, {})["port"] = port
+    for key, value in overrides.items():
+        if key == "frame_stiffness_N_per_um":
+            data["frame"]["stiffness_N_per_um"] = value
+            continue
+        targets = _SHORTCUTS.get(key)
+        if targets:
+            for section in targets:
+                if section in data:
+                    data[section][key] = value
+            continue
+        section, _, name = key.partition("_")
+        if section not in SCHEMA or not name:
+            raise ConfigError(f"<virtual>: {key}: unknown override (use <section>_<key>)")
+        data.setdefault(section, {})[name] = value
+    if "calibration_N_per_count" in data["loadcell"] and "nominal_load_N" not in overrides:
+        del data["loadcell"]["nominal_load_N"]
+    return parse_config(data, "<virtual>")
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return repr(v)
+
+
+def to_toml(config: RigConfig) -> str:
+    """The configuration as a TOML document that :func:`load_config` reads back identically."""
+    lines = [f"# flowcurve rig configuration (written from {config.source})"]
+    for name in ("loadcell", "encoder", "furnace", "frame"):
+        section = getattr(config, name)
+        if section is None:
+            continue
+        lines.append(f"\n[{name}]")
+        for f in fields(section):
+            value = getattr(section, f.name)
+            if value is not None:
+                lines.append(f"{f.name} = {_toml_value(value)}")
+    return "\n".join(lines) + "\n"
