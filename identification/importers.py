@@ -384,8 +384,9 @@ def read_mapped_csv(path: str | os.PathLike, columns: Mapping[str, tuple[str, st
             names_idx, delim, names = i, d, cells
             break
     if names_idx is None:
-        first = next((line for line in lines if line.strip()), "")
-        found = [c.strip().strip('"') for c in first.split(_sniff_delimiter(first))]
+        # the likeliest names row: the line (of the first 200) split into the most cells
+        widest = max((line for line in lines if line.strip()), key=lambda line: line.count(_sniff_delimiter(line)))
+        found = [c.strip().strip('"') for c in widest.split(_sniff_delimiter(widest))]
         absent = [name for name, _ in wanted.values() if name not in found]
         raise RecordError(source, f"no column named {', '.join(map(repr, absent))} (columns found: {', '.join(found)})")
     rest = [(j, line) for j, line in enumerate(lines) if j > names_idx and line.strip()]
