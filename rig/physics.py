@@ -13,9 +13,13 @@ read it. Conventions:
 * Tension: uniform deformation with plastic incompressibility, F = F0·exp(−εp) (elastic
   volume change neglected), until the force maximum (Considère, dσ/dεp = σ); then a neck
   zone of initial length ``neck_length_mm`` (default d0) strains alone while the rest
-  unloads elastically; the neck's mean axial stress is the flow stress times Bridgman's
-  factor (1 + 2R/a)·ln(1 + a/(2R)) with a/R = 1.1·(ε − ε_u) (Le Roy et al. 1981); fracture
-  when the neck strain reaches the material's fracture strain (force drops to zero).
+  unloads elastically; the neck's mean axial stress is the flow stress (the lumped neck
+  carries no triaxiality: adding Bridgman's factor with Le Roy's a/R = 1.1·(ε − ε_u) would
+  make the force rise past Considère); fracture when the neck strain reaches the
+  material's fracture strain (force drops to zero). The neck profile radius reported
+  after the test follows Le Roy et al. (1981), a/R = 1.1·(ε_f − ε_u). Consequence: a
+  Davidenkov or Bridgman correction applied to this model's records lowers the fracture
+  stress below the model's flow stress by that correction's factor.
 * Compression: flow stress × current area × the exact Coulomb slab factor
   2(e^c − c − 1)/c², c = 2μr/h, with plastic volume constancy; the bulge measured after
   the test follows the seed's regression (3.18) at μ.
@@ -185,9 +189,8 @@ class Mechanics:
         return dl + force / self.C_N_per_mm
 
     def neck_force(self, eps_u: float, eps_n: float) -> float:
-        """Force carried by the neck at strain eps_n: σ_flow·Bridgman·F0·exp(−εn)."""
-        a_over_R = LE_ROY_SLOPE * max(eps_n - eps_u, 0.0)
-        return self.flow(eps_n) * float(bridgman_factor(a_over_R)) * self.specimen.area0_mm2 * math.exp(-eps_n)
+        """Force carried by the neck at strain eps_n: σ_flow·F0·exp(−εn) (no triaxiality)."""
+        return self.flow(eps_n) * self.specimen.area0_mm2 * math.exp(-eps_n)
 
     def _tension_solve(self, x: float) -> SpecimenState:
         st = self.state
