@@ -109,28 +109,34 @@ class SeriesMember:
 def strain_rate_from_record(record: Record, E_MPa: float, plastic_start: float = PLASTIC_START) -> tuple[float, np.ndarray]:
     """Plastic strain rate (1/s) of a record from its data, and the plastic-range sample mask.
 
-    The specimen's true strain from the crosshead (frame compliance removed when the record
-    states the frame stiffness), εp = ε − σ/E, and the least-squares slope of εp against time
-    over the plastic range: from the first sample with εp ≥ ``plastic_start`` to the force
-    maximum (tension) or the end of loading (compression).
+    The specimen's true strain from the extensometer (tension records that have one) or the
+    crosshead (frame compliance removed when the record states the frame stiffness),
+    εp = ε − σ/E, and the least-squares slope of εp against time over the plastic range: from
+    the first sample with εp ≥ ``plastic_start`` to the force maximum (tension) or the end of
+    loading (compression).
     """
     test = record.test
     t = record.column("time_s")
     force = np.abs(record.column("force_N"))
-    d = np.abs(record.column("crosshead_mm") - record.column("crosshead_mm")[0])
-    stiffness = record.positive("rig.frame_stiffness_N_per_um")
-    if stiffness:
-        from identification.indicator import remove_frame_compliance
-
-        d = np.abs(remove_frame_compliance(d, force, stiffness))
     area0 = math.pi * record.positive("specimen.d0_mm", required=True) ** 2 / 4.0
+    if test == "tension" and record.has("extensometer_mm"):
+        ext = record.column("extensometer_mm")
+        l0 = record.positive("specimen.l0_mm", required=True)
+        d, length = np.abs(ext - ext[0]), record.positive("specimen.extensometer_gauge_mm", default=l0)
+    else:
+        d = np.abs(record.column("crosshead_mm") - record.column("crosshead_mm")[0])
+        stiffness = record.positive("rig.frame_stiffness_N_per_um")
+        if stiffness:
+            from identification.indicator import remove_frame_compliance
+
+            d = np.abs(remove_frame_compliance(d, force - force[0], stiffness))
+        length = record.positive("specimen.l0_mm" if test == "tension" else "specimen.h0_mm", required=True)
     if test == "tension":
-        eps = np.log1p(d / record.positive("specimen.l0_mm", required=True))  # (3.2)
+        eps = np.log1p(d / length)  # (3.2)
         sigma = force / area0 * np.exp(eps)  # volume constancy: F0/F = l/l0
         end = int(np.nanargmax(force))
     else:
-        h0 = record.positive("specimen.h0_mm", required=True)
-        eps = -np.log(np.clip(1.0 - d / h0, 1e-9, None))  # (3.31)
+        eps = -np.log(np.clip(1.0 - d / length, 1e-9, None))  # (3.31)
         sigma = force / area0 * np.exp(-eps)  # (3.30) S = F0·h0/h
         end = int(np.nanargmax(d))
     if not E_MPa or not math.isfinite(E_MPa) or E_MPa <= 0:
@@ -151,6 +157,15 @@ def strain_rate_from_record(record: Record, E_MPa: float, plastic_start: float =
     return slope, mask
 
 
+def plastic_part(plastic_strain, stress_MPa, plastic_start: float = PLASTIC_START) -> tuple[np.ndarray, np.ndarray]:
+    """The points of a true curve with εp ≥ ``plastic_start``: below the 0.2 % offset a true curve
+    of ``flowcurve identify`` still holds the elastic-plastic transition, which no hardening law
+    describes."""
+    eps = np.asarray(plastic_strain, dtype=float)
+    keep = eps >= plastic_start
+    return eps[keep], np.asarray(stress_MPa, dtype=float)[keep]
+
+
 def member_from_record(record: Record, **identify_options) -> SeriesMember:
     """Identify a record (tension or compression) and make it a series member.
 
@@ -169,9 +184,8 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
         t_source = "nominal"
         if temperature is None:
             raise RecordError(record.source, "the test temperature is unknown: add '# nominal_temperature_C: <value>' to the header or a temperature_C column")
-    curve = ident.true_curve
-    return SeriesMember(name=record.name, plastic_strain=curve[TRUE_CURVE_COLUMNS[0]].to_numpy(float),
-                        stress_MPa=curve[TRUE_CURVE_COLUMNS[1]].to_numpy(float), strain_rate_per_s=rate,
+    eps, sig = plastic_part(ident.true_curve[TRUE_CURVE_COLUMNS[0]], ident.true_curve[TRUE_CURVE_COLUMNS[1]])
+    return SeriesMember(name=record.name, plastic_strain=eps, stress_MPa=sig, strain_rate_per_s=rate,
                         temperature_C=temperature, source=record.source, kind="record", test=record.test,
                         strain_rate_source="data", temperature_source=t_source,
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
@@ -226,6 +240,7 @@ def member_from_result(folder: str | Path) -> SeriesMember:
         sig = curve[TRUE_CURVE_COLUMNS[1]].to_numpy(float)
     except ValueError:
         raise RecordError(curve_path, "the curve holds cells that are not numbers") from None
+    eps, sig = plastic_part(eps, sig)
     return SeriesMember(name=str(block.get("name") or folder.name), plastic_strain=eps, stress_MPa=sig,
                         strain_rate_per_s=rate, temperature_C=temperature, source=str(folder), kind="result",
                         test=test, strain_rate_source=rate_source, temperature_source="nominal",

@@ -67,4 +67,42 @@ def syn():
     from types import SimpleNamespace
 
     return SimpleNamespace(TRUE=TRUE, REF=REF, members=synthetic_members, true_stress=true_stress,
-                           write_result_folder=write_result_folder)
+                           write_result_folder=write_result_folder, tension_record=tension_record)
+
+
+def tension_record(temperature_C: float, speed_mm_per_s: float, law_rate_per_s: float, *, E_MPa=205_000.0, d0_mm=6.0,
+                   l0_mm=30.0, stiffness_N_per_um=136.0, noise_N=0.0, seed=0, source="synthetic.csv", ref_rate_per_s=None):
+    """A tension record of a Johnson-Cook 4340 at (temperature, rate), crosshead at constant speed.
+
+    Constant volume up to the force maximum, then the force falls (neck) for a few samples.
+    The crosshead includes the frame (P/C); time = crosshead travel / speed. The law is
+    evaluated at ``law_rate_per_s`` throughout (reference rate ``ref_rate_per_s``, default REF's). Returns the record and the exact εp(t), so the
+    mean plastic strain rate is known in closed form.
+    """
+    import math
+
+    import pandas as pd
+
+    from acquisition.record import Record
+
+    s0 = math.pi * d0_mm**2 / 4
+    ref = {**REF, "ref_strain_rate_per_s": ref_rate_per_s or REF["ref_strain_rate_per_s"]}
+    A_T = float(johnson_cook(0.0, law_rate_per_s, temperature_C, **TRUE, **ref))
+    sig_el = np.linspace(0.0, A_T, 60, endpoint=False)
+    eps_pl = np.linspace(0.0, 0.12, 500)
+    sig = np.concatenate([sig_el, johnson_cook(eps_pl, law_rate_per_s, temperature_C, **TRUE, **ref)])
+    eps_p = np.concatenate([np.zeros_like(sig_el), eps_pl])
+    e = np.expm1(eps_p + sig / E_MPa)
+    force = sig * s0 / (1 + e)
+    i_m = int(np.argmax(force))
+    force, e, eps_p = force[: i_m + 1], e[: i_m + 1], eps_p[: i_m + 1]
+    force = np.concatenate([force, np.linspace(force[-1], 0.8 * force[-1], 31)[1:]])
+    e = np.concatenate([e, e[-1] + np.linspace(0, 0.03, 31)[1:]])
+    cross = e * l0_mm + force / (stiffness_N_per_um * 1000)
+    rng = np.random.default_rng(seed)
+    data = pd.DataFrame({"time_s": cross / speed_mm_per_s, "force_N": force + rng.normal(0, noise_N, force.size),
+                         "crosshead_mm": cross, "temperature_C": temperature_C + rng.normal(0, 0.5, force.size)})
+    meta = {"test": "tension", "material": "4340 (synthetic)", "specimen.d0_mm": repr(d0_mm), "specimen.l0_mm": repr(l0_mm),
+            "rig.frame_stiffness_N_per_um": repr(stiffness_N_per_um), "crosshead_speed_mm_per_s": repr(speed_mm_per_s),
+            "nominal_temperature_C": repr(float(round(temperature_C)))}
+    return Record(meta=meta, data=data, source=source), {"time_s": data["time_s"].to_numpy()[: i_m + 1], "eps_p": eps_p}
