@@ -242,7 +242,8 @@ def identify_compression(
     grid = np.linspace(fit.strain_range[0], fit.strain_range[1], FIT_CURVE_POINTS)
     curves["fit"] = pd.DataFrame({"true_plastic_strain": grid, "true_stress_MPa": fit(grid)})
 
-    plastic = np.nonzero(np.maximum.accumulate(eps_def) >= 0)[0]
+    # from where the plastic strain has passed the 0.2 % offset: the curve a card starts from
+    plastic = np.nonzero((np.maximum.accumulate(eps_def) >= YIELD_OFFSET) & (eps_def >= 0))[0]
     true_curve = pd.DataFrame({"true_plastic_strain": eps_def[plastic], "true_stress_MPa": sig_def[plastic]})
 
     rp02 = offset_yield(plastic_strain(strain, pressure, E_used), pressure) if E_used is not None else None
