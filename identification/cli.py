@@ -149,11 +149,11 @@ def _fmt(value, spec: str = ".4g") -> str:
 def summary_lines(result: dict) -> list[str]:
     """A short table of one result: strength figures, hardening constants, friction."""
     h = result.get("hardening") or {}
-    lines = [
-        f"  E {_fmt(result.get('E_MPa'), '.0f')} MPa   Rp0.2 {_fmt(result.get('Rp02_MPa'), '.1f')} MPa   "
-        f"Rm {_fmt(result.get('Rm_MPa'), '.1f')} MPa   Ag {_fmt(result.get('Ag_pct'), '.2f')} %   "
-        f"A {_fmt(result.get('A_pct'), '.2f')} %   Z {_fmt(result.get('Z_pct'), '.1f')} %",
-    ]
+    strength = f"  E {_fmt(result.get('E_MPa'), '.0f')} MPa   Rp0.2 {_fmt(result.get('Rp02_MPa'), '.1f')} MPa"
+    if result.get("test") != "compression":  # Rm, Ag, A, Z are tension results
+        strength += (f"   Rm {_fmt(result.get('Rm_MPa'), '.1f')} MPa   Ag {_fmt(result.get('Ag_pct'), '.2f')} %   "
+                     f"A {_fmt(result.get('A_pct'), '.2f')} %   Z {_fmt(result.get('Z_pct'), '.1f')} %")
+    lines = [strength]
     if h:
         consts = "   ".join(f"{k.removesuffix('_MPa')} {_fmt(h[k])}{' MPa' if k.endswith('_MPa') else ''}"
                            for k in ("A_MPa", "B_MPa", "n", "K_MPa", "eps0", "sigma0_MPa", "Q_MPa", "b") if k in h)
