@@ -74,3 +74,26 @@ def test_fit_command_on_native_records(tmp_path, syn, capsys):
                              ref_temperature_C=24.85, melt_temperature_C=1519.85)
         assert np.max(np.abs(model / law - 1)) < 0.01, r["name"]
         assert r["fit_error_pct"] < 1.0
+
+
+def test_fit_command_on_the_result_folders_of_identify(tmp_path, syn, capsys):
+    """'flowcurve identify --out DIR' then 'flowcurve fit DIR': the result folders carry enough."""
+    pytest.importorskip("identification.tension")
+    paths = []
+    for T in (syn.REF["ref_temperature_C"], 600.0):
+        for speed in (0.03, 3.0):
+            rec, _ = syn.tension_record(T, speed, speed / L0_MM, noise_N=2.0, seed=len(paths), ref_rate_per_s=1e-3)
+            paths.append(write_record(tmp_path / f"T{T:.0f}_v{speed:g}.csv", rec))
+    results = tmp_path / "results"
+    assert main(["identify", *map(str, paths), "--out", str(results), "--no-plots"]) == 0, capsys.readouterr().err
+    out = tmp_path / "fit"
+    code = main(["fit", str(results), "--out", str(out), "--ref-temp", "24.85", "--melt-temp", "1519.85"])
+    assert code == 0, capsys.readouterr().err
+    d = json.loads((out / "fit.json").read_text())
+    assert sorted(r["name"] for r in d["records"]) == sorted(p.stem for p in paths)
+    assert all(r["kind"] == "result" and r["temperature_source"] == "nominal" for r in d["records"])
+    # identify's record block holds the nominal rate: crosshead speed / l0
+    assert sorted(r["strain_rate_per_s"] for r in d["records"]) == pytest.approx([1e-3, 1e-3, 0.1, 0.1])
+    assert d["ref_strain_rate_per_s"] == pytest.approx(1e-3)
+    assert d["C"] == pytest.approx(syn.TRUE["C"], rel=0.1) and d["m"] == pytest.approx(syn.TRUE["m"], rel=0.03)
+    assert d["E_MPa"] == pytest.approx(205_000.0, rel=0.02)
