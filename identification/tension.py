@@ -73,6 +73,14 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
     warnings: list[str] = []
     if has_ext and use_extensometer is not False:
         ext = record.column("extensometer_mm")
+        gaps = np.nonzero(~np.isfinite(ext[: iso6892.fracture_index(force) + 1]))[0]
+        if gaps.size:
+            message = f"the extensometer channel has no value from sample {gaps[0] + 1} on (removed before fracture?)"
+            if use_extensometer:
+                raise RecordError(record.source, message + "; identify from the crosshead instead (use_extensometer=False)", column="extensometer_mm")
+            fallback = _strain_source(record, False, force, l0, options)
+            fallback["warnings"].insert(0, message + ": the crosshead is used instead")
+            return fallback
         gauge = record.positive("specimen.extensometer_gauge_mm", default=l0)
         if "specimen.extensometer_gauge_mm" not in record.meta:
             warnings.append(f"specimen.extensometer_gauge_mm missing: the extensometer gauge length is taken as l0 = {l0:g} mm")

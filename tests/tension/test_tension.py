@@ -190,3 +190,27 @@ def test_bad_options_are_clear_errors(synthetic):
     rec2, _ = synthetic(extensometer=False)
     with pytest.raises(RecordError, match="extensometer"):
         identify_tension(rec2, use_extensometer=True)
+
+
+def test_extensometer_removed_before_fracture_falls_back_to_the_crosshead(synthetic):
+    rec, _ = synthetic()
+    rec.meta["rig.frame_stiffness_N_per_um"] = "136"
+    rec.data.loc[400:, "extensometer_mm"] = np.nan
+    r = identify_tension(rec, crosshead_length_mm=30.0, true_stress="constant_volume").result
+    assert r["methods"]["strain_source"] == "crosshead"
+    assert any("removed before fracture" in w for w in r["warnings"])
+    assert r["E_MPa"] == pytest.approx(T["E_MPa"], rel=5e-3)
+    with pytest.raises(RecordError, match="no value from sample 401"):
+        identify_tension(rec, use_extensometer=True)
+
+
+def test_result_writes_as_json_with_the_shared_keys(synthetic, tmp_path):
+    import json
+    rec, _ = synthetic()
+    out = identify_tension(rec).write(tmp_path / "r")
+    result = json.loads((out / "result.json").read_text())
+    for key in ("test", "E_MPa", "Rp02_MPa", "Rm_MPa", "Ag_pct", "A_pct", "Z_pct", "fracture_true_strain",
+                "fracture_true_stress_MPa", "hardening", "modulus_window_MPa", "methods", "warnings", "record"):
+        assert key in result, key
+    assert {"law", "A_MPa", "B_MPa", "n", "fit_error_pct"} <= set(result["hardening"])
+    assert (out / "true_curve.csv").read_text().splitlines()[0] == "true_plastic_strain,true_stress_MPa"
