@@ -118,6 +118,7 @@ class DconDevice(PtyDevice):
             return f"!{aa}{self.watchdog_status:02X}"
         if body == "1":
             self.watchdog_status = 0
+            self._last_host_ok = time.monotonic()  # the time-out counts again from now
             return f"!{aa}"
         if body == "2":
             return f"!{aa}{int(self.watchdog_enabled)}{round(self.watchdog_timeout_s * 10):02X}"
