@@ -43,7 +43,7 @@ def synthetic_tension(rows: int, rate_hz: float = 150.0, seed: int = 0) -> Recor
     eps_p = np.concatenate([np.zeros(n_el), np.linspace(0.0, 0.45, rows - n_el)])  # Considère at εp ≈ n
     sig_t = A_MPA + B_MPA * eps_p**N
     sig_t[:n_el] = A_MPA * np.linspace(0.0, 1.0, n_el, endpoint=False)
-    eps = np.log1p(np.minimum(sig_t / E_MPA + eps_p, 10))
+    eps = eps_p + sig_t / E_MPA  # true strain: plastic + elastic
     eng = np.exp(eps) - 1.0
     force = sig_t * area / (1.0 + eng)  # P = σ_t·F0/(1 + e), volume constancy
     i_m = int(np.argmax(force))
