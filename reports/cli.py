@@ -1,0 +1,101 @@
+"""``flowcurve card`` (material cards from fit.json) and ``flowcurve report`` (a series report)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from reports.cards import FORMATS, CardError, load_card_data, write_card
+from reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
+
+DEFAULT_UNITS = {"lsdyna": DEFAULT_UNIT_SYSTEM, "abaqus": DEFAULT_UNIT_SYSTEM, "radioss": DEFAULT_UNIT_SYSTEM,
+                 "calculix": DEFAULT_UNIT_SYSTEM}
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "card",
+        help="material card for an FE solver from a series fit (fit.json)",
+        description=(
+            "Write a material card from fit.json (the output of 'flowcurve fit'): LS-DYNA "
+            "(*MAT_JOHNSON_COOK with its EOS, *MAT_PIECEWISE_LINEAR_PLASTICITY on the identified "
+            "curves), Abaqus (Johnson-Cook and a temperature table), Radioss (/MAT/PLAS_JOHNS) or "
+            "CalculiX (temperature table). Constants missing from fit.json are given as options, "
+            "in lab units. The card states its unit system and the range it was identified on."
+        ),
+    )
+    p.add_argument("fit", metavar="FIT.json", help="fit.json written by 'flowcurve fit'")
+    p.add_argument("--format", "-f", required=True, choices=FORMATS, help="solver")
+    p.add_argument("--units", "-u", default=DEFAULT_UNIT_SYSTEM, choices=sorted(UNIT_SYSTEMS),
+                   help=f"consistent unit system of the deck (default {DEFAULT_UNIT_SYSTEM})")
+    p.add_argument("-o", "--output", metavar="FILE", help="write the card here (default: standard output)")
+    p.add_argument("--name", metavar="TEXT", help="material name in the card (default: fit.json's material)")
+    p.add_argument("--E", dest="E_MPa", type=float, metavar="MPa", help="Young's modulus, MPa (overrides fit.json)")
+    p.add_argument("--poisson", type=float, metavar="NU", help="Poisson's ratio (overrides fit.json)")
+    p.add_argument("--density", dest="density_kg_per_m3", type=float, metavar="KG_PER_M3", help="density, kg/m3")
+    p.add_argument("--cp", dest="specific_heat_J_per_kgK", type=float, metavar="J_PER_KGK", help="specific heat, J/(kg K)")
+    p.add_argument("--melt-temp", dest="melt_temperature_C", type=float, metavar="C", help="melting temperature, °C")
+    p.add_argument("--conductivity", dest="conductivity_W_per_mK", type=float, metavar="W_PER_MK", help="thermal conductivity, W/(m K)")
+    p.add_argument("--expansion", dest="expansion_per_K", type=float, metavar="PER_K", help="thermal expansion coefficient, 1/K")
+    p.add_argument("--friction", dest="friction_mu", type=float, metavar="MU", help="friction coefficient (overrides fit.json)")
+    p.add_argument("--curves", choices=("auto", "measured", "law"), default="auto",
+                   help="tabulated curves from the measured true curves or the fitted law (default: measured when fit.json has them)")
+    p.add_argument("--strain-rate", dest="strain_rate_per_s", type=float, metavar="1/s",
+                   help="strain rate of the temperature tables (Abaqus/CalculiX; default: the reference rate)")
+    p.add_argument("--max-rows", type=int, default=100, metavar="N", help="rows per tabulated curve (default 100; CalculiX needs ≤ ~100)")
+    p.set_defaults(func=run_card)
+
+    r = subparsers.add_parser(
+        "report",
+        help="HTML report of a test series (specimens, results, curves, fit, card)",
+        description=(
+            "One self-contained HTML document for a test series: the specimens and results of "
+            "the 'flowcurve identify' result folders under DIR, the series fit (fit.json under DIR) "
+            "with its plots, and the LS-DYNA card. What a lab hands to a customer."
+        ),
+    )
+    r.add_argument("dir", metavar="DIR", help="folder holding the result folders and the fit folder")
+    r.add_argument("-o", "--output", metavar="FILE", help="HTML file to write (default: DIR/report.html)")
+    r.add_argument("--units", "-u", default=DEFAULT_UNIT_SYSTEM, choices=sorted(UNIT_SYSTEMS), help="unit system of the card")
+    r.add_argument("--title", metavar="TEXT", help="report title")
+    for option, dest, metavar in (("--E", "E_MPa", "MPa"), ("--poisson", "poisson", "NU"), ("--density", "density_kg_per_m3", "KG_PER_M3"),
+                                  ("--cp", "specific_heat_J_per_kgK", "J_PER_KGK"), ("--melt-temp", "melt_temperature_C", "C")):
+        r.add_argument(option, dest=dest, type=float, metavar=metavar, help=f"for the card, if fit.json lacks it ({metavar})")
+    r.set_defaults(func=run_report)
+
+
+CONSTANT_OPTIONS = ("E_MPa", "poisson", "density_kg_per_m3", "specific_heat_J_per_kgK", "melt_temperature_C",
+                    "conductivity_W_per_mK", "expansion_per_K", "friction_mu")
+
+
+def overrides(args) -> dict:
+    out = {k: getattr(args, k, None) for k in CONSTANT_OPTIONS}
+    if getattr(args, "name", None):
+        out["material"] = args.name
+    return {k: v for k, v in out.items() if v is not None}
+
+
+def run_card(args) -> int:
+    if args.max_rows < 3:
+        raise CardError(f"--max-rows must be at least 3, got {args.max_rows}")
+    data = load_card_data(args.fit, **overrides(args))
+    options = {"curves": args.curves, "max_rows": args.max_rows}
+    if args.format in ("abaqus", "calculix") and args.strain_rate_per_s is not None:
+        options["strain_rate_per_s"] = args.strain_rate_per_s
+    if args.format == "radioss":
+        options = {}
+    text = write_card(data, args.format, args.units, **options)
+    if args.output:
+        Path(args.output).write_text(text, encoding="utf-8")
+        print(f"{args.format} card ({args.units}) written to {args.output}", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def run_report(args) -> int:
+    from reports.report import write_report
+
+    out = write_report(args.dir, args.output, units=args.units, title=args.title, **overrides(args))
+    print(f"report written to {out}", file=sys.stderr)
+    return 0

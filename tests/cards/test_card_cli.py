@@ -1,0 +1,67 @@
+"""``flowcurve card``: files, options for missing constants, one-line errors."""
+
+import json
+
+import pytest
+
+from flowcurve.cli import main
+
+from .readers import floats, read_inp
+
+
+def test_card_to_file_for_every_format(fit_file, tmp_path, capsys):
+    path = fit_file()
+    for fmt, first in (("lsdyna", "*KEYWORD"), ("abaqus", "**"), ("radioss", "#"), ("calculix", "**")):
+        out = tmp_path / f"card.{fmt}"
+        assert main(["card", str(path), "--format", fmt, "--units", "mm-ms-kg-kN-GPa", "-o", str(out)]) == 0
+        text = out.read_text()
+        assert text.startswith(first)
+        assert "mm-ms-kg-kN-GPa" in text and "user's risk" in text
+
+
+def test_card_to_stdout_with_constants_from_options(fit_file, capsys):
+    path = fit_file(E_MPa=None, poisson_ratio=None, density_kg_per_m3=None)
+    code = main(["card", str(path), "-f", "calculix", "--E", "200000", "--poisson", "0.3", "--density", "7850"])
+    assert code == 0
+    blocks = read_inp(capsys.readouterr().out)
+    by_key = {k: rows for k, _, rows in blocks}
+    assert floats(by_key["ELASTIC"]).tolist() == [[200000.0, 0.3]]
+    assert floats(by_key["DENSITY"])[0, 0] == pytest.approx(7.85e-9)
+
+
+@pytest.mark.parametrize("missing, option", [("E_MPa", "--E"), ("poisson_ratio", "--poisson"),
+                                             ("specific_heat_J_per_kgK", "--cp"), ("melt_temperature_C", "--melt-temp")])
+def test_missing_constant_is_one_line_naming_the_option(fit_file, capsys, missing, option):
+    path = fit_file(**{missing: None})
+    assert main(["card", str(path), "-f", "lsdyna"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("flowcurve: error:") and option in err and "\n" not in err
+
+
+def test_bad_fit_files_are_one_line_errors(tmp_path, capsys):
+    bad = tmp_path / "fit.json"
+    bad.write_text("{\"A_MPa\": 100,\n oops}")
+    assert main(["card", str(bad), "-f", "lsdyna"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "line 2" in err and "\n" not in err
+    assert main(["card", str(tmp_path / "nope.json"), "-f", "lsdyna"]) == 2
+    assert "no such fit file" in capsys.readouterr().err
+    bad.write_text(json.dumps({"A_MPa": 100, "B_MPa": 500}))
+    assert main(["card", str(bad), "-f", "lsdyna"]) == 2
+    assert "'n'" in capsys.readouterr().err
+    bad.write_text(json.dumps({"A_MPa": "abc", "B_MPa": 500, "n": 0.3}))
+    assert main(["card", str(bad), "-f", "lsdyna"]) == 2
+    assert "'A_MPa' is not a number" in capsys.readouterr().err
+
+
+def test_missing_curve_file_is_named(fit_file, capsys):
+    path = fit_file()
+    next((path.parent / "curves").iterdir()).unlink()
+    assert main(["card", str(path), "-f", "calculix"]) == 2
+    assert "is missing" in capsys.readouterr().err
+
+
+def test_unknown_units_refused_by_the_parser(fit_file, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["card", str(fit_file()), "-f", "lsdyna", "--units", "mm-s-kg-kN-GPa"])
+    assert exc.value.code == 2
