@@ -106,14 +106,14 @@ class SeriesMember:
         return grid, np.interp(grid, eps, sig)
 
 
-def strain_rate_from_record(record: Record, E_MPa: float, plastic_start: float = PLASTIC_START) -> tuple[float, np.ndarray]:
+def strain_rate_from_record(record: Record, E_MPa: float | None, plastic_start: float = PLASTIC_START) -> tuple[float, np.ndarray]:
     """Plastic strain rate (1/s) of a record from its data, and the plastic-range sample mask.
 
     The specimen's true strain from the extensometer (tension records that have one) or the
     crosshead (frame compliance removed when the record states the frame stiffness),
     εp = ε − σ/E, and the least-squares slope of εp against time over the plastic range: from
     the first sample with εp ≥ ``plastic_start`` to the force maximum (tension) or the end of
-    loading (compression).
+    loading (compression). Without a modulus (``E_MPa`` None) the total strain stands for εp.
     """
     test = record.test
     t = record.column("time_s")
@@ -139,11 +139,12 @@ def strain_rate_from_record(record: Record, E_MPa: float, plastic_start: float =
         eps = -np.log(np.clip(1.0 - d / length, 1e-9, None))  # (3.31)
         sigma = force / area0 * np.exp(-eps)  # (3.30) S = F0·h0/h
         end = int(np.nanargmax(d))
-    if not E_MPa or not math.isfinite(E_MPa) or E_MPa <= 0:
-        raise IdentificationError(f"{record.source}: no modulus E_MPa to separate the elastic strain; the strain rate cannot be computed from the data")
-    from identification.tension import true_plastic_strain
+    if E_MPa is not None and math.isfinite(E_MPa) and E_MPa > 0:
+        from identification.tension import true_plastic_strain
 
-    eps_p = true_plastic_strain(eps, sigma, E_MPa)  # (3.7)
+        eps_p = true_plastic_strain(eps, sigma, E_MPa)  # (3.7)
+    else:
+        eps_p = eps  # no modulus: the total strain's rate (the elastic part is small past yield)
     mask = np.zeros(t.size, dtype=bool)
     mask[: end + 1] = True
     mask &= np.isfinite(eps_p) & np.isfinite(t)
@@ -187,7 +188,8 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
     eps, sig = plastic_part(ident.true_curve[TRUE_CURVE_COLUMNS[0]], ident.true_curve[TRUE_CURVE_COLUMNS[1]])
     return SeriesMember(name=record.name, plastic_strain=eps, stress_MPa=sig, strain_rate_per_s=rate,
                         temperature_C=temperature, source=record.source, kind="record", test=record.test,
-                        strain_rate_source="data", temperature_source=t_source,
+                        strain_rate_source="data" if _number(result.get("E_MPa")) else "data (total strain: no E_MPa)",
+                        temperature_source=t_source,
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
                         poisson_ratio=_number(result.get("poisson_ratio")))
 
