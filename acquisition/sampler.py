@@ -23,7 +23,7 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from flowcurve.errors import DeviceError
+from flowcurve.errors import DeviceError, SafetyError
 
 # A read function returns one value, a list of values (a streamed block; each is stamped
 # when the block arrives, spaced by ``period_s`` backwards), or a list of (t, value) pairs
@@ -88,7 +88,7 @@ def merge_block(force_t: np.ndarray, force: np.ndarray, others: Sequence[tuple[n
 class Channel(threading.Thread):
     """Reads one device in its own thread and appends stamped samples to its stream."""
 
-    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str], None] | None = None):
+    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str, Exception | None], None] | None = None):
         super().__init__(name=f"flowcurve-{name}", daemon=True)
         self.device = name
         self.read = read
@@ -113,10 +113,13 @@ class Channel(threading.Thread):
         while not self._stop_event.is_set():
             try:
                 got = self.read()
+            except SafetyError as exc:  # over-temperature, open thermocouple: stop at once
+                self._fault(str(exc), exc)
+                return
             except Exception as exc:  # a device error of any kind: count it, then give up
                 failures += 1
                 if failures >= self.max_failures:
-                    self._fault(f"{failures} reads in a row failed; last: {_one_line(exc)}")
+                    self._fault(f"{failures} reads in a row failed; last: {_one_line(exc)}", exc if isinstance(exc, DeviceError) else None)
                     return
                 continue
             now = self.clock()
@@ -153,10 +156,10 @@ class Channel(threading.Thread):
             self.stream.extend([now - (k - 1 - i) * step for i in range(k)], [float(v) for v in items])
         return len(items)
 
-    def _fault(self, message: str) -> None:
+    def _fault(self, message: str, error: Exception | None = None) -> None:
         self.error = message
         if self.on_fault:
-            self.on_fault(self.device, message)
+            self.on_fault(self.device, message, error)
 
 
 def _one_line(exc: BaseException) -> str:
@@ -190,10 +193,10 @@ class Sampler:
         """Column names of the rows :meth:`take_rows` returns: time_s, then the channels."""
         return ["time_s", *self.columns]
 
-    def _on_fault(self, device: str, message: str) -> None:
+    def _on_fault(self, device: str, message: str, error: Exception | None = None) -> None:
         with self._fault_lock:
             if self._fault is None:
-                self._fault = DeviceError(device, message)
+                self._fault = error if isinstance(error, DeviceError) else DeviceError(device, message)
 
     @property
     def fault(self) -> DeviceError | None:

