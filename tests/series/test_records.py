@@ -97,3 +97,35 @@ def test_fit_command_on_the_result_folders_of_identify(tmp_path, syn, capsys):
     assert d["ref_strain_rate_per_s"] == pytest.approx(1e-3)
     assert d["C"] == pytest.approx(syn.TRUE["C"], rel=0.1) and d["m"] == pytest.approx(syn.TRUE["m"], rel=0.03)
     assert d["E_MPa"] == pytest.approx(205_000.0, rel=0.02)
+
+
+def test_compression_strain_rate_is_the_least_squares_rate_of_the_true_strain():
+    """Constant crosshead speed on a cylinder: ε(t) = −ln(1 − v·t/h0) grows ever faster; the rate
+    from the data is its least-squares slope, here against the continuous integrals (quad)."""
+    import math
+
+    import pandas as pd
+    from scipy.integrate import quad
+
+    from acquisition.record import Record
+
+    h0, d0, v, k = 7.0, 6.0, 0.01, 136.0
+    t = np.linspace(0.0, 340.0, 1701)
+    h = h0 - v * t
+    eps = np.log(h0 / h)
+    force = -(105.0 + 1392.0 * eps**0.642) * math.pi * d0**2 / 4 * h0 / h  # (3.30), compression negative
+    cross = -(h0 - h) + force / (k * 1000)  # the frame shortens the travel the specimen sees
+    rec = Record(meta={"test": "compression", "specimen.d0_mm": str(d0), "specimen.h0_mm": str(h0),
+                       "rig.frame_stiffness_N_per_um": str(k)},
+                 data=pd.DataFrame({"time_s": t, "force_N": force, "crosshead_mm": cross}), source="cyl.csv")
+    rate, mask = strain_rate_from_record(rec, None)
+    t0 = t[mask][0]
+    T = t[-1]
+
+    def strain(x):
+        return -math.log(1 - v * x / h0)
+    mean_t = (t0 + T) / 2
+    cov = quad(lambda x: (x - mean_t) * strain(x), t0, T)[0] / (T - t0)
+    var = (T - t0) ** 2 / 12
+    assert rate == pytest.approx(cov / var, rel=0.005)
+    assert rate > 1.3 * v / h0  # the nominal v/h0 understates it by a third at this height reduction
