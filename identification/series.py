@@ -655,6 +655,8 @@ def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_s
     """Fit the series by ``method`` ("global" or "stepwise") and the other one for comparison."""
     if method not in ("global", "stepwise"):
         raise IdentificationError(f"unknown fit method {method!r}; choose global or stepwise")
+    if max_points < 5:
+        raise IdentificationError(f"max_points must be at least 5 points per record, got {max_points}")
     members = list(members)
     ref = make_reference(members, ref_strain_rate_per_s=ref_strain_rate_per_s, ref_temperature_C=ref_temperature_C,
                          melt_temperature_C=melt_temperature_C)

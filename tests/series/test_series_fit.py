@@ -143,6 +143,10 @@ def test_bad_references_and_members_name_the_problem(members, syn):
         SeriesMember("s8", [0.01, 0.02, 0.03, 0.04], [500, 510, 520, 530], 0.0, 20.0)
     with pytest.raises(FlowcurveError, match="at least 4"):
         SeriesMember("s9", [0.01, 0.02], [500, 510], 1.0, 20.0)
+    with pytest.raises(IdentificationError, match="at least 5 points per record"):
+        fit_series(members, max_points=3, **REF)
+    with pytest.raises(IdentificationError, match="unknown fit method 'bayes'"):
+        fit_series(members, method="bayes", **REF)
     with pytest.raises(IdentificationError, match="only C and m can be fixed"):
         fit_global(members, make_reference(members, **REF), fixed={"A": 700.0})
 
@@ -160,3 +164,14 @@ def test_condition_curves_average_repeats_and_keep_conditions_apart(syn):
     np.testing.assert_allclose(t["true_stress_MPa"], 805 + 100 * t["true_plastic_strain"], rtol=1e-12)
     assert curves[0].filename == "T20C_rate1_per_s.csv" and curves[1].filename == "T400C_rate1_per_s.csv"
     assert np.all(np.diff(t["true_plastic_strain"]) > 0)
+
+
+def test_long_curves_are_resampled_so_every_record_weighs_the_same():
+    eps = np.linspace(0.002, 0.3, 2000)
+    m = SeriesMember("long", eps, 700 + 300 * eps, 1.0, 20.0)
+    e, s = m.fit_points(60)
+    assert e.size == 60 and e[0] == 0.002 and e[-1] == 0.3
+    np.testing.assert_allclose(np.diff(e), (0.3 - 0.002) / 59)
+    np.testing.assert_allclose(s, 700 + 300 * e, rtol=1e-12)
+    short = SeriesMember("short", eps[:40], 700 + 300 * eps[:40], 1.0, 20.0)
+    assert short.fit_points(60)[0].size == 40  # fewer points than the cap: all of them
