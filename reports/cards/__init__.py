@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -379,13 +380,13 @@ def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_not
         f"unit system: {units.name} (length {units.name.split('-')[0]}, time {units.name.split('-')[1]}, "
         f"mass {units.name.split('-')[2]}, force {units.force_name}, stress {units.stress_name}); {temperature_note}",
         f"Johnson-Cook (lab units): A = {pm('A_MPa', card.A_MPa)} MPa, B = {pm('B_MPa', card.B_MPa)} MPa, "
-        f"n = {pm('n', card.n)}, C = {pm('C', card.C)}, m = {pm('m', card.m)},",
-        f"  reference strain rate {card.ref_strain_rate_per_s:.6g} 1/s, reference temperature "
+        f"n = {pm('n', card.n)}, C = {pm('C', card.C)}, m = {pm('m', card.m)}, "
+        f"reference strain rate {card.ref_strain_rate_per_s:.6g} 1/s, reference temperature "
         f"{card.ref_temperature_C:.6g} °C, melting temperature "
         + (f"{card.melt_temperature_C:.6g} °C" if card.melt_temperature_C is not None else "not given"),
         "identified on: " + "; ".join(card.valid_range_text()),
-        "WARNING: valid only on the range above. Extrapolation beyond it (larger strains, the",
-        "  high strain rates and temperatures of machining) is the user's risk.",
+        "WARNING: valid only on the range above. Extrapolation beyond it (larger strains, the "
+        "high strain rates and temperatures of machining) is the user's risk.",
     ]
     if card.fixed:
         lines.append("NOT identified but given by the user: " + ", ".join(f"{k} = {v:g}" for k, v in card.fixed.items()))
@@ -398,8 +399,12 @@ def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_not
     return lines
 
 
-def comment_block(lines, prefix: str) -> str:
-    return "\n".join(f"{prefix}{line}".rstrip() for line in lines) + "\n"
+def comment_block(lines, prefix: str, width: int = 78) -> str:
+    """Comment lines, wrapped to ``width`` columns (fixed-format readers stop at 80)."""
+    out = []
+    for line in lines:
+        out += textwrap.wrap(line, width - len(prefix), subsequent_indent="  ", break_on_hyphens=False) or [""]
+    return "\n".join(f"{prefix}{line}".rstrip() for line in out) + "\n"
 
 
 def write_card(card: CardData, fmt: str, units: str | UnitSystem, **options) -> str:
@@ -420,8 +425,8 @@ def write_card(card: CardData, fmt: str, units: str | UnitSystem, **options) -> 
 
 # -- fixed-width fields -----------------------------------------------------------------------
 def fixed(value, width: int = 10, digits: int | None = None) -> str:
-    """``value`` right-aligned in a field of ``width`` characters: exact with one blank to
-    spare when possible (fields stay apart for the eye), else the most significant digits
+    """``value`` right-aligned in a field of ``width`` characters: within 1e-7 with one blank
+    to spare when possible (fields stay apart for the eye), else the most significant digits
     the field holds; never truncated (a value that cannot fit is an error, not a wrong
     number). ``digits`` caps the significant digits (curve points need no more than 8)."""
     if value is None:
@@ -442,12 +447,16 @@ def fixed(value, width: int = 10, digits: int | None = None) -> str:
     candidates |= {_compact(f"{value:.{d}g}") for d in range(1, 16)}
     candidates |= {_compact(f"{value:.{d}e}") for d in range(0, 15)}
     candidates = {t + ".0" if "e" not in t and "." not in t else t for t in candidates}
-    exact = [t for t in candidates if len(t) <= width - 1 and float(t) == value]
-    if exact:  # exact, with a blank to spare
-        return min(exact, key=len).rjust(width)
-    fitting = [t for t in candidates if len(t) <= width]
-    if fitting:  # else the closest that fits
-        return min(fitting, key=lambda t: (abs(float(t) - value), len(t))).rjust(width)
+    def best(room):
+        fitting = [t for t in candidates if len(t) <= room]
+        return min(fitting, key=lambda t: (abs(float(t) - value), "e" in t, len(t))) if fitting else None
+
+    spaced = best(width - 1)  # one blank keeps the field apart from the one before
+    if spaced is not None and abs(float(spaced) - value) <= 1e-7 * abs(value):
+        return spaced.rjust(width)
+    full = best(width)  # else the most precise the field holds
+    if full is not None:
+        return full.rjust(width)
     raise CardError(f"{value!r} does not fit a {width}-character field")
 
 

@@ -55,10 +55,12 @@ def lsdyna_card(data: CardData, units: UnitSystem, *, curves: str = "auto", temp
     out.append(comment_block(header_lines(data, units, "LS-DYNA", "temperatures in K, strain rates per " + time_unit), "$ ").rstrip("\n"))
     out += [
         "$",
-        f"$ MAT {MAT_JC_ID}: Johnson-Cook. On solid elements it needs the equation of state EOSID {EOS_ID} on its *PART",
-        "$ (linear, bulk modulus K = E/(3(1-2nu))). PC = -1e20 and SPALL = 1: no pressure cut-off.",
-        "$ D1-D5: " + ("identified fracture constants." if any(v is not None for v in d)
-                       else "no fracture criterion was identified; left 0 - set them if the model needs failure."),
+        comment_block([
+            f"MAT {MAT_JC_ID}: Johnson-Cook. On solid elements it needs the equation of state EOSID {EOS_ID} "
+            "on its *PART (linear, bulk modulus K = E/(3(1-2nu))). PC = -1e20 and SPALL = 1: no pressure cut-off.",
+            "D1-D5: " + ("identified fracture constants." if any(v is not None for v in d)
+                         else "no fracture criterion was identified; left 0 - set them if the model needs failure."),
+        ], "$ ").rstrip("\n"),
         "*MAT_JOHNSON_COOK",
         names("mid", "ro", "g", "e", "pr", "dtf", "vp", "rateop"),
         card([MAT_JC_ID, rho, G, E, nu, None, 0.0, 0.0]),
@@ -88,8 +90,9 @@ def lsdyna_card(data: CardData, units: UnitSystem, *, curves: str = "auto", temp
         rate_text = f"strain rate {tables[0].strain_rate_per_s:.3g} 1/s (rate-independent card)"
     out += [
         "$",
-        f"$ MAT {MAT_PLP_ID}: piecewise linear plasticity on {origin} at {temp_text}, {rate_text};",
-        "$ curves start at zero plastic strain; beyond their last point LS-DYNA extrapolates the last slope.",
+        comment_block([f"MAT {MAT_PLP_ID}: piecewise linear plasticity on {origin} at {temp_text}, {rate_text}; "
+                       "curves start at zero plastic strain; beyond their last point LS-DYNA extrapolates the last slope."],
+                      "$ ").rstrip("\n"),
         "*MAT_PIECEWISE_LINEAR_PLASTICITY",
         names("mid", "ro", "e", "pr", "sigy", "etan", "fail", "tdel"),
         card([MAT_PLP_ID, rho, E, nu, units.to_system(float(tables[0].stress_MPa[0]) * 1e6, "stress"), 0.0, 0.0, 0.0]),
@@ -102,7 +105,8 @@ def lsdyna_card(data: CardData, units: UnitSystem, *, curves: str = "auto", temp
     ]
     if several:
         out += [
-            f"$ table over {'ln(strain rate)' if use_log else 'strain rate'} per {time_unit}; curves {CURVE_ID}-{CURVE_ID + len(tables) - 1} follow in order",
+            f"$ table over {'ln(strain rate)' if use_log else 'strain rate'} per {time_unit}; "
+            f"curves {CURVE_ID}-{CURVE_ID + len(tables) - 1} follow in order",
             "*DEFINE_TABLE",
             names("tbid", "sfa", "offa"),
             card([TABLE_ID, 1.0, 0.0]),
@@ -122,8 +126,9 @@ def lsdyna_card(data: CardData, units: UnitSystem, *, curves: str = "auto", temp
     if data.friction_mu is not None:
         out += [
             "$",
-            f"$ friction mu = {data.friction_mu:.4g} identified from specimen barrelling (specimen-platen contact).",
-            "$ Set SSID/MSID to your segment sets; static and dynamic coefficients are taken equal.",
+            comment_block([f"friction mu = {data.friction_mu:.4g} identified from specimen barrelling (specimen-platen "
+                           "contact). Set SSID/MSID to your segment sets; static and dynamic coefficients are taken equal."],
+                          "$ ").rstrip("\n"),
             "*CONTACT_AUTOMATIC_SURFACE_TO_SURFACE",
             names("ssid", "msid", "sstyp", "mstyp", "sboxid", "mboxid", "spr", "mpr"),
             card([0, 0, 0, 0, 0, 0, 0, 0]),
