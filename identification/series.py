@@ -603,6 +603,7 @@ class SeriesFit:
     members: list[SeriesMember]
     curves: list[ConditionCurve]
     warnings: list[str] = field(default_factory=list)
+    max_points: int = MAX_POINTS
 
     def covered_range(self) -> dict[str, list[float]]:
         """The plastic strain, strain rate (1/s) and temperature (°C) the constants were identified on."""
@@ -627,7 +628,7 @@ class SeriesFit:
                            "temperature_C": m.temperature_C, "temperature_source": m.temperature_source,
                            "strain_rate_per_s": m.strain_rate_per_s, "strain_rate_source": m.strain_rate_source,
                            "plastic_strain": [float(m.plastic_strain[0]), float(m.plastic_strain[-1])],
-                           "points": int(m.fit_points()[0].size), **self.fit.record_errors[m.name]} for m in ms]
+                           "points": int(m.fit_points(self.max_points)[0].size), **self.fit.record_errors[m.name]} for m in ms]
         out["curves"] = [{"temperature_C": c.temperature_C, "strain_rate_per_s": c.strain_rate_per_s,
                           "file": f"curves/{c.filename}", "records": c.records,
                           "plastic_strain": [float(c.table.iloc[0, 0]), float(c.table.iloc[-1, 0])],
@@ -673,4 +674,5 @@ def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_s
     glob = fit_global(members, ref, fixed=fixed, max_points=max_points)
     chosen = glob if method == "global" else stepwise
     return SeriesFit(method=method, fit=chosen, global_fit=glob, stepwise_fit=stepwise, stepwise_note=note,
-                     members=members, curves=condition_curves(members, max_points), warnings=warnings)
+                     members=members, curves=condition_curves(members, max_points), warnings=warnings,
+                     max_points=max_points)

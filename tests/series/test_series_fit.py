@@ -84,6 +84,8 @@ def test_series_fit_reports_range_records_and_both_methods(members, syn):
     # the model at zero strain of each condition: A times the rate and thermal factors
     for c in d["curves"]:
         assert c["model_stress_at_zero_strain_MPa"] == pytest.approx(sf.fit(0.0, c["strain_rate_per_s"], c["temperature_C"]))
+    assert all(r["points"] == 40 for r in d["records"])
+    assert all(r["points"] == 20 for r in fit_series(members, max_points=20, **REF).as_dict()["records"])
     stepwise_top = fit_series(members, method="stepwise", **REF).as_dict()
     assert stepwise_top["A_MPa"] == stepwise_top["stepwise"]["A_MPa"] != stepwise_top["global"]["A_MPa"]
 
