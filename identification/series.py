@@ -72,6 +72,7 @@ class SeriesMember:
     friction_mu: float | None = None
     E_MPa: float | None = None
     poisson_ratio: float | None = None
+    material: str | None = None
 
     def __post_init__(self):
         where = self.source if self.source != "<memory>" else self.name
@@ -191,7 +192,7 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
                         strain_rate_source="data" if _number(result.get("E_MPa")) else "data (total strain: no E_MPa)",
                         temperature_source=t_source,
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
-                        poisson_ratio=_number(result.get("poisson_ratio")))
+                        poisson_ratio=_number(result.get("poisson_ratio")), material=record.meta.get("material"))
 
 
 def member_from_result(folder: str | Path) -> SeriesMember:
@@ -247,7 +248,7 @@ def member_from_result(folder: str | Path) -> SeriesMember:
                         strain_rate_per_s=rate, temperature_C=temperature, source=str(folder), kind="result",
                         test=test, strain_rate_source=rate_source, temperature_source="nominal",
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
-                        poisson_ratio=_number(result.get("poisson_ratio")))
+                        poisson_ratio=_number(result.get("poisson_ratio")), material=block.get("material"))
 
 
 def load_members(paths: Iterable[str | Path], **identify_options) -> list[SeriesMember]:
@@ -617,6 +618,7 @@ class SeriesFit:
         ref = self.fit.reference
         top = self.fit.as_dict()
         out: dict = {"schema": "flowcurve-fit/1", "model": "johnson_cook", "method": self.method,
+                     "material": " / ".join(dict.fromkeys(m.material for m in self.members if m.material)) or None,
                      "equation": EQUATION, "conventions": CONVENTIONS}
         out.update({k: v for k, v in top.items() if k not in ("method", "record_errors", "report")})
         out.update({"ref_strain_rate_per_s": ref.strain_rate_per_s, "ref_strain_rate_source": ref.strain_rate_source,

@@ -36,7 +36,7 @@ def test_fit_command_writes_fit_json_curves_and_plots(tmp_path, syn, capsys):
         assert abs(d[key] - syn.TRUE[p]) <= 3 * d[f"{key}_stderr"], key
     assert d["ref_strain_rate_per_s"] == 1.0 and d["melt_temperature_C"] == 1519.85 and d["method"] == "global"
     assert d["range"]["strain_rate_per_s"] == [1.0, 100.0] and d["range"]["temperature_C"][1] == 600.0
-    assert d["E_MPa"] == 205000.0 and d["friction_mu"] is None
+    assert d["E_MPa"] == 205000.0 and d["friction_mu"] is None and d["material"] == "4340"
     assert d["stepwise"]["C"] == pytest.approx(syn.TRUE["C"], rel=0.05)
     assert len(d["records"]) == 6 and len(d["curves"]) == 6
     for rec in d["records"]:
