@@ -13,13 +13,13 @@ read it. Conventions:
 * Tension: uniform deformation with plastic incompressibility, F = F0·exp(−εp) (elastic
   volume change neglected), until the force maximum (Considère, dσ/dεp = σ); then a neck
   zone of initial length ``neck_length_mm`` (default d0) strains alone while the rest
-  unloads elastically; the neck's mean axial stress is the flow stress (the lumped neck
-  carries no triaxiality: adding Bridgman's factor with Le Roy's a/R = 1.1·(ε − ε_u) would
-  make the force rise past Considère); fracture when the neck strain reaches the
-  material's fracture strain (force drops to zero). The neck profile radius reported
-  after the test follows Le Roy et al. (1981), a/R = 1.1·(ε_f − ε_u). Consequence: a
-  Davidenkov or Bridgman correction applied to this model's records lowers the fracture
-  stress below the model's flow stress by that correction's factor.
+  unloads elastically; the neck's mean axial stress is the flow stress times Bridgman's
+  factor (1 + 2R/a)·ln(1 + a/(2R)). The neck curvature follows Le Roy et al. (1981),
+  a/R = 1.1·(ε − ε_u), with a smooth onset: a/R = 1.1·δ²/(δ + ε_u), δ = ε − ε_u (a neck
+  that curves at once, linear in δ, would make the force rise past Considère); fracture
+  when the neck strain reaches the material's fracture strain (force drops to zero). The
+  neck radius reported after the test follows the same law, so a Bridgman correction with
+  the measured radius recovers the flow stress at fracture exactly.
 * Compression: flow stress × current area × the exact Coulomb slab factor
   2(e^c − c − 1)/c², c = 2μr/h, with plastic volume constancy; the bulge measured after
   the test follows the seed's regression (3.18) at μ.
@@ -39,6 +39,12 @@ from flowcurve.errors import ConfigError
 from rig.materials import Material, get_material
 
 LE_ROY_SLOPE = 1.1  # a/R = 1.1·(ε − ε_u), Le Roy et al. (1981)
+
+
+def neck_a_over_R(eps_u, eps):
+    """# Le Roy a/R = 1.1·(ε − ε_u) with a smooth onset: 1.1·δ²/(δ + ε_u), δ = ε − ε_u ≥ 0."""
+    d = np.maximum(np.asarray(eps, float) - eps_u, 0.0)
+    return LE_ROY_SLOPE * d * d / (d + max(eps_u, 1e-6))
 
 
 # ----------------------------------------------------------------------------- closed forms
@@ -189,8 +195,9 @@ class Mechanics:
         return dl + force / self.C_N_per_mm
 
     def neck_force(self, eps_u: float, eps_n: float) -> float:
-        """Force carried by the neck at strain eps_n: σ_flow·F0·exp(−εn) (no triaxiality)."""
-        return self.flow(eps_n) * self.specimen.area0_mm2 * math.exp(-eps_n)
+        """Force carried by the neck at strain eps_n: σ_flow·Bridgman(a/R)·F0·exp(−εn)."""
+        beta = float(bridgman_factor(neck_a_over_R(eps_u, eps_n)))
+        return self.flow(eps_n) * beta * self.specimen.area0_mm2 * math.exp(-eps_n)
 
     def _tension_solve(self, x: float) -> SpecimenState:
         st = self.state
@@ -302,7 +309,7 @@ class Mechanics:
             out["post.dk_mm"] = f"{dk:.4f}"
             out["post.du_mm"] = f"{s.d0_mm * math.exp(-eps_u / 2.0):.4f}"
             if eps_n - eps_u > 1e-6:
-                out["post.neck_radius_mm"] = f"{(dk / 2.0) / (LE_ROY_SLOPE * (eps_n - eps_u)):.4f}"
+                out["post.neck_radius_mm"] = f"{(dk / 2.0) / float(neck_a_over_R(eps_u, eps_n)):.4f}"
         else:
             eps = st.eps_p
             hk = s.h0_mm * math.exp(-eps)

@@ -68,9 +68,24 @@ def test_force_maximum_at_considere_point(material):
     assert rec[i, 2] == pytest.approx(eps_u, abs=2e-3)
     f_max = mat.flow_stress(eps_u, rate) * m.specimen.area0_mm2 * math.exp(-eps_u)
     assert rec[i, 1] == pytest.approx(f_max, rel=1e-5)
-    # after the maximum the force falls, the neck strains, and the specimen breaks
+    # after the maximum the force only falls, the neck strains, and the specimen breaks
+    assert np.all(np.diff(rec[i:-1, 1]) <= 1e-9)
     assert rec[-1, 1] == 0.0 and m.fractured
     assert rec[i + 5:, 3].max() > rec[i + 5:, 2].max()
+
+
+@pytest.mark.parametrize("material", ["steel45", "12Kh18N10T"])
+def test_bridgman_with_the_measured_neck_radius_recovers_flow_stress_at_fracture(material):
+    m = RigModel(material, "tension", speed_mm_per_s=0.01, force_noise_N=0.0)
+    rec = run(m, 0.5)
+    post = {k: float(v) for k, v in m.post_test_measurements().items()}
+    p_k = rec[rec[:, 1] > 0, 1][-1]  # last force before the break
+    a = post["post.dk_mm"] / 2
+    s_avg = p_k / (math.pi * a * a)
+    x = a / post["post.neck_radius_mm"]
+    s_eq = s_avg / ((1 + 2 / x) * math.log(1 + x / 2))  # Bridgman, METHODS.md §3
+    eps_f = 2 * math.log(m.specimen.d0_mm / post["post.dk_mm"])
+    assert s_eq == pytest.approx(m.material.flow_stress(eps_f, 0.01 / 30), rel=5e-3)
 
 
 def test_fracture_post_measurements_are_consistent():
@@ -82,10 +97,11 @@ def test_fracture_post_measurements_are_consistent():
     assert 2 * math.log(d0 / post["post.dk_mm"]) == pytest.approx(m.material.fracture_strain_at(0.02 / l0), rel=1e-3)
     eps_u = 2 * math.log(d0 / post["post.du_mm"])
     assert eps_u == pytest.approx(m.state.eps_p, rel=1e-3)
-    # Le Roy: a/R = 1.1 (eps_f - eps_u)
+    # Le Roy a/R = 1.1 (eps_f - eps_u), with the model's smooth onset δ/(δ + eps_u)
     a_over_R = (post["post.dk_mm"] / 2) / post["post.neck_radius_mm"]
     eps_f = 2 * math.log(d0 / post["post.dk_mm"])
-    assert a_over_R == pytest.approx(1.1 * (eps_f - eps_u), rel=2e-3)
+    d = eps_f - eps_u
+    assert a_over_R == pytest.approx(1.1 * d * d / (d + eps_u), rel=2e-3)
     assert l0 * math.exp(eps_u) < post["post.lu_mm"] < l0 * math.exp(eps_f)
     assert not m.moving  # the crosshead stopped at fracture
 
