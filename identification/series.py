@@ -618,8 +618,10 @@ class SeriesFit:
         ref = self.fit.reference
         top = self.fit.as_dict()
         out: dict = {"schema": "flowcurve-fit/1", "model": "johnson_cook", "method": self.method,
-                     "material": " / ".join(dict.fromkeys(m.material for m in self.members if m.material)) or None,
                      "equation": EQUATION, "conventions": CONVENTIONS}
+        material = " / ".join(dict.fromkeys(m.material for m in self.members if m.material))
+        if material:  # absent, not null, when unknown: readers default it
+            out["material"] = material
         out.update({k: v for k, v in top.items() if k not in ("method", "record_errors", "report")})
         out.update({"ref_strain_rate_per_s": ref.strain_rate_per_s, "ref_strain_rate_source": ref.strain_rate_source,
                     "ref_temperature_C": ref.temperature_C, "ref_temperature_source": ref.temperature_source,

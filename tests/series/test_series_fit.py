@@ -80,7 +80,7 @@ def test_series_fit_reports_range_records_and_both_methods(members, syn):
     assert d["A_MPa"] == d["global"]["A_MPa"] and d["stepwise"]["method"] == "stepwise"
     assert [r["name"] for r in d["records"]] == [m.name for m in members]
     assert all(r["fit_error_pct"] >= r["rms_error_pct"] > 0 for r in d["records"])
-    assert d["friction_mu"] is None and d["E_MPa"] is None and d["fixed"] == {}
+    assert d["friction_mu"] is None and d["E_MPa"] is None and d["fixed"] == {} and "material" not in d
     # the model at zero strain of each condition: A times the rate and thermal factors
     for c in d["curves"]:
         assert c["model_stress_at_zero_strain_MPa"] == pytest.approx(sf.fit(0.0, c["strain_rate_per_s"], c["temperature_C"]))
