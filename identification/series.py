@@ -212,6 +212,8 @@ def member_from_result(folder: str | Path) -> SeriesMember:
     if not isinstance(result, dict):
         raise RecordError(path, "is not a JSON object")
     block = result.get("record") or {}
+    if not isinstance(block, dict):
+        raise RecordError(path, "'record' is not a JSON object")
     test = result.get("test") or block.get("test")
     temperature = _number(block.get("nominal_temperature_C"))
     if temperature is None:

@@ -118,3 +118,19 @@ def test_unreadable_true_curve_names_the_file(tmp_path, syn):
     (folder / "true_curve.csv").write_text("strain,stress\n0.1,500\n", encoding="utf-8")
     with pytest.raises(RecordError, match=r"true_curve\.csv: missing column\(s\) true_plastic_strain"):
         member_from_result(folder)
+
+
+@pytest.mark.parametrize("result_json,curve,pattern", [
+    ('{"test": "tension", "record": [1, 2]}', None, r"result\.json: 'record' is not a JSON object"),
+    ("{not json", None, r"result\.json: is not valid JSON"),
+    (None, "true_plastic_strain,true_stress_MPa\n0.01,abc\n0.02,510\n", r"true_curve\.csv: the curve holds cells that are not numbers"),
+    (None, "", r"true_curve\.csv: cannot be read as CSV"),
+])
+def test_broken_result_folders_name_the_file(tmp_path, syn, result_json, curve, pattern):
+    folder = syn.write_result_folder(tmp_path / "r", syn.members()[0])
+    if result_json is not None:
+        (folder / "result.json").write_text(result_json, encoding="utf-8")
+    if curve is not None:
+        (folder / "true_curve.csv").write_text(curve, encoding="utf-8")
+    with pytest.raises(RecordError, match=pattern):
+        member_from_result(folder)
