@@ -8,9 +8,6 @@ from pathlib import Path
 from reports.cards import FORMATS, CardError, load_card_data, write_card
 from reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
 
-DEFAULT_UNITS = {"lsdyna": DEFAULT_UNIT_SYSTEM, "abaqus": DEFAULT_UNIT_SYSTEM, "radioss": DEFAULT_UNIT_SYSTEM,
-                 "calculix": DEFAULT_UNIT_SYSTEM}
-
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -42,6 +39,8 @@ def register(subparsers) -> None:
                    help="tabulated curves from the measured true curves or the fitted law (default: measured when fit.json has them)")
     p.add_argument("--strain-rate", dest="strain_rate_per_s", type=float, metavar="1/s",
                    help="strain rate of the temperature tables (Abaqus/CalculiX; default: the reference rate)")
+    p.add_argument("--temperature", dest="temperature_C", type=float, metavar="C",
+                   help="LS-DYNA: temperature of the MAT_024 curves (default: the reference temperature)")
     p.add_argument("--max-rows", type=int, default=100, metavar="N", help="rows per tabulated curve (default 100; CalculiX needs ≤ ~100)")
     p.set_defaults(func=run_card)
 
@@ -82,6 +81,8 @@ def run_card(args) -> int:
     options = {"curves": args.curves, "max_rows": args.max_rows}
     if args.format in ("abaqus", "calculix") and args.strain_rate_per_s is not None:
         options["strain_rate_per_s"] = args.strain_rate_per_s
+    if args.format == "lsdyna" and args.temperature_C is not None:
+        options["temperature_C"] = args.temperature_C
     if args.format == "radioss":
         options = {}
     text = write_card(data, args.format, args.units, **options)

@@ -65,3 +65,15 @@ def test_unknown_units_refused_by_the_parser(fit_file, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["card", str(fit_file()), "-f", "lsdyna", "--units", "mm-s-kg-kN-GPa"])
     assert exc.value.code == 2
+
+
+def test_lsdyna_curves_at_a_chosen_temperature(fit_file, capsys):
+    from .conftest import jc_MPa
+    import numpy as np
+
+    assert main(["card", str(fit_file(rates=(1e-3,))), "-f", "lsdyna", "--temperature", "400"]) == 0
+    text = capsys.readouterr().out
+    rows = text.split("*DEFINE_CURVE")[1].split("*CONTACT")[0].splitlines()[4:]
+    pts = np.array([[float(v) for v in r.split()] for r in rows if r.strip() and not r.startswith("$")])
+    np.testing.assert_allclose(pts[1:, 1], jc_MPa(pts[1:, 0], 1e-3, 400.0), rtol=2e-3)
+    assert "at 400 °C" in " ".join(line[2:] for line in text.splitlines() if line.startswith("$ "))
