@@ -135,39 +135,51 @@ def _errors_pct(fit_values: np.ndarray, stress: np.ndarray) -> tuple[float, floa
 # -- least squares -----------------------------------------------------------------------
 
 
+def _linear_on_grid(X: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Weighted least squares y ≈ c0 + c1·x for every row x of X at once (normal equations).
+
+    Returns c0, c1 and the weighted residual sum of squares, one value per row of X."""
+    w2 = w**2
+    sw, sy = np.sum(w2), np.sum(w2 * y)
+    sx, sxx, sxy = X @ w2, (X**2) @ w2, X @ (w2 * y)
+    det = sw * sxx - sx**2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c1 = (sw * sxy - sx * sy) / det
+        c0 = (sy - c1 * sx) / sw
+    ss = ((c0[:, None] + c1[:, None] * X - y) ** 2) @ w2
+    return c0, c1, np.where(np.isfinite(ss), ss, np.inf)
+
+
 def _start_values(law: str, eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> dict[str, float]:
     """Start values by variable projection: scan the nonlinear constant on a grid and solve
-    the two linear ones by weighted linear least squares for each grid value."""
-
-    def linear(x, y):  # weighted y ≈ c0 + c1·x
-        M = np.column_stack([np.ones_like(x), x]) * w[:, None]
-        coef, *_ = np.linalg.lstsq(M, y * w, rcond=None)
-        return coef, float(np.sum((M @ coef - y * w) ** 2))
-
-    best = None
+    the two linear ones by weighted linear least squares for each grid value (vectorized)."""
     if law == "johnson_cook":
-        for n in np.geomspace(0.02, 3.0, 120):
-            (A, B), ss = linear(np.power(eps, n), sig)
-            if B > 0 and (best is None or ss < best[0]):
-                best = (ss, {"A": A, "B": B, "n": n})
+        grid = np.geomspace(0.02, 3.0, 120)
+        A, B, ss = _linear_on_grid(np.power(eps[None, :], grid[:, None]), sig, w)
+        ok = B > 0
+        values = lambda i: {"A": A[i], "B": B[i], "n": grid[i]}  # noqa: E731
     elif law == "voce":
         span = max(np.max(eps), 1e-6)
-        for b in np.geomspace(0.1 / span, 200.0 / span, 150):
-            (s0, Q), ss = linear(1 - np.exp(-b * eps), sig)
-            if Q > 0 and (best is None or ss < best[0]):
-                best = (ss, {"sigma0": s0, "Q": Q, "b": b})
+        grid = np.geomspace(0.1 / span, 200.0 / span, 150)
+        s0, Q, ss = _linear_on_grid(1 - np.exp(-grid[:, None] * eps[None, :]), sig, w)
+        ok = Q > 0
+        values = lambda i: {"sigma0": s0[i], "Q": Q[i], "b": grid[i]}  # noqa: E731
     else:  # swift, in log form: ln σ = ln K + n·ln(ε0 + εp)
         if np.min(sig) <= 0:
             raise IdentificationError("Swift law needs positive stresses")
-        for e0 in np.geomspace(1e-5, 1.0, 120):
-            (lnK, n), _ = linear(np.log(e0 + eps), np.log(sig))
-            pred = np.exp(lnK) * np.power(e0 + eps, n)
-            ss = float(np.sum(((pred - sig) * w) ** 2))
-            if n > 0 and (best is None or ss < best[0]):
-                best = (ss, {"K": float(np.exp(lnK)), "eps0": e0, "n": n})
-    if best is None:
+        grid = np.geomspace(1e-5, 1.0, 120)
+        base = grid[:, None] + eps[None, :]
+        lnK, n, _ = _linear_on_grid(np.log(base), np.log(sig), w)
+        with np.errstate(over="ignore", invalid="ignore"):
+            pred = np.exp(lnK)[:, None] * np.power(base, n[:, None])
+        ss = np.where(np.isfinite(pred).all(axis=1), ((pred - sig) ** 2) @ (w**2), np.inf)
+        ok = n > 0
+        values = lambda i: {"K": float(np.exp(lnK[i])), "eps0": grid[i], "n": n[i]}  # noqa: E731
+    ok &= np.isfinite(ss)
+    if not np.any(ok):
         raise IdentificationError(f"the data do not harden (stress does not rise with strain): a {law} law cannot be fitted")
-    return best[1]
+    best = int(np.flatnonzero(ok)[np.argmin(ss[ok])])
+    return {k: float(v) for k, v in values(best).items()}
 
 
 def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points: Iterable[Sequence[float]] = (),
