@@ -20,6 +20,7 @@ TABLE_ID = 100  # *DEFINE_TABLE; its curves are 101, 102, ...
 CURVE_ID = 101
 CURVE_DIGITS = 8  # significant digits of curve points
 NO_SPALL_PC = -1e20  # PC: no pressure cut-off worth the name (the user sets one for spall)
+NO_FAILURE_D1 = 1e20  # JC failure strain D1 when no fracture criterion was identified
 
 
 def card(fields, width: int = 10, digits: int | None = None) -> str:
@@ -59,7 +60,9 @@ def lsdyna_card(data: CardData, units: UnitSystem, *, curves: str = "auto", temp
             f"MAT {MAT_JC_ID}: Johnson-Cook. On solid elements it needs the equation of state EOSID {EOS_ID} "
             "on its *PART (linear, bulk modulus K = E/(3(1-2nu))). PC = -1e20 and SPALL = 1: no pressure cut-off.",
             "D1-D5: " + ("identified fracture constants." if any(v is not None for v in d)
-                         else "no fracture criterion was identified; left 0 - set them if the model needs failure."),
+                         else f"no fracture criterion was identified: D1 = {NO_FAILURE_D1:g} (a failure strain never "
+                              "reached; EROD = 0 would erode elements at a zero failure strain) - replace D1-D5 if "
+                              "the model needs failure."),
         ], "$ ").rstrip("\n"),
         "*MAT_JOHNSON_COOK",
         names("mid", "ro", "g", "e", "pr", "dtf", "vp", "rateop"),
@@ -67,7 +70,8 @@ def lsdyna_card(data: CardData, units: UnitSystem, *, curves: str = "auto", temp
         names("a", "b", "n", "c", "m", "tm", "tr", "epso"),
         card([A, B, data.n, data.C, data.m, tm, tr, eps0]),
         names("cp", "pc", "spall", "it", "d1", "d2", "d3", "d4"),
-        card([cp, NO_SPALL_PC, 1.0, 0.0] + [v or 0.0 for v in d[:4]]),
+        card([cp, NO_SPALL_PC, 1.0, 0.0] + ([v or 0.0 for v in d[:4]] if any(v is not None for v in d)
+                                            else [NO_FAILURE_D1, 0.0, 0.0, 0.0])),
         names("d5", "c2/p", "erod", "efmin", "numint"),
         card([d[4] or 0.0, 0.0, 0.0, 0.0, 0.0]),
         "*EOS_LINEAR_POLYNOMIAL",

@@ -54,6 +54,7 @@ def test_johnson_cook_card_reads_back(fit_file, units):
     assert close(jc.epso, LAW["rate0"] * f["rate"])
     assert close(jc.cp, 462.0 * f["cp"])
     assert jc.pc < -1e19  # no pressure cut-off
+    assert jc.d1 >= 1e20 and (jc.d2, jc.d3, jc.d4, jc.d5) == (0, 0, 0, 0)  # no fracture identified: never fails
     eos = kw["EosLinearPolynomial"][0]
     assert close(eos.c1, E / (3 * (1 - 2 * nu)))  # bulk modulus
     assert eos.eosid == 1
@@ -126,6 +127,14 @@ def test_lines_stay_within_80_columns(fit_file):
     text = write_card(load_card_data(fit_file()), "lsdyna", "m-s-kg-N-Pa")
     for line in text.splitlines():
         assert len(line) <= 80, line
+
+
+def test_identified_fracture_constants_are_written(fit_file):
+    # table 3.2, 12Kh18N12M3TL
+    path = fit_file(D1=0.0, D2=1.1, D3=-0.7, D4=-0.029, D5=-0.3)
+    _, kw = read_deck(write_card(load_card_data(path), "lsdyna", "mm-s-t-N-MPa"))
+    jc = kw["MatJohnsonCook"][0]
+    assert (jc.d1, jc.d2, jc.d3, jc.d4, jc.d5) == (0.0, 1.1, -0.7, -0.029, -0.3)
 
 
 def test_missing_constant_names_the_option(fit_file):
