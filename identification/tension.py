@@ -209,7 +209,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     uni = slice(0, i_m + 1)
     eps_u = float(log_strain[i_m])
     ep_u, sig_u = _increasing(eps_p[uni], sig_t[uni])
-    in_range = ep_u >= 0
+    in_range = ep_u >= MIN_YIELD_OFFSET  # the flow curve from Rp0.2 on, as for compression; elastic jitter left out
     true_curve = pd.DataFrame({"true_plastic_strain": ep_u[in_range], "true_stress_MPa": sig_u[in_range]})
     sig_t_rp = float(np.interp(MIN_YIELD_OFFSET, ep_u, sig_u)) if ep_u[-1] > MIN_YIELD_OFFSET else None
     eps_p_at_Rm = float(eps_p[i_m])
