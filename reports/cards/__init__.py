@@ -347,10 +347,14 @@ def rate_tables(card: CardData, temperature_C: float | None = None, source: str 
     if source == "measured":
         if not card.curves:
             raise CardError(f"{card.source_path}: the fit file has no tabulated curves; use the law (--curves law)")
-        nearest = min({c.temperature_C for c in card.curves}, key=lambda t: abs(t - temp))
+        tested = sorted({c.temperature_C for c in card.curves})
+        nearest = min(tested, key=lambda t: abs(t - temp))
+        if temperature_C is not None and abs(nearest - temp) > 1.0:
+            raise CardError(f"{card.source_path}: no measured curves at {temp:g} °C (tested: "
+                            f"{', '.join(f'{t:g}' for t in tested)} °C); choose one of those or use the law (--curves law)")
         out = []
         for c in sorted((c for c in card.curves if c.temperature_C == nearest), key=lambda c: c.strain_rate_per_s):
-            if out and math.isclose(out[-1].strain_rate_per_s, c.strain_rate_per_s):
+            if out and math.isclose(out[-1].strain_rate_per_s, c.strain_rate_per_s, rel_tol=0.02):
                 continue  # one curve per rate: the first specimen's
             z = start_at_zero(card, c)
             eps, sig = resample(z.plastic_strain, z.stress_MPa, max_rows)
@@ -358,10 +362,11 @@ def rate_tables(card: CardData, temperature_C: float | None = None, source: str 
         return out
     if source != "law":
         raise CardError(f"unknown table source {source!r} (measured, law)")
-    rates = sorted({c.strain_rate_per_s for c in card.curves})
-    if not rates and card.strain_rate_range_per_s:
-        rates = sorted(set(card.strain_rate_range_per_s))
-    rates = rates or [card.ref_strain_rate_per_s]
+    candidates = sorted({c.strain_rate_per_s for c in card.curves}) or sorted(set(card.strain_rate_range_per_s or ()))
+    rates = []
+    for r in candidates or [card.ref_strain_rate_per_s]:
+        if not rates or not math.isclose(rates[-1], r, rel_tol=0.02):  # the series' 2 % rate tolerance
+            rates.append(r)
     return [law_curve(card, temp, r, min(60, max_rows)) for r in rates]
 
 
