@@ -83,3 +83,12 @@ def test_furnace_driver_watchdog_drops_heater_when_host_stops(rig):
         time.sleep(0.6)  # the PC stops talking
         assert not rig.model.furnace.commanded_on
         assert fu.watchdog_status() & 0x04
+
+
+@pytest.mark.xfail(raises=DeviceError, strict=True,
+                   reason="rig.codecs.dcon.parse_digital_io expects '!SOOII'; the I-7011 manual answers "
+                          "'!AASOOII' (example '!0100001'), which the virtual module sends")
+def test_furnace_driver_reads_digital_io_in_the_manual_format(rig):
+    with Furnace(rig.ports["furnace"], timeout_s=0.2) as fu:
+        fu.heater(True)
+        assert fu.digital_io()["outputs"] == 0x01
