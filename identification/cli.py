@@ -37,7 +37,7 @@ examples:
   flowcurve identify 46NT71.csv --out results
       an INSTRON export (tab-separated key/value header, force in kN) is recognised
   flowcurve identify export.csv --column force=Load:kN --column crosshead=Extension:mm \\
-      --column time=Time:s --test tension --d0 6 --l0 30 --lu 4.1 --dk 3.9
+      --column time=Time:s --test tension --d0 6 --l0 30 --lu 34.1 --dk 3.9
       any CSV: name its columns and units; give the geometry the file lacks
   flowcurve identify C1.csv --friction-correction siebel --hardening three-point
 
@@ -94,6 +94,8 @@ def register(subparsers) -> None:
     m.add_argument("--no-extensometer", action="store_true", help="use the corrected crosshead travel even when the record has an extensometer channel")
     m.add_argument("--neck-correction", choices=_choices("identification.necking", "METHODS") or ("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
     m.add_argument("--hardening", choices=tuple(HARDENING_CHOICES), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
+    m.add_argument("--E", dest="E_MPa", type=float, metavar="MPA", help="elastic modulus to strip elastic strain with (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
+    m.add_argument("--true-stress", choices=("gost_3_6", "constant_volume"), help="true stress in the uniform part of a tension test: the corrected (3.6) with bulk modulus (default) or σ·(1 + e) at constant volume")
     m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n)")
     m.add_argument("--friction-method", choices=_choices("identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default: the seed's bulge regression)")
     m.add_argument("--friction-correction", choices=_choices("identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default k_sigma; all are computed)")
@@ -122,6 +124,8 @@ def _options_from_args(args) -> dict:
         "law": args.law,
         "friction_method": args.friction_method,
         "friction_correction": args.friction_correction,
+        "E_MPa": args.E_MPa,
+        "true_stress": args.true_stress,
     }
 
 

@@ -58,3 +58,18 @@ def test_identify_command_options_fill_the_post_measurements(tmp_path, make_reco
     result = json.loads((tmp_path / "out" / "C3" / "result.json").read_text())
     assert result["friction_mu"] == pytest.approx(truth["mu"], abs=1e-3)
     assert read_record(path).meta.get("post.hk_mm") is None  # options do not rewrite the record
+
+
+def test_identify_command_passes_the_handbook_modulus(tmp_path, make_record):
+    """--E strips the elastic strain with the given modulus: the curve then ends at the
+    generating law's plastic strain, not at the total strain (as without --E above)."""
+    record, truth = make_record(seed=12)
+    path = write_record(tmp_path / "C4.csv", record)
+    out = tmp_path / "out"
+    code = main(["identify", str(path), "--out", str(out), "--no-plots", "--friction-correction", "slab", "--E", repr(truth["E"])])
+    assert code == 0
+    result = json.loads((out / "C4" / "result.json").read_text())
+    assert result["E_MPa"] == pytest.approx(truth["E"])
+    curve = pd.read_csv(out / "C4" / "true_curve.csv")
+    elastic_strain = truth["sigma_end"] / truth["E"]
+    assert curve["true_plastic_strain"].max() == pytest.approx(truth["eps_p_end"], abs=elastic_strain / 2)
