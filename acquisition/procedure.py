@@ -22,7 +22,7 @@ import os
 import select
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Protocol
 
@@ -30,10 +30,11 @@ import numpy as np
 
 from acquisition.live import LiveView, Snapshot
 from acquisition.record import STATUS_ABORTED, STATUS_COMPLETE, RecordWriter, amend_record
-from acquisition.safety import HeaterSafety, Interrupted
+from acquisition.safety import HeaterSafety, Interrupted, check_temperature
 from acquisition.sampler import Channel, Sampler
 from flowcurve.errors import FlowcurveError
 
+FORCE_LIMIT_OF_CAPACITY = 0.98  # default force limit: this fraction of the frame's capacity
 TEST_GEOMETRY = {"tension": ("d0_mm", "l0_mm"), "compression": ("d0_mm", "h0_mm")}
 POST_KEYS = {
     "tension": ("post.lu_mm", "post.dk_mm", "post.du_mm", "post.neck_radius_mm"),
@@ -63,9 +64,10 @@ class RigIO(Protocol):
     frame_stiffness_N_per_um: float | None
     loadcell_period_s: float
 
+    def set_clock(self, clock: Callable[[], float]) -> None: ...
     def channels(self, clock: Callable[[], float], to_clock: Callable[[float], float]) -> dict[str, Channel]: ...
     def read_temperature_C(self) -> float: ...
-    def control_temperature(self, setpoint_C: float, temperature_C: float) -> bool: ...
+    def hold_temperature(self, setpoint_C: float) -> float: ...  # one control step; the reading
     def heater_off(self) -> None: ...
     def arm_watchdog(self) -> None: ...
     def host_ok(self) -> None: ...
@@ -84,6 +86,8 @@ class StopCriteria:
     target_displacement_mm: float | None = None
     force_limit_N: float | None = None
     max_duration_s: float | None = None
+    stall_s: float | None = 10.0  # crosshead still (< stall_mm) this long after it moved: stopped
+    stall_mm: float = 0.005
 
 
 @dataclass
@@ -92,6 +96,10 @@ class StopState:
 
     max_force_N: float = 0.0
     last_crosshead_mm: float = 0.0
+    start_crosshead_mm: float | None = None
+    moved: bool = False
+    still_since_s: float = 0.0
+    still_at_mm: float = 0.0
 
 
 def stop_reason(rows: np.ndarray, state: StopState, crit: StopCriteria) -> str | None:
@@ -103,6 +111,7 @@ def stop_reason(rows: np.ndarray, state: StopState, crit: StopCriteria) -> str |
     running_max = np.maximum.accumulate(np.concatenate([[state.max_force_N], f]))[1:]
     state.max_force_N = float(running_max[-1])
     state.last_crosshead_mm = float(rows[-1, 2])
+    stalled = _update_stall(rows, state, crit)
     if crit.force_limit_N is not None and np.any(f >= crit.force_limit_N):
         return f"force limit {crit.force_limit_N:.0f} N reached"
     if crit.target_displacement_mm is not None and np.any(x >= crit.target_displacement_mm):
@@ -112,7 +121,26 @@ def stop_reason(rows: np.ndarray, state: StopState, crit: StopCriteria) -> str |
         return f"fracture (force fell below {100 * crit.fracture_drop_fraction:.0f} % of the maximum {state.max_force_N / 1000:.2f} kN)"
     if crit.max_duration_s is not None and rows[-1, 0] >= crit.max_duration_s:
         return f"maximum duration {crit.max_duration_s:g} s reached"
+    if stalled:
+        return f"the crosshead stopped (still for {crit.stall_s:g} s)"
     return None
+
+
+def _update_stall(rows: np.ndarray, state: StopState, crit: StopCriteria) -> bool:
+    """Track crosshead motion; True once it has moved and then stood still for stall_s."""
+    if crit.stall_s is None:
+        return False
+    t, x = rows[:, 0], rows[:, 2]
+    if state.start_crosshead_mm is None:
+        state.start_crosshead_mm = state.still_at_mm = float(x[0])
+        state.still_since_s = float(t[0])
+    moved = np.abs(x - state.still_at_mm) > crit.stall_mm
+    if np.any(moved):
+        last = int(np.flatnonzero(moved)[-1])
+        state.moved = True
+        state.still_at_mm, state.still_since_s = float(x[last]), float(t[last])
+        # a later sample can be within stall_mm of the new rest point: that is fine
+    return state.moved and float(t[-1]) - state.still_since_s >= crit.stall_s
 
 
 @dataclass
@@ -249,6 +277,7 @@ class Procedure:
     def run(self) -> Outcome:
         spec, rig = self.spec, self.rig
         self._t0 = time.monotonic()
+        rig.set_clock(self.clock)
         columns = ["time_s", "force_N", "crosshead_mm"] + (["temperature_C"] if rig.has_furnace else [])
         self.writer = RecordWriter(self.path, spec.meta(rig), columns)
         status, reason, error = STATUS_COMPLETE, "", None
@@ -262,8 +291,8 @@ class Procedure:
                     rig.tare()
                     self._event("tare")
                     sampler = Sampler(rig.channels(self.clock, self.to_clock))
-                    if rig.has_furnace:  # keep holding the set-point (or keep the heater off)
-                        sampler.channels["temperature_C"].read = self._furnace_read(sampler.channels["temperature_C"].read)
+                    if rig.has_furnace:  # keep holding the set-point (or just read), feed the watchdog
+                        sampler.channels["temperature_C"].read = self._furnace_read()
                     sampler.start()
                     reason = self._record(sampler, state)
                 except Interrupted as exc:
@@ -299,15 +328,12 @@ class Procedure:
     def _heat(self) -> None:
         spec, rig = self.spec, self.rig
         setpoint = spec.temperature_C
-        from acquisition.safety import check_temperature
-
         start_C = check_temperature(rig.read_temperature_C(), rig.max_temperature_C)
         self._event("heater_on", f"set-point {setpoint:g} C")
         t_start = self.clock()
         steady_since = None
         while True:
-            temp = check_temperature(rig.read_temperature_C(), rig.max_temperature_C)
-            rig.control_temperature(setpoint, temp)
+            temp = check_temperature(rig.hold_temperature(setpoint), rig.max_temperature_C)
             rig.host_ok()
             now = self.clock()
             if abs(temp - setpoint) <= spec.soak_band_C:
@@ -324,16 +350,13 @@ class Procedure:
             self.view.show(Snapshot(state, time_s=now, temperature_C=temp, progress=heating_progress(start_C, temp, setpoint), message=msg))
             time.sleep(self.tick_s)
 
-    def _furnace_read(self, read: Callable[[], float]) -> Callable[[], float]:
-        from acquisition.safety import check_temperature
-
-        setpoint = self.spec.temperature_C
+    def _furnace_read(self) -> Callable[[], float]:
+        setpoint, rig = self.spec.temperature_C, self.rig
 
         def guarded() -> float:
-            temp = check_temperature(read(), self.rig.max_temperature_C)
-            if setpoint is not None:
-                self.rig.control_temperature(setpoint, temp)
-            self.rig.host_ok()
+            temp = rig.read_temperature_C() if setpoint is None else rig.hold_temperature(setpoint)
+            check_temperature(temp, rig.max_temperature_C)
+            rig.host_ok()
             return temp
 
         return guarded
@@ -346,6 +369,10 @@ class Procedure:
             self._event("start", f"crosshead {spec.speed_mm_per_s:g} mm/s")
         else:
             self.view.say(f"Start the crosshead motor ({'up, tension' if direction > 0 else 'down, compression'}, {spec.speed_mm_per_s:g} mm/s); recording waits for motion.")
+        crit = spec.stop
+        capacity = getattr(rig, "max_force_N", None)
+        if crit.force_limit_N is None and capacity:
+            crit = replace(crit, force_limit_N=FORCE_LIMIT_OF_CAPACITY * capacity)
         moving = rig.can_drive
         curve_x: list[np.ndarray] = []
         curve_f: list[np.ndarray] = []
@@ -361,7 +388,7 @@ class Procedure:
                         self._event("start", "crosshead motion detected")
                     curve_x.append(rows[::10, 2])
                     curve_f.append(rows[::10, 1])
-                    reason = stop_reason(rows, state, spec.stop)
+                    reason = stop_reason(rows, state, crit)
                     if reason:
                         return reason
                 fault = sampler.fault or sampler.check_silence()

@@ -86,20 +86,27 @@ def merge_block(force_t: np.ndarray, force: np.ndarray, others: Sequence[tuple[n
 
 
 class Channel(threading.Thread):
-    """Reads one device in its own thread and appends stamped samples to its stream."""
+    """Reads one device in its own thread and appends stamped samples to its stream.
 
-    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str, Exception | None], None] | None = None):
+    ``clock`` stamps the samples (test seconds); the pacing ``period_s`` and the
+    ``silence_s`` fault limit are wall-clock seconds (:func:`time.monotonic`), so a
+    time-scaled virtual rig does not change how patient the host is. Values returned as a
+    bare list are stamped ``spacing_s`` (clock units) apart, ending at the arrival time.
+    """
+
+    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, spacing_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str, Exception | None], None] | None = None):
         super().__init__(name=f"flowcurve-{name}", daemon=True)
         self.device = name
         self.read = read
         self.clock = clock
         self.period_s = period_s
+        self.spacing_s = spacing_s
         self.max_failures = max_failures
         self.silence_s = silence_s
         self.on_fault = on_fault
         self.stream = Stream(name)
         self.reads = 0
-        self.last_data_s = clock()
+        self.last_data_wall_s = time.monotonic()
         self.error: str | None = None
         self._stop_event = threading.Event()
 
@@ -108,8 +115,8 @@ class Channel(threading.Thread):
 
     def run(self) -> None:
         failures = 0
-        self.last_data_s = self.clock()
-        next_due = self.clock()
+        self.last_data_wall_s = time.monotonic()
+        next_due = time.monotonic()
         while not self._stop_event.is_set():
             try:
                 got = self.read()
@@ -122,22 +129,22 @@ class Channel(threading.Thread):
                     self._fault(f"{failures} reads in a row failed; last: {_one_line(exc)}", exc if isinstance(exc, DeviceError) else None)
                     return
                 continue
-            now = self.clock()
             failures = 0
-            n = self._store(got, now)
+            n = self._store(got, self.clock())
+            wall = time.monotonic()
             if n:
-                self.last_data_s = now
+                self.last_data_wall_s = wall
                 self.reads += 1
-            elif now - self.last_data_s > self.silence_s:
-                self._fault(f"no data for {now - self.last_data_s:.1f} s")
+            elif wall - self.last_data_wall_s > self.silence_s:
+                self._fault(f"no data for {wall - self.last_data_wall_s:.1f} s")
                 return
             if self.period_s > 0:
                 next_due += self.period_s
-                delay = next_due - self.clock()
+                delay = next_due - time.monotonic()
                 if delay > 0:
                     self._stop_event.wait(delay)
                 else:
-                    next_due = self.clock()
+                    next_due = time.monotonic()
 
     def _store(self, got, now: float) -> int:
         if got is None:
@@ -152,8 +159,7 @@ class Channel(threading.Thread):
             self.stream.extend([p[0] for p in items], [float(p[1]) for p in items])
         else:
             k = len(items)
-            step = self.period_s if k > 1 else 0.0
-            self.stream.extend([now - (k - 1 - i) * step for i in range(k)], [float(v) for v in items])
+            self.stream.extend([now - (k - 1 - i) * self.spacing_s for i in range(k)], [float(v) for v in items])
         return len(items)
 
     def _fault(self, message: str, error: Exception | None = None) -> None:
@@ -226,12 +232,12 @@ class Sampler:
             self._other_start[i] += max(0, int(np.searchsorted(ts, ft[n - 1], side="right")) - 1)
         return rows
 
-    def check_silence(self, now: float | None = None) -> DeviceError | None:
+    def check_silence(self) -> DeviceError | None:
         """Fault a channel whose read hangs (no data for its ``silence_s``); the first fault."""
+        now = time.monotonic()
         for ch in self.channels.values():
-            now_ = ch.clock() if now is None else now
-            if ch.is_alive() and now_ - ch.last_data_s > ch.silence_s:
-                self._on_fault(ch.device, f"no answer for {now_ - ch.last_data_s:.1f} s")
+            if ch.is_alive() and now - ch.last_data_wall_s > ch.silence_s:
+                self._on_fault(ch.device, f"no answer for {now - ch.last_data_wall_s:.1f} s")
         return self._fault
 
     def stop(self, timeout_s: float = 2.0) -> None:

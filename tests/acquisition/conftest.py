@@ -53,8 +53,10 @@ class FakeRig:
         x = abs(self.x(t))
         return self._dir * (self.k * x if x < self.x_frac else 0.0)
 
-    def channels(self, clock, to_clock):
+    def set_clock(self, clock):
         self.clock = clock
+
+    def channels(self, clock, to_clock):
 
         def force():
             time.sleep(self.loadcell_period_s / self.time_scale)
@@ -71,8 +73,8 @@ class FakeRig:
 
         return {
             "force_N": Channel("loadcell", force, clock, silence_s=2.0),
-            "crosshead_mm": Channel("encoder", encoder, clock, period_s=0.01 / self.time_scale),
-            "temperature_C": Channel("furnace", self.read_temperature_C, clock, period_s=0.25 / self.time_scale),
+            "crosshead_mm": Channel("encoder", encoder, clock, period_s=0.01),
+            "temperature_C": Channel("furnace", self.read_temperature_C, clock, period_s=0.05),
         }
 
     def read_temperature_C(self):
@@ -87,9 +89,10 @@ class FakeRig:
                 return self.max_temperature_C + 50.0
             return self._temp
 
-    def control_temperature(self, setpoint_C, temperature_C):
+    def hold_temperature(self, setpoint_C):
+        temperature_C = self.read_temperature_C()
         self.set_heater(temperature_C < setpoint_C)
-        return self.heater
+        return temperature_C
 
     def set_heater(self, on):
         if on != self.heater:

@@ -72,7 +72,8 @@ def test_heating_soak_then_compression_to_target(tmp_path, fake_rig):
     assert names.index("heater_on") < names.index("soak_reached") < names.index("start")
     assert rec.meta["nominal_temperature_C"] == "120.0"
     assert abs(np.median(rec.column("temperature_C")) - 120.0) < 15
-    assert rec.column("crosshead_mm").min() == pytest.approx(-0.5, abs=0.02)
+    # stopped at the target; the overshoot is what the crosshead runs in one loop tick or two
+    assert -0.5 - 3 * 0.05 * 0.05 * rig.time_scale <= rec.column("crosshead_mm").min() <= -0.5
     assert True in rig.heater_log and not rig.heater
 
 

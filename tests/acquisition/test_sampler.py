@@ -87,7 +87,7 @@ def test_streamed_blocks_are_stamped_and_kept():
         sent.extend(vals)
         return vals
 
-    force = Channel("loadcell", block_read, clock, period_s=0.001, silence_s=5)
+    force = Channel("loadcell", block_read, clock, spacing_s=0.001, silence_s=5)
     enc = Channel("encoder", lambda: clock(), clock, period_s=0.005)
     sampler = Sampler({"force_N": force, "crosshead_mm": enc}).start()
     got = []

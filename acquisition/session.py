@@ -1,0 +1,154 @@
+"""The rig as a procedure sees it: the real drivers over the configured ports.
+
+:class:`DriverRig` implements :class:`acquisition.procedure.RigIO` with
+:class:`rig.loadcell.LoadCell` (streaming ``MSV?0``, stamped on arrival),
+:class:`rig.encoder.CrossheadEncoder` and :class:`rig.furnace.Furnace` with its
+:class:`rig.furnace.TemperatureController`. The same class serves the virtual rig: it then
+talks to the virtual devices' pseudo-terminals through the same drivers, and the optional
+``virtual`` handle lets the procedure start the crosshead and read the post-test
+measurements the way an operator would.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+from acquisition.sampler import Channel
+from flowcurve.errors import DeviceError
+from rig.codecs import aed
+
+# Wall-clock seconds a device may stay silent before the test stops (the drivers' own
+# time-outs and retries come first; this catches a read that hangs or returns nothing).
+SILENCE_S = {"loadcell": 1.5, "encoder": 1.5, "furnace": 3.0}
+ENCODER_PERIOD_S = 0.02  # wall-clock polling period of the encoder box
+FURNACE_PERIOD_S = 0.25  # of the furnace module (DCON replies take up to 0.3 s)
+STREAM_BLOCK = 20  # load-cell frames per read call at most
+
+
+class DriverRig:
+    """A configured rig (``rig.config.RigConfig``) opened for one test.
+
+    time_scale: test seconds per wall second — 1 on the real rig; the virtual rig's
+        ``time_scale`` when its model runs faster (the record's ``time_s`` is then model time).
+    virtual: a :class:`rig.virtual.rig.VirtualRig` to drive (start/stop the crosshead,
+        post-test measurements); None on the real rig.
+    stream: read the load cell as a ``MSV?0`` stream (True) or poll ``MSV?`` (False).
+    """
+
+    def __init__(self, config, *, time_scale: float = 1.0, virtual=None, stream: bool = True):
+        self.config = config
+        self.time_scale = float(time_scale)
+        self.virtual = virtual
+        self.stream = stream
+        self.can_drive = virtual is not None
+        self.has_furnace = config.furnace is not None
+        self.max_temperature_C = config.furnace.max_temperature_C if self.has_furnace else float("inf")
+        self.frame_stiffness_N_per_um = config.frame.stiffness_N_per_um
+        self.max_force_N = config.frame.max_force_N
+        rate = aed.ICR_RATES_PER_S[config.loadcell.rate_code]
+        self.loadcell_period_s = 1.0 / rate
+        self.loadcell = config.loadcell.create()
+        self.encoder = config.encoder.create()
+        self.furnace = config.furnace.create() if self.has_furnace else None
+        self._controller = None
+        self._clock: Callable[[], float] = lambda: time.monotonic() * self.time_scale
+
+    # life cycle ------------------------------------------------------------------------------
+    def open(self) -> "DriverRig":
+        try:
+            self.loadcell.open()
+            self.loadcell.configure(**self.config.loadcell.settings)
+            self.encoder.open()
+            self.encoder.read_counts()  # answers at all?
+            if self.furnace is not None:
+                self.furnace.open()
+                self.furnace.heater_off()
+        except BaseException:
+            self.close()
+            raise
+        return self
+
+    def close(self) -> None:
+        """Stop the stream, heater off (Furnace.close does it), release every port."""
+        for dev in (self.loadcell, self.encoder, self.furnace):
+            if dev is None:
+                continue
+            try:
+                dev.close()
+            except Exception:  # closing must go on to the next device
+                pass
+
+    def __enter__(self) -> "DriverRig":
+        return self.open()
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # channels --------------------------------------------------------------------------------
+    def channels(self, clock: Callable[[], float], to_clock: Callable[[float], float]) -> dict[str, Channel]:
+        """One reading thread per device; force first (the reference clock)."""
+        cell = self.loadcell
+        if self.stream:
+            started = []
+
+            def read_force():
+                if not started:
+                    cell.start_stream()
+                    started.append(True)
+                return [(to_clock(s.t_monotonic_s), s.force_N) for s in cell.read_stream(STREAM_BLOCK, 0.1)]
+        else:
+
+            def read_force():
+                s = cell.read()
+                return [(to_clock(s.t_monotonic_s), s.force_N)]
+
+        chans = {
+            "force_N": Channel("loadcell", read_force, clock, silence_s=SILENCE_S["loadcell"]),
+            "crosshead_mm": Channel("encoder", self.encoder.position_mm, clock, period_s=ENCODER_PERIOD_S, silence_s=SILENCE_S["encoder"]),
+        }
+        if self.furnace is not None:
+            chans["temperature_C"] = Channel("furnace", self.read_temperature_C, clock, period_s=FURNACE_PERIOD_S, silence_s=SILENCE_S["furnace"])
+        return chans
+
+    # furnace ---------------------------------------------------------------------------------
+    def read_temperature_C(self) -> float:
+        return self.furnace.temperature_C()
+
+    def hold_temperature(self, setpoint_C: float) -> float:
+        """One step of the furnace's TemperatureController on the test clock; the reading."""
+        if self._controller is None or self._controller.setpoint_C != setpoint_C:
+            self._controller = self.config.furnace.controller(self.furnace, setpoint_C, clock=self._clock)
+        return float(self._controller.step()["temperature_C"])
+
+    def set_clock(self, clock: Callable[[], float]) -> None:
+        """The test clock (test seconds): the controller's ramp and period run on it."""
+        self._clock = clock
+
+    def heater_off(self) -> None:
+        if self.furnace is not None and not self.furnace.heater_off():
+            raise DeviceError(self.furnace.name, "heater-off not acknowledged")
+
+    def arm_watchdog(self) -> None:
+        self.furnace.arm_watchdog(self.config.furnace.watchdog_timeout_s)
+
+    def host_ok(self) -> None:
+        if self.furnace is not None:
+            self.furnace.host_ok()
+
+    # motion ----------------------------------------------------------------------------------
+    def tare(self) -> None:
+        """Load cell to net zero and the crosshead counter to zero."""
+        self.loadcell.tare()
+        self.encoder.zero()
+
+    def start_crosshead(self, speed_mm_per_s: float, direction: int) -> None:
+        self.virtual.start_crosshead()
+
+    def stop_crosshead(self) -> None:
+        self.virtual.stop_crosshead()
+
+    def post_test_measurements(self) -> dict[str, float] | None:
+        if self.virtual is None:
+            return None
+        return {k: float(v) for k, v in self.virtual.post_test_measurements().items()}
