@@ -12,6 +12,7 @@ measurements the way an operator would.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from typing import Callable
 
 from acquisition.sampler import Channel
@@ -152,3 +153,36 @@ class DriverRig:
         if self.virtual is None:
             return None
         return {k: float(v) for k, v in self.virtual.post_test_measurements().items()}
+
+
+@dataclass
+class VirtualRun:
+    """A test recorded on the virtual rig, with the truth it was generated from."""
+
+    outcome: object  # acquisition.procedure.Outcome
+    material: object  # rig.materials.Material
+    strain_rate_per_s: float  # the model's nominal rate (v / l0 or v / h0)
+    temperature_C: float  # furnace temperature while loading
+    friction_mu: float
+
+
+def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None) -> VirtualRun:
+    """Run ``spec`` on an in-process virtual rig through the real drivers over its ptys.
+
+    The virtual specimen takes ``spec.geometry_mm``; ``rig_setup(virtual_rig)`` may inject
+    faults or change the model before the test starts.
+    """
+    from acquisition.procedure import Procedure
+    from rig.physics import Specimen
+    from rig.virtual.rig import VirtualRig
+
+    g = spec.geometry_mm
+    specimen = Specimen.tension(g["d0_mm"], g["l0_mm"]) if spec.test == "tension" else Specimen.compression(g["d0_mm"], g["h0_mm"])
+    with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu) as vr:
+        spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}")
+        if rig_setup is not None:
+            rig_setup(vr)
+        with DriverRig(vr.config(), time_scale=time_scale, virtual=vr, stream=stream) as rig:
+            outcome = Procedure(rig, spec, path, view=view, interactive=interactive).run()
+        model = vr.model
+        return VirtualRun(outcome, model.material, model.nominal_strain_rate_per_s, model.temperature_C, friction_mu)

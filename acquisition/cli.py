@@ -1,0 +1,233 @@
+"""``flowcurve run``, ``demo``, ``recover`` and ``annotate``.
+
+``run tension|compression`` runs one test on the configured rig (``--config rig.toml``) or,
+without a configuration, on the virtual rig in this process; ``demo`` runs a virtual
+tension and a virtual compression test and identifies both; ``recover`` completes the
+header of a record cut short; ``annotate`` adds post-test measurements to a record.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import math
+import sys
+from pathlib import Path
+
+from acquisition.live import LiveView
+from acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, Procedure, ProcedureError, StopCriteria, TestSpec
+from acquisition.record import amend_record, read_record, recover_record
+from flowcurve.errors import FlowcurveError, RecordError
+
+DEFAULT_VIRTUAL_MATERIAL = "steel45"
+
+
+def register(subparsers) -> None:
+    run = subparsers.add_parser("run", help="run a tension or compression test and record it", description="Run a test on the rig (--config) or on the virtual rig (no --config), record it crash-safely, show it live.")
+    run.add_argument("test", choices=tuple(TEST_GEOMETRY), help="test type")
+    run.add_argument("--config", type=Path, help="rig configuration (TOML); without it the virtual rig runs in this process")
+    run.add_argument("--out", type=Path, help="record file (default records/<test>-<date-time>.csv)")
+    run.add_argument("--material", help="material name (virtual rig: also the virtual specimen's material, default steel45)")
+    run.add_argument("--operator", default=None, help="operator name")
+    run.add_argument("--specimen-id", default=None, help="specimen identifier")
+    run.add_argument("--temperature", type=float, metavar="C", help="heat to this set-point, C, and soak before loading")
+    run.add_argument("--soak", type=float, default=60.0, metavar="S", help="soak time at the set-point, test seconds (default 60)")
+    run.add_argument("--speed", type=float, metavar="MM_PER_S", help="crosshead speed, mm/s (default 0.01; the demo-like 0.05 on the virtual rig)")
+    run.add_argument("--d0", type=float, metavar="MM", help="specimen diameter, mm")
+    run.add_argument("--l0", type=float, metavar="MM", help="gauge length (tension), mm")
+    run.add_argument("--h0", type=float, metavar="MM", help="height (compression), mm")
+    run.add_argument("--target", type=float, metavar="MM", help="stop at this crosshead displacement, mm")
+    run.add_argument("--force-limit", type=float, metavar="N", help="stop at this force, N (default 98 %% of the frame capacity)")
+    run.add_argument("--post", action="append", default=[], metavar="KEY=VALUE", help="post-test measurement, e.g. post.hk_mm=3.55 (repeatable)")
+    run.add_argument("--quiet", action="store_true", help="no live view, no prompts (for scripts)")
+    run.add_argument("--time-scale", type=float, default=None, metavar="X", help="virtual rig only: model seconds per wall second (default 15)")
+    run.add_argument("--poll", action="store_true", help="poll the load cell (MSV?) instead of streaming (MSV?0)")
+    run.set_defaults(func=cmd_run)
+
+    demo = subparsers.add_parser("demo", help="a virtual tension and compression test, recorded and identified", description="Run a virtual tension test and a virtual compression test (time-scaled), identify both, and compare with the virtual material's true constants.")
+    demo.add_argument("--out", type=Path, default=Path("flowcurve-demo"), help="output folder (default ./flowcurve-demo)")
+    demo.add_argument("--material", default=DEFAULT_VIRTUAL_MATERIAL, help="virtual material (default steel45)")
+    demo.add_argument("--quiet", action="store_true", help="only the summary")
+    demo.set_defaults(func=cmd_demo)
+
+    rec = subparsers.add_parser("recover", help="complete the header of a record cut short (power cut, kill -9)")
+    rec.add_argument("record", type=Path)
+    rec.set_defaults(func=cmd_recover)
+
+    ann = subparsers.add_parser("annotate", help="add or change metadata of a record (post-test measurements)")
+    ann.add_argument("record", type=Path)
+    ann.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", required=True, help="e.g. --set post.hk_mm=3.55 (repeatable; empty value removes the key)")
+    ann.set_defaults(func=cmd_annotate)
+
+
+# -- helpers ----------------------------------------------------------------------------------
+
+
+def parse_assignments(items: list[str], *, numeric_prefix: str = "post.") -> dict[str, str | None]:
+    """``["post.hk_mm=3.55", "operator=Ivanov"]`` → dict; post.* values must be numbers."""
+    out: dict[str, str | None] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        key, value = key.strip(), value.strip()
+        if not sep or not key or " " in key or ":" in key:
+            raise FlowcurveError(f"'{item}': give KEY=VALUE, e.g. post.hk_mm=3.55")
+        if key in ("flowcurve-record", "status"):
+            raise FlowcurveError(f"'{key}' is managed by flowcurve and cannot be set")
+        if value and key.startswith(numeric_prefix):
+            try:
+                number = float(value)
+            except ValueError:
+                raise FlowcurveError(f"'{item}': {key} must be a number (mm, mm2)") from None
+            if not (math.isfinite(number) and number > 0):
+                raise FlowcurveError(f"'{item}': {key} must be > 0")
+        out[key] = value or None
+    return out
+
+
+def _positive(name: str, value: float | None) -> None:
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise FlowcurveError(f"--{name} must be a positive number, got {value}")
+
+
+def _interactive(args) -> bool:
+    return not args.quiet and sys.stdin.isatty()
+
+
+def _ask(prompt: str, default=None, cast=str):
+    text = input(f"{prompt}{f' [{default}]' if default is not None else ''}: ").strip()
+    if not text:
+        return default
+    try:
+        return cast(text)
+    except ValueError:
+        raise FlowcurveError(f"{prompt}: not a number: {text!r}") from None
+
+
+def build_spec(args, geometry_default: dict[str, float] | None = None) -> TestSpec:
+    """The TestSpec from options (and prompts when interactive) — geometry in mm."""
+    for name in ("d0", "l0", "h0", "speed", "target", "force_limit", "soak"):
+        _positive(name.replace("_", "-"), getattr(args, name, None))
+    interactive = _interactive(args)
+    geometry: dict[str, float] = {}
+    for key in TEST_GEOMETRY[args.test]:
+        opt = key.split("_")[0]
+        value = getattr(args, opt)
+        if value is None and geometry_default:
+            value = geometry_default.get(key)
+        if value is None and interactive:
+            value = _ask(f"specimen {opt} [mm]", None, float)
+        if value is None:
+            raise ProcedureError(f"specimen geometry missing: give --{opt} (mm)")
+        geometry[key] = float(value)
+    material = args.material or (_ask("material", "unknown") if interactive else "unknown")
+    operator = args.operator if args.operator is not None else (_ask("operator", "") if interactive else "")
+    post = {k: float(v) for k, v in parse_assignments(args.post).items() if v is not None and k.startswith("post.")}
+    return TestSpec(
+        test=args.test,
+        material=material or "unknown",
+        operator=operator or "",
+        specimen_id=args.specimen_id or "",
+        geometry_mm=geometry,
+        temperature_C=args.temperature,
+        speed_mm_per_s=args.speed,
+        soak_s=args.soak,
+        stop=StopCriteria(target_displacement_mm=args.target, force_limit_N=args.force_limit),
+        post=post,
+    )
+
+
+def default_out(test: str) -> Path:
+    return Path("records") / f"{test}-{_dt.datetime.now():%Y%m%d-%H%M%S}.csv"
+
+
+def report_outcome(out: Outcome, view: LiveView) -> int:
+    """Print where the record went and why it ended; the exit code."""
+    line = f"record: {out.path} ({out.samples} samples, {out.duration_s:.1f} s test time, max force {out.max_force_N / 1000:.2f} kN) — {out.status}: {out.reason}"
+    print(line)
+    if out.post:
+        print("post-test measurements: " + ", ".join(f"{k}={v:g}" for k, v in out.post.items()))
+    elif out.status == "complete":
+        print(f"no post-test measurements yet: flowcurve annotate {out.path} --set {POST_KEYS[read_record(out.path).test][0]}=...")
+    if out.error is not None:
+        print(f"flowcurve: error: {out.error} (the record keeps everything up to the fault)", file=sys.stderr)
+        return out.error.exit_code
+    return 0 if out.status == "complete" else 130
+
+
+# -- commands ---------------------------------------------------------------------------------
+
+
+def cmd_run(args) -> int:
+    view = LiveView(quiet=args.quiet)
+    out_path = args.out or default_out(args.test)
+    if args.config is not None:
+        return _run_configured(args, view, out_path)
+    return _run_virtual(args, view, out_path)
+
+
+def _run_configured(args, view: LiveView, out_path: Path) -> int:
+    from acquisition.session import DriverRig
+    from rig.config import load_config
+
+    config = load_config(args.config)
+    scale = args.time_scale or 1.0
+    _positive("time-scale", scale)
+    if args.speed is None:
+        args.speed = 0.01
+    spec = build_spec(args)
+    with DriverRig(config, time_scale=scale, stream=not args.poll) as rig:
+        proc = Procedure(rig, spec, out_path, view=view, interactive=_interactive(args))
+        return report_outcome(proc.run(), view)
+
+
+def _run_virtual(args, view: LiveView, out_path: Path) -> int:
+    from acquisition.session import run_virtual_test
+    from rig.materials import get_material
+    from rig.physics import Specimen
+
+    scale = args.time_scale or 15.0
+    _positive("time-scale", scale)
+    if args.speed is None:
+        args.speed = 0.05
+    name = args.material or DEFAULT_VIRTUAL_MATERIAL
+    try:
+        get_material(name)
+    except FlowcurveError:
+        view.say(f"(virtual rig: no virtual material '{name}', using {DEFAULT_VIRTUAL_MATERIAL})")
+        name = DEFAULT_VIRTUAL_MATERIAL
+    base = Specimen.tension() if args.test == "tension" else Specimen.compression()
+    geometry = {"d0_mm": base.d0_mm, "l0_mm" if args.test == "tension" else "h0_mm": base.length0_mm}
+    args.material = args.material or name
+    spec = build_spec(args, geometry)
+    run = run_virtual_test(spec, out_path, material=name, time_scale=scale, view=view, interactive=_interactive(args), stream=not args.poll)
+    return report_outcome(run.outcome, view)
+
+
+def cmd_recover(args) -> int:
+    before = read_record(args.record)
+    if not before.truncated and before.meta.get("status") != "recording":
+        print(f"{args.record}: complete already (status {before.meta.get('status', '?')}), nothing to recover")
+        return 0
+    path, rec = recover_record(args.record)
+    last = float(rec.data["time_s"].iloc[-1])
+    print(f"{path}: recovered — {len(rec.data)} samples up to {last:.1f} s, {len(rec.events)} events; status {rec.meta['status']} ({rec.meta.get('abort_reason', '')})")
+    return 0
+
+
+def cmd_annotate(args) -> int:
+    updates = parse_assignments(args.set)
+    read_record(args.record)  # a clear error before touching a file that is not a record
+    amend_record(args.record, updates)
+    rec = read_record(args.record)
+    for key, value in updates.items():
+        print(f"{key} = {rec.meta.get(key, '(removed)')}")
+    missing = [k for k in POST_KEYS.get(rec.meta.get("test", ""), ()) if k not in rec.meta]
+    if missing:
+        print(f"still missing: {', '.join(missing)}")
+    return 0
+
+
+def cmd_demo(args) -> int:
+    from acquisition.demo import run_demo
+
+    return run_demo(args.out, material=args.material, quiet=args.quiet)

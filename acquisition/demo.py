@@ -1,0 +1,97 @@
+"""``flowcurve demo``: a virtual tension and a virtual compression test, recorded and identified.
+
+Both tests run on the virtual rig through the real drivers over pseudo-terminals, are
+written as flowcurve records, identified (``identification.identify``) and plotted
+(``reports.plots``); the identified hardening is compared with the virtual material's
+Johnson–Cook curve at the test's rate and temperature — the truth the rig was built from.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from acquisition.live import LiveView
+from acquisition.procedure import TestSpec
+from acquisition.record import read_record
+from acquisition.session import run_virtual_test
+
+DEMO_TIME_SCALE = 15.0  # the virtual load cell sends 100 values per wall second: enough
+DEMO_SPEED_MM_PER_S = 0.05  # samples on the elastic line at 0.75 mm of crosshead per wall second
+
+
+def jc_static(eps_p, A_MPa: float, B_MPa: float, n: float):
+    """# (2.19) static Johnson–Cook hardening A + B·εp^n, MPa."""
+    return A_MPa + B_MPa * np.power(np.maximum(eps_p, 0.0), n)
+
+
+def hardening_deviation_pct(fit: dict, material, strain_rate_per_s: float, temperature_C: float, strain_range) -> float:
+    """Max |fitted / true − 1| in % of a JC fit (A_MPa, B_MPa, n) over ``strain_range``."""
+    lo, hi = (float(v) for v in strain_range)
+    eps = np.linspace(max(lo, 1e-4), hi, 200)
+    fitted = jc_static(eps, fit["A_MPa"], fit["B_MPa"], fit["n"])
+    truth = material.flow_stress(eps, strain_rate_per_s, temperature_C)
+    return float(100.0 * np.max(np.abs(fitted / truth - 1.0)))
+
+
+def true_constants(material, strain_rate_per_s: float, temperature_C: float) -> dict[str, float]:
+    """The virtual material's static JC constants at the test's rate and temperature."""
+    factor = float(material.rate_temperature_factor(strain_rate_per_s, temperature_C))
+    return {"A_MPa": material.A_MPa * factor, "B_MPa": material.B_MPa * factor, "n": material.n}
+
+
+def demo_specs(material_name: str) -> list[TestSpec]:
+    from rig.physics import Specimen
+
+    t, c = Specimen.tension(), Specimen.compression()
+    return [
+        TestSpec("tension", material=material_name, operator="demo", specimen_id="demo-T1", geometry_mm={"d0_mm": t.d0_mm, "l0_mm": t.length0_mm}, speed_mm_per_s=DEMO_SPEED_MM_PER_S),
+        TestSpec("compression", material=material_name, operator="demo", specimen_id="demo-C1", geometry_mm={"d0_mm": c.d0_mm, "h0_mm": c.length0_mm}, speed_mm_per_s=DEMO_SPEED_MM_PER_S),
+    ]
+
+
+def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_scale: float = DEMO_TIME_SCALE) -> int:
+    from identification.identify import identify
+    from reports.plots import add_plots
+
+    out = Path(out)
+    view = LiveView(quiet=quiet)
+    say = print
+    t_start = time.monotonic()
+    say(f"flowcurve demo — virtual rig ({material}), real drivers over pseudo-terminals, time scale {time_scale:g}")
+    for spec in demo_specs(material):
+        record_path = out / "records" / f"{spec.test}.csv"
+        t0 = time.monotonic()
+        run = run_virtual_test(spec, record_path, material=material, time_scale=time_scale, view=view)
+        o = run.outcome
+        say(f"\n{spec.test}: recorded {o.samples} samples ({o.duration_s:.0f} s of test in {time.monotonic() - t0:.1f} s) → {o.path}; {o.reason}")
+        if o.status != "complete":
+            say(f"  the test did not complete ({o.reason}); not identified")
+            return 1
+        ident = identify(read_record(o.path))
+        add_plots(ident)
+        folder = ident.write(out / "results" / o.path.stem)
+        res = ident.result
+        truth = true_constants(run.material, run.strain_rate_per_s, run.temperature_C)
+        hard = res["hardening"]
+        say(f"  results → {folder}/ (result.json, true_curve.csv, {', '.join(sorted(ident.plots))} plots)")
+        say(f"  strain rate {run.strain_rate_per_s:.2e} /s, {run.temperature_C:.0f} C; virtual material's static JC there: A {truth['A_MPa']:.1f} MPa, B {truth['B_MPa']:.1f} MPa, n {truth['n']:.3f}")
+        say(f"  identified ({hard['law']}, {hard.get('correction', hard['method'])}): A {hard['A_MPa']:.1f} MPa, B {hard['B_MPa']:.1f} MPa, n {hard['n']:.3f}; "
+            f"max deviation from the true curve over εp {hard['strain_range'][0]:.3f}…{hard['strain_range'][1]:.3f}: "
+            f"{hardening_deviation_pct(hard, run.material, run.strain_rate_per_s, run.temperature_C, hard['strain_range']):.1f} %")
+        if spec.test == "tension":
+            say(f"  E {res['E_MPa'] / 1000:.0f} GPa (apparent; true {run.material.E_MPa / 1000:.0f}), Rp0.2 {res['Rp02_MPa']:.0f} MPa, Rm {res['Rm_MPa']:.0f} MPa, "
+                f"A {res['A_pct']:.1f} %, Z {res['Z_pct']:.1f} %, fracture true strain {res['fracture_true_strain']:.3f}")
+        else:
+            say(f"  friction μ {res['friction_mu']:.3f} ({res.get('friction_method', '')}; true {run.friction_mu:g})")
+            reached = float(read_record(o.path).meta.get("post.hk_mm", "nan"))
+            for name, fit in (res.get("hardening_by_correction") or {}).items():
+                if isinstance(fit, dict) and "A_MPa" in fit:
+                    dev = hardening_deviation_pct(fit, run.material, run.strain_rate_per_s, run.temperature_C, fit["strain_range"])
+                    say(f"    correction {name:8s}: A {fit['A_MPa']:.1f}, B {fit['B_MPa']:.1f}, n {fit['n']:.3f}; max deviation {dev:.1f} % over εp up to {fit['strain_range'][1]:.2f}")
+            say(f"  final height {reached:.3f} mm")
+    say(f"\ndone in {time.monotonic() - t_start:.1f} s. Next: flowcurve identify {out / 'records' / 'tension.csv'} --out results/; "
+        f"'flowcurve run tension --help' for a test of your own.")
+    return 0
