@@ -23,7 +23,8 @@ from rig.codecs import aed
 # time-outs and retries come first; this catches a read that hangs or returns nothing).
 SILENCE_S = {"loadcell": 1.5, "encoder": 1.5, "furnace": 3.0}
 ENCODER_PERIOD_S = 0.02  # wall-clock polling period of the encoder box
-FURNACE_PERIOD_S = 0.25  # of the furnace module (DCON replies take up to 0.3 s)
+FURNACE_PERIOD_S = 0.25  # of the furnace module (DCON replies take up to 0.3 s) ...
+FURNACE_MIN_PERIOD_S = 0.02  # ... shorter on a time-scaled virtual rig: 4 steps per control period
 STREAM_BLOCK = 20  # load-cell frames per read call at most
 
 
@@ -64,6 +65,7 @@ class DriverRig:
             self.encoder.read_counts()  # answers at all?
             if self.furnace is not None:
                 self.furnace.open()
+                self.furnace.clear_watchdog()  # a watchdog that tripped earlier blocks the outputs
                 self.furnace.heater_off()
         except BaseException:
             self.close()
@@ -71,7 +73,17 @@ class DriverRig:
         return self
 
     def close(self) -> None:
-        """Stop the stream, heater off (Furnace.close does it), release every port."""
+        """Stop the stream, heater off (Furnace.close does it), release every port.
+
+        The furnace's host watchdog is disarmed only after an acknowledged heater-off; if
+        that fails it stays armed and switches the heater off by itself.
+        """
+        if self.furnace is not None and self.furnace.transport.is_open:
+            try:
+                if self.furnace.heater_off() and self.furnace.watchdog_armed:
+                    self.furnace.disarm_watchdog()
+            except Exception:  # the watchdog stays armed: the module switches off by itself
+                pass
         for dev in (self.loadcell, self.encoder, self.furnace):
             if dev is None:
                 continue
@@ -109,7 +121,9 @@ class DriverRig:
             "crosshead_mm": Channel("encoder", self.encoder.position_mm, clock, period_s=ENCODER_PERIOD_S, silence_s=SILENCE_S["encoder"]),
         }
         if self.furnace is not None:
-            chans["temperature_C"] = Channel("furnace", self.read_temperature_C, clock, period_s=FURNACE_PERIOD_S, silence_s=SILENCE_S["furnace"])
+            per_control = self.config.furnace.control_period_s / 4.0 / self.time_scale
+            period = max(FURNACE_MIN_PERIOD_S, min(FURNACE_PERIOD_S, per_control))
+            chans["temperature_C"] = Channel("furnace", self.read_temperature_C, clock, period_s=period, silence_s=SILENCE_S["furnace"])
         return chans
 
     # furnace ---------------------------------------------------------------------------------
@@ -166,23 +180,26 @@ class VirtualRun:
     friction_mu: float
 
 
-def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None) -> VirtualRun:
+def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None) -> VirtualRun:
     """Run ``spec`` on an in-process virtual rig through the real drivers over its ptys.
 
     The virtual specimen takes ``spec.geometry_mm``; ``rig_setup(virtual_rig)`` may inject
-    faults or change the model before the test starts.
+    faults or change the model before the test starts; ``config_overrides`` go to
+    ``rig.config.virtual_config`` (e.g. ``furnace_max_temperature_C=500``).
     """
     from acquisition.procedure import Procedure
+    from rig.config import virtual_config
     from rig.physics import Specimen
     from rig.virtual.rig import VirtualRig
 
     g = spec.geometry_mm
     specimen = Specimen.tension(g["d0_mm"], g["l0_mm"]) if spec.test == "tension" else Specimen.compression(g["d0_mm"], g["h0_mm"])
-    with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu) as vr:
+    with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu, temperature_C=initial_temperature_C) as vr:
         spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}")
         if rig_setup is not None:
             rig_setup(vr)
-        with DriverRig(vr.config(), time_scale=time_scale, virtual=vr, stream=stream) as rig:
+        config = virtual_config(**{**vr.config_kwargs(), **(config_overrides or {})})
+        with DriverRig(config, time_scale=time_scale, virtual=vr, stream=stream) as rig:
             outcome = Procedure(rig, spec, path, view=view, interactive=interactive).run()
         model = vr.model
         return VirtualRun(outcome, model.material, model.nominal_strain_rate_per_s, model.temperature_C, friction_mu)
