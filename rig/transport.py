@@ -20,13 +20,20 @@ from typing import Callable
 
 import serial
 
+try:
+    from termios import error as TermiosError  # a pty whose other end vanished
+except ImportError:  # not on POSIX
+    class TermiosError(Exception):
+        pass
+
 from flowcurve.errors import DeviceError
 from rig.codecs import dcon
 
 # Ports currently open, by URL → the owning transport. One owner per port.
 _OWNERS: dict[str, "SerialTransport"] = {}
 _OWNERS_LOCK = threading.Lock()
-_UNSHARED_SCHEMES = ("loop://",)  # every loop:// open is a port of its own
+_UNSHARED_SCHEMES = ("loop://",)
+READ_SLICE_S = 0.01  # the port's own read time-out; exchanges loop on their own deadline  # every loop:// open is a port of its own
 
 
 def _owned_key(url: str, opener: Callable | None) -> object | None:
@@ -67,7 +74,9 @@ class SerialTransport:
             if owner is not None and owner is not self:
                 raise DeviceError(self.name, f"port {self.url} is already open by '{owner.name}'")
             try:
-                self._port = self._opener(self.url, timeout=self.timeout_s, **self.settings)
+                # a short fixed read slice: deadlines are kept here, because changing a
+                # pyserial port's timeout re-configures the line (tcsetattr) every time
+                self._port = self._opener(self.url, timeout=READ_SLICE_S, **self.settings)
             except (OSError, serial.SerialException, ValueError) as exc:
                 raise DeviceError(self.name, f"cannot open port {self.url}: {_reason(exc)}") from None
             if key is not None:
@@ -112,7 +121,7 @@ class SerialTransport:
         try:
             port.write(data)
             port.flush()
-        except (OSError, serial.SerialException):
+        except (OSError, serial.SerialException, TermiosError):
             raise self._disappeared() from None
 
     def discard_input(self) -> None:
@@ -130,10 +139,9 @@ class SerialTransport:
         if remaining <= 0:
             return b""
         try:
-            port.timeout = remaining
             waiting = port.in_waiting
             return port.read(max(size, min(waiting, 4096)) if waiting else size)
-        except (OSError, serial.SerialException, TypeError):
+        except (OSError, serial.SerialException, TypeError, TermiosError):
             # TypeError: pyserial's posix read on a vanished file descriptor
             raise self._disappeared() from None
 
@@ -217,8 +225,10 @@ class SerialTransport:
 
     # -- errors -----------------------------------------------------------------------
     def _timeout(self, what: str, timeout: float, got: bytes) -> DeviceError:
-        partial = f" (only {len(got)} bytes: {got[:40]!r})" if got else ""
-        return DeviceError(self.name, f"no answer to {what} within {timeout:g} s{partial}")
+        if got:
+            return DeviceError(self.name, f"incomplete answer to {what} within {timeout:g} s "
+                                          f"({len(got)} bytes: {got[:40]!r})")
+        return DeviceError(self.name, f"no answer to {what} within {timeout:g} s")
 
     def _disappeared(self) -> DeviceError:
         self.close()

@@ -79,6 +79,7 @@ class FakePort:
 
     def opener(self, url, **kwargs):
         self.open_kwargs = dict(kwargs, url=url)
+        self.timeout = kwargs.get("timeout", self.timeout)
         return self
 
     def assert_done(self) -> None:

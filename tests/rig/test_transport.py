@@ -40,7 +40,7 @@ def test_timeout_names_device_and_command(fake_port):
 
 def test_partial_reply_is_reported(fake_port):
     fake = fake_port([(b"Q", b"+10")])
-    with pytest.raises(DeviceError, match=r"only 3 bytes"):
+    with pytest.raises(DeviceError, match=r"^load cell: incomplete answer to 'Q' within 0.05 s \(3 bytes: b'\+10'\)$"):
         make(fake).exchange(b"Q", length=10)
 
 

@@ -1,0 +1,168 @@
+"""``flowcurve rig check`` and ``flowcurve rig virtual``.
+
+``rig check --config rig.toml`` talks to each configured device and prints its identity,
+settings and one reading, or a diagnosis (port missing, silent — wrong baud, parity or
+address?, garbled replies); exit code 0 when every device answered, 3 otherwise.
+``rig virtual`` starts the virtual rig on pseudo-terminals, prints each device's port and a
+configuration file written for it, and runs until Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from flowcurve.errors import DeviceError, FlowcurveError
+from rig.config import RigConfig, load_config, to_toml
+
+CHECK_FAILED = 3
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser("rig", help="check the rig's devices, or start the virtual rig",
+                                   description=__doc__.split("\n\n")[1])
+    sub = parser.add_subparsers(dest="rig_command", metavar="ACTION")
+    sub.required = True
+
+    check = sub.add_parser("check", help="talk to each device and diagnose what does not answer")
+    check.add_argument("--config", required=True, type=Path, help="rig configuration (TOML)")
+    check.set_defaults(func=run_check)
+
+    virtual = sub.add_parser("virtual", help="run the virtual rig on pseudo-terminals until Ctrl-C")
+    virtual.add_argument("--config", type=Path, default=None,
+                         help="write the configuration for the virtual rig's ports to this file "
+                              "(default: a file in a temporary folder)")
+    virtual.add_argument("--material", default="12Kh18N12M3TL", help="virtual specimen material")
+    virtual.add_argument("--test", choices=("tension", "compression"), default="tension")
+    virtual.add_argument("--temperature", type=float, default=None, metavar="C",
+                         help="initial furnace temperature, C (default: ambient)")
+    virtual.add_argument("--time-scale", type=float, default=1.0,
+                         help="model seconds per wall-clock second (default 1)")
+    virtual.add_argument("--checksum", action="store_true", help="DCON checksums on")
+    virtual.set_defaults(func=run_virtual)
+
+
+# -- rig check ------------------------------------------------------------------------
+def diagnose(exc: Exception, port: str) -> str:
+    """One line saying what a device failure most likely means."""
+    text = str(exc)
+    if "cannot open port" in text:
+        return f"port missing or busy: {port} ({text.split(': ', 2)[-1]}) — is it plugged in, is the name right?"
+    if "disappeared" in text:
+        return f"port {port} disappeared during the check — cable or USB adapter unplugged?"
+    if "no answer" in text:
+        return f"silent: {text.split(': ', 1)[-1]} — wrong baud rate, parity or address? powered?"
+    if "garbled" in text or "incomplete answer" in text:
+        return f"garbled replies: {text.split(': ', 1)[-1]} — wrong baud rate or parity, or another device on this port?"
+    return text.split(": ", 1)[-1] if isinstance(exc, DeviceError) else text
+
+
+def check_loadcell(section, out) -> None:
+    from rig.codecs import aed
+
+    with section.create() as cell:
+        idn = cell.identify()
+        out(f"  identity: {idn['manufacturer']} {idn['model']}, serial {idn['serial']}, firmware {idn['firmware']}")
+        s = cell.settings()
+        rate = aed.ICR_RATES_PER_S[s["rate_code"]] if 0 <= s["rate_code"] < 8 else float("nan")
+        cutoff = aed.ASF_CUTOFF_HZ.get(s["filter"])
+        out(f"  settings: {s['baud']} baud, parity {s['parity']}, COF{s['output_format']}, "
+            f"ICR{s['rate_code']} ({rate:g} values/s), ASF{s['filter']} "
+            f"({'off' if cutoff is None else f'{cutoff:g} Hz'})")
+        for key, want in (("output_format", section.output_format), ("rate_code", section.rate_code),
+                          ("filter", section.filter)):
+            if s[key] != want:
+                out(f"  note: device has {key} {s[key]}, the configuration says {want} "
+                    f"(set when a test starts)")
+        cell.fmt = aed.output_format(s["output_format"])  # read in the device's present format
+        sample = cell.read()
+        flag = "  OVERLOAD" if sample.overload else ""
+        out(f"  reading: {sample.force_N:.1f} N ({sample.counts} counts"
+            f"{'' if sample.status is None else f', status {sample.status:#04x}'}){flag}")
+
+
+def check_encoder(section, out) -> None:
+    with section.create() as enc:
+        cfg = enc.configuration()
+        out(f"  identity: module {enc.module_name()}, firmware {enc.firmware()}")
+        out(f"  settings: address {cfg.address:02X}, {cfg.baud} baud, checksum {'on' if cfg.checksum else 'off'}")
+        if cfg.checksum != section.checksum:
+            out(f"  note: module checksum {'on' if cfg.checksum else 'off'}, configuration says "
+                f"{'on' if section.checksum else 'off'}")
+        counts = enc.read_counts()
+        mm = counts / enc.counts_per_rev / enc.gear_ratio * enc.screw_lead_mm
+        out(f"  reading: {counts} counts = {mm:.3f} mm; Gray check {'ok' if enc.gray_check() else 'FAILED'}")
+
+
+def check_furnace(section, out) -> None:
+    with section.create() as fur:
+        cfg = fur.configuration()
+        out(f"  identity: module {fur.module_name()}, firmware {fur.firmware()}")
+        out(f"  settings: address {cfg.address:02X}, input type {cfg.thermocouple or f'{cfg.type_code:02X}'}, "
+            f"{cfg.baud} baud, checksum {'on' if cfg.checksum else 'off'}; max {section.max_temperature_C:g} C")
+        if cfg.thermocouple != "K":
+            out("  note: the module is not set for a type-K thermocouple")
+        status = fur.watchdog_status()
+        out(f"  reading: {fur.temperature_C():.1f} C; heater off; host watchdog status {status:02X}"
+            f"{' (timed out earlier)' if status & 0x04 else ''}")
+
+
+CHECKS = (("loadcell", "load cell", check_loadcell), ("encoder", "crosshead encoder", check_encoder),
+          ("furnace", "furnace", check_furnace))
+
+
+def check_rig(config: RigConfig, out=print) -> int:
+    """Check every configured device; returns how many failed."""
+    failed = 0
+    for key, label, check in CHECKS:
+        section = getattr(config, key)
+        if section is None:
+            out(f"{label}: not configured")
+            continue
+        out(f"{label} on {section.port}:")
+        try:
+            check(section, out)
+        except FlowcurveError as exc:
+            failed += 1
+            out(f"  FAILED: {diagnose(exc, section.port)}")
+        else:
+            out("  ok")
+    return failed
+
+
+def run_check(args) -> int:
+    config = load_config(args.config)
+    failed = check_rig(config)
+    if failed:
+        print(f"{failed} device(s) failed the check", file=sys.stderr)
+        return CHECK_FAILED
+    return 0
+
+
+# -- rig virtual ----------------------------------------------------------------------
+def run_virtual(args) -> int:
+    from rig.virtual.rig import VirtualRig  # the virtual-rig engineer's twins
+
+    if not (args.time_scale > 0 and math.isfinite(args.time_scale)):
+        raise FlowcurveError(f"--time-scale must be a positive number, got {args.time_scale}")
+    with VirtualRig(args.material, test=args.test, temperature_C=args.temperature,
+                    time_scale=args.time_scale, checksum=args.checksum) as rig:
+        path = args.config
+        if path is None:
+            path = Path(tempfile.mkdtemp(prefix="flowcurve-virtual-rig-")) / "rig.toml"
+        path.write_text(to_toml(rig.config()))
+        for name, port in rig.ports.items():
+            print(f"{name:9s} {port}")
+        print(f"configuration: {path}")
+        print(f"try: flowcurve rig check --config {path}")
+        try:  # Ctrl-C may come as soon as the line below is out
+            print("running; Ctrl-C stops", flush=True)
+            while True:
+                time.sleep(0.5)
+        except KeyboardInterrupt:
+            print("virtual rig stopped")
+    return 0

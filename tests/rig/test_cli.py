@@ -1,0 +1,111 @@
+"""``flowcurve rig check`` diagnoses per device; ``flowcurve rig virtual`` serves a config."""
+
+import os
+import pty
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from flowcurve.cli import main
+from rig.config import load_config, to_toml, virtual_config
+
+
+@pytest.fixture
+def silent_pty():
+    """A serial port with nothing behind it: every command meets silence."""
+    master, slave = pty.openpty()
+    yield os.ttyname(slave)
+    os.close(master)
+    os.close(slave)
+
+
+def test_check_diagnoses_missing_and_silent_ports(tmp_path, silent_pty, capsys):
+    ports = {"loadcell": str(tmp_path / "ttyUSB7"), "encoder": silent_pty}
+    path = tmp_path / "rig.toml"
+    path.write_text(to_toml(virtual_config(ports, loadcell_timeout_s=0.05, encoder_timeout_s=0.05)))
+    code = main(["rig", "check", "--config", str(path)])
+    out = capsys.readouterr()
+    assert code == 3
+    assert f"load cell on {tmp_path / 'ttyUSB7'}:\n  FAILED: port missing or busy" in out.out
+    assert "crosshead encoder on" in out.out
+    assert "FAILED: silent: no answer to '$022' within 0.05 s — wrong baud rate, parity or address?" in out.out
+    assert "furnace: not configured" in out.out
+    assert "2 device(s) failed the check" in out.err
+
+
+def test_check_with_a_bad_config_is_one_line(tmp_path, capsys):
+    path = tmp_path / "rig.toml"
+    path.write_text("[loadcell]\nport = 3\n[encoder]\nport = 'x'\n[frame]\n")
+    assert main(["rig", "check", "--config", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "[loadcell] port: must be a string" in err
+
+
+virtual = pytest.importorskip("rig.virtual.rig")
+
+
+def test_check_passes_on_the_virtual_rig(tmp_path, capsys):
+    with virtual.VirtualRig() as rig:
+        path = tmp_path / "rig.toml"
+        path.write_text(to_toml(rig.config()))
+        assert main(["rig", "check", "--config", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("  ok\n") == 3
+    assert "identity: HBM AED104" in out and "Gray check ok" in out and "input type K" in out
+
+
+def test_check_finds_a_device_on_the_wrong_port(tmp_path, capsys):
+    with virtual.VirtualRig() as rig:
+        # cables swapped: the furnace module sits where the load cell should be
+        ports = {"loadcell": rig.ports["furnace"], "encoder": rig.ports["encoder"]}
+        path = tmp_path / "rig.toml"
+        path.write_text(to_toml(virtual_config(ports, loadcell_timeout_s=0.1)))
+        assert main(["rig", "check", "--config", str(path)]) == 3
+    out = capsys.readouterr().out
+    # a DCON module is silent to AED syntax; the encoder is still fine
+    assert "FAILED: silent: no answer to 'IDN?' within 0.1 s" in out
+    assert "Gray check ok" in out
+
+
+def test_check_reports_garbled_replies_and_an_open_thermocouple(tmp_path, capsys):
+    with virtual.VirtualRig() as rig:
+        rig.inject("loadcell", "garble")
+        rig.inject("furnace", "open_thermocouple")
+        path = tmp_path / "rig.toml"
+        path.write_text(to_toml(rig.config()))
+        assert main(["rig", "check", "--config", str(path)]) == 3
+    out = capsys.readouterr().out
+    assert "load cell on" in out and "FAILED: garbled replies" in out
+    assert "FAILED: thermocouple open (over-range reading confirmed by $AAB); heater off" in out
+    assert "Gray check ok" in out
+
+
+def test_rig_virtual_runs_until_ctrl_c(tmp_path):
+    path = tmp_path / "virtual.toml"
+    proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "rig", "virtual", "--config", str(path)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        lines = []
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            line = proc.stdout.readline()
+            if not line:
+                break
+            lines.append(line)
+            if line.startswith("running"):
+                break
+        text = "".join(lines)
+        assert "loadcell" in text and "/dev/pts/" in text and f"configuration: {path}" in text
+        cfg = load_config(path)
+        assert cfg.loadcell.port.startswith("/dev/pts/") and cfg.furnace is not None
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=10)
+        assert proc.returncode == 0, err
+        assert "virtual rig stopped" in out
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
