@@ -169,7 +169,14 @@ class Channel(threading.Thread):
 
 
 def _one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split()) or type(exc).__name__
+    """An exception as one readable line (errno-style ``(5, 'Input/output error')`` unpacked)."""
+    args = getattr(exc, "args", ())
+    if len(args) == 2 and isinstance(args[0], int) and isinstance(args[1], str):
+        return f"{args[1]} (errno {args[0]})"
+    text = " ".join(str(exc).split())
+    if isinstance(exc, DeviceError):
+        return text
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
 class Sampler:

@@ -21,7 +21,7 @@ from rig.codecs import aed
 
 # Wall-clock seconds a device may stay silent before the test stops (the drivers' own
 # time-outs and retries come first; this catches a read that hangs or returns nothing).
-SILENCE_S = {"loadcell": 1.5, "encoder": 1.5, "furnace": 3.0}
+SILENCE_S = {"loadcell": 1.5, "encoder": 1.5, "furnace": 3.0}  # by config section
 ENCODER_PERIOD_S = 0.02  # wall-clock polling period of the encoder box
 FURNACE_PERIOD_S = 0.25  # of the furnace module (DCON replies take up to 0.3 s) ...
 FURNACE_MIN_PERIOD_S = 0.02  # ... shorter on a time-scaled virtual rig: 4 steps per control period
@@ -117,13 +117,13 @@ class DriverRig:
                 return [(to_clock(s.t_monotonic_s), s.force_N)]
 
         chans = {
-            "force_N": Channel("loadcell", read_force, clock, silence_s=SILENCE_S["loadcell"]),
-            "crosshead_mm": Channel("encoder", self.encoder.position_mm, clock, period_s=ENCODER_PERIOD_S, silence_s=SILENCE_S["encoder"]),
+            "force_N": Channel(cell.name, read_force, clock, silence_s=SILENCE_S["loadcell"]),
+            "crosshead_mm": Channel(self.encoder.name, self.encoder.position_mm, clock, period_s=ENCODER_PERIOD_S, silence_s=SILENCE_S["encoder"]),
         }
         if self.furnace is not None:
             per_control = self.config.furnace.control_period_s / 4.0 / self.time_scale
             period = max(FURNACE_MIN_PERIOD_S, min(FURNACE_PERIOD_S, per_control))
-            chans["temperature_C"] = Channel("furnace", self.read_temperature_C, clock, period_s=period, silence_s=SILENCE_S["furnace"])
+            chans["temperature_C"] = Channel(self.furnace.name, self.read_temperature_C, clock, period_s=period, silence_s=SILENCE_S["furnace"])
         return chans
 
     # furnace ---------------------------------------------------------------------------------
