@@ -27,6 +27,8 @@ except ImportError:  # not on POSIX
         pass
 
 from flowcurve.errors import DeviceError
+
+PORT_ERRORS = (OSError, serial.SerialException, TermiosError)  # what a vanished port raises
 from rig.codecs import dcon
 
 # Ports currently open, by URL → the owning transport. One owner per port.
@@ -91,7 +93,7 @@ class SerialTransport:
         if port is not None:
             try:
                 port.close()
-            except (OSError, serial.SerialException):
+            except PORT_ERRORS:
                 pass
 
     @property
@@ -121,7 +123,7 @@ class SerialTransport:
         try:
             port.write(data)
             port.flush()
-        except (OSError, serial.SerialException, TermiosError):
+        except PORT_ERRORS:
             raise self._disappeared() from None
 
     def discard_input(self) -> None:
@@ -130,7 +132,7 @@ class SerialTransport:
         self._pending.clear()
         try:
             port.reset_input_buffer()
-        except (OSError, serial.SerialException):
+        except PORT_ERRORS:
             raise self._disappeared() from None
 
     def _read_some(self, size: int, deadline: float) -> bytes:
@@ -141,7 +143,7 @@ class SerialTransport:
         try:
             waiting = port.in_waiting
             return port.read(max(size, min(waiting, 4096)) if waiting else size)
-        except (OSError, serial.SerialException, TypeError, TermiosError):
+        except PORT_ERRORS + (TypeError,):
             # TypeError: pyserial's posix read on a vanished file descriptor
             raise self._disappeared() from None
 

@@ -99,3 +99,26 @@ def test_setpoint_at_or_above_max_is_refused():
     with pytest.raises(ValueError, match="not below the maximum"):
         TemperatureController(ModelFurnace(max_temperature_C=700.0), 800.0,
                               max_temperature_C=900.0, max_rate_C_per_min=10.0)
+
+
+@pytest.mark.slow
+def test_holds_the_virtual_furnace_over_its_serial_port():
+    """The real Furnace driver and controller, over a pty, on the virtual rig (100x time)."""
+    virtual = pytest.importorskip("rig.virtual.rig")
+    setpoint, hold_s = 300.0, 300.0
+    with virtual.VirtualRig(time_scale=100.0, temperature_C=270.0) as rig:
+        cfg = rig.config()
+        with cfg.furnace.create() as furnace:
+            furnace.arm_watchdog(2.0)  # real seconds: the steps below keep it fed
+            ctl = cfg.furnace.controller(furnace, setpoint, clock=rig.now)
+            give_up = rig.now() + 3600.0
+            while not ctl.soaked(tolerance=2.0, hold_s=60.0):
+                ctl.step()
+                assert rig.now() < give_up, "no soak within an hour of model time"
+            end, worst = rig.now() + hold_s, 0.0
+            while rig.now() < end:
+                ctl.step()
+                worst = max(worst, abs(rig.model.furnace.temperature_C - setpoint))
+            assert furnace.watchdog_status() == 0  # the host watchdog never tripped
+        assert not rig.model.furnace.commanded_on  # closing the furnace switched it off
+    assert worst <= 2.0

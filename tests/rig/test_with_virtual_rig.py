@@ -1,0 +1,88 @@
+"""The drivers against the virtual-rig engineer's twins over real pseudo-terminals.
+
+Only what checks the two sides agree on a protocol reading (binary frames, watchdog safe
+value, Gray check); the twins' own behaviour is tested in their folder.
+"""
+
+import time
+
+import pytest
+
+virtual = pytest.importorskip("rig.virtual.rig")
+
+
+@pytest.fixture
+def rig():
+    with virtual.VirtualRig(time_scale=1.0) as r:
+        yield r
+
+
+@pytest.mark.parametrize("cof", [8, 12, 2, 9, 0 + 32])
+def test_loadcell_stream_in_each_format(rig, cof):
+    cell = rig.config().loadcell.create()
+    with cell:
+        cell.configure(rate_code=0, filter=0, fmt=cof)  # 100 values/s
+        idle = cell.read()
+        cell.start_stream()
+        got = []
+        deadline = time.monotonic() + 2.0
+        while len(got) < 30 and time.monotonic() < deadline:
+            got += cell.read_stream(30 - len(got), timeout=0.5)
+        cell.stop_stream()
+        after = cell.read()  # the line is clean again after STP
+    assert len(got) == 30
+    span = got[-1].t_monotonic_s - got[0].t_monotonic_s
+    assert 0.15 < span < 0.6  # 29 intervals at 100 values/s = 0.29 s
+    # idle machine: force noise of a few newtons around zero, in every format's scale
+    for s in [idle, after] + got:
+        assert abs(s.force_N) < 50.0 + 100e3 / 20_000 and not s.overload
+
+
+def test_tare_zeroes_a_held_load():
+    with virtual.VirtualRig(speed_mm_per_s=0.1) as rig:
+        with rig.config().loadcell.create() as cell:
+            cell.configure(filter=0)
+            rig.start_crosshead()
+            time.sleep(0.3)  # about 30 um of crosshead travel: kilonewtons in the elastic range
+            rig.stop_crosshead()
+            time.sleep(0.05)
+            loaded = cell.read().force_N
+            cell.tare()
+            tared = cell.read().force_N
+    assert abs(loaded) > 500.0
+    assert abs(tared) < 30.0
+
+
+def test_encoder_follows_the_crosshead(rig):
+    with rig.config().encoder.create() as enc:
+        enc.zero()
+        assert enc.read_counts() == 0 and enc.gray_check()
+        rig.start_crosshead()
+        time.sleep(0.3)
+        rig.stop_crosshead()
+        mm = enc.position_mm()
+    assert mm == pytest.approx(rig.model.crosshead_mm, abs=0.011)  # one count is 10 um
+
+
+def test_watchdog_switches_the_heater_off_when_the_host_goes_quiet(rig):
+    with rig.config().furnace.create() as furnace:
+        furnace.heater(True)
+        assert rig.model.furnace.commanded_on
+        furnace.arm_watchdog(0.3)
+        time.sleep(0.7)  # the host says nothing
+        assert not rig.model.furnace.commanded_on
+        assert furnace.watchdog_status() == 0x04
+        furnace.clear_watchdog()
+        assert furnace.watchdog_status() == 0
+
+
+def test_unplugged_furnace_is_reported_and_heater_off_does_not_raise(rig):
+    furnace = rig.config().furnace.create()
+    furnace.open()
+    rig.inject("furnace", "unplug")
+    from flowcurve.errors import DeviceError
+
+    with pytest.raises(DeviceError, match=r"^furnace: "):
+        furnace.temperature_C()
+    assert furnace.heater_off() is False
+    furnace.close()
