@@ -134,12 +134,15 @@ class TemperatureController:
     Each ``period_s`` a PI law on the error to a ramped set-point (rising at most
     ``max_rate_C_per_min``) gives the duty cycle; within the period the heater is on for
     ``duty × period_s``. Above ``max_temperature_C`` the heater is switched off and
-    :class:`SafetyError` raised. Call :meth:`step` from a loop (``now`` in monotonic s).
+    :class:`SafetyError` raised; so it is when the furnace keeps heating more than
+    ``stuck_rise_C`` with the heater off for over ``stuck_settle_s`` (a stuck relay).
+    Call :meth:`step` from a loop (``now`` in monotonic s, or the ``clock`` given).
     """
 
     def __init__(self, furnace: Furnace, setpoint_C: float, *, max_temperature_C: float,
                  max_rate_C_per_min: float, period_s: float = 2.0, kp_per_C: float = 0.05,
-                 ki_per_C_s: float = 0.0005, clock=time.monotonic):
+                 ki_per_C_s: float = 0.0005, stuck_settle_s: float = 30.0, stuck_rise_C: float = 5.0,
+                 clock=time.monotonic):
         self.max_temperature_C = min(float(max_temperature_C), furnace.max_temperature_C)
         if not setpoint_C < self.max_temperature_C:
             raise ValueError(f"set-point {setpoint_C:g} C is not below the maximum "
@@ -162,24 +165,35 @@ class TemperatureController:
         self._target_on_s = 0.0
         self._on_s = 0.0
         self._history: deque[tuple[float, float]] = deque(maxlen=200_000)
+        self.stuck_settle_s = stuck_settle_s
+        self.stuck_rise_C = stuck_rise_C
+        self._off_since: float | None = None
+        self._off_min_C = math.inf
 
     def step(self, now: float | None = None) -> dict[str, float | bool]:
-        """Read the temperature, update ramp and duty, switch the heater; returns the state."""
+        """Read the temperature, update ramp and duty, switch the heater; returns the state.
+
+        Any failure on the way (reading, switching, a safety limit) switches the heater off
+        before the error propagates.
+        """
         now = self.clock() if now is None else now
         try:
-            t = self.furnace.temperature_C()  # SafetyError on an open thermocouple (heater off)
-        except DeviceError:
+            return self._step(now)
+        except BaseException:
             self.furnace.heater_off()
             raise
+
+    def _step(self, now: float) -> dict[str, float | bool]:
+        t = self.furnace.temperature_C()  # SafetyError on an open thermocouple
         self.temperature_C = t
         if t > self.max_temperature_C:
-            self.furnace.heater_off()
             raise SafetyError(self.furnace.name, f"over-temperature: {t:.1f} C above the maximum "
                                                  f"{self.max_temperature_C:g} C; heater off")
         dt = 0.0 if self._last_t is None else max(0.0, now - self._last_t)
         self._last_t = now
         if self.furnace.heater_is_on:
             self._on_s += dt  # heater-on time delivered since the last step
+        self._check_heater_follows(t, now)
         self._update_ramp(t, dt)
         if self._period_start is None or now - self._period_start >= self.period_s:
             self._period_start = now
@@ -191,15 +205,29 @@ class TemperatureController:
             self._on_s = 0.0
         want_on = self._target_on_s - self._on_s > 0.5 * dt
         if want_on != self.furnace.heater_is_on:
-            if want_on:
-                self.furnace.heater(True)
-            else:
-                self.furnace.heater(False)
+            self.furnace.heater(want_on)
         if self.furnace.watchdog_armed:
             self.furnace.host_ok()
         self._update_soak(t, now)
         return {"temperature_C": t, "ramp_setpoint_C": self.ramp_C, "duty": self.duty,
                 "heater_on": self.furnace.heater_is_on}
+
+    def _check_heater_follows(self, t: float, now: float) -> None:
+        # stuck relay: with the heater off for longer than the settling time, the furnace
+        # can only cool; a rise of more than stuck_rise_C above the lowest reading since
+        # then means the heater is still heating
+        if self.furnace.heater_is_on:
+            self._off_since = None
+            return
+        if self._off_since is None:
+            self._off_since, self._off_min_C = now, math.inf
+        if now - self._off_since < self.stuck_settle_s:
+            return
+        self._off_min_C = min(self._off_min_C, t)
+        if t - self._off_min_C > self.stuck_rise_C:
+            raise SafetyError(self.furnace.name, f"heater does not switch off (relay stuck?): "
+                                                 f"{t - self._off_min_C:.1f} C rise with the heater "
+                                                 f"off for {now - self._off_since:.0f} s; heater off")
 
     def _update_ramp(self, t: float, dt: float) -> None:
         # rate limit: the working set-point rises at most max_rate x dt, from the start temperature

@@ -87,12 +87,36 @@ def test_heating_rate_is_limited():
 
 def test_over_temperature_cuts_the_heater():
     furnace = ModelFurnace(max_temperature_C=900.0)
-    ctl = TemperatureController(furnace, 400.0, max_temperature_C=450.0, max_rate_C_per_min=100.0)
+    ctl = TemperatureController(furnace, 400.0, max_temperature_C=450.0, max_rate_C_per_min=100.0,
+                                stuck_rise_C=1000.0)  # only the temperature limit acts here
     run(ctl, furnace, 600)
     furnace.model.set_relay_stuck(True)  # the relay welds shut: the heater stays on
     with pytest.raises(SafetyError, match="over-temperature: 45[0-9.]+ C above the maximum 450 C"):
         run(ctl, furnace, 3600)
     assert furnace.offs >= 1 and not furnace.heater_is_on
+
+
+def test_stuck_relay_is_caught_long_before_the_maximum():
+    furnace = ModelFurnace(max_temperature_C=900.0)
+    ctl = TemperatureController(furnace, 400.0, max_temperature_C=900.0, max_rate_C_per_min=100.0)
+    _, t = run(ctl, furnace, 1200)
+    assert ctl.soaked(2.0, 60.0)  # no false alarm while holding
+    furnace.model.set_relay_stuck(True)
+    with pytest.raises(SafetyError, match=r"heater does not switch off \(relay stuck\?\)"):
+        run(ctl, furnace, 3600, t0=t)
+    # full power heats ~1.5 C/s here; with the 30 s settling allowance the alarm comes
+    # within about a minute, some 60 C above the set-point — 440 C short of the maximum
+    assert furnace.model.time_s - t < 90.0
+    assert furnace.model.temperature_C < 480.0 and furnace.offs >= 1
+
+
+def test_no_stuck_alarm_when_cooling_to_a_lower_setpoint():
+    furnace = ModelFurnace()
+    ctl = TemperatureController(furnace, 600.0, max_temperature_C=900.0, max_rate_C_per_min=60.0)
+    _, t = run(ctl, furnace, 1800)
+    lower = TemperatureController(furnace, 300.0, max_temperature_C=900.0, max_rate_C_per_min=60.0)
+    _, t = run(lower, furnace, 3 * 3600, t0=t, until=lambda c: c.soaked(2.0, 300.0))
+    assert lower.soaked(2.0, 300.0)
 
 
 def test_setpoint_at_or_above_max_is_refused():
