@@ -14,6 +14,7 @@ import math
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from flowcurve.errors import DeviceError, FlowcurveError
@@ -30,6 +31,8 @@ def register(subparsers) -> None:
 
     check = sub.add_parser("check", help="talk to each device and diagnose what does not answer")
     check.add_argument("--config", required=True, type=Path, help="rig configuration (TOML)")
+    check.add_argument("--no-probe", dest="probe", action="store_false",
+                       help="do not try other baud rates and parities on a silent device")
     check.set_defaults(func=run_check)
 
     virtual = sub.add_parser("virtual", help="run the virtual rig on pseudo-terminals until Ctrl-C")
@@ -61,10 +64,10 @@ def diagnose(exc: Exception, port: str) -> str:
     return text.split(": ", 1)[-1] if isinstance(exc, DeviceError) else text
 
 
-def check_loadcell(section, out) -> None:
+def check_loadcell(section, out, opener=None) -> None:
     from rig.codecs import aed
 
-    with section.create() as cell:
+    with section.create(opener=opener) as cell:
         idn = cell.identify()
         out(f"  identity: {idn['manufacturer']} {idn['model']}, serial {idn['serial']}, firmware {idn['firmware']}")
         s = cell.settings()
@@ -85,8 +88,8 @@ def check_loadcell(section, out) -> None:
             f"{'' if sample.status is None else f', status {sample.status:#04x}'}){flag}")
 
 
-def check_encoder(section, out) -> None:
-    with section.create() as enc:
+def check_encoder(section, out, opener=None) -> None:
+    with section.create(opener=opener) as enc:
         cfg = enc.configuration()
         out(f"  identity: module {enc.module_name()}, firmware {enc.firmware()}")
         out(f"  settings: address {cfg.address:02X}, {cfg.baud} baud, checksum {'on' if cfg.checksum else 'off'}")
@@ -98,8 +101,8 @@ def check_encoder(section, out) -> None:
         out(f"  reading: {counts} counts = {mm:.3f} mm; Gray check {'ok' if enc.gray_check() else 'FAILED'}")
 
 
-def check_furnace(section, out) -> None:
-    with section.create() as fur:
+def check_furnace(section, out, opener=None) -> None:
+    with section.create(opener=opener) as fur:
         cfg = fur.configuration()
         out(f"  identity: module {fur.module_name()}, firmware {fur.firmware()}")
         out(f"  settings: address {cfg.address:02X}, input type {cfg.thermocouple or f'{cfg.type_code:02X}'}, "
@@ -115,8 +118,35 @@ CHECKS = (("loadcell", "load cell", check_loadcell), ("encoder", "crosshead enco
           ("furnace", "furnace", check_furnace))
 
 
-def check_rig(config: RigConfig, out=print) -> int:
-    """Check every configured device; returns how many failed."""
+PROBE_TIMEOUT_S = 0.1
+
+
+def probe_line(key: str, section, opener=None) -> str | None:
+    """For a silent or garbled device: the first other baud rate / parity it answers at."""
+    from rig.config import BAUDS
+
+    parities = ("E", "N", "O") if key == "loadcell" else ("N",)
+    for baud in sorted(BAUDS, key=lambda b: abs(b - section.baud)):
+        for parity in parities:
+            if (baud, parity) == (section.baud, section.parity):
+                continue
+            trial = replace(section, baud=baud, parity=parity, timeout_s=PROBE_TIMEOUT_S)
+            device = trial.create(opener=opener)
+            try:
+                with device:
+                    device.identify() if key == "loadcell" else device.configuration()
+            except FlowcurveError:
+                continue
+            return f"it answers at {baud} baud, parity {parity}: set baud = {baud}, parity = \"{parity}\" in [{key}]"
+    return None
+
+
+def check_rig(config: RigConfig, out=print, *, probe: bool = True, opener=None) -> int:
+    """Check every configured device; returns how many failed.
+
+    ``probe``: when a device is silent or garbled, try the other line settings.
+    ``opener`` replaces :func:`serial.serial_for_url` (tests).
+    """
     failed = 0
     for key, label, check in CHECKS:
         section = getattr(config, key)
@@ -125,10 +155,15 @@ def check_rig(config: RigConfig, out=print) -> int:
             continue
         out(f"{label} on {section.port}:")
         try:
-            check(section, out)
+            check(section, out, opener)
         except FlowcurveError as exc:
             failed += 1
             out(f"  FAILED: {diagnose(exc, section.port)}")
+            text = str(exc)
+            if probe and ("no answer" in text or "garbled" in text or "incomplete" in text):
+                found = probe_line(key, section, opener)
+                out(f"  probe: {found}" if found else
+                    "  probe: no answer at any other baud rate or parity either — address, cable, power?")
         else:
             out("  ok")
     return failed
@@ -136,7 +171,7 @@ def check_rig(config: RigConfig, out=print) -> int:
 
 def run_check(args) -> int:
     config = load_config(args.config)
-    failed = check_rig(config)
+    failed = check_rig(config, probe=args.probe)
     if failed:
         print(f"{failed} device(s) failed the check", file=sys.stderr)
         return CHECK_FAILED

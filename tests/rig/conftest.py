@@ -21,7 +21,7 @@ class FakePort:
         self.written = bytearray()  # bytes of the command being matched
         self.log: list[bytes] = []  # every write, in order
         self.rx = bytearray()
-        self.timeout = 0.05
+        self.timeout = 0.01  # the transport opens ports with a 0.01 s read slice
         self.open_kwargs: dict = {}
         self.unplugged = False
         self.closed = False
@@ -100,3 +100,9 @@ def fake_port():
     yield make
     for port in made:
         port.assert_done()
+
+
+@pytest.fixture
+def fake_port_class():
+    """The FakePort class itself, for tests that build ports inside an opener."""
+    return FakePort

@@ -26,7 +26,7 @@ def test_check_diagnoses_missing_and_silent_ports(tmp_path, silent_pty, capsys):
     ports = {"loadcell": str(tmp_path / "ttyUSB7"), "encoder": silent_pty}
     path = tmp_path / "rig.toml"
     path.write_text(to_toml(virtual_config(ports, loadcell_timeout_s=0.05, encoder_timeout_s=0.05)))
-    code = main(["rig", "check", "--config", str(path)])
+    code = main(["rig", "check", "--no-probe", "--config", str(path)])
     out = capsys.readouterr()
     assert code == 3
     assert f"load cell on {tmp_path / 'ttyUSB7'}:\n  FAILED: port missing or busy" in out.out
@@ -34,6 +34,29 @@ def test_check_diagnoses_missing_and_silent_ports(tmp_path, silent_pty, capsys):
     assert "FAILED: silent: no answer to '$022' within 0.05 s — wrong baud rate, parity or address?" in out.out
     assert "furnace: not configured" in out.out
     assert "2 device(s) failed the check" in out.err
+
+
+def test_probe_finds_the_line_settings_a_silent_amplifier_answers_at(fake_port_class, monkeypatch):
+    import rig.cli
+
+    monkeypatch.setattr(rig.cli, "PROBE_TIMEOUT_S", 0.01)
+    idn = b'HBM,"AED104         ","1234   ",P20\r\n'
+    opened = []
+
+    def opener(url, **kw):  # the amplifier was left at 19200 baud, even parity
+        opened.append((kw["baudrate"], kw["parity"]))
+        right = (kw["baudrate"], kw["parity"]) == (19200, "E")
+        return fake_port_class([(b";IDN?;", idn)] if right else [], strict=False)
+
+    config = virtual_config({"loadcell": "/dev/ttyUSB0", "encoder": "/dev/ttyUSB1"},
+                            loadcell_timeout_s=0.01)
+    lines = []
+    rig.cli.check_rig(config, lines.append, opener=opener)
+    text = "\n".join(lines)
+    assert "FAILED: silent: no answer to 'IDN?'" in text
+    assert 'probe: it answers at 19200 baud, parity E: set baud = 19200, parity = "E" in [loadcell]' in text
+    assert (9600, "E") in opened and opened.index((19200, "E")) < len(opened)
+    assert "probe: no answer at any other baud rate or parity either" in text  # the encoder
 
 
 def test_check_with_a_bad_config_is_one_line(tmp_path, capsys):
@@ -63,7 +86,7 @@ def test_check_finds_a_device_on_the_wrong_port(tmp_path, capsys):
         ports = {"loadcell": rig.ports["furnace"], "encoder": rig.ports["encoder"]}
         path = tmp_path / "rig.toml"
         path.write_text(to_toml(virtual_config(ports, loadcell_timeout_s=0.1)))
-        assert main(["rig", "check", "--config", str(path)]) == 3
+        assert main(["rig", "check", "--no-probe", "--config", str(path)]) == 3
     out = capsys.readouterr().out
     # a DCON module is silent to AED syntax; the encoder is still fine
     assert "FAILED: silent: no answer to 'IDN?' within 0.1 s" in out
