@@ -1,9 +1,9 @@
 """``flowcurve rig check`` and ``flowcurve rig virtual``.
 
-``rig check --config rig.toml`` talks to each configured device and prints its identity,
+'rig check --config rig.toml' talks to each configured device and prints its identity,
 settings and one reading, or a diagnosis (port missing, silent — wrong baud, parity or
 address?, garbled replies); exit code 0 when every device answered, 3 otherwise.
-``rig virtual`` starts the virtual rig on pseudo-terminals, prints each device's port and a
+'rig virtual' starts the virtual rig on pseudo-terminals, prints each device's port and a
 configuration file written for it, and runs until Ctrl-C.
 """
 
@@ -54,7 +54,12 @@ def diagnose(exc: Exception, port: str) -> str:
     """One line saying what a device failure most likely means."""
     text = str(exc)
     if "cannot open port" in text:
-        return f"port missing or busy: {port} ({text.split(': ', 2)[-1]}) — is it plugged in, is the name right?"
+        reason = text.rsplit(": ", 1)[-1]
+        if "No such file" in reason:
+            return f"port missing: {port} does not exist — is the adapter plugged in, is the name right?"
+        if "ermission" in reason:
+            return f"no permission to open {port} — is the user in the dialout group?"
+        return f"cannot open {port}: {reason} — is another program using it?"
     if "disappeared" in text:
         return f"port {port} disappeared during the check — cable or USB adapter unplugged?"
     if "no answer" in text:

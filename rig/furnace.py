@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
+from itertools import takewhile
 
 from flowcurve.errors import DeviceError, FlowcurveError, SafetyError
 from rig.codecs import dcon
@@ -257,8 +258,8 @@ class TemperatureController:
         if not self._history or self._history[-1][0] - self._history[0][0] < hold_s:
             return False
         end = self._history[-1][0]
-        return all(abs(t - self.setpoint_C) <= tolerance
-                   for when, t in reversed(self._history) if end - when <= hold_s)
+        window = takewhile(lambda sample: end - sample[0] <= hold_s, reversed(self._history))
+        return all(abs(t - self.setpoint_C) <= tolerance for _, t in window)
 
     def stop(self) -> None:
         """Heater off (best effort)."""

@@ -13,6 +13,7 @@ safe (reads and idempotent settings), never for commands with one-off side effec
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 from contextlib import contextmanager
@@ -343,5 +344,8 @@ def _describe(command: bytes) -> str:
 
 
 def _reason(exc: Exception) -> str:
+    errno = getattr(exc, "errno", None)
+    if isinstance(errno, int):
+        return os.strerror(errno)
     text = str(exc).strip() or type(exc).__name__
     return text.splitlines()[0]

@@ -29,7 +29,7 @@ def test_check_diagnoses_missing_and_silent_ports(tmp_path, silent_pty, capsys):
     code = main(["rig", "check", "--no-probe", "--config", str(path)])
     out = capsys.readouterr()
     assert code == 3
-    assert f"load cell on {tmp_path / 'ttyUSB7'}:\n  FAILED: port missing or busy" in out.out
+    assert f"load cell on {tmp_path / 'ttyUSB7'}:\n  FAILED: port missing: " in out.out
     assert "crosshead encoder on" in out.out
     assert "FAILED: silent: no answer to '$022' within 0.05 s — wrong baud rate, parity or address?" in out.out
     assert "furnace: not configured" in out.out

@@ -98,3 +98,10 @@ def test_silent_stream_raises(fake_port):
     lc.stream_silence_s = 0.05
     with pytest.raises(DeviceError, match="silent"):
         lc.read_stream(5, timeout=0.1)
+
+
+def test_bus_address_selected_once_before_the_first_command(fake_port):
+    fake = fake_port([(b";S07;", None), (b";MSV?;", b"+0001000\r\n"), (b";MSV?;", b"+0002000\r\n")])
+    lc = cell(fake, address=7, select_address=True)
+    assert [lc.read().counts for _ in range(2)] == [1000, 2000]
+    assert fake.log[0] == b";S07;" and fake.log.count(b";S07;") == 1

@@ -87,7 +87,7 @@ def test_unplugged_port_is_a_device_error(fake_port):
 
 def test_missing_port_is_a_device_error(tmp_path):
     missing = tmp_path / "ttyUSB9"
-    with pytest.raises(DeviceError, match=rf"^furnace: cannot open port {missing}"):
+    with pytest.raises(DeviceError, match=rf"^furnace: cannot open port {missing}: No such file or directory$"):
         SerialTransport(str(missing), name="furnace").open()
 
 
