@@ -109,6 +109,7 @@ class FurnaceConfig(SerialConfig):
     max_heating_rate_C_per_min: float = 30.0
     watchdog_timeout_s: float = 10.0
     control_period_s: float = 2.0
+    approach_s: float = 30.0
     kp_per_C: float = 0.05
     ki_per_C_s: float = 0.0005
 
@@ -126,7 +127,8 @@ class FurnaceConfig(SerialConfig):
 
         return TemperatureController(furnace, setpoint_C, max_temperature_C=self.max_temperature_C,
                                      max_rate_C_per_min=self.max_heating_rate_C_per_min,
-                                     period_s=self.control_period_s, kp_per_C=self.kp_per_C,
+                                     period_s=self.control_period_s, approach_s=self.approach_s,
+                                     kp_per_C=self.kp_per_C,
                                      ki_per_C_s=self.ki_per_C_s, **kw)
 
 
@@ -178,6 +180,7 @@ SCHEMA: dict[str, tuple[type, dict[str, tuple[type, Any]]]] = {
         "max_heating_rate_C_per_min": (float, _in(0.0, 200.0, lo_open=True)),
         "watchdog_timeout_s": (float, _in(0.1, 25.5)),
         "control_period_s": (float, _in(0.1, 60.0)),
+        "approach_s": (float, _in(0.0, 3600.0)),
         "kp_per_C": (float, _in(0.0, 10.0)),
         "ki_per_C_s": (float, _in(0.0, 1.0)),
     }),

@@ -20,6 +20,7 @@ from rig.codecs import dcon
 from rig.transport import DconDevice
 
 HEATER_OFF_ATTEMPTS = 3
+APPROACH_DONE_C = 0.05  # the eased set-point counts as reached this close
 
 
 class Furnace(DconDevice):
@@ -133,7 +134,7 @@ class TemperatureController:
     """Holds a furnace at ``setpoint_C`` with a time-proportioned heater output.
 
     Each ``period_s`` a PI law on the error to a ramped set-point (rising at most
-    ``max_rate_C_per_min``) gives the duty cycle; within the period the heater is on for
+    ``max_rate_C_per_min``, easing in over ``approach_s``) gives the duty cycle; within the period the heater is on for
     ``duty × period_s``. Above ``max_temperature_C`` the heater is switched off and
     :class:`SafetyError` raised; so it is when the furnace keeps heating more than
     ``stuck_rise_C`` with the heater off for over ``stuck_settle_s`` (a stuck relay).
@@ -142,7 +143,7 @@ class TemperatureController:
 
     def __init__(self, furnace: Furnace, setpoint_C: float, *, max_temperature_C: float,
                  max_rate_C_per_min: float, period_s: float = 2.0, kp_per_C: float = 0.05,
-                 ki_per_C_s: float = 0.0005, stuck_settle_s: float = 30.0, stuck_rise_C: float = 5.0,
+                 ki_per_C_s: float = 0.0005, approach_s: float = 30.0, stuck_settle_s: float = 30.0, stuck_rise_C: float = 5.0,
                  clock=time.monotonic):
         self.max_temperature_C = min(float(max_temperature_C), furnace.max_temperature_C)
         if not setpoint_C < self.max_temperature_C:
@@ -157,6 +158,7 @@ class TemperatureController:
         self.kp = kp_per_C
         self.ki = ki_per_C_s
         self.clock = clock
+        self.approach_s = float(approach_s)
         self.ramp_C: float | None = None
         self.integral = 0.0
         self.duty = 0.0
@@ -231,10 +233,18 @@ class TemperatureController:
                                                  f"off for {now - self._off_since:.0f} s; heater off")
 
     def _update_ramp(self, t: float, dt: float) -> None:
-        # rate limit: the working set-point rises at most max_rate x dt, from the start temperature
+        # rate limit: the working set-point rises at most max_rate x dt from the start
+        # temperature, and eases into the set-point with time constant approach_s (without
+        # the easing, the integral built up while ramping overshoots by ~5 C at 30 C/min)
         if self.ramp_C is None:
             self.ramp_C = min(t, self.setpoint_C)
-        self.ramp_C = min(self.setpoint_C, self.ramp_C + self.max_rate_C_per_s * dt)
+        gap = self.setpoint_C - self.ramp_C
+        rise = self.max_rate_C_per_s * dt
+        if self.approach_s > 0:
+            rise = min(rise, gap * min(1.0, dt / self.approach_s))
+        self.ramp_C = min(self.setpoint_C, self.ramp_C + rise)
+        if self.setpoint_C - self.ramp_C < APPROACH_DONE_C:
+            self.ramp_C = self.setpoint_C
 
     def _update_duty(self, t: float) -> None:
         # PI on the duty cycle, integrating only while the output is not saturated (anti-windup)

@@ -72,6 +72,21 @@ def test_holds_plus_minus_2_C_after_the_soak(setpoint):
     assert 0.0 < ctl.duty < 1.0
 
 
+def overshoot_C(approach_s):
+    """Peak above a 600 C set-point after a 30 C/min ramp on the model furnace."""
+    furnace = ModelFurnace()
+    ctl = TemperatureController(furnace, 600.0, max_temperature_C=900.0, max_rate_C_per_min=30.0,
+                                approach_s=approach_s)
+    trace, _ = run(ctl, furnace, 3600)
+    return max(T for _, T, _ in trace) - 600.0
+
+
+def test_easing_into_the_setpoint_reduces_the_overshoot():
+    eased, plain = overshoot_C(30.0), overshoot_C(0.0)
+    assert 0.0 < eased <= 3.0
+    assert eased < 0.6 * plain
+
+
 def test_heating_rate_is_limited():
     furnace = ModelFurnace()
     rate = 20.0  # C/min, well below what the heater can do (about 100 C/min when cold)
