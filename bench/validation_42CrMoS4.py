@@ -1,6 +1,6 @@
 """Validation of the tension identification against the 42CrMoS4 lab's published values.
 
-All 67 INSTRON exports of /work/shared/validation/42CrMoS4/original_data/ are read through
+All 67 INSTRON exports of shared/validation/42CrMoS4/original_data/ are read through
 identification.importers.load_record and identified twice:
 
 * extensometer path (the lab's own route): E, Rp0.2, Rm, Ag, A, Z against the header values;
@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import sys
 import time
+import os
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +27,9 @@ from identification.importers import load_record
 from identification.indicator import frame_stiffness_from_known_modulus
 from identification.tension import identify_tension
 
-DATA = Path("/work/shared/validation/42CrMoS4/original_data")
+# the project's shared/ folder stands beside the checkout (FLOWCURVE_SHARED overrides)
+SHARED = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[2] / "shared")
+DATA = SHARED / "validation" / "42CrMoS4" / "original_data"
 HANDBOOK_E_MPa = 210_000.0  # steel, for the one-off frame calibration of the crosshead path
 
 # quantity → (result key, published key, kind of deviation, acceptance limit of the brief)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,7 @@ import pytest
 
 from acquisition.record import Record, write_record
 
-INSTRON_FILE = Path("/work/shared/validation/42CrMoS4/original_data/46NT71.csv")
+INSTRON_FILE = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[3] / "shared") / "validation/42CrMoS4/original_data/46NT71.csv"
 
 
 @pytest.fixture

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +14,7 @@ from acquisition.record import Record, write_record
 from flowcurve.errors import RecordError
 from identification.importers import load_record, parse_column_option, to_native, unit_conversion
 
-INSTRON_DIR = Path("/work/shared/validation/42CrMoS4/original_data")
+INSTRON_DIR = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[3] / "shared") / "validation/42CrMoS4/original_data"
 INSTRON_FILE = INSTRON_DIR / "46NT71.csv"
 needs_instron = pytest.mark.skipif(not INSTRON_FILE.exists(), reason="42CrMoS4 validation data not present")
 
