@@ -7,6 +7,7 @@ A thin device class over :class:`~rig.transport.SerialTransport` and the pure co
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -43,7 +44,8 @@ class LoadCell:
                  calibration_N_per_count: float | None = None, nominal_load_N: float | None = None,
                  baudrate: int = 9600, parity: str = "E", timeout_s: float = 0.2,
                  output_format: int = 3, select_address: bool = False,
-                 raise_on_overload: bool = False, opener=None):
+                 raise_on_overload: bool = False, output_rate_per_s: float | None = None,
+                 opener=None):
         if (calibration_N_per_count is None) == (nominal_load_N is None):
             raise ValueError("give exactly one of calibration_N_per_count and nominal_load_N")
         if calibration_N_per_count is not None:
@@ -61,9 +63,11 @@ class LoadCell:
         else:
             self.transport = SerialTransport(port_url, name=name, baudrate=baudrate, parity=parity,
                                              timeout_s=timeout_s, opener=opener)
+        self.output_rate_per_s = output_rate_per_s  # set by configure(rate_code=...)
         self.streaming = False
         self.stream_silence_s = 1.0
         self._last_frame_t = 0.0
+        self._last_sample_t = -math.inf
         self._selected = False
 
     # -- life cycle -------------------------------------------------------------------
@@ -125,6 +129,7 @@ class LoadCell:
             if rate_code not in range(len(aed.ICR_RATES_PER_S)):
                 raise ValueError(f"rate code must be 0..7, got {rate_code}")
             self._set(f"ICR{rate_code}")
+            self.output_rate_per_s = aed.ICR_RATES_PER_S[rate_code]
         if filter is not None:
             if filter not in aed.ASF_CUTOFF_HZ:
                 raise ValueError(f"filter must be 0..8, got {filter}")
@@ -190,12 +195,24 @@ class LoadCell:
                 if not self.transport.is_open:  # the port disappeared
                     raise
                 break
-            self._last_frame_t = time.monotonic()
-            samples.append(self._sample(frame, self._last_frame_t))
+            now = time.monotonic()
+            samples.append(self._sample(frame, self._stream_time(now)))
+            self._last_frame_t = now
         silent = time.monotonic() - self._last_frame_t
         if not samples and silent > self.stream_silence_s:
             raise DeviceError(self.name, f"stream ('MSV?0') silent for {silent:.1f} s")
         return samples
+
+    def _stream_time(self, now: float) -> float:
+        # a frame read while later ones already wait in the buffer arrived earlier: back-date
+        # it by one output period per complete frame behind it (a burst read at once keeps
+        # its spacing); never before the previous sample
+        t = now
+        if self.output_rate_per_s:
+            t -= (self.transport.buffered() // self.fmt.frame_length) / self.output_rate_per_s
+        t = max(t, self._last_sample_t + 1e-6)
+        self._last_sample_t = t
+        return t
 
     def stop_stream(self) -> None:
         """``STP`` (never answers), then discard the frames still in flight."""

@@ -136,6 +136,14 @@ class SerialTransport:
         except PORT_ERRORS:
             raise self._disappeared() from None
 
+    def buffered(self) -> int:
+        """Bytes received and not yet framed (ours and the port's)."""
+        port = self._require_port()
+        try:
+            return len(self._pending) + port.in_waiting
+        except PORT_ERRORS:
+            raise self._disappeared() from None
+
     def _read_some(self, size: int, deadline: float) -> bytes:
         port = self._require_port()
         remaining = deadline - time.monotonic()

@@ -105,3 +105,22 @@ def test_bus_address_selected_once_before_the_first_command(fake_port):
     lc = cell(fake, address=7, select_address=True)
     assert [lc.read().counts for _ in range(2)] == [1000, 2000]
     assert fake.log[0] == b";S07;" and fake.log.count(b";S07;") == 1
+
+
+def test_stream_burst_keeps_the_output_spacing(fake_port):
+    import time
+
+    fmt = aed.output_format(3)
+    fake = fake_port([(b";ICR0;", b"0\r\n"), (b";MSV?0;", None)])
+    lc = cell(fake)
+    lc.configure(rate_code=0)  # 100 values/s
+    lc.start_stream()
+    fake.feed(b"".join(aed.encode_msv(c, fmt) for c in range(10)))  # ten frames arrive at once
+    before = time.monotonic()
+    got = lc.read_stream(10, timeout=0.5)
+    after = time.monotonic()
+    times = [s.t_monotonic_s for s in got]
+    steps = [b - a for a, b in zip(times, times[1:])]
+    assert [s.counts for s in got] == list(range(10))
+    assert all(step == pytest.approx(0.01, abs=0.002) for step in steps)  # the 100/s spacing
+    assert before - 0.002 <= times[-1] <= after  # the last one is stamped on arrival

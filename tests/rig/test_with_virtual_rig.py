@@ -32,7 +32,7 @@ def test_loadcell_stream_in_each_format(rig, cof):
         after = cell.read()  # the line is clean again after STP
     assert len(got) == 30
     span = got[-1].t_monotonic_s - got[0].t_monotonic_s
-    assert 0.15 < span < 0.6  # 29 intervals at 100 values/s = 0.29 s
+    assert 0.15 < span < 1.0  # 29 intervals at 100 values/s = 0.29 s (loose: a loaded machine)
     # idle machine: force noise of a few newtons around zero, in every format's scale
     for s in [idle, after] + got:
         assert abs(s.force_N) < 50.0 + 100e3 / 20_000 and not s.overload
