@@ -9,7 +9,6 @@ configuration file written for it, and runs until Ctrl-C.
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import tempfile

@@ -178,7 +178,8 @@ class LoadCell:
 
         Returns early when ``max_samples`` are in; a frame cut by the deadline stays
         buffered for the next call, so framing never slips. Timestamps are host times of
-        arrival. A stream silent for more than ``stream_silence_s`` raises DeviceError.
+        arrival, back-dated by one output period per complete frame still buffered behind
+        (known once ``configure(rate_code=...)`` ran). A stream silent for more than ``stream_silence_s`` raises DeviceError.
         """
         if not self.streaming:
             raise DeviceError(self.name, "read_stream without start_stream")
