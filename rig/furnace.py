@@ -113,7 +113,7 @@ class Furnace(DconDevice):
 
     def digital_io(self) -> dict[str, int]:
         """``@AADI`` → alarm state, digital outputs, digital inputs."""
-        return self.query("@", "DI", dcon.parse_digital_io)
+        return self.query("@", "DI", dcon.parse_digital_io, self.address)
 
     # -- host watchdog ----------------------------------------------------------------
     def arm_watchdog(self, timeout_s: float) -> None:

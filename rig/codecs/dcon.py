@@ -161,11 +161,17 @@ def parse_open_thermocouple(reply: Reply, address: int) -> bool:
     return rest == "1"
 
 
-def parse_digital_io(reply: Reply) -> dict[str, int]:
-    """``@AADI`` → ``!SOOII``: alarm state S, digital outputs OO, digital inputs II."""
+def parse_digital_io(reply: Reply, address: int | None = None) -> dict[str, int]:
+    """``@AADI`` → ``!SOOII``: alarm state S, digital outputs OO, digital inputs II.
+
+    The family's manuals show the reply without the address; some modules (and the
+    virtual one) put it first, ``!AASOOII`` — both are accepted.
+    """
     body = expect_ack(reply, None, "@AADI")
+    if address is not None and len(body) == 7 and body[:2].upper() == f"{address:02X}":
+        body = body[2:]
     if not re.fullmatch(r"[0-9A-Fa-f]{5}", body):
-        raise ProtocolError(f"@AADI reply is not !SOOII: '!{body}'")
+        raise ProtocolError(f"@AADI reply is not !SOOII: '!{reply.body}'")
     return {"alarm": int(body[0], 16), "outputs": int(body[1:3], 16), "inputs": int(body[3:5], 16)}
 
 

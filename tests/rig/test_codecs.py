@@ -157,6 +157,9 @@ def test_dcon_small_replies():
     with pytest.raises(ProtocolError):
         dcon.parse_open_thermocouple(dcon.parse_reply(b"!021\r"), 1)  # another module's reply
     assert dcon.parse_digital_io(dcon.parse_reply(b"!00100\r")) == {"alarm": 0, "outputs": 1, "inputs": 0}
+    assert dcon.parse_digital_io(dcon.parse_reply(b"!0100103\r"), 1) == {"alarm": 0, "outputs": 1, "inputs": 3}
+    with pytest.raises(ProtocolError):
+        dcon.parse_digital_io(dcon.parse_reply(b"!0200100\r"), 1)  # another module's address
     assert dcon.digital_output_body(1) == "DO01"
     assert dcon.watchdog_body(True, 10.0) == "3164"  # the manual's ~013164 = enabled, 10.0 s
     assert dcon.frame("~", 1, dcon.watchdog_body(True, 10.0)) == b"~013164\r"

@@ -86,3 +86,37 @@ def test_unplugged_furnace_is_reported_and_heater_off_does_not_raise(rig):
         furnace.temperature_C()
     assert furnace.heater_off() is False
     furnace.close()
+
+
+def test_two_threads_share_one_port_without_mixing_replies(rig):
+    """The acquisition reads the temperature in one thread while the controller switches the
+    heater in another: the port lock keeps every command with its own reply."""
+    import threading
+
+    errors, readings, switches = [], [], []
+    with rig.config().furnace.create() as furnace:
+
+        def read_loop():
+            try:
+                for _ in range(150):
+                    readings.append(furnace.temperature_C())
+            except Exception as exc:  # noqa: BLE001 - reported below
+                errors.append(exc)
+
+        def switch_loop():
+            try:
+                for i in range(150):
+                    furnace.heater(i % 2 == 0)
+                    switches.append(furnace.digital_io()["outputs"] & 1)
+            except Exception as exc:  # noqa: BLE001
+                errors.append(exc)
+
+        threads = [threading.Thread(target=read_loop), threading.Thread(target=switch_loop)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(timeout=30)
+    assert not errors, errors
+    assert len(readings) == 150 and all(15.0 < r < 40.0 for r in readings)
+    assert switches == [1 - i % 2 for i in range(150)]  # each @AADI saw the output just set
+    assert not rig.model.furnace.commanded_on  # closing switched it off
