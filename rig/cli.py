@@ -114,7 +114,8 @@ def check_furnace(section, out, opener=None) -> None:
         if cfg.thermocouple != "K":
             out("  note: the module is not set for a type-K thermocouple")
         status = fur.watchdog_status()
-        out(f"  reading: {fur.temperature_C():.1f} C; heater off; host watchdog status {status:02X}"
+        out(f"  reading: {fur.temperature_C():.1f} C (cold junction {fur.cold_junction_C():.1f} C); "
+            f"heater off; host watchdog status {status:02X}"
             f"{' (timed out earlier)' if status & 0x04 else ''}")
 
 

@@ -82,9 +82,18 @@ class Furnace(DconDevice):
         # @AADOdd is idempotent: safe to repeat after a lost reply
         reply = self.query("@", dcon.digital_output_body(outputs))
         if reply.refused:
+            if self._watchdog_tripped():
+                raise DeviceError(self.name, "outputs locked: the host watchdog timed out "
+                                             "(heater at its safe value); clear it with ~AA1")
             raise DeviceError(self.name, "refused '@AADO' (the alarm owns the digital outputs?)")
         if reply.lead != "!":
             raise DeviceError(self.name, f"garbled reply to '@AADO': '{reply.lead}{reply.body}'")
+
+    def _watchdog_tripped(self) -> bool:
+        try:
+            return bool(self.watchdog_status() & dcon.WATCHDOG_TIMED_OUT)
+        except DeviceError:
+            return False
 
     def heater(self, on: bool) -> None:
         """Switch the heater; refuses to switch it on at or above the maximum temperature."""
@@ -101,15 +110,25 @@ class Furnace(DconDevice):
         self.heater_is_on = True
 
     def heater_off(self) -> bool:
-        """Heater off, best effort: retries, never raises. True if the module acknowledged."""
+        """Heater off, best effort: retries, never raises. True if the module acknowledged,
+        or refused but reports the heater output off (after a watchdog trip)."""
         for _ in range(HEATER_OFF_ATTEMPTS):
             try:
                 self._write_outputs(0)
                 self.heater_is_on = False
                 return True
             except Exception:  # noqa: BLE001 - on a way out nothing may stop the next attempt
-                continue
+                try:
+                    if not self.digital_io()["outputs"] & self.heater_mask:
+                        self.heater_is_on = False
+                        return True
+                except Exception:  # noqa: BLE001
+                    pass
         return False
+
+    def cold_junction_C(self) -> float:
+        """``$AA3``: the module's cold-junction (terminal) temperature."""
+        return self.query("$", "3", dcon.parse_analog)
 
     def digital_io(self) -> dict[str, int]:
         """``@AADI`` → alarm state, digital outputs, digital inputs."""

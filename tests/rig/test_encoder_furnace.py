@@ -112,7 +112,8 @@ def test_heater_refused_at_max(fake_port):
 def test_heater_off_retries_and_never_raises(fake_port):
     fake = fake_port([(b"@01DO00\r", None), (b"@01DO00\r", b"!\r")])
     assert furnace(fake).heater_off() is True
-    silent = fake_port([(b"@01DO00\r", None)] * 9)  # 3 attempts x 3 tries each
+    # 3 attempts, each: @AADO00 tried 3 times, then @AADI (does the output read off?) 3 times
+    silent = fake_port(([(b"@01DO00\r", None)] * 3 + [(b"@01DI\r", None)] * 3) * 3)
     assert furnace(silent).heater_off() is False
     gone = fake_port()
     f = furnace(gone)
@@ -122,9 +123,23 @@ def test_heater_off_retries_and_never_raises(fake_port):
 
 
 def test_alarm_owning_outputs_is_reported(fake_port):
-    fake = fake_port([(b"@01DO00\r", b"?01\r")])
-    with pytest.raises(DeviceError, match="refused '@AADO'"):
+    fake = fake_port([(b"@01DO00\r", b"?01\r"), (b"~010\r", b"!0100\r")])
+    with pytest.raises(DeviceError, match="refused '@AADO' \\(the alarm owns"):
         furnace(fake).heater(False)
+
+
+def test_refused_heater_off_counts_when_the_output_reads_off(fake_port):
+    # after a watchdog trip the module refuses @AADO, but its safe value already switched
+    # the heater off: @AADI shows DO0 clear
+    fake = fake_port([(b"@01DO00\r", b"?01\r"), (b"~010\r", b"!0104\r"), (b"@01DI\r", b"!00000\r")])
+    f = furnace(fake)
+    f.heater_is_on = True
+    assert f.heater_off() is True and not f.heater_is_on
+
+
+def test_refused_heater_off_with_the_output_still_on_fails(fake_port):
+    attempt = [(b"@01DO00\r", b"?01\r"), (b"~010\r", b"!0100\r"), (b"@01DI\r", b"!00100\r")]
+    assert furnace(fake_port(attempt * 3)).heater_off() is False
 
 
 def test_arm_watchdog_sets_heater_off_safe_value_then_enables(fake_port):

@@ -8,6 +8,8 @@ import time
 
 import pytest
 
+from flowcurve.errors import DeviceError
+
 virtual = pytest.importorskip("rig.virtual.rig")
 
 
@@ -72,16 +74,19 @@ def test_watchdog_switches_the_heater_off_when_the_host_goes_quiet(rig):
         time.sleep(0.7)  # the host says nothing
         assert not rig.model.furnace.commanded_on
         assert furnace.watchdog_status() == 0x04
+        with pytest.raises(DeviceError, match="outputs locked: the host watchdog timed out"):
+            furnace.heater(True)
+        assert furnace.heater_off() is True  # refused, but the output reads off
         furnace.clear_watchdog()
         assert furnace.watchdog_status() == 0
+        furnace.heater(True)  # usable again
+        assert rig.model.furnace.commanded_on
 
 
 def test_unplugged_furnace_is_reported_and_heater_off_does_not_raise(rig):
     furnace = rig.config().furnace.create()
     furnace.open()
     rig.inject("furnace", "unplug")
-    from flowcurve.errors import DeviceError
-
     with pytest.raises(DeviceError, match=r"^furnace: "):
         furnace.temperature_C()
     assert furnace.heater_off() is False
