@@ -79,7 +79,8 @@ def check_loadcell(section, out, opener=None) -> None:
         cutoff = aed.ASF_CUTOFF_HZ.get(s["filter"])
         out(f"  settings: {s['baud']} baud, parity {s['parity']}, COF{s['output_format']}, "
             f"ICR{s['rate_code']} ({rate:g} values/s), ASF{s['filter']} "
-            f"({'off' if cutoff is None else f'{cutoff:g} Hz'})")
+            f"({'off' if cutoff is None else f'{cutoff:g} Hz'})"
+            + (f", NOV{s['nov']} (ASCII nominal = {s['nov']} counts)" if s["nov"] else ""))
         for key, want in (("output_format", section.output_format), ("rate_code", section.rate_code),
                           ("filter", section.filter)):
             if s[key] != want:

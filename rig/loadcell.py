@@ -64,6 +64,7 @@ class LoadCell:
             self.transport = SerialTransport(port_url, name=name, baudrate=baudrate, parity=parity,
                                              timeout_s=timeout_s, opener=opener)
         self.output_rate_per_s = output_rate_per_s  # set by configure(rate_code=...)
+        self.nov = 0  # NOV scale, read by configure() / read_scale()
         self.streaming = False
         self.stream_silence_s = 1.0
         self._last_frame_t = 0.0
@@ -120,11 +121,24 @@ class LoadCell:
         return {"baud": baud, "parity": parity,
                 "output_format": self._query("COF?", parse=aed.parse_int_reply),
                 "rate_code": self._query("ICR?", parse=aed.parse_int_reply),
-                "filter": self._query("ASF?", parse=aed.parse_int_reply)}
+                "filter": self._query("ASF?", parse=aed.parse_int_reply),
+                "nov": self.read_scale()}
+
+    def read_scale(self) -> int:
+        """``NOV?``: the ASCII count of nominal load (0 = factory 1 000 000), kept for scaling.
+
+        An amplifier that refuses the query is taken to be at the factory scale.
+        """
+        reply = self._query("NOV?")
+        self.nov = 0 if reply.strip() == b"?" else aed.parse_int_reply(reply)
+        if self.nov < 0:
+            raise DeviceError(self.name, f"NOV? answered {self.nov}, not a count")
+        return self.nov
 
     def configure(self, *, rate_code: int | None = None, filter: int | None = None,
                   fmt: int | None = None) -> None:
-        """Set the output rate (``ICR0..7``), the filter (``ASF0..8``) and the format (``COF``)."""
+        """Set the output rate (``ICR0..7``), the filter (``ASF0..8``) and the format (``COF``);
+        then read the ``NOV`` scale the force conversion needs."""
         if rate_code is not None:
             if rate_code not in range(len(aed.ICR_RATES_PER_S)):
                 raise ValueError(f"rate code must be 0..7, got {rate_code}")
@@ -138,6 +152,7 @@ class LoadCell:
             new = aed.output_format(fmt)
             self._set(f"COF{fmt}")
             self.fmt = new
+        self.read_scale()  # a NOV left set by someone would scale ASCII forces wrongly
 
     def tare(self) -> None:
         """``TAR``: take the present load as zero (switches to net)."""
@@ -157,7 +172,7 @@ class LoadCell:
             value = aed.decode_msv(frame, self.fmt)
         except ProtocolError as exc:
             raise DeviceError(self.name, f"garbled measured value: {exc}") from None
-        force = float(aed.counts_to_newtons(value.counts, self.fmt, self.nominal_load_N))
+        force = float(aed.counts_to_newtons(value.counts, self.fmt, self.nominal_load_N, self.nov))
         sample = ForceSample(t, force, value.status, value.overflow, value.counts)
         if sample.overload and self.raise_on_overload:
             raise DeviceError(self.name, f"overload: status {value.status:#04x}, {force:.0f} N")

@@ -193,9 +193,14 @@ def encode_msv(counts: int, fmt: OutputFormat, *, status: int = 0, address: int 
     return body + (CRLF if fmt.crlf else b"")
 
 
-def counts_to_newtons(counts, fmt: OutputFormat, nominal_load_N: float):
-    """Force from counts: nominal load reads ``fmt.nominal_counts`` (works on arrays too)."""
-    return counts * (nominal_load_N / fmt.nominal_counts)
+def nominal_counts(fmt: OutputFormat, nov: int = 0) -> int:
+    """Counts at nominal load: ``NOV`` > 0 rescales the ASCII formats, binary keeps its own."""
+    return nov if fmt.kind == "ascii" and nov > 0 else fmt.nominal_counts
+
+
+def counts_to_newtons(counts, fmt: OutputFormat, nominal_load_N: float, nov: int = 0):
+    """Force from counts: nominal load reads :func:`nominal_counts` (works on arrays too)."""
+    return counts * (nominal_load_N / nominal_counts(fmt, nov))
 
 
 _IDN = re.compile(r'^\s*([^,]+),"([^"]*)","([^"]*)",(.*?)\s*$')

@@ -19,7 +19,8 @@ def test_identify(fake_port):
 
 
 def test_configure_sends_settings_and_checks_acks(fake_port):
-    fake = fake_port([(b";ICR0;", b"0\r\n"), (b";ASF3;", b"0\r\n"), (b";COF8;", b"0\r\n")])
+    fake = fake_port([(b";ICR0;", b"0\r\n"), (b";ASF3;", b"0\r\n"), (b";COF8;", b"0\r\n"),
+                      (b";NOV?;", b"0\r\n")])
     lc = cell(fake)
     lc.configure(rate_code=0, filter=3, fmt=8)
     assert lc.fmt.frame_length == 6 and lc.fmt.has_status
@@ -111,7 +112,7 @@ def test_stream_burst_keeps_the_output_spacing(fake_port):
     import time
 
     fmt = aed.output_format(3)
-    fake = fake_port([(b";ICR0;", b"0\r\n"), (b";MSV?0;", None)])
+    fake = fake_port([(b";ICR0;", b"0\r\n"), (b";NOV?;", b"0\r\n"), (b";MSV?0;", None)])
     lc = cell(fake)
     lc.configure(rate_code=0)  # 100 values/s
     lc.start_stream()
@@ -124,3 +125,23 @@ def test_stream_burst_keeps_the_output_spacing(fake_port):
     assert [s.counts for s in got] == list(range(10))
     assert all(step == pytest.approx(0.01, abs=0.002) for step in steps)  # the 100/s spacing
     assert before - 0.002 <= times[-1] <= after  # the last one is stamped on arrival
+
+
+def test_nov_scale_read_by_configure_rescales_ascii_only(fake_port):
+    # NOV500000: nominal load reads 500 000 in ASCII; 250 000 counts are then half load
+    fake = fake_port([(b";ASF0;", b"0\r\n"), (b";NOV?;", b"500000\r\n"),
+                      (b";MSV?;", b"+0250000\r\n"),
+                      (b";COF0;", b"0\r\n"), (b";NOV?;", b"500000\r\n"),
+                      (b";MSV?;", aed.encode_msv(2_560_000, aed.output_format(0)))])
+    lc = cell(fake)
+    lc.configure(filter=0)
+    assert lc.read().force_N == pytest.approx(50_000.0)  # not 25 kN at the factory scale
+    lc.configure(fmt=0)
+    assert lc.read().force_N == pytest.approx(50_000.0)  # binary keeps 5 120 000 = nominal
+
+
+def test_nov_refused_means_factory_scale(fake_port):
+    fake = fake_port([(b";ASF0;", b"0\r\n"), (b";NOV?;", b"?\r\n"), (b";MSV?;", b"+1000000\r\n")])
+    lc = cell(fake)
+    lc.configure(filter=0)
+    assert lc.read().force_N == pytest.approx(100_000.0)
