@@ -4,7 +4,8 @@
 settings and one reading, or a diagnosis (port missing, silent — wrong baud, parity or
 address?, garbled replies); exit code 0 when every device answered, 3 otherwise.
 'rig virtual' starts the virtual rig on pseudo-terminals, prints each device's port and a
-configuration file written for it, and runs until Ctrl-C.
+configuration file written for it, and runs until Ctrl-C. 'rig recover-loadcell' brings an
+amplifier left at an unknown baud rate back to the configured one.
 """
 
 from __future__ import annotations
@@ -33,6 +34,11 @@ def register(subparsers) -> None:
     check.add_argument("--no-probe", dest="probe", action="store_false",
                        help="do not try other baud rates and parities on a silent device")
     check.set_defaults(func=run_check)
+
+    recover = sub.add_parser("recover-loadcell",
+                             help="bring an amplifier left at an unknown baud rate back to the configured one")
+    recover.add_argument("--config", required=True, type=Path, help="rig configuration (TOML)")
+    recover.set_defaults(func=run_recover_loadcell)
 
     virtual = sub.add_parser("virtual", help="run the virtual rig on pseudo-terminals until Ctrl-C")
     virtual.add_argument("--config", type=Path, default=None,
@@ -181,6 +187,17 @@ def run_check(args) -> int:
     if failed:
         print(f"{failed} device(s) failed the check", file=sys.stderr)
         return CHECK_FAILED
+    return 0
+
+
+def run_recover_loadcell(args) -> int:
+    section = load_config(args.config).loadcell
+    print(f"load cell on {section.port}: sending ';S98;BDR{section.baud},...;' at every baud rate "
+          f"and parity, then IDN? at {section.baud} baud, parity {section.parity}")
+    with section.create() as cell:
+        idn = cell.recover_line()
+    print(f"  answers: {idn['manufacturer']} {idn['model']}, serial {idn['serial']} — "
+          f"send TDD1 to keep the rate over a power cycle")
     return 0
 
 

@@ -178,6 +178,30 @@ class LoadCell:
             raise DeviceError(self.name, f"overload: status {value.status:#04x}, {force:.0f} N")
         return sample
 
+    def recover_line(self, bauds=aed.BAUD_RATES, parities=("E", "N")) -> dict[str, str]:
+        """Bring an amplifier left at an unknown baud rate back to this driver's line settings.
+
+        PROTOCOLS.md: send ``;S98;BDR<rate>,<parity>;`` at each rate in turn (``S98``
+        addresses every unit, so a wrong address does not matter either), then select this
+        unit (``S<address>``) at the wanted rate and ask ``IDN?``. Returns the identity.
+        """
+        if self.streaming:
+            raise DeviceError(self.name, "cannot recover the line while streaming")
+        baud, parity = self.transport.settings["baudrate"], self.transport.settings["parity"]
+        if parity not in aed.PARITY_CODES:
+            raise ValueError(f"the AED line has parity E or N, not {parity!r}")
+        command = f";S98;BDR{baud},{aed.PARITY_CODES[parity]};".encode("ascii")
+        self.transport.close()
+        for trial_baud in bauds:
+            for trial_parity in parities:
+                with self.transport.with_line(baudrate=trial_baud, parity=trial_parity) as trial:
+                    trial.send(command)
+                    time.sleep(len(command) * 11 / trial_baud)  # let it leave the UART
+        self.transport.open()
+        if self.address is not None:
+            self.transport.send(aed.command(f"S{self.address:02d}"))  # leave broadcast mode
+        return self.identify()
+
     # -- continuous measurement -------------------------------------------------------
     def start_stream(self) -> None:
         """``MSV?0``: the amplifier sends values continuously until ``STP``."""

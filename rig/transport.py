@@ -67,6 +67,13 @@ class SerialTransport:
         self._port = None
         self._pending = bytearray()  # bytes read past the end of the last frame
 
+    def with_line(self, *, baudrate: int, parity: str, timeout_s: float | None = None) -> "SerialTransport":
+        """A new (closed) transport on the same port and opener with other line settings."""
+        return SerialTransport(self.url, name=self.name, baudrate=baudrate, parity=parity,
+                               bytesize=self.settings["bytesize"], stopbits=self.settings["stopbits"],
+                               timeout_s=self.timeout_s if timeout_s is None else timeout_s,
+                               opener=None if self._opener is serial.serial_for_url else self._opener)
+
     # -- life cycle -------------------------------------------------------------------
     def open(self) -> "SerialTransport":
         if self._port is not None:

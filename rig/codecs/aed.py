@@ -47,6 +47,8 @@ NOMINAL_COUNTS_ASCII = 1_000_000
 ICR_RATES_PER_S = (100.0, 50.0, 25.0, 12.0, 6.0, 3.0, 2.0, 1.0)
 # ASF1..8 -3 dB cut-off with FMD0, Hz (ASF0 = filter off).
 ASF_CUTOFF_HZ = {0: None, 1: 8.0, 2: 3.5, 3: 1.5, 4: 0.7, 5: 0.3, 6: 0.2, 7: 0.1, 8: 0.05}
+BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200)  # tried in a recovery
+PARITY_CODES = {"N": 0, "E": 1}  # BDR's parity digit
 BINARY_COFS = (0, 2, 4, 6, 8, 12)
 ASCII_COFS = (1, 3, 5, 7, 9, 11)
 
@@ -223,7 +225,7 @@ def parse_baud(reply: bytes) -> tuple[int, str]:
     """``BDR?`` answer ``9600,1`` → (9600, "E"); parity 0 = none, 1 = even."""
     try:
         rate, parity = reply.strip().decode("ascii").split(",")
-        return int(rate), {"0": "N", "1": "E"}[parity.strip()]
+        return int(rate), {str(v): k for k, v in PARITY_CODES.items()}[parity.strip()]
     except (ValueError, KeyError, UnicodeDecodeError):
         raise ProtocolError(f"BDR? answer is not 'rate,parity': {reply!r}") from None
 

@@ -106,6 +106,16 @@ def test_check_reports_garbled_replies_and_an_open_thermocouple(tmp_path, capsys
     assert "Gray check ok" in out
 
 
+def test_recover_loadcell_on_the_virtual_rig(tmp_path, capsys):
+    with virtual.VirtualRig() as rig:
+        path = tmp_path / "rig.toml"
+        path.write_text(to_toml(rig.config()))
+        rig.devices["loadcell"].baud, rig.devices["loadcell"].parity = 19200, 0  # left at 19200/N
+        assert main(["rig", "recover-loadcell", "--config", str(path)]) == 0
+        assert (rig.devices["loadcell"].baud, rig.devices["loadcell"].parity) == (9600, 1)
+    assert "answers: HBM AED104, serial 1234" in capsys.readouterr().out
+
+
 def test_rig_virtual_runs_until_ctrl_c(tmp_path):
     path = tmp_path / "virtual.toml"
     proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "rig", "virtual", "--config", str(path)],

@@ -1,5 +1,7 @@
 """LoadCell driver through command/reply pairs (the AED command set of PROTOCOLS.md)."""
 
+import time
+
 import pytest
 
 from flowcurve.errors import DeviceError
@@ -109,8 +111,6 @@ def test_bus_address_selected_once_before_the_first_command(fake_port):
 
 
 def test_stream_burst_keeps_the_output_spacing(fake_port):
-    import time
-
     fmt = aed.output_format(3)
     fake = fake_port([(b";ICR0;", b"0\r\n"), (b";NOV?;", b"0\r\n"), (b";MSV?0;", None)])
     lc = cell(fake)
@@ -145,3 +145,69 @@ def test_nov_refused_means_factory_scale(fake_port):
     lc = cell(fake)
     lc.configure(filter=0)
     assert lc.read().force_N == pytest.approx(100_000.0)
+
+
+class LineDevice:
+    """An amplifier that understands only bytes sent at its own baud rate and parity."""
+
+    def __init__(self, baud, parity):
+        self.baud, self.parity = baud, parity
+        self.selected = True
+        self.heard = []
+
+    def opener(self, url, **kw):
+        device = self
+
+        class Port:
+            timeout = kw["timeout"]
+            in_waiting = 0
+
+            def __init__(self):
+                self.rx = bytearray()
+                self.line = (kw["baudrate"], kw["parity"])
+
+            def write(self, data):
+                if self.line != (device.baud, device.parity):
+                    return len(data)  # noise to the amplifier
+                for cmd in data.decode().split(";"):
+                    device.heard.append(cmd)
+                    if cmd == "S98":
+                        device.selected = False
+                    elif cmd.startswith("S"):
+                        device.selected = True
+                    elif cmd.startswith("BDR"):
+                        rate, par = cmd[3:].split(",")
+                        device.baud, device.parity = int(rate), "NE"[int(par)]
+                    elif cmd == "IDN?" and device.selected:
+                        self.rx += b'HBM,"AED104         ","1234   ",P20\r\n'
+                return len(data)
+
+            def flush(self):
+                pass
+
+            def read(self, n=1):
+                if not self.rx:
+                    time.sleep(self.timeout)
+                data = bytes(self.rx[:n])
+                del self.rx[:n]
+                return data
+
+            def reset_input_buffer(self):
+                self.rx.clear()
+
+            def close(self):
+                pass
+
+        return Port()
+
+
+def test_recover_line_brings_the_amplifier_back_to_the_configured_rate():
+    device = LineDevice(38400, "N")  # someone left it at 38 400 baud, no parity
+    lc = LoadCell("fake://amp", nominal_load_N=1e5, baudrate=9600, parity="E", timeout_s=0.05,
+                  address=31, opener=device.opener)
+    with pytest.raises(DeviceError, match="no answer to 'IDN\\?'"):
+        lc.identify()
+    assert lc.recover_line()["model"] == "AED104"
+    assert (device.baud, device.parity) == (9600, "E")
+    assert "BDR9600,1" in device.heard and device.heard[-2:] == ["IDN?", ""] and "S31" in device.heard
+    assert lc.identify()["serial"] == "1234"
