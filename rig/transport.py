@@ -336,6 +336,31 @@ class DconDevice:
         """``$AAF`` → the firmware version text."""
         return self.query("$", "F", dcon.expect_ack, self.address, "$AAF")
 
+    def set_configuration(self, *, new_address: int | None = None, type_code: int | None = None,
+                          baud: int | None = None, format_byte: int | None = None,
+                          settle_timeout_s: float = 3.0) -> dcon.Configuration:
+        """``%AANNTTCCFF``: change address, input type, baud or data format (unchanged fields
+        keep the module's present values). Baud and checksum changes need the module's INIT
+        pin, else it refuses. A module may be silent for seconds after the write: the reply
+        gets ``settle_timeout_s``. Returns the configuration read back with ``$AA2``."""
+        now = self.configuration()
+        body = dcon.set_configuration_body(
+            now.address if new_address is None else new_address,
+            now.type_code if type_code is None else type_code,
+            now.baud if baud is None else baud,
+            now.format_byte if format_byte is None else format_byte)
+        target = int(body[:2], 16)
+        acked = self.query("%", body, dcon.expect_ack, None, "%AANNTTCCFF", timeout=settle_timeout_s)
+        if acked.upper() != f"{target:02X}":
+            raise DeviceError(self.name, f"%AANNTTCCFF acknowledged for address {acked!r}, not {target:02X}")
+        self.address = target
+        self.checksum = bool((now.format_byte if format_byte is None else format_byte) & 0x40)
+        return self.configuration()
+
+    def watchdog_timeout(self) -> tuple[bool | None, float]:
+        """``~AA2`` → (enabled, time-out in s) of the host watchdog."""
+        return self.query("~", "2", dcon.parse_watchdog_timeout, self.address)
+
     def host_ok(self) -> None:
         """``~**``: tell every module on the line that the host is alive (no reply)."""
         self.send("~", broadcast=True)

@@ -165,3 +165,23 @@ def test_configuration_and_identity(fake_port):
     cfg = f.configuration()
     assert cfg.thermocouple == "K" and cfg.baud == 9600 and not cfg.checksum
     assert f.module_name() == "7011" and f.firmware() == "A2.0"
+
+
+def test_set_configuration_changes_the_address_and_keeps_the_rest(fake_port):
+    fake = fake_port([(b"$012\r", b"!010F0600\r"),
+                      (b"%01050F0600\r", b"!05\r"),
+                      (b"$052\r", b"!050F0600\r")])
+    f = furnace(fake)
+    cfg = f.set_configuration(new_address=5)
+    assert f.address == 5 and cfg.address == 5 and cfg.thermocouple == "K"
+
+
+def test_set_configuration_refused_without_the_init_pin(fake_port):
+    fake = fake_port([(b"$012\r", b"!010F0600\r"), (b"%01010F0700\r", b"?01\r")])
+    with pytest.raises(DeviceError, match=r"^furnace: refused '%01010F0700' \(answered '\?'\)$"):
+        furnace(fake).set_configuration(baud=19200)
+
+
+def test_watchdog_timeout_read(fake_port):
+    fake = fake_port([(b"~012\r", b"!01164\r")])
+    assert furnace(fake).watchdog_timeout() == (True, 10.0)
