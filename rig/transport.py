@@ -9,6 +9,10 @@ SerialException) raises ``DeviceError(device, "port /dev/... disappeared")``.
 
 Retries are the caller's decision: :meth:`exchange` repeats a command only when told it is
 safe (reads and idempotent settings), never for commands with one-off side effects.
+
+:class:`DconDevice` is the DCON exchange layer over a transport (framing, checksum,
+silence-means-error, the commands every DCON module shares); the furnace module and the
+encoder box derive from it.
 """
 
 from __future__ import annotations
