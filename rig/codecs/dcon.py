@@ -162,10 +162,9 @@ def parse_open_thermocouple(reply: Reply, address: int) -> bool:
 
 
 def parse_digital_io(reply: Reply, address: int | None = None) -> dict[str, int]:
-    """``@AADI`` → ``!SOOII``: alarm state S, digital outputs OO, digital inputs II.
-
-    The family's manuals show the reply without the address; some modules (and the
-    virtual one) put it first, ``!AASOOII`` — both are accepted.
+    """``@AADI`` → ``!AASOOII`` (I-7011 manual example ``!0100001``): alarm state S,
+    digital outputs OO, digital inputs II. The address-less ``!SOOII`` of other family
+    members is accepted too (pass ``address`` to check and strip it).
     """
     body = expect_ack(reply, None, "@AADI")
     if address is not None and len(body) == 7 and body[:2].upper() == f"{address:02X}":
