@@ -54,10 +54,18 @@ class Furnace(DconDevice):
         """``#AA`` → thermocouple temperature in °C.
 
         An over- or under-range reading is checked with ``$AAB``: an open thermocouple, or a
-        reading out of range, switches the heater off and raises :class:`SafetyError`.
+        reading out of range, switches the heater off and raises :class:`SafetyError`. Above
+        ``max_temperature_C`` the heater is switched off; if it was on, SafetyError too.
         """
         value, text = self.query("#", "", self._reading)
         if math.isfinite(value):
+            if value > self.max_temperature_C:
+                # above the limit the heater goes off whoever reads; if it was on, stop too
+                was_on = self.heater_is_on
+                self.heater_off()
+                if was_on:
+                    raise SafetyError(self.name, f"over-temperature: {value:.1f} C above the maximum "
+                                                 f"{self.max_temperature_C:g} C; heater off")
             return value
         try:
             is_open = self.open_thermocouple()

@@ -185,3 +185,15 @@ def test_set_configuration_refused_without_the_init_pin(fake_port):
 def test_watchdog_timeout_read(fake_port):
     fake = fake_port([(b"~012\r", b"!01164\r")])
     assert furnace(fake).watchdog_timeout() == (True, 10.0)
+
+
+def test_any_reading_above_max_switches_the_heater_off(fake_port):
+    fake = fake_port([(b"#01\r", b">+0500.00\r"), (b"@01DO01\r", b"!\r"),
+                      (b"#01\r", b">+0910.00\r"), (b"@01DO00\r", b"!\r"),
+                      (b"#01\r", b">+0905.00\r"), (b"@01DO00\r", b"!\r")])
+    f = furnace(fake)
+    f.heater(True)
+    with pytest.raises(SafetyError, match=r"^furnace: over-temperature: 910.0 C above the maximum 900 C"):
+        f.temperature_C()
+    assert not f.heater_is_on
+    assert f.temperature_C() == pytest.approx(905.0)  # heater already off: a reading, still off again
