@@ -145,7 +145,7 @@ def parse_analog(reply: Reply, *, data_format: int = FORMAT_ENGINEERING,
         raise ProtocolError(f"#AA reading is not a signed number: '>{body}'")
     if body in ("+9999", "+9999.9", "+99999"):
         return math.inf
-    if body.startswith("-") and float(body) == 0.0:  # "-0000": under range
+    if body == "-0000":  # the under-range code (a real reading has decimals: -0000.00)
         return -math.inf
     value = float(body)
     if data_format == FORMAT_PERCENT:

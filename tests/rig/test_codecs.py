@@ -131,6 +131,7 @@ def test_dcon_analog_engineering_units_and_range_codes():
     assert dcon.parse_analog(dcon.parse_reply(b">-0012.50\r")) == pytest.approx(-12.5)
     assert dcon.parse_analog(dcon.parse_reply(b">+9999\r")) == math.inf
     assert dcon.parse_analog(dcon.parse_reply(b">-0000\r")) == -math.inf
+    assert dcon.parse_analog(dcon.parse_reply(b">-0000.00\r")) == 0.0  # a reading, not the code
     with pytest.raises(ProtocolError):
         dcon.parse_analog(dcon.parse_reply(b"?01\r"))
 
