@@ -52,46 +52,59 @@ def demo_specs(material_name: str) -> list[TestSpec]:
     ]
 
 
-def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_scale: float = DEMO_TIME_SCALE) -> int:
+def identify_and_write(record_path: Path, outdir: Path):
+    """Identify a record, add its plots, write its result folder; (identification, folder)."""
     from identification.identify import identify
     from reports.plots import add_plots
 
+    ident = identify(read_record(record_path))
+    add_plots(ident)
+    return ident, ident.write(outdir / Path(record_path).stem)
+
+
+def summary_lines(run, ident, folder: Path) -> list[str]:
+    """What the demo prints about one identified virtual test, against the truth."""
+    res = ident.result
+    truth = true_constants(run.material, run.strain_rate_per_s, run.temperature_C)
+    hard = res["hardening"]
+    lo, hi = hard["strain_range"]
+    lines = [
+        f"  results → {folder}/ (result.json, true_curve.csv, {', '.join(sorted(ident.plots))} plots)",
+        f"  strain rate {run.strain_rate_per_s:.2e} /s, {run.temperature_C:.0f} C; virtual material's static JC there: "
+        f"A {truth['A_MPa']:.1f} MPa, B {truth['B_MPa']:.1f} MPa, n {truth['n']:.3f}",
+        f"  identified ({hard['law']}, {hard.get('correction', hard['method'])}): A {hard['A_MPa']:.1f} MPa, B {hard['B_MPa']:.1f} MPa, "
+        f"n {hard['n']:.3f}; max deviation from the true curve over εp {lo:.3f}…{hi:.3f}: "
+        f"{hardening_deviation_pct(hard, run.material, run.strain_rate_per_s, run.temperature_C, (lo, hi)):.1f} %",
+    ]
+    if res.get("test") == "tension":
+        lines.append(f"  E {res['E_MPa'] / 1000:.0f} GPa (apparent; true {run.material.E_MPa / 1000:.0f}), Rp0.2 {res['Rp02_MPa']:.0f} MPa, "
+                     f"Rm {res['Rm_MPa']:.0f} MPa, A {res['A_pct']:.1f} %, Z {res['Z_pct']:.1f} %, fracture true strain {res['fracture_true_strain']:.3f}")
+    else:
+        lines.append(f"  friction μ {res['friction_mu']:.3f} ({res.get('friction_method', '')}; true {run.friction_mu:g})")
+        for name, fit in (res.get("hardening_by_correction") or {}).items():
+            if isinstance(fit, dict) and "A_MPa" in fit:
+                dev = hardening_deviation_pct(fit, run.material, run.strain_rate_per_s, run.temperature_C, fit["strain_range"])
+                lines.append(f"    correction {name:8s}: A {fit['A_MPa']:.1f}, B {fit['B_MPa']:.1f}, n {fit['n']:.3f}; "
+                             f"max deviation {dev:.1f} % over εp up to {fit['strain_range'][1]:.2f}")
+    return lines
+
+
+def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_scale: float = DEMO_TIME_SCALE) -> int:
     out = Path(out)
     view = LiveView(quiet=quiet)
-    say = print
     t_start = time.monotonic()
-    say(f"flowcurve demo — virtual rig ({material}), real drivers over pseudo-terminals, time scale {time_scale:g}")
+    print(f"flowcurve demo — virtual rig ({material}), real drivers over pseudo-terminals, time scale {time_scale:g}")
     for spec in demo_specs(material):
         record_path = out / "records" / f"{spec.test}.csv"
         t0 = time.monotonic()
         run = run_virtual_test(spec, record_path, material=material, time_scale=time_scale, view=view)
         o = run.outcome
-        say(f"\n{spec.test}: recorded {o.samples} samples ({o.duration_s:.0f} s of test in {time.monotonic() - t0:.1f} s) → {o.path}; {o.reason}")
+        print(f"\n{spec.test}: recorded {o.samples} samples ({o.duration_s:.0f} s of test in {time.monotonic() - t0:.1f} s) → {o.path}; {o.reason}")
         if o.status != "complete":
-            say(f"  the test did not complete ({o.reason}); not identified")
+            print(f"  the test did not complete ({o.reason}); not identified")
             return 1
-        ident = identify(read_record(o.path))
-        add_plots(ident)
-        folder = ident.write(out / "results" / o.path.stem)
-        res = ident.result
-        truth = true_constants(run.material, run.strain_rate_per_s, run.temperature_C)
-        hard = res["hardening"]
-        say(f"  results → {folder}/ (result.json, true_curve.csv, {', '.join(sorted(ident.plots))} plots)")
-        say(f"  strain rate {run.strain_rate_per_s:.2e} /s, {run.temperature_C:.0f} C; virtual material's static JC there: A {truth['A_MPa']:.1f} MPa, B {truth['B_MPa']:.1f} MPa, n {truth['n']:.3f}")
-        say(f"  identified ({hard['law']}, {hard.get('correction', hard['method'])}): A {hard['A_MPa']:.1f} MPa, B {hard['B_MPa']:.1f} MPa, n {hard['n']:.3f}; "
-            f"max deviation from the true curve over εp {hard['strain_range'][0]:.3f}…{hard['strain_range'][1]:.3f}: "
-            f"{hardening_deviation_pct(hard, run.material, run.strain_rate_per_s, run.temperature_C, hard['strain_range']):.1f} %")
-        if spec.test == "tension":
-            say(f"  E {res['E_MPa'] / 1000:.0f} GPa (apparent; true {run.material.E_MPa / 1000:.0f}), Rp0.2 {res['Rp02_MPa']:.0f} MPa, Rm {res['Rm_MPa']:.0f} MPa, "
-                f"A {res['A_pct']:.1f} %, Z {res['Z_pct']:.1f} %, fracture true strain {res['fracture_true_strain']:.3f}")
-        else:
-            say(f"  friction μ {res['friction_mu']:.3f} ({res.get('friction_method', '')}; true {run.friction_mu:g})")
-            reached = float(read_record(o.path).meta.get("post.hk_mm", "nan"))
-            for name, fit in (res.get("hardening_by_correction") or {}).items():
-                if isinstance(fit, dict) and "A_MPa" in fit:
-                    dev = hardening_deviation_pct(fit, run.material, run.strain_rate_per_s, run.temperature_C, fit["strain_range"])
-                    say(f"    correction {name:8s}: A {fit['A_MPa']:.1f}, B {fit['B_MPa']:.1f}, n {fit['n']:.3f}; max deviation {dev:.1f} % over εp up to {fit['strain_range'][1]:.2f}")
-            say(f"  final height {reached:.3f} mm")
-    say(f"\ndone in {time.monotonic() - t_start:.1f} s. Next: flowcurve identify {out / 'records' / 'tension.csv'} --out results/; "
-        f"'flowcurve run tension --help' for a test of your own.")
+        ident, folder = identify_and_write(o.path, out / "results")
+        print("\n".join(summary_lines(run, ident, folder)))
+    print(f"\ndone in {time.monotonic() - t_start:.1f} s. Next: flowcurve identify {out / 'records' / 'tension.csv'} --out results/; "
+          f"'flowcurve run tension --help' for a test of your own.")
     return 0

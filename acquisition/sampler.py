@@ -64,6 +64,24 @@ class Stream:
             return self._t[-1] if self._t else -np.inf
 
 
+def lower_envelope_stamps(arrival: np.ndarray, period: float, last: float | None = None) -> np.ndarray:
+    """Send times of streamed frames from their arrival times (same clock).
+
+    A device streaming at a fixed rate sends frame k one ``period`` after frame k-1, and no
+    frame arrives before it was sent. So stamp_k = min(arrival_k, stamp_(k-1) + period):
+    frames read in a burst after the host lagged get their spacing back instead of one
+    arrival time. ``period`` should be slightly longer than the device's nominal period, so
+    that stamps lean on the least-delayed arrivals when the device's crystal is slow.
+    ``last`` is the previous block's last stamp.
+    """
+    arrival = np.asarray(arrival, dtype=float)
+    k = np.arange(arrival.size)
+    base = arrival - k * period  # stamp_k = k·T + min_j<=k (arrival_j − j·T)
+    if last is not None and arrival.size:
+        base[0] = min(base[0], last + period)
+    return np.minimum.accumulate(base) + k * period
+
+
 def interpolate_at(t: np.ndarray, ts: np.ndarray, vs: np.ndarray) -> np.ndarray:
     """Linear interpolation of the stream (ts, vs) at times t; ends held; NaN if empty."""
     if ts.size == 0:

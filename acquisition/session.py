@@ -15,7 +15,7 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
-from acquisition.sampler import Channel
+from acquisition.sampler import Channel, lower_envelope_stamps
 from flowcurve.errors import DeviceError
 from rig.codecs import aed
 
@@ -26,6 +26,7 @@ ENCODER_PERIOD_S = 0.02  # wall-clock polling period of the encoder box
 FURNACE_PERIOD_S = 0.25  # of the furnace module (DCON replies take up to 0.3 s) ...
 FURNACE_MIN_PERIOD_S = 0.02  # ... shorter on a time-scaled virtual rig: 4 steps per control period
 STREAM_BLOCK = 20  # load-cell frames per read call at most
+STREAM_PERIOD_MARGIN = 1.01  # stamps step 1 % longer than the nominal output period
 
 
 class DriverRig:
@@ -101,15 +102,24 @@ class DriverRig:
     # channels --------------------------------------------------------------------------------
     def channels(self, clock: Callable[[], float], to_clock: Callable[[float], float]) -> dict[str, Channel]:
         """One reading thread per device; force first (the reference clock)."""
+        self._to_clock = to_clock
         cell = self.loadcell
         if self.stream:
             started = []
+
+            last: list[float] = []
+            period = self.loadcell_period_s * STREAM_PERIOD_MARGIN
 
             def read_force():
                 if not started:
                     cell.start_stream()
                     started.append(True)
-                return [(to_clock(s.t_monotonic_s), s.force_N) for s in cell.read_stream(STREAM_BLOCK, 0.1)]
+                samples = cell.read_stream(STREAM_BLOCK, 0.1)
+                if not samples:
+                    return []
+                stamps = lower_envelope_stamps([s.t_monotonic_s for s in samples], period, last[-1] if last else None)
+                last[:] = [float(stamps[-1])]
+                return [(to_clock(t), s.force_N) for t, s in zip(stamps, samples)]
         else:
 
             def read_force():
@@ -118,13 +128,19 @@ class DriverRig:
 
         chans = {
             "force_N": Channel(cell.name, read_force, clock, silence_s=SILENCE_S["loadcell"]),
-            "crosshead_mm": Channel(self.encoder.name, self.encoder.position_mm, clock, period_s=ENCODER_PERIOD_S, silence_s=SILENCE_S["encoder"]),
+            "crosshead_mm": Channel(self.encoder.name, self._read_position, clock, period_s=ENCODER_PERIOD_S, silence_s=SILENCE_S["encoder"]),
         }
         if self.furnace is not None:
             per_control = self.config.furnace.control_period_s / 4.0 / self.time_scale
             period = max(FURNACE_MIN_PERIOD_S, min(FURNACE_PERIOD_S, per_control))
             chans["temperature_C"] = Channel(self.furnace.name, self.read_temperature_C, clock, period_s=period, silence_s=SILENCE_S["furnace"])
         return chans
+
+    def _read_position(self) -> list[tuple[float, float]]:
+        """The crosshead position stamped at the middle of its exchange."""
+        t1 = time.monotonic()
+        mm = self.encoder.position_mm()
+        return [(self._to_clock(0.5 * (t1 + time.monotonic())), mm)]
 
     # furnace ---------------------------------------------------------------------------------
     def read_temperature_C(self) -> float:
