@@ -63,3 +63,20 @@ def to_jsonable(value):
     if isinstance(value, np.bool_):
         return bool(value)
     return value
+
+
+def read_json_object(path: str | Path, error: type[Exception], what: str = "JSON file") -> dict:
+    """Read a JSON object (result.json, fit.json); any problem is one ``error`` naming the file
+    (and the line and column of a syntax error)."""
+    path = Path(path)
+    try:
+        value = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise error(f"{path}: no such {what}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise error(f"{path}: cannot read: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise error(f"{path}, line {exc.lineno}, column {exc.colno}: not valid JSON: {exc.msg}") from None
+    if not isinstance(value, dict):
+        raise error(f"{path}: a {what} holds a JSON object, not {type(value).__name__}")
+    return value

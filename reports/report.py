@@ -13,7 +13,6 @@ import base64
 import datetime as _dt
 import html
 import io
-import json
 from collections import Counter
 from pathlib import Path
 
@@ -21,6 +20,7 @@ from flowcurve import __version__
 from flowcurve.errors import FlowcurveError
 from reports.cards import CardData, load_card_data, write_card
 from reports.units import DEFAULT_UNIT_SYSTEM
+from identification.outcome import read_json_object
 
 
 class ReportError(FlowcurveError):
@@ -86,15 +86,7 @@ def _fmt(value) -> str:
 
 
 def _read_json(path: Path) -> dict:
-    try:
-        value = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ReportError(f"{path}: cannot read: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise ReportError(f"{path}, line {exc.lineno}, column {exc.colno}: not valid JSON: {exc.msg}") from None
-    if not isinstance(value, dict):
-        raise ReportError(f"{path}: expected a JSON object")
-    return value
+    return read_json_object(path, ReportError)
 
 
 def find_results(root: Path) -> list[tuple[str, Path, dict]]:

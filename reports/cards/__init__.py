@@ -10,7 +10,6 @@ were identified on, with the warning that extrapolation beyond it is the user's 
 
 from __future__ import annotations
 
-import json
 import math
 import textwrap
 from dataclasses import dataclass, field
@@ -23,6 +22,7 @@ from flowcurve import __version__
 from flowcurve.errors import FlowcurveError
 from identification.johnson_cook import johnson_cook
 from reports.units import UnitSystem, get_unit_system
+from identification.outcome import read_json_object
 
 FORMATS = ("lsdyna", "abaqus", "radioss", "calculix")
 MAX_TABLE_ROWS = 100  # CALCULIX.md: tables over ~150 rows gave stresses ~8 % too low
@@ -238,16 +238,7 @@ def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
 def load_card_data(path, **overrides) -> CardData:
     """Read ``fit.json`` at ``path``; a one-line error if it is missing or not JSON."""
     path = Path(path)
-    try:
-        fit = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise CardError(f"{path}: no such fit file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CardError(f"{path}: cannot read: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise CardError(f"{path}, line {exc.lineno}, column {exc.colno}: not valid JSON: {exc.msg}") from None
-    if not isinstance(fit, dict):
-        raise CardError(f"{path}: a fit file holds a JSON object, not {type(fit).__name__}")
+    fit = read_json_object(path, CardError, "fit file")
     return card_data_from_fit(fit, path, **overrides)
 
 
