@@ -57,7 +57,8 @@ def heated_spec(test="tension", speed=0.02):
 
 
 def run_with_fault(tmp_path, device, fault, *, spec=None, after_samples=40, time_scale=100.0, overrides=None, **fault_kw):
-    """Run a heated virtual test and inject ``fault`` once ``after_samples`` are on disk."""
+    """Run a heated virtual test and inject ``fault`` once ``after_samples`` are on disk
+    (``fault`` may be a function of the virtual rig instead of a fault name)."""
     path = tmp_path / "rec.csv"
     seen = {}
 
@@ -66,7 +67,10 @@ def run_with_fault(tmp_path, device, fault, *, spec=None, after_samples=40, time
 
         def inject():
             seen["t_on_disk"] = wait_for_samples(path, after_samples)
-            vr.inject(device, fault, **fault_kw)
+            if callable(fault):
+                fault(vr)
+            else:
+                vr.inject(device, fault, **fault_kw)
 
         threading.Thread(target=inject, daemon=True).start()
 
@@ -109,10 +113,23 @@ def test_open_thermocouple_stops_heating(tmp_path):
 
 
 def test_over_temperature_stops_heating(tmp_path):
-    # a relay stuck on heats past the configured maximum: the host must stop and report it
-    run, seen = run_with_fault(tmp_path, "furnace", "relay_stuck", overrides={"furnace_max_temperature_C": 75.0})
+    def overheat(vr):  # the furnace runs away (e.g. a second heat source): 90 C > max 75 C
+        with vr.lock:
+            vr.sync().furnace.temperature_C = 90.0
+
+    run, seen = run_with_fault(tmp_path, "furnace", overheat, overrides={"furnace_max_temperature_C": 75.0})
     out = run.outcome
     assert isinstance(out.error, SafetyError) and "over-temperature" in str(out.error)
+    check_kept_and_heater_off(run, seen)
+
+
+def test_stuck_heater_relay_stops_the_test(tmp_path):
+    # a relay stuck on heats whatever the output says: the host must stop and report it,
+    # either as the controller's stuck-relay diagnosis or as over-temperature, whichever first
+    run, seen = run_with_fault(tmp_path, "furnace", "relay_stuck", overrides={"furnace_max_temperature_C": 75.0})
+    out = run.outcome
+    assert isinstance(out.error, SafetyError)
+    assert "over-temperature" in str(out.error) or "relay stuck" in str(out.error)
     rec = check_kept_and_heater_off(run, seen)
     assert np.nanmax(rec.column("temperature_C")) <= 75.0 + 15.0  # stopped soon after crossing
 
