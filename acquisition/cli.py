@@ -170,7 +170,7 @@ def _run_configured(args, view: LiveView, out_path: Path) -> int:
     from rig.config import load_config
 
     config = load_config(args.config)
-    scale = args.time_scale or 1.0
+    scale = 1.0 if args.time_scale is None else args.time_scale
     _positive("time-scale", scale)
     if args.speed is None:
         args.speed = 0.01
@@ -185,7 +185,7 @@ def _run_virtual(args, view: LiveView, out_path: Path) -> int:
     from rig.materials import get_material
     from rig.physics import Specimen
 
-    scale = args.time_scale or 15.0
+    scale = 15.0 if args.time_scale is None else args.time_scale
     _positive("time-scale", scale)
     if args.speed is None:
         args.speed = 0.05

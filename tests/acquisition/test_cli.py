@@ -1,0 +1,105 @@
+"""flowcurve run / annotate / recover from the command line: results and one-line errors."""
+
+import numpy as np
+import pytest
+
+from acquisition.record import RecordWriter, read_record
+from flowcurve.cli import main
+
+
+def small_record(path, status_complete=True, partial_tail=False):
+    w = RecordWriter(path, {"test": "compression", "specimen.d0_mm": 10.0, "specimen.h0_mm": 15.0}, ["time_s", "force_N", "crosshead_mm"])
+    w.append_rows(np.column_stack([np.arange(20) * 0.1, np.arange(20) * 100.0, np.arange(20) * 0.01]))
+    w.event(1.0, "start")
+    if status_complete:
+        w.close()
+    else:  # a process killed mid-test: status 'recording', maybe a partial line
+        w._fh.flush()
+        if partial_tail:
+            w._fh.write("2.000000,20")
+            w._fh.flush()
+        w._fh.close()
+    return path
+
+
+def run_cli(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_annotate_sets_and_removes_keys(tmp_path, capsys):
+    p = small_record(tmp_path / "r.csv")
+    code, out, _ = run_cli(capsys, "annotate", p, "--set", "post.hk_mm=7.5", "--set", "operator=Petrov")
+    assert code == 0 and "post.hk_mm = 7.5" in out and "still missing: post.dmax_mm" in out
+    rec = read_record(p)
+    assert rec.meta["post.hk_mm"] == "7.5" and rec.meta["operator"] == "Petrov"
+    assert len(rec.data) == 20 and rec.events[0].name == "start"  # samples and events untouched
+    code, out, _ = run_cli(capsys, "annotate", p, "--set", "operator=")
+    assert "operator" not in read_record(p).meta
+
+
+@pytest.mark.parametrize("setting,message", [
+    ("post.hk_mm=abc", "must be a number"),
+    ("post.hk_mm=-1", "must be > 0"),
+    ("nokey", "KEY=VALUE"),
+    ("status=complete", "managed by flowcurve"),
+])
+def test_annotate_bad_input_is_one_line(tmp_path, capsys, setting, message):
+    p = small_record(tmp_path / "r.csv")
+    before = p.read_text()
+    code, _, err = run_cli(capsys, "annotate", p, "--set", setting)
+    assert code == 2 and message in err and err.count("\n") == 1 and "Traceback" not in err
+    assert p.read_text() == before
+
+
+def test_annotate_not_a_record(tmp_path, capsys):
+    p = tmp_path / "x.csv"
+    p.write_text("a,b\n1,2\n")
+    code, _, err = run_cli(capsys, "annotate", p, "--set", "post.hk_mm=1")
+    assert code == 2 and "x.csv" in err and "not a flowcurve-record" in err and err.count("\n") == 1
+
+
+def test_recover_completes_a_cut_record(tmp_path, capsys):
+    p = small_record(tmp_path / "r.csv", status_complete=False, partial_tail=True)
+    assert read_record(p).truncated
+    code, out, _ = run_cli(capsys, "recover", p)
+    assert code == 0 and "20 samples up to 1.9 s" in out
+    rec = read_record(p)
+    assert rec.meta["status"] == "aborted" and not rec.truncated and len(rec.data) == 20
+    code, out, _ = run_cli(capsys, "recover", p)  # twice: nothing to do
+    assert code == 0 and "nothing to recover" in out
+
+
+def test_run_virtual_compression_from_the_command_line(tmp_path, capsys):
+    p = tmp_path / "c.csv"
+    code, out, err = run_cli(capsys, "run", "compression", "--quiet", "--time-scale", "60", "--out", p, "--operator", "Ivanova", "--specimen-id", "C-7")
+    assert code == 0, err
+    assert f"record: {p}" in out and "complete" in out and "post.hk_mm=" in out
+    rec = read_record(p)
+    assert rec.meta["operator"] == "Ivanova" and rec.meta["specimen.id"] == "C-7"
+    assert rec.meta["material"] == "steel45" and float(rec.meta["post.hk_mm"]) < float(rec.meta["specimen.h0_mm"])
+    assert rec.column("force_N").max() > 20e3
+
+
+@pytest.mark.parametrize("args,message", [
+    (["run", "tension", "--config", "/nonexistent/rig.toml", "--quiet", "--d0", "6", "--l0", "30"], "rig.toml"),
+    (["run", "tension", "--quiet", "--d0", "-6"], "--d0 must be a positive number"),
+    (["run", "tension", "--quiet", "--time-scale", "0"], "--time-scale must be a positive number"),
+    (["run", "tension", "--quiet", "--temperature", "5000"], "exceeds the configured maximum"),
+    (["run", "tension", "--quiet", "--post", "post.lu_mm=x"], "must be a number"),
+])
+def test_run_bad_input_is_one_line(tmp_path, capsys, args, message):
+    code, out, err = run_cli(capsys, *args, "--out", tmp_path / "r.csv")
+    assert code == 2 and message in err and err.count("\n") == 1 and "Traceback" not in err, err
+
+
+def test_run_with_config_needs_geometry(tmp_path, capsys):
+    from rig.config import to_toml
+    from rig.virtual.rig import VirtualRig
+
+    with VirtualRig("steel45") as vr:
+        cfg = tmp_path / "rig.toml"
+        cfg.write_text(to_toml(vr.config()))
+        code, _, err = run_cli(capsys, "run", "tension", "--config", cfg, "--quiet", "--d0", "6", "--out", tmp_path / "r.csv")
+    assert code == 2 and "give --l0" in err
