@@ -11,6 +11,7 @@ amplifier left at an unknown baud rate back to the configured one.
 from __future__ import annotations
 
 import math
+import signal
 import sys
 import tempfile
 import time
@@ -217,10 +218,17 @@ def run_virtual(args) -> int:
             print(f"{name:9s} {port}")
         print(f"configuration: {path}")
         print(f"try: flowcurve rig check --config {path}")
+        previous = signal.signal(signal.SIGTERM, _stop_on_sigterm)  # kill/systemd: stop cleanly too
         try:  # Ctrl-C may come as soon as the line below is out
             print("running; Ctrl-C stops", flush=True)
             while True:
                 time.sleep(0.5)
         except KeyboardInterrupt:
             print("virtual rig stopped")
+        finally:
+            signal.signal(signal.SIGTERM, previous)
     return 0
+
+
+def _stop_on_sigterm(signum, frame):
+    raise KeyboardInterrupt

@@ -67,6 +67,9 @@ class LoadCell:
         self.nov = 0  # NOV scale, read by configure() / read_scale()
         self.streaming = False
         self.stream_silence_s = 1.0
+        self.max_resyncs = 3  # stream restarts in a row before a garbled stream is an error
+        self.stream_resyncs = 0  # restarts so far (for the record's warnings)
+        self._resyncs_in_a_row = 0
         self._last_frame_t = 0.0
         self._last_sample_t = -math.inf
         self._selected = False
@@ -172,6 +175,9 @@ class LoadCell:
             value = aed.decode_msv(frame, self.fmt)
         except ProtocolError as exc:
             raise DeviceError(self.name, f"garbled measured value: {exc}") from None
+        return self._to_sample(value, t)
+
+    def _to_sample(self, value: aed.MeasuredValue, t: float) -> ForceSample:
         force = float(aed.counts_to_newtons(value.counts, self.fmt, self.nominal_load_N, self.nov))
         sample = ForceSample(t, force, value.status, value.overflow, value.counts)
         if sample.overload and self.raise_on_overload:
@@ -218,7 +224,11 @@ class LoadCell:
         Returns early when ``max_samples`` are in; a frame cut by the deadline stays
         buffered for the next call, so framing never slips. Timestamps are host times of
         arrival, back-dated by one output period per complete frame still buffered behind
-        (known once ``configure(rate_code=...)`` ran). A stream silent for more than ``stream_silence_s`` raises DeviceError.
+        (known once ``configure(rate_code=...)`` ran). A frame that fails its check (a lost
+        or extra byte: no CR LF where one is due) restarts the stream (``STP``, ``MSV?0``)
+        to regain the framing — formats without CR LF (+32) cannot be checked. More than
+        ``max_resyncs`` restarts in a row, or a stream silent for more than
+        ``stream_silence_s``, raise DeviceError.
         """
         if not self.streaming:
             raise DeviceError(self.name, "read_stream without start_stream")
@@ -236,12 +246,27 @@ class LoadCell:
                     raise
                 break
             now = time.monotonic()
-            samples.append(self._sample(frame, self._stream_time(now)))
+            try:
+                value = aed.decode_msv(frame, self.fmt)
+            except ProtocolError as exc:
+                self._resync(exc)
+                continue
+            self._resyncs_in_a_row = 0
+            samples.append(self._to_sample(value, self._stream_time(now)))
             self._last_frame_t = now
         silent = time.monotonic() - self._last_frame_t
         if not samples and silent > self.stream_silence_s:
             raise DeviceError(self.name, f"stream ('MSV?0') silent for {silent:.1f} s")
         return samples
+
+    def _resync(self, exc: ProtocolError) -> None:
+        self.stream_resyncs += 1
+        self._resyncs_in_a_row += 1
+        if self._resyncs_in_a_row > self.max_resyncs:
+            raise DeviceError(self.name, f"garbled stream: {self._resyncs_in_a_row} restarts in a row "
+                                         f"did not regain the framing ({exc})")
+        self.stop_stream()
+        self.start_stream()
 
     def _stream_time(self, now: float) -> float:
         # a frame read while later ones already wait in the buffer arrived earlier: back-date

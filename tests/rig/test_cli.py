@@ -116,10 +116,14 @@ def test_recover_loadcell_on_the_virtual_rig(tmp_path, capsys):
     assert "answers: HBM AED104, serial 1234" in capsys.readouterr().out
 
 
-def test_rig_virtual_runs_until_ctrl_c(tmp_path):
+@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])
+def test_rig_virtual_runs_until_ctrl_c(tmp_path, stop):
     path = tmp_path / "virtual.toml"
+    # a runner started in the background has SIGINT ignored, and children inherit that:
+    # give the command the terminal's default, as an operator's Ctrl-C would meet it
     proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "rig", "virtual", "--config", str(path)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         lines = []
         deadline = time.monotonic() + 30
@@ -134,8 +138,8 @@ def test_rig_virtual_runs_until_ctrl_c(tmp_path):
         assert "loadcell" in text and "/dev/pts/" in text and f"configuration: {path}" in text
         cfg = load_config(path)
         assert cfg.loadcell.port.startswith("/dev/pts/") and cfg.furnace is not None
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=10)
+        proc.send_signal(stop)
+        out, err = proc.communicate(timeout=20)
         assert proc.returncode == 0, err
         assert "virtual rig stopped" in out
     finally:
