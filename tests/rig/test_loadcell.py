@@ -211,3 +211,26 @@ def test_recover_line_brings_the_amplifier_back_to_the_configured_rate():
     assert (device.baud, device.parity) == (9600, "E")
     assert "BDR9600,1" in device.heard and device.heard[-2:] == ["IDN?", ""] and "S31" in device.heard
     assert lc.identify()["serial"] == "1234"
+
+
+def test_stream_with_an_extra_byte_restarts_and_regains_framing(fake_port):
+    fmt = aed.output_format(3)
+    good = [aed.encode_msv(c, fmt) for c in (1, 2, 3)]
+    bad = good[1][:4] + b"\xa5" + good[1][4:]  # one byte too many in the second frame
+    fake = fake_port([(b";MSV?0;", good[0] + bad + good[2]),
+                      (b";STP;", None),
+                      (b";MSV?0;", b"".join(aed.encode_msv(c, fmt) for c in (10, 11)))])
+    lc = cell(fake)
+    lc.start_stream()
+    got = lc.read_stream(3, timeout=0.5)
+    assert [s.counts for s in got] == [1, 10, 11]  # the shifted frames were not decoded
+    assert lc.stream_resyncs == 1 and lc.streaming
+
+
+def test_stream_that_never_regains_framing_is_an_error(fake_port):
+    junk = b"\xff" * 10
+    fake = fake_port([(b";MSV?0;", junk)] + [(b";STP;", None), (b";MSV?0;", junk)] * 3)  # 3 restarts allowed
+    lc = cell(fake)
+    lc.start_stream()
+    with pytest.raises(DeviceError, match=r"^load cell: garbled stream: 4 restarts in a row"):
+        lc.read_stream(5, timeout=1.0)
