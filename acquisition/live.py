@@ -128,7 +128,7 @@ class LiveView:
         if self.tty:
             lines = render(s)
             out = f"\x1b[{self._drawn_lines}F" if self._drawn_lines else ""
-            out += "".join(f"\x1b[2K{line}\n" for line in lines)
+            out += "".join(f"\x1b[2K{line}\n" for line in lines) + "\x1b[J"  # clear what a longer frame left
             self.stream.write(out)
             self._drawn_lines = len(lines)
         else:
