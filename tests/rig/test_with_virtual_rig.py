@@ -125,3 +125,17 @@ def test_two_threads_share_one_port_without_mixing_replies(rig):
     assert len(readings) == 150 and all(15.0 < r < 40.0 for r in readings)
     assert switches == [1 - i % 2 for i in range(150)]  # each @AADI saw the output just set
     assert not rig.model.furnace.commanded_on  # closing switched it off
+
+
+def test_stream_survives_garbled_frames(rig):
+    rig.inject("loadcell", "garble", fraction=0.05)
+    with rig.config().loadcell.create() as cell:
+        cell.configure(rate_code=0, filter=0, fmt=3)
+        cell.start_stream()
+        got, deadline = [], time.monotonic() + 10.0
+        while len(got) < 100 and time.monotonic() < deadline:
+            got += cell.read_stream(100 - len(got), timeout=0.5)
+        cell.stop_stream()
+    assert len(got) == 100
+    assert cell.stream_resyncs >= 1  # some frames were garbled and the stream restarted ...
+    assert all(abs(s.force_N) < 100.0 for s in got)  # ... and none was decoded shifted
