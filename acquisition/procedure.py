@@ -252,8 +252,8 @@ class Procedure:
         if spec.temperature_C is not None:
             if not rig.has_furnace:
                 raise ProcedureError("heating was asked for but the rig configuration has no furnace")
-            if spec.temperature_C > rig.max_temperature_C:
-                raise ProcedureError(f"set-point {spec.temperature_C:g} C exceeds the configured maximum {rig.max_temperature_C:g} C")
+            if spec.temperature_C >= rig.max_temperature_C:
+                raise ProcedureError(f"set-point {spec.temperature_C:g} C is not below the configured maximum {rig.max_temperature_C:g} C")
         self.rig = rig
         self.spec = spec
         self.path = Path(path)

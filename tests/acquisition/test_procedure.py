@@ -113,5 +113,10 @@ def test_over_temperature_while_recording_stops_heating(tmp_path, fake_rig):
 def test_bad_spec_is_refused_in_one_line(tmp_path, fake_rig):
     with pytest.raises(ProcedureError, match="l0_mm"):
         Procedure(fake_rig(), TestSpec("tension", geometry_mm={"d0_mm": 6.0}), tmp_path / "x.csv")
-    with pytest.raises(ProcedureError, match="exceeds the configured maximum"):
+    with pytest.raises(ProcedureError, match="is not below the configured maximum"):
         Procedure(fake_rig(max_temperature_C=500.0), spec(temperature_C=600.0), tmp_path / "x.csv")
+
+
+def test_set_point_at_the_maximum_is_refused(tmp_path, fake_rig):
+    with pytest.raises(ProcedureError, match="not below the configured maximum 500"):
+        Procedure(fake_rig(max_temperature_C=500.0), spec(temperature_C=500.0), tmp_path / "x.csv")
