@@ -24,12 +24,16 @@ APPROACH_DONE_C = 0.05  # the eased set-point counts as reached this close
 
 
 class Furnace(DconDevice):
-    """The furnace module: ``temperature_C()``, ``heater(on)``, ``heater_off()``, watchdog."""
+    """The furnace module: ``temperature_C()``, ``heater(on)``, ``heater_off()``, watchdog.
+
+    ``data_format`` (engineering units, % of range or hex) is read from the module (``$AA2``)
+    before the first reading unless given.
+    """
 
     def __init__(self, port_url, *, name: str = "furnace", address: int = 1, heater_do_bit: int = 0,
                  max_temperature_C: float = 900.0, baudrate: int = 9600, parity: str = "N",
                  timeout_s: float = 0.3, checksum: bool = False,
-                 data_format: int = dcon.FORMAT_ENGINEERING, type_code: int = 0x0F, opener=None):
+                 data_format: int | None = None, type_code: int = 0x0F, opener=None):
         super().__init__(port_url, name=name, address=address, baudrate=baudrate, parity=parity,
                          timeout_s=timeout_s, checksum=checksum, opener=opener)
         if heater_do_bit not in (0, 1):
@@ -38,7 +42,7 @@ class Furnace(DconDevice):
             raise ValueError(f"maximum temperature must be positive, got {max_temperature_C}")
         self.heater_mask = 1 << heater_do_bit
         self.max_temperature_C = float(max_temperature_C)
-        self.data_format = data_format
+        self.data_format = data_format  # None: learnt from $AA2 before the first reading
         self.full_scale_C = dcon.FULL_SCALE_C.get(type_code, dcon.FULL_SCALE_C[0x0F])
         self.heater_is_on = False
         self.watchdog_armed = False
@@ -57,6 +61,8 @@ class Furnace(DconDevice):
         reading out of range, switches the heater off and raises :class:`SafetyError`. Above
         ``max_temperature_C`` the heater is switched off; if it was on, SafetyError too.
         """
+        if self.data_format is None:
+            self.configuration()
         value, text = self.query("#", "", self._reading)
         if math.isfinite(value):
             if value > self.max_temperature_C:
@@ -76,6 +82,13 @@ class Furnace(DconDevice):
             raise SafetyError(self.name, "thermocouple open (over-range reading confirmed by $AAB); heater off")
         side = "over" if value > 0 else "under"
         raise SafetyError(self.name, f"temperature reading {side} range ('>{text}'); heater off")
+
+    def configuration(self) -> dcon.Configuration:
+        """``$AA2``, and take the module's data format and input range for its readings."""
+        cfg = super().configuration()
+        self.data_format = cfg.data_format
+        self.full_scale_C = dcon.FULL_SCALE_C.get(cfg.type_code, self.full_scale_C)
+        return cfg
 
     def _reading(self, reply: dcon.Reply) -> tuple[float, str]:
         value = dcon.parse_analog(reply, data_format=self.data_format, full_scale=self.full_scale_C)

@@ -13,6 +13,7 @@ def encoder(fake, **kw):
 
 def furnace(fake, **kw):
     kw.setdefault("max_temperature_C", 900.0)
+    kw.setdefault("data_format", 0)  # engineering units (else learnt by $AA2 first)
     return Furnace("fake://fur", timeout_s=0.05, opener=fake.opener, **kw)
 
 
@@ -197,3 +198,11 @@ def test_any_reading_above_max_switches_the_heater_off(fake_port):
         f.temperature_C()
     assert not f.heater_is_on
     assert f.temperature_C() == pytest.approx(905.0)  # heater already off: a reading, still off again
+
+
+def test_data_format_is_learnt_from_the_module(fake_port):
+    # $AA2 says hex format (FF bits 1:0 = 10) on a type-K input: >4000 is half of 1370 C
+    fake = fake_port([(b"$012\r", b"!010F0602\r"), (b"#01\r", b">4000\r"), (b"#01\r", b">4000\r")])
+    f = Furnace("fake://fur", timeout_s=0.05, opener=fake.opener)
+    assert f.temperature_C() == pytest.approx(0x4000 / 0x7FFF * 1370.0)
+    assert f.temperature_C() == pytest.approx(0x4000 / 0x7FFF * 1370.0)  # asked once

@@ -32,7 +32,8 @@ def dcon_server():
                 buf += data
                 while b"\r" in buf:
                     frame, buf = buf.split(b"\r", 1)
-                    reply = {b"#01": b">+0123.40\r", b"@01DO00": b"!\r", b"$01M": b"!017011\r"}.get(frame)
+                    reply = {b"#01": b">+0123.40\r", b"@01DO00": b"!\r", b"$01M": b"!017011\r",
+                             b"$012": b"!010F0600\r"}.get(frame)
                     if reply:  # silent on anything else, like the module
                         conn.sendall(reply)
 

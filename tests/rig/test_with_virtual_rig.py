@@ -139,3 +139,12 @@ def test_stream_survives_garbled_frames(rig):
     assert len(got) == 100
     assert cell.stream_resyncs >= 1  # some frames were garbled and the stream restarted ...
     assert all(abs(s.force_N) < 100.0 for s in got)  # ... and none was decoded shifted
+
+
+@pytest.mark.parametrize("data_format", [0, 1, 2])  # engineering, % of range, hex
+def test_furnace_reading_in_each_data_format(rig, data_format):
+    rig.devices["furnace"].data_format = data_format
+    with rig.config().furnace.create() as furnace:
+        reading = furnace.temperature_C()
+        assert furnace.data_format == data_format  # learnt from $AA2
+    assert reading == pytest.approx(rig.model.furnace.temperature_C, abs=1.0)  # noise + 1370/32767
