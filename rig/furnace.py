@@ -20,6 +20,10 @@ from rig.codecs import dcon
 from rig.transport import DconDevice
 
 HEATER_OFF_ATTEMPTS = 3
+
+
+class OutputsRefused(DeviceError):
+    """The module answered ``?`` to ``@AADO`` (watchdog trip or alarm owns the outputs)."""
 APPROACH_DONE_C = 0.05  # the eased set-point counts as reached this close
 
 
@@ -104,9 +108,9 @@ class Furnace(DconDevice):
         reply = self.query("@", dcon.digital_output_body(outputs))
         if reply.refused:
             if self._watchdog_tripped():
-                raise DeviceError(self.name, "outputs locked: the host watchdog timed out "
-                                             "(heater at its safe value); clear it with ~AA1")
-            raise DeviceError(self.name, "refused '@AADO' (the alarm owns the digital outputs?)")
+                raise OutputsRefused(self.name, "outputs locked: the host watchdog timed out "
+                                                "(heater at its safe value); clear it with ~AA1")
+            raise OutputsRefused(self.name, "refused '@AADO' (the alarm owns the digital outputs?)")
         if reply.lead != "!":
             raise DeviceError(self.name, f"garbled reply to '@AADO': '{reply.lead}{reply.body}'")
 
@@ -138,13 +142,15 @@ class Furnace(DconDevice):
                 self._write_outputs(0)
                 self.heater_is_on = False
                 return True
-            except Exception:  # noqa: BLE001 - on a way out nothing may stop the next attempt
-                try:
+            except OutputsRefused:
+                try:  # the module talks but will not switch: is the output off already?
                     if not self.digital_io()["outputs"] & self.heater_mask:
                         self.heater_is_on = False
                         return True
-                except Exception:  # noqa: BLE001
+                except Exception:  # noqa: BLE001 - on a way out nothing may stop the next attempt
                     pass
+            except Exception:  # noqa: BLE001
+                pass
         return False
 
     def cold_junction_C(self) -> float:
