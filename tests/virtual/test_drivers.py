@@ -1,7 +1,6 @@
 """The real drivers (rig.loadcell, rig.encoder, rig.furnace) against the virtual devices
 over ptys, with every injected fault reported as a DeviceError naming the device."""
 
-import termios
 import time
 
 import pytest
@@ -35,13 +34,7 @@ def test_drivers_read_the_model(rig):
         assert enc.gray_check()
 
 
-# Unplug: rig/transport.py discard_input() lets termios.error (EIO from tcflush on a hung-up
-# pty) escape instead of a DeviceError; strict xfail so the fix is noticed.
-UNPLUG = pytest.param("unplug", marks=pytest.mark.xfail(
-    raises=termios.error, strict=True, reason="transport.discard_input does not wrap termios.error (EIO)"))
-
-
-@pytest.mark.parametrize("fault", ["silence", "drop", "garble", UNPLUG])
+@pytest.mark.parametrize("fault", ["silence", "drop", "garble", "unplug"])
 @pytest.mark.parametrize("device", ["loadcell", "encoder", "furnace"])
 def test_every_wire_fault_is_a_device_error_naming_the_device(rig, device, fault):
     drivers = {
@@ -85,9 +78,6 @@ def test_furnace_driver_watchdog_drops_heater_when_host_stops(rig):
         assert fu.watchdog_status() & 0x04
 
 
-@pytest.mark.xfail(raises=DeviceError, strict=True,
-                   reason="rig.codecs.dcon.parse_digital_io expects '!SOOII'; the I-7011 manual answers "
-                          "'!AASOOII' (example '!0100001'), which the virtual module sends")
 def test_furnace_driver_reads_digital_io_in_the_manual_format(rig):
     with Furnace(rig.ports["furnace"], timeout_s=0.2) as fu:
         fu.heater(True)
