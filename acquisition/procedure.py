@@ -284,7 +284,8 @@ class Procedure:
         state = StopState()
         sampler: Sampler | None = None
         try:
-            with HeaterSafety(rig.heater_off, arm_watchdog=rig.arm_watchdog if rig.has_furnace else None, log=self._event) as safety:
+            # the drivers retry heater-off themselves: one attempt here, then the module watchdog
+            with HeaterSafety(rig.heater_off, arm_watchdog=rig.arm_watchdog if rig.has_furnace else None, log=self._event, retries=1) as safety:
                 try:
                     if spec.temperature_C is not None:
                         self._heat()
@@ -303,6 +304,8 @@ class Procedure:
                 except FlowcurveError as exc:
                     status, reason, error = STATUS_ABORTED, str(exc), exc
                 finally:
+                    if sampler is not None:  # the reading threads let go of the ports first
+                        sampler.request_stop()
                     safety.switch_off(reason or "end of test")
                     self._stop_motion()
                     if sampler is not None:

@@ -65,6 +65,7 @@ class HeaterSafety:
         self.off_confirmed = False
         self.off_error: str | None = None
         self._done = False
+        self.attempted = False
         self._exiting = False
         self._lock = threading.Lock()
         self._old_handlers: dict[int, object] = {}
@@ -90,6 +91,7 @@ class HeaterSafety:
     def switch_off(self, reason: str = "end of test") -> bool:
         """Switch the heater off (idempotent per attempt; retried). True when it succeeded."""
         with self._lock:
+            self.attempted = True
             last = None
             for attempt in range(self.retries):
                 try:
@@ -132,7 +134,8 @@ class HeaterSafety:
                 reason = str(exc) if isinstance(exc, Interrupted) else "interrupted"
             else:
                 reason = " ".join(f"{exc_type.__name__}: {exc}".split())
-            self.switch_off(reason)
+            if not (self.attempted and self.off_confirmed is False and self.off_error):
+                self.switch_off(reason)  # (after a failed attempt the module watchdog takes over)
         finally:
             self._restore_handlers()
             atexit.unregister(self._atexit)

@@ -265,9 +265,13 @@ class Sampler:
                 self._on_fault(ch.device, f"no answer for {now - ch.last_data_wall_s:.1f} s")
         return self._fault
 
-    def stop(self, timeout_s: float = 2.0) -> None:
+    def request_stop(self) -> None:
+        """Ask every channel to stop after its current read (does not wait)."""
         for ch in self.channels.values():
             ch.stop()
+
+    def stop(self, timeout_s: float = 2.0) -> None:
+        self.request_stop()
         for ch in self.channels.values():
             if ch.is_alive() and ch is not threading.current_thread():
                 ch.join(timeout_s)

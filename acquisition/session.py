@@ -21,7 +21,8 @@ from rig.codecs import aed
 
 # Wall-clock seconds a device may stay silent before the test stops (the drivers' own
 # time-outs and retries come first; this catches a read that hangs or returns nothing).
-SILENCE_S = {"loadcell": 1.5, "encoder": 1.5, "furnace": 3.0}  # by config section
+SILENCE_MIN_S = 1.5
+SILENCE_TIMEOUTS = 10  # ... or this many of the device's reply time-outs, if longer
 ENCODER_PERIOD_S = 0.02  # wall-clock polling period of the encoder box
 FURNACE_PERIOD_S = 0.25  # of the furnace module (DCON replies take up to 0.3 s) ...
 FURNACE_MIN_PERIOD_S = 0.02  # ... shorter on a time-scaled virtual rig: 4 steps per control period
@@ -85,6 +86,7 @@ class DriverRig:
                     self.furnace.disarm_watchdog()
             except Exception:  # the watchdog stays armed: the module switches off by itself
                 pass
+            self.furnace.transport.close()  # heater-off tried just now: no second round in Furnace.close
         for dev in (self.loadcell, self.encoder, self.furnace):
             if dev is None:
                 continue
@@ -127,14 +129,18 @@ class DriverRig:
                 return [(to_clock(s.t_monotonic_s), s.force_N)]
 
         chans = {
-            "force_N": Channel(cell.name, read_force, clock, silence_s=SILENCE_S["loadcell"]),
-            "crosshead_mm": Channel(self.encoder.name, self._read_position, clock, period_s=ENCODER_PERIOD_S, silence_s=SILENCE_S["encoder"]),
+            "force_N": Channel(cell.name, read_force, clock, silence_s=self._silence_s(self.config.loadcell)),
+            "crosshead_mm": Channel(self.encoder.name, self._read_position, clock, period_s=ENCODER_PERIOD_S, silence_s=self._silence_s(self.config.encoder)),
         }
         if self.furnace is not None:
             per_control = self.config.furnace.control_period_s / 4.0 / self.time_scale
             period = max(FURNACE_MIN_PERIOD_S, min(FURNACE_PERIOD_S, per_control))
-            chans["temperature_C"] = Channel(self.furnace.name, self.read_temperature_C, clock, period_s=period, silence_s=SILENCE_S["furnace"])
+            chans["temperature_C"] = Channel(self.furnace.name, self.read_temperature_C, clock, period_s=period, silence_s=self._silence_s(self.config.furnace))
         return chans
+
+    @staticmethod
+    def _silence_s(section) -> float:
+        return max(SILENCE_MIN_S, SILENCE_TIMEOUTS * section.timeout_s)
 
     def _read_position(self) -> list[tuple[float, float]]:
         """The crosshead position stamped at the middle of its exchange."""

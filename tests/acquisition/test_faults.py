@@ -83,7 +83,9 @@ def check_kept_and_heater_off(run, seen):
     assert rec.meta["status"] == "aborted"
     assert rec.column("time_s")[-1] >= seen["t_on_disk"]  # nothing on disk before the fault is lost
     names = [e.name for e in rec.events]
-    assert "fault" in names and "heater_off" in names
+    texts = " ".join(e.text for e in rec.events)
+    # heater-off acknowledged, or (silent module) reported as handed to the module watchdog
+    assert "fault" in names and ("heater_off" in names or "module watchdog will switch it off" in texts)
     assert names.index("heater_on") < names.index("soak_reached") < names.index("fault")
     vr = seen["vr"]
     assert vr.devices["furnace"].do == 0  # the module's heater output is off
@@ -94,9 +96,11 @@ def check_kept_and_heater_off(run, seen):
     ("loadcell", "silence", "load cell"),
     ("encoder", "unplug", "crosshead encoder"),
     ("loadcell", "garble", "load cell"),
+    ("furnace", "silence", "furnace"),
 ])
 def test_device_faults_stop_the_test_naming_the_device(tmp_path, device, fault, named):
-    run, seen = run_with_fault(tmp_path, device, fault)
+    # short DCON time-outs keep the silent-furnace case quick (heater-off is retried on it)
+    run, seen = run_with_fault(tmp_path, device, fault, overrides={"furnace_timeout_s": 0.1})
     out = run.outcome
     assert out.status == "aborted" and isinstance(out.error, DeviceError)
     assert named in str(out.error), str(out.error)

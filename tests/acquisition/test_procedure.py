@@ -120,3 +120,40 @@ def test_bad_spec_is_refused_in_one_line(tmp_path, fake_rig):
 def test_set_point_at_the_maximum_is_refused(tmp_path, fake_rig):
     with pytest.raises(ProcedureError, match="not below the configured maximum 500"):
         Procedure(fake_rig(max_temperature_C=500.0), spec(temperature_C=500.0), tmp_path / "x.csv")
+
+
+def test_post_test_measurements_are_prompted_when_interactive(tmp_path, fake_rig):
+    answers = iter(["36.5", "", "not-a-number", "5.1"])
+    asked = []
+
+    def prompt(text):
+        asked.append(text)
+        return next(answers)
+
+    rig = fake_rig(x_frac_mm=0.5, post=None)  # a real rig: nothing measured for us
+    out = Procedure(rig, spec(), tmp_path / "p.csv", interactive=True, prompt=prompt).run()
+    assert len(asked) == 4 and "lu" in asked[0] and "neck" in asked[3]
+    rec = read_record(out.path)
+    assert rec.meta["post.lu_mm"] == "36.5" and rec.meta["post.neck_radius_mm"] == "5.1"
+    assert "post.dk_mm" not in rec.meta and "post.du_mm" not in rec.meta  # skipped, not invented
+
+
+def test_q_on_the_terminal_stops_the_test(tmp_path, fake_rig, monkeypatch):
+    import os
+    import sys
+    import threading
+
+    master, slave = os.openpty()
+    term = os.fdopen(slave, "r")
+    monkeypatch.setattr(sys, "stdin", term)
+    rig = fake_rig(x_frac_mm=1e9)
+    timer = threading.Timer(0.5, lambda: os.write(master, b"xq"))
+    timer.start()
+    try:
+        out = Procedure(rig, spec(post={"post.lu_mm": 31.0, "post.dk_mm": 5.0, "post.du_mm": 5.8, "post.neck_radius_mm": 4.0}), tmp_path / "q.csv", interactive=True).run()
+    finally:
+        timer.cancel()
+        term.close()
+        os.close(master)
+    assert out.status == "complete" and out.reason == "operator stop (q)"
+    assert read_record(out.path).meta["stop_reason"] == "operator stop (q)"
