@@ -167,7 +167,7 @@ def start_run_process(tmp_path, vr, *, watchdog_s=1.0, speed=0.02, time_scale=10
 def virtual_rig():
     from rig.virtual.rig import VirtualRig
 
-    with VirtualRig(MATERIAL, test="tension", speed_mm_per_s=0.02, time_scale=100.0) as vr:
+    with VirtualRig(MATERIAL, test="tension", speed_mm_per_s=0.02, time_scale=100.0, temperature_C=57.0) as vr:
         yield vr
 
 
