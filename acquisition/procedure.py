@@ -262,6 +262,7 @@ class Procedure:
         self.prompt = prompt
         self._t0 = 0.0
         self.writer: RecordWriter | None = None
+        self._writing = False
 
     # clock: test seconds since the procedure started (time-scaled on the virtual rig)
     def clock(self) -> float:
@@ -271,8 +272,12 @@ class Procedure:
         return (t_monotonic - self._t0) * self.rig.time_scale
 
     def _event(self, name: str, text: str = "") -> None:
-        if self.writer is not None and not self.writer._fh.closed:
+        if self.writer is not None and self._writing:
             self.writer.event(self.clock(), name, text)
+
+    def _close(self, status: str, extra: dict) -> None:
+        self._writing = False
+        self.writer.close(status, extra)
 
     def run(self) -> Outcome:
         spec, rig = self.spec, self.rig
@@ -280,6 +285,7 @@ class Procedure:
         rig.set_clock(self.clock)
         columns = ["time_s", "force_N", "crosshead_mm"] + (["temperature_C"] if rig.has_furnace else [])
         self.writer = RecordWriter(self.path, spec.meta(rig), columns)
+        self._writing = True
         status, reason, error = STATUS_COMPLETE, "", None
         state = StopState()
         sampler: Sampler | None = None
@@ -297,7 +303,7 @@ class Procedure:
                     sampler.start()
                     reason = self._record(sampler, state)
                 except Interrupted as exc:
-                    if exc.signame == "SIGINT":  # Ctrl-C: an operator stop, the record is good
+                    if exc.signame == "SIGINT" and sampler is not None:  # Ctrl-C while loading: an operator stop
                         reason = "operator stop (Ctrl-C)"
                     else:
                         status, reason = STATUS_ABORTED, str(exc)
@@ -312,13 +318,13 @@ class Procedure:
                         self.writer.append_rows(sampler.finish())
                     self._event("stop", reason)
         except BaseException as exc:  # anything unexpected: keep the record, mark it aborted
-            self.writer.close(STATUS_ABORTED, {"abort_reason": " ".join(f"{type(exc).__name__}: {exc}".split())})
+            self._close(STATUS_ABORTED, {"abort_reason": " ".join(f"{type(exc).__name__}: {exc}".split())})
             raise
         extra = {"stop_reason": reason}
         if status == STATUS_ABORTED:
             extra["abort_reason"] = reason
         samples = self.writer.rows_written
-        self.writer.close(status, extra)
+        self._close(status, extra)
         post = {}
         if status == STATUS_COMPLETE:
             post = self._post_measurements()
