@@ -40,7 +40,7 @@ def register(subparsers) -> None:
     run.add_argument("--force-limit", type=float, metavar="N", help="stop at this force, N (default 98 %% of the frame capacity)")
     run.add_argument("--post", action="append", default=[], metavar="KEY=VALUE", help="post-test measurement, e.g. post.hk_mm=3.55 (repeatable)")
     run.add_argument("--quiet", action="store_true", help="no live view, no prompts (for scripts)")
-    run.add_argument("--time-scale", type=float, default=None, metavar="X", help="virtual rig only: model seconds per wall second (default 15)")
+    run.add_argument("--time-scale", type=float, default=None, metavar="X", help="virtual rig: model seconds per wall second (in this process: default 15; with --config: what 'flowcurve rig virtual --time-scale' runs at)")
     run.add_argument("--poll", action="store_true", help="poll the load cell (MSV?) instead of streaming (MSV?0)")
     run.set_defaults(func=cmd_run)
 

@@ -129,7 +129,8 @@ class DriverRig:
                 return [(to_clock(s.t_monotonic_s), s.force_N)]
 
         chans = {
-            "force_N": Channel(cell.name, read_force, clock, silence_s=self._silence_s(self.config.loadcell)),
+            # polled: once per output period (a faster poll would read the same value again)
+            "force_N": Channel(cell.name, read_force, clock, period_s=0.0 if self.stream else self.loadcell_period_s, silence_s=self._silence_s(self.config.loadcell)),
             "crosshead_mm": Channel(self.encoder.name, self._read_position, clock, period_s=ENCODER_PERIOD_S, silence_s=self._silence_s(self.config.encoder)),
         }
         if self.furnace is not None:

@@ -71,15 +71,18 @@ def test_recover_completes_a_cut_record(tmp_path, capsys):
     assert code == 0 and "nothing to recover" in out
 
 
-def test_run_virtual_compression_from_the_command_line(tmp_path, capsys):
+@pytest.mark.parametrize("mode", [[], ["--poll"]])
+def test_run_virtual_compression_from_the_command_line(tmp_path, capsys, mode):
     p = tmp_path / "c.csv"
-    code, out, err = run_cli(capsys, "run", "compression", "--quiet", "--time-scale", "60", "--out", p, "--operator", "Ivanova", "--specimen-id", "C-7")
+    code, out, err = run_cli(capsys, "run", "compression", "--quiet", "--time-scale", "60", "--out", p, "--operator", "Ivanova", "--specimen-id", "C-7", *mode)
     assert code == 0, err
     assert f"record: {p}" in out and "complete" in out and "post.hk_mm=" in out
     rec = read_record(p)
     assert rec.meta["operator"] == "Ivanova" and rec.meta["specimen.id"] == "C-7"
     assert rec.meta["material"] == "steel45" and float(rec.meta["post.hk_mm"]) < float(rec.meta["specimen.h0_mm"])
     assert rec.column("force_N").max() > 20e3
+    rate = len(rec.data) / (rec.column("time_s")[-1] / 60.0)  # samples per wall second
+    assert 50 < rate < 130  # about the amplifier's 100 values/s, streamed or polled
 
 
 @pytest.mark.parametrize("args,message", [
