@@ -76,6 +76,8 @@ def summary_lines(run, ident, folder: Path) -> list[str]:
         f"n {hard['n']:.3f}; max deviation from the true curve over εp {lo:.3f}…{hi:.3f}: "
         f"{hardening_deviation_pct(hard, run.material, run.strain_rate_per_s, run.temperature_C, (lo, hi)):.1f} %",
     ]
+    for warning in res.get("warnings") or []:
+        lines.append(f"  warning: {warning}")
     if res.get("test") == "tension":
         lines.append(f"  E {res['E_MPa'] / 1000:.0f} GPa (apparent; true {run.material.E_MPa / 1000:.0f}), Rp0.2 {res['Rp02_MPa']:.0f} MPa, "
                      f"Rm {res['Rm_MPa']:.0f} MPa, A {res['A_pct']:.1f} %, Z {res['Z_pct']:.1f} %, fracture true strain {res['fracture_true_strain']:.3f}")
