@@ -60,11 +60,11 @@ class _Law:
 
 LAWS: dict[str, _Law] = {
     "johnson_cook": _Law(johnson_cook_static, ("A", "B", "n"), ("A_MPa", "B_MPa", "n"),
-                         {"A": (-np.inf, np.inf), "B": (0.0, np.inf), "n": (1e-4, 5.0)}),
+                         {"A": (0.0, np.inf), "B": (0.0, np.inf), "n": (1e-4, 5.0)}),
     "swift": _Law(swift, ("K", "eps0", "n"), ("K_MPa", "eps0", "n"),
                   {"K": (0.0, np.inf), "eps0": (1e-9, 10.0), "n": (1e-4, 5.0)}),
     "voce": _Law(voce, ("sigma0", "Q", "b"), ("sigma0_MPa", "Q_MPa", "b"),
-                 {"sigma0": (-np.inf, np.inf), "Q": (0.0, np.inf), "b": (1e-6, 1e5)}),
+                 {"sigma0": (0.0, np.inf), "Q": (0.0, np.inf), "b": (1e-6, 1e5)}),
 }
 
 
