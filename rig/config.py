@@ -63,7 +63,10 @@ class LoadCellConfig(SerialConfig):
     calibration_N_per_count: float | None = None
     output_format: int = 3
     rate_code: int = 0
-    filter: int = 5
+    # ASF2 (FMD0: -3 dB at 3.5 Hz, first-order lag about 45 ms). The amplifier's factory ASF5
+    # (0.3 Hz) lags the force by about 0.5 s: 5 µm of crosshead at 10 µm/s, which bends the
+    # elastic line of a short compression specimen (its whole elastic shortening is ~15 µm).
+    filter: int = 2
     select_address: bool = False
 
     def create(self, **kw):
