@@ -28,6 +28,7 @@ def register(subparsers) -> None:
     run.add_argument("--config", type=Path, help="rig configuration (TOML); without it the virtual rig runs in this process")
     run.add_argument("--out", type=Path, help="record file (default records/<test>-<date-time>.csv)")
     run.add_argument("--material", help="material name (virtual rig: also the virtual specimen's material, default steel45)")
+    run.add_argument("--E", dest="E_MPa", type=float, metavar="MPA", help="handbook elastic modulus of the material, MPa, written into the record as material.E_MPa (compression identification strips elastic strain with it; the virtual rig knows its own)")
     run.add_argument("--operator", default=None, help="operator name")
     run.add_argument("--specimen-id", default=None, help="specimen identifier")
     run.add_argument("--temperature", type=float, metavar="C", help="heat to this set-point, C, and soak before loading")
@@ -133,6 +134,7 @@ def build_spec(args, geometry_default: dict[str, float] | None = None) -> TestSp
         soak_s=args.soak,
         stop=StopCriteria(target_displacement_mm=args.target, force_limit_N=args.force_limit),
         post=post,
+        extra_meta={"material.E_MPa": repr(float(args.E_MPa))} if args.E_MPa else {},
     )
 
 

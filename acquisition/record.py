@@ -62,6 +62,7 @@ KNOWN_KEYS = (
     "status",
     "test",
     "material",
+    "material.E_MPa",
     "operator",
     "date",
     "specimen.id",

@@ -219,6 +219,7 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
     specimen = Specimen.tension(g["d0_mm"], g["l0_mm"]) if spec.test == "tension" else Specimen.compression(g["d0_mm"], g["h0_mm"])
     with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu, temperature_C=initial_temperature_C) as vr:
         spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}")
+        spec.extra_meta.setdefault("material.E_MPa", repr(float(vr.model.material.E_MPa)))  # the handbook value an operator would enter
         if rig_setup is not None:
             rig_setup(vr)
         config = virtual_config(**{**vr.config_kwargs(), **(config_overrides or {})})

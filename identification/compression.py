@@ -15,7 +15,7 @@ height hk, bulge diameter dmax or largest cross-section smax):
    corrected curve.
 
 The elastic modulus used to strip elastic strain is the ``E_MPa`` option (a handbook value)
-when given, otherwise the apparent modulus of the initial linear part (§2.3). When ``E_MPa`` is
+when given, else the record's ``material.E_MPa`` (entered at the test), otherwise the apparent modulus of the initial linear part (§2.3). When ``E_MPa`` is
 given, the measured hk (after unloading) is also corrected for the specimen's elastic
 spring-back before the shortening is scaled.
 """
@@ -157,6 +157,11 @@ def identify_compression(
         raise IdentificationError(f"unknown friction correction {friction_correction!r} (choose from {', '.join(fr.CORRECTIONS)})")
     if E_MPa is not None and not (math.isfinite(E_MPa) and E_MPa > 0):
         raise IdentificationError(f"E_MPa must be > 0, got {E_MPa!r}")
+    E_source = "option"
+    if E_MPa is None and record.positive("material.E_MPa") is not None:
+        # a short stiff specimen's elastic line is about one encoder count: the handbook
+        # modulus the operator entered strips elastic strain better than a regression on it
+        E_MPa, E_source = record.positive("material.E_MPa"), "record (material.E_MPa)"
     geo = _meta_geometry(record)
     d0, h0, hk = geo["d0"], geo["h0"], geo["hk"]
     warnings: list[str] = []
@@ -205,7 +210,7 @@ def identify_compression(
     area = math.pi * d_n**2 / 4.0  # (3.30)
     pressure = force / area  # (3.32) σ_n = P/S_i
 
-    E_used, E_source, E_fit = E_MPa, "option", None
+    E_used, E_fit = E_MPa, None
     if E_MPa is None:
         E_fit = _apparent_modulus(strain, pressure, warnings, modulus_window_MPa)
         E_used, E_source = (E_fit.E_MPa, "apparent") if E_fit is not None else (None, "none")
