@@ -11,6 +11,7 @@ amplifier left at an unknown baud rate back to the configured one.
 from __future__ import annotations
 
 import math
+import select
 import signal
 import sys
 import tempfile
@@ -52,6 +53,10 @@ def register(subparsers) -> None:
     virtual.add_argument("--time-scale", type=float, default=1.0,
                          help="model seconds per wall-clock second (default 1)")
     virtual.add_argument("--checksum", action="store_true", help="DCON checksums on")
+    virtual.add_argument("--motor-start-after", type=float, default=None, metavar="S",
+                         help="start the virtual crosshead motor S wall-clock seconds after launch (for "
+                              "scripts); interactively, press Enter here to start and stop it, as the "
+                              "operator does at the real machine's motor switch")
     virtual.set_defaults(func=run_virtual)
 
 
@@ -219,15 +224,33 @@ def run_virtual(args) -> int:
         print(f"configuration: {path}")
         print(f"try: flowcurve rig check --config {path}")
         previous = signal.signal(signal.SIGTERM, _stop_on_sigterm)  # kill/systemd: stop cleanly too
+        interactive = sys.stdin is not None and sys.stdin.isatty()
         try:  # Ctrl-C may come as soon as the line below is out
-            print("running; Ctrl-C stops", flush=True)
-            while True:
-                time.sleep(0.5)
+            print("running; " + ("Enter starts/stops the crosshead motor, " if interactive else "") + "Ctrl-C stops", flush=True)
+            _serve_motor(rig, interactive, args.motor_start_after)
         except KeyboardInterrupt:
             print("virtual rig stopped")
         finally:
             signal.signal(signal.SIGTERM, previous)
     return 0
+
+
+def _serve_motor(rig, interactive: bool, start_after_s: float | None) -> None:
+    """The operator's motor switch: Enter toggles the crosshead, or it starts after a delay."""
+    started_at = time.monotonic()
+    running = False
+    while True:
+        if start_after_s is not None and not running and time.monotonic() - started_at >= start_after_s:
+            rig.start_crosshead()
+            running, start_after_s = True, None
+            print("crosshead motor started", flush=True)
+        if interactive and select.select([sys.stdin], [], [], 0.5)[0]:
+            sys.stdin.readline()
+            (rig.stop_crosshead if running else rig.start_crosshead)()
+            running = not running
+            print(f"crosshead motor {'started' if running else 'stopped'}", flush=True)
+        elif not interactive:
+            time.sleep(0.2)
 
 
 def _stop_on_sigterm(signum, frame):

@@ -146,3 +146,31 @@ def test_rig_virtual_runs_until_ctrl_c(tmp_path, stop):
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_rig_virtual_starts_its_motor_for_a_driver_in_another_process(tmp_path):
+    """'run --config' against 'rig virtual' waits for crosshead motion, as on the real machine;
+    the virtual operator's motor switch (--motor-start-after) must make the encoder move."""
+    from rig.encoder import CrossheadEncoder
+
+    path = tmp_path / "virtual.toml"
+    proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "rig", "virtual", "--config", str(path),
+                             "--test", "compression", "--time-scale", "20", "--motor-start-after", "0.5"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
+    try:
+        seen = []
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and not any(s.startswith("crosshead motor started") for s in seen):
+            line = proc.stdout.readline()
+            if not line:
+                break
+            seen.append(line)
+        assert any(s.startswith("crosshead motor started") for s in seen), "".join(seen)
+        cfg = load_config(path)
+        with CrossheadEncoder(cfg.encoder.port, timeout_s=0.3) as enc:
+            first = enc.position_mm()
+            time.sleep(0.5)  # 10 model seconds at 0.01 mm/s: 0.1 mm, ten encoder counts
+            assert abs(enc.position_mm() - first) >= 0.05
+    finally:
+        proc.terminate()
+        proc.wait(timeout=20)
