@@ -28,10 +28,10 @@ from typing import Callable, Protocol
 
 import numpy as np
 
-from acquisition.live import LiveView, Snapshot
-from acquisition.record import STATUS_ABORTED, STATUS_COMPLETE, RecordWriter, amend_record
-from acquisition.safety import HeaterSafety, Interrupted, check_temperature
-from acquisition.sampler import Channel, Sampler
+from flowcurve.acquisition.live import LiveView, Snapshot
+from flowcurve.record.format import STATUS_ABORTED, STATUS_COMPLETE, RecordWriter, amend_record
+from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temperature
+from flowcurve.acquisition.sampler import Channel, Sampler
 from flowcurve.errors import FlowcurveError
 
 FORCE_LIMIT_OF_CAPACITY = 0.98  # default force limit: this fraction of the frame's capacity

@@ -15,9 +15,9 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
-from acquisition.sampler import Channel, lower_envelope_stamps
+from flowcurve.acquisition.sampler import Channel, lower_envelope_stamps
 from flowcurve.errors import DeviceError
-from rig.codecs import aed
+from flowcurve.rig.codecs import aed
 
 # Wall-clock seconds a device may stay silent before the test stops (the drivers' own
 # time-outs and retries come first; this catches a read that hangs or returns nothing).
@@ -197,7 +197,7 @@ class VirtualRun:
     """A test recorded on the virtual rig, with the truth it was generated from."""
 
     outcome: object  # acquisition.procedure.Outcome
-    material: object  # rig.materials.Material
+    material: object  # flowcurve.rig.virtual.materials.Material
     strain_rate_per_s: float  # the model's nominal rate (v / l0 or v / h0)
     temperature_C: float  # furnace temperature while loading
     friction_mu: float
@@ -210,10 +210,10 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
     faults or change the model before the test starts; ``config_overrides`` go to
     ``rig.config.virtual_config`` (e.g. ``furnace_max_temperature_C=500``).
     """
-    from acquisition.procedure import Procedure
-    from rig.config import virtual_config
-    from rig.physics import Specimen
-    from rig.virtual.rig import VirtualRig
+    from flowcurve.acquisition.procedure import Procedure
+    from flowcurve.rig.config import virtual_config
+    from flowcurve.rig.virtual.physics import Specimen
+    from flowcurve.rig.virtual.rig import VirtualRig
 
     g = spec.geometry_mm
     specimen = Specimen.tension(g["d0_mm"], g["l0_mm"]) if spec.test == "tension" else Specimen.compression(g["d0_mm"], g["h0_mm"])

@@ -29,14 +29,14 @@ from pathlib import Path
 
 import numpy as np
 
-from acquisition.record import read_record
-from rig.codecs import aed
-from rig.config import to_toml, virtual_config
-from rig.virtual.rig import VirtualRig
+from flowcurve.record.format import read_record
+from flowcurve.rig.codecs import aed
+from flowcurve.rig.config import to_toml, virtual_config
+from flowcurve.rig.virtual.rig import VirtualRig
 
 READER = """
 import sys, time
-from rig.config import load_config
+from flowcurve.rig.config import load_config
 cfg = load_config(sys.argv[1]); seconds = float(sys.argv[2])
 cell = cfg.loadcell.create().open()
 cell.configure(**cfg.loadcell.settings)

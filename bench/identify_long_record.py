@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from acquisition.record import Record, write_record
-from identification.identify import identify
-from identification.importers import load_record
-from reports.plots import add_plots
+from flowcurve.record.format import Record, write_record
+from flowcurve.identification.identify import identify
+from flowcurve.record.importers import load_record
+from flowcurve.reports.plots import add_plots
 
 D0_MM, L0_MM, E_MPA = 6.0, 30.0, 200e3
 A_MPA, B_MPA, N = 300.0, 600.0, 0.35

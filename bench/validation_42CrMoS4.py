@@ -1,7 +1,7 @@
 """Validation of the tension identification against the 42CrMoS4 lab's published values.
 
 All 67 INSTRON exports of shared/validation/42CrMoS4/original_data/ are read through
-identification.importers.load_record and identified twice:
+flowcurve.record.importers.load_record and identified twice:
 
 * extensometer path (the lab's own route): E, Rp0.2, Rm, Ag, A, Z against the header values;
 * crosshead-only path: the "Machine Displacement" channel, frame compliance removed with a
@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from flowcurve.errors import FlowcurveError
-from identification.importers import load_record
-from identification.indicator import frame_stiffness_from_known_modulus
-from identification.tension import identify_tension
+from flowcurve.record.importers import load_record
+from flowcurve.identification.indicator import frame_stiffness_from_known_modulus
+from flowcurve.identification.tension import identify_tension
 
 # the project's shared/ folder stands beside the checkout (FLOWCURVE_SHARED overrides)
 SHARED = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[2] / "shared")

@@ -27,13 +27,13 @@ import math
 import numpy as np
 import pandas as pd
 
-from acquisition.record import Record
+from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
-from identification import friction as fr
-from identification.hardening import fit_hardening
-from identification.indicator import fit_modulus, remove_frame_compliance, scale_to_measured
-from identification.outcome import Identification
-from identification.tension import true_plastic_strain
+from flowcurve.identification import friction as fr
+from flowcurve.identification.hardening import fit_hardening
+from flowcurve.identification.indicator import fit_modulus, remove_frame_compliance, scale_to_measured
+from flowcurve.identification.outcome import Identification
+from flowcurve.identification.tension import true_plastic_strain
 
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
 MAX_FIT_POINTS = 600  # the hardening fit uses at most this many points, evenly spread in strain

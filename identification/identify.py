@@ -9,15 +9,17 @@ record to :func:`identification.tension.identify_tension` or
 
 from __future__ import annotations
 
-import importlib
 import inspect
 import math
 
 import numpy as np
 
-from acquisition.record import Record
+from flowcurve.record.format import Record
+from flowcurve.record.summary import GAUGE_KEY, record_summary
 from flowcurve.errors import IdentificationError, RecordError
-from identification.outcome import Identification
+from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.outcome import Identification
+from flowcurve.identification.tension import identify_tension
 
 MIN_SAMPLES = 20
 # a force rise smaller than this many noise standard deviations is no test at all
@@ -26,11 +28,7 @@ NOISE_SAMPLES = 50_000  # differences used for the noise estimate (long records 
 # peak engineering stress outside this range means the force or diameter units are wrong
 PLAUSIBLE_STRESS_MPa = (2.0, 5000.0)
 
-DISPATCH = {
-    "tension": ("identification.tension", "identify_tension"),
-    "compression": ("identification.compression", "identify_compression"),
-}
-GAUGE_KEY = {"tension": "specimen.l0_mm", "compression": "specimen.h0_mm"}
+DISPATCH = {"tension": identify_tension, "compression": identify_compression}
 
 
 def force_noise_N(force_N: np.ndarray) -> float:
@@ -78,17 +76,6 @@ def check_record(record: Record) -> list[str]:
     return warnings
 
 
-def _identifier(test: str):
-    module_name, func_name = DISPATCH[test]
-    try:
-        module = importlib.import_module(module_name)
-    except ModuleNotFoundError as exc:
-        if exc.name == module_name:
-            raise IdentificationError(f"{test} identification is not available in this installation ({module_name} is missing)") from None
-        raise
-    return getattr(module, func_name)
-
-
 def _accepted(func, options: dict) -> tuple[dict, list[str]]:
     """Split options into those ``func`` accepts and the names it does not."""
     params = inspect.signature(func).parameters
@@ -96,42 +83,6 @@ def _accepted(func, options: dict) -> tuple[dict, list[str]]:
         return options, []
     accepted = {k: v for k, v in options.items() if k in params}
     return accepted, sorted(set(options) - set(accepted))
-
-
-def record_summary(record: Record) -> dict:
-    """The ``record`` block of ``result.json``: where the data came from and at what conditions."""
-    test = record.test
-    meta = record.meta
-    speed = record.number("crosshead_speed_mm_per_s")
-    gauge = record.number(GAUGE_KEY[test])
-    rate = speed / gauge if speed is not None and gauge else None
-    specimen = {k.split(".", 1)[1]: _number_or_text(v) for k, v in meta.items() if k.startswith("specimen.")}
-    post = {k.split(".", 1)[1]: _number_or_text(v) for k, v in meta.items() if k.startswith("post.")}
-    published = {k.split(".", 1)[1]: _number_or_text(v) for k, v in meta.items() if k.startswith("published.")}
-    summary = {
-        "path": record.source,
-        "name": record.name,
-        "test": test,
-        "material": meta.get("material"),
-        "nominal_temperature_C": record.number("nominal_temperature_C"),
-        "crosshead_speed_mm_per_s": speed,
-        "strain_rate_per_s": rate,  # nominal: crosshead speed / gauge length (or height)
-        "samples": int(len(record.data)),
-        "truncated": bool(record.truncated),
-        "specimen": specimen,
-        "post": post,
-    }
-    if published:
-        summary["published"] = published
-    return summary
-
-
-def _number_or_text(value: str):
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        return value
-    return number if math.isfinite(number) else value
 
 
 def identify(record: Record, **options) -> Identification:
@@ -142,7 +93,7 @@ def identify(record: Record, **options) -> Identification:
     reported in the result's warnings rather than silently lost.
     """
     warnings = check_record(record)
-    func = _identifier(record.test)
+    func = DISPATCH[record.test]
     given = {k: v for k, v in options.items() if v is not None}
     accepted, ignored = _accepted(func, given)
     ident = func(record, **accepted)

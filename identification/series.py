@@ -28,12 +28,12 @@ import lmfit
 import numpy as np
 import pandas as pd
 
-from acquisition.record import Record
+from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
-from identification.hardening import fit_hardening
-from identification.johnson_cook import (CONVENTIONS, EQUATION, homologous_temperature, johnson_cook_reduced,
+from flowcurve.identification.hardening import fit_hardening
+from flowcurve.identification.johnson_cook import (CONVENTIONS, EQUATION, homologous_temperature, johnson_cook_reduced,
                                          log_rate_ratio)
-from identification.outcome import TRUE_CURVE_COLUMNS
+from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
 
 PARAMS = ("A", "B", "n", "C", "m")
 KEYS = {"A": "A_MPa", "B": "B_MPa", "n": "n", "C": "C", "m": "m"}
@@ -128,7 +128,7 @@ def strain_rate_from_record(record: Record, E_MPa: float | None, plastic_start: 
         d = np.abs(record.column("crosshead_mm") - record.column("crosshead_mm")[0])
         stiffness = record.positive("rig.frame_stiffness_N_per_um")
         if stiffness:
-            from identification.indicator import remove_frame_compliance
+            from flowcurve.identification.indicator import remove_frame_compliance
 
             d = np.abs(remove_frame_compliance(d, force - force[0], stiffness))
         length = record.positive("specimen.l0_mm" if test == "tension" else "specimen.h0_mm", required=True)
@@ -141,7 +141,7 @@ def strain_rate_from_record(record: Record, E_MPa: float | None, plastic_start: 
         sigma = force / area0 * np.exp(-eps)  # (3.30) S = F0·h0/h
         end = int(np.nanargmax(d))
     if E_MPa is not None and math.isfinite(E_MPa) and E_MPa > 0:
-        from identification.tension import true_plastic_strain
+        from flowcurve.identification.tension import true_plastic_strain
 
         eps_p = true_plastic_strain(eps, sigma, E_MPa)  # (3.7)
     else:
@@ -174,7 +174,7 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
     Strain rate from the data (:func:`strain_rate_from_record`); temperature the mean of the
     ``temperature_C`` column over the plastic range, else ``nominal_temperature_C``.
     """
-    from identification.identify import identify
+    from flowcurve.identification.identify import identify
 
     ident = identify(record, **identify_options)
     result = ident.result
@@ -255,7 +255,7 @@ def member_from_result(folder: str | Path) -> SeriesMember:
 
 def load_members(paths: Iterable[str | Path], **identify_options) -> list[SeriesMember]:
     """Series members from record files, result folders, or folders of result folders."""
-    from identification.importers import load_record
+    from flowcurve.record.importers import load_record
 
     members: list[SeriesMember] = []
     for p in paths:

@@ -13,15 +13,15 @@ import math
 import numpy as np
 import pandas as pd
 
-from acquisition.record import Record
+from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
-from identification import iso6892
-from identification.identify import record_summary
-from identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, fit_hardening, three_point_fit
-from identification.indicator import compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
-from identification.necking import METHODS as NECK_METHODS
-from identification.necking import neck_corrections
-from identification.outcome import Identification
+from flowcurve.identification import iso6892
+from flowcurve.record.summary import record_summary
+from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, fit_hardening, three_point_fit
+from flowcurve.identification.indicator import compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
+from flowcurve.identification.necking import METHODS as NECK_METHODS
+from flowcurve.identification.necking import neck_corrections
+from flowcurve.identification.outcome import Identification
 
 TRUE_STRESS_FORMS = ("gost_3_6", "constant_volume")
 HARDENING_METHODS = ("least_squares", "three_point")

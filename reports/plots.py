@@ -23,7 +23,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from identification.outcome import Identification  # noqa: E402
+from flowcurve.identification.outcome import Identification  # noqa: E402
 
 # column-name unit suffix → how the axis label writes it
 UNIT_LABELS = {

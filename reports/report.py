@@ -18,9 +18,9 @@ from pathlib import Path
 
 from flowcurve import __version__
 from flowcurve.errors import FlowcurveError
-from reports.cards import CardData, load_card_data, write_card
-from reports.units import DEFAULT_UNIT_SYSTEM
-from identification.outcome import read_json_object
+from flowcurve.reports.cards import CardData, load_card_data, write_card
+from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM
+from flowcurve.identification.outcome import read_json_object
 
 
 class ReportError(FlowcurveError):

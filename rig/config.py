@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from flowcurve.errors import ConfigError
-from rig.codecs import aed
+from flowcurve.rig.codecs import aed
 
 PARITIES = ("N", "E", "O")
 BAUDS = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200)
@@ -71,7 +71,7 @@ class LoadCellConfig(SerialConfig):
 
     def create(self, **kw):
         """A :class:`rig.loadcell.LoadCell` for this section (port not opened yet)."""
-        from rig.loadcell import LoadCell
+        from flowcurve.rig.loadcell import LoadCell
 
         return LoadCell(self.port, address=self.address, nominal_load_N=self.nominal_load_N,
                         calibration_N_per_count=self.calibration_N_per_count,
@@ -94,7 +94,7 @@ class EncoderConfig(SerialConfig):
 
     def create(self, **kw):
         """A :class:`rig.encoder.CrossheadEncoder` for this section."""
-        from rig.encoder import CrossheadEncoder
+        from flowcurve.rig.encoder import CrossheadEncoder
 
         return CrossheadEncoder(self.port, address=self.address, checksum=self.checksum,
                                 counts_per_rev=self.counts_per_rev, gear_ratio=self.gear_ratio,
@@ -118,7 +118,7 @@ class FurnaceConfig(SerialConfig):
 
     def create(self, **kw):
         """A :class:`rig.furnace.Furnace` for this section."""
-        from rig.furnace import Furnace
+        from flowcurve.rig.furnace import Furnace
 
         return Furnace(self.port, address=self.address, checksum=self.checksum,
                        heater_do_bit=self.heater_do_bit, max_temperature_C=self.max_temperature_C,
@@ -126,7 +126,7 @@ class FurnaceConfig(SerialConfig):
 
     def controller(self, furnace, setpoint_C: float, **kw):
         """A :class:`rig.furnace.TemperatureController` with this section's limits and tuning."""
-        from rig.furnace import TemperatureController
+        from flowcurve.rig.furnace import TemperatureController
 
         return TemperatureController(furnace, setpoint_C, max_temperature_C=self.max_temperature_C,
                                      max_rate_C_per_min=self.max_heating_rate_C_per_min,

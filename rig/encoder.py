@@ -7,9 +7,9 @@ an unbounded Python int of counts since :meth:`CrossheadEncoder.zero`.
 
 from __future__ import annotations
 
-from rig.codecs import dcon
-from rig.codecs import encoder as codec
-from rig.transport import DconDevice
+from flowcurve.rig.codecs import dcon
+from flowcurve.rig.codecs import encoder as codec
+from flowcurve.rig.transport import DconDevice
 
 
 class CrossheadEncoder(DconDevice):

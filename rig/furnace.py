@@ -16,8 +16,8 @@ from collections import deque
 from itertools import takewhile
 
 from flowcurve.errors import DeviceError, FlowcurveError, SafetyError
-from rig.codecs import dcon
-from rig.transport import DconDevice
+from flowcurve.rig.codecs import dcon
+from flowcurve.rig.transport import DconDevice
 
 HEATER_OFF_ATTEMPTS = 3
 

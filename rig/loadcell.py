@@ -12,9 +12,9 @@ import time
 from dataclasses import dataclass
 
 from flowcurve.errors import DeviceError
-from rig.codecs import ProtocolError
-from rig.codecs import aed
-from rig.transport import SerialTransport
+from flowcurve.rig.codecs import ProtocolError
+from flowcurve.rig.codecs import aed
+from flowcurve.rig.transport import SerialTransport
 
 SETTING_RETRIES = 2  # ICR/ASF/COF/TAR are idempotent: safe to repeat
 READ_RETRIES = 2

@@ -34,7 +34,7 @@ except ImportError:  # not on POSIX
 from flowcurve.errors import DeviceError
 
 PORT_ERRORS = (OSError, serial.SerialException, TermiosError)  # what a vanished port raises
-from rig.codecs import dcon
+from flowcurve.rig.codecs import dcon
 
 # Ports currently open, by URL → the owning transport. One owner per port.
 _OWNERS: dict[str, "SerialTransport"] = {}

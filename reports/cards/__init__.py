@@ -20,9 +20,9 @@ import pandas as pd
 
 from flowcurve import __version__
 from flowcurve.errors import FlowcurveError
-from identification.johnson_cook import johnson_cook
-from reports.units import UnitSystem, get_unit_system
-from identification.outcome import read_json_object
+from flowcurve.identification.johnson_cook import johnson_cook
+from flowcurve.reports.units import UnitSystem, get_unit_system
+from flowcurve.identification.outcome import read_json_object
 
 FORMATS = ("lsdyna", "abaqus", "radioss", "calculix")
 MAX_TABLE_ROWS = 100  # CALCULIX.md: tables over ~150 rows gave stresses ~8 % too low
@@ -407,13 +407,13 @@ def write_card(card: CardData, fmt: str, units: str | UnitSystem, **options) -> 
     """The card text in solver format ``fmt`` and unit system ``units``."""
     system = get_unit_system(units) if isinstance(units, str) else units
     if fmt == "lsdyna":
-        from reports.cards.lsdyna import lsdyna_card as writer
+        from flowcurve.reports.cards.lsdyna import lsdyna_card as writer
     elif fmt == "abaqus":
-        from reports.cards.abaqus import abaqus_card as writer
+        from flowcurve.reports.cards.abaqus import abaqus_card as writer
     elif fmt == "radioss":
-        from reports.cards.radioss import radioss_card as writer
+        from flowcurve.reports.cards.radioss import radioss_card as writer
     elif fmt == "calculix":
-        from reports.cards.calculix import calculix_card as writer
+        from flowcurve.reports.cards.calculix import calculix_card as writer
     else:
         raise CardError(f"unknown card format {fmt!r} (choose one of: {', '.join(FORMATS)})")
     return writer(card, system, **options)

@@ -9,9 +9,9 @@ deck's time unit. A friction coefficient, when identified, comes as ``*SURFACE I
 
 from __future__ import annotations
 
-from reports.cards import MAX_TABLE_ROWS, CardData, comment_block, header_lines
-from reports.cards.calculix import material_name, number, plastic_rows
-from reports.units import UnitSystem
+from flowcurve.reports.cards import MAX_TABLE_ROWS, CardData, comment_block, header_lines
+from flowcurve.reports.cards.calculix import material_name, number, plastic_rows
+from flowcurve.reports.units import UnitSystem
 
 
 def _common(data: CardData, units: UnitSystem, name: str) -> list[str]:

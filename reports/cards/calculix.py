@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import re
 
-from reports.cards import MAX_TABLE_ROWS, CardData, comment_block, flow_tables, header_lines
-from reports.units import UnitSystem
+from flowcurve.reports.cards import MAX_TABLE_ROWS, CardData, comment_block, flow_tables, header_lines
+from flowcurve.reports.units import UnitSystem
 
 
 def material_name(data: CardData) -> str:

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import math
 
-from reports.cards import CardData, comment_block, fixed, header_lines, rate_tables
-from reports.units import UnitSystem
+from flowcurve.reports.cards import CardData, comment_block, fixed, header_lines, rate_tables
+from flowcurve.reports.units import UnitSystem
 
 MAT_JC_ID = 1
 MAT_PLP_ID = 2

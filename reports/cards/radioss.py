@@ -8,8 +8,8 @@ absolute temperatures (its default reference is 298 K) and the volumetric heat c
 
 from __future__ import annotations
 
-from reports.cards import CardData, comment_block, fixed, header_lines
-from reports.units import UnitSystem
+from flowcurve.reports.cards import CardData, comment_block, fixed, header_lines
+from flowcurve.reports.units import UnitSystem
 
 MAT_ID = 1
 

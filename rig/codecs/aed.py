@@ -27,7 +27,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from rig.codecs import ProtocolError
+from flowcurve.rig.codecs import ProtocolError
 
 CRLF = b"\r\n"
 

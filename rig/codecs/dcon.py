@@ -13,7 +13,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from rig.codecs import ProtocolError
+from flowcurve.rig.codecs import ProtocolError
 
 CR = b"\r"
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import re
 
-from rig.codecs import ProtocolError
-from rig.codecs.dcon import Reply
+from flowcurve.rig.codecs import ProtocolError
+from flowcurve.rig.codecs.dcon import Reply
 
 COUNTER_BITS = 32
 COUNTS_PER_REV = 10_000  # 2500 pulses/rev with x4 quadrature decoding

@@ -30,11 +30,11 @@ import re
 import time
 from typing import Callable
 
-from rig.codecs.aed import (
+from flowcurve.rig.codecs.aed import (
     ADC_OVERFLOW, ASF_CUTOFF_HZ, GROSS_OVERFLOW, ICR_RATES_PER_S, NET_OVERFLOW, STANDSTILL,
     encode_msv, output_format,
 )
-from rig.virtual.pty_device import PtyDevice
+from flowcurve.rig.virtual.pty_device import PtyDevice
 
 # A sample of the amplifier's input: (model time s, force N, standstill).
 Sample = tuple[float, float, bool]

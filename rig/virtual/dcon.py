@@ -28,8 +28,8 @@ import re
 import time
 from typing import Callable
 
-from rig.codecs.dcon import FULL_SCALE_C, checksum
-from rig.virtual.pty_device import PtyDevice
+from flowcurve.rig.codecs.dcon import FULL_SCALE_C, checksum
+from flowcurve.rig.virtual.pty_device import PtyDevice
 
 FORMAT_BITS = 0x03
 CHECKSUM_BIT = 0x40

@@ -11,8 +11,8 @@ from __future__ import annotations
 import re
 from typing import Callable
 
-from rig.codecs.encoder import binary_to_gray
-from rig.virtual.dcon import CHECKSUM_BIT, DconDevice
+from flowcurve.rig.codecs.encoder import binary_to_gray
+from flowcurve.rig.virtual.dcon import CHECKSUM_BIT, DconDevice
 
 MASK32 = 0xFFFFFFFF
 

@@ -19,7 +19,7 @@ import threading
 import time
 import tty
 
-from rig.virtual.faults import WireFaults
+from flowcurve.rig.virtual.faults import WireFaults
 
 
 class PtyDevice:

@@ -22,11 +22,11 @@ import threading
 import time
 
 from flowcurve.errors import ConfigError
-from rig.physics import FurnaceParams, RigModel, Specimen
-from rig.virtual.aed import AEDAmplifier
-from rig.virtual.dcon import I7011
-from rig.virtual.encoder_box import EncoderBox
-from rig.virtual.faults import MODEL_FAULTS, WIRE_FAULTS
+from flowcurve.rig.virtual.physics import FurnaceParams, RigModel, Specimen
+from flowcurve.rig.virtual.aed import AEDAmplifier
+from flowcurve.rig.virtual.dcon import I7011
+from flowcurve.rig.virtual.encoder_box import EncoderBox
+from flowcurve.rig.virtual.faults import MODEL_FAULTS, WIRE_FAULTS
 
 DEVICES = ("loadcell", "encoder", "furnace")
 
@@ -192,7 +192,7 @@ class VirtualRig:
 
     def config(self):
         """A RigConfig for the drivers pointing at this rig's ports (``rig.config.virtual_config``)."""
-        from rig.config import virtual_config  # the drivers' module; imported late on purpose
+        from flowcurve.rig.config import virtual_config  # the drivers' module; imported late on purpose
 
         return virtual_config(**self.config_kwargs())
 

@@ -7,7 +7,7 @@ import time
 import numpy as np
 import pytest
 
-from acquisition.sampler import Channel
+from flowcurve.acquisition.sampler import Channel
 
 
 class FakeRig:

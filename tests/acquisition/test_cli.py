@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from acquisition.record import RecordWriter, read_record
+from flowcurve.record.format import RecordWriter, read_record
 from flowcurve.cli import main
 
 
@@ -98,8 +98,8 @@ def test_run_bad_input_is_one_line(tmp_path, capsys, args, message):
 
 
 def test_run_with_config_needs_geometry(tmp_path, capsys):
-    from rig.config import to_toml
-    from rig.virtual.rig import VirtualRig
+    from flowcurve.rig.config import to_toml
+    from flowcurve.rig.virtual.rig import VirtualRig
 
     with VirtualRig("steel45") as vr:
         cfg = tmp_path / "rig.toml"

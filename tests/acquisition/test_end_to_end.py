@@ -4,10 +4,10 @@ ptys, identified, and compared with the virtual material the rig was built from.
 import numpy as np
 import pytest
 
-from acquisition.demo import demo_specs, identify_and_write, summary_lines
-from acquisition.record import read_record
-from acquisition.session import run_virtual_test
-from identification.identify import identify
+from flowcurve.demo import demo_specs, identify_and_write, summary_lines
+from flowcurve.record.format import read_record
+from flowcurve.acquisition.session import run_virtual_test
+from flowcurve.identification.identify import identify
 
 MATERIAL = "steel45"
 TIME_SCALE = 15.0

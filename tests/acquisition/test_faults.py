@@ -12,9 +12,9 @@ import time
 import numpy as np
 import pytest
 
-from acquisition.procedure import StopCriteria, TestSpec
-from acquisition.record import read_record
-from acquisition.session import run_virtual_test
+from flowcurve.acquisition.procedure import StopCriteria, TestSpec
+from flowcurve.record.format import read_record
+from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.errors import DeviceError, SafetyError
 
 MATERIAL = "steel45"
@@ -142,7 +142,7 @@ def test_stuck_heater_relay_stops_the_test(tmp_path):
 
 
 def start_run_process(tmp_path, vr, *, watchdog_s=1.0, speed=0.02, time_scale=100.0):
-    from rig.config import to_toml, virtual_config
+    from flowcurve.rig.config import to_toml, virtual_config
 
     cfg = tmp_path / "rig.toml"
     cfg.write_text(to_toml(virtual_config(**vr.config_kwargs(), furnace_watchdog_timeout_s=watchdog_s)))
@@ -165,7 +165,7 @@ def start_run_process(tmp_path, vr, *, watchdog_s=1.0, speed=0.02, time_scale=10
 
 @pytest.fixture
 def virtual_rig():
-    from rig.virtual.rig import VirtualRig
+    from flowcurve.rig.virtual.rig import VirtualRig
 
     with VirtualRig(MATERIAL, test="tension", speed_mm_per_s=0.02, time_scale=100.0, temperature_C=57.0) as vr:
         yield vr

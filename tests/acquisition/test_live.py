@@ -4,7 +4,7 @@ import io
 
 import numpy as np
 
-from acquisition.live import LiveView, Snapshot, braille_plot, progress_bar, render, status_line
+from flowcurve.acquisition.live import LiveView, Snapshot, braille_plot, progress_bar, render, status_line
 
 
 def dots(lines):

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from acquisition.procedure import Procedure, ProcedureError, StopCriteria, StopState, TestSpec, heating_progress, stop_reason
-from acquisition.record import read_record
+from flowcurve.acquisition.procedure import Procedure, ProcedureError, StopCriteria, StopState, TestSpec, heating_progress, stop_reason
+from flowcurve.record.format import read_record
 from flowcurve.errors import DeviceError, SafetyError
 
 

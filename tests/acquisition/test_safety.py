@@ -8,7 +8,7 @@ import textwrap
 
 import pytest
 
-from acquisition.safety import HeaterSafety, Interrupted, check_temperature
+from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temperature
 from flowcurve.errors import SafetyError
 
 
@@ -82,7 +82,7 @@ def test_atexit_switches_off_when_the_block_is_never_left(tmp_path):
     flag = tmp_path / "heater"
     code = textwrap.dedent(f"""
         from pathlib import Path
-        from acquisition.safety import HeaterSafety
+        from flowcurve.acquisition.safety import HeaterSafety
         flag = Path({str(flag)!r})
         flag.write_text("on")
         HeaterSafety(lambda: flag.write_text("off")).__enter__()

@@ -7,7 +7,7 @@ import time
 import numpy as np
 import pytest
 
-from acquisition.sampler import Channel, Sampler, interpolate_at, merge_block, releasable
+from flowcurve.acquisition.sampler import Channel, Sampler, interpolate_at, merge_block, releasable
 
 
 def make_clock():
@@ -145,7 +145,7 @@ def test_hanging_read_is_caught_by_check_silence():
 
 
 def test_lower_envelope_restores_the_spacing_of_a_burst():
-    from acquisition.sampler import lower_envelope_stamps
+    from flowcurve.acquisition.sampler import lower_envelope_stamps
 
     period = 0.01
     sent = np.arange(50) * period

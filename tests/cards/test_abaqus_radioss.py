@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from reports.cards import load_card_data, write_card
+from flowcurve.reports.cards import load_card_data, write_card
 
 from .conftest import LAW, jc_MPa
 from .readers import fixed_fields, floats, read_inp, read_radioss

@@ -8,7 +8,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from reports.cards import CardError, load_card_data, write_card
+from flowcurve.reports.cards import CardError, load_card_data, write_card
 
 from .conftest import jc_MPa
 from .readers import floats, read_dat, read_inp

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from reports.cards import CardError, fixed
+from flowcurve.reports.cards import CardError, fixed
 
 
 @pytest.mark.parametrize("width, rel", [(10, 5e-6), (20, 1e-15)])

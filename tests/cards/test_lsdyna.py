@@ -6,7 +6,7 @@ import warnings
 import numpy as np
 import pytest
 
-from reports.cards import CardError, load_card_data, write_card
+from flowcurve.reports.cards import CardError, load_card_data, write_card
 
 from .conftest import LAW, jc_MPa
 

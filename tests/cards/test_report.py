@@ -14,7 +14,7 @@ import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
 from flowcurve.cli import main  # noqa: E402
-from reports.report import ReportError, build_report  # noqa: E402
+from flowcurve.reports.report import ReportError, build_report  # noqa: E402
 
 from .conftest import jc_MPa, make_fit  # noqa: E402
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from reports.units import UNIT_SYSTEMS, UnitSystem, UnitsError, convert, get_unit_system
+from flowcurve.reports.units import UNIT_SYSTEMS, UnitSystem, UnitsError, convert, get_unit_system
 
 
 # Values worked out by hand from the definitions (1 t = 1000 kg, 1 mm = 1e-3 m, ...).
@@ -41,7 +41,7 @@ def test_round_trip_through_every_system(name):
     system = UNIT_SYSTEMS[name]
     rng = np.random.default_rng(1)
     values = rng.uniform(-1e3, 1e3, 20)
-    from reports.units import DIMENSIONS
+    from flowcurve.reports.units import DIMENSIONS
 
     for quantity in DIMENSIONS:
         # SI → system → SI

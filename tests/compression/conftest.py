@@ -18,7 +18,7 @@ import pandas as pd
 import pytest
 from scipy.optimize import brentq
 
-from acquisition.record import Record
+from flowcurve.record.format import Record
 
 SEED_LAW = {"A": 105.0, "B": 1392.0, "n": 0.642}
 E_HANDBOOK_MPa = 194_000.0  # METHODS.md table 1.1, 12Kh18N12M3TL

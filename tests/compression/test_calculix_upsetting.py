@@ -21,7 +21,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from identification import friction as fr
+from flowcurve.identification import friction as fr
 
 pytestmark = [pytest.mark.slow, pytest.mark.solver,
               pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]

@@ -7,7 +7,7 @@ import json
 import pandas as pd
 import pytest
 
-from acquisition.record import read_record, write_record
+from flowcurve.record.format import read_record, write_record
 from flowcurve.cli import main
 
 

@@ -12,9 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from acquisition.record import Record
+from flowcurve.record.format import Record
 from flowcurve.errors import FlowcurveError, IdentificationError, RecordError
-from identification.compression import identify_compression, loading_branch_end, offset_yield
+from flowcurve.identification.compression import identify_compression, loading_branch_end, offset_yield
 
 E_HANDBOOK = 194_000.0
 

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from acquisition.record import (
+from flowcurve.record.format import (
     Record,
     RecordWriter,
     amend_record,
@@ -81,7 +81,7 @@ def test_kill_9_loses_at_most_the_last_second_and_recovery_completes_header(tmp_
         f"""
         import sys, time
         import numpy as np
-        from acquisition.record import RecordWriter
+        from flowcurve.record.format import RecordWriter
         rec = RecordWriter({str(path)!r}, {{"test": "tension"}}, ["time_s", "force_N", "crosshead_mm"])
         i = 0
         t0 = time.monotonic()

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from acquisition.record import Record, write_record
+from flowcurve.record.format import Record, write_record
 
 INSTRON_FILE = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[3] / "shared") / "validation/42CrMoS4/original_data/46NT71.csv"
 

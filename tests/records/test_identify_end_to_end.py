@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 from flowcurve.cli import main
-from identification.importers import load_record
+from flowcurve.record.importers import load_record
 
 
 def test_identify_instron_file_matches_published_values(tmp_path, instron_file, capsys):
@@ -34,7 +34,7 @@ def _frictionless_compression(tmp_path):
     """A compression record from the seed's law (3.34) with no friction: no barrel, dmax = d_n(hk)."""
     import numpy as np
 
-    from acquisition.record import Record, write_record
+    from flowcurve.record.format import Record, write_record
 
     A, B, n, E = 105.0, 1392.0, 0.642, 194e3
     d0, h0 = 5.989, 6.982
@@ -74,7 +74,7 @@ def test_identify_frictionless_compression_recovers_the_law(tmp_path, capsys):
 
 
 def test_record_cut_short_is_identified_with_a_warning(tmp_path, instron_file, capsys):
-    from acquisition.record import write_record
+    from flowcurve.record.format import write_record
 
     rec = load_record(instron_file)
     rec.meta = {"flowcurve-record": "1", **rec.meta, "status": "recording"}  # as after a power cut

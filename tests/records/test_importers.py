@@ -10,9 +10,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from acquisition.record import Record, write_record
+from flowcurve.record.format import Record, write_record
 from flowcurve.errors import RecordError
-from identification.importers import load_record, parse_column_option, to_native, unit_conversion
+from flowcurve.record.importers import load_record, parse_column_option, to_native, unit_conversion
 
 INSTRON_DIR = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[3] / "shared") / "validation/42CrMoS4/original_data"
 INSTRON_FILE = INSTRON_DIR / "46NT71.csv"

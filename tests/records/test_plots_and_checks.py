@@ -9,11 +9,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from acquisition.record import Record
+from flowcurve.record.format import Record
 from flowcurve.errors import RecordError
-from identification.identify import check_record, force_noise_N, record_summary
-from identification.outcome import Identification
-from reports.plots import add_plots, axis_label
+from flowcurve.identification.identify import check_record, force_noise_N
+from flowcurve.record.summary import record_summary
+from flowcurve.identification.outcome import Identification
+from flowcurve.reports.plots import add_plots, axis_label
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

@@ -10,7 +10,7 @@ import time
 import pytest
 
 from flowcurve.cli import main
-from rig.config import load_config, to_toml, virtual_config
+from flowcurve.rig.config import load_config, to_toml, virtual_config
 
 
 @pytest.fixture
@@ -37,9 +37,9 @@ def test_check_diagnoses_missing_and_silent_ports(tmp_path, silent_pty, capsys):
 
 
 def test_probe_finds_the_line_settings_a_silent_amplifier_answers_at(fake_port_class, monkeypatch):
-    import rig.cli
+    import flowcurve.cli.rig
 
-    monkeypatch.setattr(rig.cli, "PROBE_TIMEOUT_S", 0.01)
+    monkeypatch.setattr(flowcurve.cli.rig, "PROBE_TIMEOUT_S", 0.01)
     idn = b'HBM,"AED104         ","1234   ",P20\r\n'
     opened = []
 
@@ -51,7 +51,7 @@ def test_probe_finds_the_line_settings_a_silent_amplifier_answers_at(fake_port_c
     config = virtual_config({"loadcell": "/dev/ttyUSB0", "encoder": "/dev/ttyUSB1"},
                             loadcell_timeout_s=0.01)
     lines = []
-    rig.cli.check_rig(config, lines.append, opener=opener)
+    flowcurve.cli.rig.check_rig(config, lines.append, opener=opener)
     text = "\n".join(lines)
     assert "FAILED: silent: no answer to 'IDN?'" in text
     assert 'probe: it answers at 19200 baud, parity E: set baud = 19200, parity = "E" in [loadcell]' in text
@@ -67,7 +67,7 @@ def test_check_with_a_bad_config_is_one_line(tmp_path, capsys):
     assert err.count("\n") == 1 and "[loadcell] port: must be a string" in err
 
 
-virtual = pytest.importorskip("rig.virtual.rig")
+import flowcurve.rig.virtual.rig as virtual
 
 
 def test_check_passes_on_the_virtual_rig(tmp_path, capsys):
@@ -151,7 +151,7 @@ def test_rig_virtual_runs_until_ctrl_c(tmp_path, stop):
 def test_rig_virtual_starts_its_motor_for_a_driver_in_another_process(tmp_path):
     """'run --config' against 'rig virtual' waits for crosshead motion, as on the real machine;
     the virtual operator's motor switch (--motor-start-after) must make the encoder move."""
-    from rig.encoder import CrossheadEncoder
+    from flowcurve.rig.encoder import CrossheadEncoder
 
     path = tmp_path / "virtual.toml"
     proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "rig", "virtual", "--config", str(path),

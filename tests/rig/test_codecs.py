@@ -5,8 +5,8 @@ import random
 
 import pytest
 
-from rig.codecs import ProtocolError, aed, dcon
-from rig.codecs import encoder as enc
+from flowcurve.rig.codecs import ProtocolError, aed, dcon
+from flowcurve.rig.codecs import encoder as enc
 
 
 # -- AED ------------------------------------------------------------------------------

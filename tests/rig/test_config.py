@@ -5,9 +5,9 @@ from pathlib import Path
 
 import pytest
 
-import rig
+import flowcurve.rig as rig
 from flowcurve.errors import ConfigError
-from rig.config import load_config, parse_config, to_toml, virtual_config
+from flowcurve.rig.config import load_config, parse_config, to_toml, virtual_config
 
 EXAMPLE = Path(rig.__file__).with_name("example-rig.toml")
 

@@ -3,8 +3,8 @@
 import pytest
 
 from flowcurve.errors import DeviceError, SafetyError
-from rig.encoder import CrossheadEncoder
-from rig.furnace import Furnace
+from flowcurve.rig.encoder import CrossheadEncoder
+from flowcurve.rig.furnace import Furnace
 
 
 def encoder(fake, **kw):

@@ -5,8 +5,8 @@ import time
 import pytest
 
 from flowcurve.errors import DeviceError
-from rig.codecs import aed
-from rig.loadcell import LoadCell
+from flowcurve.rig.codecs import aed
+from flowcurve.rig.loadcell import LoadCell
 
 
 def cell(fake, **kw):

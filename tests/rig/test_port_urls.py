@@ -5,8 +5,8 @@ import threading
 
 import pytest
 
-from rig.encoder import CrossheadEncoder
-from rig.furnace import Furnace
+from flowcurve.rig.encoder import CrossheadEncoder
+from flowcurve.rig.furnace import Furnace
 
 
 @pytest.fixture
@@ -52,7 +52,7 @@ def test_furnace_over_socket_url(dcon_server):
 
 
 def test_spy_url_logs_the_traffic(tmp_path):
-    virtual = pytest.importorskip("rig.virtual.rig")
+    import flowcurve.rig.virtual.rig as virtual
     log = tmp_path / "spy.txt"
     with virtual.VirtualRig() as rig:
         with CrossheadEncoder(f"spy://{rig.ports['encoder']}?file={log}") as enc:

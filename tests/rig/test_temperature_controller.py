@@ -1,4 +1,4 @@
-"""TemperatureController against the virtual-rig engineer's thermal model (rig.physics).
+"""TemperatureController against the virtual-rig engineer's thermal model (flowcurve.rig.virtual.physics).
 
 The model furnace below is the physics of the virtual rig (first-order losses growing with
 temperature, 5 s dead time, thermocouple noise) driven in simulated time; the controller
@@ -10,9 +10,9 @@ import random
 import pytest
 
 from flowcurve.errors import SafetyError
-from rig.furnace import TemperatureController
+from flowcurve.rig.furnace import TemperatureController
 
-physics = pytest.importorskip("rig.physics")
+import flowcurve.rig.virtual.physics as physics
 
 
 class ModelFurnace:
@@ -143,7 +143,7 @@ def test_setpoint_at_or_above_max_is_refused():
 def hold_over_the_serial_port(time_scale, setpoint, start_C, hold_s):
     """The real Furnace driver and controller on the virtual rig over its pty: soak, then
     hold for ``hold_s`` model seconds; returns the true furnace temperatures of the hold."""
-    virtual = pytest.importorskip("rig.virtual.rig")
+    import flowcurve.rig.virtual.rig as virtual
     with virtual.VirtualRig(time_scale=time_scale, temperature_C=start_C) as rig:
         cfg = rig.config()
         with cfg.furnace.create() as furnace:

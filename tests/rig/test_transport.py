@@ -4,7 +4,7 @@ import pytest
 import serial
 
 from flowcurve.errors import DeviceError
-from rig.transport import SerialTransport
+from flowcurve.rig.transport import SerialTransport
 
 
 def make(fake, name="load cell", timeout_s=0.05):

@@ -10,7 +10,7 @@ import pytest
 
 from flowcurve.errors import DeviceError
 
-virtual = pytest.importorskip("rig.virtual.rig")
+import flowcurve.rig.virtual.rig as virtual
 
 
 @pytest.fixture

@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from identification.johnson_cook import johnson_cook
-from identification.series import SeriesMember
+from flowcurve.identification.johnson_cook import johnson_cook
+from flowcurve.identification.series import SeriesMember
 
 # 4340 steel: A 792 MPa, B 510 MPa, n 0.26, C 0.014, m 1.03; T_m 1793 K, reference 1/s and 298 K
 TRUE = {"A": 792.0, "B": 510.0, "n": 0.26, "C": 0.014, "m": 1.03}
@@ -83,7 +83,7 @@ def tension_record(temperature_C: float, speed_mm_per_s: float, law_rate_per_s: 
 
     import pandas as pd
 
-    from acquisition.record import Record
+    from flowcurve.record.format import Record
 
     s0 = math.pi * d0_mm**2 / 4
     ref = {**REF, "ref_strain_rate_per_s": ref_rate_per_s or REF["ref_strain_rate_per_s"]}

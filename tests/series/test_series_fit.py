@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from flowcurve.errors import FlowcurveError, IdentificationError, RecordError
-from identification.hardening import fit_hardening
-from identification.series import (SeriesMember, condition_curves, fit_global, fit_series, fit_stepwise,
+from flowcurve.identification.hardening import fit_hardening
+from flowcurve.identification.series import (SeriesMember, condition_curves, fit_global, fit_series, fit_stepwise,
                                    make_reference)
 
 

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from flowcurve.errors import IdentificationError
-from identification import iso6892
-from identification.indicator import (
+from flowcurve.identification import iso6892
+from flowcurve.identification.indicator import (
     compensate_toe, fit_modulus, frame_stiffness_from_known_modulus, remove_frame_compliance, scale_to_measured,
 )
-from identification.necking import (
+from flowcurve.identification.necking import (
     bridgman_factor, davidenkov_factor, le_roy_a_over_R, mirone_factor, neck_corrections,
 )
 

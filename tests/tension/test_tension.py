@@ -7,12 +7,12 @@ import pytest
 from scipy.optimize import brentq, minimize_scalar
 
 from flowcurve.errors import FlowcurveError, IdentificationError, RecordError
-from identification.indicator import frame_stiffness_from_known_modulus
-from identification.tension import (
+from flowcurve.identification.indicator import frame_stiffness_from_known_modulus
+from flowcurve.identification.tension import (
     bulk_modulus, identify_tension, true_plastic_strain, true_stress_constant_volume, true_stress_gost,
 )
 
-from identification.hardening import johnson_cook_static
+from flowcurve.identification.hardening import johnson_cook_static
 
 T = dict(E_MPa=200_000.0, A=400.0, B=600.0, n=0.3)
 

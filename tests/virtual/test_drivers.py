@@ -6,10 +6,10 @@ import time
 import pytest
 
 from flowcurve.errors import DeviceError, SafetyError
-from rig.encoder import CrossheadEncoder
-from rig.furnace import Furnace
-from rig.loadcell import LoadCell
-from rig.virtual.rig import VirtualRig
+from flowcurve.rig.encoder import CrossheadEncoder
+from flowcurve.rig.furnace import Furnace
+from flowcurve.rig.loadcell import LoadCell
+from flowcurve.rig.virtual.rig import VirtualRig
 
 
 @pytest.fixture

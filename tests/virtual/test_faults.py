@@ -6,7 +6,7 @@ import time
 import pytest
 import serial
 
-from rig.virtual.rig import VirtualRig
+from flowcurve.rig.virtual.rig import VirtualRig
 
 
 @pytest.fixture

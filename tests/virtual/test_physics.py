@@ -7,8 +7,8 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from rig.materials import get_material
-from rig.physics import (FurnaceParams, Furnace, RigModel, Specimen, furnace_steady_state_C,
+from flowcurve.rig.virtual.materials import get_material
+from flowcurve.rig.virtual.physics import (FurnaceParams, Furnace, RigModel, Specimen, furnace_steady_state_C,
                          slab_friction_factor)
 
 

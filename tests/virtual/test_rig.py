@@ -9,9 +9,9 @@ import pytest
 import serial
 
 from flowcurve.errors import ConfigError, FlowcurveError
-from rig.materials import get_material
-from rig.virtual.aed import AEDAmplifier
-from rig.virtual.rig import VirtualRig
+from flowcurve.rig.virtual.materials import get_material
+from flowcurve.rig.virtual.aed import AEDAmplifier
+from flowcurve.rig.virtual.rig import VirtualRig
 
 
 def test_no_leaked_descriptors_or_threads():

@@ -6,10 +6,10 @@ import time
 import pytest
 import serial
 
-from rig.virtual.aed import AEDAmplifier
-from rig.virtual.dcon import I7011
-from rig.virtual.encoder_box import EncoderBox
-from rig.virtual.rig import VirtualRig
+from flowcurve.rig.virtual.aed import AEDAmplifier
+from flowcurve.rig.virtual.dcon import I7011
+from flowcurve.rig.virtual.encoder_box import EncoderBox
+from flowcurve.rig.virtual.rig import VirtualRig
 
 
 class Source:

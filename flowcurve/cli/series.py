@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from identification.outcome import to_jsonable
-from identification.series import MAX_POINTS, SeriesFit, fit_series, load_members
+from flowcurve.identification.outcome import to_jsonable
+from flowcurve.identification.series import MAX_POINTS, SeriesFit, fit_series, load_members
 
 
 def register(subparsers) -> None:

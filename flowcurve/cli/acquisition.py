@@ -14,9 +14,9 @@ import math
 import sys
 from pathlib import Path
 
-from acquisition.live import LiveView
-from acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, Procedure, ProcedureError, StopCriteria, TestSpec
-from acquisition.record import amend_record, read_record, recover_record
+from flowcurve.acquisition.live import LiveView
+from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, Procedure, ProcedureError, StopCriteria, TestSpec
+from flowcurve.record.format import amend_record, read_record, recover_record
 from flowcurve.errors import FlowcurveError, RecordError
 
 DEFAULT_VIRTUAL_MATERIAL = "steel45"
@@ -168,8 +168,8 @@ def cmd_run(args) -> int:
 
 
 def _run_configured(args, view: LiveView, out_path: Path) -> int:
-    from acquisition.session import DriverRig
-    from rig.config import load_config
+    from flowcurve.acquisition.session import DriverRig
+    from flowcurve.rig.config import load_config
 
     config = load_config(args.config)
     scale = 1.0 if args.time_scale is None else args.time_scale
@@ -183,9 +183,9 @@ def _run_configured(args, view: LiveView, out_path: Path) -> int:
 
 
 def _run_virtual(args, view: LiveView, out_path: Path) -> int:
-    from acquisition.session import run_virtual_test
-    from rig.materials import get_material
-    from rig.physics import Specimen
+    from flowcurve.acquisition.session import run_virtual_test
+    from flowcurve.rig.virtual.materials import get_material
+    from flowcurve.rig.virtual.physics import Specimen
 
     scale = 15.0 if args.time_scale is None else args.time_scale
     _positive("time-scale", scale)
@@ -230,6 +230,6 @@ def cmd_annotate(args) -> int:
 
 
 def cmd_demo(args) -> int:
-    from acquisition.demo import run_demo
+    from flowcurve.demo import run_demo
 
     return run_demo(args.out, material=args.material, quiet=args.quiet)

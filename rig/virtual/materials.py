@@ -1,7 +1,7 @@
 """A small library of virtual materials for the virtual rig (METHODS.md §5, seed tables 1.1, 3.2).
 
 Each :class:`Material` carries Johnson–Cook flow-stress constants (table 3.2), elastic
-constants (table 1.1) and a fracture strain, so that :mod:`rig.physics` can produce the
+constants (table 1.1) and a fracture strain, so that :mod:`flowcurve.rig.virtual.physics` can produce the
 record a real specimen of that steel would give. Values not printed in the seed are marked
 *assumed* and chosen to be plausible; they are the "truth" of the virtual rig, not data.
 

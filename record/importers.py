@@ -1,12 +1,12 @@
 """Read a test record from any file the lab meets: native, INSTRON export, or any CSV.
 
 :func:`load_record` is the one entry point. It returns an
-:class:`acquisition.record.Record` with the native unit-named columns (``time_s``,
+:class:`flowcurve.record.format.Record` with the native unit-named columns (``time_s``,
 ``force_N``, ``crosshead_mm`` and, where the file has them, ``extensometer_mm``,
 ``temperature_C``), whatever units the file used:
 
 * native flowcurve records (``# flowcurve-record: 1``) are read by
-  :func:`acquisition.record.read_record`;
+  :func:`flowcurve.record.format.read_record`;
 * the INSTRON export of the 42CrMoS4 validation set (tab-separated ``key:<TAB>value<TAB>unit``
   header, a names row, a units row, then samples) is recognised and mapped, its published
   results kept as ``published.<name>`` metadata;
@@ -26,7 +26,7 @@ from typing import Mapping
 
 import pandas as pd
 
-from acquisition.record import Record, is_native, read_record
+from flowcurve.record.format import Record, is_native, read_record
 from flowcurve.errors import RecordError
 
 # -- units ---------------------------------------------------------------------------------

@@ -1,7 +1,9 @@
 """The ``flowcurve`` command: a thin dispatcher over the packages' own sub-commands.
 
-Each package contributes its sub-commands through a module ``<package>/cli.py`` with a
-function ``register(subparsers)`` that adds parsers and sets ``func`` on them. ``func(args)``
+This is the application layer: the only place where the layers (rig, acquisition, record,
+identification, reports) meet. Each module ``flowcurve/cli/<layer>.py`` has a function
+``register(subparsers)`` that adds parsers and sets ``func`` on them; a module that fails to
+import is an error, never a silently missing command. ``func(args)``
 returns the exit code. Errors derived from :class:`~flowcurve.errors.FlowcurveError` are
 printed as one line; an operator never sees a traceback.
 """
@@ -17,11 +19,11 @@ from flowcurve.errors import FlowcurveError
 
 # Packages that contribute sub-commands, in the order they appear in --help.
 COMMAND_MODULES = (
-    "acquisition.cli",  # run, demo, recover, annotate
-    "identification.cli",  # identify
-    "identification.series_cli",  # fit
-    "reports.cli",  # card, report
-    "rig.cli",  # rig check, rig virtual
+    "flowcurve.cli.acquisition",  # run, demo, recover, annotate
+    "flowcurve.cli.identification",  # identify
+    "flowcurve.cli.series",  # fit
+    "flowcurve.cli.reports",  # card, report
+    "flowcurve.cli.rig",  # rig check, rig virtual
 )
 
 
@@ -38,13 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"flowcurve {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name == name:  # that package has no commands yet
-                continue
-            raise
-        module.register(subparsers)
+        importlib.import_module(name).register(subparsers)
     return parser
 
 

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from acquisition.live import LiveView
-from acquisition.procedure import TestSpec
-from acquisition.record import read_record
-from acquisition.session import run_virtual_test
+from flowcurve.acquisition.live import LiveView
+from flowcurve.acquisition.procedure import TestSpec
+from flowcurve.record.format import read_record
+from flowcurve.acquisition.session import run_virtual_test
 
 DEMO_TIME_SCALE = 15.0  # the virtual load cell sends 100 values per wall second: enough
 DEMO_SPEED_MM_PER_S = 0.05  # samples on the elastic line at 0.75 mm of crosshead per wall second
@@ -43,7 +43,7 @@ def true_constants(material, strain_rate_per_s: float, temperature_C: float) -> 
 
 
 def demo_specs(material_name: str) -> list[TestSpec]:
-    from rig.physics import Specimen
+    from flowcurve.rig.virtual.physics import Specimen
 
     t, c = Specimen.tension(), Specimen.compression()
     return [
@@ -54,8 +54,8 @@ def demo_specs(material_name: str) -> list[TestSpec]:
 
 def identify_and_write(record_path: Path, outdir: Path):
     """Identify a record, add its plots, write its result folder; (identification, folder)."""
-    from identification.identify import identify
-    from reports.plots import add_plots
+    from flowcurve.identification.identify import identify
+    from flowcurve.reports.plots import add_plots
 
     ident = identify(read_record(record_path))
     add_plots(ident)

@@ -8,7 +8,7 @@ read it. Conventions:
   compression test runs in a reversing cage, so the load cell sees the same sign).
 * Quasi-static mechanics: the specimen state is a function of the crosshead position and
   the plastic history (largest plastic strain reached), solved exactly at each step.
-* Flow stress is Johnson–Cook (:mod:`rig.materials`) at the *nominal* strain rate of the
+* Flow stress is Johnson–Cook (:mod:`flowcurve.rig.virtual.materials`) at the *nominal* strain rate of the
   test, v/l0 (tension) or v/h0 (compression), and at the furnace's true temperature.
 * Tension: uniform deformation with plastic incompressibility, F = F0·exp(−εp) (elastic
   volume change neglected), until the force maximum (Considère, dσ/dεp = σ); then a neck
@@ -36,7 +36,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from flowcurve.errors import ConfigError
-from rig.materials import Material, get_material
+from flowcurve.rig.virtual.materials import Material, get_material
 
 LE_ROY_SLOPE = 1.1  # a/R = 1.1·(ε − ε_u), Le Roy et al. (1981)
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from reports.cards import FORMATS, CardError, load_card_data, write_card
-from reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
+from flowcurve.reports.cards import FORMATS, CardError, load_card_data, write_card
+from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
 
 
 def register(subparsers) -> None:
@@ -95,7 +95,7 @@ def run_card(args) -> int:
 
 
 def run_report(args) -> int:
-    from reports.report import write_report
+    from flowcurve.reports.report import write_report
 
     out = write_report(args.dir, args.output, units=args.units, title=args.title, **overrides(args))
     print(f"report written to {out}", file=sys.stderr)

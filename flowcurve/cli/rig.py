@@ -20,7 +20,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from flowcurve.errors import DeviceError, FlowcurveError
-from rig.config import RigConfig, load_config, to_toml
+from flowcurve.rig.config import RigConfig, load_config, to_toml
 
 CHECK_FAILED = 3
 
@@ -81,7 +81,7 @@ def diagnose(exc: Exception, port: str) -> str:
 
 
 def check_loadcell(section, out, opener=None) -> None:
-    from rig.codecs import aed
+    from flowcurve.rig.codecs import aed
 
     with section.create(opener=opener) as cell:
         idn = cell.identify()
@@ -141,7 +141,7 @@ PROBE_TIMEOUT_S = 0.1
 
 def probe_line(key: str, section, opener=None) -> str | None:
     """For a silent or garbled device: the first other baud rate / parity it answers at."""
-    from rig.config import BAUDS
+    from flowcurve.rig.config import BAUDS
 
     parities = ("E", "N", "O") if key == "loadcell" else ("N",)
     for baud in sorted(BAUDS, key=lambda b: abs(b - section.baud)):
@@ -209,7 +209,7 @@ def run_recover_loadcell(args) -> int:
 
 # -- rig virtual ----------------------------------------------------------------------
 def run_virtual(args) -> int:
-    from rig.virtual.rig import VirtualRig  # the virtual-rig engineer's twins
+    from flowcurve.rig.virtual.rig import VirtualRig  # the virtual-rig engineer's twins
 
     if not (args.time_scale > 0 and math.isfinite(args.time_scale)):
         raise FlowcurveError(f"--time-scale must be a positive number, got {args.time_scale}")
@@ -217,7 +217,7 @@ def run_virtual(args) -> int:
                     time_scale=args.time_scale, checksum=args.checksum) as rig:
         path = args.config
         if path is None:
-            path = Path(tempfile.mkdtemp(prefix="flowcurve-virtual-rig-")) / "rig.toml"
+            path = Path(tempfile.mkdtemp(prefix="flowcurve-virtual-rig-")) / "flowcurve.rig.toml"
         path.write_text(to_toml(rig.config()))
         for name, port in rig.ports.items():
             print(f"{name:9s} {port}")

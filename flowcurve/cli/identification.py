@@ -92,13 +92,13 @@ def register(subparsers) -> None:
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="any other metadata key, e.g. --set nominal_temperature_C=600")
     m = p.add_argument_group("methods")
     m.add_argument("--no-extensometer", action="store_true", help="use the corrected crosshead travel even when the record has an extensometer channel")
-    m.add_argument("--neck-correction", choices=_choices("identification.necking", "METHODS") or ("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
+    m.add_argument("--neck-correction", choices=_choices("flowcurve.identification.necking", "METHODS") or ("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
     m.add_argument("--hardening", choices=tuple(HARDENING_CHOICES), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
     m.add_argument("--E", dest="E_MPa", type=float, metavar="MPA", help="elastic modulus to strip elastic strain with (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
     m.add_argument("--true-stress", choices=("gost_3_6", "constant_volume"), help="true stress in the uniform part of a tension test: the corrected (3.6) with bulk modulus (default) or σ·(1 + e) at constant volume")
     m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n)")
-    m.add_argument("--friction-method", choices=_choices("identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default: the seed's bulge regression)")
-    m.add_argument("--friction-correction", choices=_choices("identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default k_sigma; all are computed)")
+    m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default: the seed's bulge regression)")
+    m.add_argument("--friction-correction", choices=_choices("flowcurve.identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default k_sigma; all are computed)")
     p.set_defaults(func=run)
 
 
@@ -131,13 +131,13 @@ def _options_from_args(args) -> dict:
 
 def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool = True):
     """Load, identify and write one record; returns (identification, result folder)."""
-    from identification.identify import identify
-    from identification.importers import load_record
+    from flowcurve.identification.identify import identify
+    from flowcurve.record.importers import load_record
 
     record = load_record(path, columns=columns, meta=meta)
     ident = identify(record, **options)
     if plots:
-        from reports.plots import add_plots
+        from flowcurve.reports.plots import add_plots
 
         add_plots(ident)
     folder = ident.write(out / record.name)
@@ -170,7 +170,7 @@ def summary_lines(result: dict) -> list[str]:
 
 
 def run(args) -> int:
-    from identification.importers import parse_column_option
+    from flowcurve.record.importers import parse_column_option
 
     columns = dict(parse_column_option(c) for c in args.column) or None
     meta = _meta_from_args(args)
