@@ -81,7 +81,6 @@ def test_layer_imports_point_one_way(layer):
     assert not bad, "\n".join(bad)
 
 
-@pytest.mark.xfail(strict=True, reason="the virtual devices still encode with the drivers' codecs (issue 9, in progress)")
 def test_drivers_never_import_the_virtual_devices_and_twins_keep_their_own_codecs():
     """The virtual devices encode replies with code of their own: a codec bug shared by the
     driver and its twin would otherwise pass every test."""

@@ -179,7 +179,7 @@ def _decode_ascii(body: bytes, fmt: OutputFormat) -> MeasuredValue:
 
 
 def encode_msv(counts: int, fmt: OutputFormat, *, status: int = 0, address: int = 31) -> bytes:
-    """Inverse of :func:`decode_msv` (used by tests and by the virtual amplifier)."""
+    """Inverse of :func:`decode_msv` (used by tests; the virtual amplifier has its own encoder)."""
     if fmt.kind == "binary4":
         value = counts.to_bytes(3, "big", signed=True)
         body = (value if fmt.msb_first else value[::-1]) + bytes([status if fmt.has_status else 0])

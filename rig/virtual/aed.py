@@ -8,7 +8,7 @@ Behaviour implemented (command names are case-insensitive, end with ``;`` or LF)
   until the unit is selected by its own ``Snn``, which sends it (bus polling);
 * ``IDN?``; ``MSV?`` one value, ``MSV?N`` N values, ``MSV?0`` a stream until ``STP``/``RES``,
   at the ``ICR`` rate (100, 50, 25, 12, 6, 3, 2, 1 /s), in the ``COF`` format (frames of
-  :mod:`rig.codecs.aed`; binary frames can contain CR/LF). While it streams, settings are
+  :mod:`flowcurve.rig.virtual.wire_format`; binary frames can contain CR/LF). While it streams, settings are
   ignored without an answer (an answer would corrupt the stream); ``COF`` +128 streams
   from power-on (and after ``RES``);
 * settings answer ``0`` (accepted) or ``?`` (refused; ``ESR?`` then tells why: 1 unknown
@@ -30,9 +30,10 @@ import re
 import time
 from typing import Callable
 
-from flowcurve.rig.codecs.aed import (
-    ADC_OVERFLOW, ASF_CUTOFF_HZ, GROSS_OVERFLOW, ICR_RATES_PER_S, NET_OVERFLOW, STANDSTILL,
-    encode_msv, output_format,
+from flowcurve.rig.virtual.wire_format import (
+    FILTER_CUTOFF_HZ, OUTPUT_RATES_PER_S, STATUS_ADC_OVERFLOW, STATUS_GROSS_OVERFLOW,
+    STATUS_NET_OVERFLOW, STATUS_STANDSTILL, aed_frame, is_known_cof, is_two_byte_cof,
+    nominal_counts,
 )
 from flowcurve.rig.virtual.pty_device import PtyDevice
 
@@ -79,7 +80,7 @@ class AEDAmplifier(PtyDevice):
             self._remaining, self._next_due = -1, time.monotonic()
 
     def _filter(self, t: float, force: float) -> float:
-        fc = ASF_CUTOFF_HZ.get(self.s["asf"]) if self.s["fmd"] == 0 else None
+        fc = FILTER_CUTOFF_HZ[self.s["asf"]] if self.s["fmd"] == 0 else None
         if fc is None or self._filtered is None or self._last_t is None or t <= self._last_t:
             y = force if fc is None or self._filtered is None else self._filtered
         else:
@@ -92,23 +93,20 @@ class AEDAmplifier(PtyDevice):
         """One measured value in the present COF format."""
         t, force, standstill = self.source()
         gross = self._filter(t, force) / self.nominal_load_N  # in units of nominal load
-        status = STANDSTILL if standstill else 0
+        status = STATUS_STANDSTILL if standstill else 0
         if abs(gross) > ADC_LIMIT:
-            status |= ADC_OVERFLOW
+            status |= STATUS_ADC_OVERFLOW
             gross = math.copysign(ADC_LIMIT, gross)
         if abs(gross) > 1.0:
-            status |= GROSS_OVERFLOW
+            status |= STATUS_GROSS_OVERFLOW
         net = gross - self.s["tare"] if self.s["tas"] == 0 else gross
         if abs(net) > 1.0:
-            status |= NET_OVERFLOW
-        fmt = output_format(self.s["cof"])
-        nominal = fmt.nominal_counts
-        if fmt.kind == "ascii" and self.s["nov"] > 0:
-            nominal = self.s["nov"]
-        counts = int(round(net * nominal))
-        if fmt.kind == "binary2" and status & NET_OVERFLOW:
+            status |= STATUS_NET_OVERFLOW
+        cof = self.s["cof"]
+        counts = int(round(net * nominal_counts(cof, self.s["nov"])))
+        if is_two_byte_cof(cof) and status & STATUS_NET_OVERFLOW:
             counts = 0x7FFF if net > 0 else -0x8000
-        return encode_msv(counts, fmt, status=status, address=self.address)
+        return aed_frame(cof, counts, status=status, address=self.address)
 
     # -- input ------------------------------------------------------------------------
     def on_bytes(self, data: bytes) -> None:
@@ -211,7 +209,7 @@ class AEDAmplifier(PtyDevice):
         self.send(b"0\r\n")  # at the new rate (a pty has none)
 
     _RANGES = {
-        "COF": lambda v: _valid_cof(v),
+        "COF": lambda v: is_known_cof(v),
         "ICR": lambda v: 0 <= v <= 7,
         "ASF": lambda v: 0 <= v <= 8,
         "FMD": lambda v: v in (0, 1),
@@ -256,13 +254,6 @@ class AEDAmplifier(PtyDevice):
         self.send(self.measured_frame())
         if self._remaining > 0:
             self._remaining -= 1
-        period = 1.0 / ICR_RATES_PER_S[self.s["icr"]]
+        period = 1.0 / OUTPUT_RATES_PER_S[self.s["icr"]]
         self._next_due = max(self._next_due + period, now - period) if self._remaining != 0 else None
 
-
-def _valid_cof(value: int) -> bool:
-    try:
-        output_format(value)
-        return True
-    except ValueError:
-        return False

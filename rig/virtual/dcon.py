@@ -28,7 +28,7 @@ import re
 import time
 from typing import Callable
 
-from flowcurve.rig.codecs.dcon import FULL_SCALE_C, checksum
+from flowcurve.rig.virtual.wire_format import THERMOCOUPLE_FULL_SCALE_C, dcon_checksum
 from flowcurve.rig.virtual.pty_device import PtyDevice
 
 FORMAT_BITS = 0x03
@@ -68,7 +68,7 @@ class DconDevice(PtyDevice):
             return
         text = text.lstrip("\n")
         if self.checksum_on:
-            if len(text) < 3 or text[-2:].upper() != checksum(text[:-2]):
+            if len(text) < 3 or text[-2:].upper() != dcon_checksum(text[:-2]):
                 return
             text = text[:-2]
         if text == "~**":
@@ -91,7 +91,7 @@ class DconDevice(PtyDevice):
 
     def reply(self, text: str) -> None:
         if self.checksum_on:
-            text += checksum(text)
+            text += dcon_checksum(text)
         self.send(text.encode("ascii") + b"\r")
 
     @property
@@ -178,7 +178,7 @@ class I7011(DconDevice):
 
     def reading_text(self, temperature_C: float) -> str:
         """The ``#AA`` data in the present format."""
-        full_scale = FULL_SCALE_C.get(self.type_code, 1370.0)
+        full_scale = THERMOCOUPLE_FULL_SCALE_C.get(self.type_code, 1370.0)
         over = not math.isfinite(temperature_C) or temperature_C > full_scale
         if self.data_format == 2:
             if over:

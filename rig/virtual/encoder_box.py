@@ -1,6 +1,6 @@
 """Virtual crosshead encoder counter box on a pty — docs/encoder-protocol.md (version 1).
 
-DCON framing and host watchdog from :class:`rig.virtual.dcon.DconDevice`; a 32-bit up/down
+DCON framing and host watchdog from :class:`flowcurve.rig.virtual.dcon.DconDevice`; a 32-bit up/down
 counter of quadrature counts that wraps modulo 2**32 (``initial_count`` lets a test start
 it just below the wrap), read binary (``#AAN``), Gray-coded (``$AAGN``), latched by the
 ``#**`` broadcast and read back by ``$AAZN``, reset to zero by ``$AA6N``.
@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from typing import Callable
 
-from flowcurve.rig.codecs.encoder import binary_to_gray
+from flowcurve.rig.virtual.wire_format import gray_code
 from flowcurve.rig.virtual.dcon import CHECKSUM_BIT, DconDevice
 
 MASK32 = 0xFFFFFFFF
@@ -43,7 +43,7 @@ class EncoderBox(DconDevice):
             return f">{self.count():08X}"
         if lead == "$":
             if body == "G0":
-                return f">{binary_to_gray(self.count()):08X}"
+                return f">{gray_code(self.count()):08X}"
             if body == "Z0":
                 return f">{self.latched:08X}"
             if body == "60":
