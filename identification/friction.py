@@ -28,7 +28,6 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from scipy.optimize import brentq
 
 from flowcurve.errors import IdentificationError
 
@@ -201,6 +200,8 @@ def mu_equal_slab_pressure(m: float, r_over_h: float) -> float:
     hi = 1.0
     while f(hi) < 0:
         hi *= 2.0
+    from scipy.optimize import brentq  # here, so `flowcurve --help` stays fast
+
     return float(brentq(f, 0.0, hi, xtol=1e-12))
 
 

@@ -21,9 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Iterable, Sequence
 
-import lmfit
 import numpy as np
-from scipy.optimize import brentq
 
 from flowcurve.errors import IdentificationError
 
@@ -209,6 +207,8 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
         raise IdentificationError(f"hardening fit: need at least 4 points spanning a strain range, got {eps.size}")
 
     start = _start_values(law, eps, sig, w)
+    import lmfit  # here, so `flowcurve --help` stays fast
+
     model = lmfit.Model(spec.func, independent_vars=["eps_p"])
     params = model.make_params()
     for name in spec.names:
@@ -238,6 +238,8 @@ def _root(g: Callable[[float], float], lo: float, hi: float, what: str) -> float
     i = idx[0]
     if vals[i] == 0:
         return float(grid[i])
+    from scipy.optimize import brentq
+
     return float(brentq(g, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-13, maxiter=200))
 
 

@@ -11,10 +11,12 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
-import pandas as pd
+
+if TYPE_CHECKING:  # annotations only; pandas stays out of `flowcurve --help`
+    import pandas as pd
 
 TRUE_CURVE_COLUMNS = ("true_plastic_strain", "true_stress_MPa")
 

@@ -37,12 +37,14 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 
 import numpy as np
-import pandas as pd
 
 from flowcurve.errors import RecordError
+
+if TYPE_CHECKING:  # pandas is imported where records are parsed, so `flowcurve --help` stays fast
+    import pandas as pd
 
 FORMAT_NAME = "flowcurve-record"
 FORMAT_VERSION = 1
@@ -297,6 +299,8 @@ def _extract_events(comments: list[bytes], source: str) -> list[Event]:
 
 
 def _parse_samples(raw: bytes, start: int, stop: int, comments: list[bytes], columns: list[str], source: str, names_line: int) -> pd.DataFrame:
+    import pandas as pd
+
     body = memoryview(raw)[start:stop]  # no copy
     if _NON_SPACE.search(body) is None:
         return pd.DataFrame(columns=columns, dtype=float)

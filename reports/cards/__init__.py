@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from flowcurve import __version__
 from flowcurve.errors import FlowcurveError
@@ -161,6 +160,8 @@ def _curves(fit: dict, path) -> list[FlowCurve]:
             raise CardError(f"{path}: {where} lacks '{exc.args[0]}'") from None
         except (TypeError, ValueError):
             raise CardError(f"{path}: {where} holds values that are not numbers") from None
+        import pandas as pd  # here, so `flowcurve --help` stays fast
+
         try:
             table = pd.read_csv(file, comment="#")
             eps = table["true_plastic_strain"].to_numpy(dtype=float)

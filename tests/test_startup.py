@@ -1,0 +1,23 @@
+"""`flowcurve --help` stays fast: building the command's parser imports none of the heavy
+libraries (they are imported inside the code that uses them). Timing is in
+bench/cli_startup.py; here only what is imported is checked."""
+
+import subprocess
+import sys
+
+HEAVY = ("pandas", "scipy", "lmfit", "matplotlib", "serial")
+
+
+def test_the_parser_imports_no_heavy_library():
+    code = ("import sys; from flowcurve.cli import build_parser; build_parser(); "
+            f"print(' '.join(m for m in {HEAVY!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == []
+
+
+def test_a_heavy_import_is_seen():
+    """The check above can fail: a module that imports pandas shows in sys.modules."""
+    code = ("import sys; import flowcurve.record.importers; "
+            f"print(' '.join(m for m in {HEAVY!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert "pandas" in out.stdout.split()
