@@ -17,6 +17,7 @@ from pathlib import Path
 from flowcurve.acquisition.live import LiveView
 from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, Procedure, ProcedureError, StopCriteria, TestSpec
 from flowcurve.record.format import amend_record, read_record, recover_record
+from flowcurve.cli.specimen import add_geometry_options, add_modulus_option, check_specimen_options
 from flowcurve.errors import FlowcurveError, RecordError
 
 DEFAULT_VIRTUAL_MATERIAL = "steel45"
@@ -28,15 +29,13 @@ def register(subparsers) -> None:
     run.add_argument("--config", type=Path, help="rig configuration (TOML); without it the virtual rig runs in this process")
     run.add_argument("--out", type=Path, help="record file (default records/<test>-<date-time>.csv)")
     run.add_argument("--material", help="material name (virtual rig: also the virtual specimen's material, default steel45)")
-    run.add_argument("--E", dest="E_MPa", type=float, metavar="MPA", help="handbook elastic modulus of the material, MPa, written into the record as material.E_MPa (compression identification strips elastic strain with it; the virtual rig knows its own)")
+    add_modulus_option(run, "the handbook value, written into the record as material.E_MPa (compression identification strips elastic strain with it; the virtual rig knows its own)")
     run.add_argument("--operator", default=None, help="operator name")
     run.add_argument("--specimen-id", default=None, help="specimen identifier")
     run.add_argument("--temperature", type=float, metavar="C", help="heat to this set-point, C, and soak before loading")
     run.add_argument("--soak", type=float, default=60.0, metavar="S", help="soak time at the set-point, test seconds (default 60)")
     run.add_argument("--speed", type=float, metavar="MM_PER_S", help="crosshead speed, mm/s (default 0.01; the demo-like 0.05 on the virtual rig)")
-    run.add_argument("--d0", type=float, metavar="MM", help="specimen diameter, mm")
-    run.add_argument("--l0", type=float, metavar="MM", help="gauge length (tension), mm")
-    run.add_argument("--h0", type=float, metavar="MM", help="height (compression), mm")
+    add_geometry_options(run)
     run.add_argument("--target", type=float, metavar="MM", help="stop at this crosshead displacement, mm")
     run.add_argument("--force-limit", type=float, metavar="N", help="stop at this force, N (default 98 %% of the frame capacity)")
     run.add_argument("--post", action="append", default=[], metavar="KEY=VALUE", help="post-test measurement, e.g. post.hk_mm=3.55 (repeatable)")
@@ -106,7 +105,8 @@ def _ask(prompt: str, default=None, cast=str):
 
 def build_spec(args, geometry_default: dict[str, float] | None = None) -> TestSpec:
     """The TestSpec from options (and prompts when interactive) — geometry in mm."""
-    for name in ("d0", "l0", "h0", "speed", "target", "force_limit", "soak"):
+    check_specimen_options(args)
+    for name in ("speed", "target", "force_limit", "soak"):
         _positive(name.replace("_", "-"), getattr(args, name, None))
     interactive = _interactive(args)
     geometry: dict[str, float] = {}

@@ -7,6 +7,7 @@ import os
 import sys
 from pathlib import Path
 
+from flowcurve.cli.specimen import GEOMETRY_OPTIONS, add_geometry_options, add_modulus_option, check_specimen_options
 from flowcurve.errors import FlowcurveError, RecordError
 
 DEFAULT_OUT = "flowcurve-results"
@@ -17,9 +18,7 @@ HARDENING_CHOICES = {"lsq": "least_squares", "three-point": "three_point"}
 # command-line option → metadata key it sets (geometry and post-test measurements, in mm)
 META_OPTIONS = {
     "test": "test",
-    "d0": "specimen.d0_mm",
-    "l0": "specimen.l0_mm",
-    "h0": "specimen.h0_mm",
+    **{option: key for option, (key, _) in GEOMETRY_OPTIONS.items()},
     "lu": "post.lu_mm",
     "dk": "post.dk_mm",
     "hk": "post.hk_mm",
@@ -78,9 +77,7 @@ def register(subparsers) -> None:
     p.add_argument("--no-plots", action="store_true", help="skip the PNG plots (faster for long series)")
     g = p.add_argument_group("specimen and test (override the record's header)")
     g.add_argument("--test", choices=("tension", "compression"), help="kind of test, for files that do not say")
-    g.add_argument("--d0", type=float, metavar="MM", help="initial specimen diameter, mm")
-    g.add_argument("--l0", type=float, metavar="MM", help="initial gauge length (tension), mm")
-    g.add_argument("--h0", type=float, metavar="MM", help="initial specimen height (compression), mm")
+    add_geometry_options(g)
     g.add_argument("--lu", type=float, metavar="MM", help="gauge length measured after fracture (tension), mm")
     g.add_argument("--dk", type=float, metavar="MM", help="smallest diameter at the fracture (tension), mm")
     g.add_argument("--neck-radius", type=float, metavar="MM", help="profile radius of the neck at fracture (tension), mm; without it a/R is estimated (Le Roy)")
@@ -94,7 +91,7 @@ def register(subparsers) -> None:
     m.add_argument("--no-extensometer", action="store_true", help="use the corrected crosshead travel even when the record has an extensometer channel")
     m.add_argument("--neck-correction", choices=_choices("flowcurve.identification.necking", "METHODS") or ("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
     m.add_argument("--hardening", choices=tuple(HARDENING_CHOICES), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
-    m.add_argument("--E", dest="E_MPa", type=float, metavar="MPA", help="elastic modulus to strip elastic strain with (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
+    add_modulus_option(m, "strips elastic strain with it (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
     m.add_argument("--true-stress", choices=("gost_3_6", "constant_volume"), help="true stress in the uniform part of a tension test: the corrected (3.6) with bulk modulus (default) or σ·(1 + e) at constant volume")
     m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n)")
     m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default: the seed's bulge regression)")
@@ -172,6 +169,7 @@ def summary_lines(result: dict) -> list[str]:
 def run(args) -> int:
     from flowcurve.record.importers import parse_column_option
 
+    check_specimen_options(args)
     columns = dict(parse_column_option(c) for c in args.column) or None
     meta = _meta_from_args(args)
     options = _options_from_args(args)

@@ -1,0 +1,41 @@
+"""The specimen options of ``flowcurve run`` and ``flowcurve identify``, declared once.
+
+``--d0``/``--l0``/``--h0`` give the specimen's initial geometry in mm (the record keys
+``specimen.*_mm``), ``--E`` the material's elastic modulus in MPa. Each command says in one
+sentence what it does with the modulus; the names, units, types and the check of the values
+are the same everywhere.
+"""
+
+from __future__ import annotations
+
+import math
+
+from flowcurve.errors import FlowcurveError
+
+# option (without --) → (record metadata key, help)
+GEOMETRY_OPTIONS = {
+    "d0": ("specimen.d0_mm", "initial specimen diameter, mm"),
+    "l0": ("specimen.l0_mm", "initial gauge length (tension), mm"),
+    "h0": ("specimen.h0_mm", "initial specimen height (compression), mm"),
+}
+MODULUS_OPTION, MODULUS_DEST = "--E", "E_MPa"
+
+
+def add_geometry_options(target) -> None:
+    """--d0, --l0, --h0 (mm) on a parser or an argument group."""
+    for option, (_, help_text) in GEOMETRY_OPTIONS.items():
+        target.add_argument(f"--{option}", type=float, metavar="MM", help=help_text)
+
+
+def add_modulus_option(target, use: str) -> None:
+    """--E (MPa) on a parser or an argument group; ``use`` says what the command does with it."""
+    target.add_argument(MODULUS_OPTION, dest=MODULUS_DEST, type=float, metavar="MPA",
+                        help=f"elastic modulus of the material, MPa: {use}")
+
+
+def check_specimen_options(args) -> None:
+    """A given geometry or modulus must be a finite positive number (one-line error naming it)."""
+    for option, dest in [(o, o) for o in GEOMETRY_OPTIONS] + [(MODULUS_OPTION[2:], MODULUS_DEST)]:
+        value = getattr(args, dest, None)
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise FlowcurveError(f"--{option} must be a positive number, got {value}")
