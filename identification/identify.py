@@ -9,7 +9,6 @@ record to :func:`identification.tension.identify_tension` or
 
 from __future__ import annotations
 
-import inspect
 import math
 
 import numpy as np
@@ -29,6 +28,17 @@ NOISE_SAMPLES = 50_000  # differences used for the noise estimate (long records 
 PLAUSIBLE_STRESS_MPa = (2.0, 5000.0)
 
 DISPATCH = {"tension": identify_tension, "compression": identify_compression}
+# The options each test's identification takes, written out: an option in neither list is a
+# mistake (a typo) and an error; one the other test takes is a warning (a batch of tension
+# and compression records is identified with one set of options).
+# tests/compression/test_identify_options.py keeps the lists equal to the functions' keywords.
+OPTIONS = {
+    "tension": frozenset({"use_extensometer", "frame_stiffness_N_per_um", "crosshead_length_mm", "toe", "scale",
+                          "modulus_window", "modulus_reference", "E_MPa", "poisson", "true_stress", "neck",
+                          "law", "hardening", "fracture_weight"}),
+    "compression": frozenset({"friction_method", "friction_correction", "law", "E_MPa",
+                              "frame_stiffness_N_per_um", "modulus_window_MPa"}),
+}
 
 
 def force_noise_N(force_N: np.ndarray) -> float:
@@ -76,26 +86,28 @@ def check_record(record: Record) -> list[str]:
     return warnings
 
 
-def _accepted(func, options: dict) -> tuple[dict, list[str]]:
-    """Split options into those ``func`` accepts and the names it does not."""
-    params = inspect.signature(func).parameters
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
-        return options, []
-    accepted = {k: v for k, v in options.items() if k in params}
-    return accepted, sorted(set(options) - set(accepted))
+def route_options(test: str, options: dict) -> tuple[dict, list[str]]:
+    """Split options into those the test's identification takes and those only the other
+    test takes; an option neither takes is an :class:`IdentificationError` naming it."""
+    unknown = sorted(set(options).difference(*OPTIONS.values()))
+    if unknown:
+        known = ", ".join(sorted(set().union(*OPTIONS.values())))
+        raise IdentificationError(f"unknown identification option(s): {', '.join(unknown)} (known: {known})")
+    taken = {k: v for k, v in options.items() if k in OPTIONS[test]}
+    return taken, sorted(set(options) - set(taken))
 
 
 def identify(record: Record, **options) -> Identification:
     """Identify a tension or compression record (dispatch on ``record.test``).
 
-    options: passed on to the test's identification when it accepts them (``None`` values are
-    dropped, so callers can pass every command-line option); options it does not know are
-    reported in the result's warnings rather than silently lost.
+    options: routed by :data:`OPTIONS` (``None`` values are dropped, so callers can pass every
+    command-line option); an option only the other test takes is reported in the result's
+    warnings, an option no test takes is an error.
     """
     warnings = check_record(record)
     func = DISPATCH[record.test]
     given = {k: v for k, v in options.items() if v is not None}
-    accepted, ignored = _accepted(func, given)
+    accepted, ignored = route_options(record.test, given)
     ident = func(record, **accepted)
     result = ident.result
     result.setdefault("test", record.test)
