@@ -17,13 +17,16 @@ channel applies to every reading; it raises :class:`SafetyError` naming the devi
 from __future__ import annotations
 
 import atexit
+import logging
 import math
 import signal
 import threading
 import time
 from typing import Callable
 
-from flowcurve.errors import SafetyError
+from flowcurve.errors import DeviceError, SafetyError
+
+logger = logging.getLogger(__name__)
 
 # DCON family modules report a broken thermocouple as an over-range or under-range reading
 OPEN_THERMOCOUPLE_HIGH_C = 9999.0
@@ -102,8 +105,10 @@ class HeaterSafety:
                         self.log("heater_off", reason)
                     self._done = True
                     return True
-                except Exception as exc:  # keep trying: the heater must go off
+                except Exception as exc:  # keep trying whatever failed: the heater must go off
                     last = exc
+                    logger.warning("heater off, attempt %d of %d failed: %s", attempt + 1, self.retries, exc,
+                                   exc_info=not isinstance(exc, (DeviceError, OSError)))  # a bug: with its traceback
                     time.sleep(0.05 * (attempt + 1))
             self.off_error = " ".join(str(last).split())
             if self.log:

@@ -9,13 +9,16 @@ other stream has a sample at or after its time (so nothing is extrapolated); at 
 the test the remaining ones are released with the last value held ("latest-before").
 Before a stream's first sample its first value is held (the crosshead has not moved yet).
 
-A device whose reads fail ``max_failures`` times in a row, or that gives nothing for
-``silence_s``, puts the sampler in a fault state naming the device; the procedure stops
-the test and keeps what was recorded.
+A device whose reads fail ``max_failures`` times in a row (a :class:`DeviceError` or a
+port's ``OSError``/``SerialException``), or that gives nothing for ``silence_s``, puts the
+sampler in a fault state naming the device; the procedure stops the test (heater off) and
+keeps what was recorded. Any other exception from a read is a bug, not a device failure: it
+is not retried, and faults the sampler at once with an :class:`InternalError`.
 """
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from dataclasses import dataclass, field
@@ -23,7 +26,12 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from flowcurve.errors import DeviceError, SafetyError
+from flowcurve.errors import DeviceError, FlowcurveError, InternalError, SafetyError
+
+logger = logging.getLogger(__name__)
+
+# what a failing device raises: the drivers' errors, a vanished port (SerialException is an OSError)
+DEVICE_FAILURES = (DeviceError, OSError)
 
 # A read function returns one value, a list of values (a streamed block; each is stamped
 # when the block arrives, spaced by ``period_s`` backwards), or a list of (t, value) pairs
@@ -141,12 +149,19 @@ class Channel(threading.Thread):
             except SafetyError as exc:  # over-temperature, open thermocouple: stop at once
                 self._fault(str(exc), exc)
                 return
-            except Exception as exc:  # a device error of any kind: count it, then give up
+            except DEVICE_FAILURES as exc:  # count it, then give up
                 failures += 1
+                logger.debug("%s: read %d failed: %s", self.device, failures, _one_line(exc))
                 if failures >= self.max_failures:
                     self._fault(f"{failures} reads in a row failed; last: {_one_line(exc)}", exc if isinstance(exc, DeviceError) else None)
                     return
                 continue
+            except Exception as exc:  # a bug in the read code: no retry, stop the test safely
+                logger.exception("%s: internal error while reading", self.device)
+                self._fault(f"internal error: {_one_line(exc)}",
+                            InternalError(f"{self.device}: internal error while reading: {_one_line(exc)} "
+                                          f"(a bug in flowcurve, please report it)"))
+                return
             failures = 0
             n = self._store(got, self.clock())
             wall = time.monotonic()
@@ -182,6 +197,8 @@ class Channel(threading.Thread):
 
     def _fault(self, message: str, error: Exception | None = None) -> None:
         self.error = message
+        if not isinstance(error, InternalError):
+            logger.warning("%s: %s", self.device, message)
         if self.on_fault:
             self.on_fault(self.device, message, error)
 
@@ -214,7 +231,7 @@ class Sampler:
         self._others = [channels[c] for c in self.columns[1:]]
         self._released = 0
         self._other_start = [0] * len(self._others)
-        self._fault: DeviceError | None = None
+        self._fault: FlowcurveError | None = None
         self._fault_lock = threading.Lock()
         for ch in channels.values():
             ch.on_fault = self._on_fault
@@ -227,11 +244,11 @@ class Sampler:
     def _on_fault(self, device: str, message: str, error: Exception | None = None) -> None:
         with self._fault_lock:
             if self._fault is None:
-                self._fault = error if isinstance(error, DeviceError) else DeviceError(device, message)
+                self._fault = error if isinstance(error, (DeviceError, InternalError)) else DeviceError(device, message)
 
     @property
-    def fault(self) -> DeviceError | None:
-        """The first device failure, or None."""
+    def fault(self) -> FlowcurveError | None:
+        """The first device failure (or internal error), or None."""
         return self._fault
 
     @property
@@ -257,7 +274,7 @@ class Sampler:
             self._other_start[i] += max(0, int(np.searchsorted(ts, ft[n - 1], side="right")) - 1)
         return rows
 
-    def check_silence(self) -> DeviceError | None:
+    def check_silence(self) -> FlowcurveError | None:
         """Fault a channel whose read hangs (no data for its ``silence_s``); the first fault."""
         now = time.monotonic()
         for ch in self.channels.values():

@@ -11,6 +11,7 @@ measurements the way an operator would.
 
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -18,6 +19,8 @@ from typing import Callable
 from flowcurve.acquisition.sampler import Channel, lower_envelope_stamps
 from flowcurve.errors import DeviceError
 from flowcurve.rig.codecs import aed
+
+logger = logging.getLogger(__name__)
 
 # Wall-clock seconds a device may stay silent before the test stops (the drivers' own
 # time-outs and retries come first; this catches a read that hangs or returns nothing).
@@ -84,16 +87,16 @@ class DriverRig:
             try:
                 if self.furnace.heater_off() and self.furnace.watchdog_armed:
                     self.furnace.disarm_watchdog()
-            except Exception:  # the watchdog stays armed: the module switches off by itself
-                pass
+            except (DeviceError, OSError) as exc:  # the watchdog stays armed: the module switches off by itself
+                logger.warning("%s: disarming the watchdog failed (%s); it stays armed and switches the heater off by itself", self.furnace.name, exc)
             self.furnace.transport.close()  # heater-off tried just now: no second round in Furnace.close
         for dev in (self.loadcell, self.encoder, self.furnace):
             if dev is None:
                 continue
             try:
                 dev.close()
-            except Exception:  # closing must go on to the next device
-                pass
+            except (DeviceError, OSError) as exc:  # closing must go on to the next device
+                logger.warning("%s: closing failed: %s", dev.name, exc)
 
     def __enter__(self) -> "DriverRig":
         return self.open()

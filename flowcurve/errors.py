@@ -53,3 +53,10 @@ class DeviceError(FlowcurveError):
 
 class SafetyError(DeviceError):
     """Over-temperature, open thermocouple, stuck heater: the heating was stopped."""
+
+
+class InternalError(FlowcurveError):
+    """A bug in flowcurve (a TypeError in a driver, say), not a device or input failure:
+    the test stops safely and the message says to report it."""
+
+    exit_code = 70  # EX_SOFTWARE

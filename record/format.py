@@ -30,6 +30,7 @@ second, so a crash loses at most the last second of samples.
 from __future__ import annotations
 
 import io
+import logging
 import math
 import re
 import os
@@ -45,6 +46,8 @@ from flowcurve.errors import RecordError
 
 if TYPE_CHECKING:  # pandas is imported where records are parsed, so `flowcurve --help` stays fast
     import pandas as pd
+
+logger = logging.getLogger(__name__)
 
 FORMAT_NAME = "flowcurve-record"
 FORMAT_VERSION = 1
@@ -423,10 +426,12 @@ class RecordWriter:
         self._sync()
 
     def event(self, time_s: float, name: str, text: str = "") -> None:
+        """Write a ``# event:`` line, and log it (info: the procedure reports faults itself)."""
         if " " in name or not name:
             raise ValueError("event names are single words, e.g. heater_on")
         self._fh.write(f"# event: {time_s:.3f} {name} {text}".rstrip() + "\n")
         self._sync()
+        logger.info("%s: %.3f s %s %s", self.path.name, time_s, name, text)
 
     def _sync(self, force: bool = False) -> None:
         self._fh.flush()
@@ -447,6 +452,8 @@ class RecordWriter:
         meta["status"] = status
         meta.setdefault("samples", self.rows_written)
         amend_record(self.path, meta)
+        logger.info("%s: %s, %d samples%s", self.path, status, self.rows_written,
+                    f" ({meta['abort_reason']})" if meta.get("abort_reason") else "")
         return self.path
 
     def __enter__(self) -> "RecordWriter":

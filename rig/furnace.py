@@ -4,12 +4,13 @@ and the temperature controller that holds a set-point with it.
 Safety rules kept here: the heater is never switched on at or above the maximum temperature;
 an open thermocouple (over-range reading confirmed by ``$AAB``) or an over-temperature
 switches the heater off and raises :class:`~flowcurve.errors.SafetyError`; ``heater_off``
-never raises and retries; :meth:`Furnace.arm_watchdog` makes the module switch the heater
+retries and raises no device error (each failed attempt is logged); :meth:`Furnace.arm_watchdog` makes the module switch the heater
 off by itself when the PC stops talking; closing the furnace switches the heater off.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from collections import deque
@@ -18,6 +19,8 @@ from itertools import takewhile
 from flowcurve.errors import DeviceError, FlowcurveError, SafetyError
 from flowcurve.rig.codecs import dcon
 from flowcurve.rig.transport import DconDevice
+
+logger = logging.getLogger(__name__)
 
 HEATER_OFF_ATTEMPTS = 3
 
@@ -135,22 +138,27 @@ class Furnace(DconDevice):
         self.heater_is_on = True
 
     def heater_off(self) -> bool:
-        """Heater off, best effort: retries, never raises. True if the module acknowledged,
-        or refused but reports the heater output off (after a watchdog trip)."""
-        for _ in range(HEATER_OFF_ATTEMPTS):
+        """Heater off, best effort: retries; a device or port failure is logged, not raised.
+        True if the module acknowledged, or refused but reports the heater output off (after
+        a watchdog trip)."""
+        for attempt in range(1, HEATER_OFF_ATTEMPTS + 1):
             try:
                 self._write_outputs(0)
                 self.heater_is_on = False
                 return True
-            except OutputsRefused:
+            except OutputsRefused as refused:
                 try:  # the module talks but will not switch: is the output off already?
                     if not self.digital_io()["outputs"] & self.heater_mask:
                         self.heater_is_on = False
                         return True
-                except Exception:  # noqa: BLE001 - on a way out nothing may stop the next attempt
-                    pass
-            except Exception:  # noqa: BLE001
-                pass
+                    logger.warning("heater off, attempt %d of %d: %s; the heater output is still on",
+                                   attempt, HEATER_OFF_ATTEMPTS, refused)
+                except (DeviceError, OSError) as exc:
+                    logger.warning("heater off, attempt %d of %d: %s; reading the outputs back failed: %s",
+                                   attempt, HEATER_OFF_ATTEMPTS, refused, exc)
+            except (DeviceError, OSError) as exc:
+                logger.warning("heater off, attempt %d of %d failed: %s", attempt, HEATER_OFF_ATTEMPTS, exc)
+        logger.error("%s: heater off not confirmed after %d attempts", self.name, HEATER_OFF_ATTEMPTS)
         return False
 
     def cold_junction_C(self) -> float:

@@ -7,6 +7,7 @@ A thin device class over :class:`~rig.transport.SerialTransport` and the pure co
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass
@@ -15,6 +16,8 @@ from flowcurve.errors import DeviceError
 from flowcurve.rig.codecs import ProtocolError
 from flowcurve.rig.codecs import aed
 from flowcurve.rig.transport import SerialTransport
+
+logger = logging.getLogger(__name__)
 
 SETTING_RETRIES = 2  # ICR/ASF/COF/TAR are idempotent: safe to repeat
 READ_RETRIES = 2
@@ -86,8 +89,8 @@ class LoadCell:
         if self.transport.is_open and self.streaming:
             try:
                 self.stop_stream()
-            except DeviceError:
-                pass
+            except DeviceError as exc:  # the port is closed next anyway
+                logger.warning("%s: stopping the stream on close failed: %s", self.name, exc)
         self.transport.close()
 
     def __enter__(self) -> "LoadCell":
@@ -262,6 +265,7 @@ class LoadCell:
     def _resync(self, exc: ProtocolError) -> None:
         self.stream_resyncs += 1
         self._resyncs_in_a_row += 1
+        logger.info("%s: garbled stream (%s), restarting it (%d in a row)", self.name, exc, self._resyncs_in_a_row)
         if self._resyncs_in_a_row > self.max_resyncs:
             raise DeviceError(self.name, f"garbled stream: {self._resyncs_in_a_row} restarts in a row "
                                          f"did not regain the framing ({exc})")

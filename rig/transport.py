@@ -17,6 +17,7 @@ encoder box derive from it.
 
 from __future__ import annotations
 
+import logging
 import os
 import threading
 import time
@@ -35,6 +36,8 @@ from flowcurve.errors import DeviceError
 
 PORT_ERRORS = (OSError, serial.SerialException, TermiosError)  # what a vanished port raises
 from flowcurve.rig.codecs import dcon
+
+logger = logging.getLogger(__name__)
 
 # Ports currently open, by URL → the owning transport. One owner per port.
 _OWNERS: dict[str, "SerialTransport"] = {}
@@ -235,9 +238,11 @@ class SerialTransport:
                 except DeviceError as exc:
                     if last or "disappeared" in str(exc):
                         raise
+                    logger.debug("%s: %s (attempt %d of %d), retrying", self.name, exc, attempt + 1, retries + 1)
                 except ValueError as exc:
                     if last:
                         raise DeviceError(self.name, f"garbled answer to {what}: {exc}") from None
+                    logger.debug("%s: garbled answer to %s (attempt %d of %d), retrying", self.name, what, attempt + 1, retries + 1)
         raise AssertionError("unreachable")
 
     def send(self, command: bytes) -> None:

@@ -5,7 +5,8 @@ identification, reports) meet. Each module ``flowcurve/cli/<layer>.py`` has a fu
 ``register(subparsers)`` that adds parsers and sets ``func`` on them; a module that fails to
 import is an error, never a silently missing command. ``func(args)``
 returns the exit code. Errors derived from :class:`~flowcurve.errors.FlowcurveError` are
-printed as one line; an operator never sees a traceback.
+printed as one line; an operator never sees a traceback. ``-v``/``-vv``/``--log-level``
+(before or after the sub-command) show the modules' log messages on standard error.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import sys
 
 from flowcurve import __version__
 from flowcurve.errors import FlowcurveError
+from flowcurve.log import LOG_LEVELS, configure, level_name
 
 # Packages that contribute sub-commands, in the order they appear in --help.
 COMMAND_MODULES = (
@@ -41,12 +43,27 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(subparsers)
+    _add_logging_options(parser, top=True)
     return parser
+
+
+def _add_logging_options(parser: argparse.ArgumentParser, *, top: bool) -> None:
+    """-v and --log-level on the command and on every sub-command; a sub-command's defaults
+    are SUPPRESS, so an option given before the sub-command is kept."""
+    parser.add_argument("-v", "--verbose", action="count", default=0 if top else argparse.SUPPRESS,
+                        help="show what the modules log: -v steps and record events, -vv details")
+    parser.add_argument("--log-level", type=str.upper, choices=LOG_LEVELS, default=None if top else argparse.SUPPRESS,
+                        help="log level (overrides -v; default WARNING)")
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                _add_logging_options(sub, top=False)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    configure(level_name(args.verbose, args.log_level))
     if not getattr(args, "func", None):
         parser.print_help()
         return 2

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import sys
 from pathlib import Path
 
 from flowcurve.cli.specimen import GEOMETRY_OPTIONS, add_geometry_options, add_modulus_option, check_specimen_options
 from flowcurve.errors import FlowcurveError, RecordError
+
+logger = logging.getLogger(__name__)
 
 DEFAULT_OUT = "flowcurve-results"
 
@@ -187,7 +190,8 @@ def run(args) -> int:
             if os.environ.get("FLOWCURVE_DEBUG"):
                 raise
             failed += 1
-            print(f"flowcurve: internal error on {path}: {type(exc).__name__}: {exc} (set FLOWCURVE_DEBUG=1 for the traceback, and please report it)", file=sys.stderr)
+            logger.debug("internal error on %s", path, exc_info=exc)
+            print(f"flowcurve: internal error on {path}: {type(exc).__name__}: {exc} (-vv or FLOWCURVE_DEBUG=1 shows the traceback; please report it)", file=sys.stderr)
             continue
         result = ident.result
         print(f"{path}: {result.get('test', '?')} → {folder}")
