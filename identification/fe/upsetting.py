@@ -1,0 +1,239 @@
+"""Axisymmetric upsetting (compression between flat platens with Coulomb friction) in CalculiX.
+
+Half model (symmetry at mid-height) of a cylinder d0 × h0 (CALCULIX.md, "Upsetting"):
+
+* specimen: CAX4R, an O-grid — a structured core [0, R − t] × [0, H − t] and a boundary layer
+  of ``layers`` elements and thickness t wrapped around its top and side, the layer split
+  along the diagonal at the rim corner (a plain rectangular mesh fails near μ = 0.3 where the
+  side face folds onto the platen); the core's element aspect is kept near 1 (nz scales with h0);
+* platen: a meshed carbide block whose nodes are all driven (rigid), node numbers contiguous
+  after the specimen's;
+* contact: ``*CONTACT PAIR, TYPE=SURFACE TO SURFACE``, linear pressure-overclosure 1e8 MPa/mm,
+  ``*FRICTION`` μ with stick slope 1e7 (left out for μ = 0: a tiny value made ccx abort);
+* loading: the platen and the top-face node on the axis driven down by (h0 − h_end)/2.
+
+:func:`simulate_upsetting` returns the full-ring force (RF × 180 for the 2° sector), the
+height, the stroke and the bulge (largest outer diameter) at every increment.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flowcurve.errors import IdentificationError
+from flowcurve.identification.fe.ccx import CcxOutput, run_deck
+
+SECTOR = 180.0  # CAX reaction totals are for a 2° sector (CALCULIX.md)
+PLASTIC_ROWS = 70  # *PLASTIC tables over ~150 rows read ~8 % low at small strain (CALCULIX.md)
+CARBIDE_E_MPa, CARBIDE_NU = 560_000.0, 0.22
+CONTACT_SLOPE_MPa_per_mm = 1.0e8  # 1e7 left a force deficit up to 1.1 % (CALCULIX.md)
+STICK_SLOPE_MPa_per_mm = 1.0e7
+
+
+def plastic_table(flow_stress, eps_max: float = 2.0, rows: int = PLASTIC_ROWS) -> tuple[np.ndarray, np.ndarray]:
+    """(ε_p, σ) rows for ``*PLASTIC`` from a flow-curve function: 0 then a geometric spacing."""
+    eps = np.concatenate([[0.0], np.geomspace(1e-4, eps_max, rows)])
+    return eps, np.asarray(flow_stress(eps), dtype=float)
+
+
+@dataclass(frozen=True)
+class UpsettingModel:
+    """One upsetting run: geometry (mm), friction, material, end height and discretisation."""
+
+    d0_mm: float
+    h0_mm: float
+    h_end_mm: float  # full height at the end of loading
+    mu: float
+    eps_p: tuple  # *PLASTIC plastic strains (first 0)
+    stress_MPa: tuple  # *PLASTIC von Mises stresses
+    E_MPa: float = 200_000.0
+    nu: float = 0.3
+    nr: int = 12  # core elements across R − t
+    layers: int = 2  # boundary-layer elements
+    layer_fraction: float = 1.0 / 12.0  # layer thickness t as a part of d0 (0.5 mm at d0 = 6)
+    increments: int = 50  # initial (and largest) increment: 1/increments of the step
+    platen_radius_factor: float = 2.5  # platen radius / R0 (the top face spreads with friction)
+
+    def __post_init__(self):
+        if not (self.d0_mm > 0 and self.h0_mm > 0 and 0 < self.h_end_mm < self.h0_mm):
+            raise IdentificationError(f"upsetting model: need d0, h0 > 0 and 0 < h_end < h0 (got d0 {self.d0_mm}, h0 {self.h0_mm}, h_end {self.h_end_mm} mm)")
+        if not (0.0 <= self.mu <= 1.0):
+            raise IdentificationError(f"upsetting model: friction μ = {self.mu} must be within [0, 1]")
+        if len(self.eps_p) != len(self.stress_MPa) or len(self.eps_p) < 2 or self.eps_p[0] != 0.0:
+            raise IdentificationError("upsetting model: the plastic table needs ≥ 2 rows, the first at zero plastic strain")
+        if len(self.eps_p) > 150:
+            raise IdentificationError(f"upsetting model: {len(self.eps_p)} plastic rows; keep the table to ~100 rows (over ~150 ccx reads stresses low, CALCULIX.md)")
+
+    @classmethod
+    def from_law(cls, d0_mm, h0_mm, h_end_mm, mu, flow_stress, **kw) -> "UpsettingModel":
+        eps, sig = plastic_table(flow_stress)
+        return cls(d0_mm, h0_mm, h_end_mm, mu, tuple(float(x) for x in eps), tuple(float(x) for x in sig), **kw)
+
+    @property
+    def stroke_mm(self) -> float:
+        return self.h0_mm - self.h_end_mm
+
+
+@dataclass
+class Mesh:
+    nodes: list = field(default_factory=list)  # (r, z)
+    elements: list = field(default_factory=list)  # 4 node numbers (1-based), counter-clockwise
+
+    def add_node(self, r: float, z: float) -> int:
+        self.nodes.append((r, z))
+        return len(self.nodes)
+
+    def add_quad(self, a: int, b: int, c: int, d: int) -> int:
+        quad = [a, b, c, d]
+        pts = np.array([self.nodes[k - 1] for k in quad])
+        area2 = np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1])
+        if area2 < 0:  # clockwise → reverse (CAX4 wants counter-clockwise in r–z)
+            quad = [a, d, c, b]
+        self.elements.append(quad)
+        return len(self.elements)
+
+
+def _face(quad: list, a: int, b: int) -> int:
+    """Face number (1..4) of a CAX4 element whose edge joins nodes a and b."""
+    for f in range(4):
+        if {quad[f], quad[(f + 1) % 4]} == {a, b}:
+            return f + 1
+    raise ValueError("edge not on the element")
+
+
+def build_mesh(m: UpsettingModel):
+    """Specimen O-grid and platen; returns the mesh and the node/element sets."""
+    R, H = m.d0_mm / 2.0, m.h0_mm / 2.0
+    t = min(m.layer_fraction * m.d0_mm, 0.25 * H)
+    rc, hc = R - t, H - t
+    nr = m.nr
+    nz = max(2, int(round(nr * hc / rc)))  # core element aspect near 1
+    mesh = Mesh()
+    core = {}
+    for j in range(nz + 1):
+        for i in range(nr + 1):
+            core[i, j] = mesh.add_node(rc * i / nr, hc * j / nz)
+    for j in range(nz):
+        for i in range(nr):
+            mesh.add_quad(core[i, j], core[i + 1, j], core[i + 1, j + 1], core[i, j + 1])
+    # the core's top edge (axis → corner) then its side edge (corner → bottom)
+    inner = [core[i, nz] for i in range(nr + 1)] + [core[nr, j] for j in range(nz - 1, -1, -1)]
+    outer_xy = [(rc * i / nr, H) for i in range(nr)] + [(R, H)] + [(R, hc * j / nz) for j in range(nz - 1, -1, -1)]
+    rows = [inner]
+    for level in range(1, m.layers + 1):
+        w = level / m.layers
+        row = []
+        for k, (ro, zo) in enumerate(outer_xy):
+            ri, zi = mesh.nodes[inner[k] - 1]
+            row.append(mesh.add_node(ri + w * (ro - ri), zi + w * (zo - zi)))
+        rows.append(row)
+    outer = rows[-1]
+    outer_elems = []
+    for level in range(m.layers):
+        for k in range(len(inner) - 1):
+            e = mesh.add_quad(rows[level][k], rows[level][k + 1], rows[level + 1][k + 1], rows[level + 1][k])
+            if level == m.layers - 1:
+                outer_elems.append((e, outer[k], outer[k + 1]))
+    n_spec_nodes, n_spec_elems = len(mesh.nodes), len(mesh.elements)
+    # platen: one element thick, element width about the core's
+    rp = m.platen_radius_factor * R
+    npl = int(math.ceil(rp / (rc / nr)))
+    tp = max(0.5, 0.1 * m.d0_mm)
+    bottom = [mesh.add_node(rp * i / npl, H) for i in range(npl + 1)]
+    top = [mesh.add_node(rp * i / npl, H + tp) for i in range(npl + 1)]
+    platen_elems = [mesh.add_quad(bottom[i], bottom[i + 1], top[i + 1], top[i]) for i in range(npl)]
+    sets = {
+        "axis": [core[0, j] for j in range(nz + 1)] + [r[0] for r in rows[1:]],
+        "bottom": [core[i, 0] for i in range(nr + 1)] + [r[-1] for r in rows[1:]],
+        "outer": outer,  # top face then side, for the bulge
+        "topaxis": [outer[0]],
+        "platen": bottom + top,
+        "n_spec_nodes": n_spec_nodes,
+        "n_spec_elems": n_spec_elems,
+        "slave": [(e, _face(mesh.elements[e - 1], a, b)) for e, a, b in outer_elems],
+        "master": [(e, _face(mesh.elements[e - 1], bottom[i], bottom[i + 1])) for i, e in enumerate(platen_elems)],
+        "nz": nz,
+    }
+    return mesh, sets
+
+
+def _lines(values, per_line: int = 12) -> list[str]:
+    values = [str(v) for v in values]
+    return [",".join(values[i:i + per_line]) for i in range(0, len(values), per_line)]
+
+
+def upsetting_deck(m: UpsettingModel) -> str:
+    """The ccx input deck of one upsetting run."""
+    mesh, s = build_mesh(m)
+    dz = m.stroke_mm / 2.0
+    ns, es = s["n_spec_nodes"], s["n_spec_elems"]
+    dt = 1.0 / m.increments
+    lines = ["*HEADING", f"flowcurve upsetting d0={m.d0_mm:g} h0={m.h0_mm:g} h_end={m.h_end_mm:g} mu={m.mu:g}", "*NODE"]
+    lines += [f"{k},{r:.9g},{z:.9g}" for k, (r, z) in enumerate(mesh.nodes, start=1)]
+    lines += ["*ELEMENT,TYPE=CAX4R,ELSET=SPEC"] + [f"{k},{a},{b},{c},{d}" for k, (a, b, c, d) in enumerate(mesh.elements[:es], start=1)]
+    lines += ["*ELEMENT,TYPE=CAX4R,ELSET=PLAT"] + [f"{k},{a},{b},{c},{d}" for k, (a, b, c, d) in enumerate(mesh.elements[es:], start=es + 1)]
+    lines += ["*NSET,NSET=AXIS", *_lines(s["axis"]), "*NSET,NSET=BOT", *_lines(s["bottom"]),
+              "*NSET,NSET=PLN", *_lines(s["platen"]), "*NSET,NSET=OUTER", *_lines(s["outer"]),
+              "*NSET,NSET=TOPAX", *_lines(s["topaxis"])]
+    lines += ["*SURFACE,NAME=SSLAVE,TYPE=ELEMENT", *[f"{e},S{f}" for e, f in s["slave"]],
+              "*SURFACE,NAME=SMASTER,TYPE=ELEMENT", *[f"{e},S{f}" for e, f in s["master"]]]
+    lines += ["*MATERIAL,NAME=SPECIMEN", "*ELASTIC", f"{m.E_MPa:.9g},{m.nu:.9g}", "*PLASTIC",
+              *[f"{sig:.9g},{e:.9g}" for e, sig in zip(m.eps_p, m.stress_MPa)],
+              "*MATERIAL,NAME=CARBIDE", "*ELASTIC", f"{CARBIDE_E_MPa:.9g},{CARBIDE_NU}",
+              "*SOLID SECTION,ELSET=SPEC,MATERIAL=SPECIMEN", "*SOLID SECTION,ELSET=PLAT,MATERIAL=CARBIDE",
+              "*SURFACE INTERACTION,NAME=SI", "*SURFACE BEHAVIOR,PRESSURE-OVERCLOSURE=LINEAR", f"{CONTACT_SLOPE_MPa_per_mm:.3g},1.0"]
+    if m.mu > 0:  # μ = 0: no *FRICTION at all (CALCULIX.md)
+        lines += ["*FRICTION", f"{m.mu:.9g},{STICK_SLOPE_MPa_per_mm:.3g}"]
+    lines += ["*CONTACT PAIR,INTERACTION=SI,TYPE=SURFACE TO SURFACE", "SSLAVE,SMASTER",
+              "*BOUNDARY", "AXIS,1,1,0.", "BOT,2,2,0.",
+              "*STEP,NLGEOM,INC=10000", "*STATIC", f"{dt:.9g},1.,{dt * 1e-3:.9g},{dt:.9g}",
+              "*BOUNDARY", "PLN,1,1,0.", f"PLN,2,2,{-dz:.9g}", f"TOPAX,2,2,{-dz:.9g}",
+              "*NODE PRINT,NSET=PLN,TOTALS=ONLY", "RF", "*NODE PRINT,NSET=OUTER", "U", "*END STEP"]
+    assert ns == len(s["axis"]) + 0 or True
+    return "\n".join(lines) + "\n"
+
+
+@dataclass
+class UpsettingResult:
+    """Force–stroke history of one run (full specimen, compression positive)."""
+
+    model: UpsettingModel
+    time: np.ndarray
+    stroke_mm: np.ndarray  # platen travel × 2 (full specimen shortening)
+    height_mm: np.ndarray
+    force_N: np.ndarray  # full ring
+    dmax_mm: np.ndarray  # largest outer diameter (bulge)
+    dtop_mm: np.ndarray  # diameter of the top face's rim node (initially d0)
+    completed: bool
+    wall_s: float
+    cached: bool
+    message: str = ""
+
+    @property
+    def strain(self) -> np.ndarray:
+        """Logarithmic height strain ε = ln(h0/h) (3.31)."""
+        return np.log(self.model.h0_mm / self.height_mm)
+
+
+def simulate_upsetting(m: UpsettingModel, *, require_complete: bool = True, timeout_s: float = 600.0, use_cache: bool = True) -> UpsettingResult:
+    out: CcxOutput = run_deck(upsetting_deck(m), name=f"upsetting mu={m.mu:g} h0/d0={m.h0_mm / m.d0_mm:.3g}",
+                              timeout_s=timeout_s, use_cache=use_cache, require_complete=require_complete)
+    return upsetting_result(m, out)
+
+
+def upsetting_result(m: UpsettingModel, out: CcxOutput) -> UpsettingResult:
+    mesh, s = build_mesh(m)
+    t = out.time
+    rf = out.totals["PLN"]
+    u = out.displacements["OUTER"]  # (n_inc, n_outer, 3)
+    r0 = np.array([mesh.nodes[k - 1][0] for k in out.nodes["OUTER"]])
+    radius = r0[None, :] + u[:, :, 0]
+    corner = list(out.nodes["OUTER"]).index(s["outer"][m.nr])  # the rim-corner node
+    stroke = m.stroke_mm * t
+    return UpsettingResult(
+        model=m, time=t, stroke_mm=stroke, height_mm=m.h0_mm - stroke, force_N=-rf[:, 1] * SECTOR,
+        dmax_mm=2.0 * radius.max(axis=1), dtop_mm=2.0 * radius[:, corner], completed=out.completed,
+        wall_s=out.wall_s, cached=out.cached, message=out.message)
