@@ -21,7 +21,6 @@ import math
 import os
 import select
 import sys
-import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Protocol
@@ -32,6 +31,7 @@ from flowcurve.acquisition.live import LiveView, Snapshot
 from flowcurve.record.format import STATUS_ABORTED, STATUS_COMPLETE, RecordWriter, amend_record
 from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temperature
 from flowcurve.acquisition.sampler import Channel, Sampler
+from flowcurve.clock import WALL, Clock
 from flowcurve.errors import FlowcurveError
 
 FORCE_LIMIT_OF_CAPACITY = 0.98  # default force limit: this fraction of the frame's capacity
@@ -59,7 +59,8 @@ class RigIO(Protocol):
 
     has_furnace: bool
     can_drive: bool  # True on the virtual rig: the procedure starts the crosshead itself
-    time_scale: float  # test seconds per wall second (1 on the real rig)
+    time_scale: float  # test seconds per host second (1 on the real rig)
+    timebase: Clock  # host time: the wall clock, or a model clock in the fast tests
     max_temperature_C: float
     frame_stiffness_N_per_um: float | None
     loadcell_period_s: float
@@ -245,7 +246,7 @@ def heating_progress(start_C: float, now_C: float, setpoint_C: float) -> float:
 class Procedure:
     """One test on one rig, written to ``path``; :meth:`run` returns an :class:`Outcome`."""
 
-    tick_s = 0.05  # main-loop period (wall seconds)
+    tick_s = 0.05  # main-loop period (host seconds)
 
     def __init__(self, rig: RigIO, spec: TestSpec, path: str | os.PathLike, *, view: LiveView | None = None, interactive: bool = False, prompt: Callable[[str], str] = input):
         spec.check()
@@ -260,16 +261,17 @@ class Procedure:
         self.view = view or LiveView(quiet=True)
         self.interactive = interactive
         self.prompt = prompt
+        self.timebase: Clock = getattr(rig, "timebase", WALL)
         self._t0 = 0.0
         self.writer: RecordWriter | None = None
         self._writing = False
 
     # clock: test seconds since the procedure started (time-scaled on the virtual rig)
     def clock(self) -> float:
-        return (time.monotonic() - self._t0) * self.rig.time_scale
+        return (self.timebase.now() - self._t0) * self.rig.time_scale
 
-    def to_clock(self, t_monotonic: float) -> float:
-        return (t_monotonic - self._t0) * self.rig.time_scale
+    def to_clock(self, t_host: float) -> float:
+        return (t_host - self._t0) * self.rig.time_scale
 
     def _event(self, name: str, text: str = "") -> None:
         if self.writer is not None and self._writing:
@@ -281,7 +283,7 @@ class Procedure:
 
     def run(self) -> Outcome:
         spec, rig = self.spec, self.rig
-        self._t0 = time.monotonic()
+        self._t0 = self.timebase.now()
         rig.set_clock(self.clock)
         columns = ["time_s", "force_N", "crosshead_mm"] + (["temperature_C"] if rig.has_furnace else [])
         self.writer = RecordWriter(self.path, spec.meta(rig), columns)
@@ -357,7 +359,7 @@ class Procedure:
             if now - t_start > spec.heat_timeout_s:
                 raise ProcedureError(f"the furnace did not reach {setpoint:g} C within {spec.heat_timeout_s:g} s (now {temp:.1f} C)")
             self.view.show(Snapshot(state, time_s=now, temperature_C=temp, progress=heating_progress(start_C, temp, setpoint), message=msg))
-            time.sleep(self.tick_s)
+            self.timebase.sleep(self.tick_s)
 
     def _furnace_read(self) -> Callable[[], float]:
         setpoint, rig = self.spec.temperature_C, self.rig
@@ -423,7 +425,7 @@ class Procedure:
                     curve_mm=np.concatenate(curve_x) if curve_x else None,
                     curve_N=np.concatenate(curve_f) if curve_f else None,
                 ))
-                time.sleep(self.tick_s)
+                self.timebase.sleep(self.tick_s)
 
     def _stop_motion(self) -> None:
         try:

@@ -1,7 +1,9 @@
 """Synchronized sampling: one worker thread per device, one clock, rows on the force clock.
 
 Each device is read in its own thread at its own rate (:class:`Channel`). Every sample is
-stamped with :func:`time.monotonic` relative to the test start (one clock for all). The
+stamped on the test clock relative to the test start (one clock for all); the channels pace
+themselves and watch for silence on a :class:`flowcurve.clock.Clock` (the wall clock on a
+real rig, a model clock in the fast tests). The
 load cell is the fastest channel and the reference: :func:`merge_block` turns each force
 sample into exactly one record row, with the other channels **linearly interpolated** at
 the force sample's time from their own streams. A force sample is released only once every
@@ -20,12 +22,12 @@ from __future__ import annotations
 
 import logging
 import threading
-import time
 from dataclasses import dataclass, field
 from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
+from flowcurve.clock import WALL, Clock
 from flowcurve.errors import DeviceError, FlowcurveError, InternalError, SafetyError
 
 logger = logging.getLogger(__name__)
@@ -115,13 +117,14 @@ class Channel(threading.Thread):
     """Reads one device in its own thread and appends stamped samples to its stream.
 
     ``clock`` stamps the samples (test seconds); the pacing ``period_s`` and the
-    ``silence_s`` fault limit are wall-clock seconds (:func:`time.monotonic`), so a
-    time-scaled virtual rig does not change how patient the host is. Values returned as a
+    ``silence_s`` fault limit are host seconds on ``timebase`` (the wall clock on a real
+    rig), so a time-scaled virtual rig does not change how patient the host is. Values returned as a
     bare list are stamped ``spacing_s`` (clock units) apart, ending at the arrival time.
     """
 
-    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, spacing_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str, Exception | None], None] | None = None):
+    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, spacing_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str, Exception | None], None] | None = None, timebase: Clock = WALL):
         super().__init__(name=f"flowcurve-{name}", daemon=True)
+        self.timebase = timebase
         self.device = name
         self.read = read
         self.clock = clock
@@ -132,17 +135,19 @@ class Channel(threading.Thread):
         self.on_fault = on_fault
         self.stream = Stream(name)
         self.reads = 0
-        self.last_data_wall_s = time.monotonic()
+        self.last_data_wall_s = timebase.now()
         self.error: str | None = None
         self._stop_event = threading.Event()
 
     def stop(self) -> None:
         self._stop_event.set()
+        self.timebase.notify()
 
     def run(self) -> None:
+        tb = self.timebase
         failures = 0
-        self.last_data_wall_s = time.monotonic()
-        next_due = time.monotonic()
+        self.last_data_wall_s = tb.now()
+        next_due = tb.now()
         while not self._stop_event.is_set():
             try:
                 got = self.read()
@@ -164,7 +169,7 @@ class Channel(threading.Thread):
                 return
             failures = 0
             n = self._store(got, self.clock())
-            wall = time.monotonic()
+            wall = tb.now()
             if n:
                 self.last_data_wall_s = wall
                 self.reads += 1
@@ -173,11 +178,11 @@ class Channel(threading.Thread):
                 return
             if self.period_s > 0:
                 next_due += self.period_s
-                delay = next_due - time.monotonic()
+                delay = next_due - tb.now()
                 if delay > 0:
-                    self._stop_event.wait(delay)
+                    tb.wait(self._stop_event, delay)
                 else:
-                    next_due = time.monotonic()
+                    next_due = tb.now()
 
     def _store(self, got, now: float) -> int:
         if got is None:
@@ -276,8 +281,8 @@ class Sampler:
 
     def check_silence(self) -> FlowcurveError | None:
         """Fault a channel whose read hangs (no data for its ``silence_s``); the first fault."""
-        now = time.monotonic()
         for ch in self.channels.values():
+            now = ch.timebase.now()
             if ch.is_alive() and now - ch.last_data_wall_s > ch.silence_s:
                 self._on_fault(ch.device, f"no answer for {now - ch.last_data_wall_s:.1f} s")
         return self._fault

@@ -12,21 +12,21 @@ measurements the way an operator would.
 from __future__ import annotations
 
 import logging
-import time
 from dataclasses import dataclass
 from typing import Callable
 
 from flowcurve.acquisition.sampler import Channel, lower_envelope_stamps
+from flowcurve.clock import WALL, Clock
 from flowcurve.errors import DeviceError
 from flowcurve.rig.codecs import aed
 
 logger = logging.getLogger(__name__)
 
-# Wall-clock seconds a device may stay silent before the test stops (the drivers' own
+# Host seconds a device may stay silent before the test stops (the drivers' own
 # time-outs and retries come first; this catches a read that hangs or returns nothing).
 SILENCE_MIN_S = 1.5
 SILENCE_TIMEOUTS = 10  # ... or this many of the device's reply time-outs, if longer
-ENCODER_PERIOD_S = 0.02  # wall-clock polling period of the encoder box
+ENCODER_PERIOD_S = 0.02  # host-time polling period of the encoder box
 FURNACE_PERIOD_S = 0.25  # of the furnace module (DCON replies take up to 0.3 s) ...
 FURNACE_MIN_PERIOD_S = 0.02  # ... shorter on a time-scaled virtual rig: 4 steps per control period
 STREAM_BLOCK = 20  # load-cell frames per read call at most
@@ -36,15 +36,19 @@ STREAM_PERIOD_MARGIN = 1.01  # stamps step 1 % longer than the nominal output pe
 class DriverRig:
     """A configured rig (``rig.config.RigConfig``) opened for one test.
 
-    time_scale: test seconds per wall second — 1 on the real rig; the virtual rig's
+    time_scale: test seconds per host second — 1 on the real rig; the virtual rig's
         ``time_scale`` when its model runs faster (the record's ``time_s`` is then model time).
     virtual: a :class:`rig.virtual.rig.VirtualRig` to drive (start/stop the crosshead,
         post-test measurements); None on the real rig.
+    timebase: host time (:mod:`flowcurve.clock`): the virtual rig's clock when there is
+        one, else the wall clock.
     stream: read the load cell as a ``MSV?0`` stream (True) or poll ``MSV?`` (False).
     """
 
-    def __init__(self, config, *, time_scale: float = 1.0, virtual=None, stream: bool = True):
+    def __init__(self, config, *, time_scale: float = 1.0, virtual=None, stream: bool = True,
+                 timebase: Clock | None = None):
         self.config = config
+        self.timebase: Clock = timebase or (virtual.clock if virtual is not None else WALL)
         self.time_scale = float(time_scale)
         self.virtual = virtual
         self.stream = stream
@@ -59,7 +63,7 @@ class DriverRig:
         self.encoder = config.encoder.create()
         self.furnace = config.furnace.create() if self.has_furnace else None
         self._controller = None
-        self._clock: Callable[[], float] = lambda: time.monotonic() * self.time_scale
+        self._clock: Callable[[], float] = lambda: self.timebase.now() * self.time_scale
 
     # life cycle ------------------------------------------------------------------------------
     def open(self) -> "DriverRig":
@@ -133,13 +137,13 @@ class DriverRig:
 
         chans = {
             # polled: once per output period (a faster poll would read the same value again)
-            "force_N": Channel(cell.name, read_force, clock, period_s=0.0 if self.stream else self.loadcell_period_s, silence_s=self._silence_s(self.config.loadcell)),
-            "crosshead_mm": Channel(self.encoder.name, self._read_position, clock, period_s=ENCODER_PERIOD_S, silence_s=self._silence_s(self.config.encoder)),
+            "force_N": Channel(cell.name, read_force, clock, period_s=0.0 if self.stream else self.loadcell_period_s, silence_s=self._silence_s(self.config.loadcell), timebase=self.timebase),
+            "crosshead_mm": Channel(self.encoder.name, self._read_position, clock, period_s=ENCODER_PERIOD_S, silence_s=self._silence_s(self.config.encoder), timebase=self.timebase),
         }
         if self.furnace is not None:
             per_control = self.config.furnace.control_period_s / 4.0 / self.time_scale
             period = max(FURNACE_MIN_PERIOD_S, min(FURNACE_PERIOD_S, per_control))
-            chans["temperature_C"] = Channel(self.furnace.name, self.read_temperature_C, clock, period_s=period, silence_s=self._silence_s(self.config.furnace))
+            chans["temperature_C"] = Channel(self.furnace.name, self.read_temperature_C, clock, period_s=period, silence_s=self._silence_s(self.config.furnace), timebase=self.timebase)
         return chans
 
     @staticmethod
@@ -148,9 +152,9 @@ class DriverRig:
 
     def _read_position(self) -> list[tuple[float, float]]:
         """The crosshead position stamped at the middle of its exchange."""
-        t1 = time.monotonic()
+        t1 = self.timebase.now()
         mm = self.encoder.position_mm()
-        return [(self._to_clock(0.5 * (t1 + time.monotonic())), mm)]
+        return [(self._to_clock(0.5 * (t1 + self.timebase.now())), mm)]
 
     # furnace ---------------------------------------------------------------------------------
     def read_temperature_C(self) -> float:
@@ -206,12 +210,15 @@ class VirtualRun:
     friction_mu: float
 
 
-def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None) -> VirtualRun:
-    """Run ``spec`` on an in-process virtual rig through the real drivers over its ptys.
+def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty") -> VirtualRun:
+    """Run ``spec`` on a virtual rig in this process through the real drivers.
 
-    The virtual specimen takes ``spec.geometry_mm``; ``rig_setup(virtual_rig)`` may inject
-    faults or change the model before the test starts; ``config_overrides`` go to
-    ``rig.config.virtual_config`` (e.g. ``furnace_max_temperature_C=500``).
+    The devices sit on ptys in real time by default; ``link="inprocess"`` with a
+    :class:`flowcurve.clock.ModelClock` runs the same drivers over ``virtual://`` ports in
+    simulated time (the fast tests). The virtual specimen takes ``spec.geometry_mm``;
+    ``rig_setup(virtual_rig)`` may inject faults or change the model before the test
+    starts; ``config_overrides`` go to ``rig.config.virtual_config``
+    (e.g. ``furnace_max_temperature_C=500``).
     """
     from flowcurve.acquisition.procedure import Procedure
     from flowcurve.rig.config import virtual_config
@@ -220,7 +227,7 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
 
     g = spec.geometry_mm
     specimen = Specimen.tension(g["d0_mm"], g["l0_mm"]) if spec.test == "tension" else Specimen.compression(g["d0_mm"], g["h0_mm"])
-    with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu, temperature_C=initial_temperature_C) as vr:
+    with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu, temperature_C=initial_temperature_C, clock=clock, link=link) as vr:
         spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}")
         spec.extra_meta.setdefault("material.E_MPa", repr(float(vr.model.material.E_MPa)))  # the handbook value an operator would enter
         if rig_setup is not None:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 from dataclasses import dataclass
 
 from flowcurve.errors import DeviceError
@@ -25,7 +24,7 @@ READ_RETRIES = 2
 
 @dataclass(frozen=True)
 class ForceSample:
-    """One force reading: host monotonic time, force, raw status byte and overload flag."""
+    """One force reading: host monotonic time (the port's clock), force, raw status byte and overload flag."""
 
     t_monotonic_s: float
     force_N: float
@@ -167,7 +166,7 @@ class LoadCell:
     def read(self) -> ForceSample:
         """One ``MSV?`` measured value as a :class:`ForceSample`."""
         frame = self._query("MSV?", length=self.fmt.frame_length, parse=self._check_frame)
-        return self._sample(frame, time.monotonic())
+        return self._sample(frame, self.transport.clock.now())
 
     def _check_frame(self, frame: bytes) -> bytes:
         aed.decode_msv(frame, self.fmt)  # raises ProtocolError (a ValueError) → retried
@@ -205,7 +204,7 @@ class LoadCell:
             for trial_parity in parities:
                 with self.transport.with_line(baudrate=trial_baud, parity=trial_parity) as trial:
                     trial.send(command)
-                    time.sleep(len(command) * 11 / trial_baud)  # let it leave the UART
+                    trial.clock.sleep(len(command) * 11 / trial_baud)  # let it leave the UART
         self.transport.open()
         if self.address is not None:
             self.transport.send(aed.command(f"S{self.address:02d}"))  # leave broadcast mode
@@ -219,7 +218,7 @@ class LoadCell:
         self.transport.discard_input()
         self.transport.send(aed.command("MSV?0"))
         self.streaming = True
-        self._last_frame_t = time.monotonic()
+        self._last_frame_t = self.transport.clock.now()
 
     def read_stream(self, max_samples: int, timeout: float) -> list[ForceSample]:
         """Up to ``max_samples`` frames (by length) arriving within ``timeout`` seconds.
@@ -235,11 +234,11 @@ class LoadCell:
         """
         if not self.streaming:
             raise DeviceError(self.name, "read_stream without start_stream")
-        deadline = time.monotonic() + timeout
+        deadline = self.transport.clock.now() + timeout
         samples: list[ForceSample] = []
         n = self.fmt.frame_length
         while len(samples) < max_samples:
-            remaining = deadline - time.monotonic()
+            remaining = deadline - self.transport.clock.now()
             if remaining <= 0:
                 break
             try:
@@ -248,7 +247,7 @@ class LoadCell:
                 if not self.transport.is_open:  # the port disappeared
                     raise
                 break
-            now = time.monotonic()
+            now = self.transport.clock.now()
             try:
                 value = aed.decode_msv(frame, self.fmt)
             except ProtocolError as exc:
@@ -257,7 +256,7 @@ class LoadCell:
             self._resyncs_in_a_row = 0
             samples.append(self._to_sample(value, self._stream_time(now)))
             self._last_frame_t = now
-        silent = time.monotonic() - self._last_frame_t
+        silent = self.transport.clock.now() - self._last_frame_t
         if not samples and silent > self.stream_silence_s:
             raise DeviceError(self.name, f"stream ('MSV?0') silent for {silent:.1f} s")
         return samples
@@ -287,5 +286,5 @@ class LoadCell:
         """``STP`` (never answers), then discard the frames still in flight."""
         self.transport.send(aed.command("STP"))
         self.streaming = False
-        time.sleep(min(0.05, self.transport.timeout_s))
+        self.transport.clock.sleep(min(0.05, self.transport.timeout_s))
         self.transport.discard_input()

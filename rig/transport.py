@@ -2,10 +2,14 @@
 
 Every port is opened through :func:`serial.serial_for_url`, so a driver runs unchanged on a
 real port, a pseudo-terminal (``/dev/pts/N``), ``loop://``, ``spy://`` (traffic log) or
-``socket://host:port``. Replies are framed by length (binary: :meth:`read_exactly`) or by
+``socket://host:port`` or an in-process virtual device (``virtual://``). Replies are framed by length (binary: :meth:`read_exactly`) or by
 terminator (ASCII: :meth:`read_until`), each against a deadline. A missing reply raises
 ``DeviceError(device, "no answer to 'MSV?' within 0.2 s")``; a port that vanishes (OSError,
 SerialException) raises ``DeviceError(device, "port /dev/... disappeared")``.
+
+Deadlines run on the port's clock (the ``clock`` attribute of the port object, e.g. a
+virtual device's :class:`flowcurve.clock.ModelClock`; :data:`flowcurve.clock.WALL` for
+every real port), exposed as :attr:`SerialTransport.clock` for the drivers' own timing.
 
 Retries are the caller's decision: :meth:`exchange` repeats a command only when told it is
 safe (reads and idempotent settings), never for commands with one-off side effects.
@@ -20,7 +24,6 @@ from __future__ import annotations
 import logging
 import os
 import threading
-import time
 from contextlib import contextmanager
 from typing import Callable
 
@@ -32,6 +35,7 @@ except ImportError:  # not on POSIX
     class TermiosError(Exception):
         pass
 
+from flowcurve.clock import WALL, Clock
 from flowcurve.errors import DeviceError
 
 PORT_ERRORS = (OSError, serial.SerialException, TermiosError)  # what a vanished port raises
@@ -73,6 +77,7 @@ class SerialTransport:
         self._key = _owned_key(url, opener)
         self._port = None
         self._pending = bytearray()  # bytes read past the end of the last frame
+        self.clock: Clock = WALL  # the port's clock once open (see the module docstring)
 
     def with_line(self, *, baudrate: int, parity: str, timeout_s: float | None = None) -> "SerialTransport":
         """A new (closed) transport on the same port and opener with other line settings."""
@@ -96,6 +101,7 @@ class SerialTransport:
                 self._port = self._opener(self.url, timeout=READ_SLICE_S, **self.settings)
             except (OSError, serial.SerialException, ValueError) as exc:
                 raise DeviceError(self.name, f"cannot open port {self.url}: {_reason(exc)}") from None
+            self.clock = getattr(self._port, "clock", WALL)
             if key is not None:
                 _OWNERS[key] = self
         return self
@@ -160,7 +166,7 @@ class SerialTransport:
 
     def _read_some(self, size: int, deadline: float) -> bytes:
         port = self._require_port()
-        remaining = deadline - time.monotonic()
+        remaining = deadline - self.clock.now()
         if remaining <= 0:
             return b""
         try:
@@ -173,11 +179,12 @@ class SerialTransport:
     def read_exactly(self, n: int, timeout: float | None = None, *, what: str = "a reply") -> bytes:
         """Exactly ``n`` bytes before the deadline, else :class:`DeviceError` (framing by length)."""
         timeout = self.timeout_s if timeout is None else timeout
-        deadline = time.monotonic() + timeout
+        self._require_port()
+        deadline = self.clock.now() + timeout
         with self.lock:
             while len(self._pending) < n:
                 chunk = self._read_some(n - len(self._pending), deadline)
-                if not chunk and time.monotonic() >= deadline:
+                if not chunk and self.clock.now() >= deadline:
                     # a partial frame stays buffered: a stream keeps its framing, and an
                     # exchange discards input before it writes anyway
                     raise self._timeout(what, timeout, bytes(self._pending))
@@ -190,7 +197,8 @@ class SerialTransport:
                    what: str = "a reply", max_bytes: int = 256) -> bytes:
         """Bytes up to and including ``terminator`` before the deadline (framing by terminator)."""
         timeout = self.timeout_s if timeout is None else timeout
-        deadline = time.monotonic() + timeout
+        self._require_port()
+        deadline = self.clock.now() + timeout
         with self.lock:
             while True:
                 end = self._pending.find(terminator)
@@ -205,7 +213,7 @@ class SerialTransport:
                     raise DeviceError(self.name, f"garbled answer to {what}: no {terminator!r} "
                                                  f"in {len(got)} bytes ({got[:40]!r}...)")
                 chunk = self._read_some(1, deadline)
-                if not chunk and time.monotonic() >= deadline:
+                if not chunk and self.clock.now() >= deadline:
                     got = bytes(self._pending)
                     self._pending.clear()
                     raise self._timeout(what, timeout, got)

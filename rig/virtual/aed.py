@@ -77,7 +77,7 @@ class AEDAmplifier(PtyDevice):
     # -- values -----------------------------------------------------------------------
     def _power_on_stream(self) -> None:
         if self.s["cof"] & 128:
-            self._remaining, self._next_due = -1, time.monotonic()
+            self._remaining, self._next_due = -1, self.clock.now()
 
     def _filter(self, t: float, force: float) -> float:
         fc = FILTER_CUTOFF_HZ[self.s["asf"]] if self.s["fmd"] == 0 else None
@@ -191,7 +191,7 @@ class AEDAmplifier(PtyDevice):
             self._ack(False, ESR_RANGE)
             return
         self._remaining = -1 if int(arg) == 0 else int(arg)
-        self._next_due = time.monotonic()
+        self._next_due = self.clock.now()
         self.on_tick(self._next_due)
 
     def _bdr(self, arg: str) -> None:

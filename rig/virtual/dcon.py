@@ -10,7 +10,7 @@ Host watchdog (I-7000 family behaviour): only the ``~**`` broadcast feeds it (ot
 commands do not); ``~AA3EVV`` arms it (E 0/1, VV time-out in 0.1 s, hex); when the host is
 quiet longer than the time-out the module sets its outputs to the safe value of
 ``~AA5PPSS``, sets status 04 (``~AA0`` → ``!AA04``) and refuses output commands (``?AA``)
-until ``~AA1`` clears the status. The watchdog runs in real (wall-clock) time.
+until ``~AA1`` clears the status. The watchdog runs on the device's clock (real time on a pty).
 
 I-7011 replies chosen where PROTOCOLS.md leaves the format open, after the I-7011 manual:
 ``#AA`` → ``>+0025.12`` (engineering, ``+dddd.dd``), ``>+001.84`` (% of FSR), ``>0046`` (hex,
@@ -50,7 +50,7 @@ class DconDevice(PtyDevice):
         self.watchdog_enabled = False
         self.watchdog_timeout_s = 0.0
         self.watchdog_status = 0
-        self._last_host_ok = time.monotonic()
+        self._last_host_ok = self.clock.now()
 
     # -- framing ----------------------------------------------------------------------
     def on_bytes(self, data: bytes) -> None:
@@ -72,7 +72,7 @@ class DconDevice(PtyDevice):
                 return
             text = text[:-2]
         if text == "~**":
-            self._last_host_ok = time.monotonic()
+            self._last_host_ok = self.clock.now()
             return
         if text.startswith("#**"):
             self.broadcast(text)
@@ -118,7 +118,7 @@ class DconDevice(PtyDevice):
             return f"!{aa}{self.watchdog_status:02X}"
         if body == "1":
             self.watchdog_status = 0
-            self._last_host_ok = time.monotonic()  # the time-out counts again from now
+            self._last_host_ok = self.clock.now()  # the time-out counts again from now
             return f"!{aa}"
         if body == "2":
             return f"!{aa}{int(self.watchdog_enabled)}{round(self.watchdog_timeout_s * 10):02X}"
@@ -129,7 +129,7 @@ class DconDevice(PtyDevice):
                 return f"?{aa}"
             self.watchdog_enabled = m.group(1) == "1"
             self.watchdog_timeout_s = units / 10.0
-            self._last_host_ok = time.monotonic()
+            self._last_host_ok = self.clock.now()
             return f"!{aa}"
         return None
 

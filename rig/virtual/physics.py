@@ -154,6 +154,7 @@ class Mechanics:
         self.state = SpecimenState()
         self.strain_rate_per_s = 0.0
         self.temperature_C = material.T_ref_C
+        self._considere: tuple[tuple[float, float], float] | None = None
 
     # -- conditions -----------------------------------------------------------------
     def set_conditions(self, strain_rate_per_s: float, temperature_C: float) -> None:
@@ -168,7 +169,17 @@ class Mechanics:
         return self.material.fracture_strain_at(self.strain_rate_per_s, self.temperature_C)
 
     def considere_strain(self) -> float:
-        """Plastic strain at the force maximum of uniform tension: dσ/dεp = σ."""
+        """Plastic strain at the force maximum of uniform tension: dσ/dεp = σ.
+
+        Remembered for the last (rate, temperature): every step of a test at constant
+        conditions asks again, and the root search is most of a step's cost.
+        """
+        key = (self.strain_rate_per_s, self.temperature_C)
+        if self._considere is None or self._considere[0] != key:
+            self._considere = (key, self._solve_considere())
+        return self._considere[1]
+
+    def _solve_considere(self) -> float:
         m = self.material
         g = lambda e: float(m.hardening_slope(e, self.strain_rate_per_s, self.temperature_C)) - self.flow(e)
         lo, hi = 1e-9, 1e-3

@@ -1,52 +1,87 @@
-"""A serial device served on a pseudo-terminal, so real drivers talk to it over a real port.
+"""A virtual serial device, served on a pseudo-terminal or in-process, on a clock.
 
-:class:`PtyDevice` opens ``os.openpty()``, puts the slave in raw mode and exposes its path
-as :attr:`port` (``/dev/pts/N``; open it with pyserial like any serial port — baud and
-parity are ignored by a pty). A thread serves the protocol: ``select`` with time-outs on
-the master and a wake-up pipe, :meth:`on_bytes` for what the host sent, :meth:`on_tick` at
-the deadline :meth:`next_deadline` asks for (continuous output, watchdogs). Replies go
-through the device's :class:`~rig.virtual.faults.WireFaults`. :meth:`close` stops the
-thread and closes every descriptor; ``unplug`` closes the master mid-test.
+:class:`PtyDevice` is the base of the virtual devices: the protocol hooks (:meth:`on_bytes`
+for what the host sent, :meth:`on_tick` at the deadline :meth:`next_deadline` asks for —
+continuous output, watchdogs), the replies through the device's
+:class:`~rig.virtual.faults.WireFaults`, and one of two links to the host:
+
+* ``link="pty"`` (the default): ``os.openpty()``, the slave in raw mode, its path in
+  :attr:`port` (``/dev/pts/N``; open it with pyserial like any serial port — baud and parity
+  are ignored by a pty). A thread serves the protocol: ``select`` with time-outs on the
+  master and a wake-up pipe. Real time only (:data:`flowcurve.clock.WALL`): the host may be
+  another process. ``unplug`` closes the master mid-test.
+* ``link="inprocess"``: no descriptor and no thread. :attr:`port` is a ``virtual://`` URL
+  that :func:`serial.serial_for_url` opens in this process
+  (:mod:`flowcurve.rig.virtual.protocol_virtual`); bytes written by the host are handled at
+  once, and the periodic work runs as timers on the device's clock — a
+  :class:`flowcurve.clock.ModelClock` in the fast tests, so nothing waits on the wall clock.
+
+:meth:`close` stops the thread or the timers and closes every descriptor.
 """
 
 from __future__ import annotations
 
 import errno
 import heapq
+import itertools
 import os
 import select
 import threading
 import time
 import tty
 
+from flowcurve.clock import WALL, Clock
+from flowcurve.errors import ConfigError
 from flowcurve.rig.virtual.faults import WireFaults
+
+LINKS = ("pty", "inprocess")
+INPROCESS_BUFFER_BYTES = 4096  # like a pty's: bytes the host does not read beyond it are lost
+_NAMES = itertools.count(1)
 
 
 class PtyDevice:
-    """Base of the virtual devices: a protocol served on a pty by one thread."""
+    """Base of the virtual devices: a protocol served on a pty or in-process (see the module)."""
 
     name = "device"
 
-    def __init__(self, *, faults: WireFaults | None = None, seed: int = 0):
+    def __init__(self, *, faults: WireFaults | None = None, seed: int = 0,
+                 clock: Clock = WALL, link: str = "pty"):
+        if link not in LINKS:
+            raise ConfigError(f"link: must be one of {', '.join(LINKS)}, got {link!r}")
+        if link == "pty" and clock is not WALL:
+            raise ConfigError("link: a device on a pty runs in real time (the host may be another process)")
         self.faults = faults if faults is not None else WireFaults(seed)
-        self._master, self._slave = os.openpty()
-        tty.setraw(self._slave)
-        self.port = os.ttyname(self._slave)
-        os.set_blocking(self._master, False)
-        self._wake_r, self._wake_w = os.pipe()
-        self._stop = threading.Event()
+        self.clock = clock
+        self.link = link
         self._delayed: list[tuple[float, int, bytes]] = []  # (due, seq, bytes) for the delay fault
         self._seq = 0
         self.unplugged = False
-        self._thread = threading.Thread(target=self._run, name=f"virtual-{self.name}", daemon=True)
         self._started = False
+        self._closed = False
+        self._lock = threading.RLock()  # in-process: the host's calls and the timers
+        self._timer = None
+        self._host = None  # in-process: the open port object (protocol_virtual.Serial)
+        self._master = self._slave = self._wake_r = self._wake_w = -1
+        if link == "pty":
+            self._master, self._slave = os.openpty()
+            tty.setraw(self._slave)
+            self.port = os.ttyname(self._slave)
+            os.set_blocking(self._master, False)
+            self._wake_r, self._wake_w = os.pipe()
+            self._stop = threading.Event()
+            self._thread = threading.Thread(target=self._run, name=f"virtual-{self.name}", daemon=True)
+        else:
+            from flowcurve.rig.virtual import protocol_virtual  # registers the virtual:// scheme
+
+            self.port = f"virtual://{self.name}-{next(_NAMES)}"
+            protocol_virtual.register(self.port, self)
 
     # -- protocol hooks (subclasses) ---------------------------------------------------
     def on_bytes(self, data: bytes) -> None:
         """Bytes received from the host."""
 
     def next_deadline(self) -> float | None:
-        """time.monotonic() at which :meth:`on_tick` must run next (None: no periodic work)."""
+        """Clock time at which :meth:`on_tick` must run next (None: no periodic work)."""
         return None
 
     def on_tick(self, now: float) -> None:
@@ -54,17 +89,21 @@ class PtyDevice:
 
     # -- output -----------------------------------------------------------------------
     def send(self, reply: bytes) -> None:
-        """Send a reply to the host through the wire faults (called from the device thread)."""
+        """Send a reply to the host through the wire faults (called from the device's side)."""
         out = self.faults.apply(reply)
         if out is None:
             return
         if self.faults.delay_s > 0:
             self._seq += 1
-            heapq.heappush(self._delayed, (time.monotonic() + self.faults.delay_s, self._seq, out))
+            heapq.heappush(self._delayed, (self.clock.now() + self.faults.delay_s, self._seq, out))
             return
         self._write(out)
 
     def _write(self, data: bytes) -> None:
+        if self.link == "inprocess":
+            if self._host is not None and not self.unplugged:
+                self._host.deliver(data, INPROCESS_BUFFER_BYTES)
+            return
         if self._master < 0:
             return
         try:
@@ -79,25 +118,45 @@ class PtyDevice:
     def start(self) -> "PtyDevice":
         if not self._started:
             self._started = True
-            self._thread.start()
+            if self.link == "pty":
+                self._thread.start()
+            else:
+                self._reschedule()
         return self
 
     def wake(self) -> None:
-        """Make the thread re-evaluate its deadline now (e.g. after a fault was injected)."""
+        """Make the device re-evaluate its deadline now (e.g. after a fault was injected)."""
+        if self.link == "inprocess":
+            with self._lock:
+                self._reschedule()
+            return
         try:
             os.write(self._wake_w, b"x")
         except OSError:
             pass
 
     def unplug(self) -> None:
-        """The cable is pulled: the port vanishes (the thread closes the pty and ends)."""
+        """The cable is pulled: the port vanishes (a pty's thread closes it and ends)."""
         self.faults.inject("unplug")
+        if self.link == "inprocess":
+            with self._lock:
+                self.unplugged = True
+                self._cancel_timer()
+            return
         self.wake()
         if self._started:
             self._thread.join(timeout=2.0)
 
     def close(self) -> None:
-        """Stop the thread and close every descriptor (idempotent)."""
+        """Stop the thread (or the timers) and close every descriptor (idempotent)."""
+        if self.link == "inprocess":
+            from flowcurve.rig.virtual import protocol_virtual
+
+            with self._lock:
+                self._closed = True
+                self._cancel_timer()
+            protocol_virtual.unregister(self.port)
+            return
         self._stop.set()
         self.wake()
         if self._started:
@@ -127,7 +186,67 @@ class PtyDevice:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    # -- the thread -------------------------------------------------------------------
+    # -- the in-process link (called by protocol_virtual.Serial and the clock) ----------------
+    @property
+    def lost(self) -> bool:
+        """The port is gone for the host (unplugged or closed)."""
+        return self.unplugged or self._closed
+
+    def attach(self, host) -> None:
+        """A host port opened this device (one at a time, like a serial port)."""
+        with self._lock:
+            self._host = host
+
+    def detach(self, host) -> None:
+        with self._lock:
+            if self._host is host:
+                self._host = None
+
+    def host_write(self, data: bytes) -> None:
+        """Bytes from the host, handled at once (after any periodic work now due)."""
+        with self._lock:
+            self._catch_up()
+            self.on_bytes(data)
+            self._reschedule()
+
+    def _catch_up(self) -> None:
+        now = self.clock.now()
+        while self._delayed and self._delayed[0][0] <= now:
+            self._write(heapq.heappop(self._delayed)[2])
+        deadline = self.next_deadline()
+        if deadline is not None and deadline <= now and not self.lost:
+            self.on_tick(now)  # as the pty thread does: a late tick catches up by itself
+
+    def _on_timer(self) -> None:
+        with self._lock:
+            self._timer = None
+            if self.lost:
+                return
+            self._catch_up()
+            self._reschedule()
+
+    def _cancel_timer(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+
+    def _reschedule(self) -> None:
+        """One timer at the earliest of the periodic deadline and the delayed replies."""
+        if not self._started or self.lost:
+            return
+        due = [d for d in (self.next_deadline(),) if d is not None]
+        if self._delayed:
+            due.append(self._delayed[0][0])
+        when = min(due) if due else None
+        if when is not None and when <= self.clock.now():  # a tick that did not move its deadline
+            when = self.clock.now() + 1e-9  # (rounding: last + timeout − last < timeout)
+        if self._timer is not None and self._timer.when == when:
+            return
+        self._cancel_timer()
+        if when is not None:
+            self._timer = self.clock.call_at(when, self._on_timer)
+
+    # -- the pty thread ---------------------------------------------------------------
     def _run(self) -> None:
         while not self._stop.is_set():
             if self.faults.unplug_requested:

@@ -8,19 +8,29 @@
         rig.start_crosshead()          # the operator starts the machine
         rig.inject("furnace", "silence")
 
-**One model clock.** Model time = wall-clock time since the rig started × ``time_scale``.
+**One model clock.** Model time = host time since the rig started × ``time_scale``.
 Every read by a device first advances the model to that time, so the load cell, the
 encoder and the furnace always see one consistent state. ``time_scale=100`` runs a
 10 µm/s test a hundred times faster: a 30-minute tension test in 18 s, a furnace heat-up
 of 10 minutes in 6 s; the devices' own timing (output rate ``ICR``, DCON host watchdog)
-stays in real time, as the host sees it.
+stays in host time, as the host sees it.
+
+**Host time** is ``clock`` (:mod:`flowcurve.clock`): the wall clock by default, with the
+devices on pseudo-terminals (``link="pty"``, :attr:`ports` are ``/dev/pts/N``) for drivers
+in this or another process; or, with ``link="inprocess"``, ``virtual://`` ports that only
+this process opens (:mod:`flowcurve.rig.virtual.protocol_virtual`) — on a
+:class:`flowcurve.clock.ModelClock` the whole rig then runs in simulated time::
+
+    clock = ModelClock()
+    with VirtualRig("steel45", clock=clock, link="inprocess") as rig:
+        ...                            # drivers on rig.ports; clock.advance(0.3) or clock.sleep(0.3)
 """
 
 from __future__ import annotations
 
 import threading
-import time
 
+from flowcurve.clock import WALL, Clock
 from flowcurve.errors import ConfigError
 from flowcurve.rig.virtual.physics import FurnaceParams, RigModel, Specimen
 from flowcurve.rig.virtual.aed import AEDAmplifier
@@ -40,7 +50,8 @@ class VirtualRig:
                  friction_mu: float = 0.1, force_noise_N: float = 3.0, nominal_load_N: float = 100e3,
                  furnace: FurnaceParams = FurnaceParams(), stroke_limit_mm: float | None = None,
                  loadcell_address: int = 31, furnace_address: int = 0x01, encoder_address: int = 0x02,
-                 checksum: bool = False, encoder_initial_count: int = 0, aed_settings: dict | None = None):
+                 checksum: bool = False, encoder_initial_count: int = 0, aed_settings: dict | None = None,
+                 clock: Clock = WALL, link: str = "pty"):
         if not time_scale > 0:
             raise ConfigError(f"time_scale: must be positive, got {time_scale}")
         self.time_scale = float(time_scale)
@@ -51,17 +62,20 @@ class VirtualRig:
         self.nominal_load_N = float(nominal_load_N)
         self.checksum = checksum
         self._lock = threading.RLock()
-        self._t0 = time.monotonic()
+        self.clock = clock
+        self.link = link
+        self._t0 = clock.now()
         self._running = False
         self.devices: dict = {}
         try:
             self.devices["loadcell"] = AEDAmplifier(self._loadcell_sample, nominal_load_N=nominal_load_N,
-                                                    address=loadcell_address, settings=aed_settings, seed=seed + 1)
+                                                    address=loadcell_address, settings=aed_settings, seed=seed + 1,
+                                                    clock=clock, link=link)
             self.devices["encoder"] = EncoderBox(self._encoder_counts, address=encoder_address,
                                                  checksum_on=checksum, initial_count=encoder_initial_count,
-                                                 seed=seed + 2)
+                                                 seed=seed + 2, clock=clock, link=link)
             self.devices["furnace"] = I7011(self._thermocouple, self._set_heater, address=furnace_address,
-                                            checksum_on=checksum, seed=seed + 3)
+                                            checksum_on=checksum, seed=seed + 3, clock=clock, link=link)
         except BaseException:
             self.close()
             raise
@@ -69,7 +83,7 @@ class VirtualRig:
     # -- clock and model access (called from the device threads) --------------------------
     def now(self) -> float:
         """Model time in seconds."""
-        return (time.monotonic() - self._t0) * self.time_scale
+        return (self.clock.now() - self._t0) * self.time_scale
 
     def sync(self) -> RigModel:
         """Advance the model to the present model time and return it (hold :attr:`lock`)."""
@@ -101,7 +115,7 @@ class VirtualRig:
     # -- life cycle ---------------------------------------------------------------------
     def start(self) -> "VirtualRig":
         with self._lock:
-            self._t0 = time.monotonic() - self.model.time_s / self.time_scale
+            self._t0 = self.clock.now() - self.model.time_s / self.time_scale
         for dev in self.devices.values():
             dev.start()
         self._running = True
@@ -122,7 +136,7 @@ class VirtualRig:
     # -- what the tests and the operator do ----------------------------------------------
     @property
     def ports(self) -> dict[str, str]:
-        """Serial port paths: ``{"loadcell": "/dev/pts/N", "encoder": ..., "furnace": ...}``."""
+        """Serial ports: ``{"loadcell": "/dev/pts/N", ...}`` (or ``virtual://loadcell-N`` in-process)."""
         return {name: dev.port for name, dev in self.devices.items()}
 
     def start_crosshead(self) -> None:

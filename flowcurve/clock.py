@@ -1,0 +1,211 @@
+"""Time for the rig, the acquisition and the virtual devices: the wall clock or a model clock.
+
+Everything that waits or measures time in the acquisition path (the procedure's loop, the
+sampler's channels, the serial transport's deadlines, the virtual devices' output periods
+and watchdogs) asks a :class:`Clock` instead of :mod:`time`:
+
+* :data:`WALL` (:class:`WallClock`) is :func:`time.monotonic` and real waits — what a real
+  test and the pty-based virtual rig run on, exactly as before;
+* :class:`ModelClock` is simulated time for the tests: it stands still while any thread that
+  takes part in it is working, and jumps to the next deadline once every such thread waits
+  (a discrete-event simulation), so a 30-minute virtual test costs only its computing time.
+  A test may also move it by hand with :meth:`ModelClock.advance`.
+
+A thread takes part in a model clock from its first wait on it until it ends. A thread that
+blocks elsewhere (a lock held by a thread that waits on the clock) would stop time for good,
+so when nothing has happened for ``stall_s`` of wall time the clock moves on to the next
+deadline anyway — as time passes on a loaded machine.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+import threading
+import time
+from typing import Callable, Protocol
+
+
+class Clock(Protocol):
+    """Monotonic seconds, waits and timers (see the module docstring)."""
+
+    def now(self) -> float: ...
+    def sleep(self, seconds: float) -> None: ...
+    def wait(self, event: threading.Event, timeout: float | None = None) -> bool: ...
+    def notify(self) -> None: ...
+    def call_at(self, when: float, callback: Callable[[], None]) -> "Timer": ...
+
+
+class Timer:
+    """A callback scheduled on a clock; :meth:`cancel` before it runs to drop it."""
+
+    def __init__(self, when: float, callback: Callable[[], None]):
+        self.when = when
+        self.callback = callback
+        self.cancelled = False
+        self._thread: threading.Timer | None = None
+
+    def cancel(self) -> None:
+        self.cancelled = True
+        if self._thread is not None:
+            self._thread.cancel()
+
+
+class WallClock:
+    """Real time: :func:`time.monotonic`, real sleeps, timers on threads."""
+
+    def now(self) -> float:
+        return time.monotonic()
+
+    def sleep(self, seconds: float) -> None:
+        if seconds > 0:
+            time.sleep(seconds)
+
+    def wait(self, event: threading.Event, timeout: float | None = None) -> bool:
+        return event.wait(timeout)
+
+    def notify(self) -> None:
+        """Nothing to do: threading.Event wakes its waiters itself."""
+
+    def call_at(self, when: float, callback: Callable[[], None]) -> Timer:
+        timer = Timer(when, callback)
+
+        def fire() -> None:
+            if not timer.cancelled:
+                callback()
+
+        timer._thread = threading.Timer(max(0.0, when - time.monotonic()), fire)
+        timer._thread.daemon = True
+        timer._thread.start()
+        return timer
+
+    def __repr__(self) -> str:
+        return "WallClock()"
+
+
+WALL = WallClock()
+
+
+class ModelClock:
+    """Simulated seconds that move only when every participating thread waits (or by hand).
+
+    ``auto=False`` leaves time entirely to :meth:`advance` (the test's hand on the clock).
+    """
+
+    def __init__(self, start_s: float = 0.0, *, auto: bool = True, stall_s: float = 0.01):
+        self._now = float(start_s)
+        self.auto = auto
+        self.stall_s = stall_s
+        self._cond = threading.Condition(threading.Lock())
+        self._advancing = threading.Lock()  # one thread runs timers at a time, in order
+        self._timers: list[tuple[float, int, Timer]] = []
+        self._seq = itertools.count()
+        self._actors: set[threading.Thread] = set()
+        self._waiting: dict[threading.Thread, float] = {}
+        self._progress_wall = time.monotonic()
+
+    def __repr__(self) -> str:
+        return f"ModelClock(now={self._now:.6f})"
+
+    # -- reading and moving time ------------------------------------------------------------
+    def now(self) -> float:
+        return self._now
+
+    def advance(self, seconds: float) -> None:
+        """Move time forward by ``seconds``, running the timers due on the way, in order."""
+        if seconds < 0:
+            raise ValueError("time runs forward only")
+        self.advance_to(self._now + seconds)
+
+    def advance_to(self, when: float) -> None:
+        """Move time to ``when`` (no-op if it is not later), running the timers due on the way."""
+        with self._advancing:
+            while True:
+                with self._cond:
+                    timer = None
+                    while self._timers and self._timers[0][0] <= when:
+                        _, _, candidate = heapq.heappop(self._timers)
+                        if not candidate.cancelled:
+                            timer = candidate
+                            break
+                    if timer is None:
+                        if when > self._now:
+                            self._now = when
+                        self._progressed()
+                        return
+                    if timer.when > self._now:
+                        self._now = timer.when
+                    self._progressed()
+                timer.callback()  # outside the lock: it may schedule timers or notify
+
+    def call_at(self, when: float, callback: Callable[[], None]) -> Timer:
+        """Run ``callback`` when the clock reaches ``when`` (in the thread that moves it)."""
+        timer = Timer(when, callback)
+        with self._cond:
+            heapq.heappush(self._timers, (when, next(self._seq), timer))
+            self._cond.notify_all()  # a waiter may now have an earlier deadline to jump to
+        return timer
+
+    def notify(self) -> None:
+        """Wake the waiters to look at their events again (call after setting one)."""
+        with self._cond:
+            self._progressed()
+
+    # -- waiting ------------------------------------------------------------------------------
+    def sleep(self, seconds: float) -> None:
+        self.wait_until(self._now + max(0.0, seconds))
+
+    def wait(self, event: threading.Event, timeout: float | None = None) -> bool:
+        """Like :meth:`threading.Event.wait` on this clock: True once ``event`` is set."""
+        deadline = math.inf if timeout is None else self._now + max(0.0, timeout)
+        return self.wait_until(deadline, event)
+
+    def wait_until(self, deadline: float, event: threading.Event | None = None) -> bool:
+        """Block until the clock reaches ``deadline`` (False) or ``event`` is set (True)."""
+        me = threading.current_thread()
+        while True:
+            jump = None
+            with self._cond:
+                self._actors.add(me)
+                if event is not None and event.is_set():
+                    return True
+                if self._now >= deadline:
+                    return False
+                self._waiting[me] = deadline
+                try:
+                    jump = self._jump_target()
+                    if jump is None:
+                        seen = self._progress_wall
+                        self._cond.wait(self.stall_s)
+                        if (self._progress_wall == seen and self.auto
+                                and time.monotonic() - seen >= self.stall_s):
+                            jump = self._next_deadline()  # someone is stuck: time goes on
+                finally:
+                    del self._waiting[me]
+            if jump is not None and math.isfinite(jump):
+                self.advance_to(jump)
+
+    # -- internals (called with the condition held) -------------------------------------------
+    def _progressed(self) -> None:
+        self._progress_wall = time.monotonic()
+        self._cond.notify_all()
+
+    def _next_deadline(self) -> float:
+        due = [d for d in self._waiting.values()]
+        while self._timers and self._timers[0][2].cancelled:
+            heapq.heappop(self._timers)
+        if self._timers:
+            due.append(self._timers[0][0])
+        return min(due, default=math.inf)
+
+    def _jump_target(self) -> float | None:
+        """The next deadline when every participating thread waits; None otherwise."""
+        if not self.auto:
+            return None
+        self._actors = {t for t in self._actors if t.is_alive()}
+        if any(t not in self._waiting for t in self._actors):
+            return None
+        target = self._next_deadline()
+        # a deadline already reached belongs to a waiter that was woken and has yet to run
+        return target if self._now < target < math.inf else None
