@@ -33,7 +33,7 @@ from flowcurve.identification import friction as fr
 from flowcurve.identification.hardening import fit_hardening
 from flowcurve.identification.indicator import fit_modulus, remove_frame_compliance, scale_to_measured
 from flowcurve.identification.outcome import Identification
-from flowcurve.identification.tension import true_plastic_strain
+from flowcurve.identification.tension import check_fit_range, true_plastic_strain
 
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
 MAX_FIT_POINTS = 600  # the hardening fit uses at most this many points, evenly spread in strain
@@ -143,6 +143,7 @@ def identify_compression(
     E_MPa: float | None = None,
     frame_stiffness_N_per_um: float | None = None,
     modulus_window_MPa: tuple[float, float] | None = None,
+    fit_range: tuple[float, float] | None = None,
 ) -> Identification:
     """Identify a compression record: friction, friction-corrected true curves and hardening.
 
@@ -150,7 +151,8 @@ def identify_compression(
     ``ebrahimi_najafizadeh``), ``friction_correction`` (``k_sigma`` (default), ``siebel``,
     ``slab``), ``law`` of the hardening fit, ``E_MPa`` (handbook modulus for elastic strain and
     spring-back; otherwise the apparent modulus), ``frame_stiffness_N_per_um`` (otherwise the
-    record's ``rig.frame_stiffness_N_per_um``), ``modulus_window_MPa``.
+    record's ``rig.frame_stiffness_N_per_um``), ``modulus_window_MPa``, ``fit_range`` (LO, HI
+    true plastic strain of the hardening fit).
     """
     src = record.source
     if friction_correction not in fr.CORRECTIONS:
@@ -230,8 +232,11 @@ def identify_compression(
 
     # -- hardening fits ---------------------------------------------------------------------
     fits = {}
+    fit_range = check_fit_range(fit_range)
     for method, (eps_tp, sig_t) in corrected.items():
         idx = _fit_subset(eps_tp, YIELD_OFFSET)
+        if fit_range is not None:
+            idx = idx[(eps_tp[idx] >= fit_range[0]) & (eps_tp[idx] <= fit_range[1])]
         if idx.size < 4:
             if method == friction_correction:
                 raise IdentificationError(f"{src}: the plastic range has only {idx.size} points; nothing to fit (did the specimen yield?)")
@@ -243,6 +248,7 @@ def identify_compression(
                 raise
             warnings.append(f"hardening fit on the {method} curve failed: {exc}")
     fit = fits[friction_correction]
+    warnings += [f"hardening: {w}" for w in fit.warnings]
     eps_def, sig_def = corrected[friction_correction]
     grid = np.linspace(fit.strain_range[0], fit.strain_range[1], FIT_CURVE_POINTS)
     curves["fit"] = pd.DataFrame({"true_plastic_strain": grid, "true_stress_MPa": fit(grid)})

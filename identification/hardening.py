@@ -21,9 +21,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Iterable, Sequence
 
+import logging
+
 import numpy as np
 
 from flowcurve.errors import IdentificationError
+
+logger = logging.getLogger(__name__)
 
 # Plausibility limits used to catch unit mistakes (Pa for MPa, % for fractions).
 MAX_STRESS_MPa = 20_000.0
@@ -86,6 +90,12 @@ class HardeningFit:
     rms_error_pct: float = float("nan")
     strain_range: tuple[float, float] = (float("nan"), float("nan"))
     report: str = ""
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def quality(self) -> str:
+        """"good", or "poor" when the largest relative error exceeds 10 %."""
+        return "poor" if not self.fit_error_pct <= POOR_FIT_PCT else "good"
 
     def __call__(self, eps_p):
         """Flow stress (MPa) of the identified law at true plastic strain ``eps_p``."""
@@ -103,6 +113,8 @@ class HardeningFit:
         out["fit_error_pct"] = float(self.fit_error_pct)
         out["rms_error_pct"] = float(self.rms_error_pct)
         out["strain_range"] = [float(self.strain_range[0]), float(self.strain_range[1])]
+        out["quality"] = self.quality
+        out["warnings"] = list(self.warnings)
         return out
 
 
@@ -133,9 +145,11 @@ def _errors_pct(fit_values: np.ndarray, stress: np.ndarray) -> tuple[float, floa
 # -- least squares -----------------------------------------------------------------------
 
 
-def _linear_on_grid(X: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _linear_on_grid(X: np.ndarray, y: np.ndarray, w: np.ndarray, *, nonnegative_c0: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Weighted least squares y ≈ c0 + c1·x for every row x of X at once (normal equations).
 
+    nonnegative_c0: where the free solution has c0 < 0, the best line with c0 = 0 instead
+    (c1 = Σw²xy/Σw²x²), so the grid search respects the bound A ≥ 0 / σ0 ≥ 0 exactly.
     Returns c0, c1 and the weighted residual sum of squares, one value per row of X."""
     w2 = w**2
     sw, sy = np.sum(w2), np.sum(w2 * y)
@@ -144,51 +158,140 @@ def _linear_on_grid(X: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.nda
     with np.errstate(divide="ignore", invalid="ignore"):
         c1 = (sw * sxy - sx * sy) / det
         c0 = (sy - c1 * sx) / sw
-    ss = ((c0[:, None] + c1[:, None] * X - y) ** 2) @ w2
+        if nonnegative_c0:
+            through_zero = c0 < 0
+            c1 = np.where(through_zero, sxy / sxx, c1)
+            c0 = np.where(through_zero, 0.0, c0)
+        ss = ((c0[:, None] + c1[:, None] * X - y) ** 2) @ w2
     return c0, c1, np.where(np.isfinite(ss), ss, np.inf)
 
 
-def _start_values(law: str, eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> dict[str, float]:
-    """Start values by variable projection: scan the nonlinear constant on a grid and solve
-    the two linear ones by weighted linear least squares for each grid value (vectorized)."""
+def _grid_search(law: str, eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, list[dict[str, float]]]:
+    """Global stage by variable projection: the nonlinear constant (n, b or ε0) scanned over a
+    dense log grid across its whole plausible range, the two linear ones solved exactly (weighted
+    linear least squares, the lower bound of A / σ0 respected) for every grid value.
+
+    Returns the residual sum of squares per grid value and the constants per grid value."""
     if law == "johnson_cook":
-        grid = np.geomspace(0.02, 3.0, 120)
-        A, B, ss = _linear_on_grid(np.power(eps[None, :], grid[:, None]), sig, w)
+        grid = np.geomspace(0.005, 3.0, 240)
+        A, B, ss = _linear_on_grid(np.power(eps[None, :], grid[:, None]), sig, w, nonnegative_c0=True)
         ok = B > 0
-        values = lambda i: {"A": A[i], "B": B[i], "n": grid[i]}  # noqa: E731
+        cands = [{"A": A[i], "B": B[i], "n": grid[i]} for i in range(grid.size)]
     elif law == "voce":
         span = max(np.max(eps), 1e-6)
-        grid = np.geomspace(0.1 / span, 200.0 / span, 150)
-        s0, Q, ss = _linear_on_grid(1 - np.exp(-grid[:, None] * eps[None, :]), sig, w)
+        grid = np.geomspace(0.05 / span, 2000.0 / span, 240)
+        s0, Q, ss = _linear_on_grid(-np.expm1(-grid[:, None] * eps[None, :]), sig, w, nonnegative_c0=True)
         ok = Q > 0
-        values = lambda i: {"sigma0": s0[i], "Q": Q[i], "b": grid[i]}  # noqa: E731
-    else:  # swift, in log form: ln σ = ln K + n·ln(ε0 + εp)
+        cands = [{"sigma0": s0[i], "Q": Q[i], "b": grid[i]} for i in range(grid.size)]
+    else:  # swift, in log form: ln σ = ln K + n·ln(ε0 + εp), then scored in MPa
         if np.min(sig) <= 0:
             raise IdentificationError("Swift law needs positive stresses")
-        grid = np.geomspace(1e-5, 1.0, 120)
+        grid = np.geomspace(1e-7, 1.0, 240)
         base = grid[:, None] + eps[None, :]
         lnK, n, _ = _linear_on_grid(np.log(base), np.log(sig), w)
         with np.errstate(over="ignore", invalid="ignore"):
             pred = np.exp(lnK)[:, None] * np.power(base, n[:, None])
         ss = np.where(np.isfinite(pred).all(axis=1), ((pred - sig) ** 2) @ (w**2), np.inf)
         ok = n > 0
-        values = lambda i: {"K": float(np.exp(lnK[i])), "eps0": grid[i], "n": n[i]}  # noqa: E731
-    ok &= np.isfinite(ss)
-    if not np.any(ok):
-        raise IdentificationError(f"the data do not harden (stress does not rise with strain): a {law} law cannot be fitted")
-    best = int(np.flatnonzero(ok)[np.argmin(ss[ok])])
-    return {k: float(v) for k, v in values(best).items()}
+        cands = [{"K": float(np.exp(lnK[i])), "eps0": grid[i], "n": n[i]} for i in range(grid.size)]
+    ss = np.where(ok & np.isfinite(ss), ss, np.inf)
+    return ss, [{k: float(v) for k, v in c.items()} for c in cands]
+
+
+def data_start(law: str, eps: np.ndarray, sig: np.ndarray) -> dict[str, float]:
+    """Start values read off the data: A (σ0) = the flow stress at the first plastic point
+    (≈ Rp0.2), B and n from the log–log slope of σ − A against εp (ln(σ − A) = ln B + n ln εp)."""
+    order = np.argsort(eps)
+    e, s = eps[order], sig[order]
+    first = float(s[0])
+    A = max(first - 0.05 * max(np.ptp(s), 1e-9), 0.0)  # just below the first point: σ − A > 0
+    rise = s - A
+    use = (e > 0) & (rise > 0)
+    if use.sum() >= 2 and np.ptp(np.log(e[use])) > 0:
+        n, lnB = np.polyfit(np.log(e[use]), np.log(rise[use]), 1)
+    else:
+        n, lnB = 0.5, np.log(max(np.ptp(s), 1.0) / max(np.ptp(e), 1e-6) ** 0.5)
+    n = float(np.clip(n, 0.01, 2.0))
+    B = float(np.exp(lnB))
+    if law == "johnson_cook":
+        return {"A": A, "B": B, "n": n}
+    if law == "voce":
+        top = float(np.max(s))
+        half = e[np.argmax(s >= A + 0.63 * (top - A))] if top > A else float(np.max(e))
+        return {"sigma0": A, "Q": max(top - A, 1e-3), "b": 1.0 / max(half, 1e-6)}
+    ln_e = np.log(np.clip(e, 1e-9, None))
+    n_sw, lnK = np.polyfit(ln_e, np.log(np.clip(s, 1e-9, None)), 1) if np.ptp(ln_e) > 0 else (0.2, np.log(first))
+    return {"K": float(np.exp(lnK)), "eps0": 1e-3, "n": float(np.clip(n_sw, 1e-3, 2.0))}
+
+
+def _grid_minima(ss: np.ndarray, count: int, within: float = 10.0) -> list[int]:
+    """Indices of the ``count`` lowest local minima of ``ss`` along the grid (distinct basins),
+    those no more than ``within`` times the lowest."""
+    finite = np.isfinite(ss)
+    left = np.concatenate([[np.inf], ss[:-1]])
+    right = np.concatenate([ss[1:], [np.inf]])
+    minima = np.flatnonzero(finite & (ss <= left) & (ss <= right))
+    minima = minima[ss[minima] <= within * np.min(ss[minima])]
+    return [int(i) for i in minima[np.argsort(ss[minima])][:count]]
+
+
+def _on_bound(value: float, lo: float, hi: float) -> str | None:
+    """'lower'/'upper' when a fitted value sits on a finite bound (within a relative 1e-6)."""
+    for bound, name in ((lo, "lower"), (hi, "upper")):
+        if np.isfinite(bound) and abs(value - bound) <= 1e-6 * max(abs(bound), 1e-3):
+            return name
+    return None
+
+
+# a fit whose largest relative error exceeds this is marked poor
+POOR_FIT_PCT = 10.0
+GRID_STARTS = 4  # local fits started from the best basins of the global grid stage
+MAX_EVALUATIONS = 500  # per local fit: a start crawling along a bound is cut short, the others finish
+
+
+def _polish(spec: _Law, starts: list[dict[str, float]], eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> dict[str, float]:
+    """Local bounded least squares (scipy, trust region) from every start; the lowest cost wins.
+
+    The winner is then refitted once with lmfit by the caller, for its uncertainties and report."""
+    from scipy.optimize import least_squares
+
+    lo = np.array([spec.bounds[n][0] for n in spec.names])
+    hi = np.array([spec.bounds[n][1] for n in spec.names])
+
+    def residual(x):
+        with np.errstate(over="ignore", invalid="ignore"):
+            r = w * (spec.func(eps, *x) - sig)
+        return np.where(np.isfinite(r), r, 1e12)
+
+    best_x, best_cost = None, np.inf
+    for start in starts:
+        x0 = np.clip([start[n] for n in spec.names], lo, hi)
+        x0 = np.where(x0 <= lo, lo + 1e-9 * np.maximum(np.abs(lo), 1.0), x0)  # strictly inside for trf
+        sol = least_squares(residual, x0, bounds=(lo, hi), x_scale="jac", max_nfev=MAX_EVALUATIONS)
+        if np.isfinite(sol.cost) and sol.cost < best_cost:
+            best_x, best_cost = sol.x, sol.cost
+    if best_x is None:
+        raise IdentificationError(f"the {spec.func.__name__} fit did not converge from any start value")
+    return dict(zip(spec.names, (float(v) for v in best_x)))
 
 
 def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points: Iterable[Sequence[float]] = (),
                   weights=None) -> HardeningFit:
-    """Least-squares fit of a hardening law (lmfit) to a true curve σ(εp).
+    """Least-squares fit of a hardening law (lmfit) to a true curve σ(εp), global then local.
 
     eps_p, stress_MPa: the uniform range (true plastic strain, true stress in MPa).
     extra_points: further (εp, σ_MPa) or (εp, σ_MPa, weight) points, e.g. the neck-corrected
         fracture point; their default weight is 1, like every curve point.
     weights: per-point weights of the curve points (multiply the residuals in MPa).
+
+    Global stage: the nonlinear constant scanned over its whole range with the linear ones
+    solved exactly (:func:`_grid_search`); local stage: lmfit from the best basins of that scan
+    and from start values read off the data (:func:`data_start`); the lowest residual wins.
+    A constant left on a bound and a fit with a max error above 10 % are reported in
+    ``warnings``; the latter makes ``quality`` "poor".
     """
+    import lmfit  # here, so `flowcurve --help` stays fast
+
     spec = _law(law)
     raw_eps = np.asarray(eps_p, dtype=float).ravel()
     w = np.ones_like(raw_eps) if weights is None else np.asarray(weights, dtype=float).ravel()
@@ -206,22 +309,32 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     if eps.size < 4 or np.ptp(eps) <= 0:
         raise IdentificationError(f"hardening fit: need at least 4 points spanning a strain range, got {eps.size}")
 
-    start = _start_values(law, eps, sig, w)
-    import lmfit  # here, so `flowcurve --help` stays fast
-
+    ss, candidates = _grid_search(law, eps, sig, w)
+    if not np.any(np.isfinite(ss)):
+        raise IdentificationError(f"the data do not harden (stress does not rise with strain): a {law} law cannot be fitted")
+    starts = [candidates[i] for i in _grid_minima(ss, GRID_STARTS)] + [data_start(law, eps, sig)]
+    polished = _polish(spec, starts, eps, sig, w)
     model = lmfit.Model(spec.func, independent_vars=["eps_p"])
     params = model.make_params()
     for name in spec.names:
         lo, hi = spec.bounds[name]
-        params[name].set(value=float(np.clip(start[name], lo if np.isfinite(lo) else -np.inf, hi)), min=lo, max=hi)
-    result = model.fit(sig, params, eps_p=eps, weights=w, nan_policy="raise")
-    values = {name: float(result.params[name].value) for name in spec.names}
-    stderr = {name: (None if result.params[name].stderr is None else float(result.params[name].stderr)) for name in spec.names}
-    correl = {name: {k: float(v) for k, v in (result.params[name].correl or {}).items()} for name in spec.names}
+        params[name].set(value=float(np.clip(polished[name], lo, hi)), min=lo, max=hi)
+    best = model.fit(sig, params, eps_p=eps, weights=w, nan_policy="raise", max_nfev=MAX_EVALUATIONS)
+    values = {name: float(best.params[name].value) for name in spec.names}
+    stderr = {name: (None if best.params[name].stderr is None else float(best.params[name].stderr)) for name in spec.names}
+    correl = {name: {k: float(v) for k, v in (best.params[name].correl or {}).items()} for name in spec.names}
     max_pct, rms_pct = _errors_pct(spec.func(eps, **values), sig)
+    warnings = []
+    for name, key in zip(spec.names, spec.keys):
+        side = _on_bound(values[name], *spec.bounds[name])
+        if side:
+            warnings.append(f"{law} {key} = {values[name]:.4g} sits on its {side} bound: the law does not describe this curve well "
+                            "(another law, --fit-range or --fracture-point exclude may)")
+    if max_pct > POOR_FIT_PCT:
+        warnings.append(f"{law} fit is poor: max error {max_pct:.3g} % (> {POOR_FIT_PCT:g} %), rms {rms_pct:.3g} %")
     return HardeningFit(law=law, method="least_squares", params=values, stderr=stderr, correlations=correl,
                         fit_error_pct=max_pct, rms_error_pct=rms_pct,
-                        strain_range=(float(np.min(eps)), float(np.max(eps))), report=result.fit_report())
+                        strain_range=(float(np.min(eps)), float(np.max(eps))), report=best.fit_report(), warnings=warnings)
 
 
 # -- three characteristic points ------------------------------------------------------------

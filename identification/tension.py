@@ -29,6 +29,9 @@ DEFAULT_MODULUS_WINDOW = (0.10, 0.80)  # fractions of the modulus reference stre
 MODULUS_REFERENCES = ("Rp02", "Rm")
 FIT_POINTS = 30  # the uniform range is resampled to this many points, evenly in εp
 MIN_YIELD_OFFSET = 0.002
+FRACTURE_POINT_MODES = ("auto", "include", "exclude")
+# auto: the fracture point may cost the uniform range at most this much max error (percentage points)
+FRACTURE_POINT_SLACK_PCT = 2.0
 
 
 def true_stress_gost(eng_stress_MPa, log_strain, K_MPa: float):
@@ -56,6 +59,43 @@ def bulk_modulus(E_MPa: float, poisson: float) -> float:
     if not -1.0 < poisson < 0.5:
         raise IdentificationError(f"Poisson's ratio must lie in (-1, 0.5), got {poisson!r}")
     return E_MPa / (3.0 * (1.0 - 2.0 * poisson))
+
+
+def uniform_error_pct(fit, eps_p, stress_MPa) -> float:
+    """Max |σ_fit/σ − 1| over the uniform range only, % (the fracture point left out)."""
+    return float(100 * np.max(np.abs(fit(eps_p) / stress_MPa - 1.0)))
+
+
+def choose_fracture_variant(pair: dict, eps_p, stress_MPa, mode: str) -> tuple[str, str]:
+    """Which fit of a law to report: "with" or "without" the fracture point, and why.
+
+    auto: with it, unless its max error over the uniform range exceeds the fit without it by
+    more than FRACTURE_POINT_SLACK_PCT (the uniform range is not sacrificed to one point)."""
+    if "with" not in pair:
+        return "without", "no fracture point"
+    if mode == "include":
+        return "with", "fracture point included (option)"
+    if mode == "exclude":
+        return "without", "fracture point excluded (option)"
+    e_with = uniform_error_pct(pair["with"], eps_p, stress_MPa)
+    e_without = uniform_error_pct(pair["without"], eps_p, stress_MPa)
+    if e_with <= e_without + FRACTURE_POINT_SLACK_PCT:
+        return "with", f"included: uniform-range max error {e_with:.2f} % with it, {e_without:.2f} % without"
+    return "without", (f"excluded: with it the uniform-range max error would be {e_with:.2f} % instead of {e_without:.2f} % "
+                       "(the law cannot pass through both; see hardening_alternatives)")
+
+
+def check_fit_range(fit_range) -> tuple[float, float] | None:
+    """A (lo, hi) plastic-strain range with 0 ≤ lo < hi, or None."""
+    if fit_range is None:
+        return None
+    try:
+        lo, hi = (float(v) for v in fit_range)
+    except (TypeError, ValueError):
+        raise IdentificationError(f"fit_range must be two plastic strains LO,HI, got {fit_range!r}") from None
+    if not (0 <= lo < hi <= MAX_STRAIN):
+        raise IdentificationError(f"fit_range must satisfy 0 ≤ LO < HI ≤ {MAX_STRAIN:g} (true plastic strain, a fraction), got {lo:g},{hi:g}")
+    return lo, hi
 
 
 def _increasing(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -103,7 +143,8 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
                      modulus_window: tuple[float, float] = DEFAULT_MODULUS_WINDOW, modulus_reference: str = "Rp02",
                      E_MPa: float | None = None, poisson: float = 0.3, true_stress: str = "gost_3_6",
                      neck: str = "davidenkov", law: str = "johnson_cook", hardening: str = "least_squares",
-                     fracture_weight: float | None = None) -> Identification:
+                     fracture_weight: float | None = None, fit_range: tuple[float, float] | None = None,
+                     fracture_point: str = "auto") -> Identification:
     """Identify a tension record: ISO 6892-1 results, true curve, fracture point, hardening law.
 
     use_extensometer: None = use the extensometer channel when the record has one.
@@ -117,6 +158,11 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     law, hardening: the hardening law and method of the main fit; the others are reported.
     fracture_weight: weight of the fracture point in the least squares (default √N, so that
         it counts as much as the N points of the uniform range).
+    fit_range: (lo, hi) true plastic strain of the uniform range used by the hardening fits.
+    fracture_point: "include" / "exclude" the neck-corrected fracture point from the least
+        squares, or "auto" (default): include it unless it costs the uniform range more than
+        2 percentage points of max error (:func:`choose_fracture_variant`); both variants are
+        kept in ``hardening_alternatives``.
     """
     if true_stress not in TRUE_STRESS_FORMS:
         raise IdentificationError(f"true_stress must be one of {', '.join(TRUE_STRESS_FORMS)}, not {true_stress!r}")
@@ -126,6 +172,9 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         raise IdentificationError(f"hardening must be one of {', '.join(HARDENING_METHODS)}, not {hardening!r}")
     if modulus_reference not in MODULUS_REFERENCES:
         raise IdentificationError(f"modulus_reference must be one of {', '.join(MODULUS_REFERENCES)}, not {modulus_reference!r}")
+    if fracture_point not in FRACTURE_POINT_MODES:
+        raise IdentificationError(f"fracture_point must be one of {', '.join(FRACTURE_POINT_MODES)}, not {fracture_point!r}")
+    fit_range = check_fit_range(fit_range)
     lo_frac, hi_frac = (float(v) for v in modulus_window)
     if not 0 <= lo_frac < hi_frac <= 1:
         raise IdentificationError(f"modulus_window must be fractions 0 ≤ lo < hi ≤ 1, got {modulus_window!r}")
@@ -227,22 +276,35 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         warnings.append("no post.dk_mm or post.sk_mm2: no reduction of area, fracture point or neck correction; the hardening law is fitted to the uniform range only")
 
     # hardening
-    sel = ep_u >= MIN_YIELD_OFFSET
+    fit_lo, fit_hi = (MIN_YIELD_OFFSET, np.inf) if fit_range is None else fit_range
+    sel = (ep_u >= max(fit_lo, MIN_YIELD_OFFSET)) & (ep_u <= fit_hi)
     if sel.sum() < 4:
-        raise IdentificationError(f"{record.source}: the uniform range has fewer than 4 points beyond 0.2 % plastic strain; no hardening law")
+        raise IdentificationError(f"{record.source}: the uniform range has fewer than 4 points beyond 0.2 % plastic strain"
+                                  + (f" within the fit range {fit_lo:g}–{fit_hi:g}" if fit_range is not None else "") + "; no hardening law")
     grid = np.linspace(ep_u[sel][0], ep_u[sel][-1], FIT_POINTS)
     fit_sig = np.interp(grid, ep_u[sel], sig_u[sel])
     weight = math.sqrt(FIT_POINTS) if fracture_weight is None else float(fracture_weight)
     extra = [(fracture["true_strain"], fracture[neck]["stress_MPa"], weight)] if fracture else []
+    if fracture_point == "include" and not extra:
+        warnings.append("--fracture-point include: there is no fracture point (post.dk_mm or post.sk_mm2 missing); the uniform range alone is fitted")
     three_points = None
     if fracture and sig_t_rp is not None:
         three_points = [(MIN_YIELD_OFFSET, sig_t_rp), (eps_p_at_Rm, float(sig_t[i_m])), (fracture["true_strain"], fracture[neck]["stress_MPa"])]
     fits: dict = {}
+    variants: dict = {}
+    choices: dict = {}
     for name in ("johnson_cook", "swift", "voce"):
         try:
-            fits[f"least_squares_{name}"] = fit_hardening(grid, fit_sig, name, extra_points=extra)
+            pair = {"without": fit_hardening(grid, fit_sig, name)}
+            if extra:
+                pair["with"] = fit_hardening(grid, fit_sig, name, extra_points=extra)
         except IdentificationError as exc:
             warnings.append(f"least-squares {name} fit failed: {exc}")
+        else:
+            chosen, why = choose_fracture_variant(pair, grid, fit_sig, fracture_point)
+            fits[f"least_squares_{name}"] = pair[chosen]
+            choices[name] = (chosen, why)
+            variants.update({f"least_squares_{name}_{v}_fracture_point": f for v, f in pair.items()})
         if three_points is not None:
             try:
                 fits[f"three_point_{name}"] = three_point_fit(three_points, name, curve=(grid, fit_sig))
@@ -252,6 +314,8 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     if main_key not in fits:
         raise IdentificationError(f"{record.source}: the {hardening.replace('_', ' ')} {law} fit is not available" + (" (it needs the fracture point: post.dk_mm)" if hardening == "three_point" else ""))
     main = fits[main_key]
+    main_fracture = choices.get(law, (None, None)) if hardening == "least_squares" else ("with", "three-point fit through the fracture point")
+    warnings += [f"hardening: {w}" for w in main.warnings]
 
     eps_end = fracture.get("true_strain", float(grid[-1]))
     fit_eps = np.linspace(0.0, eps_end, 200)
@@ -283,8 +347,13 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         "fracture_true_stress_MPa": fracture[neck]["stress_MPa"] if fracture else None,
         "fracture_avg_stress_MPa": fracture.get("avg_stress_MPa"),
         "neck_corrections": {k: v for k, v in fracture.items() if k in NECK_METHODS or k.startswith("a_over_R")},
-        "hardening": {**main.as_dict(), "fracture_point_weight": weight if extra else None},
-        "hardening_alternatives": {k: f.as_dict() for k, f in fits.items() if k != main_key},
+        "hardening": {**main.as_dict(), "fracture_point_weight": weight if extra and main_fracture[0] == "with" else None,
+                      "fracture_point": {"with": "included", "without": "excluded"}.get(main_fracture[0], "none"),
+                      "fracture_point_choice": main_fracture[1],
+                      "uniform_range_error_pct": uniform_error_pct(main, grid, fit_sig),
+                      "fit_range": [float(grid[0]), float(grid[-1])]},
+        "hardening_alternatives": {**{k: f.as_dict() for k, f in fits.items() if k != main_key},
+                                   **{k: f.as_dict() for k, f in variants.items()}},
         "three_points": [{"true_plastic_strain": e, "true_stress_MPa": s} for e, s in three_points] if three_points else None,
         "modulus_window_MPa": list(window_MPa),
         "methods": {
