@@ -42,7 +42,7 @@ from typing import Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from flowcurve.errors import RecordError
+from flowcurve.errors import MissingValueError, RecordError
 
 FORMAT_NAME = "flowcurve-record"
 FORMAT_VERSION = 1
@@ -127,7 +127,7 @@ class Record:
         raw = self.meta.get(key)
         if raw is None or str(raw).strip() == "":
             if required:
-                raise RecordError(self.source, f"required metadata '{key}' is missing (add '# {key}: <value>' to the header or give it as an option)")
+                raise MissingValueError(self.source, (key,))
             return default
         try:
             value = float(str(raw).strip())
