@@ -60,3 +60,29 @@ class InternalError(FlowcurveError):
     the test stops safely and the message says to report it."""
 
     exit_code = 70  # EX_SOFTWARE
+
+
+class MissingValueError(RecordError):
+    """A value a record lacks (one of the metadata ``keys``); the message says how to give it.
+
+    The command line, which knows its options, rephrases it with :meth:`message_with` so that
+    the option (``--d0``) is named as well as the header key.
+    """
+
+    def __init__(self, path, keys, what: str | None = None, line: int | None = None, column: str | None = None):
+        self.keys = tuple(keys)
+        self.what = what
+        super().__init__(path, self.explain(), line=line, column=column)
+
+    def explain(self, givers: list[str] | None = None) -> str:
+        """The message without the file: what is missing, and every way to give it."""
+        keys = " or ".join(f"'{k}'" for k in self.keys)
+        text = f"required metadata {keys} is missing"
+        if self.what:
+            text = f"{self.what}: {text}"
+        how = " or ".join(givers) if givers else "give it as an option"
+        return f"{text} (add '# {self.keys[0]}: <value>' to the header or {how})"
+
+    def message_with(self, givers: list[str]) -> str:
+        """The whole one-line message (file, line, column) naming ``givers`` (e.g. ``['give --d0']``)."""
+        return str(self).removesuffix(self.explain()) + self.explain(givers)

@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.record.format import Record
-from flowcurve.errors import IdentificationError, RecordError
+from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
 from flowcurve.identification.hardening import fit_hardening
 from flowcurve.identification.indicator import fit_modulus, remove_frame_compliance, scale_to_measured
@@ -100,7 +100,7 @@ def _meta_geometry(record: Record) -> dict:
     dmax = record.positive("post.dmax_mm")
     smax = record.positive("post.smax_mm2")
     if dmax is None and smax is None:
-        raise RecordError(src, "required metadata 'post.dmax_mm' (bulge diameter) or 'post.smax_mm2' (largest cross-section) is missing; the friction cannot be identified without it")
+        raise MissingValueError(src, ("post.dmax_mm", "post.smax_mm2"), what="the friction needs the bulge diameter dmax or the largest cross-section smax")
     dtop = record.positive("post.dtop_mm")
     return {"d0": d0, "h0": h0, "hk": hk, "dmax": dmax, "smax": smax, "dtop": dtop}
 

@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from flowcurve.errors import RecordError
+from flowcurve.errors import MissingValueError, RecordError
 
 if TYPE_CHECKING:  # pandas is imported where records are parsed, so `flowcurve --help` stays fast
     import pandas as pd
@@ -132,7 +132,7 @@ class Record:
         raw = self.meta.get(key)
         if raw is None or str(raw).strip() == "":
             if required:
-                raise RecordError(self.source, f"required metadata '{key}' is missing (add '# {key}: <value>' to the header or give it as an option)")
+                raise MissingValueError(self.source, (key,))
             return default
         try:
             value = float(str(raw).strip())

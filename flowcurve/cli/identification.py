@@ -6,10 +6,11 @@ import argparse
 import logging
 import os
 import sys
+import warnings
 from pathlib import Path
 
 from flowcurve.cli.specimen import GEOMETRY_OPTIONS, add_geometry_options, add_modulus_option, check_specimen_options
-from flowcurve.errors import FlowcurveError, RecordError
+from flowcurve.errors import FlowcurveError, MissingValueError, RecordError
 
 logger = logging.getLogger(__name__)
 
@@ -22,6 +23,7 @@ HARDENING_CHOICES = {"lsq": "least_squares", "three-point": "three_point"}
 META_OPTIONS = {
     "test": "test",
     **{option: key for option, (key, _) in GEOMETRY_OPTIONS.items()},
+    "le": "specimen.extensometer_gauge_mm",
     "lu": "post.lu_mm",
     "dk": "post.dk_mm",
     "hk": "post.hk_mm",
@@ -41,6 +43,10 @@ examples:
   flowcurve identify export.csv --column force=Load:kN --column crosshead=Extension:mm \\
       --column time=Time:s --test tension --d0 6 --l0 30 --lu 34.1 --dk 3.9
       any CSV: name its columns and units; give the geometry the file lacks
+  flowcurve identify bluehill/*.csv --test tension --le 25 --specimens specimens.csv
+      other labs' exports (Bluehill, testXpert, MTS): columns named 'Load [kN]', 'Time (s)'
+      or with a units row are recognised; a strain column needs the extensometer length
+      --le; each specimen's d0, l0, lu, dk ... come from a table with a 'file' column
   flowcurve identify C1.csv --friction-correction siebel --hardening three-point
 
 Options override what a record's header says. Each record gets DIR/<record name>/ with
@@ -77,10 +83,15 @@ def register(subparsers) -> None:
                    help="for a plain CSV: which column holds time, force, crosshead, extensometer or temperature, "
                         "and its unit (e.g. force=Load:kN, crosshead=Extension:in, temperature=T:K); without a unit "
                         "the file's units row is used. Repeat per column. Units are converted, never guessed.")
+    p.add_argument("--specimens", metavar="TABLE.csv",
+                   help="per-specimen dimensions for several records: a table with a 'file' column naming each record and "
+                        "columns d0, l0, h0, le, lu, dk, du, hk, dmax, smax, neck_radius, speed, temperature, test, material, "
+                        "each with its unit in the name ('d0 (mm)', 'd0_mm') or in a units row")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG plots (faster for long series)")
     g = p.add_argument_group("specimen and test (override the record's header)")
     g.add_argument("--test", choices=("tension", "compression"), help="kind of test, for files that do not say")
     add_geometry_options(g)
+    g.add_argument("--le", type=float, metavar="MM", help="extensometer gauge length Le (ISO 6892-1), mm; needed to turn a strain column (%%, mm/mm, -) into elongation")
     g.add_argument("--lu", type=float, metavar="MM", help="gauge length measured after fracture (tension), mm")
     g.add_argument("--dk", type=float, metavar="MM", help="smallest diameter at the fracture (tension), mm")
     g.add_argument("--neck-radius", type=float, metavar="MM", help="profile radius of the neck at fracture (tension), mm; without it a/R is estimated (Le Roy)")
@@ -145,18 +156,42 @@ def _options_from_args(args) -> dict:
 
 
 def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool = True):
-    """Load, identify and write one record; returns (identification, result folder)."""
+    """Load, identify and write one record; returns (identification, result folder).
+
+    A numerical warning (numpy's RuntimeWarning) is not printed raw: it joins the result's
+    warnings, so it is written to result.json and shown in one line under the record.
+    """
     from flowcurve.identification.identify import identify
     from flowcurve.record.importers import load_record
 
-    record = load_record(path, columns=columns, meta=meta)
-    ident = identify(record, **options)
+    raised = list(_error_categories())
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for category in raised:  # '-W error::RuntimeWarning' from outside still raises
+            warnings.simplefilter("error", category)
+        record = load_record(path, columns=columns, meta=meta)
+        ident = identify(record, **options)
+    caught_lines = [f"{'numerical warning' if issubclass(w.category, RuntimeWarning) else w.category.__name__}: {w.message}" for w in caught]
+    if caught_lines:
+        old = ident.result.setdefault("warnings", [])
+        old.extend(m for m in dict.fromkeys(caught_lines) if m not in old)
     if plots:
         from flowcurve.reports.plots import add_plots
 
         add_plots(ident)
-    folder = ident.write(out / record.name)
+    folder = out / record.name
+    try:
+        ident.write(folder)
+    except OSError as exc:
+        raise RecordError(folder, f"cannot write the results ({exc.strerror or exc}); choose another --out") from None
     return ident, folder
+
+
+def _error_categories():
+    """Warning categories the caller turned into errors ('-W error::RuntimeWarning')."""
+    for action, _message, category, _module, _line in warnings.filters:
+        if action == "error" and isinstance(category, type) and issubclass(category, Warning):
+            yield category
 
 
 def _fmt(value, spec: str = ".4g") -> str:
@@ -185,6 +220,42 @@ def summary_lines(result: dict) -> list[str]:
     return lines
 
 
+def _check_out(out: Path) -> None:
+    """--out must be a folder (or not exist yet): a file there is a one-line error, before any work."""
+    for folder in (out, *out.parents):
+        if folder.exists():
+            if not folder.is_dir():
+                raise FlowcurveError(f"--out {out}: {'is' if folder == out else f'{folder} is'} a file, not a folder; choose another --out")
+            if not os.access(folder, os.W_OK | os.X_OK):
+                raise FlowcurveError(f"--out {out}: {folder} is not writable; choose another --out")
+            return
+
+
+def _givers(keys, table) -> list[str]:
+    """The ways to give missing metadata ``keys`` on the command line: options and table columns."""
+    options = {key: f"--{opt.replace('_', '-')}" for opt, key in META_OPTIONS.items()}
+    givers = [f"give {options[k]}" for k in keys if k in options]
+    if table is not None:
+        from flowcurve.record.specimens import TABLE_COLUMNS
+
+        columns = {key: name for name, (key, _) in TABLE_COLUMNS.items()}
+        givers += [f"a column '{columns[k]}' in {table.source}" for k in keys if k in columns]
+    return givers or ["give it with --set KEY=VALUE"]
+
+
+def _check_table_against_options(table, meta: dict[str, str]) -> None:
+    """A value given both by an option and by a --specimens column is an error: which is meant?"""
+    options = {key: f"--{opt.replace('_', '-')}" for opt, key in META_OPTIONS.items()}
+    for key in meta:
+        if key in table.columns and any(key in row.meta for row in table.rows):
+            raise RecordError(table.source, f"{options.get(key, '--set ' + key)} and this column both give '{key}'; keep one", column=table.columns[key])
+
+
+def _record_meta(path: str, meta: dict[str, str], table) -> dict[str, str]:
+    """The metadata of one record: its row of the --specimens table, and the options."""
+    return meta if table is None else {**table.row_for(path).meta, **meta}
+
+
 def run(args) -> int:
     from flowcurve.record.importers import parse_column_option
 
@@ -193,13 +264,23 @@ def run(args) -> int:
     meta = _meta_from_args(args)
     options = _options_from_args(args)
     out = Path(args.out)
+    _check_out(out)
+    table = None
+    if args.specimens:
+        from flowcurve.record.specimens import read_specimen_table
+
+        table = read_specimen_table(args.specimens)
+        _check_table_against_options(table, meta)
+        for row in table.unused(args.records):
+            print(f"flowcurve: warning: {table.source}, line {row.line}: '{row.file}' names none of the records given", file=sys.stderr)
     failed = 0
     for path in args.records:
         try:
-            ident, folder = identify_file(path, columns=columns, meta=meta, options=options, out=out, plots=not args.no_plots)
+            ident, folder = identify_file(path, columns=columns, meta=_record_meta(path, meta, table), options=options, out=out, plots=not args.no_plots)
         except FlowcurveError as exc:
             failed += 1
-            message = str(exc) if str(path) in str(exc) else f"{path}: {exc}"  # always name the file
+            message = exc.message_with(_givers(exc.keys, table)) if isinstance(exc, MissingValueError) else str(exc)
+            message = message if str(path) in message else f"{path}: {message}"  # always name the file
             print(f"flowcurve: error: {message}", file=sys.stderr)
             continue
         except Exception as exc:  # a bug, not bad input: one line per record, the others still run
