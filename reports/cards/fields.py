@@ -28,11 +28,26 @@ ASCII_SPELLING = {
 }
 
 
+# Russian steel grades (12Х18Н10Т) in the Latin spelling of their standards (12Kh18N10T).
+CYRILLIC = dict(zip("АБВГДЕЁЖЗИЙКЛМНОПРСТУФХЦЧШЩЪЫЬЭЮЯ",
+                    ["A", "B", "V", "G", "D", "E", "E", "Zh", "Z", "I", "Y", "K", "L", "M", "N", "O", "P", "R", "S",
+                     "T", "U", "F", "Kh", "Ts", "Ch", "Sh", "Shch", "", "Y", "", "E", "Yu", "Ya"]))
+
+
 def ascii_text(text: str) -> str:
-    """``text`` in plain ASCII: known symbols spelled out, anything else as '?'."""
+    """``text`` in plain ASCII: known symbols spelled out, Cyrillic transliterated, anything
+    else as '?'."""
     for char, spelling in ASCII_SPELLING.items():
         text = text.replace(char, spelling)
+    text = "".join(latin(c) for c in text)
     return text.encode("ascii", "replace").decode("ascii")
+
+
+def latin(char: str) -> str:
+    """A Cyrillic letter in Latin spelling (lower case kept), any other character as is."""
+    if char in CYRILLIC:
+        return CYRILLIC[char]
+    return CYRILLIC[char.upper()].lower() if char.upper() in CYRILLIC else char
 
 
 def comment_block(lines, prefix: str, width: int = 78) -> str:

@@ -19,7 +19,7 @@ without it OpenRadioss warns and uses the raw, noisy strain rate.
 from __future__ import annotations
 
 from flowcurve.reports.cards.data import DAMAGE_KEYS, CardData, CardOptions, header_lines
-from flowcurve.reports.cards.fields import comment_block, mixed_line
+from flowcurve.reports.cards.fields import ascii_text, comment_block, mixed_line
 from flowcurve.reports.units import UnitSystem
 
 MAT_ID = 1
@@ -40,7 +40,7 @@ def plas_johns(data: CardData, units: UnitSystem, options: CardOptions, mat_id: 
     current = options.radioss_version == "2025"
     out = [
         f"/MAT/PLAS_JOHNS/{mat_id}",
-        data.material[:100],
+        ascii_text(data.material)[:100],
         "#              RHO_I",
         mixed_line((rho, 20)),
     ]
