@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from flowcurve.reports.cards import FORMATS, CardError, load_card_data, write_card
+from flowcurve.reports.cards import FORMATS, load_card_data, write_card
 from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
 
 
@@ -16,9 +16,11 @@ def register(subparsers) -> None:
         description=(
             "Write a material card from fit.json (the output of 'flowcurve fit'): LS-DYNA "
             "(*MAT_JOHNSON_COOK with its EOS, *MAT_PIECEWISE_LINEAR_PLASTICITY on the identified "
-            "curves), Abaqus (Johnson-Cook and a temperature table), Radioss (/MAT/PLAS_JOHNS) or "
-            "CalculiX (temperature table). Constants missing from fit.json are given as options, "
-            "in lab units. The card states its unit system and the range it was identified on."
+            "curves), Abaqus (Johnson-Cook and a temperature table), OpenRadioss (/MAT/PLAS_JOHNS) or "
+            "CalculiX (temperature table); the Johnson-Cook fracture constants D1-D5 when fit.json has "
+            "them. Constants missing from fit.json are given as options, in lab units. The card states "
+            "its unit system and the range it was identified on. Every tabulated curve continues beyond "
+            "its last measured point with the fitted law up to --extend-to, in every format alike."
         ),
     )
     p.add_argument("fit", metavar="FIT.json", help="fit.json written by 'flowcurve fit'")
@@ -42,6 +44,18 @@ def register(subparsers) -> None:
     p.add_argument("--temperature", dest="temperature_C", type=float, metavar="C",
                    help="LS-DYNA: temperature of the MAT_024 curves (default: the reference temperature)")
     p.add_argument("--max-rows", type=int, default=100, metavar="N", help="rows per tabulated curve (default 100; CalculiX needs ≤ ~100)")
+    p.add_argument("--extend-to", type=float, metavar="EPS_P",
+                   help="extend every tabulated curve beyond its last measured point with the fitted law to this plastic strain (default 2)")
+    p.add_argument("--temperature-tolerance", dest="temperature_tolerance_C", type=float, metavar="C",
+                   help="curves closer than this in temperature are one temperature (default 1 °C)")
+    p.add_argument("--id-offset", type=int, metavar="N", help="add N to every numeric ID of the deck (materials, EOS, tables, curves; default 0)")
+    p.add_argument("--radioss-version", choices=("2025", "2023"),
+                   help="OpenRadioss input layout: 2025 (current, default) or 2023 (the layout before 2025)")
+    p.add_argument("--fcut", dest="fcut_hz", type=float, metavar="HZ", help="Radioss strain-rate filter cut-off frequency, Hz (default 10000)")
+    p.add_argument("--erosion-strain", type=float, metavar="EPS",
+                   help="LS-DYNA: add *MAT_ADD_EROSION with this maximum effective strain (EFFEPS) to both materials")
+    p.add_argument("--damage-displacement", dest="damage_displacement_mm", type=float, metavar="MM",
+                   help="Abaqus: *DAMAGE EVOLUTION, TYPE=DISPLACEMENT with this equivalent plastic displacement at failure, mm")
     p.set_defaults(func=run_card)
 
     r = subparsers.add_parser(
@@ -74,18 +88,13 @@ def overrides(args) -> dict:
     return {k: v for k, v in out.items() if v is not None}
 
 
+CARD_OPTIONS = ("curves", "max_rows", "strain_rate_per_s", "temperature_C", "extend_to", "temperature_tolerance_C",
+                "id_offset", "radioss_version", "fcut_hz", "erosion_strain", "damage_displacement_mm")
+
+
 def run_card(args) -> int:
-    if args.max_rows < 3:
-        raise CardError(f"--max-rows must be at least 3, got {args.max_rows}")
     data = load_card_data(args.fit, **overrides(args))
-    options = {"curves": args.curves, "max_rows": args.max_rows}
-    if args.format in ("abaqus", "calculix") and args.strain_rate_per_s is not None:
-        options["strain_rate_per_s"] = args.strain_rate_per_s
-    if args.format == "lsdyna" and args.temperature_C is not None:
-        options["temperature_C"] = args.temperature_C
-    if args.format == "radioss":
-        options = {}
-    text = write_card(data, args.format, args.units, **options)
+    text = write_card(data, args.format, args.units, **{k: getattr(args, k) for k in CARD_OPTIONS})
     if args.output:
         Path(args.output).write_text(text, encoding="utf-8")
         print(f"{args.format} card ({args.units}) written to {args.output}", file=sys.stderr)

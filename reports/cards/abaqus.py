@@ -1,16 +1,17 @@
-"""Abaqus material cards: the Johnson–Cook form and the equivalent temperature table.
+"""Abaqus material cards: the Johnson-Cook form and the equivalent temperature table.
 
 Two materials in one file: ``<NAME>_JC`` (``*PLASTIC, HARDENING=JOHNSON COOK`` with
 ``*RATE DEPENDENT, TYPE=JOHNSON COOK``) and ``<NAME>_TABLE`` (tabular ``*PLASTIC`` with a
-temperature column, from the identified curves or the law). Temperatures in °C (Johnson–Cook
-uses temperature differences; the model's temperatures must be in °C as well), ε̇0 per the
+temperature column, from the identified curves or the law). Temperatures in C (Johnson-Cook
+uses temperature differences; the model's temperatures must be in C as well), eps_dot0 per the
 deck's time unit. A friction coefficient, when identified, comes as ``*SURFACE INTERACTION``.
 """
 
 from __future__ import annotations
 
-from flowcurve.reports.cards import MAX_TABLE_ROWS, CardData, comment_block, header_lines
-from flowcurve.reports.cards.calculix import material_name, number, plastic_rows
+from flowcurve.reports.cards.calculix import material_name, plastic_rows
+from flowcurve.reports.cards.data import DAMAGE_KEYS, CardData, CardOptions, header_lines
+from flowcurve.reports.cards.fields import comment_block, number
 from flowcurve.reports.units import UnitSystem
 
 
@@ -27,19 +28,39 @@ def _common(data: CardData, units: UnitSystem, name: str) -> list[str]:
     return out
 
 
-def abaqus_card(data: CardData, units: UnitSystem, *, curves: str = "auto", strain_rate_per_s: float | None = None,
-                temperatures_C=None, max_rows: int = MAX_TABLE_ROWS) -> str:
+def damage_lines(data: CardData, units: UnitSystem, options: CardOptions) -> list[str]:
+    """*DAMAGE INITIATION, CRITERION=JOHNSON COOK (d1..d5, melting and transition temperature,
+    reference strain rate, per the Abaqus keyword reference) and the user's *DAMAGE EVOLUTION."""
+    if not data.fracture:
+        return []
+    eps0 = units.to_system(data.ref_strain_rate_per_s, "strain_rate")
+    out = ["*DAMAGE INITIATION, CRITERION=JOHNSON COOK",
+           ", ".join(number(v) for v in [data.fracture[k] for k in DAMAGE_KEYS]
+                     + [data.require("melt_temperature_C"), data.ref_temperature_C, eps0])]
+    if options.damage_displacement_mm is None:
+        out += ["** No *DAMAGE EVOLUTION given (--damage-displacement): Abaqus evaluates the criterion (JCCRT)",
+                "** for output only; the material does not soften or fail."]
+    else:
+        u_f = units.to_system(options.damage_displacement_mm * 1e-3, "length")
+        out += [f"** *DAMAGE EVOLUTION set by the user (not identified): linear softening over an equivalent plastic "
+                f"displacement of {options.damage_displacement_mm:g} mm",
+                "*DAMAGE EVOLUTION, TYPE=DISPLACEMENT, SOFTENING=LINEAR", number(u_f)]
+    return out
+
+
+def abaqus_card(data: CardData, units: UnitSystem, options: CardOptions) -> str:
     """The card text with both materials (and the friction interaction if identified)."""
     base = material_name(data)
     A, B = (units.to_system(v * 1e6, "stress") for v in (data.A_MPa, data.B_MPa))
     melt = data.require("melt_temperature_C")
     eps0 = units.to_system(data.ref_strain_rate_per_s, "strain_rate")
-    rows, tables = plastic_rows(data, units, curves=curves, strain_rate_per_s=strain_rate_per_s,
-                                temperatures_C=temperatures_C, max_rows=max_rows)
-    origin = "identified true curves" if tables[0].origin == "measured" else "the Johnson-Cook law tabulated"
+    rows, tables = plastic_rows(data, units, options)
+    origin = "the Johnson-Cook law tabulated" if tables[0].origin == "Johnson-Cook" else "identified true curves"
     rate_text = ", ".join(sorted({f"{c.strain_rate_per_s:.3g}" for c in tables}))
     time_unit = units.name.split("-")[1]
-    out = [comment_block(header_lines(data, units, "Abaqus", f"temperatures in °C, strain rates per {time_unit}"), "** ").rstrip("\n")]
+    out = [comment_block(header_lines(data, units, "Abaqus", f"temperatures in C, strain rates per {time_unit}", options)
+                         + (["damage: triaxiality -p/q, positive in tension, as Abaqus'"] if data.fracture else []),
+                         "** ").rstrip("\n")]
     out += ["**", f"** {base}_JC: Johnson-Cook; transition temperature = reference temperature."]
     out += _common(data, units, f"{base}_JC")
     out += [
@@ -47,12 +68,17 @@ def abaqus_card(data: CardData, units: UnitSystem, *, curves: str = "auto", stra
         ", ".join(number(v) for v in (A, B, data.n, data.m, melt, data.ref_temperature_C)),
         "*RATE DEPENDENT, TYPE=JOHNSON COOK",
         f"{number(data.C)}, {number(eps0)}",
+    ]
+    out += damage_lines(data, units, options)
+    out += [
         "**",
-        f"** {base}_TABLE: {origin} at strain rate {rate_text} 1/s, per temperature, from zero plastic strain.",
+        f"** {base}_TABLE: {origin} at strain rate {rate_text} 1/s, per temperature, from zero plastic strain",
+        f"** to {options.extend_to:g} (the fitted law beyond the last measured point).",
     ]
     out += _common(data, units, f"{base}_TABLE")
     out.append("*PLASTIC")
     out += rows
+    out += damage_lines(data, units, options)
     if data.friction_mu is not None:
         out += [
             "**",

@@ -3,7 +3,7 @@
 CalculiX 2.20 misreads ``*PLASTIC, HARDENING=JOHNSON COOK`` silently and ignores
 ``*RATE DEPENDENT`` (CALCULIX.md), so the card carries the flow curve as a table: one block per
 temperature, each starting at zero plastic strain, at most ~100 rows (longer tables gave
-stresses ~8 % low). Temperatures in °C; the model must set
+stresses ~8 % low). Temperatures in C; the model must set
 ``*INITIAL CONDITIONS, TYPE=TEMPERATURE`` or CalculiX silently uses the lowest curve.
 """
 
@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import re
 
-from flowcurve.reports.cards import MAX_TABLE_ROWS, CardData, comment_block, flow_tables, header_lines
+from flowcurve.reports.cards.data import CardData, CardOptions, header_lines
+from flowcurve.reports.cards.fields import comment_block, number
+from flowcurve.reports.cards.tables import flow_tables
 from flowcurve.reports.units import UnitSystem
 
 
@@ -21,15 +23,10 @@ def material_name(data: CardData) -> str:
     return name[:80].upper()
 
 
-def number(value) -> str:
-    """A free-format number, 10 significant digits (no binary noise like 7.820000000000002e-09)."""
-    return f"{float(value):.10g}"
-
-
-def plastic_rows(data: CardData, units: UnitSystem, *, curves: str = "auto", strain_rate_per_s: float | None = None,
-                 temperatures_C=None, max_rows: int = MAX_TABLE_ROWS, temperature_column: bool = True) -> tuple[list[str], list]:
-    """The ``*PLASTIC`` data lines (stress, plastic strain[, temperature °C]) and the curves."""
-    tables = flow_tables(data, curves, strain_rate_per_s, temperatures_C, max_rows)
+def plastic_rows(data: CardData, units: UnitSystem, options: CardOptions,
+                 temperature_column: bool = True) -> tuple[list[str], list]:
+    """The ``*PLASTIC`` data lines (stress, plastic strain[, temperature C]) and the curves."""
+    tables = flow_tables(data, options)
     rows = []
     for curve in tables:
         stress = units.to_system(curve.stress_MPa * 1e6, "stress")
@@ -39,22 +36,21 @@ def plastic_rows(data: CardData, units: UnitSystem, *, curves: str = "auto", str
     return rows, tables
 
 
-def calculix_card(data: CardData, units: UnitSystem, *, curves: str = "auto", strain_rate_per_s: float | None = None,
-                  temperatures_C=None, max_rows: int = MAX_TABLE_ROWS) -> str:
+def calculix_card(data: CardData, units: UnitSystem, options: CardOptions) -> str:
     """The card text: *MATERIAL with *ELASTIC, *DENSITY, thermal constants if given, *PLASTIC table."""
     E = units.to_system(data.require("E_MPa") * 1e6, "stress")
     nu = data.require("poisson")
     rho = units.to_system(data.require("density_kg_per_m3"), "density")
-    rows, tables = plastic_rows(data, units, curves=curves, strain_rate_per_s=strain_rate_per_s,
-                                temperatures_C=temperatures_C, max_rows=max_rows)
+    rows, tables = plastic_rows(data, units, options)
     rate_text = ", ".join(sorted({f"{c.strain_rate_per_s:.3g}" for c in tables}))
-    origin = "identified true curves" if tables[0].origin == "measured" else "the Johnson-Cook law tabulated"
+    origin = "the Johnson-Cook law tabulated" if tables[0].origin == "Johnson-Cook" else "identified true curves"
     temps = ", ".join(f"{c.temperature_C:g}" for c in tables)
-    out = [comment_block(header_lines(data, units, "CalculiX 2.20", "temperatures in °C"), "** ").rstrip("\n")]
+    out = [comment_block(header_lines(data, units, "CalculiX 2.20", "temperatures in C", options), "** ").rstrip("\n")]
     out += [
         "**",
         f"** *PLASTIC: {origin} at strain rate {rate_text} 1/s (CalculiX 2.20 has no working rate",
-        f"** dependence), one block per temperature ({temps} °C), each from zero plastic strain.",
+        f"** dependence), one block per temperature ({temps} C), each from zero plastic strain",
+        f"** to {options.extend_to:g} (the fitted law beyond the last measured point).",
         "** Johnson-Cook's own keyword is misread silently by ccx 2.20: this table is the correct form.",
         "** Set *INITIAL CONDITIONS, TYPE=TEMPERATURE in the model, or ccx uses the lowest-temperature curve.",
         f"*MATERIAL, NAME={material_name(data)}",

@@ -1,16 +1,26 @@
-"""LS-DYNA keyword deck: *MAT_JOHNSON_COOK (MAT_015) with its equation of state, and
-*MAT_PIECEWISE_LINEAR_PLASTICITY (MAT_024) on the identified curves.
+"""LS-DYNA keyword deck: *MAT_JOHNSON_COOK (MAT_015) with its equation of state and fracture
+constants, and *MAT_PIECEWISE_LINEAR_PLASTICITY (MAT_024) on the tabulated curves.
 
-Fixed format: 10-character fields (8 to a card), curve points in two 20-character fields.
-Temperatures are written in kelvin (the thermal solver and MAT_015's default TR = 298 are
-absolute); strain rates per the deck's time unit.
+Fixed format: 10-character fields (8 to a card), curve points and table values in
+20-character fields. Temperatures in kelvin (MAT_015's default TR = 298 is absolute); strain
+rates per the deck's time unit. Every ID is ``id_offset`` + a base (MID 1 and 2, EOSID 1,
+table 100, curves 101...).
+
+Rate table convention: the *DEFINE_TABLE values are always ln(strain rate per deck time
+unit), and the first value is always negative, which is LS-DYNA's signal to read all of them
+as ln(rate) (a row below the slowest rate is added when needed, carrying the curve at eps_dot0:
+no rate effect below eps_dot0). LS-DYNA then interpolates between the curves linearly in
+ln(rate), in every unit system alike, which is exactly the Johnson-Cook rate factor
+1 + C ln(eps_dot/eps_dot0). The rows include eps_dot0, where the law bends.
 """
 
 from __future__ import annotations
 
 import math
 
-from flowcurve.reports.cards import CardData, comment_block, fixed, header_lines, rate_tables
+from flowcurve.reports.cards.data import DAMAGE_KEYS, CardData, CardOptions, header_lines
+from flowcurve.reports.cards.fields import comment_block, fixed_line
+from flowcurve.reports.cards.tables import rate_tables
 from flowcurve.reports.units import UnitSystem
 
 MAT_JC_ID = 1
@@ -23,21 +33,14 @@ NO_SPALL_PC = -1e20  # PC: no pressure cut-off worth the name (the user sets one
 NO_FAILURE_D1 = 1e20  # JC failure strain D1 when no fracture criterion was identified
 
 
-def card(fields, width: int = 10, digits: int | None = None) -> str:
-    """One fixed-format card line."""
-    return "".join(fixed(v, width, digits) for v in fields).rstrip()
-
-
 def names(*labels) -> str:
     """The '$#' comment naming a card's fields, in LS-PrePost's style."""
     text = "".join(label.rjust(10) for label in labels)
     return "$#" + text[2:]
 
 
-def lsdyna_card(data: CardData, units: UnitSystem, *, curves: str = "auto", temperature_C: float | None = None,
-                max_rows: int = 100) -> str:
-    """The deck text. ``curves``: 'measured', 'law' or 'auto' for the MAT_024 curves;
-    ``temperature_C``: the temperature of those curves (MAT_024 has no temperature)."""
+def johnson_cook_block(data: CardData, units: UnitSystem, mid: int, eosid: int) -> list[str]:
+    """*MAT_JOHNSON_COOK and its *EOS_LINEAR_POLYNOMIAL."""
     E = units.to_system(data.require("E_MPa") * 1e6, "stress")
     nu = data.require("poisson")
     rho = units.to_system(data.require("density_kg_per_m3"), "density")
@@ -48,60 +51,68 @@ def lsdyna_card(data: CardData, units: UnitSystem, *, curves: str = "auto", temp
     eps0 = units.to_system(data.ref_strain_rate_per_s, "strain_rate")
     G = E / (2.0 * (1.0 + nu))  # shear modulus
     K = E / (3.0 * (1.0 - 2.0 * nu))  # bulk modulus, the linear EOS slope
-    d = [data.fracture.get(f"D{i}") for i in range(1, 6)]
-
-    tables = rate_tables(data, temperature_C, curves, max_rows)
-    time_unit = units.name.split("-")[1]
-    out = ["*KEYWORD"]
-    out.append(comment_block(header_lines(data, units, "LS-DYNA", "temperatures in K, strain rates per " + time_unit), "$ ").rstrip("\n"))
-    out += [
-        "$",
-        comment_block([
-            f"MAT {MAT_JC_ID}: Johnson-Cook. On solid elements it needs the equation of state EOSID {EOS_ID} "
-            "on its *PART (linear, bulk modulus K = E/(3(1-2nu))). PC = -1e20 and SPALL = 1: no pressure cut-off.",
-            "D1-D5: " + ("identified fracture constants." if any(v is not None for v in d)
-                         else f"no fracture criterion was identified: D1 = {NO_FAILURE_D1:g} (a failure strain never "
-                              "reached; EROD = 0 would erode elements at a zero failure strain) - replace D1-D5 if "
-                              "the model needs failure."),
-        ], "$ ").rstrip("\n"),
+    d = [data.fracture[k] for k in DAMAGE_KEYS] if data.fracture else [NO_FAILURE_D1, 0.0, 0.0, 0.0, 0.0]
+    note = ("D1-D5: the identified Johnson-Cook fracture constants (triaxiality positive in tension, as LS-DYNA's)."
+            if data.fracture else
+            f"D1-D5: no fracture criterion was identified: D1 = {NO_FAILURE_D1:g} (a failure strain never reached; "
+            "EROD = 0 would erode elements at a zero failure strain) - replace D1-D5 if the model needs failure.")
+    return [
+        comment_block([f"MAT {mid}: Johnson-Cook. On solid elements it needs the equation of state EOSID {eosid} "
+                       "on its *PART (linear, bulk modulus K = E/(3(1-2nu))). PC = -1e20 and SPALL = 1: no pressure "
+                       "cut-off.", note], "$ ").rstrip("\n"),
         "*MAT_JOHNSON_COOK",
         names("mid", "ro", "g", "e", "pr", "dtf", "vp", "rateop"),
-        card([MAT_JC_ID, rho, G, E, nu, None, 0.0, 0.0]),
+        fixed_line([mid, rho, G, E, nu, None, 0.0, 0.0]),
         names("a", "b", "n", "c", "m", "tm", "tr", "epso"),
-        card([A, B, data.n, data.C, data.m, tm, tr, eps0]),
+        fixed_line([A, B, data.n, data.C, data.m, tm, tr, eps0]),
         names("cp", "pc", "spall", "it", "d1", "d2", "d3", "d4"),
-        card([cp, NO_SPALL_PC, 1.0, 0.0] + ([v or 0.0 for v in d[:4]] if any(v is not None for v in d)
-                                            else [NO_FAILURE_D1, 0.0, 0.0, 0.0])),
+        fixed_line([cp, NO_SPALL_PC, 1.0, 0.0] + d[:4]),
         names("d5", "c2/p", "erod", "efmin", "numint"),
-        card([d[4] or 0.0, 0.0, 0.0, 0.0, 0.0]),
+        fixed_line([d[4], 0.0, 0.0, 0.0, 0.0]),
         "*EOS_LINEAR_POLYNOMIAL",
         names("eosid", "c0", "c1", "c2", "c3", "c4", "c5", "c6"),
-        card([EOS_ID, 0.0, K, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        fixed_line([eosid, 0.0, K, 0.0, 0.0, 0.0, 0.0, 0.0]),
         names("e0", "v0"),
-        card([0.0, 1.0]),
+        fixed_line([0.0, 1.0]),
     ]
 
-    temp_text = f"{tables[0].temperature_C:.6g} °C"
-    origin = "identified true curves" if tables[0].origin == "measured" else "the Johnson-Cook law tabulated"
-    several = len(tables) > 1
+
+def table_rows(data: CardData, units: UnitSystem, tables) -> list[tuple[float, object]]:
+    """(ln rate per deck time unit, curve) rows, the first always negative (see the module)."""
+    rows = [(math.log(units.to_system(c.strain_rate_per_s, "strain_rate")), c) for c in tables]
+    if rows[0][0] >= 0.0:  # below eps_dot0 the law has no rate effect: the eps_dot0 curve again
+        rows.insert(0, (min(rows[0][0] - math.log(10.0), math.log(0.1)), tables[0]))
+    return rows
+
+
+def piecewise_linear_block(data: CardData, units: UnitSystem, options: CardOptions, mid: int) -> list[str]:
+    """*MAT_PIECEWISE_LINEAR_PLASTICITY on the rate tables (or one curve), with its curves."""
+    E = units.to_system(data.require("E_MPa") * 1e6, "stress")
+    nu = data.require("poisson")
+    rho = units.to_system(data.require("density_kg_per_m3"), "density")
+    tables = rate_tables(data, options)
+    time_unit = units.name.split("-")[1]
+    table_id, curve_id = TABLE_ID + options.id_offset, CURVE_ID + options.id_offset
+    temp_text = f"{tables[0].temperature_C:.6g} C"
+    origin = "the Johnson-Cook law tabulated" if tables[0].origin == "Johnson-Cook" else "identified true curves"
+    rows = table_rows(data, units, tables) if len(tables) > 1 else [(None, tables[0])]
+    several = len(rows) > 1
     if several:
-        rates = [units.to_system(c.strain_rate_per_s, "strain_rate") for c in tables]
-        use_log = rates[0] < 1.0  # LS-DYNA reads the table values as ln(rate) when the first is negative
-        lcss = TABLE_ID
-        rate_text = "strain rates " + ", ".join(f"{c.strain_rate_per_s:.3g}" for c in tables) + " 1/s"
+        rate_text = ("strain rates " + ", ".join(f"{c.strain_rate_per_s:.3g}" for c in tables)
+                     + f" 1/s (including the reference rate {data.ref_strain_rate_per_s:.3g} 1/s)")
     else:
-        lcss = CURVE_ID
         rate_text = f"strain rate {tables[0].strain_rate_per_s:.3g} 1/s (rate-independent card)"
-    out += [
+    out = [
         "$",
-        comment_block([f"MAT {MAT_PLP_ID}: piecewise linear plasticity on {origin} at {temp_text}, {rate_text}; "
-                       "curves start at zero plastic strain; beyond their last point LS-DYNA extrapolates the last slope."],
-                      "$ ").rstrip("\n"),
+        comment_block([f"MAT {mid}: piecewise linear plasticity on {origin} at {temp_text}, {rate_text}; "
+                       "curves start at zero plastic strain and continue beyond the last measured point with the "
+                       f"fitted law to plastic strain {options.extend_to:g}; beyond that LS-DYNA extrapolates the "
+                       "last slope."], "$ ").rstrip("\n"),
         "*MAT_PIECEWISE_LINEAR_PLASTICITY",
         names("mid", "ro", "e", "pr", "sigy", "etan", "fail", "tdel"),
-        card([MAT_PLP_ID, rho, E, nu, units.to_system(float(tables[0].stress_MPa[0]) * 1e6, "stress"), 0.0, 0.0, 0.0]),
+        fixed_line([mid, rho, E, nu, units.to_system(float(tables[0].stress_MPa[0]) * 1e6, "stress"), 0.0, 0.0, 0.0]),
         names("c", "p", "lcss", "lcsr", "vp"),
-        card([0.0, 0.0, lcss, 0, 0.0]),
+        fixed_line([0.0, 0.0, table_id if several else curve_id, 0, 0.0]),
         names("eps1", "eps2", "eps3", "eps4", "eps5", "eps6", "eps7", "eps8"),
         "",
         names("es1", "es2", "es3", "es4", "es5", "es6", "es7", "es8"),
@@ -109,37 +120,71 @@ def lsdyna_card(data: CardData, units: UnitSystem, *, curves: str = "auto", temp
     ]
     if several:
         out += [
-            f"$ table over {'ln(strain rate)' if use_log else 'strain rate'} per {time_unit}; "
-            f"curves {CURVE_ID}-{CURVE_ID + len(tables) - 1} follow in order",
+            comment_block([f"table {table_id}: values are ln(strain rate per {time_unit}); the first is negative, so "
+                           "LS-DYNA reads them all as ln(rate) and interpolates linearly in ln(rate) (the Johnson-Cook "
+                           f"rate law); curves {curve_id}-{curve_id + len(rows) - 1} follow in order"], "$ ").rstrip("\n"),
             "*DEFINE_TABLE",
             names("tbid", "sfa", "offa"),
-            card([TABLE_ID, 1.0, 0.0]),
+            fixed_line([table_id, 1.0, 0.0]),
             "$#" + "value".rjust(18),
         ]
-        out += [card([math.log(r) if use_log else r], 20) for r in rates]
-    for i, curve in enumerate(tables):
+        out += [fixed_line([value], 20) for value, _ in rows]
+    for i, (_, curve) in enumerate(rows):
         out += [
             "*DEFINE_CURVE",
             names("lcid", "sidr", "sfa", "sfo", "offa", "offo", "dattyp"),
-            card([CURVE_ID + i, 0, 1.0, 1.0, 0.0, 0.0, 0]),
+            fixed_line([curve_id + i, 0, 1.0, 1.0, 0.0, 0.0, 0]),
             "$#" + "a1".rjust(18) + "o1".rjust(20),
         ]
         stress = units.to_system(curve.stress_MPa * 1e6, "stress")
-        out += [card([e, s], 20, CURVE_DIGITS) for e, s in zip(curve.plastic_strain, stress)]
+        out += [fixed_line([e, s], 20, CURVE_DIGITS) for e, s in zip(curve.plastic_strain, stress)]
+    return out
 
+
+def erosion_block(options: CardOptions, mids) -> list[str]:
+    """*MAT_ADD_EROSION with the user's maximum effective strain on each material."""
+    out = ["$", comment_block([f"*MAT_ADD_EROSION (asked for): elements erode at effective strain EFFEPS = "
+                               f"{options.erosion_strain:g} (the user's value, not identified). MAT {mids[1]} has no "
+                               f"fracture law of its own; on MAT {mids[0]} it acts besides D1-D5."], "$ ").rstrip("\n")]
+    for mid in mids:
+        out += ["*MAT_ADD_EROSION",
+                names("mid", "excl", "mxpres", "mneps", "effeps", "voleps", "numfip", "ncs"),
+                fixed_line([mid, None, None, None, options.erosion_strain, None, 1.0, 1.0])]
+    return out
+
+
+def contact_template(data: CardData) -> list[str]:
+    """The identified friction as a commented-out contact card: the user fills SSID/MSID."""
+    lines = [
+        "*CONTACT_AUTOMATIC_SURFACE_TO_SURFACE",
+        names("surfa", "surfb", "surfatyp", "surfbtyp", "saboxid", "sbboxid", "sapr", "sbpr"),
+        "   <SURFA>   <SURFB>" + fixed_line([0, 0, 0, 0, 0, 0]),
+        names("fs", "fd", "dc", "vc", "vdc", "penchk", "bt", "dt"),
+        fixed_line([data.friction_mu, data.friction_mu, 0.0, 0.0, 0.0, 0, 0.0, 1e20]),
+        names("sfsa", "sfsb", "sast", "sbst", "sfsat", "sfsbt", "fsf", "vsf"),
+        fixed_line([1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0]),
+    ]
+    return ["$", comment_block([
+        f"TEMPLATE (not active): friction mu = {data.friction_mu:.4g} identified from specimen barrelling "
+        "(specimen-platen contact); static and dynamic coefficients taken equal. To use it, replace <SURFA> and "
+        "<SURFB> (SSID, MSID) by your segment set IDs, remove the '$' before *CONTACT and replace the leading '$' of its "
+        "data lines by a blank."], "$ ").rstrip("\n")] + [
+        line if line.startswith("$#") else "$" + line if line.startswith("*") else "$" + line[1:] for line in lines]
+
+
+def lsdyna_card(data: CardData, units: UnitSystem, options: CardOptions) -> str:
+    """The deck text."""
+    time_unit = units.name.split("-")[1]
+    mid_jc, mid_plp = MAT_JC_ID + options.id_offset, MAT_PLP_ID + options.id_offset
+    out = ["*KEYWORD"]
+    out.append(comment_block(header_lines(data, units, "LS-DYNA", f"temperatures in K, strain rates per {time_unit}", options),
+                             "$ ").rstrip("\n"))
+    out.append("$")
+    out += johnson_cook_block(data, units, mid_jc, EOS_ID + options.id_offset)
+    out += piecewise_linear_block(data, units, options, mid_plp)
+    if options.erosion_strain is not None:
+        out += erosion_block(options, (mid_jc, mid_plp))
     if data.friction_mu is not None:
-        out += [
-            "$",
-            comment_block([f"friction mu = {data.friction_mu:.4g} identified from specimen barrelling (specimen-platen "
-                           "contact). Set SSID/MSID to your segment sets; static and dynamic coefficients are taken equal."],
-                          "$ ").rstrip("\n"),
-            "*CONTACT_AUTOMATIC_SURFACE_TO_SURFACE",
-            names("ssid", "msid", "sstyp", "mstyp", "sboxid", "mboxid", "spr", "mpr"),
-            card([0, 0, 0, 0, 0, 0, 0, 0]),
-            names("fs", "fd", "dc", "vc", "vdc", "penchk", "bt", "dt"),
-            card([data.friction_mu, data.friction_mu, 0.0, 0.0, 0.0, 0, 0.0, 1e20]),
-            names("sfs", "sfm", "sst", "mst", "sfst", "sfmt", "fsf", "vsf"),
-            card([1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0]),
-        ]
+        out += contact_template(data)
     out.append("*END")
     return "\n".join(out) + "\n"

@@ -18,22 +18,28 @@ def jc_MPa(eps_p, rate, T, law=LAW):
     return (law["A"] + law["B"] * eps_p ** law["n"]) * rate_term * (1.0 - t_star ** law["m"])
 
 
-def make_fit(folder, temperatures=(20.0, 400.0), rates=(1e-3, 1e-2), points=300, friction=0.11, **extra):
-    """A fit.json following docs/fit-json.md, its curve tables written under ``folder``/curves."""
+def make_fit(folder, temperatures=(20.0, 400.0), rates=(1e-3, 1e-2), points=300, friction=0.11, law=LAW,
+             conditions=None, curve=None, last_strain=0.25, **extra):
+    """A fit.json following docs/fit-json.md, its curve tables written under ``folder``/curves.
+    ``conditions``: (temperature, rate) pairs instead of every temperature with every rate;
+    ``curve(eps, rate, T)``: the measured stress (default the law itself)."""
+    curve = curve or (lambda e, r, T: jc_MPa(e, r, T, law))
+    conditions = conditions or [(T, r) for T in temperatures for r in rates]
+    temperatures = sorted({T for T, _ in conditions})
+    rates = sorted({r for _, r in conditions})
     curves = []
     (folder / "curves").mkdir(parents=True, exist_ok=True)
-    for T in temperatures:
-        for r in rates:
-            e = np.linspace(0.002, 0.25, points)
-            name = f"curves/T{T:g}C_rate{r:.0e}.csv"
-            pd.DataFrame({"true_plastic_strain": e, "true_stress_MPa": jc_MPa(e, r, T)}).to_csv(folder / name, index=False)
-            curves.append({"temperature_C": T, "strain_rate_per_s": r, "file": name, "records": [f"T{T:g}_r{r:g}"],
-                           "plastic_strain": [0.002, 0.25], "model_stress_at_zero_strain_MPa": float(jc_MPa(0.0, r, T))})
+    for T, r in conditions:
+        e = np.linspace(0.002, last_strain, points)
+        name = f"curves/T{T:g}C_rate{r:.0e}.csv"
+        pd.DataFrame({"true_plastic_strain": e, "true_stress_MPa": curve(e, r, T)}).to_csv(folder / name, index=False)
+        curves.append({"temperature_C": T, "strain_rate_per_s": r, "file": name, "records": [f"T{T:g}_r{r:g}"],
+                       "plastic_strain": [0.002, last_strain], "model_stress_at_zero_strain_MPa": float(jc_MPa(0.0, r, T, law))})
     fit = {"schema": "flowcurve-fit/1", "model": "johnson_cook",
-        "material": "12Kh18N12M3TL", "A_MPa": LAW["A"], "B_MPa": LAW["B"], "n": LAW["n"], "C": LAW["C"],
-        "m": LAW["m"], "ref_strain_rate_per_s": LAW["rate0"], "ref_temperature_C": LAW["T_ref"],
-        "melt_temperature_C": LAW["T_melt"], "A_MPa_stderr": 2.1, "B_MPa_stderr": 35.0, "n_stderr": 0.01,
-        "range": {"plastic_strain": [0.002, 0.25], "strain_rate_per_s": [min(rates), max(rates)],
+        "material": "12Kh18N12M3TL", "A_MPa": law["A"], "B_MPa": law["B"], "n": law["n"], "C": law["C"],
+        "m": law["m"], "ref_strain_rate_per_s": law["rate0"], "ref_temperature_C": law["T_ref"],
+        "melt_temperature_C": law["T_melt"], "A_MPa_stderr": 2.1, "B_MPa_stderr": 35.0, "n_stderr": 0.01,
+        "range": {"plastic_strain": [0.002, last_strain], "strain_rate_per_s": [min(rates), max(rates)],
                   "temperature_C": [min(temperatures), max(temperatures)]},
         "records": [{"name": "c20_v1", "source": "/lab/c20_v1.csv"}, {"name": "c20_v2", "source": "/lab/c20_v2.csv"},
                     {"name": "c400_v1", "source": "/lab/c400_v1.csv"}],
