@@ -85,10 +85,13 @@ class ConsoleView:
             self.state, self.message = s.state, s.message
             self.progress = s.progress
             self.samples = max(self.samples, int(s.samples or 0))
-            self.readings = {
+            readings = {
                 "time_s": _finite(s.time_s), "force_N": _finite(s.force_N), "crosshead_mm": _finite(s.crosshead_mm),
                 "temperature_C": _finite(s.temperature_C), "rate_per_s": _finite(s.rate_per_s),
             }
+            if s.state in ("done", "tare"):  # these snapshots carry no readings: the last ones stay on show
+                readings = {**self.readings, "time_s": readings["time_s"]}
+            self.readings = readings
             rows = getattr(s, "rows", None)
             if rows is not None and len(rows):
                 self.force_displacement.extend(rows[:, COLUMN_CROSSHEAD], rows[:, COLUMN_FORCE])

@@ -10,6 +10,10 @@ let currentTest = null;
 let lastState = "idle";
 let postShownFor = null;
 
+function num(v) {
+  if (typeof v !== "number") return String(v ?? "");
+  return Math.abs(v) >= 1000 ? v.toFixed(0) : Number(v.toPrecision(4)).toString();
+}
 function fmt(v, digits) { return v === null || v === undefined || !isFinite(v) ? "—" : Number(v).toFixed(digits); }
 function esc(s) { return String(s ?? "").replace(/[&<>"']/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" }[c])); }
 
@@ -23,11 +27,19 @@ async function api(path, body) {
 }
 
 // -- plots -----------------------------------------------------------------------------------
-function makePlot(el, xLabel, yLabel, color) {
+// axes from zero (force, displacement, time); temperature spans at least 10 °C so noise stays noise
+const fromZero = (u, min, max) => (min === null || max === null ? [0, 1] : uPlot.rangeNum(Math.min(0, min), Math.max(max, min + 1e-6), 0.05, true));
+const atLeast10C = (u, min, max) => {
+  if (min === null || max === null) return [0, 100];
+  const mid = (min + max) / 2, half = Math.max((max - min) / 2, 5);
+  return uPlot.rangeNum(mid - half, mid + half, 0.05, true);
+};
+
+function makePlot(el, xLabel, yLabel, color, yRange) {
   const width = () => Math.max(280, el.clientWidth);
   const plot = new uPlot({
     width: width(), height: 240,
-    scales: { x: { time: false } },
+    scales: { x: { time: false, range: fromZero }, y: { range: yRange } },
     legend: { show: false },
     cursor: { drag: { x: false, y: false } },
     axes: [{ label: xLabel, size: 40 }, { label: yLabel, size: 60 }],
@@ -129,7 +141,7 @@ function showResult(r) {
   const el = $("#result");
   if (!r) { el.innerHTML = ""; return; }
   if (r.error) { el.innerHTML = `<p class="error" id="result-error">identification: ${esc(r.error)}</p>`; return; }
-  const figures = Object.entries(r.figures || {}).map(([k, v]) => `<div><span class="dim">${esc(k)}</span> <b>${typeof v === "number" ? esc(Number(v).toPrecision(4)) : esc(v)}</b></div>`).join("");
+  const figures = Object.entries(r.figures || {}).map(([k, v]) => `<div><span class="dim">${esc(k)}</span> <b>${esc(num(v))}</b></div>`).join("");
   const files = (r.files || []).map((f) => `<a href="${esc(f.url)}" target="_blank">${esc(f.name)}</a>`).join(" · ");
   const warnings = (r.warnings || []).map((w) => `<li>${esc(w)}</li>`).join("");
   const imgs = (r.plots || []).map((u) => `<a href="${esc(u)}" target="_blank"><img src="${esc(u)}?v=${Date.now()}" alt="${esc(u.split("/").pop())}"></a>`).join("");
@@ -201,7 +213,7 @@ async function loadRecords() {
     const res = r.result;
     let resText = "—";
     if (res && res.error) resText = `<span class="error">${esc(res.error)}</span>`;
-    else if (res) resText = Object.entries(res.figures).filter(([k]) => /JC|friction|Rm|E_MPa/.test(k)).map(([k, v]) => `${esc(k)} ${esc(Number(v).toPrecision(4))}`).join(", ") + ` <a href="${esc(res.folder)}/result.json" target="_blank">result</a>`;
+    else if (res) resText = Object.entries(res.figures).filter(([k]) => /JC|friction|Rm|E_MPa/.test(k)).map(([k, v]) => `${esc(k)} ${esc(num(v))}`).join(", ") + ` <a href="${esc(res.folder)}/result.json" target="_blank">result</a>`;
     return `<tr><td><input type="checkbox" name="rec" value="${esc(r.name)}" aria-label="select ${esc(r.name)}"></td>` +
       `<td><a href="${esc(r.url)}" target="_blank">${esc(r.name)}</a></td><td>${esc(r.test)}</td><td>${esc(r.material)}</td>` +
       `<td>${esc(r.specimen_id)}</td><td>${esc(r.status)}${r.error ? ` <span class="error">${esc(r.error)}</span>` : ""}</td><td>${resText}</td></tr>`;
@@ -256,8 +268,8 @@ async function boot() {
 }
 
 window.addEventListener("DOMContentLoaded", () => {
-  plots.fd = makePlot($("#plot-fd"), "crosshead displacement, mm", "force, kN", "#1f5fbf");
-  plots.tt = makePlot($("#plot-tt"), "test time, s", "temperature, °C", "#b3261e");
+  plots.fd = makePlot($("#plot-fd"), "crosshead displacement, mm", "force, kN", "#1f5fbf", fromZero);
+  plots.tt = makePlot($("#plot-tt"), "test time, s", "temperature, °C", "#b3261e", atLeast10C);
   $("#setup").addEventListener("submit", startTest);
   $("#post").addEventListener("submit", submitPost);
   $("#fit").addEventListener("submit", runFit);
