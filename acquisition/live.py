@@ -50,7 +50,7 @@ def progress_bar(fraction: float, width: int = 30) -> str:
 class Snapshot:
     """What the view shows at one moment."""
 
-    state: str  # heating, soaking, waiting, recording, stopping, done
+    state: str  # heating, soaking, tare, waiting, recording, stopping, done
     time_s: float = 0.0
     force_N: float = math.nan
     crosshead_mm: float = math.nan
@@ -61,6 +61,7 @@ class Snapshot:
     message: str = ""
     curve_mm: np.ndarray | None = None
     curve_N: np.ndarray | None = None
+    rows: np.ndarray | None = None  # the record rows taken since the last snapshot (for live plots elsewhere)
 
 
 def _num(value: float, fmt: str) -> str:

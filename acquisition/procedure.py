@@ -248,7 +248,7 @@ class Procedure:
 
     tick_s = 0.05  # main-loop period (host seconds)
 
-    def __init__(self, rig: RigIO, spec: TestSpec, path: str | os.PathLike, *, view: LiveView | None = None, interactive: bool = False, prompt: Callable[[str], str] = input):
+    def __init__(self, rig: RigIO, spec: TestSpec, path: str | os.PathLike, *, view: LiveView | None = None, interactive: bool = False, prompt: Callable[[str], str] = input, stop_requested: Callable[[], str | None] | None = None):
         spec.check()
         if spec.temperature_C is not None:
             if not rig.has_furnace:
@@ -262,6 +262,8 @@ class Procedure:
         self.interactive = interactive
         self.prompt = prompt
         self.timebase: Clock = getattr(rig, "timebase", WALL)
+        # another thread's stop button (the console): an operator-stop reason, or None; it may raise Interrupted to abort
+        self.stop_requested = stop_requested or (lambda: None)
         self._t0 = 0.0
         self.writer: RecordWriter | None = None
         self._writing = False
@@ -297,6 +299,7 @@ class Procedure:
                 try:
                     if spec.temperature_C is not None:
                         self._heat()
+                    self.view.show(Snapshot("tare", time_s=self.clock()), force=True)
                     rig.tare()
                     self._event("tare")
                     sampler = Sampler(rig.channels(self.clock, self.to_clock))
@@ -359,6 +362,9 @@ class Procedure:
             if now - t_start > spec.heat_timeout_s:
                 raise ProcedureError(f"the furnace did not reach {setpoint:g} C within {spec.heat_timeout_s:g} s (now {temp:.1f} C)")
             self.view.show(Snapshot(state, time_s=now, temperature_C=temp, progress=heating_progress(start_C, temp, setpoint), message=msg))
+            asked = self.stop_requested()
+            if asked:  # before loading, a stop ends the test unloaded: aborted
+                raise Interrupted(asked)
             self.timebase.sleep(self.tick_s)
 
     def _furnace_read(self) -> Callable[[], float]:
@@ -408,6 +414,9 @@ class Procedure:
                     raise fault
                 if keys.quit_pressed():
                     return "operator stop (q)"
+                asked = self.stop_requested()
+                if asked:
+                    return asked
                 now = self.clock()
                 if now - rate_t >= 1.0 * rig.time_scale:
                     released = sampler.released
@@ -424,6 +433,7 @@ class Procedure:
                     samples=self.writer.rows_written,
                     curve_mm=np.concatenate(curve_x) if curve_x else None,
                     curve_N=np.concatenate(curve_f) if curve_f else None,
+                    rows=rows if rows.size else None,
                 ))
                 self.timebase.sleep(self.tick_s)
 

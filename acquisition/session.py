@@ -210,7 +210,7 @@ class VirtualRun:
     friction_mu: float
 
 
-def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty") -> VirtualRun:
+def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty", stop_requested=None) -> VirtualRun:
     """Run ``spec`` on a virtual rig in this process through the real drivers.
 
     The devices sit on ptys in real time by default; ``link="inprocess"`` with a
@@ -218,7 +218,8 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
     simulated time (the fast tests). The virtual specimen takes ``spec.geometry_mm``;
     ``rig_setup(virtual_rig)`` may inject faults or change the model before the test
     starts; ``config_overrides`` go to ``rig.config.virtual_config``
-    (e.g. ``furnace_max_temperature_C=500``).
+    (e.g. ``furnace_max_temperature_C=500``); ``stop_requested`` goes to the
+    :class:`Procedure` (a stop button in another thread).
     """
     from flowcurve.acquisition.procedure import Procedure
     from flowcurve.rig.config import virtual_config
@@ -234,6 +235,6 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
             rig_setup(vr)
         config = virtual_config(**{**vr.config_kwargs(), **(config_overrides or {})})
         with DriverRig(config, time_scale=time_scale, virtual=vr, stream=stream) as rig:
-            outcome = Procedure(rig, spec, path, view=view, interactive=interactive).run()
+            outcome = Procedure(rig, spec, path, view=view, interactive=interactive, stop_requested=stop_requested).run()
         model = vr.model
         return VirtualRun(outcome, model.material, model.nominal_strain_rate_per_s, model.temperature_C, friction_mu)

@@ -167,23 +167,28 @@ def cmd_run(args) -> int:
     return _run_virtual(args, view, out_path)
 
 
+def configured_spec(args) -> tuple[TestSpec, float]:
+    """A test on the configured rig as ``run`` sets it up: (spec, time scale)."""
+    scale = 1.0 if args.time_scale is None else args.time_scale
+    _positive("time-scale", scale)
+    if args.speed is None:
+        args.speed = 0.01
+    return build_spec(args), scale
+
+
 def _run_configured(args, view: LiveView, out_path: Path) -> int:
     from flowcurve.acquisition.session import DriverRig
     from flowcurve.rig.config import load_config
 
     config = load_config(args.config)
-    scale = 1.0 if args.time_scale is None else args.time_scale
-    _positive("time-scale", scale)
-    if args.speed is None:
-        args.speed = 0.01
-    spec = build_spec(args)
+    spec, scale = configured_spec(args)
     with DriverRig(config, time_scale=scale, stream=not args.poll) as rig:
         proc = Procedure(rig, spec, out_path, view=view, interactive=_interactive(args))
         return report_outcome(proc.run(), view)
 
 
-def _run_virtual(args, view: LiveView, out_path: Path) -> int:
-    from flowcurve.acquisition.session import run_virtual_test
+def virtual_spec(args, view: LiveView) -> tuple[TestSpec, str, float]:
+    """A test on the in-process virtual rig as ``run`` sets it up: (spec, virtual material, time scale)."""
     from flowcurve.rig.virtual.materials import get_material
     from flowcurve.rig.virtual.physics import Specimen
 
@@ -200,7 +205,13 @@ def _run_virtual(args, view: LiveView, out_path: Path) -> int:
     base = Specimen.tension() if args.test == "tension" else Specimen.compression()
     geometry = {"d0_mm": base.d0_mm, "l0_mm" if args.test == "tension" else "h0_mm": base.length0_mm}
     args.material = args.material or name
-    spec = build_spec(args, geometry)
+    return build_spec(args, geometry), name, scale
+
+
+def _run_virtual(args, view: LiveView, out_path: Path) -> int:
+    from flowcurve.acquisition.session import run_virtual_test
+
+    spec, name, scale = virtual_spec(args, view)
     run = run_virtual_test(spec, out_path, material=name, time_scale=scale, view=view, interactive=_interactive(args), stream=not args.poll)
     return report_outcome(run.outcome, view)
 

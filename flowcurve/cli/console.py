@@ -1,0 +1,64 @@
+"""``flowcurve console``: the operator's console in the browser (``flowcurve.console``).
+
+The server is imported only when the command runs, so ``flowcurve --help`` stays fast and
+works without the ``console`` extra installed.
+"""
+
+from __future__ import annotations
+
+import secrets
+import sys
+from pathlib import Path
+
+from flowcurve.errors import FlowcurveError
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "console",
+        help="the operator's console: set up, run and watch tests in a web page",
+        description=(
+            "Serve a local web page to set up a test, watch it live (force-displacement and "
+            "temperature plots, state, heater), stop or abort it, enter the post-test "
+            "measurements and see the identified result; list the records in --out and fit a "
+            "series to a material card. The test runs in this process on the rig of --config "
+            "(or on the virtual rig) with the same code as 'flowcurve run'; closing the page "
+            "does not stop it. Needs the 'console' extra (pip install 'flowcurve[console]')."
+        ),
+    )
+    p.add_argument("--config", type=Path, help="rig configuration (TOML); without it the virtual rig runs in this process")
+    p.add_argument("--out", type=Path, default=Path("console"), help="folder for records, results, fits and cards (default ./console)")
+    p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1, this computer only; any other needs a token)")
+    p.add_argument("--port", type=int, default=8080, help="port (default 8080)")
+    p.add_argument("--token", help="access token the page asks for (default: a random one when --host is not the loopback)")
+    p.add_argument("--time-scale", type=float, default=None, metavar="X", help="virtual rig: model seconds per wall second (default 15, as 'run')")
+    p.set_defaults(func=cmd_console)
+
+
+def cmd_console(args) -> int:
+    try:
+        import uvicorn
+
+        from flowcurve.console.server import LOOPBACK_HOSTS, Console, create_app
+    except ImportError as exc:
+        raise FlowcurveError(f"the console needs the 'console' extra: pip install 'flowcurve[console]' ({exc.name} is missing)") from None
+    if not 0 < args.port < 65536:
+        raise FlowcurveError(f"--port must be 1-65535, got {args.port}")
+    if args.time_scale is not None and not args.time_scale > 0:
+        raise FlowcurveError(f"--time-scale must be a positive number, got {args.time_scale}")
+    config = None
+    if args.config is not None:
+        from flowcurve.rig.config import load_config
+
+        config = load_config(args.config)
+    token = args.token
+    if token is None and args.host not in LOOPBACK_HOSTS:
+        token = secrets.token_urlsafe(18)
+    console = Console(args.out, config=config, time_scale=args.time_scale, token=token,
+                      rig_name=f"rig {args.config}" if args.config else "virtual rig")
+    where = f"http://{'[' + args.host + ']' if ':' in args.host else args.host}:{args.port}/"
+    print(f"flowcurve console on {where} — {console.rig_name}, records in {console.workspace.records}", file=sys.stderr)
+    if token:
+        print(f"access token (the page asks for it): {token}", file=sys.stderr)
+    uvicorn.run(create_app(console), host=args.host, port=args.port, log_level="warning")
+    return 0

@@ -1,0 +1,192 @@
+"""One test at a time on the console's rig, run in a thread with the ``run`` command's code.
+
+The test itself is :class:`flowcurve.acquisition.procedure.Procedure` — on the virtual rig
+through :func:`flowcurve.acquisition.session.run_virtual_test`, on a configured rig through
+:class:`DriverRig` — exactly as ``flowcurve run`` runs it: the same record, the same stop
+criteria, the same heater safety (the heater is switched off on every way out of the
+procedure, and the furnace's watchdog is armed while it runs). The browser only watches:
+closing or reloading it changes nothing; a stop or abort button sets a flag the procedure
+reads at its next tick. When the console itself shuts down, a running test is aborted and
+waited for, so the heater is off and the record closed before the process ends.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import logging
+import re
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from flowcurve.acquisition.safety import Interrupted
+from flowcurve.console.live_state import ConsoleView
+from flowcurve.console.setup_form import TestSetup
+from flowcurve.errors import FlowcurveError
+
+log = logging.getLogger(__name__)
+
+OPERATOR_STOP = "operator stop (console)"
+ABORT_SIGNAME = "the console's abort button"  # the record says "stopped by the console's abort button"
+SHUTDOWN_SIGNAME = "the console shutting down"
+FAULT_STATE = "fault"
+
+
+class BusyError(FlowcurveError):
+    """A test is running on this rig already."""
+
+
+def record_name(setup: TestSetup, now: _dt.datetime | None = None) -> str:
+    """``compression-<specimen id>-<date-time>.csv``, safe as a file name."""
+    now = now or _dt.datetime.now()
+    sid = re.sub(r"[^A-Za-z0-9._-]+", "_", setup.spec.specimen_id).strip("._")[:40]
+    parts = [setup.spec.test] + ([sid] if sid else []) + [f"{now:%Y%m%d-%H%M%S}"]
+    return "-".join(parts) + ".csv"
+
+
+@dataclass
+class TestRun:
+    """One test started from the console: its view (live state) and, once ended, its outcome."""
+
+    __test__ = False
+
+    test_id: int
+    setup: TestSetup
+    record: Path
+    view: ConsoleView
+    thread: threading.Thread | None = None
+    outcome: object | None = None  # acquisition.procedure.Outcome
+    error: str | None = None  # a fault, named as ``run`` names it
+    stop_reason: str | None = None
+    abort_reason: str | None = None
+    post: dict[str, float] = field(default_factory=dict)
+    result: dict | None = None  # summary of the identification
+    heater_source: object | None = None  # what tells the heater state (virtual furnace or driver)
+
+    @property
+    def running(self) -> bool:
+        return self.thread is not None and self.thread.is_alive()
+
+    def summary(self) -> dict:
+        o = self.outcome
+        return {
+            "test_id": self.test_id,
+            "test": self.setup.spec.test,
+            "record": self.record.name,
+            "running": self.running,
+            "status": getattr(o, "status", None),
+            "reason": getattr(o, "reason", None),
+            "samples": getattr(o, "samples", None),
+            "duration_s": getattr(o, "duration_s", None),
+            "max_force_N": getattr(o, "max_force_N", None),
+            "error": self.error,
+            "post": dict(self.post),
+            "result": self.result,
+        }
+
+
+class TestRunner:
+    """Starts tests (one at a time), stops and aborts them, and keeps the last one."""
+
+    __test__ = False
+
+    def __init__(self, records_dir: Path, *, config=None):
+        self.records_dir = Path(records_dir)
+        self.config = config  # rig.config.RigConfig, or None for the virtual rig
+        self._lock = threading.Lock()
+        self._next_id = 1
+        self.current: TestRun | None = None
+
+    @property
+    def virtual(self) -> bool:
+        return self.config is None
+
+    def start(self, setup: TestSetup) -> TestRun:
+        with self._lock:
+            if self.current is not None and self.current.running:
+                raise BusyError(f"a test is running on this rig already ({self.current.record.name}); stop it first")
+            self.records_dir.mkdir(parents=True, exist_ok=True)
+            run = TestRun(self._next_id, setup, self.records_dir / record_name(setup), ConsoleView(self._next_id, time_scale=setup.time_scale))
+            run.view.heater = lambda: self._heater_on(run)
+            self._next_id += 1
+            run.thread = threading.Thread(target=self._run, args=(run,), name=f"flowcurve-console-test-{run.test_id}", daemon=False)
+            self.current = run
+            run.thread.start()
+            return run
+
+    def stop(self) -> bool:
+        """Operator stop: recording ends, the record is complete. False when nothing runs."""
+        run = self.current
+        if run is None or not run.running:
+            return False
+        run.stop_reason = OPERATOR_STOP
+        return True
+
+    def abort(self, why: str = ABORT_SIGNAME) -> bool:
+        """Abort: the test ends at once, the record is marked aborted. False when nothing runs."""
+        run = self.current
+        if run is None or not run.running:
+            return False
+        run.abort_reason = why
+        return True
+
+    def shutdown(self, timeout_s: float = 30.0) -> None:
+        """Abort a running test and wait for the procedure to switch off and close the record."""
+        run = self.current
+        if run is not None and run.running:
+            log.warning("console shutting down: aborting test %s (%s)", run.test_id, run.record)
+            self.abort(SHUTDOWN_SIGNAME)
+            run.thread.join(timeout_s)
+
+    # the test thread -----------------------------------------------------------------------
+    @staticmethod
+    def _stop_requested(run: TestRun):
+        def asked() -> str | None:
+            if run.abort_reason:
+                raise Interrupted(run.abort_reason)
+            return run.stop_reason
+
+        return asked
+
+    @staticmethod
+    def _heater_on(run: TestRun) -> bool | None:
+        source = run.heater_source
+        if source is None:
+            return None
+        if hasattr(source, "relay_on"):  # the virtual furnace: the relay itself
+            return bool(source.relay_on)
+        return bool(getattr(source, "heater_is_on", False))  # the furnace driver: the last command
+
+    def _run(self, run: TestRun) -> None:
+        spec = run.setup.spec
+        try:
+            if self.virtual:
+                from flowcurve.acquisition.session import run_virtual_test
+
+                def attach(vr) -> None:
+                    run.heater_source = vr.model.furnace
+
+                virtual = run_virtual_test(spec, run.record, material=run.setup.virtual_material, time_scale=run.setup.time_scale,
+                                           view=run.view, stop_requested=self._stop_requested(run), rig_setup=attach)
+                run.outcome = virtual.outcome
+            else:
+                from flowcurve.acquisition.procedure import Procedure
+                from flowcurve.acquisition.session import DriverRig
+
+                with DriverRig(self.config, time_scale=run.setup.time_scale) as rig:
+                    run.heater_source = rig.furnace
+                    run.outcome = Procedure(rig, spec, run.record, view=run.view, stop_requested=self._stop_requested(run)).run()
+        except FlowcurveError as exc:  # could not start (a device that does not answer, a bad set-point)
+            run.error = str(exc)
+        except BaseException as exc:  # the procedure closed the record as aborted and switched the heater off
+            log.exception("test %s ended with an unexpected error", run.test_id)
+            run.error = " ".join(f"{type(exc).__name__}: {exc}".split())
+        o = run.outcome
+        if o is not None:
+            run.post = dict(o.post)
+            if o.error is not None:
+                run.error = str(o.error)
+        if run.error:
+            run.view.set_state(FAULT_STATE, f"{run.error} (the record keeps everything up to the fault)" if o is not None else run.error)
+        else:
+            run.view.set_state("done", f"{o.status}: {o.reason}")

@@ -1,0 +1,283 @@
+// flowcurve console page: set-up form, live plots (server-sent events), post-test form, records.
+"use strict";
+
+const $ = (sel) => document.querySelector(sel);
+const RUNNING = new Set(["starting", "heating", "soaking", "tare", "waiting", "recording"]);
+const stats = { fdPoints: 0, ttPoints: 0, draws: 0, events: 0, latencies_ms: [] };  // read by the browser tests and the bench
+window.fcStats = stats;
+let info = null;
+let currentTest = null;
+let lastState = "idle";
+let postShownFor = null;
+
+function num(v) {
+  if (typeof v !== "number") return String(v ?? "");
+  return Math.abs(v) >= 1000 ? v.toFixed(0) : Number(v.toPrecision(4)).toString();
+}
+function fmt(v, digits) { return v === null || v === undefined || !isFinite(v) ? "—" : Number(v).toFixed(digits); }
+function esc(s) { return String(s ?? "").replace(/[&<>"']/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" }[c])); }
+
+async function api(path, body) {
+  const opts = body === undefined ? {} : { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) };
+  const resp = await fetch(path, opts);
+  let data = {};
+  try { data = await resp.json(); } catch (e) { data = { error: `${resp.status} ${resp.statusText}` }; }
+  if (resp.status === 401 && data.token_required) { askToken(); }
+  return { ok: resp.ok, status: resp.status, data };
+}
+
+// -- plots -----------------------------------------------------------------------------------
+// axes from zero (force, displacement, time); temperature spans at least 10 °C so noise stays noise
+const fromZero = (u, min, max) => (min === null || max === null ? [0, 1] : uPlot.rangeNum(Math.min(0, min), Math.max(max, min + 1e-6), 0.05, true));
+const atLeast10C = (u, min, max) => {
+  if (min === null || max === null) return [0, 100];
+  const mid = (min + max) / 2, half = Math.max((max - min) / 2, 5);
+  return uPlot.rangeNum(mid - half, mid + half, 0.05, true);
+};
+
+function makePlot(el, xLabel, yLabel, color, yRange) {
+  const width = () => Math.max(280, el.clientWidth);
+  const plot = new uPlot({
+    width: width(), height: 240,
+    scales: { x: { time: false, range: fromZero }, y: { range: yRange } },
+    legend: { show: false },
+    cursor: { drag: { x: false, y: false } },
+    axes: [{ label: xLabel, size: 40 }, { label: yLabel, size: 60 }],
+    series: [{ label: xLabel }, { label: yLabel, stroke: color, width: 1.5, points: { show: false } }],
+    hooks: { draw: [() => onDraw(el.id)] },
+  }, [[], []], el);
+  new ResizeObserver(() => plot.setSize({ width: width(), height: 240 })).observe(el);
+  return plot;
+}
+
+const plots = {};
+const data = { fd: { x: [], y: [] }, tt: { x: [], y: [] } };
+let pendingDraw = false;
+let pendingSampleEpoch = null;
+
+function onDraw(id) {
+  stats.draws += 1;
+  if (id === "plot-fd" && pendingSampleEpoch !== null) {
+    stats.latencies_ms.push(Date.now() - pendingSampleEpoch * 1000);
+    if (stats.latencies_ms.length > 5000) stats.latencies_ms.shift();
+    pendingSampleEpoch = null;
+  }
+}
+
+function addPoints(p) {
+  for (const name of ["fd", "tt"]) {
+    const part = p[name];
+    if (!part) continue;
+    if (part.reset) { data[name].x = []; data[name].y = []; }
+    data[name].x.push(...part.x);
+    data[name].y.push(...part.y);
+  }
+  if (p.last_sample_epoch_s) pendingSampleEpoch = p.last_sample_epoch_s;
+  if (!pendingDraw) { pendingDraw = true; requestAnimationFrame(drawPlots); }
+}
+
+function drawPlots() {
+  pendingDraw = false;
+  plots.fd.setData([data.fd.x, data.fd.y.map((f) => f / 1000)]);
+  plots.tt.setData([data.tt.x, data.tt.y]);
+  stats.fdPoints = data.fd.x.length;
+  stats.ttPoints = data.tt.x.length;
+  $("#fd-count").textContent = stats.fdPoints;
+  $("#tt-count").textContent = stats.ttPoints;
+}
+
+function clearPlots() {
+  for (const name of ["fd", "tt"]) { data[name].x = []; data[name].y = []; }
+  drawPlots();
+}
+
+// -- live state ------------------------------------------------------------------------------
+function showStatus(s) {
+  const state = s.state || "idle";
+  const badge = $("#state");
+  badge.textContent = state;
+  badge.className = `badge state-${state}`;
+  const heater = $("#heater");
+  heater.textContent = s.heater || "off";
+  heater.className = `badge heater-${s.heater || "off"}`;
+  $("#r-time").textContent = fmt(s.time_s, 1);
+  $("#r-force").textContent = s.force_N === null || s.force_N === undefined ? "—" : fmt(s.force_N / 1000, 3);
+  $("#r-cross").textContent = fmt(s.crosshead_mm, 3);
+  $("#r-temp").textContent = fmt(s.temperature_C, 1);
+  $("#r-samples").textContent = s.samples ?? 0;
+  const msg = $("#message");
+  msg.textContent = s.message || (s.messages && s.messages.length ? s.messages[s.messages.length - 1] : "");
+  msg.className = state === "fault" ? "message fault" : "message";
+  const running = RUNNING.has(state);
+  $("#btn-start").disabled = running;
+  $("#btn-stop").disabled = !running;
+  $("#btn-abort").disabled = !running;
+  for (const el of document.querySelectorAll("#setup input, #setup select")) el.disabled = running;
+  if (lastState !== state && (state === "done" || state === "fault")) loadRecords();
+  lastState = state;
+}
+
+function showTest(t) {
+  currentTest = t;
+  if (!t) return;
+  $("#record-name").textContent = t.record ? `— ${t.record}` : "";
+  const panel = $("#post-panel");
+  if (t.running || t.status === null) { panel.hidden = true; return; }
+  panel.hidden = false;
+  const link = t.record_url ? ` <a href="${esc(t.record_url)}" target="_blank">${esc(t.record)}</a>` : "";
+  $("#outcome").innerHTML = `Record${link}: ${esc(t.status ?? "not written")}${t.reason ? ` — ${esc(t.reason)}` : ""}` +
+    (t.samples !== null && t.samples !== undefined ? ` (${t.samples} samples, ${fmt(t.duration_s, 1)} s test time, max force ${fmt((t.max_force_N || 0) / 1000, 2)} kN)` : "") +
+    (t.error ? `<br><span class="error">fault: ${esc(t.error)}</span>` : "");
+  if (postShownFor !== t.test_id) {
+    postShownFor = t.test_id;
+    const keys = (info && info.post[t.test]) || [];
+    $("#post-fields").innerHTML = keys.map((k) => `<label>${esc(info.prompts[k] || k)}<input name="${esc(k)}" id="p-${esc(k.replace("post.", ""))}" inputmode="decimal" value="${t.post && t.post[k] !== undefined ? esc(t.post[k]) : ""}"><span class="field-error" data-for="${esc(k)}"></span></label>`).join("");
+  }
+  $("#post").hidden = t.status !== "complete";
+  showResult(t.result);
+}
+
+function showResult(r) {
+  const el = $("#result");
+  if (!r) { el.innerHTML = ""; return; }
+  if (r.error) { el.innerHTML = `<p class="error" id="result-error">identification: ${esc(r.error)}</p>`; return; }
+  const figures = Object.entries(r.figures || {}).map(([k, v]) => `<div><span class="dim">${esc(k)}</span> <b>${esc(num(v))}</b></div>`).join("");
+  const files = (r.files || []).map((f) => `<a href="${esc(f.url)}" target="_blank">${esc(f.name)}</a>`).join(" · ");
+  const warnings = (r.warnings || []).map((w) => `<li>${esc(w)}</li>`).join("");
+  const imgs = (r.plots || []).map((u) => `<a href="${esc(u)}" target="_blank"><img src="${esc(u)}?v=${Date.now()}" alt="${esc(u.split("/").pop())}"></a>`).join("");
+  el.innerHTML = `<h3 id="result-title">Identified (${esc(r.hardening_law || "")})</h3><div class="figures" id="result-figures">${figures}</div>` +
+    (warnings ? `<ul class="hint">${warnings}</ul>` : "") + `<p>files: ${files}</p><div class="result-plots">${imgs}</div>`;
+}
+
+function connect() {
+  const es = new EventSource("/api/events");
+  es.addEventListener("status", (e) => { stats.events += 1; showStatus(JSON.parse(e.data)); });
+  es.addEventListener("test", (e) => {
+    const t = JSON.parse(e.data);
+    if (!currentTest || !t || currentTest.test_id !== t.test_id) clearPlots();
+    showTest(t);
+  });
+  es.addEventListener("points", (e) => { stats.events += 1; addPoints(JSON.parse(e.data)); });
+  es.onerror = () => { $("#message").textContent = "connection to the console lost; retrying…"; };
+}
+
+// -- forms -----------------------------------------------------------------------------------
+function formValues(form) {
+  const out = {};
+  for (const el of form.elements) if (el.name) out[el.name] = el.value;
+  return out;
+}
+
+function showFieldErrors(form, fields) {
+  for (const p of form.querySelectorAll(".field-error")) p.textContent = "";
+  for (const el of form.querySelectorAll(".invalid")) el.classList.remove("invalid");
+  for (const [name, msg] of Object.entries(fields || {})) {
+    const p = form.querySelector(`.field-error[data-for="${CSS.escape(name)}"]`) || form.querySelector('.field-error[data-for="form"]');
+    if (p) p.textContent = msg;
+    const input = form.elements[name];
+    if (input && input.classList) input.classList.add("invalid");
+  }
+}
+
+async function startTest(ev) {
+  ev.preventDefault();
+  const form = $("#setup");
+  showFieldErrors(form, {});
+  const { ok, status, data } = await api("/api/start", formValues(form));
+  if (!ok) {
+    showFieldErrors(form, data.fields || { form: data.error });
+    if (status === 409) $("#message").textContent = data.error;
+    return;
+  }
+  postShownFor = null;
+}
+
+async function submitPost(ev) {
+  ev.preventDefault();
+  const form = $("#post");
+  showFieldErrors(form, {});
+  $("#btn-post").disabled = true;
+  $("#result").innerHTML = `<p class="hint">identifying…</p>`;
+  try {
+    const { ok, data } = await api("/api/post", formValues(form));
+    if (!ok) { showFieldErrors(form, data.fields || { form: data.error }); $("#result").innerHTML = ""; return; }
+    showTest(data.test);
+    loadRecords();
+  } finally { $("#btn-post").disabled = false; }
+}
+
+async function loadRecords() {
+  const { ok, data } = await api("/api/records");
+  if (!ok) return;
+  const rows = data.records.map((r) => {
+    const res = r.result;
+    let resText = "—";
+    if (res && res.error) resText = `<span class="error">${esc(res.error)}</span>`;
+    else if (res) resText = Object.entries(res.figures).filter(([k]) => /JC|friction|Rm|E_MPa/.test(k)).map(([k, v]) => `${esc(k)} ${esc(num(v))}`).join(", ") + ` <a href="${esc(res.folder)}/result.json" target="_blank">result</a>`;
+    return `<tr><td><input type="checkbox" name="rec" value="${esc(r.name)}" aria-label="select ${esc(r.name)}"></td>` +
+      `<td><a href="${esc(r.url)}" target="_blank">${esc(r.name)}</a></td><td>${esc(r.test)}</td><td>${esc(r.material)}</td>` +
+      `<td>${esc(r.specimen_id)}</td><td>${esc(r.status)}${r.error ? ` <span class="error">${esc(r.error)}</span>` : ""}</td><td>${resText}</td></tr>`;
+  });
+  $("#records tbody").innerHTML = rows.join("") || `<tr><td colspan="7" class="dim">no records yet</td></tr>`;
+}
+
+async function runFit(ev) {
+  ev.preventDefault();
+  const form = $("#fit");
+  const names = [...document.querySelectorAll('#records input[name="rec"]:checked')].map((c) => c.value);
+  showFieldErrors(form, {});
+  $("#fit-result").innerHTML = `<p class="hint">fitting…</p>`;
+  const { ok, data } = await api("/api/fit", { records: names, ...formValues(form) });
+  if (!ok) { showFieldErrors(form, { fit: data.error }); $("#fit-result").innerHTML = ""; return; }
+  const imgs = data.plots.map((u) => `<img src="${esc(u)}" alt="">`).join("");
+  $("#fit-result").innerHTML = `<p><a id="card-link" href="${esc(data.card)}?download" download="${esc(data.card_name)}">download ${esc(data.card_name)}</a> · <a href="${esc(data.fit)}" target="_blank">fit.json</a></p><pre>${esc(data.summary)}</pre><div class="result-plots">${imgs}</div>`;
+}
+
+function setTestType() {
+  document.body.classList.toggle("test-tension", $("#f-test").value === "tension");
+  document.body.classList.toggle("test-compression", $("#f-test").value === "compression");
+}
+
+// -- token -----------------------------------------------------------------------------------
+function askToken() {
+  const dlg = $("#token-dialog");
+  if (!dlg.open) dlg.showModal();
+}
+
+async function sendToken(ev) {
+  ev.preventDefault();
+  const { ok, data } = await api("/api/login", { token: $("#token").value });
+  if (!ok) { $("#token-error").textContent = data.error; return; }
+  $("#token-dialog").close();
+  boot();
+}
+
+async function boot() {
+  const res = await api("/api/info");
+  if (!res.ok) return;
+  info = res.data;
+  if (info.token_required) {
+    const probe = await api("/api/status");
+    if (!probe.ok) return;
+  }
+  $("#rig").textContent = `— ${info.rig}`;
+  $("#out").textContent = info.out;
+  $("#setup-hint").textContent = info.virtual ? "Virtual rig: empty geometry and speed take the virtual specimen's and run's defaults." : "";
+  connect();
+  loadRecords();
+}
+
+window.addEventListener("DOMContentLoaded", () => {
+  plots.fd = makePlot($("#plot-fd"), "crosshead displacement, mm", "force, kN", "#1f5fbf", fromZero);
+  plots.tt = makePlot($("#plot-tt"), "test time, s", "temperature, °C", "#b3261e", atLeast10C);
+  $("#setup").addEventListener("submit", startTest);
+  $("#post").addEventListener("submit", submitPost);
+  $("#fit").addEventListener("submit", runFit);
+  $("#f-test").addEventListener("change", setTestType);
+  $("#btn-stop").addEventListener("click", () => api("/api/stop", {}));
+  $("#btn-abort").addEventListener("click", () => { if (confirm("Abort the test? The record is kept and marked aborted.")) api("/api/abort", {}); });
+  $("#btn-refresh").addEventListener("click", loadRecords);
+  $("#token-form").addEventListener("submit", sendToken);
+  setTestType();
+  boot();
+});

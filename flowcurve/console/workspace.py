@@ -1,0 +1,192 @@
+"""The console's folder (``--out``): records, their results, series fits and cards.
+
+::
+
+    OUT/records/<record>.csv        written by the procedure, amended with post-test values
+    OUT/results/<record stem>/      flowcurve identify's folder (result.json, plots, true curve)
+    OUT/fits/<fit name>/            flowcurve fit's folder (fit.json, curves/, plots/) and cards
+
+Nothing the console writes goes anywhere else: every path a request names is a bare name
+checked against these folders (:func:`inside`), never a path joined as given.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import logging
+import re
+from pathlib import Path
+
+from flowcurve.errors import FlowcurveError
+
+log = logging.getLogger(__name__)
+
+NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,120}$")
+
+
+class PathError(FlowcurveError):
+    """A request named a file outside the console's folder, or a name that is not one."""
+
+
+def inside(root: Path, relative: str) -> Path:
+    """``root/relative`` resolved, refused unless it stays inside ``root`` (no .., no links out)."""
+    root = Path(root).resolve()
+    if not relative or "\x00" in relative or relative.startswith(("/", "\\")) or "\\" in relative:
+        raise PathError(f"not a file of the console's folder: {relative!r}")
+    path = (root / relative).resolve()
+    if path != root and root not in path.parents:
+        raise PathError(f"not a file of the console's folder: {relative!r}")
+    return path
+
+
+def bare_name(name: str, what: str = "name") -> str:
+    """A single file-name component (letters, digits, . _ -), or PathError."""
+    if not isinstance(name, str) or not NAME_RE.match(name) or ".." in name:
+        raise PathError(f"{what}: not a plain name: {name!r}")
+    return name
+
+
+class Workspace:
+    """The folders under ``--out`` and what the console does with them."""
+
+    def __init__(self, root: Path):
+        self.root = Path(root).resolve()
+        self.records = self.root / "records"
+        self.results = self.root / "results"
+        self.fits = self.root / "fits"
+
+    def record_path(self, name: str) -> Path:
+        name = bare_name(name, "record")
+        if not name.endswith(".csv"):
+            raise PathError(f"record: not a record file name (.csv): {name!r}")
+        path = self.records / name
+        if not path.is_file():
+            raise PathError(f"record: no such record in {self.records}: {name}")
+        return path
+
+    def result_folder(self, record: Path) -> Path:
+        return self.results / record.stem
+
+    def url(self, path: Path) -> str:
+        """The /files/ address of a file inside the folder."""
+        return "/files/" + Path(path).resolve().relative_to(self.root).as_posix()
+
+    # records ---------------------------------------------------------------------------------
+    def list_records(self) -> list[dict]:
+        """Every record in OUT/records with its header's essentials and its result, newest first."""
+        from flowcurve.record.format import read_record
+
+        rows = []
+        if not self.records.is_dir():
+            return rows
+        for path in sorted(self.records.glob("*.csv"), key=lambda p: p.stat().st_mtime, reverse=True):
+            entry: dict = {"name": path.name, "url": self.url(path)}
+            try:
+                rec = read_record(path)
+                meta = rec.meta
+                entry.update({
+                    "test": meta.get("test"), "material": meta.get("material"), "specimen_id": meta.get("specimen.id"),
+                    "date": meta.get("date"), "status": meta.get("status"), "stop_reason": meta.get("stop_reason") or meta.get("abort_reason"),
+                    "samples": len(rec.data), "nominal_temperature_C": meta.get("nominal_temperature_C"),
+                })
+            except FlowcurveError as exc:
+                entry["error"] = str(exc)
+            entry["result"] = self.result_summary(path)
+            rows.append(entry)
+        return rows
+
+    def result_summary(self, record: Path) -> dict | None:
+        """The key figures of a record's result.json, with links to its files; None if not identified."""
+        from flowcurve.identification.outcome import read_json_object
+
+        folder = self.result_folder(record)
+        path = folder / "result.json"
+        if not path.is_file():
+            return None
+        try:
+            res = read_json_object(path, FlowcurveError, "result.json")
+        except FlowcurveError as exc:
+            return {"error": str(exc)}
+        hard = res.get("hardening") or {}
+        figures = {k: res.get(k) for k in ("E_MPa", "Rp02_MPa", "Rm_MPa", "A_pct", "Z_pct", "fracture_true_strain", "friction_mu", "final_true_strain", "max_force_N") if res.get(k) is not None}
+        for k in ("A_MPa", "B_MPa", "n", "fit_error_pct"):
+            if hard.get(k) is not None:
+                figures[f"JC {k}"] = hard[k]
+        files = sorted(p for p in folder.iterdir() if p.is_file())
+        return {
+            "folder": self.url(folder),
+            "figures": figures,
+            "hardening_law": hard.get("law"),
+            "warnings": list(res.get("warnings") or []),
+            "plots": [self.url(p) for p in files if p.suffix == ".png"],
+            "files": [{"name": p.name, "url": self.url(p)} for p in files],
+        }
+
+    # identification --------------------------------------------------------------------------
+    def identify(self, record: Path) -> dict:
+        """``flowcurve identify`` on one record into OUT/results/<stem>/; its summary."""
+        from flowcurve.demo import identify_and_write
+
+        identify_and_write(record, self.results)
+        return self.result_summary(record)
+
+    # series fit and card ----------------------------------------------------------------------
+    def fit_and_card(self, names: list[str], options: dict) -> dict:
+        """``flowcurve fit`` on the named records (their result folders when identified), then
+        ``flowcurve card``: both with the command line's own parsers and functions."""
+        from flowcurve.cli import build_parser
+        from flowcurve.cli.reports import run_card
+        from flowcurve.cli.series import summary, write_fit
+        from flowcurve.identification.series import fit_series, load_members
+
+        if not names:
+            raise FlowcurveError("fit: select at least one record")
+        inputs = []
+        for name in names:
+            record = self.record_path(name)
+            folder = self.result_folder(record)
+            inputs.append(str(folder if (folder / "result.json").is_file() else record))
+        out = self.fits / f"fit-{_dt.datetime.now():%Y%m%d-%H%M%S-%f}"
+        argv = ["fit", *inputs, "--out", str(out)]
+        for key, option in (("melt_temp", "--melt-temp"), ("fix_C", "--fix-C"), ("fix_m", "--fix-m"), ("ref_rate", "--ref-rate"), ("ref_temp", "--ref-temp")):
+            value = str(options.get(key) or "").strip()
+            if value:
+                argv += [option, value]
+        if options.get("method"):
+            argv += ["--method", str(options["method"])]
+        args = _parse(build_parser(), argv)
+        members = load_members(args.inputs)
+        fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
+        series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
+                            melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points)
+        fit_json = write_fit(series, out)
+        text = summary(series, fit_json)
+        fmt = str(options.get("format") or "lsdyna")
+        units = str(options.get("units") or "").strip()
+        card = out / f"card-{bare_name(fmt, 'format')}.{_CARD_SUFFIX.get(fmt, 'txt')}"
+        card_argv = ["card", str(fit_json), "--format", fmt, "-o", str(card)] + (["--units", units] if units else [])
+        for key, option in (("poisson", "--poisson"), ("density", "--density"), ("cp", "--cp"), ("E_MPa", "--E")):
+            value = str(options.get(key) or "").strip()
+            if value:
+                card_argv += [option, value]
+        run_card(_parse(build_parser(), card_argv))
+        plots = sorted((out / "plots").glob("*.png"))
+        return {"summary": text, "fit": self.url(fit_json), "card": self.url(card), "card_name": card.name,
+                "plots": [self.url(p) for p in plots], "folder": self.url(out)}
+
+
+_CARD_SUFFIX = {"lsdyna": "k", "abaqus": "inp", "radioss": "rad", "calculix": "inp"}
+
+
+def _parse(parser, argv: list[str]):
+    """argparse on ``argv``; its complaint (it would exit) becomes one FlowcurveError line."""
+    import contextlib
+    import io
+
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err):
+            return parser.parse_args(argv)
+    except SystemExit:
+        lines = [ln for ln in err.getvalue().splitlines() if ln.strip()]
+        raise FlowcurveError(lines[-1] if lines else f"bad options: {' '.join(argv)}") from None

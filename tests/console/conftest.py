@@ -1,0 +1,93 @@
+"""A console served in a thread on a free port, and headless Chromium pages driven by selenium.
+
+Screenshots go to ``$FLOWCURVE_ARTIFACTS`` or ``tests/console/artifacts/`` (git-ignored).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+ARTIFACTS = Path(os.environ.get("FLOWCURVE_ARTIFACTS") or Path(__file__).with_name("artifacts"))
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+CHROMEDRIVER = shutil.which("chromedriver")
+BROWSER_TIME_SCALE = 10.0  # the virtual rig's compression test takes about 10 wall seconds
+
+
+class ServedConsole:
+    def __init__(self, console, server, thread, url):
+        self.console, self.server, self.thread, self.url = console, server, thread, url
+
+
+@pytest.fixture
+def served_console(tmp_path):
+    pytest.importorskip("uvicorn")
+    import uvicorn
+
+    from flowcurve.console.server import Console, create_app
+
+    console = Console(tmp_path / "out", time_scale=BROWSER_TIME_SCALE)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    server = uvicorn.Server(uvicorn.Config(create_app(console), host="127.0.0.1", port=port, log_level="warning", lifespan="on"))
+    thread = threading.Thread(target=server.run, name="console-under-test", daemon=True)
+    thread.start()
+    end = time.monotonic() + 20
+    while not server.started and time.monotonic() < end:
+        time.sleep(0.05)
+    assert server.started, "the console did not start"
+    yield ServedConsole(console, server, thread, f"http://127.0.0.1:{port}/")
+    server.should_exit = True
+    thread.join(30)
+    assert not thread.is_alive()
+
+
+@pytest.fixture
+def browser_factory():
+    if CHROMIUM is None or CHROMEDRIVER is None:
+        pytest.skip("chromium / chromedriver is not installed (apt-get install chromium chromium-driver)")
+    pytest.importorskip("selenium")
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    drivers = []
+
+    def open_browser(width: int = 1366, height: int = 900):
+        options = webdriver.ChromeOptions()
+        options.binary_location = CHROMIUM
+        for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--disable-gpu", f"--window-size={width},{height}", "--hide-scrollbars"):
+            options.add_argument(arg)
+        driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
+        driver.set_page_load_timeout(30)
+        drivers.append(driver)
+        return driver
+
+    yield open_browser
+    for d in drivers:
+        try:
+            d.quit()
+        except Exception:  # already closed by the test
+            pass
+
+
+@pytest.fixture
+def shot(request):
+    """``shot(driver, "stage")`` saves a full-page PNG named after the test and the stage."""
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+
+    def save(driver, stage: str) -> Path:
+        path = ARTIFACTS / f"{request.node.name}-{stage}.png"
+        height = driver.execute_script("return document.documentElement.scrollHeight")
+        width = driver.execute_script("return window.innerWidth")
+        driver.set_window_size(width, max(600, min(int(height) + 140, 4000)))
+        driver.save_screenshot(str(path))
+        return path
+
+    return save

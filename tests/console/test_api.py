@@ -1,0 +1,186 @@
+"""The console's HTTP endpoints (no browser): form checks, one test at a time, the token,
+paths that try to leave --out, and the heater off when the console shuts down mid-test."""
+
+from __future__ import annotations
+
+import time
+import warnings
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("starlette")
+pytest.importorskip("httpx")
+
+with warnings.catch_warnings():  # starlette's note about its test client's HTTP library
+    warnings.simplefilter("ignore", DeprecationWarning)
+    from starlette.testclient import TestClient  # noqa: E402
+
+from flowcurve.cli import main as cli_main  # noqa: E402
+from flowcurve.console.server import Console, create_app  # noqa: E402
+from flowcurve.record.format import read_record  # noqa: E402
+
+JSON = {"Content-Type": "application/json"}
+
+
+def _client(tmp_path: Path, **kw) -> tuple[Console, TestClient]:
+    console = Console(tmp_path / "out", time_scale=kw.pop("time_scale", 60.0), **kw)
+    return console, TestClient(create_app(console))
+
+
+def _wait(console: Console, states=("done", "fault"), timeout_s: float = 60.0) -> None:
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        run = console.runner.current
+        if run is not None and not run.running and run.view.state in states:
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"test did not reach {states} in {timeout_s} s (state {console.runner.current.view.state})")
+
+
+def _cli_error(argv: list[str], capsys) -> str:
+    code = cli_main(argv)
+    assert code != 0
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("flowcurve: error: ")
+    return err[len("flowcurve: error: "):]
+
+
+def test_bad_values_are_refused_with_the_run_commands_words_beside_each_field(tmp_path, capsys):
+    _console, client = _client(tmp_path)
+    r = client.post("/api/start", json={"test": "compression", "d0": "-2", "speed": "fast", "target": "0"}, headers=JSON)
+    assert r.status_code == 400
+    fields = r.json()["fields"]
+    assert set(fields) == {"d0", "speed", "target"}
+    # the same value given to `flowcurve run` is refused with the same message
+    assert fields["d0"] == _cli_error(["run", "compression", "--quiet", "--d0", "-2", "--out", str(tmp_path / "x.csv")], capsys)
+    assert fields["target"] == _cli_error(["run", "compression", "--quiet", "--target", "0", "--out", str(tmp_path / "y.csv")], capsys)
+    assert "not a number" in fields["speed"]
+    assert not (tmp_path / "out" / "records").exists() or not list((tmp_path / "out" / "records").iterdir())
+
+
+def test_a_set_point_the_furnace_refuses_goes_back_to_the_temperature_field(tmp_path):
+    _console, client = _client(tmp_path)
+    r = client.post("/api/start", json={"test": "compression", "temperature": "5000"}, headers=JSON)
+    assert r.status_code == 400
+    assert "temperature" in r.json()["fields"]
+    assert "not below the configured maximum" in r.json()["fields"]["temperature"]
+
+
+def test_one_test_at_a_time_and_stop_gives_a_complete_record(tmp_path):
+    console, client = _client(tmp_path, time_scale=5.0)
+    r = client.post("/api/start", json={"test": "compression", "specimen_id": "C-a"}, headers=JSON)
+    assert r.status_code == 200, r.text
+    second = client.post("/api/start", json={"test": "compression"}, headers=JSON)
+    assert second.status_code == 409
+    end = time.monotonic() + 30
+    while console.runner.current.view.samples < 20 and time.monotonic() < end:
+        time.sleep(0.05)
+    assert client.post("/api/stop", json={}, headers=JSON).json() == {"stopping": True}
+    _wait(console)
+    run = console.runner.current
+    rec = read_record(run.record)
+    assert rec.meta["status"] == "complete"
+    assert rec.meta["stop_reason"] == "operator stop (console)"
+    assert rec.meta["specimen.id"] == "C-a"
+    assert ("stop", "operator stop (console)") in [(e.name, e.text) for e in rec.events]
+    assert client.post("/api/stop", json={}, headers=JSON).json() == {"stopping": False}
+
+
+def test_abort_marks_the_record_aborted(tmp_path):
+    console, client = _client(tmp_path, time_scale=5.0)
+    assert client.post("/api/start", json={"test": "tension"}, headers=JSON).status_code == 200
+    end = time.monotonic() + 30
+    while console.runner.current.view.samples < 10 and time.monotonic() < end:
+        time.sleep(0.05)
+    assert client.post("/api/abort", json={}, headers=JSON).json() == {"aborting": True}
+    _wait(console)
+    rec = read_record(console.runner.current.record)
+    assert rec.meta["status"] == "aborted"
+    assert "abort button" in rec.meta["abort_reason"]
+
+
+def test_shutting_the_console_down_mid_heating_switches_the_heater_off_and_closes_the_record(tmp_path):
+    console = Console(tmp_path / "out", time_scale=20.0)
+    with TestClient(create_app(console)) as client:  # the context runs the app's lifespan (shutdown)
+        r = client.post("/api/start", json={"test": "compression", "temperature": "300", "soak": "600"}, headers=JSON)
+        assert r.status_code == 200, r.text
+        run = console.runner.current
+        end = time.monotonic() + 30
+        while run.view.status()["heater"] != "on" and time.monotonic() < end:
+            time.sleep(0.05)
+        assert run.view.status()["heater"] == "on"  # the virtual furnace's relay is on while heating
+    assert not run.running
+    assert run.heater_source.relay_on is False
+    text = run.record.read_text()  # no samples yet (aborted while heating): read the header as text
+    assert "# status: aborted\n" in text
+    assert "# abort_reason: stopped by the console shutting down\n" in text
+    assert [line.split()[3] for line in text.splitlines() if line.startswith("# event:")] == ["heater_on", "heater_off", "stop"]
+
+
+@pytest.mark.parametrize("path", [
+    "/files/../../etc/passwd", "/files/%2e%2e/%2e%2e/etc/passwd", "/files/records/..%2f..%2f..%2fsecret.txt",
+    "/files/%2Fetc%2Fpasswd", "/files/records/%2e%2e/%2e%2e/secret.txt", "/files/link/secret.txt", "/files/records/%5c..%5c..%5csecret.txt",
+])
+def test_files_outside_out_cannot_be_read(tmp_path, path):
+    (tmp_path / "secret.txt").write_text("no")
+    _console, client = _client(tmp_path)
+    (tmp_path / "out").mkdir(exist_ok=True)
+    (tmp_path / "out" / "link").symlink_to(tmp_path)  # a link inside --out pointing out of it
+    r = client.get(path)
+    assert r.status_code == 404
+    assert r.text != "no"
+
+
+def test_files_inside_out_are_served(tmp_path):
+    _console, client = _client(tmp_path)
+    (tmp_path / "out" / "records").mkdir(parents=True)
+    (tmp_path / "out" / "records" / "a.csv").write_text("# flowcurve-record: 1\n")
+    r = client.get("/files/records/a.csv")
+    assert r.status_code == 200 and r.text == "# flowcurve-record: 1\n"
+
+
+@pytest.mark.parametrize("name", ["../secret.csv", "/tmp/x.csv", "..", "records/../../x.csv", "a\\..\\b.csv"])
+def test_no_endpoint_takes_a_path_out_of_out(tmp_path, name):
+    _console, client = _client(tmp_path)
+    r = client.post("/api/fit", json={"records": [name], "melt_temp": "1450"}, headers=JSON)
+    assert r.status_code == 400
+    assert "not a plain name" in r.json()["error"]
+    written = [p for p in tmp_path.rglob("*") if p.is_file()]  # nothing written anywhere
+    assert written == []
+
+
+def test_posts_from_another_origin_or_not_json_are_refused(tmp_path):
+    _console, client = _client(tmp_path)
+    r = client.post("/api/start", json={"test": "compression"}, headers={**JSON, "Origin": "http://elsewhere.example"})
+    assert r.status_code == 403
+    r = client.post("/api/start", content="test=compression", headers={"Content-Type": "application/x-www-form-urlencoded"})
+    assert r.status_code == 415
+
+
+def test_a_token_guards_the_api_and_the_files_and_the_login_sets_it(tmp_path):
+    _console, client = _client(tmp_path, token="s3cret")
+    assert client.get("/").status_code == 200  # the page itself loads (and asks for the token)
+    assert client.get("/api/status").status_code == 401
+    assert client.get("/files/records/x.csv").status_code == 401
+    assert client.post("/api/start", json={"test": "compression"}, headers=JSON).status_code == 401
+    assert client.post("/api/login", json={"token": "wrong"}, headers=JSON).status_code == 401
+    assert client.post("/api/login", json={"token": "s3cret"}, headers=JSON).status_code == 200
+    assert client.get("/api/status").status_code == 200  # the cookie now
+    assert TestClient(client.app).get("/api/status", headers={"X-Flowcurve-Token": "s3cret"}).status_code == 200
+
+
+def test_console_listening_beyond_the_loopback_makes_a_token(monkeypatch, tmp_path, capsys):
+    seen = {}
+
+    def fake_run(app, host, port, log_level):
+        seen["host"], seen["port"] = host, port
+
+    import uvicorn
+
+    monkeypatch.setattr(uvicorn, "run", fake_run)
+    assert cli_main(["console", "--host", "0.0.0.0", "--port", "8099", "--out", str(tmp_path)]) == 0
+    err = capsys.readouterr().err
+    assert "access token" in err and seen == {"host": "0.0.0.0", "port": 8099}
+    assert cli_main(["console", "--out", str(tmp_path)]) == 0
+    assert "access token" not in capsys.readouterr().err

@@ -1,0 +1,170 @@
+"""The console in a real headless Chromium: a virtual compression test set up, run, watched,
+stopped, annotated and identified through the page; the record compared with what
+``flowcurve run`` writes; a reload, a closed browser and a second page during a test; a bad
+value in the form. Every stage leaves a screenshot (see conftest.ARTIFACTS)."""
+
+from __future__ import annotations
+
+import time
+import urllib.request
+
+import pytest
+
+from flowcurve.cli import main as cli_main
+from flowcurve.record.format import read_record
+from tests.console.conftest import BROWSER_TIME_SCALE
+
+By = pytest.importorskip("selenium.webdriver.common.by").By
+
+RUN_STATES = ("starting", "tare", "waiting", "recording")
+
+
+def wait_for(predicate, timeout_s: float = 30.0, what: str = "condition"):
+    end = time.monotonic() + timeout_s
+    last = None
+    while time.monotonic() < end:
+        try:
+            last = predicate()
+            if last:
+                return last
+        except Exception as exc:  # the page is still loading: try again
+            last = exc
+        time.sleep(0.1)
+    raise AssertionError(f"timed out waiting for {what} (last: {last!r})")
+
+
+def text(driver, css: str) -> str:
+    return driver.find_element(By.CSS_SELECTOR, css).text
+
+
+def fd_points(driver) -> int:
+    return int(driver.execute_script("return window.fcStats.fdPoints"))
+
+
+def fill(driver, values: dict[str, str]) -> None:
+    for name, value in values.items():
+        el = driver.find_element(By.NAME, name)
+        if el.tag_name == "select":
+            driver.execute_script("arguments[0].value = arguments[1]; arguments[0].dispatchEvent(new Event('change'))", el, value)
+        else:
+            el.clear()
+            el.send_keys(value)
+
+
+def open_console(driver, url: str) -> None:
+    driver.get(url)
+    wait_for(lambda: driver.execute_script("return window.fcStats && window.fcStats.events") >= 1 or text(driver, "#state") == "idle", what="the page to connect")
+
+
+SETUP = {"test": "compression", "material": "steel45", "E_MPa": "200000", "specimen_id": "C-browser", "operator": "selenium", "speed": "0.05"}
+
+
+def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(served_console, browser_factory, shot, tmp_path):
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    assert text(driver, "#state") == "IDLE"  # CSS upper-cases the badge
+    assert text(driver, "#heater") == "OFF"
+    shot(driver, "1-idle")
+
+    # a bad value: refused beside its field with run's words, nothing started
+    fill(driver, {**SETUP, "d0": "-3"})
+    driver.find_element(By.ID, "btn-start").click()
+    error = wait_for(lambda: text(driver, '#setup .field-error[data-for="d0"]'), what="the d0 error")
+    assert error == "--d0 must be a positive number, got -3.0"
+    assert "invalid" in driver.find_element(By.ID, "f-d0").get_attribute("class")
+    assert served_console.console.runner.current is None
+    shot(driver, "2-bad-input")
+
+    fill(driver, {"d0": ""})
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: text(driver, "#state").lower() == "recording", what="recording")
+    first = wait_for(lambda: fd_points(driver), what="first plot points")
+    wait_for(lambda: fd_points(driver) > first + 10, what="the live plot to grow")
+    assert not text(driver, '#setup .field-error[data-for="d0"]')
+    assert driver.find_element(By.ID, "btn-start").get_attribute("disabled") is not None
+    shot(driver, "3-recording")
+
+    driver.find_element(By.ID, "btn-stop").click()
+    wait_for(lambda: text(driver, "#state").lower() == "done", what="done")
+    outcome = wait_for(lambda: text(driver, "#outcome"), what="the outcome")
+    assert "complete — operator stop (console)" in outcome
+    shot(driver, "4-stopped")
+
+    # post-test measurements: the virtual rig's own measurement of the stopped specimen, typed in
+    run = served_console.console.runner.current
+    measured = dict(run.outcome.post)
+    assert set(measured) == {"post.hk_mm", "post.dmax_mm"}
+    typed = {k: f"{v:.4f}" for k, v in measured.items()}
+    fill(driver, typed)
+    driver.find_element(By.ID, "btn-post").click()
+    figures = wait_for(lambda: text(driver, "#result-figures"), timeout_s=120, what="the identified result")
+    assert "friction_mu" in figures and "JC A_MPa" in figures
+    links = [a.get_attribute("href") for a in driver.find_elements(By.CSS_SELECTOR, "#result a")]
+    assert any(h.endswith("/result.json") for h in links)
+    shot(driver, "5-result")
+
+    # the record: amended with what was typed, identical in content to run's
+    rec = read_record(run.record)
+    assert {k: float(rec.meta[k]) for k in typed} == {k: float(v) for k, v in typed.items()}
+    result_json = urllib.request.urlopen(served_console.url + "files/results/" + run.record.stem + "/result.json").read()
+    assert b'"friction_mu"' in result_json
+    reference_path = tmp_path / "run.csv"
+    assert cli_main(["run", "compression", "--quiet", "--out", str(reference_path), "--time-scale", str(BROWSER_TIME_SCALE),
+                     "--material", "steel45", "--E", "200000", "--specimen-id", "C-browser", "--operator", "selenium", "--speed", "0.05"]) == 0
+    ref = read_record(reference_path)
+    assert list(rec.data.columns) == list(ref.data.columns)
+    assert set(rec.meta) - {"stop_reason"} == set(ref.meta) - {"stop_reason"}
+    varying = {"date", "stop_reason", "samples", "post.hk_mm", "post.dmax_mm"}  # the time, and where each test stopped
+    assert {k: v for k, v in rec.meta.items() if k not in varying} == {k: v for k, v in ref.meta.items() if k not in varying}
+    assert [e.name for e in rec.events] == [e.name for e in ref.events]
+    assert int(rec.meta["samples"]) == len(rec.data)
+
+    # the records list: select it, fit, download the card
+    driver.find_element(By.ID, "btn-refresh").click()
+    wait_for(lambda: "JC A_MPa" in text(driver, "#records tbody"), what="the record and its result in the list")
+    box = f'#records input[value="{run.record.name}"]'
+    wait_for(lambda: driver.find_element(By.CSS_SELECTOR, box).click() or driver.find_element(By.CSS_SELECTOR, box).is_selected(), what="the record selected")
+    fill(driver, {"melt_temp": "1450", "fix_C": "0.01", "fix_m": "1", "poisson": "0.3", "density": "7850", "cp": "460", "format": "lsdyna"})
+    driver.find_element(By.ID, "btn-fit").click()
+    card = wait_for(lambda: driver.find_element(By.ID, "card-link"), timeout_s=120, what="the card link")
+    body = urllib.request.urlopen(card.get_attribute("href")).read().decode()
+    assert "*MAT_JOHNSON_COOK" in body
+    shot(driver, "6-records-fit")
+
+
+def test_reload_close_and_a_second_page_during_a_test(served_console, browser_factory, shot):
+    first = browser_factory()
+    open_console(first, served_console.url)
+    fill(first, {**SETUP, "specimen_id": "C-reload", "speed": "0.01"})  # slow: the test outlasts the browsers coming and going
+    first.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: fd_points(first) > 5, what="points on the first page")
+
+    # a second page (a tablet-sized one) sees the running test, its points included
+    second = browser_factory(820, 1180)
+    open_console(second, served_console.url)
+    wait_for(lambda: text(second, "#state").lower() == "recording", what="the second page to see the test")
+    wait_for(lambda: fd_points(second) > 5, what="points on the second page")
+    assert second.find_element(By.ID, "btn-start").get_attribute("disabled") is not None
+    shot(second, "1-second-page-tablet")
+
+    # a reload picks the live state up again
+    before = fd_points(first)
+    first.refresh()
+    wait_for(lambda: text(first, "#state").lower() == "recording", what="the reloaded page's state")
+    wait_for(lambda: fd_points(first) >= before, what="the reloaded page's points")
+    shot(first, "2-after-reload")
+
+    # the first browser closes: the test goes on recording
+    run = served_console.console.runner.current
+    first.quit()
+    samples = run.view.samples
+    wait_for(lambda: run.view.samples > samples + 20, what="recording after the browser closed")
+    assert run.running
+    seen = fd_points(second)
+    wait_for(lambda: fd_points(second) > seen, what="the second page still updating")
+    second.find_element(By.ID, "btn-stop").click()
+    wait_for(lambda: text(second, "#state").lower() == "done", what="done on the second page")
+    shot(second, "3-stopped-from-second-page")
+    rec = read_record(run.record)
+    assert rec.meta["status"] == "complete" and rec.meta["specimen.id"] == "C-reload"
+    assert len(rec.data) == run.outcome.samples
