@@ -51,8 +51,8 @@ from flowcurve.record.importers import (
     _check_readable,
     _found_columns_hint,
     _head_lines,
-    _is_number,
-    _sniff_delimiter,
+    is_number,
+    sniff_delimiter,
     parse_column_option,
     unit_conversion,
 )
@@ -216,7 +216,7 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
     else:
         raise RecordError(source, "not a flowcurve-adhesion table and no column mapping given; name the columns, e.g. "
                           "--column normal_force=Fz:N --column moment=Mz:N*m --column imprint_radius=r:mm "
-                          "--column temperature=T:C" + _found_columns_hint(path))
+                          "--column temperature=T:C" + _found_columns_hint(_head_lines(path)))
     unknown = [q for q in mapping if q not in ADHESION_COLUMNS]
     if unknown:
         raise RecordError(source, f"unknown quantity {', '.join(map(repr, unknown))} in the column mapping (use: {', '.join(ADHESION_COLUMNS)})")
@@ -225,7 +225,7 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
         if missing:
             raise RecordError(source, f"the column mapping lacks {', '.join(missing)} (give e.g. --column {missing[0]}=NAME:{ADHESION_COLUMNS[missing[0]][2]})")
     names_line = lines[body_start]
-    delim = _sniff_delimiter(names_line)
+    delim = sniff_delimiter(names_line)
     names = [c.strip().strip('"') for c in next(csv.reader([names_line], delimiter=delim))]
     if native:
         mapping = {q: spec for q, spec in mapping.items() if spec[0] in names}
@@ -246,7 +246,7 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
     # an optional units row right under the names row: no mapped numeric cell is a number
     first_line, first_cells = rows[0]
     file_units: dict[str, str] = {}
-    if all(k < len(first_cells) for k in numeric_idx) and not any(_is_number(first_cells[k], decimal) for k in numeric_idx if first_cells[k].strip()):
+    if all(k < len(first_cells) for k in numeric_idx) and not any(is_number(first_cells[k], decimal) for k in numeric_idx if first_cells[k].strip()):
         file_units = {names[k]: first_cells[k].strip().strip('"').strip("[]() ") for k in range(min(len(names), len(first_cells)))}
         rows = rows[1:]
         if not rows:
@@ -299,7 +299,7 @@ def _parse_row(cells, names, mapping, converters, meta, source: str, line_no: in
         if cell == "":
             row[native] = math.nan
             continue
-        if not _is_number(cell, decimal) or (decimal == "." and "," in cell):
+        if not is_number(cell, decimal) or (decimal == "." and "," in cell):
             raise RecordError(source, f"not a number: {cell!r}", line=line_no, column=name)
         row[native] = float(converters[quantity](float(cell.replace(",", "."))))
     for key, native in HEADER_KEYS.items():
