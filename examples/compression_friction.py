@@ -2,8 +2,8 @@
 
 Friction on the platens barrels the specimen and raises the force above what the flow
 stress alone needs. The friction coefficient μ comes from the barrel: the largest diameter
-after the test (post.dmax_mm) and the final height (post.hk_mm) (docs/methods.md §3.3); the
-flow stress is the mean platen pressure divided by a friction factor (§3.4). Several
+after the test (post.dmax_mm) and the final height (post.hk_mm) (docs/methods.md §4.2); the
+flow stress is the mean platen pressure divided by a friction factor (§4.4, §4.5). Several
 corrections are computed; this script asks for the slab method's, which is also the
 friction law of the virtual rig that made the record (the default, k_sigma, reads a few
 per cent higher on it).

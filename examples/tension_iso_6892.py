@@ -3,7 +3,7 @@
 The record is an INSTRON export of a 42CrMoS4 specimen (examples/data/README.md): its
 header carries the lab's own results, its columns the raw time, force, extensometer and
 crosshead signals. ``load_record`` recognises the format; ``identify`` computes E, Rp0.2,
-Rm, Ag, A and Z from the raw columns alone (docs/methods.md §2).
+Rm, Ag, A and Z from the raw columns alone (docs/methods.md §2, §3.1–§3.3).
 
 Run: python examples/tension_iso_6892.py
 """

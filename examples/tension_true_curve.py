@@ -1,10 +1,10 @@
 """From the engineering curve to the true stress–strain curve and a hardening law.
 
 Up to the force maximum the specimen deforms uniformly, so the true stress is the
-engineering stress times (1 + e) (constant volume; docs/methods.md §2.4); past it a neck
-forms and the fracture point is corrected for the neck's triaxiality (Davidenkov). The
+engineering stress times (1 + e) (constant volume; docs/methods.md §3.2); past it a neck
+forms and the fracture point is corrected for the neck's triaxiality (Davidenkov, §3.4). The
 Johnson–Cook static law σ = A + B·εp^n is fitted to the true curve over the uniform range
-plus the corrected fracture point (docs/methods.md §2.5).
+plus the corrected fracture point (docs/methods.md §3.5, §5.1).
 
 Run: python examples/tension_true_curve.py
 """

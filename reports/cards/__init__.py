@@ -89,7 +89,7 @@ class CardData:
 
     # -- the law ---------------------------------------------------------------------------
     def flow_stress_MPa(self, eps_p, strain_rate_per_s=None, temperature_C=None):
-        """(2.19) Johnson–Cook flow stress in MPa, with the conventions of METHODS.md §5."""
+        """(2.19) Johnson–Cook flow stress in MPa, with the conventions of docs/methods.md §5."""
         rate = self.ref_strain_rate_per_s if strain_rate_per_s is None else strain_rate_per_s
         temp = self.ref_temperature_C if temperature_C is None else temperature_C
         melt = self.melt_temperature_C
@@ -262,7 +262,7 @@ def resample(eps, sig, max_rows: int = MAX_TABLE_ROWS) -> tuple[np.ndarray, np.n
 
 
 def start_at_zero(card: CardData, curve: FlowCurve) -> FlowCurve:
-    """The curve beginning at zero plastic strain (solvers require it, METHODS.md §7).
+    """The curve beginning at zero plastic strain (solvers require it, docs/methods.md §7).
 
     A measured curve starts at εp ≈ 0.002 (Rp0.2): the missing first point is the fitted
     model at εp = 0 for the curve's condition (fit.json's ``model_stress_at_zero_strain_MPa``,
