@@ -103,3 +103,10 @@ def test_installed_beside_packages_named_rig_and_reports_every_command_answers(w
         run = subprocess.run([str(env_dir / "bin" / "flowcurve"), *words, "--help"], cwd=tmp_path, env=env,
                              capture_output=True, text=True)
         assert run.returncode == 0 and run.stdout.startswith("usage: flowcurve"), (words, run.stderr[-2000:])
+    # and a command that does real work with the installed package: identify a shipped record, with plots
+    record = ROOT / "examples" / "data" / "46NT71.csv"
+    run = subprocess.run([str(env_dir / "bin" / "flowcurve"), "identify", str(record), "--out", "results"], cwd=tmp_path,
+                         env={**env, "MPLBACKEND": "Agg"}, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert (tmp_path / "results" / "46NT71" / "result.json").is_file()
+    assert list((tmp_path / "results" / "46NT71").glob("*.png"))
