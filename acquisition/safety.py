@@ -107,8 +107,9 @@ class HeaterSafety:
                     return True
                 except Exception as exc:  # keep trying whatever failed: the heater must go off
                     last = exc
-                    logger.warning("heater off, attempt %d of %d failed: %s", attempt + 1, self.retries, exc,
-                                   exc_info=not isinstance(exc, (DeviceError, OSError)))  # a bug: with its traceback
+                    logger.warning("heater off, attempt %d of %d failed: %s", attempt + 1, self.retries, exc)
+                    if not isinstance(exc, (DeviceError, OSError)):  # a bug: its traceback at -vv
+                        logger.debug("heater off: internal error", exc_info=True)
                     time.sleep(0.05 * (attempt + 1))
             self.off_error = " ".join(str(last).split())
             if self.log:

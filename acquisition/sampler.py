@@ -162,10 +162,10 @@ class Channel(threading.Thread):
                     return
                 continue
             except Exception as exc:  # a bug in the read code: no retry, stop the test safely
-                logger.exception("%s: internal error while reading", self.device)
+                logger.debug("%s: internal error while reading", self.device, exc_info=True)  # -vv: the traceback
                 self._fault(f"internal error: {_one_line(exc)}",
                             InternalError(f"{self.device}: internal error while reading: {_one_line(exc)} "
-                                          f"(a bug in flowcurve, please report it)"))
+                                          f"(a bug in flowcurve, please report it; -vv shows the traceback)"))
                 return
             failures = 0
             n = self._store(got, self.clock())
@@ -202,8 +202,7 @@ class Channel(threading.Thread):
 
     def _fault(self, message: str, error: Exception | None = None) -> None:
         self.error = message
-        if not isinstance(error, InternalError):
-            logger.warning("%s: %s", self.device, message)
+        logger.info("%s: fault: %s", self.device, message)  # the procedure reports it to the operator
         if self.on_fault:
             self.on_fault(self.device, message, error)
 

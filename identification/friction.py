@@ -1,7 +1,7 @@
 """Friction at the platens of a compression (upsetting) test, and the flow-curve corrections.
 
 Pure functions on post-test measurements and on (mean pressure, strain) arrays; equation
-numbers refer to seed 004, section 3.1.3 (see METHODS.md §4). All lengths in mm, stresses
+numbers refer to the seed (the thesis named in docs/methods.md), section 3.1.3 (§4 there). All lengths in mm, stresses
 in MPa, strains are logarithmic (true) strains.
 
 Friction from the barrelled specimen (each returns a :class:`FrictionResult`):

@@ -1,6 +1,6 @@
 """Strain-hardening laws σ(εp) and their identification from a true stress-strain curve.
 
-Three laws (METHODS.md §3, §5):
+Three laws (docs/methods.md §3, §5):
 
 * Johnson–Cook static part ``A + B·εp^n`` (the default),
 * Swift ``K·(ε0 + εp)^n``,

@@ -1,6 +1,6 @@
 """Indicator-diagram (P–Δl) processing: what turns a crosshead reading into specimen elongation.
 
-METHODS.md §2: frame compliance (§2.1), scaling to the elongation measured on the specimen
+docs/methods.md §2: frame compliance (§2.1), scaling to the elongation measured on the specimen
 ((3.1), §2.2), toe/slack compensation, the apparent modulus of the initial linear part (§2.3),
 and the frame stiffness identified from a specimen of known modulus (§2.4).
 

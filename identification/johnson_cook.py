@@ -1,4 +1,4 @@
-"""The full Johnson–Cook flow stress (2.19) with its conventions made explicit (METHODS.md §5).
+"""The full Johnson–Cook flow stress (2.19) with its conventions made explicit (docs/methods.md §5).
 
     σ = (A + B·εp^n) · (1 + C·ln ε̇*) · (1 − T*^m),   ε̇* = ε̇/ε̇0,   T* = (T − T_r)/(T_m − T_r)
 

@@ -1,6 +1,6 @@
 """Neck corrections: from the average axial stress in the neck to the equivalent flow stress.
 
-METHODS.md §3: Davidenkov–Spiridonov (3.10)–(3.11) (the default), Bridgman, Mirone's MLR.
+docs/methods.md §3: Davidenkov–Spiridonov (3.10)–(3.11) (the default), Bridgman, Mirone's MLR.
 When the neck radius R was not measured, a/R is estimated with Le Roy et al. (1981).
 The seed's (3.12) is deliberately absent: as printed it gives η ≈ 0.25 with no neck.
 

@@ -1,4 +1,4 @@
-"""Tension identification (METHODS.md §2–§3, seed 3.1.2): record → ISO 6892-1 results, true
+"""Tension identification (docs/methods.md §2–§3, seed 3.1.2): record → ISO 6892-1 results, true
 stress–strain curve, neck-corrected fracture point and hardening law.
 
 The strain comes from the extensometer when the record has one (``use_extensometer=None``

@@ -431,7 +431,7 @@ class RecordWriter:
             raise ValueError("event names are single words, e.g. heater_on")
         self._fh.write(f"# event: {time_s:.3f} {name} {text}".rstrip() + "\n")
         self._sync()
-        logger.info("%s: %.3f s %s %s", self.path.name, time_s, name, text)
+        logger.info("%s: %.3f s %s", self.path.name, time_s, f"{name} {text}".rstrip())
 
     def _sync(self, force: bool = False) -> None:
         self._fh.flush()

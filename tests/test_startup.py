@@ -21,3 +21,11 @@ def test_a_heavy_import_is_seen():
             f"print(' '.join(m for m in {HEAVY!r} if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert "pandas" in out.stdout.split()
+
+
+def test_the_fit_command_states_the_series_fits_default():
+    """`flowcurve fit --help` names the default without importing the fit; the two agree."""
+    from flowcurve.cli.series import DEFAULT_MAX_POINTS
+    from flowcurve.identification.series import MAX_POINTS
+
+    assert DEFAULT_MAX_POINTS == MAX_POINTS

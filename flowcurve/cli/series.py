@@ -18,6 +18,10 @@ from flowcurve.identification.outcome import to_jsonable
 if TYPE_CHECKING:  # the series fit (lmfit, pandas) is imported when a fit runs, not for --help
     from flowcurve.identification.series import SeriesFit
 
+# the series fit's MAX_POINTS, written here so that --help need not import the fit (lmfit);
+# tests/test_startup.py keeps the two equal
+DEFAULT_MAX_POINTS = 60
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -39,17 +43,17 @@ def register(subparsers) -> None:
                    help="global least squares over all curves (default) or the classic stepwise procedure; the other is reported for comparison")
     p.add_argument("--fix-C", type=float, metavar="VALUE", help="do not identify C, use this value (e.g. for a series at one rate)")
     p.add_argument("--fix-m", type=float, metavar="VALUE", help="do not identify m, use this value (e.g. for a series at one temperature)")
-    p.add_argument("--max-points", type=int, metavar="N", help="points per record in the fit (default: the series fit's MAX_POINTS, the same for every record)")
+    p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, metavar="N", help=f"points per record in the fit, the same for every record (default {DEFAULT_MAX_POINTS})")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from flowcurve.identification.series import MAX_POINTS, fit_series, load_members
+    from flowcurve.identification.series import fit_series, load_members
 
     members = load_members(args.inputs)
     fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
     series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
-                        melt_temperature_C=args.melt_temp, fixed=fixed, max_points=MAX_POINTS if args.max_points is None else args.max_points)
+                        melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points)
     out = write_fit(series, args.out)
     print(summary(series, out))
     return 0

@@ -1,4 +1,4 @@
-"""A small library of virtual materials for the virtual rig (METHODS.md §5, seed tables 1.1, 3.2).
+"""A small library of virtual materials for the virtual rig (docs/methods.md §5, seed tables 1.1, 3.2).
 
 Each :class:`Material` carries Johnson–Cook flow-stress constants (table 3.2), elastic
 constants (table 1.1) and a fracture strain, so that :mod:`flowcurve.rig.virtual.physics` can produce the

@@ -1,4 +1,4 @@
-"""Physical model of the virtual rig: specimen, frame, crosshead, furnace (METHODS.md §1–§5).
+"""Physical model of the virtual rig: specimen, frame, crosshead, furnace (docs/methods.md §1–§5).
 
 Pure and deterministic given a seed: :class:`RigModel` is advanced in model time by
 :meth:`RigModel.step` / :meth:`RigModel.advance_to`; the devices of :mod:`rig.virtual` only
@@ -113,7 +113,7 @@ class Specimen:
 
     @classmethod
     def tension(cls, d0_mm=6.0, l0_mm=30.0, neck_length_mm=None) -> "Specimen":
-        """GOST 1497 type IV (METHODS.md §3): d0 6 mm, l0 30 mm."""
+        """GOST 1497 type IV (docs/methods.md §3): d0 6 mm, l0 30 mm."""
         return cls("tension", d0_mm=d0_mm, l0_mm=l0_mm, neck_length_mm=neck_length_mm)
 
     @classmethod

@@ -1,7 +1,7 @@
 """How the virtual devices put their replies on the wire, written from the manuals' tables.
 
 The drivers decode with :mod:`flowcurve.rig.codecs`; the virtual devices encode with this
-module, written again from /work/shared/PROTOCOLS.md (HBM AED, ICP DAS DCON) and
+module, written again from the manuals' facts in the project's PROTOCOLS.md (HBM AED, ICP DAS DCON) and
 docs/encoder-protocol.md without looking at — or importing — the drivers' code. A mistake
 made on one side then shows as a failing test instead of cancelling out on both.
 

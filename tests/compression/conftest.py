@@ -21,7 +21,7 @@ from scipy.optimize import brentq
 from flowcurve.record.format import Record
 
 SEED_LAW = {"A": 105.0, "B": 1392.0, "n": 0.642}
-E_HANDBOOK_MPa = 194_000.0  # METHODS.md table 1.1, 12Kh18N12M3TL
+E_HANDBOOK_MPa = 194_000.0  # docs/methods.md table 1.1, 12Kh18N12M3TL
 
 
 def flow_stress(eps_p, A=105.0, B=1392.0, n=0.642):

@@ -83,7 +83,7 @@ def test_bridgman_with_the_measured_neck_radius_recovers_flow_stress_at_fracture
     a = post["post.dk_mm"] / 2
     s_avg = p_k / (math.pi * a * a)
     x = a / post["post.neck_radius_mm"]
-    s_eq = s_avg / ((1 + 2 / x) * math.log(1 + x / 2))  # Bridgman, METHODS.md §3
+    s_eq = s_avg / ((1 + 2 / x) * math.log(1 + x / 2))  # Bridgman, docs/methods.md §3
     eps_f = 2 * math.log(m.specimen.d0_mm / post["post.dk_mm"])
     assert s_eq == pytest.approx(m.material.flow_stress(eps_f, 0.01 / 30), rel=5e-3)
 
