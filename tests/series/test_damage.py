@@ -97,3 +97,74 @@ def test_fracture_table_reader(tmp_path):
     path.write_text("triaxiality,rate,temperature_C,fracture_strain\n0.3,0.001,20,1.2\n")
     with pytest.raises(RecordError, match="missing column.*strain_rate_per_s"):
         read_fracture_points(path)
+
+
+# -- through 'flowcurve fit' ------------------------------------------------------------------------------------
+SERIES_REF = dict(ref_strain_rate_per_s=1.0, ref_temperature_C=24.85, melt_temperature_C=1519.85)  # the syn series
+
+
+def write_fracture_table(path, ref=SERIES_REF, seed=5):
+    rng = np.random.default_rng(seed)
+    rows = ["# steel 45 constants (table 3.2), 2 % noise", "triaxiality,strain_rate_per_s,temperature_C,fracture_strain"]
+    for t in (1 / 3, *bridgman_triaxiality(3.0, [2.0, 1.0, 0.5])):
+        for r in (1.0, 1e2, 1e4):
+            for T in (24.85, 300.0, 600.0):
+                lr = max(math.log(r / ref["ref_strain_rate_per_s"]), 0.0)
+                ts = (T - ref["ref_temperature_C"]) / (ref["melt_temperature_C"] - ref["ref_temperature_C"])
+                e = (STEEL45["D2"] * math.exp(STEEL45["D3"] * t)) * (1 + STEEL45["D4"] * lr) * (1 + STEEL45["D5"] * ts)
+                rows.append(f"{t:.6f},{r:g},{T:g},{e * (1 + 0.02 * rng.standard_normal()):.5f}")
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def test_fit_command_adds_d1_to_d5_from_a_fracture_table(tmp_path, syn, capsys):
+    import json
+
+    from flowcurve.cli import main
+
+    root = tmp_path / "results"
+    for m in syn.members():
+        syn.write_result_folder(root / m.name, m)
+    table_path = write_fracture_table(tmp_path / "fracture.csv")
+    out = tmp_path / "fit"
+    assert main(["fit", str(root), "--out", str(out), "--ref-rate", "1", "--ref-temp", "24.85", "--melt-temp", "1519.85",
+                 "--fracture-points", str(table_path)]) == 0
+    text = capsys.readouterr().out
+    assert "fracture (2.22) over 36 points" in text
+    d = json.loads((out / "fit.json").read_text())
+    for k in ("D4", "D5"):
+        assert abs(d[k] - STEEL45[k]) < 2 * d[f"{k}_stderr"], k
+    assert d["damage"]["triaxiality_range"] == pytest.approx([1 / 3, float(bridgman_triaxiality(3.0, 0.5))])
+    assert d["damage"]["points"] == 36 and "positive in tension" in d["damage"]["conventions"]["triaxiality"]
+    assert any(w.startswith("fracture:") for w in d["warnings"])  # D1 fixed at 0, said so
+
+
+def test_bad_fracture_table_is_a_one_line_error(tmp_path, syn, capsys):
+    from flowcurve.cli import main
+
+    root = tmp_path / "results"
+    for m in syn.members():
+        syn.write_result_folder(root / m.name, m)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("triaxiality,strain_rate_per_s,temperature_C,fracture_strain\n0.33,1,20,-1\n")
+    assert main(["fit", str(root), "--out", str(tmp_path / "fit"), "--melt-temp", "1519.85", "--fracture-points", str(bad)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "bad.csv" in err and "line 2" in err and "fracture_strain" in err and "\n" not in err
+
+
+def test_notched_result_folder_carries_its_bridgman_triaxiality(tmp_path, syn):
+    import json
+
+    from flowcurve.identification.series import member_from_result
+
+    m = syn.members()[0]
+    folder = syn.write_result_folder(tmp_path / "notched", m)
+    result = json.loads((folder / "result.json").read_text())
+    result["fracture_true_strain"] = 0.8
+    result["record"]["specimen"]["notch_radius_mm"] = 1.5
+    (folder / "result.json").write_text(json.dumps(result))
+    member = member_from_result(folder)
+    # d0 6 mm: a = 3 mm, R = 1.5 mm: 1/3 + ln 2
+    assert member.fracture.triaxiality == pytest.approx(1 / 3 + math.log(2.0))
+    assert member.fracture.fracture_strain == 0.8
+    assert member.fracture.strain_rate_per_s == member.strain_rate_per_s
