@@ -52,7 +52,9 @@ def johnson_cook_block(data: CardData, units: UnitSystem, mid: int, eosid: int) 
     G = E / (2.0 * (1.0 + nu))  # shear modulus
     K = E / (3.0 * (1.0 - 2.0 * nu))  # bulk modulus, the linear EOS slope
     d = [data.fracture[k] for k in DAMAGE_KEYS] if data.fracture else [NO_FAILURE_D1, 0.0, 0.0, 0.0, 0.0]
-    note = ("D1-D5: the identified Johnson-Cook fracture constants (triaxiality positive in tension, as LS-DYNA's)."
+    note = ("D1-D5: the identified Johnson-Cook fracture constants, triaxiality sigma_m/sigma_eq positive in tension "
+            "(Johnson-Cook 1985, the convention in which published D1-D5 with D3 < 0 are entered here; the LS-DYNA "
+            "manual writes it p/sigma_eff)."
             if data.fracture else
             f"D1-D5: no fracture criterion was identified: D1 = {NO_FAILURE_D1:g} (a failure strain never reached; "
             "EROD = 0 would erode elements at a zero failure strain) - replace D1-D5 if the model needs failure.")

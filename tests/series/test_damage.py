@@ -137,6 +137,14 @@ def test_fit_command_adds_d1_to_d5_from_a_fracture_table(tmp_path, syn, capsys):
     assert d["damage"]["triaxiality_range"] == pytest.approx([1 / 3, float(bridgman_triaxiality(3.0, 0.5))])
     assert d["damage"]["points"] == 36 and "positive in tension" in d["damage"]["conventions"]["triaxiality"]
     assert any(w.startswith("fracture:") for w in d["warnings"])  # D1 fixed at 0, said so
+    # and on into the three solvers' cards
+    constants = ["--E", "205000", "--poisson", "0.29", "--density", "7850", "--cp", "477"]
+    for fmt, needle in (("lsdyna", "*MAT_JOHNSON_COOK"), ("abaqus", "*DAMAGE INITIATION, CRITERION=JOHNSON COOK"),
+                        ("radioss", "/FAIL/JOHNSON/1")):
+        card = tmp_path / f"card.{fmt}"
+        assert main(["card", str(out / "fit.json"), "-f", fmt, "-o", str(card), *constants]) == 0, capsys.readouterr().err
+        text = card.read_text()
+        assert needle in text and f"D5 = {d['D5']:.6g}" in text
 
 
 def test_bad_fracture_table_is_a_one_line_error(tmp_path, syn, capsys):
