@@ -12,6 +12,7 @@ from __future__ import annotations
 from flowcurve.reports.cards.calculix import material_name, plastic_rows
 from flowcurve.reports.cards.data import DAMAGE_KEYS, CardData, CardOptions, header_lines
 from flowcurve.reports.cards.fields import comment_block, number
+from flowcurve.reports.cards.tables import origin_text
 from flowcurve.reports.units import UnitSystem
 
 
@@ -55,7 +56,7 @@ def abaqus_card(data: CardData, units: UnitSystem, options: CardOptions) -> str:
     melt = data.require("melt_temperature_C")
     eps0 = units.to_system(data.ref_strain_rate_per_s, "strain_rate")
     rows, tables = plastic_rows(data, units, options)
-    origin = "the Johnson-Cook law tabulated" if tables[0].origin == "Johnson-Cook" else "identified true curves"
+    origin = origin_text(tables)
     rate_text = ", ".join(sorted({f"{c.strain_rate_per_s:.3g}" for c in tables}))
     time_unit = units.name.split("-")[1]
     out = [comment_block(header_lines(data, units, "Abaqus", f"temperatures in C, strain rates per {time_unit}", options)

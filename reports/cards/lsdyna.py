@@ -20,7 +20,7 @@ import math
 
 from flowcurve.reports.cards.data import DAMAGE_KEYS, CardData, CardOptions, header_lines
 from flowcurve.reports.cards.fields import comment_block, fixed_line
-from flowcurve.reports.cards.tables import rate_tables
+from flowcurve.reports.cards.tables import origin_text, rate_tables
 from flowcurve.reports.units import UnitSystem
 
 MAT_JC_ID = 1
@@ -96,7 +96,7 @@ def piecewise_linear_block(data: CardData, units: UnitSystem, options: CardOptio
     time_unit = units.name.split("-")[1]
     table_id, curve_id = TABLE_ID + options.id_offset, CURVE_ID + options.id_offset
     temp_text = f"{tables[0].temperature_C:.6g} C"
-    origin = "the Johnson-Cook law tabulated" if tables[0].origin == "Johnson-Cook" else "identified true curves"
+    origin = origin_text(tables)
     rows = table_rows(data, units, tables) if len(tables) > 1 else [(None, tables[0])]
     several = len(rows) > 1
     if several:

@@ -39,7 +39,7 @@ def plas_johns(data: CardData, units: UnitSystem, options: CardOptions, mat_id: 
     rho_cp = rho * cp  # volumetric heat capacity, the unit system's own rho*Cp
     A, B = (units.to_system(v * 1e6, "stress") for v in (data.A_MPa, data.B_MPa))
     eps0 = units.to_system(data.ref_strain_rate_per_s, "strain_rate")
-    fcut = units.to_system(options.fcut_hz, "strain_rate")  # a frequency: 1/time
+    fcut = units.to_system(options.fcut_hz, "frequency")
     t_melt = units.temperature(data.require("melt_temperature_C"), absolute=True)
     t_ref = units.temperature(data.ref_temperature_C, absolute=True)
     current = options.radioss_version == "2025"
