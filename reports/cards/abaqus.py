@@ -39,13 +39,13 @@ def damage_lines(data: CardData, units: UnitSystem, options: CardOptions) -> lis
            ", ".join(number(v) for v in [data.fracture[k] for k in DAMAGE_KEYS]
                      + [data.require("melt_temperature_C"), data.ref_temperature_C, eps0])]
     if options.damage_displacement_mm is None:
-        out += ["** No *DAMAGE EVOLUTION given (--damage-displacement): Abaqus evaluates the criterion (JCCRT)",
-                "** for output only; the material does not soften or fail."]
+        out.append(comment_block(["No *DAMAGE EVOLUTION given (--damage-displacement): Abaqus evaluates the criterion "
+                                  "(JCCRT) for output only; the material does not soften or fail."], "** ").rstrip("\n"))
     else:
         u_f = units.to_system(options.damage_displacement_mm * 1e-3, "length")
-        out += [f"** *DAMAGE EVOLUTION set by the user (not identified): linear softening over an equivalent plastic "
-                f"displacement of {options.damage_displacement_mm:g} mm",
-                "*DAMAGE EVOLUTION, TYPE=DISPLACEMENT, SOFTENING=LINEAR", number(u_f)]
+        out.append(comment_block(["*DAMAGE EVOLUTION set by the user (not identified): linear softening over an "
+                                  f"equivalent plastic displacement of {options.damage_displacement_mm:g} mm"], "** ").rstrip("\n"))
+        out += ["*DAMAGE EVOLUTION, TYPE=DISPLACEMENT, SOFTENING=LINEAR", number(u_f)]
     return out
 
 

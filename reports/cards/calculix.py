@@ -53,6 +53,7 @@ def calculix_card(data: CardData, units: UnitSystem, options: CardOptions) -> st
         f"** to {options.extend_to:g} (the fitted law beyond the last measured point).",
         "** Johnson-Cook's own keyword is misread silently by ccx 2.20: this table is the correct form.",
         "** Set *INITIAL CONDITIONS, TYPE=TEMPERATURE in the model, or ccx uses the lowest-temperature curve.",
+        *(["** D1-D5 not written: Johnson-Cook damage cards exist only from ccx 2.23 (CALCULIX.md)."] if data.fracture else []),
         f"*MATERIAL, NAME={material_name(data)}",
         "*ELASTIC",
         f"{number(E)}, {number(nu)}",
