@@ -176,3 +176,15 @@ def test_notched_result_folder_carries_its_bridgman_triaxiality(tmp_path, syn):
     assert member.fracture.triaxiality == pytest.approx(1 / 3 + math.log(2.0))
     assert member.fracture.fracture_strain == 0.8
     assert member.fracture.strain_rate_per_s == member.strain_rate_per_s
+
+
+def test_record_with_a_section_after_fracture_and_a_notch_gives_its_fracture_point(syn):
+    from flowcurve.identification.series import member_from_record
+
+    record, _ = syn.tension_record(24.85, 0.03, 1e-3)
+    assert member_from_record(record).fracture is None  # no section after fracture: no point, no guess
+    record.meta.update({"post.dk_mm": "4.0", "specimen.notch_radius_mm": "2.0"})
+    point = member_from_record(record).fracture
+    assert point.fracture_strain == pytest.approx(2 * math.log(6.0 / 4.0), rel=1e-9)  # ln(A0/Af)
+    assert point.triaxiality == pytest.approx(1 / 3 + math.log(1 + 3.0 / 4.0))  # a = 3 mm, R = 2 mm
+    assert point.temperature_C == pytest.approx(24.85, abs=0.2)
