@@ -13,8 +13,6 @@ from .conftest import LAW, jc_MPa
 from .readers import floats, read_inp
 from .test_lsdyna import read_deck
 
-dyna_curves = None
-
 
 def dyna_flow_stress(text, eps_p, rate_per_time_unit):
     """MAT_024's flow stress as LS-DYNA reads its LCSS: a *DEFINE_TABLE whose first value is
