@@ -34,6 +34,7 @@ from flowcurve.identification.hardening import fit_hardening
 from flowcurve.identification.johnson_cook import (CONVENTIONS, EQUATION, homologous_temperature, johnson_cook_reduced,
                                          log_rate_ratio)
 from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
+from flowcurve.identification.damage import DamageFit, FracturePoint, fit_damage, fracture_point_from_result
 
 PARAMS = ("A", "B", "n", "C", "m")
 KEYS = {"A": "A_MPa", "B": "B_MPa", "n": "n", "C": "C", "m": "m"}
@@ -73,6 +74,7 @@ class SeriesMember:
     E_MPa: float | None = None
     poisson_ratio: float | None = None
     material: str | None = None
+    fracture: FracturePoint | None = None  # the test's fracture (tension with a section after fracture)
 
     def __post_init__(self):
         where = self.source if self.source != "<memory>" else self.name
@@ -192,7 +194,9 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
                         strain_rate_source="data" if _number(result.get("E_MPa")) else "data (total strain: no E_MPa)",
                         temperature_source=t_source,
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
-                        poisson_ratio=_number(result.get("poisson_ratio")), material=record.meta.get("material"))
+                        poisson_ratio=_number(result.get("poisson_ratio")), material=record.meta.get("material"),
+                        fracture=fracture_point_from_result(dict(result, test=record.test), record.meta, rate, temperature,
+                                                            record.source))
 
 
 def member_from_result(folder: str | Path) -> SeriesMember:
@@ -250,7 +254,15 @@ def member_from_result(folder: str | Path) -> SeriesMember:
                         strain_rate_per_s=rate, temperature_C=temperature, source=str(folder), kind="result",
                         test=test, strain_rate_source=rate_source, temperature_source="nominal",
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
-                        poisson_ratio=_number(result.get("poisson_ratio")), material=block.get("material"))
+                        poisson_ratio=_number(result.get("poisson_ratio")), material=block.get("material"),
+                        fracture=fracture_point_from_result(dict(result, test=test), _flat_specimen(block), rate,
+                                                            temperature, str(folder)))
+
+
+def _flat_specimen(block: dict) -> dict:
+    """result.json's record block with its specimen keys as in a record header (specimen.d0_mm)."""
+    specimen = block.get("specimen") if isinstance(block.get("specimen"), dict) else {}
+    return {**block, **{f"specimen.{k}": v for k, v in specimen.items()}}
 
 
 def load_members(paths: Iterable[str | Path], **identify_options) -> list[SeriesMember]:
@@ -607,6 +619,7 @@ class SeriesFit:
     curves: list[ConditionCurve]
     warnings: list[str] = field(default_factory=list)
     max_points: int = MAX_POINTS
+    damage: DamageFit | None = None  # D1-D5 when the series holds fracture data
 
     def covered_range(self) -> dict[str, list[float]]:
         """The plastic strain, strain rate (1/s) and temperature (°C) the constants were identified on."""
@@ -653,13 +666,17 @@ class SeriesFit:
         nus = [m.poisson_ratio for m in ms if m.poisson_ratio is not None]
         out["poisson_ratio"] = float(np.mean(nus)) if nus else None
         out["warnings"] = list(self.warnings)
+        if self.damage is not None:
+            out.update(self.damage.as_dict())
         return out
 
 
 def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_strain_rate_per_s: float | None = None,
                ref_temperature_C: float | None = None, melt_temperature_C: float | None = None,
-               fixed: dict[str, float] | None = None, max_points: int = MAX_POINTS) -> SeriesFit:
-    """Fit the series by ``method`` ("global" or "stepwise") and the other one for comparison."""
+               fixed: dict[str, float] | None = None, max_points: int = MAX_POINTS,
+               fracture_points: Sequence[FracturePoint] = ()) -> SeriesFit:
+    """Fit the series by ``method`` ("global" or "stepwise") and the other one for comparison;
+    D1-D5 from the members' fractures and ``fracture_points`` (measured elsewhere) when given."""
     if method not in ("global", "stepwise"):
         raise IdentificationError(f"unknown fit method {method!r}; choose global or stepwise")
     if max_points < 5:
@@ -679,6 +696,22 @@ def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_s
             note = f"no stepwise comparison: {exc}"
     glob = fit_global(members, ref, fixed=fixed, max_points=max_points)
     chosen = glob if method == "global" else stepwise
+    damage = _fit_damage(members, list(fracture_points), ref, warnings)
     return SeriesFit(method=method, fit=chosen, global_fit=glob, stepwise_fit=stepwise, stepwise_note=note,
                      members=members, curves=condition_curves(members, max_points), warnings=warnings,
-                     max_points=max_points)
+                     max_points=max_points, damage=damage)
+
+
+def _fit_damage(members, extra: list[FracturePoint], ref: Reference, warnings: list[str]) -> DamageFit | None:
+    """D1-D5 at the flow fit's reference, or None with a warning saying why (no fracture data: silent)."""
+    points = [m.fracture for m in members if m.fracture is not None] + extra
+    if not points:
+        return None
+    try:
+        damage = fit_damage(points, ref_strain_rate_per_s=ref.strain_rate_per_s, ref_temperature_C=ref.temperature_C,
+                            melt_temperature_C=ref.melt_temperature_C)
+    except IdentificationError as exc:
+        warnings.append(f"no Johnson-Cook fracture constants: {exc}")
+        return None
+    warnings.extend(f"fracture: {w}" for w in damage.warnings)
+    return damage

@@ -36,6 +36,7 @@ DIMENSIONS: dict[str, tuple[int, int, int, int]] = {
     "volume": (3, 0, 0, 0),
     "velocity": (1, -1, 0, 0),
     "strain_rate": (0, -1, 0, 0),
+    "frequency": (0, -1, 0, 0),  # Radioss' filter cut-off F_cut
     "force": (1, -2, 1, 0),
     "stress": (-1, -2, 1, 0),
     "energy": (2, -2, 1, 0),

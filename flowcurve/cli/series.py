@@ -44,16 +44,22 @@ def register(subparsers) -> None:
     p.add_argument("--fix-C", type=float, metavar="VALUE", help="do not identify C, use this value (e.g. for a series at one rate)")
     p.add_argument("--fix-m", type=float, metavar="VALUE", help="do not identify m, use this value (e.g. for a series at one temperature)")
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, metavar="N", help=f"points per record in the fit, the same for every record (default {DEFAULT_MAX_POINTS})")
+    p.add_argument("--fracture-points", metavar="FILE.csv",
+                   help="fracture points measured elsewhere for the Johnson-Cook fracture constants D1-D5 (columns triaxiality "
+                        "[sigma_m/sigma_eq, positive in tension], strain_rate_per_s, temperature_C, fracture_strain); "
+                        "added to the fractures of the series' tension records")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    from flowcurve.identification.damage import read_fracture_points
     from flowcurve.identification.series import fit_series, load_members
 
     members = load_members(args.inputs)
     fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
+    extra = read_fracture_points(args.fracture_points) if args.fracture_points else ()
     series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
-                        melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points)
+                        melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points, fracture_points=extra)
     out = write_fit(series, args.out)
     print(summary(series, out))
     return 0
@@ -148,6 +154,12 @@ def summary(series: SeriesFit, path: Path) -> str:
                      + f" (max error {other.fit_error_pct:.2f} %)")
     elif series.stepwise_note:
         lines.append(f"  {series.stepwise_note}")
+    if series.damage is not None:
+        d = series.damage
+        lines.append(f"  fracture (2.22) over {len(d.points)} points, triaxiality {d.covered()['triaxiality_range'][0]:.3g}-"
+                     f"{d.covered()['triaxiality_range'][1]:.3g} (positive in tension): "
+                     + ", ".join(f"{k} = {v:.4g}" + (" (fixed)" if k in d.fixed else f" ± {d.stderr[k]:.2g}" if d.stderr[k] else "")
+                                 for k, v in d.params.items()))
     lines += [f"  warning: {w}" for w in series.warnings]
     lines.append(f"wrote {path}")
     return "\n".join(lines)

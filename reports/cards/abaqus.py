@@ -12,6 +12,7 @@ from __future__ import annotations
 from flowcurve.reports.cards.calculix import material_name, plastic_rows
 from flowcurve.reports.cards.data import DAMAGE_KEYS, CardData, CardOptions, header_lines
 from flowcurve.reports.cards.fields import comment_block, number
+from flowcurve.reports.cards.tables import origin_text
 from flowcurve.reports.units import UnitSystem
 
 
@@ -38,13 +39,13 @@ def damage_lines(data: CardData, units: UnitSystem, options: CardOptions) -> lis
            ", ".join(number(v) for v in [data.fracture[k] for k in DAMAGE_KEYS]
                      + [data.require("melt_temperature_C"), data.ref_temperature_C, eps0])]
     if options.damage_displacement_mm is None:
-        out += ["** No *DAMAGE EVOLUTION given (--damage-displacement): Abaqus evaluates the criterion (JCCRT)",
-                "** for output only; the material does not soften or fail."]
+        out.append(comment_block(["No *DAMAGE EVOLUTION given (--damage-displacement): Abaqus evaluates the criterion "
+                                  "(JCCRT) for output only; the material does not soften or fail."], "** ").rstrip("\n"))
     else:
         u_f = units.to_system(options.damage_displacement_mm * 1e-3, "length")
-        out += [f"** *DAMAGE EVOLUTION set by the user (not identified): linear softening over an equivalent plastic "
-                f"displacement of {options.damage_displacement_mm:g} mm",
-                "*DAMAGE EVOLUTION, TYPE=DISPLACEMENT, SOFTENING=LINEAR", number(u_f)]
+        out.append(comment_block(["*DAMAGE EVOLUTION set by the user (not identified): linear softening over an "
+                                  f"equivalent plastic displacement of {options.damage_displacement_mm:g} mm"], "** ").rstrip("\n"))
+        out += ["*DAMAGE EVOLUTION, TYPE=DISPLACEMENT, SOFTENING=LINEAR", number(u_f)]
     return out
 
 
@@ -55,7 +56,7 @@ def abaqus_card(data: CardData, units: UnitSystem, options: CardOptions) -> str:
     melt = data.require("melt_temperature_C")
     eps0 = units.to_system(data.ref_strain_rate_per_s, "strain_rate")
     rows, tables = plastic_rows(data, units, options)
-    origin = "the Johnson-Cook law tabulated" if tables[0].origin == "Johnson-Cook" else "identified true curves"
+    origin = origin_text(tables)
     rate_text = ", ".join(sorted({f"{c.strain_rate_per_s:.3g}" for c in tables}))
     time_unit = units.name.split("-")[1]
     out = [comment_block(header_lines(data, units, "Abaqus", f"temperatures in C, strain rates per {time_unit}", options)

@@ -13,7 +13,7 @@ import re
 
 from flowcurve.reports.cards.data import CardData, CardOptions, header_lines
 from flowcurve.reports.cards.fields import comment_block, number
-from flowcurve.reports.cards.tables import flow_tables
+from flowcurve.reports.cards.tables import flow_tables, origin_text
 from flowcurve.reports.units import UnitSystem
 
 
@@ -43,7 +43,7 @@ def calculix_card(data: CardData, units: UnitSystem, options: CardOptions) -> st
     rho = units.to_system(data.require("density_kg_per_m3"), "density")
     rows, tables = plastic_rows(data, units, options)
     rate_text = ", ".join(sorted({f"{c.strain_rate_per_s:.3g}" for c in tables}))
-    origin = "the Johnson-Cook law tabulated" if tables[0].origin == "Johnson-Cook" else "identified true curves"
+    origin = origin_text(tables)
     temps = ", ".join(f"{c.temperature_C:g}" for c in tables)
     out = [comment_block(header_lines(data, units, "CalculiX 2.20", "temperatures in C", options), "** ").rstrip("\n")]
     out += [
@@ -53,6 +53,7 @@ def calculix_card(data: CardData, units: UnitSystem, options: CardOptions) -> st
         f"** to {options.extend_to:g} (the fitted law beyond the last measured point).",
         "** Johnson-Cook's own keyword is misread silently by ccx 2.20: this table is the correct form.",
         "** Set *INITIAL CONDITIONS, TYPE=TEMPERATURE in the model, or ccx uses the lowest-temperature curve.",
+        *(["** D1-D5 not written: Johnson-Cook damage cards exist only from ccx 2.23 (CALCULIX.md)."] if data.fracture else []),
         f"*MATERIAL, NAME={material_name(data)}",
         "*ELASTIC",
         f"{number(E)}, {number(nu)}",

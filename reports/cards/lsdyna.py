@@ -20,7 +20,7 @@ import math
 
 from flowcurve.reports.cards.data import DAMAGE_KEYS, CardData, CardOptions, header_lines
 from flowcurve.reports.cards.fields import comment_block, fixed_line
-from flowcurve.reports.cards.tables import rate_tables
+from flowcurve.reports.cards.tables import origin_text, rate_tables
 from flowcurve.reports.units import UnitSystem
 
 MAT_JC_ID = 1
@@ -52,7 +52,9 @@ def johnson_cook_block(data: CardData, units: UnitSystem, mid: int, eosid: int) 
     G = E / (2.0 * (1.0 + nu))  # shear modulus
     K = E / (3.0 * (1.0 - 2.0 * nu))  # bulk modulus, the linear EOS slope
     d = [data.fracture[k] for k in DAMAGE_KEYS] if data.fracture else [NO_FAILURE_D1, 0.0, 0.0, 0.0, 0.0]
-    note = ("D1-D5: the identified Johnson-Cook fracture constants (triaxiality positive in tension, as LS-DYNA's)."
+    note = ("D1-D5: the identified Johnson-Cook fracture constants, triaxiality sigma_m/sigma_eq positive in tension "
+            "(Johnson-Cook 1985, the convention in which published D1-D5 with D3 < 0 are entered here; the LS-DYNA "
+            "manual writes it p/sigma_eff)."
             if data.fracture else
             f"D1-D5: no fracture criterion was identified: D1 = {NO_FAILURE_D1:g} (a failure strain never reached; "
             "EROD = 0 would erode elements at a zero failure strain) - replace D1-D5 if the model needs failure.")
@@ -94,7 +96,7 @@ def piecewise_linear_block(data: CardData, units: UnitSystem, options: CardOptio
     time_unit = units.name.split("-")[1]
     table_id, curve_id = TABLE_ID + options.id_offset, CURVE_ID + options.id_offset
     temp_text = f"{tables[0].temperature_C:.6g} C"
-    origin = "the Johnson-Cook law tabulated" if tables[0].origin == "Johnson-Cook" else "identified true curves"
+    origin = origin_text(tables)
     rows = table_rows(data, units, tables) if len(tables) > 1 else [(None, tables[0])]
     several = len(rows) > 1
     if several:

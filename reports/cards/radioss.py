@@ -14,6 +14,11 @@ The 2023 layout (OpenRadioss before 2025) has four fields on line 5. Radioss wan
 temperatures (T_r <= 0 reads as 298 K) and the volumetric heat capacity rho*Cp; eps_dot0 and
 F_cut are per the deck's time unit. The strain-rate filter is on (Fsmooth = 1, F_cut given):
 without it OpenRadioss warns and uses the raw, noisy strain rate.
+
+/FAIL/JOHNSON: OpenRadioss evaluates eps_f = D1 + D2 exp(D3 P/SVM) with P the mean stress
+(sigma_xx + sigma_yy + sigma_zz)/3, positive in tension, times (1 + D4 ln(max(1, eps_dot/eps_dot0)))
+(1 + D5 T*) (engine/source/materials/fail/johnson_cook/fail_johnson.F): the conventions of
+identification.damage, so the fitted constants go in unchanged.
 """
 
 from __future__ import annotations
@@ -34,7 +39,7 @@ def plas_johns(data: CardData, units: UnitSystem, options: CardOptions, mat_id: 
     rho_cp = rho * cp  # volumetric heat capacity, the unit system's own rho*Cp
     A, B = (units.to_system(v * 1e6, "stress") for v in (data.A_MPa, data.B_MPa))
     eps0 = units.to_system(data.ref_strain_rate_per_s, "strain_rate")
-    fcut = units.to_system(options.fcut_hz, "strain_rate")  # a frequency: 1/time
+    fcut = units.to_system(options.fcut_hz, "frequency")
     t_melt = units.temperature(data.require("melt_temperature_C"), absolute=True)
     t_ref = units.temperature(data.ref_temperature_C, absolute=True)
     current = options.radioss_version == "2025"

@@ -21,6 +21,8 @@ import math
 import numpy as np
 
 from flowcurve.identification.hardening import johnson_cook_static
+from flowcurve.identification.johnson_cook import log_rate_ratio
+from flowcurve.identification.johnson_cook import rate_factor as jc_rate_factor
 from flowcurve.reports.cards.data import CardData, CardOptions, FlowCurve
 from flowcurve.reports.cards.fields import CardError
 
@@ -113,8 +115,8 @@ def law_curve(card: CardData, temperature_C: float, strain_rate_per_s: float, op
 
 
 def rate_factor(card: CardData, strain_rate_per_s: float) -> float:
-    """# (2.19) 1 + C ln(max(eps_dot/eps_dot0, 1))."""
-    return 1.0 + card.C * max(math.log(strain_rate_per_s / card.ref_strain_rate_per_s), 0.0)
+    """# (2.19) 1 + C ln(max(eps_dot/eps_dot0, 1)) of the card's law."""
+    return float(jc_rate_factor(log_rate_ratio(strain_rate_per_s, card.ref_strain_rate_per_s), card.C))
 
 
 def curve_at_rate(card: CardData, group: list[FlowCurve], temperature_C: float, strain_rate_per_s: float) -> FlowCurve:
@@ -128,6 +130,15 @@ def curve_at_rate(card: CardData, group: list[FlowCurve], temperature_C: float, 
     zero = None if near.model_stress_at_zero_MPa is None else near.model_stress_at_zero_MPa * scale
     return FlowCurve(temperature_C, strain_rate_per_s, near.plastic_strain, near.stress_MPa * scale,
                      "measured, rate-scaled by the law", zero)
+
+
+def origin_text(curves: list[FlowCurve]) -> str:
+    """What the tabulated curves are, for the card's comment."""
+    if curves[0].origin == "Johnson-Cook":
+        return "the Johnson-Cook law tabulated"
+    if any("scaled" in c.origin for c in curves):
+        return "identified true curves (at an untested rate: the nearest one scaled by the law's rate factor)"
+    return "identified true curves"
 
 
 def source_of(card: CardData, options: CardOptions) -> str:

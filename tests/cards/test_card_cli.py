@@ -84,3 +84,24 @@ def test_untested_temperature_for_measured_curves_is_refused(fit_file, capsys):
     err = capsys.readouterr().err
     assert "no measured curves at 300 C" in err and "--curves law" in err
     assert main(["card", str(fit_file()), "-f", "lsdyna", "--temperature", "300", "--curves", "law"]) == 0
+
+
+def test_card_options_reach_the_card(fit_file, capsys):
+    from .readers import read_radioss, read_radioss_block
+
+    path = fit_file()
+    assert main(["card", str(path), "-f", "radioss", "--radioss-version", "2023", "--id-offset", "40", "--fcut", "500"]) == 0
+    blocks = dict(read_radioss(capsys.readouterr().out))
+    v = read_radioss_block(blocks["/MAT/PLAS_JOHNS/41"][1:], "PLAS_JOHNS", "2023")
+    assert v["F_cut"] == 500.0 and v["T_r"] == pytest.approx(293.15)
+    assert main(["card", str(path), "-f", "calculix", "--extend-to", "0.6", "--temperature-tolerance", "500"]) == 0
+    rows = floats([r for k, _, r in read_inp(capsys.readouterr().out) if k == "PLASTIC"][0])
+    assert len(set(rows[:, 2])) == 1 and rows[-1, 1] == pytest.approx(0.6)  # 20 and 400 C made one by the tolerance
+
+
+@pytest.mark.parametrize("option, value", [("--extend-to", "0"), ("--id-offset", "-3"), ("--temperature-tolerance", "-1"),
+                                           ("--max-rows", "2"), ("--damage-displacement", "0")])
+def test_bad_card_option_is_one_line_naming_it(fit_file, capsys, option, value):
+    assert main(["card", str(fit_file()), "-f", "lsdyna", option, value]) == 2
+    err = capsys.readouterr().err.strip()
+    assert option in err and "\n" not in err

@@ -13,8 +13,6 @@ from .conftest import LAW, jc_MPa
 from .readers import floats, read_inp
 from .test_lsdyna import read_deck
 
-dyna_curves = None
-
 
 def dyna_flow_stress(text, eps_p, rate_per_time_unit):
     """MAT_024's flow stress as LS-DYNA reads its LCSS: a *DEFINE_TABLE whose first value is
@@ -156,3 +154,29 @@ def test_no_two_values_run_together(fit_file):
         for k in range(0, len(line), width):
             field = line[k:k + width]
             assert field.strip() == "" or field[0] == " ", line
+
+
+def test_demo_like_series_gives_a_rate_dependent_mat024_and_one_temperature_block(tmp_path):
+    """Two tests at two rates, one temperature that the thermocouple read as 19.9934 and
+    19.9957 C: through 'flowcurve fit' (its files) to the cards."""
+    from flowcurve.cli.series import write_fit
+    from flowcurve.identification.series import SeriesMember, fit_series
+
+    eps = np.linspace(0.002, 0.12, 60)
+    members = [SeriesMember(name=f"t{i}", plastic_strain=eps, stress_MPa=jc_MPa(eps, rate, 20.0), strain_rate_per_s=rate,
+                            temperature_C=temp, test="tension")
+               for i, (temp, rate) in enumerate(((19.9934, 1e-3), (19.9957, 1e-2)))]
+    series = fit_series(members, ref_strain_rate_per_s=1e-3, ref_temperature_C=19.9934, melt_temperature_C=1400.0,
+                        fixed={"m": LAW["m"]})
+    fit_path = write_fit(series, tmp_path / "fit")
+    data = load_card_data(fit_path, E_MPa=194000.0, poisson=0.25, density_kg_per_m3=7820.0, specific_heat_J_per_kgK=462.0)
+    text = write_card(data, "lsdyna", "mm-s-t-N-MPa")
+    _, kw = read_deck(text)
+    assert np.asarray(kw["DefineTable"][0].points.data) == pytest.approx(np.log([1e-3, 1e-2]))  # rate-dependent
+    probe = np.array([0.05, 0.1])
+    np.testing.assert_allclose(dyna_flow_stress(text, probe, 1e-2), jc_MPa(probe, 1e-2, 20.0), rtol=3e-3)
+    for fmt, name in (("abaqus", "_TABLE"), ("calculix", None)):
+        blocks = plastic_blocks(write_card(data, fmt, "mm-s-t-N-MPa"), name)
+        assert len(blocks) == 1  # one temperature block
+        (rows,) = blocks.values()
+        assert rows[-1, 1] == pytest.approx(2.0)  # not cut at 0.12: the stated extension

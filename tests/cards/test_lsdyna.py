@@ -52,8 +52,17 @@ def assert_read_as_written(text, deck):
         elif line.startswith("$#") and current is not None and i + 1 < len(lines) and lines[i + 1][:1] not in ("$", "*"):
             labels = line[2:].split()
             data = lines[i + 1]
-            if labels in (["value"], ["a1", "o1"]):
-                continue  # 20-character points: checked against the curves' tables below
+            if labels in (["value"], ["a1", "o1"]):  # 20-character points up to the next keyword
+                rows = []
+                for row in lines[i + 1:]:
+                    if row.startswith(("*", "$")):
+                        break
+                    rows.append([float(row[k:k + 20]) for k in range(0, len(row), 20)])
+                read = (np.asarray(current.points.data, float)[:, None] if labels == ["value"]
+                        else current.curves[["a1", "o1"]].to_numpy(float))
+                np.testing.assert_array_equal(read, np.array(rows))
+                checked += read.size
+                continue
             for k, label in enumerate(labels):
                 if not hasattr(current, label):
                     continue
@@ -63,6 +72,15 @@ def assert_read_as_written(text, deck):
                     assert float(read) == float(text_value), (type(current).__name__, label, read, text_value)
                     checked += 1
     assert checked > 20
+
+
+@pytest.mark.parametrize("units", sorted(FACTORS))
+@pytest.mark.parametrize("options", [{}, {"id_offset": 70, "erosion_strain": 1.2}, {"curves": "law", "extend_to": 1.5}])
+def test_every_field_reads_back_as_written(fit_file, units, options):
+    path = fit_file(D1=0.05, D2=3.44, D3=-2.12, D4=0.002, D5=0.61, law=dict(LAW, rate0=1.0), rates=(1.0, 30.0))
+    text = write_card(load_card_data(path), "lsdyna", units, **options)
+    deck, _ = read_deck(text)
+    assert_read_as_written(text, deck)
 
 
 @pytest.mark.parametrize("units", sorted(FACTORS))
