@@ -17,21 +17,17 @@ from flowcurve.acquisition.live import LiveView
 from flowcurve.acquisition.procedure import TestSpec
 from flowcurve.record.format import read_record
 from flowcurve.acquisition.session import run_virtual_test
+from flowcurve.identification.hardening import johnson_cook_static
 
 DEMO_TIME_SCALE = 15.0  # the virtual load cell sends 100 values per wall second: enough
 DEMO_SPEED_MM_PER_S = 0.05  # samples on the elastic line at 0.75 mm of crosshead per wall second
-
-
-def jc_static(eps_p, A_MPa: float, B_MPa: float, n: float):
-    """# (2.19) static Johnson–Cook hardening A + B·εp^n, MPa."""
-    return A_MPa + B_MPa * np.power(np.maximum(eps_p, 0.0), n)
 
 
 def hardening_deviation_pct(fit: dict, material, strain_rate_per_s: float, temperature_C: float, strain_range) -> float:
     """Max |fitted / true − 1| in % of a JC fit (A_MPa, B_MPa, n) over ``strain_range``."""
     lo, hi = (float(v) for v in strain_range)
     eps = np.linspace(max(lo, 1e-4), hi, 200)
-    fitted = jc_static(eps, fit["A_MPa"], fit["B_MPa"], fit["n"])
+    fitted = johnson_cook_static(eps, fit["A_MPa"], fit["B_MPa"], fit["n"])
     truth = material.flow_stress(eps, strain_rate_per_s, temperature_C)
     return float(100.0 * np.max(np.abs(fitted / truth - 1.0)))
 
