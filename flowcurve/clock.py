@@ -12,9 +12,10 @@ and watchdogs) asks a :class:`Clock` instead of :mod:`time`:
   A test may also move it by hand with :meth:`ModelClock.advance`.
 
 A thread takes part in a model clock from its first wait on it until it ends. A thread that
-blocks elsewhere (a lock held by a thread that waits on the clock) would stop time for good,
-so when nothing has happened for ``stall_s`` of wall time the clock moves on to the next
-deadline anyway — as time passes on a loaded machine.
+blocks on something another thread's clock wait will release (a port's lock) says so with
+``with clock.idle(): lock.acquire()``. One that blocks elsewhere unannounced would stop time
+for good, so when nothing has happened for ``stall_s`` of wall time the clock moves on to the
+next deadline anyway — as time passes on a loaded machine.
 """
 
 from __future__ import annotations
@@ -24,7 +25,8 @@ import itertools
 import math
 import threading
 import time
-from typing import Callable, Protocol
+from contextlib import contextmanager, nullcontext
+from typing import Callable, ContextManager, Protocol
 
 
 class Clock(Protocol):
@@ -35,6 +37,7 @@ class Clock(Protocol):
     def wait(self, event: threading.Event, timeout: float | None = None) -> bool: ...
     def notify(self) -> None: ...
     def call_at(self, when: float, callback: Callable[[], None]) -> "Timer": ...
+    def idle(self) -> ContextManager[None]: ...
 
 
 class Timer:
@@ -67,6 +70,9 @@ class WallClock:
 
     def notify(self) -> None:
         """Nothing to do: threading.Event wakes its waiters itself."""
+
+    def idle(self) -> ContextManager[None]:
+        return nullcontext()
 
     def call_at(self, when: float, callback: Callable[[], None]) -> Timer:
         timer = Timer(when, callback)
@@ -153,6 +159,21 @@ class ModelClock:
             self._progressed()
 
     # -- waiting ------------------------------------------------------------------------------
+    @contextmanager
+    def idle(self):
+        """The calling thread blocks on something (a lock) that only the clock's other
+        threads can release: time may move on without it meanwhile."""
+        me = threading.current_thread()
+        with self._cond:
+            self._actors.add(me)
+            self._waiting[me] = math.inf
+            self._cond.notify_all()  # the others may now be all that is left: one of them jumps
+        try:
+            yield
+        finally:
+            with self._cond:
+                del self._waiting[me]
+
     def sleep(self, seconds: float) -> None:
         self.wait_until(self._now + max(0.0, seconds))
 

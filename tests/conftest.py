@@ -24,3 +24,29 @@ def pytest_runtest_makereport(item, call):
         if any(word in reason for word in MISSING_DATA_WORDS):
             report.outcome = "failed"
             report.longrepr = f"in CI this must be present: {reason}"
+
+
+@pytest.fixture
+def model_clock():
+    """Simulated host time (:class:`flowcurve.clock.ModelClock`): the fast tests' clock."""
+    from flowcurve.clock import ModelClock
+
+    return ModelClock()
+
+
+@pytest.fixture
+def model_time_rig(model_clock):
+    """``model_time_rig(material, **kw)`` → a started VirtualRig whose devices are opened
+    in-process (``virtual://``) and run on ``model_clock``; closed after the test."""
+    from flowcurve.rig.virtual.rig import VirtualRig
+
+    rigs = []
+
+    def make(*args, **kwargs):
+        rig = VirtualRig(*args, clock=model_clock, link="inprocess", **kwargs)
+        rigs.append(rig)
+        return rig.start()
+
+    yield make
+    for rig in rigs:
+        rig.close()
