@@ -244,6 +244,11 @@ class Sampler:
         return self._released
 
     def start(self) -> "Sampler":
+        # on a model clock, time waits for every channel (and the caller) to take part:
+        # a channel started first must not run ahead while the others start
+        for ch in self.channels.values():
+            ch.timebase.enlist(threading.current_thread())
+            ch.timebase.enlist(ch)
         for ch in self.channels.values():
             ch.start()
         return self

@@ -11,7 +11,8 @@ and watchdogs) asks a :class:`Clock` instead of :mod:`time`:
   (a discrete-event simulation), so a 30-minute virtual test costs only its computing time.
   A test may also move it by hand with :meth:`ModelClock.advance`.
 
-A thread takes part in a model clock from its first wait on it until it ends. A thread that
+A thread takes part in a model clock from its first wait on it (or from :meth:`enlist`, for
+a thread about to start) until it ends. A thread that
 blocks on something another thread's clock wait will release (a port's lock) says so with
 ``with clock.idle(): lock.acquire()``. One that blocks elsewhere unannounced would stop time
 for good, so when nothing has happened for ``stall_s`` of wall time the clock moves on to the
@@ -38,6 +39,7 @@ class Clock(Protocol):
     def notify(self) -> None: ...
     def call_at(self, when: float, callback: Callable[[], None]) -> "Timer": ...
     def idle(self) -> ContextManager[None]: ...
+    def enlist(self, thread: threading.Thread) -> None: ...
 
 
 class Timer:
@@ -73,6 +75,9 @@ class WallClock:
 
     def idle(self) -> ContextManager[None]:
         return nullcontext()
+
+    def enlist(self, thread: threading.Thread) -> None:
+        """Nothing to do: real time does not wait for anyone."""
 
     def call_at(self, when: float, callback: Callable[[], None]) -> Timer:
         timer = Timer(when, callback)
@@ -159,6 +164,12 @@ class ModelClock:
             self._progressed()
 
     # -- waiting ------------------------------------------------------------------------------
+    def enlist(self, thread: threading.Thread) -> None:
+        """Count ``thread`` (about to start) as taking part from now: time waits for it to
+        reach its first wait instead of running ahead while it starts."""
+        with self._cond:
+            self._actors.add(thread)
+
     @contextmanager
     def idle(self):
         """The calling thread blocks on something (a lock) that only the clock's other
@@ -224,7 +235,7 @@ class ModelClock:
         """The next deadline when every participating thread waits; None otherwise."""
         if not self.auto:
             return None
-        self._actors = {t for t in self._actors if t.is_alive()}
+        self._actors = {t for t in self._actors if t.is_alive() or t.ident is None}  # (or starting)
         if any(t not in self._waiting for t in self._actors):
             return None
         target = self._next_deadline()

@@ -1,6 +1,11 @@
 """Faults on the virtual rig, through the real drivers: each stops the test with a message
 naming the device, the record on disk stays readable with every sample written before the
-fault, and the heater ends off (read from the virtual DCON module's digital outputs)."""
+fault, and the heater ends off (read from the virtual DCON module's digital outputs).
+
+The device faults run in-process on model time; the acquisition process interrupted
+(SIGINT, SIGTERM, kill -9) runs for real: ``flowcurve run`` in a process of its own against
+the virtual devices on ptys, in real time.
+"""
 
 import os
 import signal
@@ -15,6 +20,7 @@ import pytest
 from flowcurve.acquisition.procedure import StopCriteria, TestSpec
 from flowcurve.record.format import read_record
 from flowcurve.acquisition.session import run_virtual_test
+from flowcurve.clock import WALL, ModelClock
 from flowcurve.errors import DeviceError, SafetyError
 
 MATERIAL = "steel45"
@@ -33,22 +39,23 @@ def samples_on_disk(path):
     return len(rows) - 1, float(rows[-2].split(",")[0])  # the last complete line
 
 
-def wait_for(predicate, timeout_s=20.0, step_s=0.02):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
+def wait_for(predicate, timeout_s=20.0, step_s=0.02, clock=WALL):
+    """Poll ``predicate`` every ``step_s`` on ``clock`` (host seconds) until it is true."""
+    deadline = clock.now() + timeout_s
+    while clock.now() < deadline:
         value = predicate()
         if value:
             return value
-        time.sleep(step_s)
+        clock.sleep(step_s)
     raise AssertionError("timed out waiting")
 
 
-def wait_for_samples(path, n, timeout_s=20.0):
+def wait_for_samples(path, n, timeout_s=20.0, clock=WALL):
     """Wait until ``n`` samples are on disk; the time_s of the last one."""
     def enough():
         count, last = samples_on_disk(path)
         return last if count >= n else None
-    return wait_for(enough, timeout_s)
+    return wait_for(enough, timeout_s, clock=clock)
 
 
 def heated_spec(test="tension", speed=0.02):
@@ -57,24 +64,29 @@ def heated_spec(test="tension", speed=0.02):
 
 
 def run_with_fault(tmp_path, device, fault, *, spec=None, after_samples=40, time_scale=100.0, overrides=None, **fault_kw):
-    """Run a heated virtual test and inject ``fault`` once ``after_samples`` are on disk
-    (``fault`` may be a function of the virtual rig instead of a fault name)."""
+    """Run a heated virtual test (in-process, on model time) and inject ``fault`` once
+    ``after_samples`` are on disk (``fault`` may be a function of the virtual rig instead of
+    a fault name)."""
     path = tmp_path / "rec.csv"
     seen = {}
+    clock = ModelClock()
 
     def setup(vr):
         seen["vr"] = vr
 
         def inject():
-            seen["t_on_disk"] = wait_for_samples(path, after_samples)
+            seen["t_on_disk"] = wait_for_samples(path, after_samples, clock=clock)
             if callable(fault):
                 fault(vr)
             else:
                 vr.inject(device, fault, **fault_kw)
 
-        threading.Thread(target=inject, daemon=True).start()
+        injector = threading.Thread(target=inject, daemon=True)
+        clock.enlist(injector)  # time waits for its polls
+        injector.start()
 
-    run = run_virtual_test(spec or heated_spec(), path, material=MATERIAL, time_scale=time_scale, rig_setup=setup, config_overrides=overrides)
+    run = run_virtual_test(spec or heated_spec(), path, material=MATERIAL, time_scale=time_scale, rig_setup=setup,
+                           config_overrides=overrides, clock=clock, link="inprocess")
     return run, seen
 
 
