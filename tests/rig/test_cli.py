@@ -67,8 +67,8 @@ def test_check_with_a_bad_config_is_one_line(tmp_path, capsys):
     assert err.count("\n") == 1 and "[loadcell] port: must be a string" in err
 
 
-def test_check_passes_on_the_virtual_rig(tmp_path, capsys, model_time_rig):
-    rig = model_time_rig()
+def test_check_passes_on_the_virtual_rig(tmp_path, capsys, rig_factory):
+    rig = rig_factory()
     path = tmp_path / "rig.toml"
     path.write_text(to_toml(rig.config()))
     assert main(["rig", "check", "--config", str(path)]) == 0
@@ -77,8 +77,8 @@ def test_check_passes_on_the_virtual_rig(tmp_path, capsys, model_time_rig):
     assert "identity: HBM AED104" in out and "Gray check ok" in out and "input type K" in out
 
 
-def test_check_finds_a_device_on_the_wrong_port(tmp_path, capsys, model_time_rig):
-    rig = model_time_rig()
+def test_check_finds_a_device_on_the_wrong_port(tmp_path, capsys, rig_factory):
+    rig = rig_factory()
     # cables swapped: the furnace module sits where the load cell should be
     ports = {"loadcell": rig.ports["furnace"], "encoder": rig.ports["encoder"]}
     path = tmp_path / "rig.toml"
@@ -90,8 +90,8 @@ def test_check_finds_a_device_on_the_wrong_port(tmp_path, capsys, model_time_rig
     assert "Gray check ok" in out
 
 
-def test_check_reports_garbled_replies_and_an_open_thermocouple(tmp_path, capsys, model_time_rig):
-    rig = model_time_rig()
+def test_check_reports_garbled_replies_and_an_open_thermocouple(tmp_path, capsys, rig_factory):
+    rig = rig_factory()
     rig.inject("loadcell", "garble")
     rig.inject("furnace", "open_thermocouple")
     path = tmp_path / "rig.toml"
@@ -103,8 +103,8 @@ def test_check_reports_garbled_replies_and_an_open_thermocouple(tmp_path, capsys
     assert "Gray check ok" in out
 
 
-def test_recover_loadcell_on_the_virtual_rig(tmp_path, capsys, model_time_rig):
-    rig = model_time_rig()
+def test_recover_loadcell_on_the_virtual_rig(tmp_path, capsys, rig_factory):
+    rig = rig_factory()
     path = tmp_path / "rig.toml"
     path.write_text(to_toml(rig.config()))
     rig.devices["loadcell"].baud, rig.devices["loadcell"].parity = 19200, 0  # left at 19200/N

@@ -12,8 +12,8 @@ from flowcurve.errors import DeviceError
 
 
 @pytest.fixture
-def rig(model_time_rig):
-    return model_time_rig(time_scale=1.0)
+def rig(rig_factory):
+    return rig_factory(time_scale=1.0)
 
 
 @pytest.mark.parametrize("cof", [8, 12, 2, 9, 0 + 32])
@@ -30,16 +30,18 @@ def test_loadcell_stream_in_each_format(rig, cof):
         cell.stop_stream()
         after = cell.read()  # the line is clean again after STP
     assert len(got) == 30
-    span = got[-1].t_monotonic_s - got[1].t_monotonic_s
-    assert span == pytest.approx(0.28, abs=1e-9)  # 28 intervals at 100 values/s (the first frame
-    # also waits for its command on the line)
+    span = got[-1].t_monotonic_s - got[1].t_monotonic_s  # 28 intervals at 100 values/s
+    if rig.link == "inprocess":  # model time: exactly (the first frame also waits for its command)
+        assert span == pytest.approx(0.28, abs=1e-9)
+    else:  # a pty in real time (loose: a loaded machine)
+        assert 0.15 < span < 1.0
     # idle machine: force noise of a few newtons around zero, in every format's scale
     for s in [idle, after] + got:
         assert abs(s.force_N) < 50.0 + 100e3 / 20_000 and not s.overload
 
 
-def test_tare_zeroes_a_held_load(model_time_rig):
-    rig = model_time_rig(speed_mm_per_s=0.1)
+def test_tare_zeroes_a_held_load(rig_factory):
+    rig = rig_factory(speed_mm_per_s=0.1)
     with rig.config().loadcell.create() as cell:
         cell.configure(filter=0)
         rig.start_crosshead()

@@ -11,8 +11,8 @@ from flowcurve.rig.loadcell import LoadCell
 
 
 @pytest.fixture
-def rig(model_time_rig):
-    return model_time_rig("12Kh18N10T", time_scale=100, seed=5, force_noise_N=0.0, aed_settings={"asf": 0})
+def rig(rig_factory):
+    return rig_factory("12Kh18N10T", time_scale=100, seed=5, force_noise_N=0.0, aed_settings={"asf": 0})
 
 
 def test_drivers_read_the_model(rig):

@@ -7,8 +7,8 @@ import serial
 
 
 @pytest.fixture
-def rig(model_time_rig):
-    return model_time_rig("steel45", time_scale=50, seed=3)
+def rig(rig_factory):
+    return rig_factory("steel45", time_scale=50, seed=3)
 
 
 def open_port(url, **kwargs):

@@ -1,6 +1,6 @@
 """Plain pyserial scripts following PROTOCOLS.md and docs/encoder-protocol.md — no project
 code on the host side — talk to each virtual device, opened in-process (``virtual://``,
-pyserial's ``serial_for_url``) on model time."""
+pyserial's ``serial_for_url``) on model time, or on its pty in real time (``-m pty``)."""
 
 import pytest
 import serial
@@ -26,9 +26,9 @@ def cs(text: str) -> str:  # DCON checksum, written out here from the document
 
 
 @pytest.fixture
-def aed(model_clock):
+def aed(device_link):
     src = Source()
-    dev = AEDAmplifier(src, nominal_load_N=100e3, settings={"asf": 0}, clock=model_clock, link="inprocess").start()
+    dev = AEDAmplifier(src, nominal_load_N=100e3, settings={"asf": 0}, **device_link).start()
     port = serial.serial_for_url(dev.port, 9600, parity=serial.PARITY_EVEN, timeout=0.3)
     yield dev, src, port
     port.close()
@@ -119,9 +119,9 @@ def test_aed_addressing_tare_and_bus_polling(aed):
     assert int(port.read(10)) == 50_000
 
 
-def test_dcon_furnace_module_plain_script(model_clock):
+def test_dcon_furnace_module_plain_script(device_link):
     state = {"heater": None}
-    dev = I7011(lambda: 612.345, lambda on: state.update(heater=on), address=0x01, clock=model_clock, link="inprocess").start()
+    dev = I7011(lambda: 612.345, lambda on: state.update(heater=on), address=0x01, **device_link).start()
     with serial.serial_for_url(dev.port, 9600, timeout=0.3) as p:
         def ask_(text):
             p.write(text.encode() + b"\r")
@@ -140,8 +140,8 @@ def test_dcon_furnace_module_plain_script(model_clock):
     dev.close()
 
 
-def test_dcon_checksum_mode(model_clock):
-    dev = I7011(lambda: 25.12, lambda on: None, address=0x01, checksum_on=True, clock=model_clock, link="inprocess").start()
+def test_dcon_checksum_mode(device_link):
+    dev = I7011(lambda: 25.12, lambda on: None, address=0x01, checksum_on=True, **device_link).start()
     with serial.serial_for_url(dev.port, 9600, timeout=0.3) as p:
         assert cs("$012") == "B7"  # PROTOCOLS.md example
         p.write(b"$012B7\r")
@@ -157,9 +157,9 @@ def test_dcon_checksum_mode(model_clock):
     dev.close()
 
 
-def test_encoder_box_plain_script(model_clock):
+def test_encoder_box_plain_script(device_link):
     box_counts = {"n": 0}
-    dev = EncoderBox(lambda: box_counts["n"], address=0x02, initial_count=2**32 - 3, clock=model_clock, link="inprocess").start()
+    dev = EncoderBox(lambda: box_counts["n"], address=0x02, initial_count=2**32 - 3, **device_link).start()
 
     def gray_to_binary(g):  # from the document
         b = g
@@ -190,8 +190,8 @@ def test_encoder_box_plain_script(model_clock):
     dev.close()
 
 
-def test_virtual_rig_devices_share_one_model_clock(model_time_rig):
-    rig = model_time_rig("12Kh18N10T", time_scale=200, force_noise_N=0.0, aed_settings={"asf": 0})
+def test_virtual_rig_devices_share_one_model_clock(rig_factory):
+    rig = rig_factory("12Kh18N10T", time_scale=200, force_noise_N=0.0, aed_settings={"asf": 0})
     lc = serial.serial_for_url(rig.ports["loadcell"], 9600, timeout=0.5)
     en = serial.serial_for_url(rig.ports["encoder"], 9600, timeout=0.5)
     rig.start_crosshead()
