@@ -151,7 +151,8 @@ class ModelClock:
                 timer.callback()  # outside the lock: it may schedule timers or notify
 
     def call_at(self, when: float, callback: Callable[[], None]) -> Timer:
-        """Run ``callback`` when the clock reaches ``when`` (in the thread that moves it)."""
+        """Run ``callback`` when the clock reaches ``when`` (in the thread that moves it; a
+        callback must not wait on the clock)."""
         timer = Timer(when, callback)
         with self._cond:
             heapq.heappush(self._timers, (when, next(self._seq), timer))
