@@ -1,6 +1,7 @@
 """Every injected fault is observable from the wire (plain pyserial on the in-process
 ``virtual://`` ports, on model time), and the DCON host watchdog switches the heater off
-when the host goes quiet. The unplug of a pty (EIO) is tested in test_rig.py."""
+when the host goes quiet; with ``-m pty`` the same on ptys in real time (the unplug of a pty,
+EIO, in the default selection too)."""
 
 import pytest
 import serial
@@ -48,6 +49,7 @@ def test_garbled_reply_is_a_bad_frame(rig):
         assert len(frame) == 7  # one byte too many: framing by length breaks
 
 
+@pytest.mark.parametrize("device_link", ["inprocess", "pty"], indirect=True)  # a pty's EIO: default selection
 def test_unplug_raises_eio_on_the_host(rig):
     p = open_port(rig.ports["loadcell"], timeout=0.2)
     try:
