@@ -284,7 +284,8 @@ class Sampler:
         self.request_stop()
         for ch in self.channels.values():
             if ch.is_alive() and ch is not threading.current_thread():
-                ch.join(timeout_s)
+                with ch.timebase.idle():  # a channel may finish its read on the clock first
+                    ch.join(timeout_s)
 
     def finish(self) -> np.ndarray:
         """Stop the threads and release every remaining force sample (last values held)."""

@@ -16,7 +16,8 @@ a thread about to start) until it ends. A thread that
 blocks on something another thread's clock wait will release (a port's lock) says so with
 ``with clock.idle(): lock.acquire()``. One that blocks elsewhere unannounced would stop time
 for good, so when nothing has happened for ``stall_s`` of wall time the clock moves on to the
-next deadline anyway — as time passes on a loaded machine.
+next deadline anyway — as time passes on a loaded machine. A thread that merely computes
+(or imports) for that long lets the others move on too, so ``stall_s`` is generous.
 """
 
 from __future__ import annotations
@@ -104,7 +105,7 @@ class ModelClock:
     ``auto=False`` leaves time entirely to :meth:`advance` (the test's hand on the clock).
     """
 
-    def __init__(self, start_s: float = 0.0, *, auto: bool = True, stall_s: float = 0.01):
+    def __init__(self, start_s: float = 0.0, *, auto: bool = True, stall_s: float = 0.25):
         self._now = float(start_s)
         self.auto = auto
         self.stall_s = stall_s

@@ -98,7 +98,7 @@ def test_a_thread_waiting_for_a_lock_held_across_a_clock_wait_is_idle():
 
 
 def test_a_participant_stuck_outside_the_clock_does_not_stop_time():
-    clock = ModelClock()
+    clock = ModelClock(stall_s=0.01)
     release = threading.Event()
     stuck = threading.Thread(target=release.wait, args=(10,))  # a driver hanging in a real wait
     clock.enlist(stuck)

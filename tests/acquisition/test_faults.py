@@ -83,7 +83,8 @@ def run_with_fault(tmp_path, link, device, fault, *, spec=None, after_samples=40
                 vr.inject(device, fault, **fault_kw)
 
         injector = threading.Thread(target=inject, daemon=True)
-        clock.enlist(injector)  # time waits for its polls
+        clock.enlist(threading.current_thread())  # time waits for the test to run ...
+        clock.enlist(injector)  # ... and for the polls: neither runs ahead of the other
         injector.start()
 
     run = run_virtual_test(spec or heated_spec(), path, material=MATERIAL, time_scale=time_scale, rig_setup=setup,

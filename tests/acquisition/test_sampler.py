@@ -13,8 +13,9 @@ from flowcurve.clock import ModelClock
 
 @pytest.fixture
 def tb():
-    """The channels' host time; the samples are stamped with ``tb.now`` (test seconds)."""
-    return ModelClock()
+    """The channels' host time; the samples are stamped with ``tb.now`` (test seconds). A
+    short stall rule: one test has a driver hang outside the clock."""
+    return ModelClock(stall_s=0.01)
 
 
 def counter_read(n_max, period_s, tb):
