@@ -260,6 +260,11 @@ class Sampler:
         return self._released
 
     def start(self) -> "Sampler":
+        # on a model clock, time waits for every channel (and the caller) to take part:
+        # a channel started first must not run ahead while the others start
+        for ch in self.channels.values():
+            ch.timebase.enlist(threading.current_thread())
+            ch.timebase.enlist(ch)
         for ch in self.channels.values():
             ch.start()
         return self
@@ -295,7 +300,8 @@ class Sampler:
         self.request_stop()
         for ch in self.channels.values():
             if ch.is_alive() and ch is not threading.current_thread():
-                ch.join(timeout_s)
+                with ch.timebase.idle():  # a channel may finish its read on the clock first
+                    ch.join(timeout_s)
 
     def finish(self) -> np.ndarray:
         """Stop the threads and release every remaining force sample (last values held)."""

@@ -11,10 +11,13 @@ and watchdogs) asks a :class:`Clock` instead of :mod:`time`:
   (a discrete-event simulation), so a 30-minute virtual test costs only its computing time.
   A test may also move it by hand with :meth:`ModelClock.advance`.
 
-A thread takes part in a model clock from its first wait on it until it ends. A thread that
-blocks elsewhere (a lock held by a thread that waits on the clock) would stop time for good,
-so when nothing has happened for ``stall_s`` of wall time the clock moves on to the next
-deadline anyway — as time passes on a loaded machine.
+A thread takes part in a model clock from its first wait on it (or from :meth:`enlist`, for
+a thread about to start) until it ends. A thread that
+blocks on something another thread's clock wait will release (a port's lock) says so with
+``with clock.idle(): lock.acquire()``. One that blocks elsewhere unannounced would stop time
+for good, so when nothing has happened for ``stall_s`` of wall time the clock moves on to the
+next deadline anyway — as time passes on a loaded machine. A thread that merely computes
+(or imports) for that long lets the others move on too, so ``stall_s`` is generous.
 """
 
 from __future__ import annotations
@@ -24,7 +27,8 @@ import itertools
 import math
 import threading
 import time
-from typing import Callable, Protocol
+from contextlib import contextmanager, nullcontext
+from typing import Callable, ContextManager, Protocol
 
 
 class Clock(Protocol):
@@ -35,6 +39,8 @@ class Clock(Protocol):
     def wait(self, event: threading.Event, timeout: float | None = None) -> bool: ...
     def notify(self) -> None: ...
     def call_at(self, when: float, callback: Callable[[], None]) -> "Timer": ...
+    def idle(self) -> ContextManager[None]: ...
+    def enlist(self, thread: threading.Thread) -> None: ...
 
 
 class Timer:
@@ -68,6 +74,12 @@ class WallClock:
     def notify(self) -> None:
         """Nothing to do: threading.Event wakes its waiters itself."""
 
+    def idle(self) -> ContextManager[None]:
+        return nullcontext()
+
+    def enlist(self, thread: threading.Thread) -> None:
+        """Nothing to do: real time does not wait for anyone."""
+
     def call_at(self, when: float, callback: Callable[[], None]) -> Timer:
         timer = Timer(when, callback)
 
@@ -93,7 +105,7 @@ class ModelClock:
     ``auto=False`` leaves time entirely to :meth:`advance` (the test's hand on the clock).
     """
 
-    def __init__(self, start_s: float = 0.0, *, auto: bool = True, stall_s: float = 0.01):
+    def __init__(self, start_s: float = 0.0, *, auto: bool = True, stall_s: float = 0.25):
         self._now = float(start_s)
         self.auto = auto
         self.stall_s = stall_s
@@ -140,7 +152,8 @@ class ModelClock:
                 timer.callback()  # outside the lock: it may schedule timers or notify
 
     def call_at(self, when: float, callback: Callable[[], None]) -> Timer:
-        """Run ``callback`` when the clock reaches ``when`` (in the thread that moves it)."""
+        """Run ``callback`` when the clock reaches ``when`` (in the thread that moves it; a
+        callback must not wait on the clock)."""
         timer = Timer(when, callback)
         with self._cond:
             heapq.heappush(self._timers, (when, next(self._seq), timer))
@@ -153,6 +166,27 @@ class ModelClock:
             self._progressed()
 
     # -- waiting ------------------------------------------------------------------------------
+    def enlist(self, thread: threading.Thread) -> None:
+        """Count ``thread`` (about to start) as taking part from now: time waits for it to
+        reach its first wait instead of running ahead while it starts."""
+        with self._cond:
+            self._actors.add(thread)
+
+    @contextmanager
+    def idle(self):
+        """The calling thread blocks on something (a lock) that only the clock's other
+        threads can release: time may move on without it meanwhile."""
+        me = threading.current_thread()
+        with self._cond:
+            self._actors.add(me)
+            self._waiting[me] = math.inf
+            self._cond.notify_all()  # the others may now be all that is left: one of them jumps
+        try:
+            yield
+        finally:
+            with self._cond:
+                del self._waiting[me]
+
     def sleep(self, seconds: float) -> None:
         self.wait_until(self._now + max(0.0, seconds))
 
@@ -203,7 +237,7 @@ class ModelClock:
         """The next deadline when every participating thread waits; None otherwise."""
         if not self.auto:
             return None
-        self._actors = {t for t in self._actors if t.is_alive()}
+        self._actors = {t for t in self._actors if t.is_alive() or t.ident is None}  # (or starting)
         if any(t not in self._waiting for t in self._actors):
             return None
         target = self._next_deadline()

@@ -130,8 +130,20 @@ class SerialTransport:
     @contextmanager
     def locked(self):
         """Hold the port for a sequence of exchanges that must not be interleaved."""
-        with self.lock:
+        with self._holding():
             yield self
+
+    @contextmanager
+    def _holding(self):
+        """The port's lock; while another thread's exchange holds it, this thread is idle on
+        the clock (on a model clock, time then moves on without it)."""
+        if not self.lock.acquire(blocking=False):
+            with self.clock.idle():
+                self.lock.acquire()
+        try:
+            yield
+        finally:
+            self.lock.release()
 
     # -- raw I/O ----------------------------------------------------------------------
     def _require_port(self):
@@ -181,7 +193,7 @@ class SerialTransport:
         timeout = self.timeout_s if timeout is None else timeout
         self._require_port()
         deadline = self.clock.now() + timeout
-        with self.lock:
+        with self._holding():
             while len(self._pending) < n:
                 chunk = self._read_some(n - len(self._pending), deadline)
                 if not chunk and self.clock.now() >= deadline:
@@ -199,7 +211,7 @@ class SerialTransport:
         timeout = self.timeout_s if timeout is None else timeout
         self._require_port()
         deadline = self.clock.now() + timeout
-        with self.lock:
+        with self._holding():
             while True:
                 end = self._pending.find(terminator)
                 if end >= 0:
@@ -230,7 +242,7 @@ class SerialTransport:
         reply bytes, or ``parse(reply)``. ``terminator=None`` with no length: nothing is read.
         """
         what = what or _describe(command)
-        with self.lock:
+        with self._holding():
             for attempt in range(retries + 1):
                 last = attempt == retries
                 self.discard_input()
@@ -255,7 +267,7 @@ class SerialTransport:
 
     def send(self, command: bytes) -> None:
         """Send a command that has no reply (``STP``, ``~**``, ``#**``, address selection)."""
-        with self.lock:
+        with self._holding():
             self.write(command)
 
     # -- errors -----------------------------------------------------------------------

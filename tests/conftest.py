@@ -24,3 +24,56 @@ def pytest_runtest_makereport(item, call):
         if any(word in reason for word in MISSING_DATA_WORDS):
             report.outcome = "failed"
             report.longrepr = f"in CI this must be present: {reason}"
+
+
+@pytest.fixture
+def model_clock():
+    """Simulated host time (:class:`flowcurve.clock.ModelClock`): the fast tests' clock."""
+    from flowcurve.clock import ModelClock
+
+    return ModelClock()
+
+
+@pytest.fixture(params=["inprocess", pytest.param("pty", marks=pytest.mark.pty)])
+def device_link(request):
+    """Where the virtual devices run: ``{"clock": ..., "link": ...}`` for their constructors.
+    In-process (``virtual://``) on a model clock in the default selection; the same test on
+    pseudo-terminals in real time with ``-m pty``."""
+    from flowcurve.clock import WALL, ModelClock
+
+    if request.param == "pty":
+        return {"clock": WALL, "link": "pty"}
+    return {"clock": ModelClock(), "link": "inprocess"}
+
+
+def _rig_factory(link):
+    from flowcurve.rig.virtual.rig import VirtualRig
+
+    rigs = []
+
+    def make(*args, **kwargs):
+        rig = VirtualRig(*args, **link, **kwargs)
+        rigs.append(rig)
+        return rig.start()
+
+    return rigs, make
+
+
+@pytest.fixture
+def rig_factory(device_link):
+    """``rig_factory(material, **kw)`` → a started VirtualRig on ``device_link`` (sleep with
+    ``rig.clock.sleep``), closed after the test."""
+    rigs, make = _rig_factory(device_link)
+    yield make
+    for rig in rigs:
+        rig.close()
+
+
+@pytest.fixture
+def model_time_rig(model_clock):
+    """Like ``rig_factory``, in-process on ``model_clock`` only: for the tests that check
+    times exactly."""
+    rigs, make = _rig_factory({"clock": model_clock, "link": "inprocess"})
+    yield make
+    for rig in rigs:
+        rig.close()

@@ -213,10 +213,9 @@ class Mechanics:
     def _tension_solve(self, x: float) -> SpecimenState:
         st = self.state
         s = self.specimen
-        eps_f = self.fracture_strain
-        eps_u_c = self.considere_strain()
         if st.fractured:
             return st
+        eps_f = self.fracture_strain
         if not st.necked:
             eps_hist = st.eps_p
             slack = s.l0_mm * math.expm1(eps_hist)
@@ -227,6 +226,7 @@ class Mechanics:
                 sig = brentq(lambda q: self._tension_uniform(eps_hist, q)[1] - x, 0.0, sig_y, xtol=1e-10)
                 f, xc = self._tension_uniform(eps_hist, sig)
                 return SpecimenState(f, eps_hist, eps_hist, False, False, xc - f / self.C_N_per_mm)
+            eps_u_c = self.considere_strain()  # (only past yield: it is a root search)
             eps_end = min(eps_u_c, eps_f)
             x_end = self._tension_uniform(eps_end, self.flow(eps_end))[1]
             if x < x_end:

@@ -27,6 +27,7 @@ from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 from flowcurve.clock import WALL
 
 PACKAGE = "flowcurve.rig.virtual"
+BITS_PER_BYTE = 10  # start, 8 data, stop: the line time of a byte is 10 / baud
 if PACKAGE not in serial.protocol_handler_packages:
     serial.protocol_handler_packages.append(PACKAGE)
 
@@ -70,7 +71,7 @@ class Serial(SerialBase):
         self.clock = device.clock
         self._rx.clear()
         self._rx_event.clear()
-        device.attach(self)
+        device.attach(self, BITS_PER_BYTE / self._baudrate)
         self.is_open = True
 
     def close(self) -> None:
@@ -103,34 +104,33 @@ class Serial(SerialBase):
     def write(self, data) -> int:
         device = self._check()
         data = bytes(data)
-        device.host_write(data)
+        device.host_write(data, BITS_PER_BYTE / self._baudrate)
         return len(data)
 
     def flush(self) -> None:
         self._check()
 
     def read(self, size: int = 1) -> bytes:
-        """Up to ``size`` bytes: what is there, else the first that arrive within the time-out."""
+        """``size`` bytes, or fewer when the time-out (on the device's clock) runs out first."""
         self._check()
         deadline = None if self._timeout is None else self.clock.now() + self._timeout
+        data = bytearray()
         while True:
             with self._rx_lock:
-                if self._rx:
-                    data = bytes(self._rx[:size])
-                    del self._rx[:size]
-                    if not self._rx:
-                        self._rx_event.clear()
-                    return data
-                self._rx_event.clear()
+                take = size - len(data)
+                data += self._rx[:take]
+                del self._rx[:take]
+                if not self._rx:
+                    self._rx_event.clear()
+            if len(data) >= size or not self.is_open:
+                return bytes(data)
             self._check()
-            if deadline is not None and self.clock.now() >= deadline:
-                return b""
             if deadline is None:
                 self.clock.wait(self._rx_event)
+            elif self.clock.now() >= deadline:
+                return bytes(data)
             else:
                 self.clock.wait(self._rx_event, deadline - self.clock.now())
-            if not self.is_open:
-                return b""
 
     @property
     def in_waiting(self) -> int:

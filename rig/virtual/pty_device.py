@@ -53,8 +53,11 @@ class PtyDevice:
         self.faults = faults if faults is not None else WireFaults(seed)
         self.clock = clock
         self.link = link
-        self._delayed: list[tuple[float, int, bytes]] = []  # (due, seq, bytes) for the delay fault
+        self._delayed: list[tuple[float, int, bytes]] = []  # (due, seq, bytes) still on their way
         self._seq = 0
+        self._last_due = 0.0
+        self._command_bytes = 0  # in-process: the command being answered ...
+        self._byte_time_s = 0.0  # ... and the line's time per byte (from the host's port)
         self.unplugged = False
         self._started = False
         self._closed = False
@@ -89,13 +92,24 @@ class PtyDevice:
 
     # -- output -----------------------------------------------------------------------
     def send(self, reply: bytes) -> None:
-        """Send a reply to the host through the wire faults (called from the device's side)."""
+        """Send a reply to the host through the wire faults (called from the device's side).
+
+        Bytes leave in order: a reply that is due later holds back what follows it.
+        In-process, bytes also take the line's time (10 bits a byte at the host port's baud
+        rate; a reply counts its command too): the host's exchanges then take time on the
+        clock, as on a real line.
+        """
         out = self.faults.apply(reply)
         if out is None:
             return
-        if self.faults.delay_s > 0:
+        now = self.clock.now()
+        due = now + self.faults.delay_s + (self._command_bytes + len(out)) * self._byte_time_s
+        if self._delayed:
+            due = max(due, self._last_due)
+        if due > now:
             self._seq += 1
-            heapq.heappush(self._delayed, (self.clock.now() + self.faults.delay_s, self._seq, out))
+            self._last_due = due
+            heapq.heappush(self._delayed, (due, self._seq, out))
             return
         self._write(out)
 
@@ -192,21 +206,27 @@ class PtyDevice:
         """The port is gone for the host (unplugged or closed)."""
         return self.unplugged or self._closed
 
-    def attach(self, host) -> None:
+    def attach(self, host, byte_time_s: float = 0.0) -> None:
         """A host port opened this device (one at a time, like a serial port)."""
         with self._lock:
             self._host = host
+            self._byte_time_s = byte_time_s
 
     def detach(self, host) -> None:
         with self._lock:
             if self._host is host:
                 self._host = None
 
-    def host_write(self, data: bytes) -> None:
-        """Bytes from the host, handled at once (after any periodic work now due)."""
+    def host_write(self, data: bytes, byte_time_s: float = 0.0) -> None:
+        """Bytes from the host, handled at once (after any periodic work now due); the
+        replies arrive after the line's time for command and reply (``byte_time_s`` a byte)."""
         with self._lock:
             self._catch_up()
-            self.on_bytes(data)
+            self._command_bytes, self._byte_time_s = len(data), byte_time_s
+            try:
+                self.on_bytes(data)
+            finally:
+                self._command_bytes = 0
             self._reschedule()
 
     def _catch_up(self) -> None:

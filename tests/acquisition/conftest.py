@@ -1,13 +1,14 @@
 """A small in-process fake rig for procedure tests (the real drivers are tested end to end
-in test_end_to_end.py); its force law is known, so the record can be checked against it."""
+in test_end_to_end.py); its force law is known, so the record can be checked against it.
+It runs on a model clock unless given the wall clock."""
 
 import threading
-import time
 
 import numpy as np
 import pytest
 
 from flowcurve.acquisition.sampler import Channel
+from flowcurve.clock import ModelClock
 
 
 class FakeRig:
@@ -23,7 +24,8 @@ class FakeRig:
     loadcell_period_s = 0.002
 
     def __init__(self, *, time_scale=20.0, k_N_per_mm=20000.0, x_frac_mm=1.0, max_temperature_C=900.0,
-                 heat_rate_C_per_s=20.0, die_after_s=None, overheat_at_s=None, post=None):
+                 heat_rate_C_per_s=20.0, die_after_s=None, overheat_at_s=None, post=None, timebase=None):
+        self.timebase = ModelClock() if timebase is None else timebase
         self.time_scale = time_scale
         self.k = k_N_per_mm
         self.x_frac = x_frac_mm
@@ -59,7 +61,7 @@ class FakeRig:
     def channels(self, clock, to_clock):
 
         def force():
-            time.sleep(self.loadcell_period_s / self.time_scale)
+            self.timebase.sleep(self.loadcell_period_s / self.time_scale)
             t = clock()
             v = self.f(t)
             self.sent_forces.append(v)
@@ -71,15 +73,16 @@ class FakeRig:
                 raise OSError("port /dev/ttyUSB1 disappeared")
             return self.x(t)
 
+        tb = self.timebase
         return {
-            "force_N": Channel("loadcell", force, clock, silence_s=2.0),
-            "crosshead_mm": Channel("encoder", encoder, clock, period_s=0.01),
-            "temperature_C": Channel("furnace", self.read_temperature_C, clock, period_s=0.05),
+            "force_N": Channel("loadcell", force, clock, silence_s=2.0, timebase=tb),
+            "crosshead_mm": Channel("encoder", encoder, clock, period_s=0.01, timebase=tb),
+            "temperature_C": Channel("furnace", self.read_temperature_C, clock, period_s=0.05, timebase=tb),
         }
 
     def read_temperature_C(self):
         with self._lock:
-            t = time.monotonic() * self.time_scale
+            t = self.timebase.now() * self.time_scale
             if self._t_temp is not None:
                 dt = t - self._t_temp
                 self._temp += (self.heat_rate if self.heater else -0.1 * self.heat_rate) * dt

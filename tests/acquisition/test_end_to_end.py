@@ -1,5 +1,6 @@
-"""End to end: virtual tension and compression tests recorded through the real drivers over
-ptys, identified, and compared with the virtual material the rig was built from."""
+"""End to end: virtual tension and compression tests recorded through the real drivers (the
+virtual devices opened in-process, on model time; on ptys in real time with ``-m pty``),
+identified, and compared with the virtual material the rig was built from."""
 
 import numpy as np
 import pytest
@@ -21,9 +22,9 @@ def max_dev_pct(fit, run, lo, hi):
     return 100 * np.max(np.abs(fitted / truth - 1))
 
 
-def test_virtual_tension_identified_within_3_percent(tmp_path):
+def test_virtual_tension_identified_within_3_percent(tmp_path, device_link):
     spec = demo_specs(MATERIAL)[0]
-    run = run_virtual_test(spec, tmp_path / "t.csv", material=MATERIAL, time_scale=TIME_SCALE)
+    run = run_virtual_test(spec, tmp_path / "t.csv", material=MATERIAL, time_scale=TIME_SCALE, **device_link)
     assert run.outcome.status == "complete" and "fracture" in run.outcome.reason
     rec = read_record(run.outcome.path)
     assert rec.test == "tension" and not rec.truncated
@@ -44,10 +45,11 @@ def test_virtual_tension_identified_within_3_percent(tmp_path):
     assert res["Rm_MPa"] == pytest.approx(rm_true, rel=0.01)
 
 
-def test_virtual_compression_identified_and_friction_recovered(tmp_path):
+def test_virtual_compression_identified_and_friction_recovered(tmp_path, device_link):
     spec = demo_specs(MATERIAL)[1]
     # slower than the tension test: the stiff short specimen leaves few samples on the elastic line
-    run = run_virtual_test(spec, tmp_path / "c.csv", material=MATERIAL, time_scale=10.0, friction_mu=0.1)
+    run = run_virtual_test(spec, tmp_path / "c.csv", material=MATERIAL, time_scale=10.0, friction_mu=0.1,
+                           **device_link)
     assert run.outcome.status == "complete"
     rec = read_record(run.outcome.path)
     h0, hk = float(rec.meta["specimen.h0_mm"]), float(rec.meta["post.hk_mm"])

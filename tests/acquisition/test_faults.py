@@ -1,6 +1,12 @@
 """Faults on the virtual rig, through the real drivers: each stops the test with a message
 naming the device, the record on disk stays readable with every sample written before the
-fault, and the heater ends off (read from the virtual DCON module's digital outputs)."""
+fault, and the heater ends off (read from the virtual DCON module's digital outputs).
+
+The device faults run in-process on model time (on ptys in real time with ``-m pty``); the
+acquisition process interrupted
+(SIGINT, SIGTERM, kill -9) runs for real: ``flowcurve run`` in a process of its own against
+the virtual devices on ptys, in real time.
+"""
 
 import os
 import signal
@@ -15,6 +21,7 @@ import pytest
 from flowcurve.acquisition.procedure import StopCriteria, TestSpec
 from flowcurve.record.format import read_record
 from flowcurve.acquisition.session import run_virtual_test
+from flowcurve.clock import WALL
 from flowcurve.errors import DeviceError, SafetyError
 
 MATERIAL = "steel45"
@@ -33,22 +40,23 @@ def samples_on_disk(path):
     return len(rows) - 1, float(rows[-2].split(",")[0])  # the last complete line
 
 
-def wait_for(predicate, timeout_s=20.0, step_s=0.02):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
+def wait_for(predicate, timeout_s=20.0, step_s=0.02, clock=WALL):
+    """Poll ``predicate`` every ``step_s`` on ``clock`` (host seconds) until it is true."""
+    deadline = clock.now() + timeout_s
+    while clock.now() < deadline:
         value = predicate()
         if value:
             return value
-        time.sleep(step_s)
+        clock.sleep(step_s)
     raise AssertionError("timed out waiting")
 
 
-def wait_for_samples(path, n, timeout_s=20.0):
+def wait_for_samples(path, n, timeout_s=20.0, clock=WALL):
     """Wait until ``n`` samples are on disk; the time_s of the last one."""
     def enough():
         count, last = samples_on_disk(path)
         return last if count >= n else None
-    return wait_for(enough, timeout_s)
+    return wait_for(enough, timeout_s, clock=clock)
 
 
 def heated_spec(test="tension", speed=0.02):
@@ -56,25 +64,31 @@ def heated_spec(test="tension", speed=0.02):
     return TestSpec(test, material=MATERIAL, geometry_mm=geo, speed_mm_per_s=speed, temperature_C=60.0, soak_s=5.0, soak_band_C=3.0)
 
 
-def run_with_fault(tmp_path, device, fault, *, spec=None, after_samples=40, time_scale=100.0, overrides=None, **fault_kw):
-    """Run a heated virtual test and inject ``fault`` once ``after_samples`` are on disk
-    (``fault`` may be a function of the virtual rig instead of a fault name)."""
+def run_with_fault(tmp_path, link, device, fault, *, spec=None, after_samples=40, time_scale=100.0, overrides=None, **fault_kw):
+    """Run a heated virtual test on ``link`` (the ``device_link`` fixture) and inject ``fault``
+    once ``after_samples`` are on disk (``fault`` may be a function of the virtual rig instead
+    of a fault name)."""
     path = tmp_path / "rec.csv"
     seen = {}
+    clock = link["clock"]
 
     def setup(vr):
         seen["vr"] = vr
 
         def inject():
-            seen["t_on_disk"] = wait_for_samples(path, after_samples)
+            seen["t_on_disk"] = wait_for_samples(path, after_samples, clock=clock)
             if callable(fault):
                 fault(vr)
             else:
                 vr.inject(device, fault, **fault_kw)
 
-        threading.Thread(target=inject, daemon=True).start()
+        injector = threading.Thread(target=inject, daemon=True)
+        clock.enlist(threading.current_thread())  # time waits for the test to run ...
+        clock.enlist(injector)  # ... and for the polls: neither runs ahead of the other
+        injector.start()
 
-    run = run_virtual_test(spec or heated_spec(), path, material=MATERIAL, time_scale=time_scale, rig_setup=setup, config_overrides=overrides)
+    run = run_virtual_test(spec or heated_spec(), path, material=MATERIAL, time_scale=time_scale, rig_setup=setup,
+                           config_overrides=overrides, **link)
     return run, seen
 
 
@@ -98,9 +112,9 @@ def check_kept_and_heater_off(run, seen):
     ("loadcell", "garble", "load cell"),
     ("furnace", "silence", "furnace"),
 ])
-def test_device_faults_stop_the_test_naming_the_device(tmp_path, device, fault, named):
+def test_device_faults_stop_the_test_naming_the_device(tmp_path, device_link, device, fault, named):
     # short DCON time-outs keep the silent-furnace case quick (heater-off is retried on it)
-    run, seen = run_with_fault(tmp_path, device, fault, overrides={"furnace_timeout_s": 0.1})
+    run, seen = run_with_fault(tmp_path, device_link, device, fault, overrides={"furnace_timeout_s": 0.1})
     out = run.outcome
     assert out.status == "aborted" and isinstance(out.error, DeviceError)
     assert named in str(out.error), str(out.error)
@@ -108,29 +122,29 @@ def test_device_faults_stop_the_test_naming_the_device(tmp_path, device, fault, 
     assert named in rec.meta["abort_reason"]
 
 
-def test_open_thermocouple_stops_heating(tmp_path):
-    run, seen = run_with_fault(tmp_path, "furnace", "open_thermocouple")
+def test_open_thermocouple_stops_heating(tmp_path, device_link):
+    run, seen = run_with_fault(tmp_path, device_link, "furnace", "open_thermocouple")
     out = run.outcome
     assert isinstance(out.error, SafetyError) and "thermocouple" in str(out.error)
     check_kept_and_heater_off(run, seen)
     assert not seen["vr"].model.furnace.relay_on
 
 
-def test_over_temperature_stops_heating(tmp_path):
+def test_over_temperature_stops_heating(tmp_path, device_link):
     def overheat(vr):  # the furnace runs away (e.g. a second heat source): 90 C > max 75 C
         with vr.lock:
             vr.sync().furnace.temperature_C = 90.0
 
-    run, seen = run_with_fault(tmp_path, "furnace", overheat, overrides={"furnace_max_temperature_C": 75.0})
+    run, seen = run_with_fault(tmp_path, device_link, "furnace", overheat, overrides={"furnace_max_temperature_C": 75.0})
     out = run.outcome
     assert isinstance(out.error, SafetyError) and "over-temperature" in str(out.error)
     check_kept_and_heater_off(run, seen)
 
 
-def test_stuck_heater_relay_stops_the_test(tmp_path):
+def test_stuck_heater_relay_stops_the_test(tmp_path, device_link):
     # a relay stuck on heats whatever the output says: the host must stop and report it,
     # either as the controller's stuck-relay diagnosis or as over-temperature, whichever first
-    run, seen = run_with_fault(tmp_path, "furnace", "relay_stuck", overrides={"furnace_max_temperature_C": 75.0})
+    run, seen = run_with_fault(tmp_path, device_link, "furnace", "relay_stuck", overrides={"furnace_max_temperature_C": 75.0})
     out = run.outcome
     assert isinstance(out.error, SafetyError)
     assert "over-temperature" in str(out.error) or "relay stuck" in str(out.error)

@@ -1,4 +1,5 @@
-"""The test procedure on a fake rig: phases, stop criteria, record contents, heater state."""
+"""The test procedure on a fake rig (on model time): phases, stop criteria, record contents,
+heater state; the 'q' typed on a real terminal in real time."""
 
 import numpy as np
 import pytest
@@ -143,10 +144,12 @@ def test_q_on_the_terminal_stops_the_test(tmp_path, fake_rig, monkeypatch):
     import sys
     import threading
 
+    from flowcurve.clock import WALL
+
     master, slave = os.openpty()
     term = os.fdopen(slave, "r")
     monkeypatch.setattr(sys, "stdin", term)
-    rig = fake_rig(x_frac_mm=1e9)
+    rig = fake_rig(x_frac_mm=1e9, timebase=WALL)  # a key typed on a real terminal, in real time
     timer = threading.Timer(0.5, lambda: os.write(master, b"xq"))
     timer.start()
     try:

@@ -1,26 +1,29 @@
-"""Synchronized sampling with fake devices: nothing lost, nothing duplicated, correct merge."""
+"""Synchronized sampling with fake devices on model time: nothing lost, nothing duplicated,
+correct merge."""
 
 import itertools
 import threading
-import time
 
 import numpy as np
 import pytest
 
 from flowcurve.acquisition.sampler import Channel, Sampler, interpolate_at, merge_block, releasable
+from flowcurve.clock import ModelClock
 
 
-def make_clock():
-    t0 = time.monotonic()
-    return lambda: time.monotonic() - t0
+@pytest.fixture
+def tb():
+    """The channels' host time; the samples are stamped with ``tb.now`` (test seconds). A
+    short stall rule: one test has a driver hang outside the clock."""
+    return ModelClock(stall_s=0.01)
 
 
-def counter_read(n_max, period_s, clock):
+def counter_read(n_max, period_s, tb):
     """A fake load cell: sends 0, 1, 2, ... n_max-1 then nothing (returns None)."""
     it = iter(range(n_max))
 
     def read():
-        time.sleep(period_s)
+        tb.sleep(period_s)
         return next(it, None)
 
     return read
@@ -48,18 +51,18 @@ def test_interpolate_holds_ends_and_nan_when_empty():
     assert np.isnan(interpolate_at(np.array([1.0]), np.array([]), np.array([]))).all()
 
 
-def test_every_force_sample_appears_exactly_once_and_in_order():
-    clock = make_clock()
+def test_every_force_sample_appears_exactly_once_and_in_order(tb):
+    clock = tb.now
     n = 600
     speed = 0.5  # mm/s, the fake crosshead position is speed * t on the same clock
-    force = Channel("loadcell", counter_read(n, 0.0005, clock), clock, silence_s=5)
-    enc = Channel("encoder", lambda: speed * clock(), clock, period_s=0.01)
-    temp = Channel("furnace", lambda: 20.0 + clock(), clock, period_s=0.03)
+    force = Channel("loadcell", counter_read(n, 0.0005, tb), clock, silence_s=5, timebase=tb)
+    enc = Channel("encoder", lambda: speed * clock(), clock, period_s=0.01, timebase=tb)
+    temp = Channel("furnace", lambda: 20.0 + clock(), clock, period_s=0.03, timebase=tb)
     sampler = Sampler({"force_N": force, "crosshead_mm": enc, "temperature_C": temp}).start()
     blocks = []
     while len(force.stream) < n:
         blocks.append(sampler.take_rows())
-        time.sleep(0.01)
+        tb.sleep(0.01)
     blocks.append(sampler.finish())
     rows = np.vstack(blocks)
     np.testing.assert_array_equal(rows[:, 1], np.arange(n))  # each sent value once, in order
@@ -74,34 +77,34 @@ def test_every_force_sample_appears_exactly_once_and_in_order():
     np.testing.assert_allclose(rows[inside_t, 3], 20.0 + rows[inside_t, 0], atol=2e-3)
 
 
-def test_streamed_blocks_are_stamped_and_kept():
-    clock = make_clock()
+def test_streamed_blocks_are_stamped_and_kept(tb):
+    clock = tb.now
     counter = itertools.count()
     sent = []
 
     def block_read():
-        time.sleep(0.005)
+        tb.sleep(0.005)
         if len(sent) >= 500:
             return []
         vals = [next(counter) for _ in range(5)]
         sent.extend(vals)
         return vals
 
-    force = Channel("loadcell", block_read, clock, spacing_s=0.001, silence_s=5)
-    enc = Channel("encoder", lambda: clock(), clock, period_s=0.005)
+    force = Channel("loadcell", block_read, clock, spacing_s=0.001, silence_s=5, timebase=tb)
+    enc = Channel("encoder", lambda: clock(), clock, period_s=0.005, timebase=tb)
     sampler = Sampler({"force_N": force, "crosshead_mm": enc}).start()
     got = []
     while len(force.stream) < 500:
         got.append(sampler.take_rows())
-        time.sleep(0.005)
+        tb.sleep(0.005)
     got.append(sampler.finish())
     rows = np.vstack(got)
     np.testing.assert_array_equal(rows[:, 1], np.array(sent, dtype=float))
     assert np.all(np.diff(rows[:, 0]) >= 0)
 
 
-def test_failing_device_is_named_and_recorded_samples_kept():
-    clock = make_clock()
+def test_failing_device_is_named_and_recorded_samples_kept(tb):
+    clock = tb.now
     calls = itertools.count()
 
     def dying_encoder():
@@ -109,12 +112,12 @@ def test_failing_device_is_named_and_recorded_samples_kept():
             raise OSError("device reports readiness to read but returned no data")
         return 1.0
 
-    force = Channel("loadcell", lambda: (time.sleep(0.002), 5.0)[1], clock)
-    enc = Channel("encoder", dying_encoder, clock, period_s=0.002, max_failures=3)
+    force = Channel("loadcell", lambda: (tb.sleep(0.002), 5.0)[1], clock, timebase=tb)
+    enc = Channel("encoder", dying_encoder, clock, period_s=0.002, max_failures=3, timebase=tb)
     sampler = Sampler({"force_N": force, "crosshead_mm": enc}).start()
-    deadline = time.monotonic() + 5
-    while sampler.fault is None and time.monotonic() < deadline:
-        time.sleep(0.01)
+    deadline = tb.now() + 5
+    while sampler.fault is None and tb.now() < deadline:
+        tb.sleep(0.01)
     rows = sampler.finish()
     assert sampler.fault is not None
     assert str(sampler.fault).startswith("encoder: ")
@@ -122,22 +125,23 @@ def test_failing_device_is_named_and_recorded_samples_kept():
     assert len(rows) > 0 and np.all(rows[:, 2] == 1.0)
 
 
-def test_silent_device_returning_nothing_is_a_fault():
-    clock = make_clock()
-    force = Channel("loadcell", lambda: (time.sleep(0.01), None)[1], clock, silence_s=0.2)
+def test_silent_device_returning_nothing_is_a_fault(tb):
+    force = Channel("loadcell", lambda: (tb.sleep(0.01), None)[1], tb.now, silence_s=0.2, timebase=tb)
     sampler = Sampler({"force_N": force}).start()
-    force.join(3)
+    with tb.idle():  # this thread waits for the channel, which waits on the clock
+        force.join(3)
     sampler.stop()
     assert sampler.fault is not None and "loadcell" in str(sampler.fault) and "no data" in str(sampler.fault)
 
 
-def test_hanging_read_is_caught_by_check_silence():
-    clock = make_clock()
+def test_hanging_read_is_caught_by_check_silence(tb):
+    clock = tb.now
     release = threading.Event()
-    force = Channel("loadcell", lambda: 1.0, clock, period_s=0.005)
-    enc = Channel("encoder", lambda: (release.wait(5), 0.0)[1], clock, silence_s=0.1)
+    force = Channel("loadcell", lambda: 1.0, clock, period_s=0.05, timebase=tb)
+    # a driver stuck outside the clock: time moves on only by the clock's stall rule
+    enc = Channel("encoder", lambda: (release.wait(5), 0.0)[1], clock, silence_s=0.1, timebase=tb)
     sampler = Sampler({"force_N": force, "crosshead_mm": enc}).start()
-    time.sleep(0.3)
+    tb.sleep(0.3)
     fault = sampler.check_silence()
     release.set()
     sampler.finish()

@@ -3,15 +3,17 @@
 In the manner of PyMeasure's ``expected_protocol``: the test lists (command, reply) pairs;
 the driver must write exactly those commands in that order; ``reply=None`` is a device that
 stays silent. ``fake.feed(data)`` adds unsolicited bytes (a measurement stream) and
-``fake.unplug()`` makes the port vanish.
+``fake.unplug()`` makes the port vanish. The port keeps model time (:attr:`clock`, which the
+transport takes for its deadlines): a read with nothing to give advances it by the read's
+time-out instead of sleeping.
 """
 
 from __future__ import annotations
 
-import time
-
 import pytest
 import serial
+
+from flowcurve.clock import ModelClock
 
 
 class FakePort:
@@ -25,6 +27,7 @@ class FakePort:
         self.open_kwargs: dict = {}
         self.unplugged = False
         self.closed = False
+        self.clock = ModelClock()
 
     # -- what the transport calls --------------------------------------------------------
     def write(self, data: bytes) -> int:
@@ -48,7 +51,7 @@ class FakePort:
     def read(self, size: int = 1) -> bytes:
         self._check()
         if not self.rx:
-            time.sleep(self.timeout or 0)
+            self.clock.sleep(self.timeout or 0)
             return b""
         data = bytes(self.rx[:size])
         del self.rx[:size]

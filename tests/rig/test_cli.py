@@ -67,110 +67,120 @@ def test_check_with_a_bad_config_is_one_line(tmp_path, capsys):
     assert err.count("\n") == 1 and "[loadcell] port: must be a string" in err
 
 
-import flowcurve.rig.virtual.rig as virtual
-
-
-def test_check_passes_on_the_virtual_rig(tmp_path, capsys):
-    with virtual.VirtualRig() as rig:
-        path = tmp_path / "rig.toml"
-        path.write_text(to_toml(rig.config()))
-        assert main(["rig", "check", "--config", str(path)]) == 0
+def test_check_passes_on_the_virtual_rig(tmp_path, capsys, rig_factory):
+    rig = rig_factory()
+    path = tmp_path / "rig.toml"
+    path.write_text(to_toml(rig.config()))
+    assert main(["rig", "check", "--config", str(path)]) == 0
     out = capsys.readouterr().out
     assert out.count("  ok\n") == 3
     assert "identity: HBM AED104" in out and "Gray check ok" in out and "input type K" in out
 
 
-def test_check_finds_a_device_on_the_wrong_port(tmp_path, capsys):
-    with virtual.VirtualRig() as rig:
-        # cables swapped: the furnace module sits where the load cell should be
-        ports = {"loadcell": rig.ports["furnace"], "encoder": rig.ports["encoder"]}
-        path = tmp_path / "rig.toml"
-        path.write_text(to_toml(virtual_config(ports, loadcell_timeout_s=0.1)))
-        assert main(["rig", "check", "--no-probe", "--config", str(path)]) == 3
+def test_check_finds_a_device_on_the_wrong_port(tmp_path, capsys, rig_factory):
+    rig = rig_factory()
+    # cables swapped: the furnace module sits where the load cell should be
+    ports = {"loadcell": rig.ports["furnace"], "encoder": rig.ports["encoder"]}
+    path = tmp_path / "rig.toml"
+    path.write_text(to_toml(virtual_config(ports, loadcell_timeout_s=0.1)))
+    assert main(["rig", "check", "--no-probe", "--config", str(path)]) == 3
     out = capsys.readouterr().out
     # a DCON module is silent to AED syntax; the encoder is still fine
     assert "FAILED: silent: no answer to 'IDN?' within 0.1 s" in out
     assert "Gray check ok" in out
 
 
-def test_check_reports_garbled_replies_and_an_open_thermocouple(tmp_path, capsys):
-    with virtual.VirtualRig() as rig:
-        rig.inject("loadcell", "garble")
-        rig.inject("furnace", "open_thermocouple")
-        path = tmp_path / "rig.toml"
-        path.write_text(to_toml(rig.config()))
-        assert main(["rig", "check", "--config", str(path)]) == 3
+def test_check_reports_garbled_replies_and_an_open_thermocouple(tmp_path, capsys, rig_factory):
+    rig = rig_factory()
+    rig.inject("loadcell", "garble")
+    rig.inject("furnace", "open_thermocouple")
+    path = tmp_path / "rig.toml"
+    path.write_text(to_toml(rig.config()))
+    assert main(["rig", "check", "--config", str(path)]) == 3
     out = capsys.readouterr().out
     assert "load cell on" in out and "FAILED: garbled replies" in out
     assert "FAILED: thermocouple open (over-range reading confirmed by $AAB); heater off" in out
     assert "Gray check ok" in out
 
 
-def test_recover_loadcell_on_the_virtual_rig(tmp_path, capsys):
-    with virtual.VirtualRig() as rig:
-        path = tmp_path / "rig.toml"
-        path.write_text(to_toml(rig.config()))
-        rig.devices["loadcell"].baud, rig.devices["loadcell"].parity = 19200, 0  # left at 19200/N
-        assert main(["rig", "recover-loadcell", "--config", str(path)]) == 0
-        assert (rig.devices["loadcell"].baud, rig.devices["loadcell"].parity) == (9600, 1)
+def test_recover_loadcell_on_the_virtual_rig(tmp_path, capsys, rig_factory):
+    rig = rig_factory()
+    path = tmp_path / "rig.toml"
+    path.write_text(to_toml(rig.config()))
+    rig.devices["loadcell"].baud, rig.devices["loadcell"].parity = 19200, 0  # left at 19200/N
+    assert main(["rig", "recover-loadcell", "--config", str(path)]) == 0
+    assert (rig.devices["loadcell"].baud, rig.devices["loadcell"].parity) == (9600, 1)
     assert "answers: HBM AED104, serial 1234" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])
-def test_rig_virtual_runs_until_ctrl_c(tmp_path, stop):
-    path = tmp_path / "virtual.toml"
+def start_rig_virtual(path, *options):
+    """``flowcurve rig virtual`` in a process of its own, serving ptys in real time."""
     # a runner started in the background has SIGINT ignored, and children inherit that:
     # give the command the terminal's default, as an operator's Ctrl-C would meet it
-    proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "rig", "virtual", "--config", str(path)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    return subprocess.Popen([sys.executable, "-m", "flowcurve", "rig", "virtual", "--config", str(path), *options],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+
+
+def read_until_line(proc, prefix, timeout_s=30.0):
+    """The lines the process printed up to the first starting with ``prefix``."""
+    lines = []
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        line = proc.stdout.readline()
+        if not line:
+            break
+        lines.append(line)
+        if line.startswith(prefix):
+            return "".join(lines)
+    raise AssertionError(f"no line starting with {prefix!r} in: {''.join(lines)}")
+
+
+def stop_rig_virtual(proc, stop):
+    proc.send_signal(stop)
+    out, err = proc.communicate(timeout=20)
+    assert proc.returncode == 0, err
+    assert "virtual rig stopped" in out
+
+
+def kill_if_running(proc):
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait()
+
+
+@pytest.mark.parametrize("stop", [pytest.param(signal.SIGINT, marks=pytest.mark.pty), pytest.param(signal.SIGTERM, marks=pytest.mark.pty)])
+def test_rig_virtual_runs_until_ctrl_c(tmp_path, stop):
+    path = tmp_path / "virtual.toml"
+    proc = start_rig_virtual(path)
     try:
-        lines = []
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline:
-            line = proc.stdout.readline()
-            if not line:
-                break
-            lines.append(line)
-            if line.startswith("running"):
-                break
-        text = "".join(lines)
+        text = read_until_line(proc, "running")
         assert "loadcell" in text and "/dev/pts/" in text and f"configuration: {path}" in text
         cfg = load_config(path)
         assert cfg.loadcell.port.startswith("/dev/pts/") and cfg.furnace is not None
-        proc.send_signal(stop)
-        out, err = proc.communicate(timeout=20)
-        assert proc.returncode == 0, err
-        assert "virtual rig stopped" in out
+        stop_rig_virtual(proc, stop)
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+        kill_if_running(proc)
 
 
-def test_rig_virtual_starts_its_motor_for_a_driver_in_another_process(tmp_path):
+def test_rig_virtual_serves_ptys_starts_its_motor_for_a_driver_in_another_process_and_stops_on_ctrl_c(tmp_path):
     """'run --config' against 'rig virtual' waits for crosshead motion, as on the real machine;
-    the virtual operator's motor switch (--motor-start-after) must make the encoder move."""
+    the virtual operator's motor switch (--motor-start-after) must make the encoder move. The
+    real-time pty path of the default selection: another process, real ports, Ctrl-C."""
     from flowcurve.rig.encoder import CrossheadEncoder
 
     path = tmp_path / "virtual.toml"
-    proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "rig", "virtual", "--config", str(path),
-                             "--test", "compression", "--time-scale", "20", "--motor-start-after", "0.5"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
+    proc = start_rig_virtual(path, "--test", "compression", "--time-scale", "20", "--motor-start-after", "0.2")
     try:
-        seen = []
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and not any(s.startswith("crosshead motor started") for s in seen):
-            line = proc.stdout.readline()
-            if not line:
-                break
-            seen.append(line)
-        assert any(s.startswith("crosshead motor started") for s in seen), "".join(seen)
+        text = read_until_line(proc, "crosshead motor started")
+        assert "loadcell" in text and "/dev/pts/" in text and f"configuration: {path}" in text
         cfg = load_config(path)
+        assert cfg.loadcell.port.startswith("/dev/pts/") and cfg.furnace is not None
         with CrossheadEncoder(cfg.encoder.port, timeout_s=0.3) as enc:
             first = enc.position_mm()
-            time.sleep(0.5)  # 10 model seconds at 0.01 mm/s: 0.1 mm, ten encoder counts
-            assert abs(enc.position_mm() - first) >= 0.05
+            deadline = time.monotonic() + 20.0  # at 0.01 mm/s x 20: 0.05 mm in a quarter second
+            while abs(enc.position_mm() - first) < 0.05:
+                assert time.monotonic() < deadline, "the crosshead does not move"
+        stop_rig_virtual(proc, signal.SIGINT)
     finally:
-        proc.terminate()
-        proc.wait(timeout=20)
+        kill_if_running(proc)

@@ -1,9 +1,8 @@
 """LoadCell driver through command/reply pairs (the AED command set of PROTOCOLS.md)."""
 
-import time
-
 import pytest
 
+from flowcurve.clock import ModelClock
 from flowcurve.errors import DeviceError
 from flowcurve.rig.codecs import aed
 from flowcurve.rig.loadcell import LoadCell
@@ -117,9 +116,9 @@ def test_stream_burst_keeps_the_output_spacing(fake_port):
     lc.configure(rate_code=0)  # 100 values/s
     lc.start_stream()
     fake.feed(b"".join(aed.encode_msv(c, fmt) for c in range(10)))  # ten frames arrive at once
-    before = time.monotonic()
+    before = fake.clock.now()  # the port's clock stamps the frames
     got = lc.read_stream(10, timeout=0.5)
-    after = time.monotonic()
+    after = fake.clock.now()
     times = [s.t_monotonic_s for s in got]
     steps = [b - a for a, b in zip(times, times[1:])]
     assert [s.counts for s in got] == list(range(10))
@@ -154,6 +153,7 @@ class LineDevice:
         self.baud, self.parity = baud, parity
         self.selected = True
         self.heard = []
+        self.clock = ModelClock()  # a read with nothing to give advances it by its time-out
 
     def opener(self, url, **kw):
         device = self
@@ -161,6 +161,7 @@ class LineDevice:
         class Port:
             timeout = kw["timeout"]
             in_waiting = 0
+            clock = device.clock
 
             def __init__(self):
                 self.rx = bytearray()
@@ -187,7 +188,7 @@ class LineDevice:
 
             def read(self, n=1):
                 if not self.rx:
-                    time.sleep(self.timeout)
+                    self.clock.sleep(self.timeout)
                 data = bytes(self.rx[:n])
                 del self.rx[:n]
                 return data

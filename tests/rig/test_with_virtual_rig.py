@@ -1,22 +1,19 @@
-"""The drivers against the virtual-rig engineer's twins over real pseudo-terminals.
+"""The drivers against the virtual-rig engineer's twins, opened in-process on model time.
 
 Only what checks the two sides agree on a protocol reading (binary frames, watchdog safe
-value, Gray check); the twins' own behaviour is tested in their folder.
+value, Gray check); the twins' own behaviour is tested in their folder. The drivers over
+real pseudo-terminals: tests/acquisition/test_faults.py (a separate process) and
+tests/rig/test_cli.py.
 """
-
-import time
 
 import pytest
 
 from flowcurve.errors import DeviceError
 
-import flowcurve.rig.virtual.rig as virtual
-
 
 @pytest.fixture
-def rig():
-    with virtual.VirtualRig(time_scale=1.0) as r:
-        yield r
+def rig(rig_factory):
+    return rig_factory(time_scale=1.0)
 
 
 @pytest.mark.parametrize("cof", [8, 12, 2, 9, 0 + 32])
@@ -27,30 +24,33 @@ def test_loadcell_stream_in_each_format(rig, cof):
         idle = cell.read()
         cell.start_stream()
         got = []
-        deadline = time.monotonic() + 2.0
-        while len(got) < 30 and time.monotonic() < deadline:
+        deadline = rig.clock.now() + 2.0
+        while len(got) < 30 and rig.clock.now() < deadline:
             got += cell.read_stream(30 - len(got), timeout=0.5)
         cell.stop_stream()
         after = cell.read()  # the line is clean again after STP
     assert len(got) == 30
-    span = got[-1].t_monotonic_s - got[0].t_monotonic_s
-    assert 0.15 < span < 1.0  # 29 intervals at 100 values/s = 0.29 s (loose: a loaded machine)
+    span = got[-1].t_monotonic_s - got[1].t_monotonic_s  # 28 intervals at 100 values/s
+    if rig.link == "inprocess":  # model time: exactly (the first frame also waits for its command)
+        assert span == pytest.approx(0.28, abs=1e-9)
+    else:  # a pty in real time (loose: a loaded machine)
+        assert 0.15 < span < 1.0
     # idle machine: force noise of a few newtons around zero, in every format's scale
     for s in [idle, after] + got:
         assert abs(s.force_N) < 50.0 + 100e3 / 20_000 and not s.overload
 
 
-def test_tare_zeroes_a_held_load():
-    with virtual.VirtualRig(speed_mm_per_s=0.1) as rig:
-        with rig.config().loadcell.create() as cell:
-            cell.configure(filter=0)
-            rig.start_crosshead()
-            time.sleep(0.3)  # about 30 um of crosshead travel: kilonewtons in the elastic range
-            rig.stop_crosshead()
-            time.sleep(0.05)
-            loaded = cell.read().force_N
-            cell.tare()
-            tared = cell.read().force_N
+def test_tare_zeroes_a_held_load(rig_factory):
+    rig = rig_factory(speed_mm_per_s=0.1)
+    with rig.config().loadcell.create() as cell:
+        cell.configure(filter=0)
+        rig.start_crosshead()
+        rig.clock.sleep(0.3)  # 30 um of crosshead travel: kilonewtons in the elastic range
+        rig.stop_crosshead()
+        rig.clock.sleep(0.05)
+        loaded = cell.read().force_N
+        cell.tare()
+        tared = cell.read().force_N
     assert abs(loaded) > 500.0
     assert abs(tared) < 30.0
 
@@ -60,7 +60,7 @@ def test_encoder_follows_the_crosshead(rig):
         enc.zero()
         assert enc.read_counts() == 0 and enc.gray_check()
         rig.start_crosshead()
-        time.sleep(0.3)
+        rig.clock.sleep(0.3)
         rig.stop_crosshead()
         mm = enc.position_mm()
     assert mm == pytest.approx(rig.model.crosshead_mm, abs=0.011)  # one count is 10 um
@@ -71,7 +71,7 @@ def test_watchdog_switches_the_heater_off_when_the_host_goes_quiet(rig):
         furnace.heater(True)
         assert rig.model.furnace.commanded_on
         furnace.arm_watchdog(0.3)
-        time.sleep(0.7)  # the host says nothing
+        rig.clock.sleep(0.7)  # the host says nothing
         assert not rig.model.furnace.commanded_on
         assert furnace.watchdog_status() == 0x04
         with pytest.raises(DeviceError, match="outputs locked: the host watchdog timed out"):
@@ -132,8 +132,8 @@ def test_stream_survives_garbled_frames(rig):
     with rig.config().loadcell.create() as cell:
         cell.configure(rate_code=0, filter=0, fmt=3)
         cell.start_stream()
-        got, deadline = [], time.monotonic() + 10.0
-        while len(got) < 100 and time.monotonic() < deadline:
+        got, deadline = [], rig.clock.now() + 10.0
+        while len(got) < 100 and rig.clock.now() < deadline:
             got += cell.read_stream(100 - len(got), timeout=0.5)
         cell.stop_stream()
     assert len(got) == 100

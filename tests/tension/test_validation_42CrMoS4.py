@@ -32,7 +32,6 @@ def test_extensometer_path_reproduces_the_lab(bench):
     assert table["A"]["pass_rate"] >= 0.95 and table["Z"]["pass_rate"] >= 0.95
 
 
-@pytest.mark.slow
 def test_crosshead_only_path_looser_bounds(bench):
     files = bench.specimen_files()
     loo, each = bench.leave_one_out_stiffness(files)

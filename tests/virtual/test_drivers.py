@@ -1,7 +1,6 @@
-"""The real drivers (rig.loadcell, rig.encoder, rig.furnace) against the virtual devices
-over ptys, with every injected fault reported as a DeviceError naming the device."""
-
-import time
+"""The real drivers (rig.loadcell, rig.encoder, rig.furnace) against the virtual devices,
+opened in-process on model time, with every injected fault reported as a DeviceError naming
+the device."""
 
 import pytest
 
@@ -9,14 +8,11 @@ from flowcurve.errors import DeviceError, SafetyError
 from flowcurve.rig.encoder import CrossheadEncoder
 from flowcurve.rig.furnace import Furnace
 from flowcurve.rig.loadcell import LoadCell
-from flowcurve.rig.virtual.rig import VirtualRig
 
 
 @pytest.fixture
-def rig():
-    with VirtualRig("12Kh18N10T", time_scale=100, seed=5, force_noise_N=0.0,
-                    aed_settings={"asf": 0}) as r:
-        yield r
+def rig(rig_factory):
+    return rig_factory("12Kh18N10T", time_scale=100, seed=5, force_noise_N=0.0, aed_settings={"asf": 0})
 
 
 def test_drivers_read_the_model(rig):
@@ -25,7 +21,7 @@ def test_drivers_read_the_model(rig):
     with LoadCell(rig.ports["loadcell"], nominal_load_N=100e3, timeout_s=0.3) as lc, \
             CrossheadEncoder(rig.ports["encoder"], timeout_s=0.3) as enc:
         rig.start_crosshead()
-        time.sleep(0.3)
+        rig.clock.sleep(0.3)
         rig.stop_crosshead()
         sample = lc.read()
         x = enc.position_mm()
@@ -49,10 +45,10 @@ def test_every_wire_fault_is_a_device_error_naming_the_device(rig, device, fault
     try:
         read[device](drv)  # works before the fault
         rig.inject(device, fault)
-        t0 = time.monotonic()
+        t0 = rig.clock.now()
         with pytest.raises(DeviceError) as err:
             read[device](drv)
-        assert time.monotonic() - t0 < 3.0  # nothing hangs
+        assert rig.clock.now() - t0 < 3.0  # nothing hangs: the drivers give up on their time-outs
         assert err.value.device == drv.name
     finally:
         drv.close()
@@ -73,7 +69,7 @@ def test_furnace_driver_watchdog_drops_heater_when_host_stops(rig):
         fu.arm_watchdog(0.3)
         fu.heater(True)
         assert rig.model.furnace.commanded_on
-        time.sleep(0.6)  # the PC stops talking
+        rig.clock.sleep(0.6)  # the PC stops talking
         assert not rig.model.furnace.commanded_on
         assert fu.watchdog_status() & 0x04
 

@@ -1,7 +1,6 @@
 """Plain pyserial scripts following PROTOCOLS.md and docs/encoder-protocol.md — no project
-code on the host side — talk to each virtual device over its pty."""
-
-import time
+code on the host side — talk to each virtual device, opened in-process (``virtual://``,
+pyserial's ``serial_for_url``) on model time, or on its pty in real time (``-m pty``)."""
 
 import pytest
 import serial
@@ -9,7 +8,6 @@ import serial
 from flowcurve.rig.virtual.aed import AEDAmplifier
 from flowcurve.rig.virtual.dcon import I7011
 from flowcurve.rig.virtual.encoder_box import EncoderBox
-from flowcurve.rig.virtual.rig import VirtualRig
 
 
 class Source:
@@ -28,10 +26,10 @@ def cs(text: str) -> str:  # DCON checksum, written out here from the document
 
 
 @pytest.fixture
-def aed():
+def aed(device_link):
     src = Source()
-    dev = AEDAmplifier(src, nominal_load_N=100e3, settings={"asf": 0}).start()
-    port = serial.Serial(dev.port, 9600, parity=serial.PARITY_EVEN, timeout=0.3)
+    dev = AEDAmplifier(src, nominal_load_N=100e3, settings={"asf": 0}, **device_link).start()
+    port = serial.serial_for_url(dev.port, 9600, parity=serial.PARITY_EVEN, timeout=0.3)
     yield dev, src, port
     port.close()
     dev.close()
@@ -100,7 +98,7 @@ def test_aed_overflow_status_stream_and_stop(aed):
     data = port.read(17 * 10)
     assert len(data) == 170 and data.count(b"\r\n") == 10
     port.write(b";STP;")
-    time.sleep(0.1)
+    dev.clock.sleep(0.1)
     port.reset_input_buffer()
     assert port.read(17) == b""
 
@@ -121,10 +119,10 @@ def test_aed_addressing_tare_and_bus_polling(aed):
     assert int(port.read(10)) == 50_000
 
 
-def test_dcon_furnace_module_plain_script():
+def test_dcon_furnace_module_plain_script(device_link):
     state = {"heater": None}
-    dev = I7011(lambda: 612.345, lambda on: state.update(heater=on), address=0x01).start()
-    with serial.Serial(dev.port, 9600, timeout=0.3) as p:
+    dev = I7011(lambda: 612.345, lambda on: state.update(heater=on), address=0x01, **device_link).start()
+    with serial.serial_for_url(dev.port, 9600, timeout=0.3) as p:
         def ask_(text):
             p.write(text.encode() + b"\r")
             return p.read_until(b"\r")
@@ -142,9 +140,9 @@ def test_dcon_furnace_module_plain_script():
     dev.close()
 
 
-def test_dcon_checksum_mode():
-    dev = I7011(lambda: 25.12, lambda on: None, address=0x01, checksum_on=True).start()
-    with serial.Serial(dev.port, 9600, timeout=0.3) as p:
+def test_dcon_checksum_mode(device_link):
+    dev = I7011(lambda: 25.12, lambda on: None, address=0x01, checksum_on=True, **device_link).start()
+    with serial.serial_for_url(dev.port, 9600, timeout=0.3) as p:
         assert cs("$012") == "B7"  # PROTOCOLS.md example
         p.write(b"$012B7\r")
         reply = p.read_until(b"\r")[:-1].decode()
@@ -159,9 +157,9 @@ def test_dcon_checksum_mode():
     dev.close()
 
 
-def test_encoder_box_plain_script():
+def test_encoder_box_plain_script(device_link):
     box_counts = {"n": 0}
-    dev = EncoderBox(lambda: box_counts["n"], address=0x02, initial_count=2**32 - 3).start()
+    dev = EncoderBox(lambda: box_counts["n"], address=0x02, initial_count=2**32 - 3, **device_link).start()
 
     def gray_to_binary(g):  # from the document
         b = g
@@ -169,7 +167,7 @@ def test_encoder_box_plain_script():
             b ^= g
         return b
 
-    with serial.Serial(dev.port, 9600, timeout=0.3) as p:
+    with serial.serial_for_url(dev.port, 9600, timeout=0.3) as p:
         def ask_(text):
             p.write(text.encode() + b"\r")
             return p.read_until(b"\r")
@@ -192,19 +190,19 @@ def test_encoder_box_plain_script():
     dev.close()
 
 
-def test_virtual_rig_devices_share_one_model_clock():
-    with VirtualRig("12Kh18N10T", time_scale=200, force_noise_N=0.0, aed_settings={"asf": 0}) as rig:
-        lc = serial.Serial(rig.ports["loadcell"], 9600, timeout=0.5)
-        en = serial.Serial(rig.ports["encoder"], 9600, timeout=0.5)
-        rig.start_crosshead()
-        time.sleep(0.3)
-        rig.stop_crosshead()  # hold still so both reads see the same state
-        lc.write(b";MSV?;")
-        force = int(lc.read(10)) / 1e6 * 100e3
-        en.write(b"#020\r")
-        count = int(en.read_until(b"\r")[1:9], 16)
-        m = rig.model
-        assert count == int(m.crosshead_mm * 100) and count > 0
-        assert force == pytest.approx(m.force_N, abs=0.2)
-        lc.close()
-        en.close()
+def test_virtual_rig_devices_share_one_model_clock(rig_factory):
+    rig = rig_factory("12Kh18N10T", time_scale=200, force_noise_N=0.0, aed_settings={"asf": 0})
+    lc = serial.serial_for_url(rig.ports["loadcell"], 9600, timeout=0.5)
+    en = serial.serial_for_url(rig.ports["encoder"], 9600, timeout=0.5)
+    rig.start_crosshead()
+    rig.clock.sleep(0.3)
+    rig.stop_crosshead()  # hold still so both reads see the same state
+    lc.write(b";MSV?;")
+    force = int(lc.read(10)) / 1e6 * 100e3
+    en.write(b"#020\r")
+    count = int(en.read_until(b"\r")[1:9], 16)
+    m = rig.model
+    assert count == int(m.crosshead_mm * 100) and count > 0
+    assert force == pytest.approx(m.force_N, abs=0.2)
+    lc.close()
+    en.close()
