@@ -147,23 +147,60 @@ MIN_FEW_POINTS = 3  # with fewer samples on the whole elastic line there is no m
 FEW_SAMPLES = 10  # an elastic line with fewer samples is used whole, not searched for a window
 
 
-def _line_stats(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
-    """Least-squares line y = a·x + b: slope, intercept, slope standard error and R²."""
-    xm, ym = x.mean(), y.mean()
-    sxx = float(np.sum((x - xm) ** 2))
-    if sxx <= 0:
+def _slope_stats(n, sx, sy, vxx, vxy, vyy, strain_on_stress: bool) -> tuple[float, float, float]:
+    """E, its standard error and the stress intercept of a line from the centred sums of
+    strain x and stress y: σ regressed on ε (E = vxy/vxx), or ε on σ (1/E = vxy/vyy)."""
+    if strain_on_stress:
+        compliance = vxy / vyy
+        se_c = math.sqrt(max(vxx - compliance * vxy, 0.0) / (n - 2) / vyy) if n > 2 else float("nan")
+        slope = 1.0 / compliance if compliance != 0 else float("nan")
+        se = se_c / compliance**2 if compliance != 0 else float("inf")
+    else:
+        slope = vxy / vxx
+        se = math.sqrt(max(vyy - slope * vxy, 0.0) / (n - 2) / vxx) if n > 2 else float("nan")
+    return slope, se, (sy - slope * sx) / n
+
+
+def _line_stats(x: np.ndarray, y: np.ndarray, strain_on_stress: bool = False) -> tuple[float, float, float, float]:
+    """Least-squares line y = a·x + b (strain x, stress y): slope, intercept, slope standard error and R²."""
+    n = x.size
+    vxx, vyy = float(np.sum((x - x.mean()) ** 2)), float(np.sum((y - y.mean()) ** 2))
+    if vxx <= 0 or vyy <= 0:
         return float("nan"), float("nan"), float("inf"), float("nan")
-    slope = float(np.sum((x - xm) * (y - ym)) / sxx)
-    intercept = float(ym - slope * xm)
-    resid = y - (slope * x + intercept)
-    dof = x.size - 2
-    stderr = float(np.sqrt(np.sum(resid**2) / dof / sxx)) if dof > 0 else float("nan")
-    sst = float(np.sum((y - ym) ** 2))
-    r2 = float(1 - np.sum(resid**2) / sst) if sst > 0 else float("nan")
-    return slope, intercept, stderr, r2
+    vxy = float(np.sum((x - x.mean()) * (y - y.mean())))
+    slope, se, intercept = _slope_stats(n, float(x.sum()), float(y.sum()), vxx, vxy, vyy, strain_on_stress)
+    return slope, intercept, se, vxy * vxy / (vxx * vyy)
 
 
-def auto_modulus(strain, stress_MPa, reference_MPa: float) -> ModulusFit:
+def yield_onset_from_rate(time_s, force_N, levels: int = 400) -> float:
+    """A first estimate of the force at the onset of yield, from the force rate alone.
+
+    Under constant crosshead speed the force rises fastest on the elastic line (the stiffness
+    of frame and specimen) and slower in the toe and after yield. The rate is taken between
+    force levels (ΔF = the largest force / ``levels``, at least 5 noise standard deviations),
+    as 3ΔF over the time the force envelope needs to climb 3 levels, so noise does not make
+    it; the onset is the first level after the fastest climb where the rate is below half of
+    it. Needs no displacement, so a coarse encoder does not matter."""
+    t = np.asarray(time_s, dtype=float)
+    f = np.asarray(force_N, dtype=float)
+    if f.size < 8:
+        raise IdentificationError(f"only {f.size} samples of the first loading: no yield estimate")
+    d = np.diff(f)
+    noise = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)  # MAD of the differences
+    envelope = np.maximum.accumulate(f)
+    step = max(envelope[-1] / levels, 5.0 * noise)
+    level = np.arange(step, envelope[-1], step)
+    if level.size < 8:
+        raise IdentificationError("the force rises too little above its noise for a yield estimate")
+    times = t[np.searchsorted(envelope, level)]
+    period = float(np.median(np.diff(t)))
+    rate = 3.0 * step / np.maximum(times[3:] - times[:-3], period)
+    peak = int(np.argmax(rate))
+    below = np.nonzero(rate[peak:] < 0.5 * rate[peak])[0]
+    return float(level[peak + int(below[0])]) if below.size else float(level[-1])
+
+
+def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: bool = False) -> ModulusFit:
     """The modulus over the most linear stretch of the first loading (in the manner of
     ISO 6892-1 Annex G / ASTM E111), not over a fixed fraction of the yield stress.
 
@@ -174,6 +211,10 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float) -> ModulusFit:
     the windows that reach into it below that R² (§2.3). When no window is that linear (a
     crosshead curve with seating grips), the conventional 0.10–0.80 × the yield stress is used
     and ``source`` says so.
+
+    strain_on_stress: regress strain on stress (compliance 1/E) instead of stress on strain:
+    unbiased when the strain is the coarse signal (a crosshead with 10 µm steps against a
+    specimen that shortens a few µm elastically, where the usual direction dilutes E).
 
     With fewer than 10 samples on the whole elastic line (a sparsely sampled one, e.g. 10 Hz
     on a stiff specimen) all samples of the first loading between the toe (5 %) and the onset
@@ -205,13 +246,10 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float) -> ModulusFit:
             vxx, vxy, vyy = sxx - sx * sx / n, sxy - sx * sy / n, syy - sy * sy / n
             if not (vxx > 0 and vyy > 0):
                 continue
-            slope = vxy / vxx
-            ss_res = max(vyy - slope * vxy, 0.0)
-            se = math.sqrt(ss_res / (n - 2) / vxx)
-            r2 = 1.0 - ss_res / vyy
+            slope, se, intercept = _slope_stats(n, sx, sy, vxx, vxy, vyy, strain_on_stress)
+            r2 = vxy * vxy / (vxx * vyy)
             if not slope > 0:
                 continue
-            intercept = (sy - slope * sx) / n
             if r2 < AUTO_WINDOW_R2:
                 best_r2 = max(best_r2, r2)
                 continue
@@ -226,7 +264,7 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float) -> ModulusFit:
         lo, hi = CONVENTIONAL_WINDOW
         sel = (s1 >= lo * reference_MPa) & (s1 <= hi * reference_MPa)
         if sel.sum() >= MIN_LINE_POINTS:
-            slope, intercept, se, r2 = _line_stats(e1[sel], s1[sel])
+            slope, intercept, se, r2 = _line_stats(e1[sel], s1[sel], strain_on_stress)
             if slope > 0:
                 return ModulusFit(slope, se, intercept, r2, int(sel.sum()), (lo * reference_MPa, hi * reference_MPa),
                                   source=f"conventional window {lo:g}–{hi:g} × {reference_MPa:.4g} MPa: no stretch of the first loading is linear "
@@ -236,19 +274,25 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float) -> ModulusFit:
     if sel.sum() < MIN_FEW_POINTS:
         raise IdentificationError(f"only {int(sel.sum())} samples on the elastic line (between {window[0]:.4g} and {window[1]:.4g} MPa of the first loading); "
                                   f"need {MIN_FEW_POINTS} for a modulus: sample faster or give the handbook modulus (--E or material.E_MPa)")
-    slope, intercept, se, r2 = _line_stats(e1[sel], s1[sel])
+    slope, intercept, se, r2 = _line_stats(e1[sel], s1[sel], strain_on_stress)
     if not slope > 0:
         raise IdentificationError(f"the stress does not rise with strain on the elastic line ({int(sel.sum())} samples): no modulus")
     return ModulusFit(slope, se, intercept, r2, int(sel.sum()), (float(window[0]), float(window[1])),
                       source=f"all {int(sel.sum())} samples of the elastic line (too few for a window)")
 
 
-def fit_modulus(strain, stress_MPa, window_MPa: tuple[float, float], *, min_points: int = 5) -> ModulusFit:
-    """Apparent modulus by linear regression of stress on strain over ``window_MPa`` (§2.3)."""
+def fit_modulus(strain, stress_MPa, window_MPa: tuple[float, float], *, min_points: int = 5,
+                strain_on_stress: bool = False) -> ModulusFit:
+    """Apparent modulus by linear regression of stress on strain over ``window_MPa`` (§2.3)
+    (of strain on stress with ``strain_on_stress``, see :func:`auto_modulus`)."""
     line = fit_line_in_window(strain, stress_MPa, *window_MPa, unit="MPa", min_points=min_points)
-    if line.slope <= 0:
+    slope, intercept, se, r2 = line.slope, line.intercept, line.slope_stderr, line.r2
+    if strain_on_stress:
+        idx = line.indices
+        slope, intercept, se, r2 = _line_stats(np.asarray(strain, dtype=float)[idx], np.asarray(stress_MPa, dtype=float)[idx], True)
+    if not slope > 0:
         raise IdentificationError(f"the stress does not rise with strain between {window_MPa[0]:.4g} and {window_MPa[1]:.4g} MPa: no modulus")
-    return ModulusFit(line.slope, line.slope_stderr, line.intercept, line.r2, line.n_points, line.window, source="given window")
+    return ModulusFit(slope, se, intercept, r2, line.n_points, line.window, source="given window")
 
 
 def frame_stiffness_from_known_modulus(crosshead_mm, force_N, *, E_MPa: float, area_mm2: float, length_mm: float,
