@@ -269,6 +269,12 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         warnings.append(f"apparent modulus {E:.4g} MPa is far from any metal's: check units, the frame stiffness or the window")
 
     # ISO 6892-1 results
+    step = np.diff(eng_stress[: i_m + 1])
+    noise_MPa = float(1.4826 * np.median(np.abs(step - np.median(step))) / math.sqrt(2.0)) if step.size else 0.0
+    yp = iso6892.yield_point(strain, eng_stress, noise_MPa=noise_MPa)
+    if yp is not None:
+        warnings.append(f"the curve has a yield point (ReH {yp['ReH_MPa']:.1f} MPa, ReL {yp['ReL_MPa']:.1f} MPa, Ae {yp['Ae_pct']:.2f} %): "
+                        "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")
     e_m = float(strain[i_m])
     Ag = float(iso6892.plastic_extension_pct(e_m, Rm, E))
     i_k = iso6892.fracture_index(force)
@@ -312,7 +318,8 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         warnings.append("no post.dk_mm or post.sk_mm2: no reduction of area, fracture point or neck correction; the hardening law is fitted to the uniform range only")
 
     # hardening
-    fit_lo, fit_hi = (MIN_YIELD_OFFSET, np.inf) if fit_range is None else fit_range
+    plateau_end = float(eps_p[yp["plateau_end_index"]]) if yp is not None else MIN_YIELD_OFFSET
+    fit_lo, fit_hi = (max(MIN_YIELD_OFFSET, plateau_end), np.inf) if fit_range is None else fit_range
     sel = (ep_u >= max(fit_lo, MIN_YIELD_OFFSET)) & (ep_u <= fit_hi)
     if sel.sum() < 4:
         raise IdentificationError(f"{record.source}: the uniform range has fewer than 4 points beyond 0.2 % plastic strain"
@@ -325,7 +332,8 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         warnings.append("--fracture-point include: there is no fracture point (post.dk_mm or post.sk_mm2 missing); the uniform range alone is fitted")
     three_points = None
     if fracture and sig_t_rp is not None:
-        three_points = [(MIN_YIELD_OFFSET, sig_t_rp), (eps_p_at_Rm, float(sig_t[i_m])), (fracture["true_strain"], fracture[neck]["stress_MPa"])]
+        first = (MIN_YIELD_OFFSET, sig_t_rp) if yp is None else (fit_lo, float(np.interp(fit_lo, ep_u, sig_u)))
+        three_points = [first, (eps_p_at_Rm, float(sig_t[i_m])), (fracture["true_strain"], fracture[neck]["stress_MPa"])]
     fits: dict = {}
     variants: dict = {}
     choices: dict = {}
@@ -371,6 +379,10 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         "E_stderr_MPa": mod.E_stderr_MPa if E == mod.E_MPa else None,
         "modulus": {**mod.as_dict(), "E_MPa": E, "E_regressed_MPa": mod.E_MPa},
         "Rp02_MPa": Rp02,
+        "yield_point": yp is not None,  # ISO 6892-1: with a yield point ReH/ReL are the yield strengths
+        "ReH_MPa": yp["ReH_MPa"] if yp else None,
+        "ReL_MPa": yp["ReL_MPa"] if yp else None,
+        "Ae_pct": yp["Ae_pct"] if yp else None,
         "Rm_MPa": Rm,
         "Fm_N": Fm,
         "Ag_pct": Ag,

@@ -184,6 +184,9 @@ def summary_lines(result: dict) -> list[str]:
         strength += (f"   Rm {_fmt(result.get('Rm_MPa'), '.1f')} MPa   Ag {_fmt(result.get('Ag_pct'), '.2f')} %   "
                      f"A {_fmt(result.get('A_pct'), '.2f')} %   Z {_fmt(result.get('Z_pct'), '.1f')} %")
     lines = [strength]
+    if result.get("ReH_MPa") is not None:
+        lines.append(f"  yield point: ReH {_fmt(result['ReH_MPa'], '.1f')} MPa   ReL {_fmt(result.get('ReL_MPa'), '.1f')} MPa   "
+                     f"Ae {_fmt(result.get('Ae_pct'), '.2f')} %")
     if h:
         consts = "   ".join(f"{k.removesuffix('_MPa')} {_fmt(h[k])}{' MPa' if k.endswith('_MPa') else ''}"
                            for k in ("A_MPa", "B_MPa", "n", "K_MPa", "eps0", "sigma0_MPa", "Q_MPa", "b") if k in h)
