@@ -31,7 +31,8 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
 from flowcurve.identification.hardening import fit_hardening
-from flowcurve.identification.indicator import fit_modulus, remove_frame_compliance, scale_to_measured
+from flowcurve.identification.indicator import (ModulusFit, auto_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
+                                                yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.tension import check_fit_range, true_plastic_strain
 
@@ -77,10 +78,12 @@ def plastic_strain(strain, stress_MPa, E_MPa: float | None):
     return true_plastic_strain(strain, stress_MPa, E_MPa)  # (3.7) ε_p = ε − σ/E
 
 
-def _fit_subset(eps_p: np.ndarray, start: float) -> np.ndarray:
-    """Indices of the plastic range (ε_p ≥ start, after the running maximum passed it), thinned."""
+def _fit_subset(eps_p: np.ndarray, start: float, first: int = 0) -> np.ndarray:
+    """Indices of the plastic range (ε_p ≥ start, after the running maximum passed it, from
+    sample ``first`` on — the yield sample, so encoder jitter on the elastic line stays out), thinned."""
     past = np.maximum.accumulate(eps_p) >= start
-    idx = np.nonzero(past & (eps_p > 0))[0]
+    past[:first] = False
+    idx = np.nonzero(past & (eps_p >= start))[0]
     if idx.size > MAX_FIT_POINTS:
         # evenly in strain, so the long end of the curve does not outweigh the start
         targets = np.linspace(eps_p[idx[0]], eps_p[idx[-1]], MAX_FIT_POINTS)
@@ -120,18 +123,57 @@ def _friction_all(geo: dict, chosen: str, warnings: list[str]) -> tuple[fr.Frict
     return results[chosen], results
 
 
-def _apparent_modulus(strain: np.ndarray, stress: np.ndarray, warnings: list[str], window_MPa=None):
-    """Apparent modulus of the first loading (§2.3); None (with a warning) when it fails."""
-    if window_MPa is None:
-        # a crude yield estimate: the nominal stress at 1 % strain; fit between 10 % and 40 % of it
-        ref = float(np.interp(0.01, np.maximum.accumulate(strain), stress)) if strain[-1] > 0.01 else float(np.max(stress))
-        window_MPa = (0.1 * ref, 0.4 * ref)
-    try:
-        fit = fit_modulus(strain, stress, tuple(window_MPa))
-    except IdentificationError as exc:
-        warnings.append(f"apparent modulus not identified ({exc}); elastic strain not removed — give E_MPa")
-        return None
-    return fit
+def _offset_onset_MPa(strain0, stress0, line: ModulusFit, offset: float = YIELD_OFFSET) -> float | None:
+    """Stress where the strain first exceeds the elastic line by ``offset`` (the line's zero at
+    zero stress, i.e. toe-compensated): the yield estimate that sets the next window."""
+    beyond = strain0 - (stress0 - line.intercept_MPa) / line.E_MPa
+    past = np.nonzero(beyond >= offset)[0]
+    return float(stress0[past[0]]) if past.size else None
+
+
+def elastic_line(t, specimen_mm, force_N, *, area0_mm2: float, h0_mm: float, window_MPa=None, window=None,
+                 modulus_reference: str = "Rp02") -> tuple[ModulusFit, float]:
+    """The elastic line of the first loading and the toe it reveals (§2.3, ISO 6892-1 toe).
+
+    Strain regressed on stress over the widest linear window (:func:`auto_modulus`, iterated
+    on the 0.2 % offset yield from a first estimate off the force rate), or over ``window_MPa``
+    (MPa) / ``window`` (fractions of the yield estimate, or of the largest stress with
+    ``modulus_reference`` "Rm"). Returns the line in (specimen displacement/h0, P/S0) and the
+    toe offset (mm): where the line meets zero force."""
+    strain0 = np.asarray(specimen_mm, dtype=float) / h0_mm
+    stress0 = np.asarray(force_N, dtype=float) / area0_mm2
+    if window_MPa is not None:
+        line = fit_modulus(strain0, stress0, tuple(window_MPa), strain_on_stress=True)
+        line.source = "given window (MPa)"
+    else:
+        ref = float(np.max(stress0)) if modulus_reference == "Rm" and window is not None else yield_onset_from_rate(t, force_N) / area0_mm2
+        for _ in range(4):
+            if window is not None:
+                line = fit_modulus(strain0, stress0, (window[0] * ref, window[1] * ref), strain_on_stress=True)
+                line.source = f"given window {window[0]:g}–{window[1]:g} × {'largest stress' if modulus_reference == 'Rm' else 'the yield stress'}"
+            else:
+                line = auto_modulus(strain0, stress0, ref, strain_on_stress=True)
+            if modulus_reference == "Rm" and window is not None:
+                break
+            new_ref = _offset_onset_MPa(strain0, stress0, line)
+            if new_ref is None or abs(new_ref - ref) <= 1e-3 * ref:
+                break
+            ref = new_ref
+    if not line.E_MPa > 0:
+        raise IdentificationError("the elastic line does not rise: no modulus")
+    toe_mm = -line.intercept_MPa / line.E_MPa * h0_mm  # ε = c0 + σ/E → Δl0 = c0·h0
+    return line, float(toe_mm)
+
+
+def compensate_toe_line(specimen_mm, force_N, line: ModulusFit, toe_mm: float, *, area0_mm2: float, h0_mm: float) -> np.ndarray:
+    """ISO 6892-1 toe compensation: the displacement shifted so that the elastic line passes
+    through zero force, and the samples before the line (the toe) replaced by the line."""
+    out = np.asarray(specimen_mm, dtype=float) - toe_mm
+    force = np.asarray(force_N, dtype=float)
+    on_line = np.nonzero(force / area0_mm2 >= line.window_MPa[0])[0]
+    head = np.arange(on_line[0]) if on_line.size else np.arange(0)
+    out[head] = np.clip(force[head], 0.0, None) / area0_mm2 / line.E_MPa * h0_mm  # the toe replaced by the line
+    return out
 
 
 def identify_compression(
@@ -143,6 +185,9 @@ def identify_compression(
     E_MPa: float | None = None,
     frame_stiffness_N_per_um: float | None = None,
     modulus_window_MPa: tuple[float, float] | None = None,
+    modulus_window: tuple[float, float] | None = None,
+    modulus_reference: str = "Rp02",
+    toe: bool = True,
     fit_range: tuple[float, float] | None = None,
 ) -> Identification:
     """Identify a compression record: friction, friction-corrected true curves and hardening.
@@ -151,8 +196,10 @@ def identify_compression(
     ``ebrahimi_najafizadeh``), ``friction_correction`` (``k_sigma`` (default), ``siebel``,
     ``slab``), ``law`` of the hardening fit, ``E_MPa`` (handbook modulus for elastic strain and
     spring-back; otherwise the apparent modulus), ``frame_stiffness_N_per_um`` (otherwise the
-    record's ``rig.frame_stiffness_N_per_um``), ``modulus_window_MPa``, ``fit_range`` (LO, HI
-    true plastic strain of the hardening fit).
+    record's ``rig.frame_stiffness_N_per_um``), ``modulus_window_MPa`` / ``modulus_window``
+    (fractions of the yield stress, or of the largest stress with ``modulus_reference`` "Rm";
+    default: the widest linear stretch, :func:`elastic_line`), ``toe`` (compensate a soft
+    start, default on), ``fit_range`` (LO, HI true plastic strain of the hardening fit).
     """
     src = record.source
     if friction_correction not in fr.CORRECTIONS:
@@ -195,6 +242,19 @@ def identify_compression(
     if end < 10:
         raise IdentificationError(f"{src}: the loading branch has only {end + 1} samples")
 
+    # -- elastic line and toe: the linear part extended to zero force (ISO 6892-1) ----------
+    area0 = math.pi * d0**2 / 4.0
+    try:
+        line, toe_mm = elastic_line(t, specimen, force, area0_mm2=area0, h0_mm=h0, window_MPa=modulus_window_MPa,
+                                    window=modulus_window, modulus_reference=modulus_reference)
+    except IdentificationError as exc:
+        line, toe_mm = None, 0.0
+        warnings.append(f"no elastic line ({exc}): the toe is not compensated; "
+                        + (f"the handbook E = {E_MPa:g} MPa strips the elastic strain" if E_MPa is not None
+                           else "no modulus, so the elastic strain is not removed and there is no Rp0.2 — give E_MPa"))
+    if line is not None and toe:
+        specimen = compensate_toe_line(specimen, force, line, toe_mm, area0_mm2=area0, h0_mm=h0)
+
     # measured shortening at the largest load: h0 − hk plus the elastic spring-back when E is known
     d_k = float(fr.nominal_diameter(d0, h0, hk))
     springback = 0.0
@@ -213,9 +273,11 @@ def identify_compression(
     pressure = force / area  # (3.32) σ_n = P/S_i
 
     E_used, E_fit = E_MPa, None
-    if E_MPa is None:
-        E_fit = _apparent_modulus(strain, pressure, warnings, modulus_window_MPa)
-        E_used, E_source = (E_fit.E_MPa, "apparent") if E_fit is not None else (None, "none")
+    if E_MPa is None and line is not None:
+        E_fit = line
+        E_used, E_source = line.E_MPa / K_l, "apparent"  # the line's slope on the scaled strain
+    elif E_MPa is None:
+        E_source = "none"
 
     # -- friction corrections ---------------------------------------------------------------
     curves: dict[str, pd.DataFrame] = {
@@ -230,11 +292,13 @@ def identify_compression(
         corrected[method] = (eps_tp, sig_t)
         curves[f"true_{method}"] = pd.DataFrame({"true_plastic_strain": eps_tp, "true_stress_MPa": sig_t, "true_strain": eps_t})
 
-    # -- hardening fits ---------------------------------------------------------------------
+    # -- hardening fits, from the yield sample on ----------------------------------------------
+    rp02 = offset_yield(plastic_strain(strain, pressure, E_used), pressure) if E_used is not None else None
+    i_yield = int(np.argmax(pressure >= rp02)) if rp02 is not None else 0
     fits = {}
     fit_range = check_fit_range(fit_range)
     for method, (eps_tp, sig_t) in corrected.items():
-        idx = _fit_subset(eps_tp, YIELD_OFFSET)
+        idx = _fit_subset(eps_tp, YIELD_OFFSET, i_yield)
         if fit_range is not None:
             idx = idx[(eps_tp[idx] >= fit_range[0]) & (eps_tp[idx] <= fit_range[1])]
         if idx.size < 4:
@@ -254,10 +318,9 @@ def identify_compression(
     curves["fit"] = pd.DataFrame({"true_plastic_strain": grid, "true_stress_MPa": fit(grid)})
 
     # from where the plastic strain has passed the 0.2 % offset: the curve a card starts from
-    plastic = np.nonzero((np.maximum.accumulate(eps_def) >= YIELD_OFFSET) & (eps_def >= 0))[0]
+    plastic = np.nonzero((np.maximum.accumulate(eps_def) >= YIELD_OFFSET) & (eps_def >= 0) & (np.arange(eps_def.size) >= i_yield))[0]
     true_curve = pd.DataFrame({"true_plastic_strain": eps_def[plastic], "true_stress_MPa": sig_def[plastic]})
 
-    rp02 = offset_yield(plastic_strain(strain, pressure, E_used), pressure) if E_used is not None else None
     duration = float(t[-1] - t[0])
     strain_rate = float(strain[-1] / duration) if duration > 0 else None
 
@@ -308,5 +371,9 @@ def identify_compression(
         },
     }
     if E_fit is not None:
-        result["E_apparent_stderr_MPa"] = E_fit.E_stderr_MPa
+        result["E_apparent_stderr_MPa"] = E_fit.E_stderr_MPa / K_l
+    if line is not None:
+        result["modulus"] = {**line.as_dict(), "E_MPa": E_used, "E_line_MPa": line.E_MPa / K_l,
+                             "E_stderr_MPa": line.E_stderr_MPa / K_l, "source": E_source if E_MPa is not None else line.source}
+        result["indicator"]["toe_compensation_mm"] = toe_mm if toe else None
     return Identification(result=result, true_curve=true_curve, curves=curves)

@@ -9,6 +9,7 @@ Units: displacements in mm, forces in N, stiffness in N/µm, stresses in MPa.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -97,7 +98,7 @@ def fit_line_in_window(x, y, lo: float, hi: float, *, min_points: int = 5, unit:
     return LineFit(float(coef[0]), float(coef[1]), stderr, r2, int(idx.size), (float(lo), float(hi)), idx)
 
 
-def compensate_toe(displacement_mm, force_N, *, window_N: tuple[float, float]) -> tuple[np.ndarray, float]:
+def compensate_toe(displacement_mm, force_N, *, window_N: tuple[float, float], min_points: int = 5) -> tuple[np.ndarray, float]:
     """Toe (slack) compensation: shift the displacement so that the linear part of the loading
     curve, extrapolated to zero force, passes through zero; the toe itself (before the window)
     is replaced by that line.
@@ -106,7 +107,7 @@ def compensate_toe(displacement_mm, force_N, *, window_N: tuple[float, float]) -
     """
     disp = np.asarray(displacement_mm, dtype=float)
     force = np.asarray(force_N, dtype=float)
-    line = fit_line_in_window(disp, force, *window_N)
+    line = fit_line_in_window(disp, force, *window_N, min_points=min_points)
     if line.slope <= 0:
         raise IdentificationError("the loading curve does not rise over the toe window: cannot compensate the toe")
     toe = line.x_at_zero  # F = k·(Δl − Δl0) → Δl0
@@ -126,14 +127,172 @@ class ModulusFit:
     r2: float
     n_points: int
     window_MPa: tuple[float, float]
+    source: str = "given window"
+
+    def as_dict(self) -> dict:
+        """The result's ``modulus`` block (keys with units)."""
+        return {"E_MPa": self.E_MPa, "E_stderr_MPa": self.E_stderr_MPa, "r2": self.r2, "n_points": self.n_points,
+                "window_MPa": list(self.window_MPa), "source": self.source}
 
 
-def fit_modulus(strain, stress_MPa, window_MPa: tuple[float, float]) -> ModulusFit:
-    """Apparent modulus by linear regression of stress on strain over ``window_MPa`` (§2.3)."""
-    line = fit_line_in_window(strain, stress_MPa, *window_MPa, unit="MPa")
-    if line.slope <= 0:
+# the automatic window: lower edges and the smallest span, fractions of the reference stress
+AUTO_WINDOW_LOWS = (0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.40)
+AUTO_WINDOW_MIN_SPAN = 0.25
+AUTO_WINDOW_TOP = 0.80  # the elastic line ends before the onset of yield
+AUTO_WINDOW_R2 = 0.9995  # a window this linear counts as linear (the Annex G quality criterion)
+CONVENTIONAL_WINDOW = (0.10, 0.80)  # used when no stretch is linear (the 42CrMoS4 lab's window)
+FEW_POINTS_TOP = 0.90  # with few samples, all of them up to this fraction of the yield stress
+MIN_LINE_POINTS = 5  # a window with fewer samples is not a candidate of the automatic choice
+MIN_FEW_POINTS = 3  # with fewer samples on the whole elastic line there is no modulus
+FEW_SAMPLES = 10  # an elastic line with fewer samples is used whole, not searched for a window
+
+
+def _slope_stats(n, sx, sy, vxx, vxy, vyy, strain_on_stress: bool) -> tuple[float, float, float]:
+    """E, its standard error and the stress intercept of a line from the centred sums of
+    strain x and stress y: σ regressed on ε (E = vxy/vxx), or ε on σ (1/E = vxy/vyy)."""
+    if strain_on_stress:
+        compliance = vxy / vyy
+        se_c = math.sqrt(max(vxx - compliance * vxy, 0.0) / (n - 2) / vyy) if n > 2 else float("nan")
+        slope = 1.0 / compliance if compliance != 0 else float("nan")
+        se = se_c / compliance**2 if compliance != 0 else float("inf")
+    else:
+        slope = vxy / vxx
+        se = math.sqrt(max(vyy - slope * vxy, 0.0) / (n - 2) / vxx) if n > 2 else float("nan")
+    return slope, se, (sy - slope * sx) / n
+
+
+def _line_stats(x: np.ndarray, y: np.ndarray, strain_on_stress: bool = False) -> tuple[float, float, float, float]:
+    """Least-squares line y = a·x + b (strain x, stress y): slope, intercept, slope standard error and R²."""
+    n = x.size
+    vxx, vyy = float(np.sum((x - x.mean()) ** 2)), float(np.sum((y - y.mean()) ** 2))
+    if vxx <= 0 or vyy <= 0:
+        return float("nan"), float("nan"), float("inf"), float("nan")
+    vxy = float(np.sum((x - x.mean()) * (y - y.mean())))
+    slope, se, intercept = _slope_stats(n, float(x.sum()), float(y.sum()), vxx, vxy, vyy, strain_on_stress)
+    return slope, intercept, se, vxy * vxy / (vxx * vyy)
+
+
+def yield_onset_from_rate(time_s, force_N, levels: int = 400) -> float:
+    """A first estimate of the force at the onset of yield, from the force rate alone.
+
+    Under constant crosshead speed the force rises fastest on the elastic line (the stiffness
+    of frame and specimen) and slower in the toe and after yield. The rate is taken between
+    force levels (ΔF = the largest force / ``levels``, at least 5 noise standard deviations),
+    as 3ΔF over the time the force envelope needs to climb 3 levels, so noise does not make
+    it; the onset is the first level after the fastest climb where the rate is below half of
+    it. Needs no displacement, so a coarse encoder does not matter."""
+    t = np.asarray(time_s, dtype=float)
+    f = np.asarray(force_N, dtype=float)
+    if f.size < 8:
+        raise IdentificationError(f"only {f.size} samples of the first loading: no yield estimate")
+    d = np.diff(f)
+    noise = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)  # MAD of the differences
+    envelope = np.maximum.accumulate(f)
+    step = max(envelope[-1] / levels, 5.0 * noise)
+    level = np.arange(step, envelope[-1], step)
+    if level.size < 8:
+        raise IdentificationError("the force rises too little above its noise for a yield estimate")
+    times = t[np.searchsorted(envelope, level)]
+    period = float(np.median(np.diff(t)))
+    rate = 3.0 * step / np.maximum(times[3:] - times[:-3], period)
+    peak = int(np.argmax(rate))
+    below = np.nonzero(rate[peak:] < 0.5 * rate[peak])[0]
+    return float(level[peak + int(below[0])]) if below.size else float(level[-1])
+
+
+def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: bool = False) -> ModulusFit:
+    """The modulus over the most linear stretch of the first loading (in the manner of
+    ISO 6892-1 Annex G / ASTM E111), not over a fixed fraction of the yield stress.
+
+    Candidate windows run from lo to hi × ``reference_MPa`` (the yield stress, iterated by the
+    caller), lo in AUTO_WINDOW_LOWS, hi − lo ≥ 0.25, hi ≤ 0.8; each gets a regression line. The
+    widest window whose line is linear (R² ≥ 0.9995, the Annex G quality criterion) wins, so
+    noise is averaged over as much of the line as stays straight; a toe or early yielding bends
+    the windows that reach into it below that R² (§2.3). When no window is that linear (a
+    crosshead curve with seating grips), the conventional 0.10–0.80 × the yield stress is used
+    and ``source`` says so.
+
+    strain_on_stress: regress strain on stress (compliance 1/E) instead of stress on strain:
+    unbiased when the strain is the coarse signal (a crosshead with 10 µm steps against a
+    specimen that shortens a few µm elastically, where the usual direction dilutes E).
+
+    With fewer than 10 samples on the whole elastic line (a sparsely sampled one, e.g. 10 Hz
+    on a stiff specimen) all samples of the first loading between the toe (5 %) and the onset
+    of yield (90 %) are used, if there are at least 3; otherwise a one-line error.
+    """
+    e = np.asarray(strain, dtype=float)
+    s = np.asarray(stress_MPa, dtype=float)
+    if not reference_MPa > 0:
+        raise IdentificationError(f"the reference stress of the modulus window must be > 0 MPa, got {reference_MPa!r}")
+    top = FEW_POINTS_TOP * reference_MPa
+    above = np.nonzero(s >= top)[0]
+    end = int(above[0]) if above.size else s.size - 1
+    e1, s1 = e[: end + 1], s[: end + 1]
+    ok = np.isfinite(e1) & np.isfinite(s1)
+    e1, s1 = e1[ok], s1[ok]
+    line_samples = int(np.sum((s1 >= 0.05 * reference_MPa) & (s1 <= FEW_POINTS_TOP * reference_MPa)))
+    best, best_r2 = None, -np.inf
+    order = np.argsort(s1, kind="stable")
+    xs, ys = e1[order], s1[order]
+    # cumulative sums over the samples sorted by stress: every window is a contiguous run
+    cums = [np.concatenate([[0.0], np.cumsum(v)]) for v in (np.ones_like(xs), xs, ys, xs * xs, xs * ys, ys * ys)]
+    for lo in AUTO_WINDOW_LOWS:
+        for hi in np.arange(lo + AUTO_WINDOW_MIN_SPAN, AUTO_WINDOW_TOP + 1e-9, 0.05):
+            i = int(np.searchsorted(ys, lo * reference_MPa, side="left"))
+            j = int(np.searchsorted(ys, hi * reference_MPa, side="right"))
+            n, sx, sy, sxx, sxy, syy = (c[j] - c[i] for c in cums)
+            if n < MIN_LINE_POINTS or line_samples < FEW_SAMPLES:
+                continue
+            vxx, vxy, vyy = sxx - sx * sx / n, sxy - sx * sy / n, syy - sy * sy / n
+            if not (vxx > 0 and vyy > 0):
+                continue
+            slope, se, intercept = _slope_stats(n, sx, sy, vxx, vxy, vyy, strain_on_stress)
+            r2 = vxy * vxy / (vxx * vyy)
+            if not slope > 0:
+                continue
+            if r2 < AUTO_WINDOW_R2:
+                best_r2 = max(best_r2, r2)
+                continue
+            score = (-(hi - lo), se / slope)  # the widest linear window; of equal ones, the surest slope
+            if best is None or score < best[0]:
+                best = (score, slope, intercept, se, r2, int(n), (lo * reference_MPa, hi * reference_MPa))
+    if best is not None:
+        _, slope, intercept, se, r2, n, window = best
+        return ModulusFit(slope, se, intercept, r2, n, (float(window[0]), float(window[1])),
+                          source=f"automatic window {window[0] / reference_MPa:.2f}–{window[1] / reference_MPa:.2f} × {reference_MPa:.4g} MPa (widest linear stretch, R² ≥ {AUTO_WINDOW_R2})")
+    if np.isfinite(best_r2):  # enough samples, but no stretch is straight: the conventional window
+        lo, hi = CONVENTIONAL_WINDOW
+        sel = (s1 >= lo * reference_MPa) & (s1 <= hi * reference_MPa)
+        if sel.sum() >= MIN_LINE_POINTS:
+            slope, intercept, se, r2 = _line_stats(e1[sel], s1[sel], strain_on_stress)
+            if slope > 0:
+                return ModulusFit(slope, se, intercept, r2, int(sel.sum()), (lo * reference_MPa, hi * reference_MPa),
+                                  source=f"conventional window {lo:g}–{hi:g} × {reference_MPa:.4g} MPa: no stretch of the first loading is linear "
+                                         f"(best R² {best_r2:.5f} < {AUTO_WINDOW_R2})")
+    window = (0.05 * reference_MPa, FEW_POINTS_TOP * reference_MPa)
+    sel = (s1 >= window[0]) & (s1 <= window[1])
+    if sel.sum() < MIN_FEW_POINTS:
+        raise IdentificationError(f"only {int(sel.sum())} samples on the elastic line (between {window[0]:.4g} and {window[1]:.4g} MPa of the first loading); "
+                                  f"need {MIN_FEW_POINTS} for a modulus: sample faster or give the handbook modulus (--E or material.E_MPa)")
+    slope, intercept, se, r2 = _line_stats(e1[sel], s1[sel], strain_on_stress)
+    if not slope > 0:
+        raise IdentificationError(f"the stress does not rise with strain on the elastic line ({int(sel.sum())} samples): no modulus")
+    return ModulusFit(slope, se, intercept, r2, int(sel.sum()), (float(window[0]), float(window[1])),
+                      source=f"all {int(sel.sum())} samples of the elastic line (too few for a window)")
+
+
+def fit_modulus(strain, stress_MPa, window_MPa: tuple[float, float], *, min_points: int = 5,
+                strain_on_stress: bool = False) -> ModulusFit:
+    """Apparent modulus by linear regression of stress on strain over ``window_MPa`` (§2.3)
+    (of strain on stress with ``strain_on_stress``, see :func:`auto_modulus`)."""
+    line = fit_line_in_window(strain, stress_MPa, *window_MPa, unit="MPa", min_points=min_points)
+    slope, intercept, se, r2 = line.slope, line.intercept, line.slope_stderr, line.r2
+    if strain_on_stress:
+        idx = line.indices
+        slope, intercept, se, r2 = _line_stats(np.asarray(strain, dtype=float)[idx], np.asarray(stress_MPa, dtype=float)[idx], True)
+    if not slope > 0:
         raise IdentificationError(f"the stress does not rise with strain between {window_MPa[0]:.4g} and {window_MPa[1]:.4g} MPa: no modulus")
-    return ModulusFit(line.slope, line.slope_stderr, line.intercept, line.r2, line.n_points, line.window)
+    return ModulusFit(slope, se, intercept, r2, line.n_points, line.window, source="given window")
 
 
 def frame_stiffness_from_known_modulus(crosshead_mm, force_N, *, E_MPa: float, area_mm2: float, length_mm: float,

@@ -72,3 +72,54 @@ def reduction_of_area_pct(s0_mm2: float, su_mm2: float) -> float:
     if not 0 < su_mm2 <= s0_mm2:
         raise IdentificationError(f"the area after fracture {su_mm2!r} mm² must be > 0 and not larger than the original {s0_mm2!r} mm²: check post.dk_mm")
     return 100.0 * (s0_mm2 - su_mm2) / s0_mm2
+
+
+# a drop of the stress after a maximum by more than this fraction of it (and 3 noise standard
+# deviations) makes that maximum an upper yield strength
+YIELD_DROP = 0.01
+
+
+def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0) -> dict | None:
+    """Upper and lower yield strength and the yield point extension (ISO 6892-1 3.10.2, 3.7.4).
+
+    ReH: the maximum stress before the first drop of more than 1 % (and 3 noise standard
+    deviations) — searched before the maximum force. ReL: the lowest stress on the yield plateau,
+    the initial transient (from ReH to the local maximum after the first minimum) disregarded
+    unless nothing else is left. Ae: the extension from ReH to the start of uniform work hardening — the last sample up
+    to Fm still within the plateau band (ReL + half the drop, at most 2 % of ReL, at least 3
+    noise deviations), in % of the gauge length. None when the curve has no yield point.
+    Returns ReH_MPa, ReL_MPa, Ae_pct and the sample indices of ReH and of the plateau end.
+    """
+    e = np.asarray(strain, dtype=float)
+    s = np.asarray(stress_MPa, dtype=float)
+    i_m = int(np.nanargmax(s))
+    head = s[: i_m + 1]
+    run = np.maximum.accumulate(head)
+    threshold = np.maximum(YIELD_DROP * run, 3.0 * noise_MPa)
+    drops = np.nonzero(run - head > threshold)[0]
+    if drops.size == 0:
+        return None
+    j = int(drops[0])
+    i_h = int(np.argmax(head[:j]))
+    if i_h == 0:
+        return None
+    reh = float(s[i_h])
+    # the rest of the curve up to Fm, and the first local minimum after ReH (the transient)
+    after = s[i_h + 1: i_m + 1]
+    if after.size < 2:
+        return None
+    d = np.diff(after)
+    rising = np.nonzero(d > 0)[0]
+    first_min = int(rising[0]) if rising.size else after.size - 1
+    falling = np.nonzero(d[first_min:] < 0)[0]  # the transient ends at the next local maximum
+    transient_end = first_min + int(falling[0]) if falling.size else first_min
+    band_of = lambda low: low + float(np.clip(0.5 * (reh - low), 3.0 * noise_MPa, 0.02 * low))  # noqa: E731
+    level = float(np.min(after))
+    top = band_of(level)
+    within = np.nonzero(after <= top)[0]
+    end = int(within[-1])  # the last sample on the plateau
+    plateau = after[transient_end + 1: end + 1]
+    rel = float(np.min(plateau)) if plateau.size else float(np.min(after[: end + 1]))
+    i_end = i_h + 1 + end
+    return {"ReH_MPa": reh, "ReL_MPa": rel, "Ae_pct": float(100.0 * (e[i_end] - e[i_h])),
+            "ReH_index": i_h, "plateau_end_index": i_end}

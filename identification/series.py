@@ -30,7 +30,7 @@ import pandas as pd
 
 from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
-from flowcurve.identification.hardening import fit_hardening
+from flowcurve.identification.hardening import POOR_FIT_PCT, fit_hardening
 from flowcurve.identification.johnson_cook import (CONVENTIONS, EQUATION, homologous_temperature, johnson_cook_reduced,
                                          log_rate_ratio)
 from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
@@ -284,6 +284,11 @@ def load_members(paths: Iterable[str | Path], **identify_options) -> list[Series
             members.append(member_from_record(load_record(p), **identify_options))
         else:
             raise RecordError(p, "no such file or folder")
+    no_modulus = [m.name for m in members if m.kind == "record" and m.E_MPa is None]
+    if no_modulus:
+        raise IdentificationError(
+            f"record(s) {', '.join(no_modulus)} have no elastic modulus (no elastic line was found and no handbook E given), so their "
+            "plastic strain would be the total strain: add material.E_MPa to the records or give the modulus (--E)")
     names = [m.name for m in members]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
@@ -621,6 +626,11 @@ class SeriesFit:
     max_points: int = MAX_POINTS
     damage: DamageFit | None = None  # D1-D5 when the series holds fracture data
 
+    @property
+    def quality(self) -> str:
+        """"good", or "poor" when the chosen fit's largest relative error exceeds 10 %."""
+        return "poor" if not self.fit.fit_error_pct <= POOR_FIT_PCT else "good"
+
     def covered_range(self) -> dict[str, list[float]]:
         """The plastic strain, strain rate (1/s) and temperature (°C) the constants were identified on."""
         ms = self.members
@@ -638,6 +648,7 @@ class SeriesFit:
         if material:  # absent, not null, when unknown: readers default it
             out["material"] = material
         out.update({k: v for k, v in top.items() if k not in ("method", "record_errors", "report")})
+        out["quality"] = self.quality
         out.update({"ref_strain_rate_per_s": ref.strain_rate_per_s, "ref_strain_rate_source": ref.strain_rate_source,
                     "ref_temperature_C": ref.temperature_C, "ref_temperature_source": ref.temperature_source,
                     "melt_temperature_C": ref.melt_temperature_C})
@@ -696,6 +707,10 @@ def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_s
             note = f"no stepwise comparison: {exc}"
     glob = fit_global(members, ref, fixed=fixed, max_points=max_points)
     chosen = glob if method == "global" else stepwise
+    if chosen.fit_error_pct > POOR_FIT_PCT:
+        worst = sorted(chosen.record_errors.items(), key=lambda kv: -kv[1]["fit_error_pct"])[:3]
+        warnings.append(f"the {method} fit is poor: max error {chosen.fit_error_pct:.3g} % (> {POOR_FIT_PCT:g} %); worst records "
+                        + ", ".join(f"{name} {e['fit_error_pct']:.3g} %" for name, e in worst))
     damage = _fit_damage(members, list(fracture_points), ref, warnings)
     return SeriesFit(method=method, fit=chosen, global_fit=glob, stepwise_fit=stepwise, stepwise_note=note,
                      members=members, curves=condition_curves(members, max_points), warnings=warnings,

@@ -18,14 +18,13 @@ from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
 from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, fit_hardening, three_point_fit
-from flowcurve.identification.indicator import compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
+from flowcurve.identification.indicator import FEW_SAMPLES, auto_modulus, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
 from flowcurve.identification.necking import METHODS as NECK_METHODS
 from flowcurve.identification.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
 
 TRUE_STRESS_FORMS = ("gost_3_6", "constant_volume")
 HARDENING_METHODS = ("least_squares", "three_point")
-DEFAULT_MODULUS_WINDOW = (0.10, 0.80)  # fractions of the modulus reference stress
 MODULUS_REFERENCES = ("Rp02", "Rm")
 FIT_POINTS = 30  # the uniform range is resampled to this many points, evenly in εp
 MIN_YIELD_OFFSET = 0.002
@@ -85,6 +84,19 @@ def choose_fracture_variant(pair: dict, eps_p, stress_MPa, mode: str) -> tuple[s
                        "(the law cannot pass through both; see hardening_alternatives)")
 
 
+def _check_window(window, name: str, *, fractions: bool) -> tuple[float, float] | None:
+    """A (lo, hi) modulus window: fractions 0 ≤ lo < hi ≤ 1, or MPa 0 ≤ lo < hi; or None."""
+    if window is None:
+        return None
+    try:
+        lo, hi = (float(v) for v in window)
+    except (TypeError, ValueError):
+        raise IdentificationError(f"{name} must be two numbers LO,HI, got {window!r}") from None
+    if not (0 <= lo < hi) or (fractions and hi > 1) or not math.isfinite(hi):
+        raise IdentificationError(f"{name} must be {'fractions 0 ≤ lo < hi ≤ 1' if fractions else 'MPa 0 ≤ lo < hi'}, got {window!r}")
+    return lo, hi
+
+
 def check_fit_range(fit_range) -> tuple[float, float] | None:
     """A (lo, hi) plastic-strain range with 0 ≤ lo < hi, or None."""
     if fit_range is None:
@@ -140,7 +152,8 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
 
 def identify_tension(record: Record, *, use_extensometer: bool | None = None, frame_stiffness_N_per_um: float | None = None,
                      crosshead_length_mm: float | None = None, toe: bool = True, scale: bool = True,
-                     modulus_window: tuple[float, float] = DEFAULT_MODULUS_WINDOW, modulus_reference: str = "Rp02",
+                     modulus_window: tuple[float, float] | None = None, modulus_reference: str = "Rp02",
+                     modulus_window_MPa: tuple[float, float] | None = None,
                      E_MPa: float | None = None, poisson: float = 0.3, true_stress: str = "gost_3_6",
                      neck: str = "davidenkov", law: str = "johnson_cook", hardening: str = "least_squares",
                      fracture_weight: float | None = None, fit_range: tuple[float, float] | None = None,
@@ -152,7 +165,10 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     crosshead_length_mm: length the crosshead elongation refers to (default: the parallel
         length if given, else l0); with post.lu_mm measured and ``scale`` it is l0 (3.1).
     modulus_window: E is regressed over (lo, hi) × the reference stress (Rp0.2, iterated,
-        or Rm); the window in MPa is reported. E_MPa fixes the modulus instead.
+        or Rm); modulus_window_MPa: over (lo, hi) MPa; neither (default): over the most linear
+        stretch of the first loading (:func:`identification.indicator.auto_modulus`), or all of
+        its samples when there are few — then the handbook ``material.E_MPa`` when the record
+        has one. The window in MPa and ``modulus.source`` are reported. E_MPa fixes the modulus.
     true_stress: "gost_3_6" (the corrected (3.6), with ν = ``poisson``) or "constant_volume".
     neck: the neck correction used for the fracture point (all are reported).
     law, hardening: the hardening law and method of the main fit; the others are reported.
@@ -175,9 +191,10 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     if fracture_point not in FRACTURE_POINT_MODES:
         raise IdentificationError(f"fracture_point must be one of {', '.join(FRACTURE_POINT_MODES)}, not {fracture_point!r}")
     fit_range = check_fit_range(fit_range)
-    lo_frac, hi_frac = (float(v) for v in modulus_window)
-    if not 0 <= lo_frac < hi_frac <= 1:
-        raise IdentificationError(f"modulus_window must be fractions 0 ≤ lo < hi ≤ 1, got {modulus_window!r}")
+    fractions = _check_window(modulus_window, "modulus_window", fractions=True)
+    window_fixed_MPa = _check_window(modulus_window_MPa, "modulus_window_MPa", fractions=False)
+    if fractions is not None and window_fixed_MPa is not None:
+        raise IdentificationError("give modulus_window (fractions) or modulus_window_MPa, not both")
 
     warnings: list[str] = []
     d0 = record.positive("specimen.d0_mm", required=True)
@@ -212,19 +229,38 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
 
     # E, the toe and Rp0.2 depend on each other through the window: iterate to a fixed point
     ref = 0.5 * Rm if modulus_reference == "Rp02" else Rm
+    handbook_E = record.positive("material.E_MPa") if E_MPa is None else None
     toe_mm = 0.0
-    for _ in range(4):
-        window_MPa = (lo_frac * ref, hi_frac * ref)
+    for step in range(6):
+        if window_fixed_MPa is not None:
+            window_MPa, line_points, how = window_fixed_MPa, 5, "given window (MPa)"
+        elif fractions is not None:
+            window_MPa = (fractions[0] * ref, fractions[1] * ref)
+            line_points, how = 5, f"given window {fractions[0]:g}–{fractions[1]:g} × {modulus_reference}"
+        else:
+            try:
+                auto = auto_modulus(disp0 / length, eng_stress, ref)  # the window is the same before toe and scaling
+            except IdentificationError:
+                if step > 0 or ref >= Rm:
+                    raise
+                ref = Rm  # a sparse elastic line may hold no sample below the first guess: start from Rm
+                auto = auto_modulus(disp0 / length, eng_stress, ref)
+            window_MPa, line_points, how = auto.window_MPa, min(auto.n_points, 5), auto.source
         disp = disp0
         if toe:
-            disp, toe_mm = compensate_toe(disp0, force, window_N=(window_MPa[0] * s0, window_MPa[1] * s0))
+            disp, toe_mm = compensate_toe(disp0, force, window_N=(window_MPa[0] * s0, window_MPa[1] * s0), min_points=line_points)
         if src["scalable"] and scale and lu is not None:
             disp, scale_factor = scale_to_measured(disp, lu - l0)  # (3.1) K_l = Δl_p / max Δl
         strain = disp / length
-        mod = fit_modulus(strain, eng_stress, window_MPa)
-        E = float(E_MPa) if E_MPa is not None else mod.E_MPa
+        mod = fit_modulus(strain, eng_stress, window_MPa, min_points=line_points)
+        mod.source = how
+        E = mod.E_MPa
+        if E_MPa is not None:
+            E, mod.source = float(E_MPa), "option E_MPa"
+        elif handbook_E is not None and fractions is None and window_fixed_MPa is None and mod.n_points < FEW_SAMPLES:
+            E, mod.source = handbook_E, f"handbook material.E_MPa (only {mod.n_points} samples on the elastic line)"
         Rp02, _ = iso6892.offset_yield_strength(strain, eng_stress, E, MIN_YIELD_OFFSET, start_MPa=window_MPa[0])
-        if modulus_reference == "Rm" or abs(Rp02 - ref) <= 1e-6 * Rp02:
+        if window_fixed_MPa is not None or modulus_reference == "Rm" or abs(Rp02 - ref) <= 1e-6 * Rp02:
             break
         ref = Rp02
     if np.nanmax(np.abs(strain)) > MAX_STRAIN:
@@ -233,6 +269,12 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         warnings.append(f"apparent modulus {E:.4g} MPa is far from any metal's: check units, the frame stiffness or the window")
 
     # ISO 6892-1 results
+    step = np.diff(eng_stress[: i_m + 1])
+    noise_MPa = float(1.4826 * np.median(np.abs(step - np.median(step))) / math.sqrt(2.0)) if step.size else 0.0
+    yp = iso6892.yield_point(strain, eng_stress, noise_MPa=noise_MPa)
+    if yp is not None:
+        warnings.append(f"the curve has a yield point (ReH {yp['ReH_MPa']:.1f} MPa, ReL {yp['ReL_MPa']:.1f} MPa, Ae {yp['Ae_pct']:.2f} %): "
+                        "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")
     e_m = float(strain[i_m])
     Ag = float(iso6892.plastic_extension_pct(e_m, Rm, E))
     i_k = iso6892.fracture_index(force)
@@ -276,7 +318,8 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         warnings.append("no post.dk_mm or post.sk_mm2: no reduction of area, fracture point or neck correction; the hardening law is fitted to the uniform range only")
 
     # hardening
-    fit_lo, fit_hi = (MIN_YIELD_OFFSET, np.inf) if fit_range is None else fit_range
+    plateau_end = float(eps_p[yp["plateau_end_index"]]) if yp is not None else MIN_YIELD_OFFSET
+    fit_lo, fit_hi = (max(MIN_YIELD_OFFSET, plateau_end), np.inf) if fit_range is None else fit_range
     sel = (ep_u >= max(fit_lo, MIN_YIELD_OFFSET)) & (ep_u <= fit_hi)
     if sel.sum() < 4:
         raise IdentificationError(f"{record.source}: the uniform range has fewer than 4 points beyond 0.2 % plastic strain"
@@ -289,7 +332,8 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         warnings.append("--fracture-point include: there is no fracture point (post.dk_mm or post.sk_mm2 missing); the uniform range alone is fitted")
     three_points = None
     if fracture and sig_t_rp is not None:
-        three_points = [(MIN_YIELD_OFFSET, sig_t_rp), (eps_p_at_Rm, float(sig_t[i_m])), (fracture["true_strain"], fracture[neck]["stress_MPa"])]
+        first = (MIN_YIELD_OFFSET, sig_t_rp) if yp is None else (fit_lo, float(np.interp(fit_lo, ep_u, sig_u)))
+        three_points = [first, (eps_p_at_Rm, float(sig_t[i_m])), (fracture["true_strain"], fracture[neck]["stress_MPa"])]
     fits: dict = {}
     variants: dict = {}
     choices: dict = {}
@@ -332,8 +376,13 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     result = {
         "test": "tension",
         "E_MPa": E,
-        "E_stderr_MPa": mod.E_stderr_MPa if E_MPa is None else None,
+        "E_stderr_MPa": mod.E_stderr_MPa if E == mod.E_MPa else None,
+        "modulus": {**mod.as_dict(), "E_MPa": E, "E_regressed_MPa": mod.E_MPa},
         "Rp02_MPa": Rp02,
+        "yield_point": yp is not None,  # ISO 6892-1: with a yield point ReH/ReL are the yield strengths
+        "ReH_MPa": yp["ReH_MPa"] if yp else None,
+        "ReL_MPa": yp["ReL_MPa"] if yp else None,
+        "Ae_pct": yp["Ae_pct"] if yp else None,
         "Rm_MPa": Rm,
         "Fm_N": Fm,
         "Ag_pct": Ag,
@@ -362,7 +411,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
             "frame_stiffness_N_per_um": src["stiffness"],
             "toe_compensation_mm": toe_mm if toe else None,
             "scale_factor_Kl": scale_factor,
-            "modulus": "fixed by option E_MPa" if E_MPa is not None else f"linear regression over {lo_frac:g}–{hi_frac:g} × {modulus_reference} of the first loading",
+            "modulus": mod.source,
             "modulus_r2": mod.r2,
             "Rp02": "offset method, ISO 6892-1: intersection with the 0.2 % line of slope E",
             "Ag": "plastic extension at maximum force, 100·(e_m − Rm/E)",

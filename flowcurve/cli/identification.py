@@ -108,6 +108,7 @@ def register(subparsers) -> None:
     add_modulus_option(m, "strips elastic strain with it (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
     m.add_argument("--true-stress", choices=("gost_3_6", "constant_volume"), help="true stress in the uniform part of a tension test: the corrected (3.6) with bulk modulus (default) or σ·(1 + e) at constant volume")
     m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n)")
+    m.add_argument("--modulus-window", type=_pair, metavar="LO,HI", help="stress window of the elastic-modulus regression: MPa (e.g. 50,300), or fractions of Rm when both are ≤ 1 (e.g. 0.1,0.4); default: the widest linear stretch of the first loading, chosen automatically (all of it when it has few samples)")
     m.add_argument("--fit-range", type=_pair, metavar="LO,HI", help="true plastic strain range of the hardening fit, e.g. 0.01,0.15 (default: from 0.2 %% offset, past a yield plateau, to the end of the uniform range)")
     m.add_argument("--fracture-point", choices=("auto", "include", "exclude"), help="the neck-corrected fracture point in the least-squares hardening fit (tension): include, exclude, or auto (default: included unless it costs the uniform range more than 2 %% max error); both variants are reported")
     m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default: the seed's bulge regression)")
@@ -124,6 +125,15 @@ def _pair(text: str) -> tuple[float, float]:
         return float(parts[0]), float(parts[1])
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not LO,HI (two numbers separated by a comma)") from None
+
+
+def _modulus_window_options(window) -> dict:
+    """--modulus-window LO,HI: fractions of Rm when both are ≤ 1, else MPa."""
+    if window is None:
+        return {}
+    if max(window) <= 1.0:
+        return {"modulus_window": window, "modulus_reference": "Rm"}
+    return {"modulus_window_MPa": window}
 
 
 def _meta_from_args(args) -> dict[str, str]:
@@ -150,6 +160,7 @@ def _options_from_args(args) -> dict:
         "friction_correction": args.friction_correction,
         "E_MPa": args.E_MPa,
         "true_stress": args.true_stress,
+        **_modulus_window_options(args.modulus_window),
         "fit_range": args.fit_range,
         "fracture_point": args.fracture_point,
     }
@@ -208,6 +219,9 @@ def summary_lines(result: dict) -> list[str]:
         strength += (f"   Rm {_fmt(result.get('Rm_MPa'), '.1f')} MPa   Ag {_fmt(result.get('Ag_pct'), '.2f')} %   "
                      f"A {_fmt(result.get('A_pct'), '.2f')} %   Z {_fmt(result.get('Z_pct'), '.1f')} %")
     lines = [strength]
+    if result.get("ReH_MPa") is not None:
+        lines.append(f"  yield point: ReH {_fmt(result['ReH_MPa'], '.1f')} MPa   ReL {_fmt(result.get('ReL_MPa'), '.1f')} MPa   "
+                     f"Ae {_fmt(result.get('Ae_pct'), '.2f')} %")
     if h:
         consts = "   ".join(f"{k.removesuffix('_MPa')} {_fmt(h[k])}{' MPa' if k.endswith('_MPa') else ''}"
                            for k in ("A_MPa", "B_MPa", "n", "K_MPa", "eps0", "sigma0_MPa", "Q_MPa", "b") if k in h)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -43,6 +44,8 @@ def register(subparsers) -> None:
                    help="global least squares over all curves (default) or the classic stepwise procedure; the other is reported for comparison")
     p.add_argument("--fix-C", type=float, metavar="VALUE", help="do not identify C, use this value (e.g. for a series at one rate)")
     p.add_argument("--fix-m", type=float, metavar="VALUE", help="do not identify m, use this value (e.g. for a series at one temperature)")
+    p.add_argument("--E", dest="E_MPa", type=float, metavar="MPA", help="elastic modulus for records that have no handbook material.E_MPa (default: each record's identified modulus)")
+    p.add_argument("--strict", action="store_true", help="exit non-zero when the fit is poor (max error above 10 %%); fit.json is still written, marked poor")
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, metavar="N", help=f"points per record in the fit, the same for every record (default {DEFAULT_MAX_POINTS})")
     p.add_argument("--fracture-points", metavar="FILE.csv",
                    help="fracture points measured elsewhere for the Johnson-Cook fracture constants D1-D5 (columns triaxiality "
@@ -55,13 +58,16 @@ def run(args) -> int:
     from flowcurve.identification.damage import read_fracture_points
     from flowcurve.identification.series import fit_series, load_members
 
-    members = load_members(args.inputs)
+    members = load_members(args.inputs, **({"E_MPa": args.E_MPa} if args.E_MPa is not None else {}))
     fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
     extra = read_fracture_points(args.fracture_points) if args.fracture_points else ()
     series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
                         melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points, fracture_points=extra)
     out = write_fit(series, args.out)
     print(summary(series, out))
+    if series.quality == "poor" and args.strict:
+        print(f"flowcurve: error: the fit is poor (max error {series.fit.fit_error_pct:.3g} % > 10 %); {out} is marked poor (--strict)", file=sys.stderr)
+        return 2
     return 0
 
 
@@ -143,7 +149,7 @@ def summary(series: SeriesFit, path: Path) -> str:
     lines.append(f"  identified on: plastic strain {d['plastic_strain'][0]:.3g}–{d['plastic_strain'][1]:.3g}, "
                  f"rate {d['strain_rate_per_s'][0]:.3g}–{d['strain_rate_per_s'][1]:.3g} 1/s, "
                  f"temperature {d['temperature_C'][0]:.4g}–{d['temperature_C'][1]:.4g} °C")
-    lines.append(f"  error: max {f.fit_error_pct:.2f} %, rms {f.rms_error_pct:.2f} %")
+    lines.append(f"  error: max {f.fit_error_pct:.2f} %, rms {f.rms_error_pct:.2f} %, quality {series.quality}")
     for m in series.members:
         e = f.record_errors[m.name]
         lines.append(f"    {m.name}: {m.temperature_C:.4g} °C, {m.strain_rate_per_s:.3g} 1/s ({m.strain_rate_source}): "

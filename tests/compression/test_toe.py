@@ -1,0 +1,48 @@
+"""Compression records with a soft start (toe) and no handbook modulus: the elastic line is
+extended to zero force (ISO 6892-1), so Rp0.2 and the true curve start where the material yields."""
+
+import numpy as np
+import pytest
+
+from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.indicator import yield_onset_from_rate
+
+from .toe_records import make_toe_compression
+
+
+@pytest.mark.parametrize("rate_hz", [10.0, 50.0])
+@pytest.mark.parametrize("toe_mm", [0.0, 0.05])
+@pytest.mark.parametrize("handbook_E", [False, True])
+def test_rp02_within_3_percent_with_a_toe_and_without_handbook_E(rate_hz, toe_mm, handbook_E):
+    record, truth = make_toe_compression(rate_hz=rate_hz, toe_mm=toe_mm, handbook_E=handbook_E)
+    ident = identify_compression(record)
+    r = ident.result
+    # the model's mean pressure at εp = 0.002 (flow stress × the Coulomb slab factor)
+    assert r["Rp02_MPa"] == pytest.approx(truth["rp02_pressure_MPa"], rel=0.03)
+    # the toe found is the seating travel, within one encoder step
+    assert r["indicator"]["toe_compensation_mm"] == pytest.approx(toe_mm, abs=0.01)
+    # the true curve starts at the yield, not near zero stress
+    first = ident.true_curve["true_stress_MPa"].iloc[0]
+    assert first >= 0.9 * r["Rp02_MPa"]
+    assert r["modulus"]["source"] and (handbook_E == ("material.E_MPa" in r["E_source"]))
+    assert r["hardening"]["quality"] in ("good", "poor")
+
+
+def test_yield_onset_from_the_force_rate_ignores_displacement():
+    # elastic at 1000 N/s up to 3000 N, then 100 N/s; a toe at 200 N/s below 500 N; noise 20 N at 50 Hz
+    t = np.arange(0, 40, 0.02)
+    f = np.where(t < 2.5, 200 * t, 500 + 1000 * (t - 2.5))
+    t_y = 2.5 + 2.5
+    f = np.where(t < t_y, f, 3000 + 100 * (t - t_y))
+    f = f + np.random.default_rng(0).normal(0, 20, t.size)
+    onset = yield_onset_from_rate(t, f)
+    assert 2600 < onset < 3300  # within the three force levels (3 × 100 N) the rate is taken over
+
+
+def test_the_modulus_window_option_reaches_compression():
+    record, truth = make_toe_compression(rate_hz=50.0, toe_mm=0.05)
+    r = identify_compression(record, modulus_window_MPa=(15.0, 110.0)).result
+    assert r["modulus"]["window_MPa"] == [15.0, 110.0] and r["modulus"]["source"] == "given window (MPa)"
+    assert r["Rp02_MPa"] == pytest.approx(truth["rp02_pressure_MPa"], rel=0.03)
+    r = identify_compression(record, modulus_window=(0.1, 0.6)).result
+    assert r["modulus"]["source"].startswith("given window 0.1–0.6 × the yield stress")

@@ -1,0 +1,65 @@
+"""ISO 6892-1 yield point: ReH, ReL and Ae on a curve built with them, none on a smooth curve."""
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from flowcurve.identification import iso6892
+from flowcurve.identification.tension import identify_tension
+from flowcurve.record.format import Record
+
+E, REH, REL, AE = 200_000.0, 450.0, 398.0, 0.015  # MPa, MPa, MPa (plateau minimum), strain
+
+
+def yield_point_curve(noise_MPa=0.0, seed=0):
+    """Engineering curve: elastic to ReH, a transient drop to 392 MPa (to be disregarded), a
+    Lüders plateau 400 ± 2 MPa ending AE after ReH, then hardening to Rm and a falling neck."""
+    e_el = np.linspace(0, REH / E, 60)
+    e_h = REH / E
+    e_drop = e_h + np.linspace(0.0002, 0.001, 5)
+    s_drop = np.array([430.0, 410.0, 392.0, 395.0, 399.0])
+    e_pl = np.linspace(e_drop[-1] + 0.0002, e_h + AE, 150)
+    s_pl = 400 + 2 * np.sin(np.linspace(0, 30, 150))
+    e_hard = np.linspace(e_pl[-1] + 1e-4, 0.18, 300)
+    s_hard = 400 + 300 * (1 - np.exp(-(e_hard - e_pl[-1]) / 0.05))
+    e_neck = e_hard[-1] + np.linspace(0.001, 0.04, 40)
+    s_neck = s_hard[-1] - np.linspace(1, 120, 40)
+    e = np.concatenate([e_el, e_drop, e_pl, e_hard, e_neck])
+    s = np.concatenate([e_el * E, s_drop, s_pl, s_hard, s_neck])
+    s = s + np.random.default_rng(seed).normal(0, noise_MPa, s.size) * (np.arange(s.size) > 0)
+    return e, s
+
+
+def test_yield_point_by_construction():
+    e, s = yield_point_curve()
+    yp = iso6892.yield_point(e, s)
+    assert yp["ReH_MPa"] == pytest.approx(REH)
+    assert yp["ReL_MPa"] == pytest.approx(REL, abs=0.05)  # the 392 MPa transient disregarded
+    assert yp["Ae_pct"] == pytest.approx(100 * AE, abs=0.05)
+
+
+def test_no_yield_point_on_a_smooth_noisy_curve():
+    e = np.linspace(0, 0.2, 2000)
+    s = np.minimum(E * e, 400 + 300 * (1 - np.exp(-np.clip(e - 0.002, 0, None) / 0.05)))
+    s = s + np.random.default_rng(1).normal(0, 0.5, s.size)
+    assert iso6892.yield_point(e, s, noise_MPa=0.5) is None
+
+
+def test_tension_reports_reh_rel_ae_and_fits_past_the_plateau(synthetic):
+    e, s = yield_point_curve(noise_MPa=0.3)
+    d0, l0 = 6.0, 30.0
+    s0 = math.pi * d0**2 / 4
+    data = pd.DataFrame({"time_s": np.arange(e.size) * 0.1, "force_N": s * s0, "crosshead_mm": e * l0, "extensometer_mm": e * l0})
+    meta = {"test": "tension", "specimen.d0_mm": repr(d0), "specimen.l0_mm": repr(l0), "specimen.extensometer_gauge_mm": repr(l0)}
+    r = identify_tension(Record(meta=meta, data=data, source="yield-point.csv")).result
+    assert r["yield_point"] is True
+    assert r["ReH_MPa"] == pytest.approx(REH, rel=0.01)
+    assert r["ReL_MPa"] == pytest.approx(REL, rel=0.01)
+    assert r["Ae_pct"] == pytest.approx(100 * AE, abs=0.1)
+    assert any("yield point" in w for w in r["warnings"])
+    # the hardening fit starts after the plateau
+    assert r["hardening"]["fit_range"][0] >= AE - 0.003
+    smooth = identify_tension(synthetic(noise_N=5.0)[0]).result  # continuous yielding (Johnson–Cook)
+    assert smooth["yield_point"] is False and smooth["ReH_MPa"] is None and smooth["Ae_pct"] is None
