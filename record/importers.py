@@ -30,7 +30,7 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from flowcurve.record.format import Record, is_native, read_record
+from flowcurve.record.format import MAX_MAGNITUDE, Record, is_native, read_record
 from flowcurve.errors import MissingValueError, RecordError
 
 # -- units ---------------------------------------------------------------------------------
@@ -151,8 +151,6 @@ def to_native(values, unit: str, quantity: str | None = None, *, source: str = "
 
 # -- entry point ---------------------------------------------------------------------------
 
-# data values beyond this magnitude (in native units: N, mm, s, °C) are overflow, not measurement
-MAX_MAGNITUDE = 1e12
 EXTENSOMETER_GAUGE_KEY = "specimen.extensometer_gauge_mm"
 
 
@@ -223,7 +221,7 @@ def _check_magnitudes(record: Record) -> None:
     row, col = (int(v[0]) for v in np.nonzero(bad))
     native = record.data.columns[col]
     first_line = record.meta.get(FIRST_DATA_LINE_KEY)
-    message = f"{values[row, col]!r} is beyond any measurement (|value| > {MAX_MAGNITUDE:g} {native.rsplit('_', 1)[-1]}): an overflow or a wrong column"
+    message = f"{float(values[row, col])!r} is beyond any measurement (|value| > {MAX_MAGNITUDE:g} {native.rsplit('_', 1)[-1]}): an overflow or a wrong column"
     if first_line is None:  # a native record: events may stand between samples, so count samples
         raise RecordError(record.source, f"sample {row + 1}: {message}", column=native)
     raise RecordError(record.source, message, line=int(first_line) + row, column=record.meta.get(COLUMN_LABEL_PREFIX + native, native))
@@ -725,7 +723,8 @@ def _read_columns(source: str, text: Text, *, sep: str, decimal: str, first_data
         if col.quantity == "strain":
             converted[col.native] = values * strain_factor(col.unit, source=source, column=col.label)
         else:
-            converted[col.native] = to_native(values, col.unit, col.quantity, source=source, column=col.label)
+            with np.errstate(over="ignore"):  # 1e308 kN → inf N, reported by _check_magnitudes
+                converted[col.native] = to_native(values, col.unit, col.quantity, source=source, column=col.label)
     for native in sorted(converted, key=lambda c: order.index(c) if c in order else len(order)):
         data[native] = converted[native]
     return data.reset_index(drop=True)
