@@ -3,6 +3,7 @@ exit ≠ 0, no traceback, no raw numpy RuntimeWarning (the module runs with them
 
 from __future__ import annotations
 
+import csv
 import json
 import re
 import subprocess
@@ -119,9 +120,9 @@ def test_overflow_in_an_option(bluehill, tmp_path, capsys, option, value):
 def test_overflow_in_the_samples_names_line_and_column(tmp_path, truth, capsys, cell):
     path = write_bluehill(tmp_path / "bluehill.csv", truth)
     lines = path.read_text().splitlines()
-    cells = lines[400].split(",")  # line 401: names row, units row, then sample 399
-    cells[2] = f'"{cell}"'
-    lines[400] = ",".join(cells)
+    cells = next(csv.reader([lines[400]]))  # line 401: a sample (the preamble, names and units rows above)
+    cells[2] = cell  # the Load column
+    lines[400] = ",".join(f'"{c}"' for c in cells)
     path.write_text("\n".join(lines) + "\n")
     line = _one_error(*_cli(capsys, ["identify", str(path), *GEOMETRY, "--out", str(tmp_path / "o"), "--no-plots"]))
     assert line.startswith(f"flowcurve: error: {path}, line 401, column 'Load': ") and "beyond any measurement" in line, line
