@@ -37,6 +37,7 @@ from flowcurve.identification.outcome import Identification
 from flowcurve.identification.tension import check_fit_range, true_plastic_strain
 
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
+LOADED_FRACTION = 0.05  # samples above this fraction of the peak force belong to the test
 MAX_FIT_POINTS = 600  # the hardening fit uses at most this many points, evenly spread in strain
 FIT_CURVE_POINTS = 200
 
@@ -106,6 +107,14 @@ def _meta_geometry(record: Record) -> dict:
         raise MissingValueError(src, ("post.dmax_mm", "post.smax_mm2"), what="the friction needs the bulge diameter dmax or the largest cross-section smax")
     dtop = record.positive("post.dtop_mm")
     return {"d0": d0, "h0": h0, "hk": hk, "dmax": dmax, "smax": smax, "dtop": dtop}
+
+
+def _check_crosshead_gaps(src: str, force: np.ndarray, cross: np.ndarray) -> None:
+    """A crosshead without values while the specimen carries load cannot be scaled to hk: stop."""
+    loaded = np.abs(np.nan_to_num(force)) > LOADED_FRACTION * np.nanmax(np.abs(force))
+    gaps = np.nonzero(loaded & ~np.isfinite(cross))[0]
+    if gaps.size:
+        raise RecordError(src, f"the crosshead channel has no value at sample {gaps[0] + 1} (and {gaps.size - 1} more) while the specimen is loaded; the shortening cannot be followed through the gap", column="crosshead_mm")
 
 
 def _friction_all(geo: dict, chosen: str, warnings: list[str]) -> tuple[fr.FrictionResult, dict[str, fr.FrictionResult | str]]:
@@ -223,6 +232,7 @@ def identify_compression(
     t = record.column("time_s")
     force_raw = record.column("force_N")
     cross_raw = record.column("crosshead_mm")
+    _check_crosshead_gaps(src, force_raw, cross_raw)
     ok = np.isfinite(t) & np.isfinite(force_raw) & np.isfinite(cross_raw)
     t, force_raw, cross_raw = t[ok], force_raw[ok], cross_raw[ok]
     if t.size < 10:

@@ -31,6 +31,10 @@ MIN_YIELD_OFFSET = 0.002
 FRACTURE_POINT_MODES = ("auto", "include", "exclude")
 # auto: the fracture point may cost the uniform range at most this much max error (percentage points)
 FRACTURE_POINT_SLACK_PCT = 2.0
+# a record ending below this fraction of Fm, after Fm, has reached fracture (an export cut at
+# the break, as Bluehill writes it, ends at 0.68–0.86 Fm on the 42CrMoS4 records); one ending
+# above it was stopped before fracture, unless it shows the break as a force drop
+FRACTURE_END_FORCE = 0.9
 
 
 def true_stress_gost(eng_stress_MPa, log_strain, K_MPa: float):
@@ -117,6 +121,35 @@ def _increasing(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return x[keep], y[keep]
 
 
+def reaches_fracture(force_N: np.ndarray) -> bool:
+    """Does the record reach fracture: a single-step drop of more than 20 % of Fm after Fm
+    (the break), or a last force below FRACTURE_END_FORCE × Fm (a necked specimen, the
+    record cut at the break)?"""
+    i_k = iso6892.fracture_index(force_N)
+    Fm = float(np.nanmax(force_N))
+    return i_k < force_N.size - 1 or float(force_N[-1]) <= FRACTURE_END_FORCE * Fm
+
+
+def _check_post_dimensions(record: Record, d0: float, l0: float, lu: float | None) -> None:
+    """Measurements after fracture that no tension test can give: Lu < L0, du or dk > d0."""
+    if lu is not None and lu < l0:
+        raise RecordError(record.source, f"Lu = {lu:g} mm (post.lu_mm, --lu) is shorter than L0 = {l0:g} mm (specimen.l0_mm, --l0): a specimen does not shorten in tension")
+    for name in ("du", "dk"):
+        d = record.positive(f"post.{name}_mm")
+        if d is not None and d > d0:
+            raise RecordError(record.source, f"{name} = {d:g} mm (post.{name}_mm{', --dk' if name == 'dk' else ''}) is larger than d0 = {d0:g} mm (specimen.d0_mm, --d0): a specimen does not thicken in tension")
+
+
+def _why_no_fit(hardening: str, law: str, fracture: dict, sig_t_rp: float | None, warnings: list[str]) -> str:
+    """Why a fit is missing: the input it lacks only when that input is missing, else its failure."""
+    if hardening == "three_point" and not fracture:
+        return "it needs the fracture point: post.dk_mm (--dk) or post.sk_mm2"
+    if hardening == "three_point" and sig_t_rp is None:
+        return "it needs Rp0.2 on the true curve, and the uniform range does not reach 0.2 % plastic strain"
+    failed = [w for w in warnings if w.startswith(f"{hardening.replace('_', '-')} {law} fit failed")]
+    return failed[-1] if failed else "no fit was made"
+
+
 def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndarray, l0: float, options: dict) -> dict:
     """Displacement (mm), the length it refers to (mm) and how it was obtained."""
     has_ext = record.has("extensometer_mm")
@@ -128,6 +161,8 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
         gaps = np.nonzero(~np.isfinite(ext[: iso6892.fracture_index(force) + 1]))[0]
         if gaps.size:
             message = f"the extensometer channel has no value from sample {gaps[0] + 1} on (removed before fracture?)"
+            if not record.has("crosshead_mm"):
+                raise RecordError(record.source, message + "; the record has no crosshead column to identify from instead", column="extensometer_mm")
             if use_extensometer:
                 raise RecordError(record.source, message + "; identify from the crosshead instead (use_extensometer=False)", column="extensometer_mm")
             fallback = _strain_source(record, False, force, l0, options)
@@ -137,7 +172,12 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
         if "specimen.extensometer_gauge_mm" not in record.meta:
             warnings.append(f"specimen.extensometer_gauge_mm missing: the extensometer gauge length is taken as l0 = {l0:g} mm")
         return {"disp": ext - ext[0], "length": gauge, "source": "extensometer", "stiffness": None, "scalable": False, "warnings": warnings}
+    if not record.has("crosshead_mm"):
+        raise RecordError(record.source, "the record has no crosshead column: its strain can only come from the extensometer (leave out --no-extensometer)", column="crosshead_mm")
     cross = record.column("crosshead_mm")
+    gaps = np.nonzero(~np.isfinite(cross[: iso6892.fracture_index(force) + 1]))[0]
+    if gaps.size:
+        raise RecordError(record.source, f"the crosshead channel has no value at sample {gaps[0] + 1} (of {gaps.size} before fracture); the strain cannot be followed through the gap", column="crosshead_mm")
     disp = cross - cross[0]
     stiffness = options.get("frame_stiffness_N_per_um")
     if stiffness is None:
@@ -220,6 +260,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     warnings += src["warnings"]
     disp0 = src["disp"]
     lu = record.positive("post.lu_mm")
+    _check_post_dimensions(record, d0, l0, lu)
     scale_factor = None
     length = src["length"]
     if src["scalable"] and scale and lu is not None:
@@ -280,9 +321,12 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     i_k = iso6892.fracture_index(force)
     if lu is not None:
         A, A_method = iso6892.elongation_after_fracture_pct(l0, lu), "measured gauge length after fracture (post.lu_mm)"
-    else:
+    elif reaches_fracture(force):
         A = float(iso6892.plastic_extension_pct(strain[i_k], eng_stress[i_k], E))
         A_method = f"{src['source']} at fracture, elastic part removed (no post.lu_mm)"
+    else:
+        A, A_method = None, None
+        warnings.append(f"the record ends at {100.0 * force[-1] / Fm:.0f} % of Fm without a fracture: A is not reported (measure Lu and give it: post.lu_mm, --lu)")
     su = record.positive("post.sk_mm2")
     dk = record.positive("post.dk_mm")
     su_source = "post.sk_mm2" if su is not None else None
@@ -356,7 +400,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
                 warnings.append(f"three-point {name} fit failed: {exc}")
     main_key = f"{hardening}_{law}"
     if main_key not in fits:
-        raise IdentificationError(f"{record.source}: the {hardening.replace('_', ' ')} {law} fit is not available" + (" (it needs the fracture point: post.dk_mm)" if hardening == "three_point" else ""))
+        raise IdentificationError(f"{record.source}: the {hardening.replace('_', ' ')} {law} fit is not available ({_why_no_fit(hardening, law, fracture, sig_t_rp, warnings)})")
     main = fits[main_key]
     main_fracture = choices.get(law, (None, None)) if hardening == "least_squares" else ("with", "three-point fit through the fracture point")
     warnings += [f"hardening: {w}" for w in main.warnings]

@@ -87,6 +87,11 @@ KNOWN_KEYS = (
     "post.smax_mm2",
 )
 
+# metadata numbers beyond these magnitudes (native units: mm, N, s, MPa, N/µm, mm/s) are
+# overflow or typing slips, not measurements: a one-line error, not inf or 0 in the arithmetic
+MAX_MAGNITUDE = 1e12
+MIN_POSITIVE = 1e-9
+
 STATUS_RECORDING = "recording"
 STATUS_COMPLETE = "complete"
 STATUS_ABORTED = "aborted"
@@ -140,13 +145,17 @@ class Record:
             raise RecordError(self.source, f"metadata '{key}' is not a number: {raw!r}") from None
         if not math.isfinite(value):
             raise RecordError(self.source, f"metadata '{key}' is not finite: {raw!r}")
+        if abs(value) > MAX_MAGNITUDE:
+            raise RecordError(self.source, f"metadata '{key}' = {raw!r} is beyond any measurement (|value| > {MAX_MAGNITUDE:g}): an overflow or a typing slip")
         return value
 
     def positive(self, key: str, default: float | None = None, *, required: bool = False) -> float | None:
-        """Like :meth:`number`, and the value must be > 0."""
+        """Like :meth:`number`, and the value must be > 0 (and not vanishingly small)."""
         value = self.number(key, default, required=required)
         if value is not None and value <= 0:
             raise RecordError(self.source, f"metadata '{key}' must be > 0, got {value:g}")
+        if value is not None and value < MIN_POSITIVE:
+            raise RecordError(self.source, f"metadata '{key}' = {value:g} is below any measurement (< {MIN_POSITIVE:g}): an underflow or a typing slip")
         return value
 
     def column(self, name: str) -> np.ndarray:

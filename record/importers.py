@@ -10,9 +10,16 @@
 * the INSTRON export of the 42CrMoS4 validation set (tab-separated ``key:<TAB>value<TAB>unit``
   header, a names row, a units row, then samples) is recognised and mapped, its published
   results kept as ``published.<name>`` metadata;
-* any other CSV is read through a column mapping ``{"force": ("Load", "kN"), ...}``.
+* any other CSV or text export (Instron Bluehill, Zwick testXpert, MTS TestSuite and the
+  like) is read through a column mapping ``{"force": ("Load", "kN"), ...}`` or, without one,
+  by the column names it recognises (:func:`recognise_quantity`), with the units written in
+  the names (``Load [kN]``) or in a units row; an extensometer column in a strain unit
+  becomes elongation with the extensometer gauge length Le. Text may be UTF-8 (with or
+  without BOM), UTF-16 (Excel's "Unicode text") or Windows-1252, with decimal commas and
+  thousands separators.
 
 Units are converted through :data:`UNITS`; a unit it does not know is an error, never a guess.
+Crosshead-less records (force and extensometer only) come back without ``crosshead_mm``.
 """
 
 from __future__ import annotations
@@ -30,7 +37,7 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from flowcurve.record.format import Record, is_native, read_record
+from flowcurve.record.format import MAX_MAGNITUDE, Record, is_native, read_record
 from flowcurve.errors import MissingValueError, RecordError
 
 # -- units ---------------------------------------------------------------------------------
@@ -151,8 +158,6 @@ def to_native(values, unit: str, quantity: str | None = None, *, source: str = "
 
 # -- entry point ---------------------------------------------------------------------------
 
-# data values beyond this magnitude (in native units: N, mm, s, °C) are overflow, not measurement
-MAX_MAGNITUDE = 1e12
 EXTENSOMETER_GAUGE_KEY = "specimen.extensometer_gauge_mm"
 
 
@@ -223,7 +228,7 @@ def _check_magnitudes(record: Record) -> None:
     row, col = (int(v[0]) for v in np.nonzero(bad))
     native = record.data.columns[col]
     first_line = record.meta.get(FIRST_DATA_LINE_KEY)
-    message = f"{values[row, col]!r} is beyond any measurement (|value| > {MAX_MAGNITUDE:g} {native.rsplit('_', 1)[-1]}): an overflow or a wrong column"
+    message = f"{float(values[row, col])!r} is beyond any measurement (|value| > {MAX_MAGNITUDE:g} {native.rsplit('_', 1)[-1]}): an overflow or a wrong column"
     if first_line is None:  # a native record: events may stand between samples, so count samples
         raise RecordError(record.source, f"sample {row + 1}: {message}", column=native)
     raise RecordError(record.source, message, line=int(first_line) + row, column=record.meta.get(COLUMN_LABEL_PREFIX + native, native))
@@ -301,7 +306,7 @@ def decode_text(path: str | os.PathLike) -> Text:
     except UnicodeDecodeError as exc:
         line = raw[: exc.start].count(b"\n") + 1
         if encoding != "utf-8":
-            raise RecordError(path, f"is not valid {encoding.upper()} text", line=line // (2 if "16" in encoding else 1) or 1) from None
+            raise RecordError(path, f"is not valid {encoding.upper()} text", line=line) from None
         try:
             text = raw.decode("cp1252")
         except UnicodeDecodeError:
@@ -312,11 +317,6 @@ def decode_text(path: str | os.PathLike) -> Text:
         raise RecordError(path, f"holds NUL characters after decoding as {encoding}: a binary file, not text")
     head = text.split("\n", HEAD_LINES)[:HEAD_LINES]
     return Text(text=text, encoding=encoding, warnings=warnings, head=[line.rstrip("\r") for line in head])
-
-
-def _head_lines(path: Path, n: int = HEAD_LINES) -> list[str]:
-    """The first ``n`` lines of a text file, decoded as :func:`decode_text` does."""
-    return decode_text(path).head[:n]
 
 
 def _found_columns_hint(lines: list[str]) -> str:
@@ -536,8 +536,10 @@ def sniff_delimiter(line: str) -> str:
     return best if counts[best] > 0 else ","
 
 
-def is_number(cell: str, decimal: str) -> bool:
+def is_number(cell: str, decimal: str, thousands: str | None = None) -> bool:
     cell = cell.strip()
+    if thousands:
+        cell = cell.replace(thousands, "")
     if decimal == ",":
         cell = cell.replace(",", ".")
     try:
@@ -547,9 +549,25 @@ def is_number(cell: str, decimal: str) -> bool:
     return True
 
 
-def read_mapped_csv(path: str | os.PathLike, columns: Mapping[str, tuple[str, str | None]]) -> Record:
-    """Read a CSV whose columns are named by ``columns`` (quantity → (file column, unit))."""
-    return read_csv_export(path, columns)
+# numbers with thousands separators, as Bluehill writes them quoted ("1,004.80328") or a
+# German export writes them (1.004,80328)
+_THOUSANDS_COMMA = re.compile(r'(?:^|[,;\t"])-?\d{1,3}(?:,\d{3})+\.\d*(?=$|[,;\t"])', re.MULTILINE)
+_THOUSANDS_POINT = re.compile(r'(?:^|[;\t"])-?\d{1,3}(?:\.\d{3})+,\d*(?=$|[;\t"])', re.MULTILINE)
+
+
+def number_style(text: str, delim: str, sample: str) -> tuple[str, str | None]:
+    """(decimal mark, thousands separator) of the numbers in a file with this delimiter.
+
+    Thousands separators are taken only where the file shows both marks in one number
+    ("1,004.8", "1.004,8"); a ';' or tab file whose numbers are written 1,25 has a decimal comma.
+    """
+    if (delim != "," or '"' in text) and _THOUSANDS_COMMA.search(text):
+        return ".", ","
+    if delim != "," and _THOUSANDS_POINT.search(text):
+        return ",", "."
+    if delim != "," and re.search(r"(^|" + re.escape(delim) + r")\s*\"?-?\d+,\d+", sample):
+        return ",", None
+    return ".", None
 
 
 def read_csv_export(path: str | os.PathLike, columns: Mapping[str, tuple[str, str | None]] | None = None, *, text: Text | None = None) -> Record:
@@ -573,11 +591,7 @@ def read_csv_export(path: str | os.PathLike, columns: Mapping[str, tuple[str, st
     rest = [(j, line) for j, line in enumerate(lines) if j > names_idx and line.strip()]
     if not rest:
         raise RecordError(source, "the file has a column row but no samples (header only)", line=names_idx + 1)
-    # decimal comma: a ';' or tab file whose numbers are written 1,25
-    decimal = "."
-    sample = rest[-1][1] if len(rest) > 1 else rest[0][1]
-    if delim != "," and re.search(r"(^|" + re.escape(delim) + r")\s*\"?-?\d+,\d+", sample):
-        decimal = ","
+    decimal, thousands = number_style(text.text, delim, rest[-1][1] if len(rest) > 1 else rest[0][1])
     # an optional units row right under the names row: text (not numbers) under the chosen columns
     first_j, first_line = rest[0]
     first_cells = split_cells(first_line, delim)
@@ -602,7 +616,7 @@ def read_csv_export(path: str | os.PathLike, columns: Mapping[str, tuple[str, st
         else:
             unit_conversion(unit, kind, source=source, column=label)  # unknown unit → error now
         mapping[k] = Column(native, kind, unit, label)
-    data = _read_columns(source, text, sep=delim, decimal=decimal, first_data_line=first_data, mapping=mapping)
+    data = _read_columns(source, text, sep=delim, decimal=decimal, thousands=thousands, first_data_line=first_data, mapping=mapping)
     meta = {"source_format": "csv", FIRST_DATA_LINE_KEY: str(first_data + 1)}
     meta.update({f"{COLUMN_LABEL_PREFIX}{c.native}": c.label for c in mapping.values()})
     return Record(meta=meta, data=data, source=source)
@@ -693,7 +707,7 @@ def _recognised_row(source: str, lines: list[str]):
 # -- the fast sample reader shared by both importers ---------------------------------------
 
 
-def _read_columns(source: str, text: Text, *, sep: str, decimal: str, first_data_line: int, mapping: Mapping[int, Column]) -> pd.DataFrame:
+def _read_columns(source: str, text: Text, *, sep: str, decimal: str, first_data_line: int, mapping: Mapping[int, Column], thousands: str | None = None) -> pd.DataFrame:
     """Read the chosen columns with pandas' C engine and convert each to its native unit.
 
     mapping: 0-based file column index → :class:`Column`. ``first_data_line`` is 0-based.
@@ -704,6 +718,7 @@ def _read_columns(source: str, text: Text, *, sep: str, decimal: str, first_data
             io.StringIO(text.text),
             sep=sep,
             decimal=decimal,
+            thousands=thousands,
             header=None,
             usecols=usecols,
             skiprows=first_data_line,
@@ -713,7 +728,7 @@ def _read_columns(source: str, text: Text, *, sep: str, decimal: str, first_data
             quotechar='"',
         )
     except (ValueError, pd.errors.ParserError):
-        _raise_bad_cell(source, text, sep, decimal, first_data_line, mapping)
+        _raise_bad_cell(source, text, sep, decimal, thousands, first_data_line, mapping)
         raise  # pragma: no cover - _raise_bad_cell always raises
     if raw.empty:
         raise RecordError(source, "the file has no samples (header only)", line=first_data_line)
@@ -725,13 +740,14 @@ def _read_columns(source: str, text: Text, *, sep: str, decimal: str, first_data
         if col.quantity == "strain":
             converted[col.native] = values * strain_factor(col.unit, source=source, column=col.label)
         else:
-            converted[col.native] = to_native(values, col.unit, col.quantity, source=source, column=col.label)
+            with np.errstate(over="ignore"):  # 1e308 kN → inf N, reported by _check_magnitudes
+                converted[col.native] = to_native(values, col.unit, col.quantity, source=source, column=col.label)
     for native in sorted(converted, key=lambda c: order.index(c) if c in order else len(order)):
         data[native] = converted[native]
     return data.reset_index(drop=True)
 
 
-def _raise_bad_cell(source: str, text: Text, sep: str, decimal: str, first_data_line: int, mapping: Mapping[int, Column]) -> None:
+def _raise_bad_cell(source: str, text: Text, sep: str, decimal: str, thousands: str | None, first_data_line: int, mapping: Mapping[int, Column]) -> None:
     """Slow path, only after a failed read: find the first bad cell and raise with its place."""
     for line_no, line in enumerate(text.lines(), start=1):
         if line_no <= first_data_line or not line.strip():
@@ -743,7 +759,7 @@ def _raise_bad_cell(source: str, text: Text, sep: str, decimal: str, first_data_
             cell = cells[k]
             if cell == "":
                 continue
-            if not is_number(cell, decimal) or (decimal == "." and "," in cell):
+            if not is_number(cell, decimal, thousands) or (decimal == "." and not thousands and "," in cell):
                 raise RecordError(source, f"not a number: {cell!r}", line=line_no, column=col.label)
     raise RecordError(source, "the samples cannot be parsed as numbers")
 

@@ -136,12 +136,21 @@ def _modulus_window_options(window) -> dict:
     return {"modulus_window_MPa": window}
 
 
+def _measurement(option: str, value: float) -> float:
+    """A number option (dimension, speed, stiffness, modulus): finite, > 0, not an overflow."""
+    from flowcurve.record.format import MAX_MAGNITUDE, MIN_POSITIVE
+
+    if not MIN_POSITIVE <= value <= MAX_MAGNITUDE:  # NaN fails too
+        raise FlowcurveError(f"--{option.replace('_', '-')}: {value!r} is not a measurement (it must be > 0, finite and at most {MAX_MAGNITUDE:g})")
+    return value
+
+
 def _meta_from_args(args) -> dict[str, str]:
     meta = {}
     for attr, key in META_OPTIONS.items():
         value = getattr(args, attr, None)
         if value is not None:
-            meta[key] = repr(value) if isinstance(value, float) else str(value)
+            meta[key] = repr(_measurement(attr, value)) if isinstance(value, float) else str(value)
     for item in args.set:
         key, sep, value = item.partition("=")
         if not sep or not key.strip() or " " in key.strip():
@@ -158,7 +167,7 @@ def _options_from_args(args) -> dict:
         "law": args.law,
         "friction_method": args.friction_method,
         "friction_correction": args.friction_correction,
-        "E_MPa": args.E_MPa,
+        "E_MPa": None if args.E_MPa is None else _measurement("E", args.E_MPa),
         "true_stress": args.true_stress,
         **_modulus_window_options(args.modulus_window),
         "fit_range": args.fit_range,
@@ -175,11 +184,11 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
     from flowcurve.identification.identify import identify
     from flowcurve.record.importers import load_record
 
-    raised = list(_error_categories())
+    raise_runtime = _runtime_warnings_raise()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        for category in raised:  # '-W error::RuntimeWarning' from outside still raises
-            warnings.simplefilter("error", category)
+        if raise_runtime:  # '-W error::RuntimeWarning' from outside still raises (tests find the source)
+            warnings.simplefilter("error", RuntimeWarning)
         record = load_record(path, columns=columns, meta=meta)
         ident = identify(record, **options)
     caught_lines = [f"{'numerical warning' if issubclass(w.category, RuntimeWarning) else w.category.__name__}: {w.message}" for w in caught]
@@ -198,11 +207,13 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
     return ident, folder
 
 
-def _error_categories():
-    """Warning categories the caller turned into errors ('-W error::RuntimeWarning')."""
+def _runtime_warnings_raise() -> bool:
+    """Did the caller make RuntimeWarnings errors ('-W error::RuntimeWarning')? The first filter
+    that applies to them decides, as in the warnings module."""
     for action, _message, category, _module, _line in warnings.filters:
-        if action == "error" and isinstance(category, type) and issubclass(category, Warning):
-            yield category
+        if issubclass(RuntimeWarning, category):
+            return action == "error"
+    return False
 
 
 def _fmt(value, spec: str = ".4g") -> str:
@@ -248,7 +259,8 @@ def _check_out(out: Path) -> None:
 def _givers(keys, table) -> list[str]:
     """The ways to give missing metadata ``keys`` on the command line: options and table columns."""
     options = {key: f"--{opt.replace('_', '-')}" for opt, key in META_OPTIONS.items()}
-    givers = [f"give {options[k]}" for k in keys if k in options]
+    named = [options[k] for k in keys if k in options]
+    givers = [f"give {' or '.join(named)}"] if named else []
     if table is not None:
         from flowcurve.record.specimens import TABLE_COLUMNS
 

@@ -7,8 +7,9 @@ Rm = max force / S0, so results can be checked against values obtained without f
 
 Writers (layouts as the vendors' exports are laid out, not as flowcurve writes records):
 
-* :func:`write_bluehill` — Instron Bluehill CSV: quoted cells, a names row, a units row
-  ``"(s)","(mm)","(kN)","(%)"``; the strain channel "Tensile strain (Strain 1)" in %.
+* :func:`write_bluehill` — Instron Bluehill raw-data CSV: a results preamble, names, a units
+  row ``(s),(mm),(N),(%)``, quoted samples with thousands separators; the strain channel
+  "Tensile strain (Strain 1)" in %, and the derived "Tensile stress" (to be left aside).
 * :func:`write_testxpert` — Zwick testXpert text export: German names (Prüfzeit,
   Standardkraft, Standardweg, Dehnung), a units row, tab-separated with decimal commas,
   UTF-16 with a BOM (Excel's "Unicode text") or Windows-1252, or ``;``-separated.
@@ -71,18 +72,23 @@ def tension_truth(*, E_MPa: float = 200e3, Rp_MPa: float = 400.0, N: float = 20.
                  le_mm=le_mm, E_MPa=E_MPa, Rp02_MPa=Rp_MPa, Rm_MPa=float(force.max() / s0))
 
 
-def write_bluehill(path: Path, truth: Truth, *, strain: bool = True, crosshead: bool = True) -> Path:
-    """Instron Bluehill raw-data CSV: quoted names and units rows, force in kN, strain in %."""
-    names, units, cols = ['"Time"'], ['"(s)"'], [truth.time_s]
+def write_bluehill(path: Path, truth: Truth, *, strain: bool = True, crosshead: bool = True, force_unit: str = "N") -> Path:
+    """Instron Bluehill raw-data CSV: a results preamble, a names row, a units row ``(s),(mm),(N),(%)``
+    and quoted samples with thousands separators (``"1,004.80328"``), as Bluehill writes them."""
+    scale = {"N": 1.0, "kN": 1e-3}[force_unit]
+    names, units, cols = ["Time"], ["(s)"], [truth.time_s]
     if crosshead:
-        names.append('"Extension"'), units.append('"(mm)"'), cols.append(truth.crosshead_mm)
-    names.append('"Load"'), units.append('"(kN)"'), cols.append(truth.force_N / 1e3)
+        names.append("Extension"), units.append("(mm)"), cols.append(truth.crosshead_mm)
+    names.append("Load"), units.append(f"({force_unit})"), cols.append(truth.force_N * scale)
     if strain:
-        names.append('"Tensile strain (Strain 1)"'), units.append('"(%)"'), cols.append(100.0 * truth.strain)
+        names.append("Tensile strain (Strain 1)"), units.append("(%)"), cols.append(100.0 * truth.strain)
     else:
-        names.append('"Tensile extension (Strain 1)"'), units.append('"(mm)"'), cols.append(truth.extensometer_mm)
-    lines = [",".join(names), ",".join(units)]
-    lines += [",".join(f'"{v:.6f}"' for v in row) for row in zip(*cols)]
+        names.append("Tensile extension (Strain 1)"), units.append("(mm)"), cols.append(truth.extensometer_mm)
+    names.append("Tensile stress"), units.append("(MPa)"), cols.append(truth.force_N / truth.s0_mm2)
+    lines = ["Specimen number (included),1", f'Modulus (Automatic Young\'s),"{truth.E_MPa:,.5f}",MPa',
+             f'Diameter,"{truth.d0_mm:.5f}",mm', 'Specimen ID,"0038"', ""]
+    lines += [",".join(names), ",".join(units)]
+    lines += [",".join(f'"{v:,.6f}"' for v in row) for row in zip(*cols)]
     path.write_text("\r\n".join(lines) + "\r\n", encoding="utf-8")
     return path
 

@@ -191,3 +191,18 @@ def test_unreadable_columns_one_line(tmp_path, capsys, header, units, pattern):
     assert code != 0
     line = _one_error(err)
     assert line.startswith(f"flowcurve: error: {path}") and re.search(pattern, line), line
+
+
+def test_thousands_separators_both_ways(tmp_path, truth):
+    """Bluehill quotes "1,004.8" in a comma file; a German export writes 1.004,8 with semicolons."""
+    path = tmp_path / "german.csv"
+    rows = ["Zeit;Kraft;Traverse", "s;N;mm"]
+    for a, b, c in zip(truth.time_s, truth.force_N, truth.crosshead_mm):
+        rows.append(";".join(f"{v:,.6f}".replace(",", " ").replace(".", ",").replace(" ", ".") for v in (a, b, c)))
+    path.write_text("\n".join(rows) + "\n", encoding="cp1252")
+    assert any(re.fullmatch(r"\d\.\d{3},\d{6}", r.split(";")[1]) for r in rows[2:])  # forces written 9.764,031000
+    rec = load_record(path)
+    np.testing.assert_allclose(rec.column("force_N"), truth.force_N, atol=1e-5)
+    np.testing.assert_allclose(rec.column("crosshead_mm"), truth.crosshead_mm, atol=1e-6)
+    text = write_bluehill(tmp_path / "b.csv", truth).read_text()
+    assert re.search(r'"\d,\d{3}\.\d{6}"', text)  # the Bluehill writer does write "1,004.803280"
