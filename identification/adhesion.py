@@ -319,7 +319,8 @@ def _minimize(residual, params, plan, temperatures_C):
     for start in starts:
         trial = params.copy()
         trial["theta_k"].value = start
-        result = lmfit.minimize(residual, trial, method="least_squares")
+        with np.errstate(invalid="ignore"):  # a start in the wrong interval may leave a singular covariance
+            result = lmfit.minimize(residual, trial, method="least_squares")
         if best is None or (result.success and result.chisqr < best.chisqr):
             best = result
     return best
