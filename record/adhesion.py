@@ -50,7 +50,6 @@ from flowcurve.record.importers import (
     UnitError,
     _check_readable,
     _found_columns_hint,
-    _head_lines,
     _is_number,
     _sniff_delimiter,
     parse_column_option,
@@ -161,11 +160,6 @@ def parse_adhesion_column_option(text: str) -> tuple[str, tuple[str, str | None]
 
 
 # -- reading -----------------------------------------------------------------------------------
-
-
-def is_adhesion_table(path: str | os.PathLike) -> bool:
-    lines = [line for line in _head_lines(Path(path), 1)]
-    return bool(lines) and lines[0].replace(" ", "").lower().startswith(f"#{FORMAT_NAME}:")
 
 
 def read_adhesion_tables(paths, *, columns: Mapping[str, tuple[str, str | None]] | None = None) -> AdhesionTable:

@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from flowcurve.identification.adhesion import CONTACT_RATIO_MODELS, HERTZ_MEAN_FACTOR, HOT_FROM_C, FrictionFit, fit_friction
+from flowcurve.identification.adhesion import (CONTACT_RATIO_MODELS, HERTZ_MEAN_FACTOR, HOT_FROM_C, FrictionFit, adhesion_shear,
+                                                fit_friction)
 from flowcurve.identification.outcome import to_jsonable
 from flowcurve.record.adhesion import ADHESION_COLUMNS, parse_adhesion_column_option, read_adhesion_tables, write_adhesion_table
 from flowcurve.reports.friction_cards import FRICTION_CARD_FORMATS, friction_card
@@ -69,6 +70,10 @@ def _fit_options(p, demo: bool = False) -> None:
     p.add_argument("--hot-from", type=float, default=HOT_FROM_C, metavar="C", help=f"tests at or above this temperature give k_b, theta_k (default {HOT_FROM_C:g})")
     p.add_argument("--weights", choices=("relative", "absolute"), default="relative",
                    help="least-squares residuals relative to the measured value (default) or absolute (the seed's plain sum)")
+    p.add_argument("--moment-accuracy", type=float, metavar="REL",
+                   help="relative scatter of the measured M_z (e.g. 0.005); with --radius-accuracy, residuals are weighted "
+                        "by their effective variance and the uncertainties account for the imprint radius error")
+    p.add_argument("--radius-accuracy", type=float, metavar="UM", help="scatter of the measured imprint radius, um")
     p.add_argument("--asperity-radius", type=float, metavar="UM", help="asperity radius of the sphere's microrelief, um (mu_d from R_p, t_m)")
     p.add_argument("--bearing-exponent", type=float, default=2.0, metavar="NU", help="exponent nu of the bearing curve (default 2)")
     p.add_argument("--card", action="append", default=[], choices=FRICTION_CARD_FORMATS, help="also write a solver card (repeatable)")
@@ -83,9 +88,12 @@ def _fit(table, args) -> FrictionFit:
 
         raise IdentificationError(f"--flow-stress must be > 0 MPa, got {args.flow_stress:g}")
     model = args.contact_model or ("none" if args.method == "simple" else "bowden_tabor")
+    accuracy = None
+    if args.moment_accuracy is not None or args.radius_accuracy is not None:
+        accuracy = (args.moment_accuracy or 0.0, args.radius_accuracy or 0.0)
     return fit_friction(table, args.method, mu_d=args.mu_d, contact_model=model, flow_stress_MPa=args.flow_stress,
                         hot_from_C=args.hot_from, weights=args.weights, asperity_radius_um=args.asperity_radius,
-                        bearing_exponent=args.bearing_exponent)
+                        bearing_exponent=args.bearing_exponent, accuracy=accuracy)
 
 
 def run(args) -> int:
@@ -165,7 +173,8 @@ def _plots(fit: FrictionFit, folder: Path) -> list[str]:
         ax.plot(x, y, "o", ms=4, color=color, label=f"{T:g} C tests" + ("" if all(t["used"] for t in group) else " (not used)"))
         ax.plot(x, model, "-", color=color, lw=1, label=f"{T:g} C fitted model, as (3.35) reads it")
         grid = np.linspace(0.0, x.max() * 1.05, 50)
-        law = fit.values["tau0_MPa"] + (fit.values["beta0"] - fit.values["k_b_per_C"] * max(0.0, T - fit.values["theta_k_C"])) * grid
+        v = fit.values
+        law = adhesion_shear(grid, T, v["tau0_MPa"], v["beta0"], v["k_b_per_C"], v["theta_k_C"])
         ax.plot(grid, law, "--", color=color, lw=1, label=f"law (2.25) at {T:g} C")
     ax.set(xlabel="real contact pressure sigma_nr, MPa", ylabel="adhesion shear stress, MPa",
            title=f"{fit.method} fit: tau0 = {fit.values['tau0_MPa']:.3g} MPa, beta0 = {fit.values['beta0']:.3g}")

@@ -84,3 +84,14 @@ def test_simple_fit_with_the_bowden_tabor_model_refuses_a_degenerate_series(make
     table, device = make_table(contact="bowden_tabor", moment_noise_rel=0.002, radius_noise_um=0.2)
     with pytest.raises(IdentificationError, match="real pressure is the same in every test"):
         fit_simple(table, mu_d=TRUTH.mu_d, contact_model="bowden_tabor", flow_stress_MPa=device.surface_flow_stress_MPa(20.0))
+
+
+def test_effective_variance_weights_with_the_instrument_accuracy(make_table):
+    """Weighting by the instrument's scatter (0.5 % on M_z, 0.5 µm on r): still within 3 stderr, and the
+    imprint radius error is in the uncertainty (bench/adhesion_recovery.py: ~68 % within one stderr)."""
+    table, _ = make_table(contact="full", moment_noise_rel=0.005, radius_noise_um=0.5, hot=True)
+    result = fit_simple(table, mu_d=TRUTH.mu_d, accuracy=(0.005, 0.5))
+    _check(result, ("tau0_MPa", "beta0", "k_b_per_C", "theta_k_C"), "simple effective variance")
+    assert "effective variance" in result.extra["weights"]
+    with pytest.raises(IdentificationError, match="accuracy"):
+        fit_simple(table, mu_d=TRUTH.mu_d, accuracy=(0.0, 0.0))
