@@ -149,14 +149,11 @@ def parse_adhesion_column_option(text: str) -> tuple[str, tuple[str, str | None]
 
     The COLUMN[:UNIT] part is split exactly as :func:`flowcurve.record.importers.parse_column_option` does.
     """
-    quantity, sep, rest = text.partition("=")
-    quantity = quantity.strip().lower()
-    if not sep or not rest.strip():
-        raise RecordError("--column", f"{text!r} is not QUANTITY=COLUMN[:UNIT] (e.g. moment=Torque:N*m)")
-    if quantity not in ADHESION_COLUMNS:
-        raise RecordError("--column", f"unknown quantity {quantity!r} in {text!r} (use: {', '.join(ADHESION_COLUMNS)})")
-    _, spec = parse_column_option("force=" + rest)
-    return quantity, spec
+    quantity, _, rest = text.partition("=")
+    if quantity.strip().lower() not in ADHESION_COLUMNS or not rest.strip():
+        raise RecordError("--column", f"{text!r} is not QUANTITY=COLUMN[:UNIT] with a quantity of: {', '.join(ADHESION_COLUMNS)} "
+                          "(e.g. moment=Torque:N*m)")
+    return quantity.strip().lower(), parse_column_option("force=" + rest)[1]
 
 
 # -- reading -----------------------------------------------------------------------------------
