@@ -152,7 +152,7 @@ def write_friction(fit: FrictionFit, table, outdir, *, cards=(), units: str = DE
 
 
 def _plots(fit: FrictionFit, folder: Path) -> list[str]:
-    """τ_adh (or the moment's mean stress) against the real pressure per temperature, and residuals."""
+    """Each test's adhesion stress against its mean pressure per temperature, with the model and law; residuals."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -162,8 +162,8 @@ def _plots(fit: FrictionFit, folder: Path) -> list[str]:
     temps = sorted({t["temperature_C"] for t in tests})
     fig, ax = plt.subplots(figsize=(7, 5))
     for i, T in enumerate(temps):
-        group = sorted((t for t in tests if t["temperature_C"] == T), key=lambda t: t["real_pressure_MPa"])
-        x = np.array([t["real_pressure_MPa"] for t in group])
+        group = sorted((t for t in tests if t["temperature_C"] == T), key=lambda t: t["nominal_mean_pressure_MPa"])
+        x = np.array([t["nominal_mean_pressure_MPa"] for t in group])
         # what each test shows: the mean stress (3.35) less the deformation part, measured and as the model gives it
         y = np.array([t["tau_n_MPa"] - t["mu_d"] * t["nominal_mean_pressure_MPa"] for t in group])
         model = y * np.array([1.0 + t["residual_pct"] / 100.0 for t in group]) if fit.method == "simple" else \
@@ -175,8 +175,8 @@ def _plots(fit: FrictionFit, folder: Path) -> list[str]:
         grid = np.linspace(0.0, x.max() * 1.05, 50)
         v = fit.values
         law = adhesion_shear(grid, T, v["tau0_MPa"], v["beta0"], v["k_b_per_C"], v["theta_k_C"])
-        ax.plot(grid, law, "--", color=color, lw=1, label=f"law (2.25) at {T:g} C")
-    ax.set(xlabel="real contact pressure sigma_nr, MPa", ylabel="adhesion shear stress, MPa",
+        ax.plot(grid, law, "--", color=color, lw=1, label=f"law (2.25) at {T:g} C, full contact")
+    ax.set(xlabel="nominal mean pressure N/(pi r^2), MPa (= sigma_nr at full contact)", ylabel="adhesion shear stress, MPa",
            title=f"{fit.method} fit: tau0 = {fit.values['tau0_MPa']:.3g} MPa, beta0 = {fit.values['beta0']:.3g}")
     ax.text(0.02, 0.02, "points: 0.540 M/r^3 - mu_d p (3.35); (3.35) reads a uniform tau0 as 1.132 tau0",
             transform=ax.transAxes, fontsize=7)
@@ -188,9 +188,9 @@ def _plots(fit: FrictionFit, folder: Path) -> list[str]:
     fig, ax = plt.subplots(figsize=(7, 3.5))
     for i, T in enumerate(temps):
         group = [t for t in tests if t["temperature_C"] == T]
-        ax.plot([t["real_pressure_MPa"] for t in group], [t["residual_pct"] for t in group], "o", ms=4, color=f"C{i % 10}", label=f"{T:g} C")
+        ax.plot([t["nominal_mean_pressure_MPa"] for t in group], [t["residual_pct"] for t in group], "o", ms=4, color=f"C{i % 10}", label=f"{T:g} C")
     ax.axhline(0.0, color="0.3", lw=0.8)
-    ax.set(xlabel="real contact pressure sigma_nr, MPa", ylabel="model - measured, %",
+    ax.set(xlabel="nominal mean pressure N/(pi r^2), MPa", ylabel="model - measured, %",
            title=f"residuals of the {fit.method} fit ({'tau_adh' if fit.method == 'simple' else 'M_z'})")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
