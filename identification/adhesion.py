@@ -183,16 +183,6 @@ class FrictionFit:
     extra: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
 
-    def law(self, pressure_MPa, temperature_C, real_pressure_MPa=None):
-        """τ (MPa) of the identified law (2.25) at nominal pressure and temperature.
-
-        The real pressure defaults to the nominal one (K_r = 1, full contact, as at the tool–chip
-        interface in cutting)."""
-        v = self.values
-        p = np.asarray(pressure_MPa, dtype=float)
-        pr = p if real_pressure_MPa is None else np.asarray(real_pressure_MPa, dtype=float)
-        return adhesion_shear(pr, temperature_C, v["tau0_MPa"], v["beta0"], v["k_b_per_C"], v["theta_k_C"]) + v["mu_d"] * p
-
     def as_dict(self) -> dict:
         """friction.json (docs/adhesion.md)."""
         out: dict = {"schema": "flowcurve-friction/1", "model": "adhesion_deformation_2.25", "method": self.method,
@@ -319,7 +309,8 @@ def _minimize(residual, params, plan, temperatures_C):
     for start in starts:
         trial = params.copy()
         trial["theta_k"].value = start
-        result = lmfit.minimize(residual, trial, method="least_squares")
+        with np.errstate(invalid="ignore"):  # a start in the wrong interval may leave a singular covariance
+            result = lmfit.minimize(residual, trial, method="least_squares")
         if best is None or (result.success and result.chisqr < best.chisqr):
             best = result
     return best
@@ -359,13 +350,16 @@ PARAM_KEYS = {"tau0": "tau0_MPa", "beta0": "beta0", "k_b": "k_b_per_C", "theta_k
 
 def fit_simple(table: AdhesionTable, *, mu_d: float | None = None, contact_model: str = "none",
                flow_stress_MPa: float | None = None, hot_from_C: float = HOT_FROM_C, weights: str = "relative",
-               asperity_radius_um: float | None = None, bearing_exponent: float = 2.0) -> FrictionFit:
+               asperity_radius_um: float | None = None, bearing_exponent: float = 2.0,
+               accuracy: tuple[float, float] | None = None) -> FrictionFit:
     """# (3.35)–(3.37) with (2.25): τ_adh = K_r·((32/(9π))·τ0 + β(T)·σ_nr) against the tests' τ_n − μ_d·σ̄_n.
 
     contact_model ``"none"`` is the seed's: σ_nr = σ̄_n = N_z/(π r²). ``"bowden_tabor"`` needs the
     flow stress of each test (table column or ``flow_stress_MPa``). weights: ``"relative"``
     (residuals divided by the measured τ_adh, for errors proportional to the reading) or
-    ``"absolute"`` (the plain sum of squares of the seed).
+    ``"absolute"`` (the plain sum of squares of the seed). accuracy: (relative scatter of M_z,
+    scatter of r in µm) of the instrument — each residual is then divided by its effective
+    standard deviation (:func:`_weighted_fit`) instead.
     """
     import lmfit
 
@@ -374,17 +368,19 @@ def fit_simple(table: AdhesionTable, *, mu_d: float | None = None, contact_model
     if contact_model != "none" and not np.all(np.isfinite(s.flow_stress_MPa)):
         raise IdentificationError(f"the {contact_model} contact model needs the flow stress of every test (flow_stress_MPa column or --flow-stress)")
     hot, hot_temps = _split_hot(s, hot_from_C)
-    p = s.pressure_MPa
-    tau_n = mean_shear_stress(s.moment_N_mm, s.radius_mm)  # (3.35)
-    tau_adh = tau_n - s.mu_d * p  # (3.36): the deformation part removed
-    kr = contact_ratio(contact_model, p, s.flow_stress_MPa)
-    sigma_nr = p / kr  # (3.42) with the mean pressure
+
+    def quantities(radius):
+        p = nominal_mean_pressure(s.force_N, radius)
+        tau_n = mean_shear_stress(s.moment_N_mm, radius)  # (3.35)
+        kr = contact_ratio(contact_model, p, s.flow_stress_MPa)
+        return p, tau_n, tau_n - s.mu_d * p, kr, p / kr  # (3.36) deformation part removed; (3.42) on the mean pressure
+
+    p, tau_n, tau_adh, kr, sigma_nr = quantities(s.radius_mm)
     spread = np.ptp(sigma_nr[~hot]) / np.mean(sigma_nr[~hot])
     if spread < 1e-3:
         raise IdentificationError(f"the real pressure is the same in every test below {hot_from_C:g} C ({np.mean(sigma_nr[~hot]):.4g} MPa): "
                                   f"with the {contact_model} contact model the mean pressure of a plastic imprint never exceeds the "
                                   "flow pressure, so beta0 cannot be separated from tau0; use --method refined, or the contact model 'none'")
-    scale = _weights(tau_adh, weights)
     intercept0, slope0 = _start_linear(tau_adh[~hot], sigma_nr[~hot])
     params = lmfit.Parameters()
     params.add("tau0", value=max(intercept0 / UNIFORM_SHEAR_WEIGHT, 1e-3))
@@ -393,12 +389,15 @@ def fit_simple(table: AdhesionTable, *, mu_d: float | None = None, contact_model
     _add_hot_params(params, plan, slope0)
     use = np.ones(len(p), bool) if plan["k_b"][0] else ~hot
 
-    def model(v):
-        return kr * (UNIFORM_SHEAR_WEIGHT * v["tau0"] + beta_at(s.temperature_C, v["beta0"], v["k_b"], v["theta_k"]) * sigma_nr)
+    def deviation(v, radius):
+        """model − measured τ_adh (MPa) with the imprint radii ``radius``."""
+        _, _, measured, ratio, real = quantities(radius)
+        return ratio * (UNIFORM_SHEAR_WEIGHT * v["tau0"] + beta_at(s.temperature_C, v["beta0"], v["k_b"], v["theta_k"]) * real) - measured
 
-    result = _minimize(lambda pars: ((model(pars.valuesdict()) - tau_adh) / scale)[use], params, plan, s.temperature_C[use])
-    if not result.success:
-        raise IdentificationError(f"the simple adhesion fit did not converge: {result.message}")
+    def model(v):
+        return deviation(v, s.radius_mm) + tau_adh
+
+    result = _weighted_fit(deviation, params, plan, s, use, measured=tau_adh, moment_part=tau_n, weights=weights, accuracy=accuracy)
     _finish_hot(result.params, plan)
     v = result.params.valuesdict()
     predicted = model(v)
@@ -408,7 +407,7 @@ def fit_simple(table: AdhesionTable, *, mu_d: float | None = None, contact_model
     fit.extra["tau0_intercept_MPa"] = float(UNIFORM_SHEAR_WEIGHT * v["tau0"])
     fit.extra["tau0_intercept_note"] = ("intercept of (3.37) on the 0.540 mean stress (3.35); tau0_MPa = intercept*9*pi/32 "
                                         "because (3.35) reads a uniform shear as 32/(9 pi) = 1.132 times itself")
-    fit.extra["weights"] = weights
+    fit.extra["weights"] = _weights_text(weights, accuracy)
     if hot.any() and not plan["k_b"][0]:
         fit.warnings.append(f"{np.count_nonzero(hot)} test(s) at or above {hot_from_C:g} C not used: {hot_source}")
     return fit
@@ -417,12 +416,13 @@ def fit_simple(table: AdhesionTable, *, mu_d: float | None = None, contact_model
 def fit_refined(table: AdhesionTable, *, mu_d: float | None = None, contact_model: str = "bowden_tabor",
                 flow_stress_MPa: float | None = None, hot_from_C: float = HOT_FROM_C, weights: str = "relative",
                 asperity_radius_um: float | None = None, bearing_exponent: float = 2.0,
-                sigma_S_start_MPa: float | None = None) -> FrictionFit:
+                sigma_S_start_MPa: float | None = None, accuracy: tuple[float, float] | None = None) -> FrictionFit:
     """# (3.38)–(3.44): τ0, β0, σ_S (and k_b, θ_k) by least squares of every test's moment.
 
     Tests whose flow stress is known (``flow_stress_MPa`` column, or ``flow_stress_MPa``) use it;
     the others share one fitted σ_S (seed 3.2.3: hardening assumed equal in all tests).
-    weights: ``"relative"`` ((M_model − M_z)/M_z) or ``"absolute"`` (the plain sum (3.38), N·mm).
+    weights: ``"relative"`` ((M_model − M_z)/M_z) or ``"absolute"`` (the plain sum (3.38), N·mm);
+    accuracy as in :func:`fit_simple`.
     """
     import lmfit
 
@@ -448,14 +448,18 @@ def fit_refined(table: AdhesionTable, *, mu_d: float | None = None, contact_mode
     _add_hot_params(params, plan, slope0)
     use = np.ones(len(p), bool) if plan["k_b"][0] else ~hot
     hot_shared = hot & ~known & use
-    scale = _weights(s.moment_N_mm, weights)
+
+    def deviation(v, radius):
+        """model − measured M_z (N·mm) with the imprint radii ``radius``."""
+        flow = np.where(known, s.flow_stress_MPa, v["sigma_S"])
+        return refined_moment(s.force_N, radius, s.temperature_C, v["tau0"], v["beta0"], v["k_b"], v["theta_k"],
+                              flow, s.mu_d, model=contact_model) - s.moment_N_mm
 
     def model(v):
-        flow = np.where(known, s.flow_stress_MPa, v["sigma_S"])
-        return refined_moment(s.force_N, s.radius_mm, s.temperature_C, v["tau0"], v["beta0"], v["k_b"], v["theta_k"],
-                              flow, s.mu_d, model=contact_model)
+        return deviation(v, s.radius_mm) + s.moment_N_mm
 
-    result = _minimize(lambda pars: ((model(pars.valuesdict()) - s.moment_N_mm) / scale)[use], params, plan, s.temperature_C[use])
+    result = _weighted_fit(deviation, params, plan, s, use, measured=s.moment_N_mm, moment_part=s.moment_N_mm,
+                           weights=weights, accuracy=accuracy)
     if not result.success:
         raise IdentificationError(f"the refined adhesion fit did not converge: {result.message}")
     _finish_hot(result.params, plan)
@@ -465,13 +469,47 @@ def fit_refined(table: AdhesionTable, *, mu_d: float | None = None, contact_mode
     tests = _test_rows(s, p, p / kr, use, measured=s.moment_N_mm / N_MM_PER_N_M, predicted=model(v) / N_MM_PER_N_M,
                        name="moment_N_m", extra={"tau_n_MPa": tau_n, "flow_stress_MPa": flow})
     fit = _make_fit("refined", result, s, plan, hot_source, contact_model, tests, sigma_S=shared)
-    fit.extra["weights"] = weights
+    fit.extra["weights"] = _weights_text(weights, accuracy)
     if hot_shared.any() and contact_model != "none":
         fit.warnings.append(f"{np.count_nonzero(hot_shared)} hot test(s) without a known flow stress share the fitted sigma_S "
                             "of the cold tests; give flow_stress_MPa for tests at temperature")
     if hot.any() and not plan["k_b"][0]:
         fit.warnings.append(f"{np.count_nonzero(hot)} test(s) at or above {hot_from_C:g} C not used: {hot_source}")
     return fit
+
+
+def _weighted_fit(deviation, params, plan, s: _Series, use, *, measured, moment_part, weights: str, accuracy):
+    """Least squares of ``deviation(v, radius)`` (model − measured) over the tests in ``use``.
+
+    Without ``accuracy`` each deviation is divided by the measured value (``weights="relative"``)
+    or not at all (``"absolute"``). With ``accuracy = (s_M, δr_um)`` it is divided by its
+    effective standard deviation √((s_M·m_i)² + (∂d_i/∂r_i·δr)²) — the effective-variance method
+    (J. Orear, Am. J. Phys. 50 (1982) 912) for the error of the measured imprint radius, which
+    enters both sides — evaluated at a first fit and refitted once; ``moment_part`` m_i is the
+    part of the measured value proportional to M_z.
+    """
+    def fit_with(scale):
+        return _minimize(lambda pars: (deviation(pars.valuesdict(), s.radius_mm) / scale)[use], params, plan, s.temperature_C[use])
+
+    result = fit_with(_weights(measured, weights))
+    if accuracy is None:
+        return result
+    moment_rel, radius_um = accuracy
+    if moment_rel < 0 or radius_um < 0 or moment_rel + radius_um == 0:
+        raise IdentificationError(f"the instrument accuracy must be >= 0 and not both 0, got moment {moment_rel:g}, radius {radius_um:g} um")
+    v = result.params.valuesdict()
+    step = 1e-6 * s.radius_mm  # each test's deviation depends on its own radius only: one vectorized difference
+    slope = (deviation(v, s.radius_mm + step) - deviation(v, s.radius_mm - step)) / (2.0 * step)
+    scale = np.sqrt((moment_rel * np.asarray(moment_part)) ** 2 + (slope * radius_um * 1e-3) ** 2)
+    for name in params:
+        params[name].value = result.params[name].value
+    return fit_with(scale)
+
+
+def _weights_text(weights: str, accuracy) -> str:
+    if accuracy is None:
+        return weights
+    return (f"effective variance (Orear 1982): moment scatter {100 * accuracy[0]:g} %, imprint radius scatter {accuracy[1]:g} um")
 
 
 def _weights(measured, weights: str):

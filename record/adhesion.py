@@ -150,22 +150,14 @@ def parse_adhesion_column_option(text: str) -> tuple[str, tuple[str, str | None]
 
     The COLUMN[:UNIT] part is split exactly as :func:`flowcurve.record.importers.parse_column_option` does.
     """
-    quantity, sep, rest = text.partition("=")
-    quantity = quantity.strip().lower()
-    if not sep or not rest.strip():
-        raise RecordError("--column", f"{text!r} is not QUANTITY=COLUMN[:UNIT] (e.g. moment=Torque:N*m)")
-    if quantity not in ADHESION_COLUMNS:
-        raise RecordError("--column", f"unknown quantity {quantity!r} in {text!r} (use: {', '.join(ADHESION_COLUMNS)})")
-    _, spec = parse_column_option("force=" + rest)
-    return quantity, spec
+    quantity, _, rest = text.partition("=")
+    if quantity.strip().lower() not in ADHESION_COLUMNS or not rest.strip():
+        raise RecordError("--column", f"{text!r} is not QUANTITY=COLUMN[:UNIT] with a quantity of: {', '.join(ADHESION_COLUMNS)} "
+                          "(e.g. moment=Torque:N*m)")
+    return quantity.strip().lower(), parse_column_option("force=" + rest)[1]
 
 
 # -- reading -----------------------------------------------------------------------------------
-
-
-def is_adhesion_table(path: str | os.PathLike) -> bool:
-    lines = [line for line in _head_lines(Path(path), 1)]
-    return bool(lines) and lines[0].replace(" ", "").lower().startswith(f"#{FORMAT_NAME}:")
 
 
 def read_adhesion_tables(paths, *, columns: Mapping[str, tuple[str, str | None]] | None = None) -> AdhesionTable:

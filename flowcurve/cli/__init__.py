@@ -26,6 +26,7 @@ COMMAND_MODULES = (
     "flowcurve.cli.series",  # fit
     "flowcurve.cli.reports",  # card, report
     "flowcurve.cli.rig",  # rig check, rig virtual
+    "flowcurve.cli.friction",  # friction, friction-demo
     "flowcurve.cli.console",  # console
 )
 

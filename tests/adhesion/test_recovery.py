@@ -12,7 +12,10 @@ from flowcurve.errors import IdentificationError
 
 from flowcurve.identification.adhesion import SEED_KB_DIVISOR, SEED_THETA_K_C, fit_refined, fit_simple
 
-from .synthetic import TRUTH
+from flowcurve.record.adhesion import read_adhesion_table, write_adhesion_table
+from flowcurve.rig.virtual.adhesiometer import FrictionTruth, VirtualAdhesiometer
+
+from .synthetic import COLD_LOADS_N, TRUTH
 
 TRUE = {"tau0_MPa": TRUTH.tau0_MPa, "beta0": TRUTH.beta0, "k_b_per_C": TRUTH.k_b_per_C, "theta_k_C": TRUTH.theta_k_C}
 
@@ -84,3 +87,37 @@ def test_simple_fit_with_the_bowden_tabor_model_refuses_a_degenerate_series(make
     table, device = make_table(contact="bowden_tabor", moment_noise_rel=0.002, radius_noise_um=0.2)
     with pytest.raises(IdentificationError, match="real pressure is the same in every test"):
         fit_simple(table, mu_d=TRUTH.mu_d, contact_model="bowden_tabor", flow_stress_MPa=device.surface_flow_stress_MPa(20.0))
+
+
+def test_effective_variance_weights_with_the_instrument_accuracy(make_table):
+    """Weighting by the instrument's scatter (0.5 % on M_z, 0.5 µm on r): still within 3 stderr, and the
+    imprint radius error is in the uncertainty (bench/adhesion_recovery.py: ~68 % within one stderr)."""
+    table, _ = make_table(contact="full", moment_noise_rel=0.005, radius_noise_um=0.5, hot=True)
+    result = fit_simple(table, mu_d=TRUTH.mu_d, accuracy=(0.005, 0.5))
+    _check(result, ("tau0_MPa", "beta0", "k_b_per_C", "theta_k_C"), "simple effective variance")
+    assert "effective variance" in result.extra["weights"]
+    with pytest.raises(IdentificationError, match="accuracy"):
+        fit_simple(table, mu_d=TRUTH.mu_d, accuracy=(0.0, 0.0))
+
+
+def test_one_hot_temperature_gives_k_b_with_the_seeds_theta_k(tmp_path):
+    """Tests at 800 °C only: θ_k cannot be separated, so it is the seed's 700 °C and k_b is fitted."""
+    truth = FrictionTruth(tau0_MPa=80.0, beta0=0.05, k_b_per_C=1.5e-4, theta_k_C=700.0, mu_d=0.02)
+    device = VirtualAdhesiometer(truth=truth, contact="full", moment_noise_rel=0.005, radius_noise_um=0.5, seed=5)
+    forces = list(COLD_LOADS_N) + [200.0, 400.0, 800.0]
+    data, _ = device.run_series(forces, [20.0] * len(COLD_LOADS_N) + [800.0] * 3)
+    table = read_adhesion_table(write_adhesion_table(tmp_path / "t.csv", data, device.table_meta()))
+    result = fit_simple(table, mu_d=truth.mu_d, accuracy=(0.005, 0.5))
+    assert result.values["theta_k_C"] == SEED_THETA_K_C and result.stderr["theta_k_C"] is None
+    kb, se = result.values["k_b_per_C"], result.stderr["k_b_per_C"]
+    print(f"one hot temperature: k_b = {kb:.4g} ± {se:.2g} (true {truth.k_b_per_C:.4g})")
+    assert abs(kb - truth.k_b_per_C) <= 3 * se
+    assert "theta_k fixed at the seed's 700 C" in result.sources["hot_constants"]
+
+
+def test_too_few_cold_tests_is_an_error(tmp_path):
+    device = VirtualAdhesiometer(contact="full")
+    data, _ = device.run_series([100.0, 400.0, 600.0, 800.0], [20.0, 20.0, 700.0, 800.0])
+    table = read_adhesion_table(write_adhesion_table(tmp_path / "t.csv", data, device.table_meta()))
+    with pytest.raises(IdentificationError, match="at least 3 tests below 600 C"):
+        fit_refined(table, mu_d=0.02, contact_model="none")

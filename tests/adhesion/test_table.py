@@ -125,7 +125,7 @@ def test_a_wrong_quantity_unit_is_an_error(tmp_path):
 
 
 def test_column_option_rejects_unknown_quantity():
-    with pytest.raises(RecordError, match="unknown quantity 'torque'"):
+    with pytest.raises(RecordError, match=r"'torque=Mz:N\*m' is not QUANTITY=COLUMN"):
         parse_adhesion_column_option("torque=Mz:N*m")
     assert parse_adhesion_column_option("moment=M:z:N*mm") == ("moment", ("M:z", "N*mm"))
 
