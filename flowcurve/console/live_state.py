@@ -20,6 +20,7 @@ from typing import Callable
 
 import numpy as np
 
+ENDED_STATES = ("done", "fault")
 MAX_POINTS = 20_000  # per plot, before thinning
 COLUMN_FORCE, COLUMN_CROSSHEAD = 1, 2  # record rows: time_s, force_N, crosshead_mm[, temperature_C]
 
@@ -63,9 +64,13 @@ class ConsoleView:
     heater: returns True/False for the heater relay, None when the rig has no furnace.
     """
 
-    def __init__(self, test_id: int, heater: Callable[[], bool | None] | None = None, time_scale: float = 1.0):
+    def __init__(self, test_id: int, heater: Callable[[], bool | None] | None = None, time_scale: float = 1.0, heater_window_s: float = 0.0):
         self.test_id = test_id
         self.time_scale = time_scale  # test seconds per wall second
+        # the furnace controller switches the relay on for a share of each control period:
+        # the heater shows "on" while the relay was on within this many wall seconds
+        self.heater_window_s = heater_window_s
+        self._heater_on_wall_s: float | None = None
         self.heater = heater or (lambda: None)
         self.lock = threading.Lock()
         self.state = "starting"
@@ -80,7 +85,20 @@ class ConsoleView:
         self._listeners: set[Callable[[], None]] = set()
 
     # the procedure's side --------------------------------------------------------------------
+    def _heater_state(self, ended: bool) -> bool | None:
+        """The relay now; while the test runs, on if it was on within the controller's window."""
+        now_on = self.heater()
+        if now_on is None:
+            return None
+        now = time.monotonic()
+        if now_on:
+            self._heater_on_wall_s = now
+        if ended:
+            return now_on
+        return now_on or (self._heater_on_wall_s is not None and now - self._heater_on_wall_s < self.heater_window_s)
+
     def show(self, s, force: bool = False) -> None:
+        self._heater_state(ended=False)  # catch the short on-pulses between the pages' looks
         with self.lock:
             self.state, self.message = s.state, s.message
             self.progress = s.progress
@@ -132,7 +150,7 @@ class ConsoleView:
 
     def status(self) -> dict:
         """The state and readings as JSON-ready values (heater included)."""
-        heater = self.heater()
+        heater = self._heater_state(ended=self.state in ENDED_STATES)
         with self.lock:
             return {
                 "test_id": self.test_id,

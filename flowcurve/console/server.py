@@ -54,9 +54,9 @@ LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 class Console:
     """Everything one console process serves: the rig's runner and the --out folder."""
 
-    def __init__(self, out: Path, *, config=None, time_scale: float | None = None, token: str | None = None, rig_name: str = ""):
+    def __init__(self, out: Path, *, config=None, time_scale: float | None = None, token: str | None = None, rig_name: str = "", virtual_setup=None):
         self.workspace = Workspace(out)
-        self.runner = TestRunner(self.workspace.records, config=config)
+        self.runner = TestRunner(self.workspace.records, config=config, virtual_setup=virtual_setup)
         self.time_scale = time_scale
         self.token = token
         self.rig_name = rig_name or ("virtual rig" if config is None else "configured rig")
@@ -156,7 +156,7 @@ def create_app(console: Console) -> Starlette:
         data = await _body(request)
         try:
             setup = validate(data, virtual=runner.virtual, time_scale=console.time_scale)
-            run = runner.start(setup)
+            run = runner.start(setup, {k: v for k, v in data.items() if isinstance(v, (str, int, float))})
         except FormError as exc:
             return _error(str(exc), 400, fields=exc.errors)
         except BusyError as exc:

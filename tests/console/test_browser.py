@@ -168,3 +168,43 @@ def test_reload_close_and_a_second_page_during_a_test(served_console, browser_fa
     rec = read_record(run.record)
     assert rec.meta["status"] == "complete" and rec.meta["specimen.id"] == "C-reload"
     assert len(rec.data) == run.outcome.samples
+
+
+def test_heating_shows_the_heater_on_and_an_abort_switches_it_off(served_console, browser_factory, shot):
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    fill(driver, {**SETUP, "specimen_id": "C-hot", "temperature": "300", "soak": "30"})
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: text(driver, "#state").lower() == "heating", what="heating")
+    wait_for(lambda: text(driver, "#heater") == "ON", what="the heater badge on")
+    start_points = wait_for(lambda: int(driver.execute_script("return window.fcStats.ttPoints")), what="temperature points")
+    wait_for(lambda: int(driver.execute_script("return window.fcStats.ttPoints")) > start_points + 5, what="the temperature plot to grow")
+    shot(driver, "1-heating")
+    run = served_console.console.runner.current  # (the controller switches the relay on and off: the badge follows it)
+    driver.find_element(By.ID, "btn-abort").click()
+    driver.switch_to.alert.accept()
+    wait_for(lambda: text(driver, "#state").lower() == "done", what="done after the abort")
+    assert text(driver, "#heater") == "OFF" and run.heater_source.relay_on is False
+    assert "aborted" in text(driver, "#message")
+    shot(driver, "2-aborted")
+    assert "# status: aborted\n" in run.record.read_text()
+
+
+def test_a_device_fault_is_named_as_run_names_it(served_console, browser_factory, shot):
+    rigs = []
+    served_console.console.runner.virtual_setup = rigs.append
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    fill(driver, {**SETUP, "specimen_id": "C-fault", "speed": "0.02"})
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: fd_points(driver) > 20, what="recording")
+    rigs[0].inject("encoder", "unplug")
+    wait_for(lambda: text(driver, "#state").lower() == "fault", what="the fault state")
+    run = served_console.console.runner.current
+    # run prints "flowcurve: error: <the error> (the record keeps everything up to the fault)"
+    assert text(driver, "#message") == f"{run.outcome.error} (the record keeps everything up to the fault)"
+    assert "crosshead encoder" in text(driver, "#message")
+    assert "fault" in driver.find_element(By.ID, "message").get_attribute("class")
+    shot(driver, "1-fault")
+    rec = read_record(run.record)
+    assert rec.meta["status"] == "aborted" and len(rec.data) > 0

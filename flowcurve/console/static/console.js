@@ -118,8 +118,14 @@ function showStatus(s) {
 }
 
 function showTest(t) {
+  const isNew = !currentTest || !t || currentTest.test_id !== t.test_id;
   currentTest = t;
   if (!t) return;
+  if (isNew && t.running && t.setup) {  // another page started it: show what it was set up with
+    const form = $("#setup");
+    for (const [name, value] of Object.entries(t.setup)) if (form.elements[name]) form.elements[name].value = value;
+    setTestType();
+  }
   $("#record-name").textContent = t.record ? `— ${t.record}` : "";
   const panel = $("#post-panel");
   if (t.running || t.status === null) { panel.hidden = true; return; }
