@@ -19,7 +19,7 @@ By = pytest.importorskip("selenium.webdriver.common.by").By
 RUN_STATES = ("starting", "tare", "waiting", "recording")
 
 
-def wait_for(predicate, timeout_s: float = 30.0, what: str = "condition"):
+def wait_for(predicate, timeout_s: float = 60.0, what: str = "condition", driver=None):
     end = time.monotonic() + timeout_s
     last = None
     while time.monotonic() < end:
@@ -30,7 +30,10 @@ def wait_for(predicate, timeout_s: float = 30.0, what: str = "condition"):
         except Exception as exc:  # the page is still loading: try again
             last = exc
         time.sleep(0.1)
-    raise AssertionError(f"timed out waiting for {what} (last: {last!r})")
+    page = ""
+    if driver is not None:
+        page = f"; page: state {text(driver, '#state')!r}, message {text(driver, '#message')!r}, form errors {text(driver, '#setup')[-300:]!r}"
+    raise AssertionError(f"timed out waiting for {what} (last: {last!r}){page}")
 
 
 def text(driver, css: str) -> str:
@@ -56,7 +59,7 @@ def open_console(driver, url: str) -> None:
     wait_for(lambda: driver.execute_script("return window.fcStats && window.fcStats.events") >= 1 or text(driver, "#state") == "idle", what="the page to connect")
 
 
-SETUP = {"test": "compression", "material": "steel45", "E_MPa": "200000", "specimen_id": "C-browser", "operator": "selenium", "speed": "0.05"}
+SETUP = {"test": "compression", "material": "steel45", "E_MPa": "200000", "specimen_id": "C-browser", "operator": "selenium", "speed": "0.025"}  # about 25 wall seconds of loading
 
 
 def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(served_console, browser_factory, shot, tmp_path):
@@ -77,9 +80,9 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
 
     fill(driver, {"d0": ""})
     driver.find_element(By.ID, "btn-start").click()
-    wait_for(lambda: text(driver, "#state").lower() == "recording", what="recording")
-    first = wait_for(lambda: fd_points(driver), what="first plot points")
-    wait_for(lambda: fd_points(driver) > first + 10, what="the live plot to grow")
+    wait_for(lambda: text(driver, "#state").lower() == "recording", what="recording", driver=driver)
+    first = wait_for(lambda: fd_points(driver), what="first plot points", driver=driver)
+    wait_for(lambda: fd_points(driver) > first + 10, what="the live plot to grow", driver=driver)
     assert not text(driver, '#setup .field-error[data-for="d0"]')
     assert driver.find_element(By.ID, "btn-start").get_attribute("disabled") is not None
     shot(driver, "3-recording")
@@ -110,7 +113,7 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
     assert b'"friction_mu"' in result_json
     reference_path = tmp_path / "run.csv"
     assert cli_main(["run", "compression", "--quiet", "--out", str(reference_path), "--time-scale", str(BROWSER_TIME_SCALE),
-                     "--material", "steel45", "--E", "200000", "--specimen-id", "C-browser", "--operator", "selenium", "--speed", "0.05"]) == 0
+                     "--material", "steel45", "--E", "200000", "--specimen-id", "C-browser", "--operator", "selenium", "--speed", SETUP["speed"]]) == 0
     ref = read_record(reference_path)
     assert list(rec.data.columns) == list(ref.data.columns)
     assert set(rec.meta) - {"stop_reason"} == set(ref.meta) - {"stop_reason"}
