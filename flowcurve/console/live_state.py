@@ -34,15 +34,14 @@ class PlotBuffer:
     y: list[float] = field(default_factory=list)
     stride: int = 1
     generation: int = 0
-    _skip: int = 0  # rows still to skip before the next kept one
+    _seen: int = 0  # rows offered so far; row i is kept when i is a multiple of the stride
 
     def extend(self, xs: np.ndarray, ys: np.ndarray) -> None:
-        start = self._skip
-        kept_x, kept_y = xs[start::self.stride], ys[start::self.stride]
-        self._skip = (start - len(xs)) % self.stride if len(xs) else start
-        self.x.extend(float(v) for v in kept_x)
-        self.y.extend(float(v) for v in kept_y)
-        if len(self.x) >= self.limit:
+        first = (-self._seen) % self.stride  # the first row of this block on the stride
+        self.x.extend(float(v) for v in xs[first::self.stride])
+        self.y.extend(float(v) for v in ys[first::self.stride])
+        self._seen += len(xs)
+        if len(self.x) >= self.limit:  # kept rows are 0, s, 2s, …: every second one is on 2s
             self.x, self.y = self.x[::2], self.y[::2]
             self.stride *= 2
             self.generation += 1
