@@ -93,9 +93,11 @@ class TestRunner:
 
     __test__ = False
 
-    def __init__(self, records_dir: Path, *, config=None, virtual_setup=None):
+    def __init__(self, records_dir: Path, *, config=None, virtual_setup=None, open_rig=None):
         self.records_dir = Path(records_dir)
         self.config = config  # rig.config.RigConfig, or None for the virtual rig
+        # open_rig(time_scale) → a context manager giving a RigIO; default DriverRig(config) (benchmarks pass their own)
+        self.open_rig = open_rig
         self.virtual_setup = virtual_setup  # virtual rig: called with it before each test (faults, for tests)
         self._lock = threading.Lock()
         self._next_id = 1
@@ -103,7 +105,7 @@ class TestRunner:
 
     @property
     def virtual(self) -> bool:
-        return self.config is None
+        return self.config is None and self.open_rig is None
 
     def start(self, setup: TestSetup, form: dict | None = None) -> TestRun:
         with self._lock:
@@ -187,8 +189,9 @@ class TestRunner:
                 from flowcurve.acquisition.procedure import Procedure
                 from flowcurve.acquisition.session import DriverRig
 
-                with DriverRig(self.config, time_scale=run.setup.time_scale) as rig:
-                    run.heater_source = rig.furnace
+                opened = self.open_rig(run.setup.time_scale) if self.open_rig else DriverRig(self.config, time_scale=run.setup.time_scale)
+                with opened as rig:
+                    run.heater_source = getattr(rig, "furnace", None)
                     run.outcome = Procedure(rig, spec, run.record, view=run.view, stop_requested=self._stop_requested(run)).run()
         except FlowcurveError as exc:  # could not start (a device that does not answer, a bad set-point)
             run.error = str(exc)
