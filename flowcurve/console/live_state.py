@@ -20,6 +20,7 @@ from typing import Callable
 
 import numpy as np
 
+ENDED_STATES = ("done", "fault")
 MAX_POINTS = 20_000  # per plot, before thinning
 COLUMN_FORCE, COLUMN_CROSSHEAD = 1, 2  # record rows: time_s, force_N, crosshead_mm[, temperature_C]
 
@@ -33,15 +34,14 @@ class PlotBuffer:
     y: list[float] = field(default_factory=list)
     stride: int = 1
     generation: int = 0
-    _skip: int = 0  # rows still to skip before the next kept one
+    _seen: int = 0  # rows offered so far; row i is kept when i is a multiple of the stride
 
     def extend(self, xs: np.ndarray, ys: np.ndarray) -> None:
-        start = self._skip
-        kept_x, kept_y = xs[start::self.stride], ys[start::self.stride]
-        self._skip = (start - len(xs)) % self.stride if len(xs) else start
-        self.x.extend(float(v) for v in kept_x)
-        self.y.extend(float(v) for v in kept_y)
-        if len(self.x) >= self.limit:
+        first = (-self._seen) % self.stride  # the first row of this block on the stride
+        self.x.extend(float(v) for v in xs[first::self.stride])
+        self.y.extend(float(v) for v in ys[first::self.stride])
+        self._seen += len(xs)
+        if len(self.x) >= self.limit:  # kept rows are 0, s, 2s, …: every second one is on 2s
             self.x, self.y = self.x[::2], self.y[::2]
             self.stride *= 2
             self.generation += 1
@@ -63,9 +63,13 @@ class ConsoleView:
     heater: returns True/False for the heater relay, None when the rig has no furnace.
     """
 
-    def __init__(self, test_id: int, heater: Callable[[], bool | None] | None = None, time_scale: float = 1.0):
+    def __init__(self, test_id: int, heater: Callable[[], bool | None] | None = None, time_scale: float = 1.0, heater_window_s: float = 0.0):
         self.test_id = test_id
         self.time_scale = time_scale  # test seconds per wall second
+        # the furnace controller switches the relay on for a share of each control period:
+        # the heater shows "on" while the relay was on within this many wall seconds
+        self.heater_window_s = heater_window_s
+        self._heater_on_wall_s: float | None = None
         self.heater = heater or (lambda: None)
         self.lock = threading.Lock()
         self.state = "starting"
@@ -80,7 +84,20 @@ class ConsoleView:
         self._listeners: set[Callable[[], None]] = set()
 
     # the procedure's side --------------------------------------------------------------------
+    def _heater_state(self, ended: bool) -> bool | None:
+        """The relay now; while the test runs, on if it was on within the controller's window."""
+        now_on = self.heater()
+        if now_on is None:
+            return None
+        now = time.monotonic()
+        if now_on:
+            self._heater_on_wall_s = now
+        if ended:
+            return now_on
+        return now_on or (self._heater_on_wall_s is not None and now - self._heater_on_wall_s < self.heater_window_s)
+
     def show(self, s, force: bool = False) -> None:
+        self._heater_state(ended=False)  # catch the short on-pulses between the pages' looks
         with self.lock:
             self.state, self.message = s.state, s.message
             self.progress = s.progress
@@ -132,7 +149,7 @@ class ConsoleView:
 
     def status(self) -> dict:
         """The state and readings as JSON-ready values (heater included)."""
-        heater = self.heater()
+        heater = self._heater_state(ended=self.state in ENDED_STATES)
         with self.lock:
             return {
                 "test_id": self.test_id,

@@ -30,6 +30,7 @@ OPERATOR_STOP = "operator stop (console)"
 ABORT_SIGNAME = "the console's abort button"  # the record says "stopped by the console's abort button"
 SHUTDOWN_SIGNAME = "the console shutting down"
 FAULT_STATE = "fault"
+HEATER_WINDOW_PERIODS = 1.5  # the heater shows "on" while its relay was on within this many control periods
 
 
 class BusyError(FlowcurveError):
@@ -62,6 +63,7 @@ class TestRun:
     post: dict[str, float] = field(default_factory=dict)
     result: dict | None = None  # summary of the identification
     heater_source: object | None = None  # what tells the heater state (virtual furnace or driver)
+    form: dict[str, str] = field(default_factory=dict)  # the set-up form as entered (other pages show it)
 
     @property
     def running(self) -> bool:
@@ -82,6 +84,7 @@ class TestRun:
             "error": self.error,
             "post": dict(self.post),
             "result": self.result,
+            "setup": dict(self.form),
         }
 
 
@@ -90,29 +93,40 @@ class TestRunner:
 
     __test__ = False
 
-    def __init__(self, records_dir: Path, *, config=None):
+    def __init__(self, records_dir: Path, *, config=None, virtual_setup=None, open_rig=None):
         self.records_dir = Path(records_dir)
         self.config = config  # rig.config.RigConfig, or None for the virtual rig
+        # open_rig(time_scale) → a context manager giving a RigIO; default DriverRig(config) (benchmarks pass their own)
+        self.open_rig = open_rig
+        self.virtual_setup = virtual_setup  # virtual rig: called with it before each test (faults, for tests)
         self._lock = threading.Lock()
         self._next_id = 1
         self.current: TestRun | None = None
 
     @property
     def virtual(self) -> bool:
-        return self.config is None
+        return self.config is None and self.open_rig is None
 
-    def start(self, setup: TestSetup) -> TestRun:
+    def start(self, setup: TestSetup, form: dict | None = None) -> TestRun:
         with self._lock:
             if self.current is not None and self.current.running:
                 raise BusyError(f"a test is running on this rig already ({self.current.record.name}); stop it first")
             self.records_dir.mkdir(parents=True, exist_ok=True)
-            run = TestRun(self._next_id, setup, self.records_dir / record_name(setup), ConsoleView(self._next_id, time_scale=setup.time_scale))
+            view = ConsoleView(self._next_id, time_scale=setup.time_scale, heater_window_s=HEATER_WINDOW_PERIODS * self._control_period_s() / setup.time_scale)
+            run = TestRun(self._next_id, setup, self.records_dir / record_name(setup), view)
             run.view.heater = lambda: self._heater_on(run)
+            run.form = {str(k): str(v) for k, v in (form or {}).items()}
             self._next_id += 1
             run.thread = threading.Thread(target=self._run, args=(run,), name=f"flowcurve-console-test-{run.test_id}", daemon=False)
             self.current = run
             run.thread.start()
             return run
+
+    def _control_period_s(self) -> float:
+        from flowcurve.rig.config import FurnaceConfig
+
+        furnace = self.config.furnace if self.config is not None else None
+        return furnace.control_period_s if furnace is not None else FurnaceConfig.control_period_s
 
     def stop(self) -> bool:
         """Operator stop: recording ends, the record is complete. False when nothing runs."""
@@ -165,6 +179,8 @@ class TestRunner:
 
                 def attach(vr) -> None:
                     run.heater_source = vr.model.furnace
+                    if self.virtual_setup is not None:
+                        self.virtual_setup(vr)
 
                 virtual = run_virtual_test(spec, run.record, material=run.setup.virtual_material, time_scale=run.setup.time_scale,
                                            view=run.view, stop_requested=self._stop_requested(run), rig_setup=attach)
@@ -173,8 +189,9 @@ class TestRunner:
                 from flowcurve.acquisition.procedure import Procedure
                 from flowcurve.acquisition.session import DriverRig
 
-                with DriverRig(self.config, time_scale=run.setup.time_scale) as rig:
-                    run.heater_source = rig.furnace
+                opened = self.open_rig(run.setup.time_scale) if self.open_rig else DriverRig(self.config, time_scale=run.setup.time_scale)
+                with opened as rig:
+                    run.heater_source = getattr(rig, "furnace", None)
                     run.outcome = Procedure(rig, spec, run.record, view=run.view, stop_requested=self._stop_requested(run)).run()
         except FlowcurveError as exc:  # could not start (a device that does not answer, a bad set-point)
             run.error = str(exc)

@@ -54,9 +54,9 @@ LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 class Console:
     """Everything one console process serves: the rig's runner and the --out folder."""
 
-    def __init__(self, out: Path, *, config=None, time_scale: float | None = None, token: str | None = None, rig_name: str = ""):
+    def __init__(self, out: Path, *, config=None, time_scale: float | None = None, token: str | None = None, rig_name: str = "", virtual_setup=None, open_rig=None):
         self.workspace = Workspace(out)
-        self.runner = TestRunner(self.workspace.records, config=config)
+        self.runner = TestRunner(self.workspace.records, config=config, virtual_setup=virtual_setup, open_rig=open_rig)
         self.time_scale = time_scale
         self.token = token
         self.rig_name = rig_name or ("virtual rig" if config is None else "configured rig")
@@ -156,7 +156,7 @@ def create_app(console: Console) -> Starlette:
         data = await _body(request)
         try:
             setup = validate(data, virtual=runner.virtual, time_scale=console.time_scale)
-            run = runner.start(setup)
+            run = runner.start(setup, {k: v for k, v in data.items() if isinstance(v, (str, int, float))})
         except FormError as exc:
             return _error(str(exc), 400, fields=exc.errors)
         except BusyError as exc:
@@ -297,12 +297,13 @@ async def _event_stream(console: Console, request: Request):
             elif last_status is None:
                 last_status = {"state": "idle", "heater": "off"}
                 yield _sse("status", last_status)
+            sent_at = loop.time()
             changed.clear()
             try:
                 await asyncio.wait_for(changed.wait(), KEEPALIVE_S)
             except asyncio.TimeoutError:
                 yield b": keep-alive\n\n"
-            await asyncio.sleep(EVENT_PERIOD_S)
+            await asyncio.sleep(max(0.0, sent_at + EVENT_PERIOD_S - loop.time()))  # at most one update per period
     finally:
         if forget:
             forget()

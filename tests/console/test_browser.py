@@ -19,7 +19,7 @@ By = pytest.importorskip("selenium.webdriver.common.by").By
 RUN_STATES = ("starting", "tare", "waiting", "recording")
 
 
-def wait_for(predicate, timeout_s: float = 30.0, what: str = "condition"):
+def wait_for(predicate, timeout_s: float = 60.0, what: str = "condition", driver=None):
     end = time.monotonic() + timeout_s
     last = None
     while time.monotonic() < end:
@@ -30,7 +30,10 @@ def wait_for(predicate, timeout_s: float = 30.0, what: str = "condition"):
         except Exception as exc:  # the page is still loading: try again
             last = exc
         time.sleep(0.1)
-    raise AssertionError(f"timed out waiting for {what} (last: {last!r})")
+    page = ""
+    if driver is not None:
+        page = f"; page: state {text(driver, '#state')!r}, message {text(driver, '#message')!r}, form errors {text(driver, '#setup')[-300:]!r}"
+    raise AssertionError(f"timed out waiting for {what} (last: {last!r}){page}")
 
 
 def text(driver, css: str) -> str:
@@ -56,7 +59,7 @@ def open_console(driver, url: str) -> None:
     wait_for(lambda: driver.execute_script("return window.fcStats && window.fcStats.events") >= 1 or text(driver, "#state") == "idle", what="the page to connect")
 
 
-SETUP = {"test": "compression", "material": "steel45", "E_MPa": "200000", "specimen_id": "C-browser", "operator": "selenium", "speed": "0.05"}
+SETUP = {"test": "compression", "material": "steel45", "E_MPa": "200000", "specimen_id": "C-browser", "operator": "selenium", "speed": "0.025"}  # about 25 wall seconds of loading
 
 
 def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(served_console, browser_factory, shot, tmp_path):
@@ -77,9 +80,9 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
 
     fill(driver, {"d0": ""})
     driver.find_element(By.ID, "btn-start").click()
-    wait_for(lambda: text(driver, "#state").lower() == "recording", what="recording")
-    first = wait_for(lambda: fd_points(driver), what="first plot points")
-    wait_for(lambda: fd_points(driver) > first + 10, what="the live plot to grow")
+    wait_for(lambda: text(driver, "#state").lower() == "recording", what="recording", driver=driver)
+    first = wait_for(lambda: fd_points(driver), what="first plot points", driver=driver)
+    wait_for(lambda: fd_points(driver) > first + 10, what="the live plot to grow", driver=driver)
     assert not text(driver, '#setup .field-error[data-for="d0"]')
     assert driver.find_element(By.ID, "btn-start").get_attribute("disabled") is not None
     shot(driver, "3-recording")
@@ -110,7 +113,7 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
     assert b'"friction_mu"' in result_json
     reference_path = tmp_path / "run.csv"
     assert cli_main(["run", "compression", "--quiet", "--out", str(reference_path), "--time-scale", str(BROWSER_TIME_SCALE),
-                     "--material", "steel45", "--E", "200000", "--specimen-id", "C-browser", "--operator", "selenium", "--speed", "0.05"]) == 0
+                     "--material", "steel45", "--E", "200000", "--specimen-id", "C-browser", "--operator", "selenium", "--speed", SETUP["speed"]]) == 0
     ref = read_record(reference_path)
     assert list(rec.data.columns) == list(ref.data.columns)
     assert set(rec.meta) - {"stop_reason"} == set(ref.meta) - {"stop_reason"}
@@ -168,3 +171,43 @@ def test_reload_close_and_a_second_page_during_a_test(served_console, browser_fa
     rec = read_record(run.record)
     assert rec.meta["status"] == "complete" and rec.meta["specimen.id"] == "C-reload"
     assert len(rec.data) == run.outcome.samples
+
+
+def test_heating_shows_the_heater_on_and_an_abort_switches_it_off(served_console, browser_factory, shot):
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    fill(driver, {**SETUP, "specimen_id": "C-hot", "temperature": "300", "soak": "30"})
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: text(driver, "#state").lower() == "heating", what="heating")
+    wait_for(lambda: text(driver, "#heater") == "ON", what="the heater badge on")
+    start_points = wait_for(lambda: int(driver.execute_script("return window.fcStats.ttPoints")), what="temperature points")
+    wait_for(lambda: int(driver.execute_script("return window.fcStats.ttPoints")) > start_points + 5, what="the temperature plot to grow")
+    shot(driver, "1-heating")
+    run = served_console.console.runner.current  # (the controller switches the relay on and off: the badge follows it)
+    driver.find_element(By.ID, "btn-abort").click()
+    driver.switch_to.alert.accept()
+    wait_for(lambda: text(driver, "#state").lower() == "done", what="done after the abort")
+    assert text(driver, "#heater") == "OFF" and run.heater_source.relay_on is False
+    assert "aborted" in text(driver, "#message")
+    shot(driver, "2-aborted")
+    assert "# status: aborted\n" in run.record.read_text()
+
+
+def test_a_device_fault_is_named_as_run_names_it(served_console, browser_factory, shot):
+    rigs = []
+    served_console.console.runner.virtual_setup = rigs.append
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    fill(driver, {**SETUP, "specimen_id": "C-fault", "speed": "0.02"})
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: fd_points(driver) > 20, what="recording")
+    rigs[0].inject("encoder", "unplug")
+    wait_for(lambda: text(driver, "#state").lower() == "fault", what="the fault state")
+    run = served_console.console.runner.current
+    # run prints "flowcurve: error: <the error> (the record keeps everything up to the fault)"
+    assert text(driver, "#message") == f"{run.outcome.error} (the record keeps everything up to the fault)"
+    assert "crosshead encoder" in text(driver, "#message")
+    assert "fault" in driver.find_element(By.ID, "message").get_attribute("class")
+    shot(driver, "1-fault")
+    rec = read_record(run.record)
+    assert rec.meta["status"] == "aborted" and len(rec.data) > 0

@@ -3,7 +3,7 @@
 
 const $ = (sel) => document.querySelector(sel);
 const RUNNING = new Set(["starting", "heating", "soaking", "tare", "waiting", "recording"]);
-const stats = { fdPoints: 0, ttPoints: 0, draws: 0, events: 0, latencies_ms: [] };  // read by the browser tests and the bench
+const stats = { fdPoints: 0, ttPoints: 0, draws: 0, fdDraws: 0, events: 0, latencies_ms: [] };  // read by the browser tests and the bench
 window.fcStats = stats;
 let info = null;
 let currentTest = null;
@@ -57,6 +57,7 @@ let pendingSampleEpoch = null;
 
 function onDraw(id) {
   stats.draws += 1;
+  if (id === "plot-fd") stats.fdDraws += 1;
   if (id === "plot-fd" && pendingSampleEpoch !== null) {
     stats.latencies_ms.push(Date.now() - pendingSampleEpoch * 1000);
     if (stats.latencies_ms.length > 5000) stats.latencies_ms.shift();
@@ -76,9 +77,21 @@ function addPoints(p) {
   if (!pendingDraw) { pendingDraw = true; requestAnimationFrame(drawPlots); }
 }
 
+// the newest reading (status, 20/s) drawn after the recorded rows, which the sampler releases only
+// once every channel has caught up with them (the furnace is read 4 times a second on a real rig)
+let tail = null;
+
+function showTail(s) {
+  const live = s.state === "recording" && s.crosshead_mm !== null && s.force_N !== null && s.crosshead_mm !== undefined;
+  tail = live ? [s.crosshead_mm, s.force_N] : null;
+  if (!pendingDraw) { pendingDraw = true; requestAnimationFrame(drawPlots); }
+}
+
 function drawPlots() {
   pendingDraw = false;
-  plots.fd.setData([data.fd.x, data.fd.y.map((f) => f / 1000)]);
+  const fx = tail ? data.fd.x.concat([tail[0]]) : data.fd.x;
+  const fy = tail ? data.fd.y.concat([tail[1]]) : data.fd.y;
+  plots.fd.setData([fx, fy.map((f) => f / 1000)]);
   plots.tt.setData([data.tt.x, data.tt.y]);
   stats.fdPoints = data.fd.x.length;
   stats.ttPoints = data.tt.x.length;
@@ -118,8 +131,14 @@ function showStatus(s) {
 }
 
 function showTest(t) {
+  const isNew = !currentTest || !t || currentTest.test_id !== t.test_id;
   currentTest = t;
   if (!t) return;
+  if (isNew && t.running && t.setup) {  // another page started it: show what it was set up with
+    const form = $("#setup");
+    for (const [name, value] of Object.entries(t.setup)) if (form.elements[name]) form.elements[name].value = value;
+    setTestType();
+  }
   $("#record-name").textContent = t.record ? `— ${t.record}` : "";
   const panel = $("#post-panel");
   if (t.running || t.status === null) { panel.hidden = true; return; }
@@ -151,7 +170,7 @@ function showResult(r) {
 
 function connect() {
   const es = new EventSource("/api/events");
-  es.addEventListener("status", (e) => { stats.events += 1; showStatus(JSON.parse(e.data)); });
+  es.addEventListener("status", (e) => { stats.events += 1; const s = JSON.parse(e.data); showStatus(s); showTail(s); });
   es.addEventListener("test", (e) => {
     const t = JSON.parse(e.data);
     if (!currentTest || !t || currentTest.test_id !== t.test_id) clearPlots();
