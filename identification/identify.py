@@ -34,10 +34,10 @@ DISPATCH = {"tension": identify_tension, "compression": identify_compression}
 # tests/compression/test_identify_options.py keeps the lists equal to the functions' keywords.
 OPTIONS = {
     "tension": frozenset({"use_extensometer", "frame_stiffness_N_per_um", "crosshead_length_mm", "toe", "scale",
-                          "modulus_window", "modulus_reference", "E_MPa", "poisson", "true_stress", "neck",
-                          "law", "hardening", "fracture_weight"}),
-    "compression": frozenset({"friction_method", "friction_correction", "law", "E_MPa",
-                              "frame_stiffness_N_per_um", "modulus_window_MPa"}),
+                          "modulus_window", "modulus_window_MPa", "modulus_reference", "E_MPa", "poisson",
+                          "true_stress", "neck", "law", "hardening", "fracture_weight", "fit_range", "fracture_point"}),
+    "compression": frozenset({"friction_method", "friction_correction", "law", "E_MPa", "frame_stiffness_N_per_um",
+                              "modulus_window", "modulus_window_MPa", "modulus_reference", "toe", "fit_range"}),
 }
 
 

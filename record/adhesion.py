@@ -50,7 +50,7 @@ from flowcurve.record.importers import (
     UnitError,
     _check_readable,
     _found_columns_hint,
-    _head_lines,
+    decode_text,
     is_number,
     sniff_delimiter,
     parse_column_option,
@@ -208,7 +208,7 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
     else:
         raise RecordError(source, "not a flowcurve-adhesion table and no column mapping given; name the columns, e.g. "
                           "--column normal_force=Fz:N --column moment=Mz:N*m --column imprint_radius=r:mm "
-                          "--column temperature=T:C" + _found_columns_hint(_head_lines(path)))
+                          "--column temperature=T:C" + _found_columns_hint(decode_text(path).head))
     unknown = [q for q in mapping if q not in ADHESION_COLUMNS]
     if unknown:
         raise RecordError(source, f"unknown quantity {', '.join(map(repr, unknown))} in the column mapping (use: {', '.join(ADHESION_COLUMNS)})")
