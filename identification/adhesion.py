@@ -1,6 +1,6 @@
 """Adhesion friction constants τ0, β0, k_b, θ_k (and σ_S) from rotating-sphere tests.
 
-The friction law of the seed's cutting simulations (2.25), METHODS.md §6:
+The friction law of the seed's cutting simulations (2.25), docs/methods.md §6:
 
     τ = τ_a + τ_d,   τ_d = μ_d·σ_n,   τ_a = τ0 + (β0 − k_b·max(0, T − θ_k))·σ_nr
 

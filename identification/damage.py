@@ -1,4 +1,4 @@
-"""Johnson-Cook fracture strain (2.22) and the identification of D1-D5 (METHODS.md section 5).
+"""Johnson-Cook fracture strain (2.22) and the identification of D1-D5 (docs/methods.md §5).
 
     eps_f = [D1 + D2 exp(D3 sigma*)] [1 + D4 ln eps_dot*] [1 + D5 T*]
 
@@ -73,7 +73,7 @@ def fracture_strain(triaxiality, log_rate, t_star, D1, D2, D3, D4, D5):
 
 
 def bridgman_triaxiality(section_radius_mm, notch_radius_mm):
-    """# Bridgman (METHODS.md section 5): sigma* = 1/3 + ln(1 + a/(2R)) at the centre of a notched bar."""
+    """# Bridgman (docs/methods.md §5): sigma* = 1/3 + ln(1 + a/(2R)) at the centre of a notched bar."""
     return SMOOTH_BAR_TRIAXIALITY + np.log1p(np.asarray(section_radius_mm, float) / (2.0 * np.asarray(notch_radius_mm, float)))
 
 

@@ -1,6 +1,6 @@
 """The adhesiometer test table (``flowcurve-adhesion``, version 1): one row per test.
 
-A rotating-sphere adhesiometer test (METHODS.md §6, seed 004 section 3.2) gives three
+A rotating-sphere adhesiometer test (docs/methods.md §6, seed 004 section 3.2) gives three
 numbers: the normal force N_z, the moment M_z resisting the slow rotation of the sphere, and
 the radius r of the imprint measured afterwards. A series of tests is one UTF-8 CSV::
 
@@ -39,10 +39,12 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping
+from typing import TYPE_CHECKING, Mapping
+
+if TYPE_CHECKING:  # pandas is imported where tables are read, so `flowcurve --help` stays fast
+    import pandas as pd
 
 import numpy as np
-import pandas as pd
 
 from flowcurve.errors import RecordError
 from flowcurve.record.format import parse_header_line
@@ -162,6 +164,8 @@ def parse_adhesion_column_option(text: str) -> tuple[str, tuple[str, str | None]
 
 def read_adhesion_tables(paths, *, columns: Mapping[str, tuple[str, str | None]] | None = None) -> AdhesionTable:
     """Read and join several tables (native ones, or foreign CSVs through ``columns``)."""
+    import pandas as pd
+
     tables = [read_adhesion_table(p, columns=columns) for p in paths]
     if not tables:
         raise RecordError("RECORD", "no adhesion table given")
@@ -182,6 +186,8 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
         ``{"normal_force": ("Fz", "kN"), "moment": ("Mz", "N*mm"), ...}``. Ignored (with a
         warning) for a native table, which names its own columns.
     """
+    import pandas as pd
+
     path = Path(path)
     source = str(path)
     _check_readable(path)
@@ -347,6 +353,8 @@ def _attach_traces(table: AdhesionTable, path: Path) -> None:
 
 def read_moment_trace(path: Path, *, table_source: str, line: int) -> pd.DataFrame:
     """A trace file: CSV with columns ``time_s, moment_N_m``."""
+    import pandas as pd
+
     if not path.exists():
         raise RecordError(table_source, f"trace file {str(path)!r} not found", line=line, column="trace_file")
     try:

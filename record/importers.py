@@ -32,10 +32,12 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping
+from typing import TYPE_CHECKING, Mapping
+
+if TYPE_CHECKING:  # pandas is imported where columns are read, so `flowcurve --help` stays fast
+    import pandas as pd
 
 import numpy as np
-import pandas as pd
 
 from flowcurve.record.format import MAX_MAGNITUDE, Record, is_native, read_record
 from flowcurve.errors import MissingValueError, RecordError
@@ -712,6 +714,8 @@ def _read_columns(source: str, text: Text, *, sep: str, decimal: str, first_data
 
     mapping: 0-based file column index → :class:`Column`. ``first_data_line`` is 0-based.
     """
+    import pandas as pd
+
     usecols = sorted(mapping)
     try:
         raw = pd.read_csv(

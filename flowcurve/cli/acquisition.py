@@ -17,7 +17,7 @@ from pathlib import Path
 from flowcurve.acquisition.live import LiveView
 from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, Procedure, ProcedureError, StopCriteria, TestSpec
 from flowcurve.record.format import amend_record, read_record, recover_record
-from flowcurve.cli.specimen import add_geometry_options, add_modulus_option, check_specimen_options
+from flowcurve.cli.specimen import add_geometry_options, add_modulus_option, check_specimen_options, measurement
 from flowcurve.errors import FlowcurveError, RecordError
 
 DEFAULT_VIRTUAL_MATERIAL = "steel45"
@@ -85,8 +85,8 @@ def parse_assignments(items: list[str], *, numeric_prefix: str = "post.") -> dic
 
 
 def _positive(name: str, value: float | None) -> None:
-    if value is not None and not (math.isfinite(value) and value > 0):
-        raise FlowcurveError(f"--{name} must be a positive number, got {value}")
+    if value is not None:
+        measurement(name, value)
 
 
 def _interactive(args) -> bool:

@@ -9,7 +9,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from flowcurve.cli.specimen import GEOMETRY_OPTIONS, add_geometry_options, add_modulus_option, check_specimen_options
+from flowcurve.cli.specimen import GEOMETRY_OPTIONS, add_geometry_options, add_modulus_option, check_specimen_options, measurement
 from flowcurve.errors import FlowcurveError, MissingValueError, RecordError
 
 logger = logging.getLogger(__name__)
@@ -136,21 +136,12 @@ def _modulus_window_options(window) -> dict:
     return {"modulus_window_MPa": window}
 
 
-def _measurement(option: str, value: float) -> float:
-    """A number option (dimension, speed, stiffness, modulus): finite, > 0, not an overflow."""
-    from flowcurve.record.format import MAX_MAGNITUDE, MIN_POSITIVE
-
-    if not MIN_POSITIVE <= value <= MAX_MAGNITUDE:  # NaN fails too
-        raise FlowcurveError(f"--{option.replace('_', '-')}: {value!r} is not a measurement (it must be > 0, finite and at most {MAX_MAGNITUDE:g})")
-    return value
-
-
 def _meta_from_args(args) -> dict[str, str]:
     meta = {}
     for attr, key in META_OPTIONS.items():
         value = getattr(args, attr, None)
         if value is not None:
-            meta[key] = repr(_measurement(attr, value)) if isinstance(value, float) else str(value)
+            meta[key] = repr(measurement(attr, value)) if isinstance(value, float) else str(value)
     for item in args.set:
         key, sep, value = item.partition("=")
         if not sep or not key.strip() or " " in key.strip():
@@ -167,7 +158,7 @@ def _options_from_args(args) -> dict:
         "law": args.law,
         "friction_method": args.friction_method,
         "friction_correction": args.friction_correction,
-        "E_MPa": None if args.E_MPa is None else _measurement("E", args.E_MPa),
+        "E_MPa": None if args.E_MPa is None else measurement("E", args.E_MPa),
         "true_stress": args.true_stress,
         **_modulus_window_options(args.modulus_window),
         "fit_range": args.fit_range,

@@ -8,7 +8,6 @@ are the same everywhere.
 
 from __future__ import annotations
 
-import math
 
 from flowcurve.errors import FlowcurveError
 
@@ -33,9 +32,21 @@ def add_modulus_option(target, use: str) -> None:
                         help=f"elastic modulus of the material, MPa: {use}")
 
 
+def measurement(option: str, value: float) -> float:
+    """A number option (dimension, speed, stiffness, modulus): finite, > 0, not an overflow.
+
+    ``option`` is the option's name without dashes; the one-line error names it.
+    """
+    from flowcurve.record.format import MAX_MAGNITUDE, MIN_POSITIVE
+
+    if not MIN_POSITIVE <= value <= MAX_MAGNITUDE:  # NaN fails too
+        raise FlowcurveError(f"--{option.replace('_', '-')} must be a positive number of at most {MAX_MAGNITUDE:g}, got {value!r}")
+    return value
+
+
 def check_specimen_options(args) -> None:
     """A given geometry or modulus must be a finite positive number (one-line error naming it)."""
     for option, dest in [(o, o) for o in GEOMETRY_OPTIONS] + [(MODULUS_OPTION[2:], MODULUS_DEST)]:
         value = getattr(args, dest, None)
-        if value is not None and not (math.isfinite(value) and value > 0):
-            raise FlowcurveError(f"--{option} must be a positive number, got {value}")
+        if value is not None:
+            measurement(option, value)

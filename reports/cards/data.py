@@ -143,7 +143,7 @@ class CardData:
 
     # -- the law ---------------------------------------------------------------------------
     def flow_stress_MPa(self, eps_p, strain_rate_per_s=None, temperature_C=None):
-        """(2.19) Johnson–Cook flow stress in MPa, with the conventions of METHODS.md §5."""
+        """(2.19) Johnson–Cook flow stress in MPa, with the conventions of docs/methods.md §5."""
         rate = self.ref_strain_rate_per_s if strain_rate_per_s is None else strain_rate_per_s
         temp = self.ref_temperature_C if temperature_C is None else temperature_C
         melt = self.melt_temperature_C

@@ -8,7 +8,7 @@ The rules every format shares (so that three solvers see one material):
 * **A rate without a measured curve** takes the measured curve at the nearest rate (in
   ln rate) scaled by the fitted law's rate factor (1 + C ln eps_dot*), clamped below eps_dot0.
 * **Zero plastic strain**: a measured curve starts at about 0.002; its first point is the
-  fitted model at zero plastic strain for its condition (METHODS.md section 7).
+  fitted model at zero plastic strain for its condition (docs/methods.md §7).
 * **Beyond the last measured point** the curve continues with the fitted Johnson-Cook
   hardening scaled to meet that point, sigma(eps) = sigma_last (A + B eps^n)/(A + B eps_last^n)
   (the rate and temperature factors of (2.19) cancel), up to ``extend_to`` (default 2).

@@ -1,4 +1,4 @@
-"""A virtual rotating-sphere adhesiometer: the friction law (2.25) run forward (METHODS.md §6).
+"""A virtual rotating-sphere adhesiometer: the friction law (2.25) run forward (docs/methods.md §6).
 
 A polished sphere of tool material is pressed into the work material with the normal force
 N_z and turned slowly (31.5 rpm); the dynamometer reads N_z and the moment M_z, and the

@@ -10,7 +10,7 @@ from .conftest import LAW
 from .readers import floats, read_inp, read_radioss, read_radioss_block
 from .test_lsdyna import read_deck
 
-STEEL45 = dict(D1=0.0, D2=1.3, D3=-0.17, D4=0.063, D5=2.8)  # METHODS.md table 3.2
+STEEL45 = dict(D1=0.0, D2=1.3, D3=-0.17, D4=0.063, D5=2.8)  # docs/methods.md §5, table 3.2
 ERRORS = dict(D1_stderr=None, D2_stderr=0.013, D3_stderr=0.007, D4_stderr=0.0011, D5_stderr=0.045)
 
 

@@ -113,7 +113,7 @@ def test_overflow_in_the_header(tmp_path, truth, capsys, value, pattern):
 def test_overflow_in_an_option(bluehill, tmp_path, capsys, option, value):
     argv = ["identify", str(bluehill), "--test", "tension", "--d0", "6", "--l0", "30", "--le", "25", option, value, "--out", str(tmp_path / "o")]
     line = _one_error(*_cli(capsys, argv))
-    assert line.startswith(f"flowcurve: error: {option}: {float(value)!r} is not a measurement")
+    assert line.startswith(f"flowcurve: error: {option} must be a positive number of at most 1e+12, got {float(value)!r}")
 
 
 @pytest.mark.parametrize("cell", ["1e308", "inf", "-Infinity"])

@@ -10,7 +10,7 @@ from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.damage import (FracturePoint, bridgman_triaxiality, fit_damage, fracture_strain_from_diameters,
                                              read_fracture_points)
 
-# METHODS.md table 3.2, steel 45 (140 HB): D1..D5 = 0, 1.3, -0.17, 0.063, 2.8
+# docs/methods.md §5, table 3.2, steel 45 (140 HB): D1..D5 = 0, 1.3, -0.17, 0.063, 2.8
 STEEL45 = dict(D1=0.0, D2=1.3, D3=-0.17, D4=0.063, D5=2.8)
 REF = dict(ref_strain_rate_per_s=1e-3, ref_temperature_C=20.0, melt_temperature_C=1500.0)
 
