@@ -11,7 +11,8 @@ Bytes written reach the device at once; its replies and its streamed frames wait
 port's input buffer. A read waits on the device's clock (:attr:`Serial.clock`, which the
 transport uses for its deadlines too), so on a :class:`flowcurve.clock.ModelClock` a silent
 device costs no wall time. An unplugged device raises ``OSError(EIO)`` on every call, as a
-pty whose other end vanished does.
+pty whose other end vanished does. Unlike a pty, what a device sends while no port is open
+is lost (nothing holds it).
 """
 
 from __future__ import annotations

@@ -163,10 +163,11 @@ def test_rig_virtual_runs_until_ctrl_c(tmp_path, stop):
         kill_if_running(proc)
 
 
-def test_rig_virtual_serves_ptys_starts_its_motor_for_a_driver_in_another_process_and_stops_on_ctrl_c(tmp_path):
+def test_rig_virtual_serves_ptys_starts_its_motor_for_a_driver_in_another_process_and_stops_on_sigterm(tmp_path):
     """'run --config' against 'rig virtual' waits for crosshead motion, as on the real machine;
     the virtual operator's motor switch (--motor-start-after) must make the encoder move. The
-    real-time pty path of the default selection: another process, real ports, Ctrl-C."""
+    real-time pty path of the default selection: another process, real ports, and SIGTERM
+    (kill, systemd), which the command turns into its Ctrl-C stop (both signals: -m pty)."""
     from flowcurve.rig.encoder import CrossheadEncoder
 
     path = tmp_path / "virtual.toml"
@@ -181,6 +182,6 @@ def test_rig_virtual_serves_ptys_starts_its_motor_for_a_driver_in_another_proces
             deadline = time.monotonic() + 20.0  # at 0.01 mm/s x 20: 0.05 mm in a quarter second
             while abs(enc.position_mm() - first) < 0.05:
                 assert time.monotonic() < deadline, "the crosshead does not move"
-        stop_rig_virtual(proc, signal.SIGINT)
+        stop_rig_virtual(proc, signal.SIGTERM)
     finally:
         kill_if_running(proc)
