@@ -37,9 +37,9 @@ def register(subparsers) -> None:
 
 def cmd_console(args) -> int:
     try:
-        import uvicorn
+        import uvicorn  # noqa: F401  (the server's)
 
-        from flowcurve.console.server import LOOPBACK_HOSTS, Console, create_app
+        from flowcurve.console.server import LOOPBACK_HOSTS, Console, serve
     except ImportError as exc:
         raise FlowcurveError(f"the console needs the 'console' extra: pip install 'flowcurve[console]' ({exc.name} is missing)") from None
     if not 0 < args.port < 65536:
@@ -60,5 +60,5 @@ def cmd_console(args) -> int:
     print(f"flowcurve console on {where} — {console.rig_name}, records in {console.workspace.records}", file=sys.stderr)
     if token:
         print(f"access token (the page asks for it): {token}", file=sys.stderr)
-    uvicorn.run(create_app(console), host=args.host, port=args.port, log_level="warning")
+    serve(console, args.host, args.port)
     return 0

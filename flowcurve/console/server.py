@@ -25,6 +25,7 @@ import hmac
 import json
 import logging
 import math
+import threading
 from contextlib import asynccontextmanager
 from pathlib import Path
 
@@ -36,7 +37,7 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS
-from flowcurve.console.runner import BusyError, TestRunner
+from flowcurve.console.runner import SHUTDOWN_SIGNAME, BusyError, TestRunner
 from flowcurve.console.setup_form import FormError, post_values, validate
 from flowcurve.console.workspace import PathError, Workspace, inside
 from flowcurve.errors import FlowcurveError
@@ -48,6 +49,8 @@ TOKEN_HEADER = "x-flowcurve-token"
 TOKEN_COOKIE = "flowcurve_token"
 EVENT_PERIOD_S = 0.05  # at most 20 updates a second per page
 KEEPALIVE_S = 10.0
+WAKE_S = 0.5  # an idle stream looks at least this often whether the console is closing
+GRACEFUL_SHUTDOWN_S = 5.0  # then uvicorn closes connections that are still open
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 
 
@@ -60,6 +63,12 @@ class Console:
         self.time_scale = time_scale
         self.token = token
         self.rig_name = rig_name or ("virtual rig" if config is None else "configured rig")
+        self.closing = threading.Event()  # set when the process is asked to stop: pages' streams end
+
+    def close(self) -> None:
+        """The process is stopping: abort a running test now (heater off), end the event streams."""
+        self.closing.set()
+        self.runner.abort(SHUTDOWN_SIGNAME)
 
     def test_summary(self) -> dict | None:
         run = self.runner.current
@@ -232,6 +241,7 @@ def create_app(console: Console) -> Starlette:
     @asynccontextmanager
     async def lifespan(app):
         yield
+        console.close()
         await asyncio.to_thread(runner.shutdown)  # a running test is aborted: heater off, record closed
 
     routes = [
@@ -275,8 +285,9 @@ async def _event_stream(console: Console, request: Request):
     last_summary = None
     last_status = None
     yield _sse("hello", {"rig": console.rig_name})
+    sent_at = loop.time()
     try:
-        while not await request.is_disconnected():
+        while not console.closing.is_set() and not await request.is_disconnected():
             run = console.runner.current
             if run is not None and run is not listening_to:
                 if forget:
@@ -299,11 +310,28 @@ async def _event_stream(console: Console, request: Request):
                 yield _sse("status", last_status)
             sent_at = loop.time()
             changed.clear()
-            try:
-                await asyncio.wait_for(changed.wait(), KEEPALIVE_S)
-            except asyncio.TimeoutError:
-                yield b": keep-alive\n\n"
+            while not changed.is_set() and not console.closing.is_set() and console.runner.current is listening_to:
+                try:
+                    await asyncio.wait_for(changed.wait(), WAKE_S)
+                except asyncio.TimeoutError:
+                    if loop.time() - sent_at >= KEEPALIVE_S:
+                        sent_at = loop.time()
+                        yield b": keep-alive\n\n"
             await asyncio.sleep(max(0.0, sent_at + EVENT_PERIOD_S - loop.time()))  # at most one update per period
     finally:
         if forget:
             forget()
+
+
+def serve(console: Console, host: str, port: int) -> None:
+    """Serve until SIGINT/SIGTERM; the signal aborts a running test at once (the heater goes
+    off within a tick), and open pages do not hold the shutdown up."""
+    import uvicorn
+
+    class ConsoleServer(uvicorn.Server):
+        def handle_exit(self, sig, frame) -> None:
+            console.close()
+            super().handle_exit(sig, frame)
+
+    config = uvicorn.Config(create_app(console), host=host, port=port, log_level="warning", timeout_graceful_shutdown=GRACEFUL_SHUTDOWN_S)
+    ConsoleServer(config).run()

@@ -173,12 +173,12 @@ def test_a_token_guards_the_api_and_the_files_and_the_login_sets_it(tmp_path):
 def test_console_listening_beyond_the_loopback_makes_a_token(monkeypatch, tmp_path, capsys):
     seen = {}
 
-    def fake_run(app, host, port, log_level):
+    def fake_serve(console, host, port):
         seen["host"], seen["port"] = host, port
 
-    import uvicorn
+    import flowcurve.console.server as server
 
-    monkeypatch.setattr(uvicorn, "run", fake_run)
+    monkeypatch.setattr(server, "serve", fake_serve)
     assert cli_main(["console", "--host", "0.0.0.0", "--port", "8099", "--out", str(tmp_path)]) == 0
     err = capsys.readouterr().err
     assert "access token" in err and seen == {"host": "0.0.0.0", "port": 8099}

@@ -56,7 +56,7 @@ def fill(driver, values: dict[str, str]) -> None:
 
 def open_console(driver, url: str) -> None:
     driver.get(url)
-    wait_for(lambda: driver.execute_script("return window.fcStats && window.fcStats.events") >= 1 or text(driver, "#state") == "idle", what="the page to connect")
+    wait_for(lambda: driver.execute_script("return window.fcStats && window.fcStats.events") >= 1, what="the page to connect")
 
 
 SETUP = {"test": "compression", "material": "steel45", "E_MPa": "200000", "specimen_id": "C-browser", "operator": "selenium", "speed": "0.025"}  # about 25 wall seconds of loading
@@ -211,3 +211,23 @@ def test_a_device_fault_is_named_as_run_names_it(served_console, browser_factory
     shot(driver, "1-fault")
     rec = read_record(run.record)
     assert rec.meta["status"] == "aborted" and len(rec.data) > 0
+
+
+def test_a_console_with_a_token_asks_for_it_before_showing_anything(served_console, browser_factory, shot):
+    served_console.console.token = "lab-PC-7f3a"  # as when listening beyond the loopback
+    driver = browser_factory()
+    driver.get(served_console.url)
+    dialog = wait_for(lambda: driver.find_element(By.ID, "token-dialog").is_displayed() and driver.find_element(By.ID, "token-dialog"), what="the token dialog")
+    assert text(driver, "#heater") == "UNKNOWN" and driver.execute_script("return window.fcStats.events") == 0  # no stream yet: nothing claimed
+    driver.find_element(By.ID, "token").send_keys("guess")
+    dialog.find_element(By.CSS_SELECTOR, "button").click()
+    assert wait_for(lambda: text(driver, "#token-error"), what="the refusal") == "wrong token"
+    shot(driver, "1-token-refused")
+    field = driver.find_element(By.ID, "token")
+    field.clear()
+    field.send_keys("lab-PC-7f3a")
+    dialog.find_element(By.CSS_SELECTOR, "button").click()
+    wait_for(lambda: not driver.find_element(By.ID, "token-dialog").is_displayed(), what="the dialog to close")
+    wait_for(lambda: driver.execute_script("return window.fcStats.events") >= 1, what="the live stream")
+    assert "virtual rig" in text(driver, "#rig")
+    shot(driver, "2-token-accepted")

@@ -1,0 +1,70 @@
+"""``flowcurve console`` stopped by a signal while a heated test runs and a page listens:
+the test is aborted at once, the heater switched off, the record closed, the process ends."""
+
+from __future__ import annotations
+
+import json
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+import urllib.request
+
+import pytest
+
+pytest.importorskip("uvicorn")
+
+
+def _post(url: str, body: dict) -> dict:
+    req = urllib.request.Request(url, data=json.dumps(body).encode(), headers={"Content-Type": "application/json"}, method="POST")
+    with urllib.request.urlopen(req, timeout=30) as resp:
+        return json.loads(resp.read())
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, -signal.SIGTERM)])  # as run on Ctrl-C; SIGTERM re-raised
+def test_a_signal_aborts_the_heated_test_even_with_a_page_open(tmp_path, sig, code):
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "console", "--out", str(out), "--port", str(port), "--time-scale", "5"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    base = f"http://127.0.0.1:{port}"
+    try:
+        for _ in range(300):
+            try:
+                urllib.request.urlopen(base + "/api/info", timeout=1).read()
+                break
+            except OSError:
+                time.sleep(0.1)
+        started = _post(base + "/api/start", {"test": "compression", "temperature": "300", "soak": "600"})
+        record = out / "records" / started["test"]["record"]
+        stream = urllib.request.urlopen(base + "/api/events", timeout=60)  # a page listening
+        heater_seen = []
+
+        def listen():
+            for line in stream:
+                if line.startswith(b"data:") and b'"heater":"on"' in line:
+                    heater_seen.append(True)
+
+        threading.Thread(target=listen, daemon=True).start()
+        end = time.monotonic() + 30
+        while not heater_seen and time.monotonic() < end:
+            time.sleep(0.05)
+        assert heater_seen, "the page never saw the heater on"
+        proc.send_signal(sig)
+        proc.wait(60)  # a bound for a hung process, not a speed check
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    text = record.read_text()
+    assert "# status: aborted\n" in text
+    assert "# abort_reason: stopped by the console shutting down\n" in text
+    events = [line.split()[3] for line in text.splitlines() if line.startswith("# event:")]
+    assert events == ["heater_on", "heater_off", "stop"]
+    err = proc.stderr.read().decode()
+    assert "Traceback" not in err, err
+    assert proc.returncode == code
