@@ -457,12 +457,14 @@ COLUMN_LABEL_PREFIX = SOURCE_PREFIX + "column."
 STRAIN_COLUMN = "extensometer_strain"  # an extensometer column in a strain unit, as a ratio
 STRAIN_LABEL_KEY = COLUMN_LABEL_PREFIX + STRAIN_COLUMN
 
+UNCERTAIN = "uncertain"
 # quantity → pattern on a lower-cased column name (its unit removed); tried in this order,
 # the first match wins. "ignore" catches derived columns (stress, true strain, rates) and
 # crosshead-based strain ("Tensile strain (Extension)", testXpert's "Nominal strain").
 NAME_PATTERNS: tuple[tuple[str, str], ...] = (
     ("ignore", r"true|wahr|stress|spannung|rate|speed|geschwindigkeit|cycle|zyklus|energy|energie|work|arbeit|count|nominal|nominell"),
-    ("ignore", r"(strain|dehnung).*(extension|crosshead|travel|grip|traverse|machine)"),
+    ("ignore", r"(strain|dehnung).*(extension|crosshead|travel|grip|traverse|machine)|width|breite"),
+    ("uncertain", r"standardweg|standard travel"),  # testXpert: the extensometer if fitted, else the crosshead
     ("extensometer", r"extensometer|strain|dehnung"),
     ("temperature", r"temp"),
     ("time", r"time|zeit"),
@@ -478,6 +480,13 @@ def recognise_quantity(name: str) -> str | None:
     testXpert and MTS TestSuite exports and the German ones of testXpert. An "extensometer"
     column holds elongation or strain: its unit decides which.
     """
+    quantity = recognise_column(name)
+    return None if quantity == UNCERTAIN else quantity
+
+
+def recognise_column(name: str) -> str | None:
+    """Like :func:`recognise_quantity`, but ``'uncertain'`` for a channel that may be either
+    displacement (testXpert's "Standardweg"/"Standard travel")."""
     lowered = name.strip().lower()
     for quantity, pattern in NAME_PATTERNS:
         if re.search(pattern, lowered):
@@ -584,10 +593,11 @@ def read_csv_export(path: str | os.PathLike, columns: Mapping[str, tuple[str, st
     lines = text.head
     if not any(line.strip() for line in lines):
         raise RecordError(source, "the file is empty")
+    warnings: list[str] = []
     if columns:
         names_idx, delim, cells, chosen = _mapped_row(source, lines, columns)
     else:
-        names_idx, delim, cells, chosen = _recognised_row(source, lines)
+        names_idx, delim, cells, chosen = _recognised_row(source, lines, warnings)
     rest = [(j, line) for j, line in enumerate(lines) if j > names_idx and line.strip()]
     if not rest:
         raise RecordError(source, "the file has a column row but no samples (header only)", line=names_idx + 1)
@@ -619,7 +629,7 @@ def read_csv_export(path: str | os.PathLike, columns: Mapping[str, tuple[str, st
     data = _read_columns(source, text, sep=delim, decimal=decimal, thousands=thousands, first_data_line=first_data, mapping=mapping)
     meta = {"source_format": "csv", FIRST_DATA_LINE_KEY: str(first_data + 1)}
     meta.update({f"{COLUMN_LABEL_PREFIX}{c.native}": c.label for c in mapping.values()})
-    return Record(meta=meta, data=data, source=source)
+    return Record(meta=meta, data=data, source=source, warnings=warnings)
 
 
 def _resolve_unit(source: str, quantity: str, label: str, given: str | None, in_name: str | None, in_row: str | None, *, units_line: int | None) -> str:
@@ -681,7 +691,7 @@ def _find_cell(name: str, cells: list[str], split: list[tuple[str, str | None]])
 DISPLACEMENTS = ("crosshead", "extensometer")
 
 
-def _recognised_row(source: str, lines: list[str]):
+def _recognised_row(source: str, lines: list[str], warnings: list[str]):
     """The first line whose names show a force and a displacement; → (index, delimiter, cells, chosen)."""
     for i, line in enumerate(lines):
         if not line.strip():
@@ -689,9 +699,13 @@ def _recognised_row(source: str, lines: list[str]):
         delim = sniff_delimiter(line)
         cells = split_cells(line, delim)
         split = [split_name_unit(c) for c in cells]
-        quantities = [recognise_quantity(name) for name, _ in split]
-        if "force" not in quantities or not any(q in quantities for q in DISPLACEMENTS):
+        quantities = [recognise_column(name) for name, _ in split]
+        if "force" not in quantities or not any(q in quantities for q in (*DISPLACEMENTS, UNCERTAIN)):
             continue
+        uncertain = [cells[k] for k, q in enumerate(quantities) if q == UNCERTAIN]
+        if uncertain and not any(q in quantities for q in DISPLACEMENTS):
+            raise RecordError(source, f"column '{uncertain[0]}' is the extensometer when one is fitted, else the crosshead: say which, naming the columns: --column extensometer={uncertain[0]}:UNIT (or crosshead=...) --column force=NAME:UNIT", line=i + 1)
+        warnings += [f"column '{name}' left aside: it is the extensometer when one is fitted, else the crosshead (to use it: --column extensometer={name}:UNIT ...)" for name in uncertain]
         chosen = {}
         for quantity in MAPPED_COLUMNS:
             hits = [k for k, q in enumerate(quantities) if q == quantity]

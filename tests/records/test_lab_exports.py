@@ -55,12 +55,13 @@ def test_unit_written_in_the_column_name(cell, expected):
 
 @pytest.mark.parametrize("name, quantity", [
     ("Time", "time"), ("Prüfzeit", "time"), ("Running Time", "time"), ("Load", "force"), ("Standardkraft", "force"),
-    ("Axial Force", "force"), ("Extension", "crosshead"), ("Standardweg", "crosshead"), ("Axial Displacement", "crosshead"),
+    ("Axial Force", "force"), ("Extension", "crosshead"), ("Traversenweg absolut", "crosshead"), ("Axial Displacement", "crosshead"),
     ("Grip to grip separation", "crosshead"), ("Tensile strain (Strain 1)", "extensometer"), ("Dehnung", "extensometer"),
     ("Extensometer", "extensometer"), ("Temperature", "temperature"),
     # derived or crosshead-based: never taken for a measured channel
     ("Tensile stress", None), ("True Strain", None), ("Tensile strain (Extension)", None), ("Nominal strain", None),
-    ("Strain rate", None), ("Specimen label", None),
+    ("Strain rate", None), ("Specimen label", None), ("Breitenänderung", None),
+    ("Standardweg", None),  # testXpert's standard travel: the extensometer when fitted, else the crosshead
 ])
 def test_recognised_names(name, quantity):
     assert recognise_quantity(name) == quantity
@@ -88,7 +89,20 @@ def test_bluehill_quoted_units_row_strain_in_percent(tmp_path, truth):
 def test_testxpert_utf16_tab_decimal_comma(tmp_path, truth):
     path = write_testxpert(tmp_path / "zwick.txt", truth)
     assert path.read_bytes()[:2] == b"\xff\xfe"  # Excel's "Unicode text": UTF-16 LE with a BOM
-    _assert_samples(load_record(path, meta=LE), truth)
+    rec = load_record(path, meta=LE)
+    _assert_samples(rec, truth)
+    assert rec.warnings == ["column 'Standardweg' left aside: it is the extensometer when one is fitted, else the crosshead "
+                            "(to use it: --column extensometer=Standardweg:UNIT ...)"]
+    # named by the user, the standard travel is the extensometer elongation itself (mm, no Le needed)
+    rec = load_record(path, columns={"force": ("Standardkraft", None), "extensometer": ("Standardweg", None), "time": ("Prüfzeit", None)})
+    np.testing.assert_allclose(rec.column("extensometer_mm"), truth.extensometer_mm, atol=1e-6)
+
+
+def test_standard_travel_alone_asks_which_it_is(tmp_path):
+    path = tmp_path / "zwick.csv"
+    path.write_text("Prüfzeit;Standardkraft;Standardweg\ns;N;mm\n0;0;0\n1;100;0,01\n")
+    with pytest.raises(RecordError, match=r"line 1: column 'Standardweg' is the extensometer when one is fitted, else the crosshead: say which"):
+        load_record(path)
 
 
 def test_testxpert_windows_1252_semicolons(tmp_path, truth):
