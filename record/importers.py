@@ -660,12 +660,7 @@ def _mapped_row(source: str, lines: list[str], columns: Mapping[str, tuple[str, 
     if missing_q or not any(q in columns for q in DISPLACEMENTS):
         lacking = " and ".join([*missing_q, *([] if any(q in columns for q in DISPLACEMENTS) else ["crosshead or extensometer"])])
         raise RecordError(source, f"the column mapping lacks {lacking} (give e.g. --column {(missing_q or ['crosshead'])[0]}=NAME:UNIT)")
-    for i, line in enumerate(lines):
-        if not line.strip():
-            continue
-        delim = sniff_delimiter(line)
-        cells = split_cells(line, delim)
-        split = [split_name_unit(c) for c in cells]
+    for i, delim, cells, split in _candidate_rows(lines):
         chosen = {}
         for quantity, (name, unit) in columns.items():
             k = _find_cell(name, cells, split)
@@ -678,6 +673,15 @@ def _mapped_row(source: str, lines: list[str], columns: Mapping[str, tuple[str, 
     found = split_cells(widest, sniff_delimiter(widest))
     absent = [name for name, _ in columns.values() if _find_cell(name, found, [split_name_unit(c) for c in found]) is None]
     raise RecordError(source, f"no column named {', '.join(map(repr, absent))} (columns found: {', '.join(found)})")
+
+
+def _candidate_rows(lines: list[str]):
+    """Each non-blank line as a possible names row: (index, delimiter, cells, (name, unit) per cell)."""
+    for i, line in enumerate(lines):
+        if line.strip():
+            delim = sniff_delimiter(line)
+            cells = split_cells(line, delim)
+            yield i, delim, cells, [split_name_unit(c) for c in cells]
 
 
 def _find_cell(name: str, cells: list[str], split: list[tuple[str, str | None]]) -> int | None:
@@ -693,12 +697,7 @@ DISPLACEMENTS = ("crosshead", "extensometer")
 
 def _recognised_row(source: str, lines: list[str], warnings: list[str]):
     """The first line whose names show a force and a displacement; → (index, delimiter, cells, chosen)."""
-    for i, line in enumerate(lines):
-        if not line.strip():
-            continue
-        delim = sniff_delimiter(line)
-        cells = split_cells(line, delim)
-        split = [split_name_unit(c) for c in cells]
+    for i, delim, cells, split in _candidate_rows(lines):
         quantities = [recognise_column(name) for name, _ in split]
         if "force" not in quantities or not any(q in quantities for q in (*DISPLACEMENTS, UNCERTAIN)):
             continue

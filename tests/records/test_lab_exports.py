@@ -14,10 +14,10 @@ import re
 import numpy as np
 import pytest
 
-from flowcurve.cli import main
 from flowcurve.errors import RecordError
 from flowcurve.record.importers import load_record, recognise_quantity, split_name_unit
 
+from .cli_run import one_error, run_cli
 from .lab_exports import tension_truth, write_bluehill, write_mts, write_testxpert
 
 LE = {"specimen.extensometer_gauge_mm": "25"}
@@ -28,16 +28,6 @@ def truth():
     return tension_truth()
 
 
-def _cli(capsys, argv):
-    code = main(argv)
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def _one_error(err: str) -> str:
-    lines = [line for line in err.splitlines() if line.startswith("flowcurve: error:")]
-    assert len(lines) == 1 and "Traceback" not in err, err
-    return lines[0]
 
 
 # -- names and units -------------------------------------------------------------------------
@@ -158,7 +148,7 @@ WRITERS = {
 @pytest.mark.parametrize("vendor", list(WRITERS))
 def test_identified_from_vendor_export(vendor, tmp_path, truth, capsys):
     path = WRITERS[vendor](tmp_path, truth)
-    code, out, err = _cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--le", "25",
+    code, out, err = run_cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--le", "25",
                                    "--out", str(tmp_path / "out"), "--no-plots"])
     assert code == 0, err
     result = json.loads((tmp_path / "out" / path.stem / "result.json").read_text())
@@ -177,9 +167,9 @@ def test_identified_from_vendor_export(vendor, tmp_path, truth, capsys):
 
 def test_strain_column_without_le_names_the_option(tmp_path, truth, capsys):
     path = write_bluehill(tmp_path / "bluehill.csv", truth)
-    code, out, err = _cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--out", str(tmp_path / "o"), "--no-plots"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--out", str(tmp_path / "o"), "--no-plots"])
     assert code != 0
-    line = _one_error(err)
+    line = one_error(code, out, err)
     assert f"{path}, column 'Tensile strain (Strain 1)': holds strain" in line and "give --le" in line
 
 
@@ -201,9 +191,9 @@ def _plain(tmp_path, header: str, units: str | None = None):
 ])
 def test_unreadable_columns_one_line(tmp_path, capsys, header, units, pattern):
     path = _plain(tmp_path, header, units)
-    code, out, err = _cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--le", "25", "--out", str(tmp_path / "o"), "--no-plots"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--le", "25", "--out", str(tmp_path / "o"), "--no-plots"])
     assert code != 0
-    line = _one_error(err)
+    line = one_error(code, out, err)
     assert line.startswith(f"flowcurve: error: {path}") and re.search(pattern, line), line
 
 
