@@ -570,9 +570,10 @@ def number_style(text: str, delim: str, sample: str) -> tuple[str, str | None]:
     Thousands separators are taken only where the file shows both marks in one number
     ("1,004.8", "1.004,8"); a ';' or tab file whose numbers are written 1,25 has a decimal comma.
     """
-    if (delim != "," or '"' in text) and _THOUSANDS_COMMA.search(text):
+    both = "." in text and "," in text  # a cheap test first: the searches scan the whole text
+    if both and (delim != "," or '"' in text) and _THOUSANDS_COMMA.search(text):
         return ".", ","
-    if delim != "," and _THOUSANDS_POINT.search(text):
+    if both and delim != "," and _THOUSANDS_POINT.search(text):
         return ",", "."
     if delim != "," and re.search(r"(^|" + re.escape(delim) + r")\s*\"?-?\d+,\d+", sample):
         return ",", None
