@@ -459,12 +459,14 @@ COLUMN_LABEL_PREFIX = SOURCE_PREFIX + "column."
 STRAIN_COLUMN = "extensometer_strain"  # an extensometer column in a strain unit, as a ratio
 STRAIN_LABEL_KEY = COLUMN_LABEL_PREFIX + STRAIN_COLUMN
 
+UNCERTAIN = "uncertain"
 # quantity → pattern on a lower-cased column name (its unit removed); tried in this order,
 # the first match wins. "ignore" catches derived columns (stress, true strain, rates) and
 # crosshead-based strain ("Tensile strain (Extension)", testXpert's "Nominal strain").
 NAME_PATTERNS: tuple[tuple[str, str], ...] = (
     ("ignore", r"true|wahr|stress|spannung|rate|speed|geschwindigkeit|cycle|zyklus|energy|energie|work|arbeit|count|nominal|nominell"),
-    ("ignore", r"(strain|dehnung).*(extension|crosshead|travel|grip|traverse|machine)"),
+    ("ignore", r"(strain|dehnung).*(extension|crosshead|travel|grip|traverse|machine)|width|breite"),
+    ("uncertain", r"standardweg|standard travel"),  # testXpert: the extensometer if fitted, else the crosshead
     ("extensometer", r"extensometer|strain|dehnung"),
     ("temperature", r"temp"),
     ("time", r"time|zeit"),
@@ -480,6 +482,13 @@ def recognise_quantity(name: str) -> str | None:
     testXpert and MTS TestSuite exports and the German ones of testXpert. An "extensometer"
     column holds elongation or strain: its unit decides which.
     """
+    quantity = recognise_column(name)
+    return None if quantity == UNCERTAIN else quantity
+
+
+def recognise_column(name: str) -> str | None:
+    """Like :func:`recognise_quantity`, but ``'uncertain'`` for a channel that may be either
+    displacement (testXpert's "Standardweg"/"Standard travel")."""
     lowered = name.strip().lower()
     for quantity, pattern in NAME_PATTERNS:
         if re.search(pattern, lowered):
@@ -563,9 +572,10 @@ def number_style(text: str, delim: str, sample: str) -> tuple[str, str | None]:
     Thousands separators are taken only where the file shows both marks in one number
     ("1,004.8", "1.004,8"); a ';' or tab file whose numbers are written 1,25 has a decimal comma.
     """
-    if (delim != "," or '"' in text) and _THOUSANDS_COMMA.search(text):
+    both = "." in text and "," in text  # a cheap test first: the searches scan the whole text
+    if both and (delim != "," or '"' in text) and _THOUSANDS_COMMA.search(text):
         return ".", ","
-    if delim != "," and _THOUSANDS_POINT.search(text):
+    if both and delim != "," and _THOUSANDS_POINT.search(text):
         return ",", "."
     if delim != "," and re.search(r"(^|" + re.escape(delim) + r")\s*\"?-?\d+,\d+", sample):
         return ",", None
@@ -586,10 +596,11 @@ def read_csv_export(path: str | os.PathLike, columns: Mapping[str, tuple[str, st
     lines = text.head
     if not any(line.strip() for line in lines):
         raise RecordError(source, "the file is empty")
+    warnings: list[str] = []
     if columns:
         names_idx, delim, cells, chosen = _mapped_row(source, lines, columns)
     else:
-        names_idx, delim, cells, chosen = _recognised_row(source, lines)
+        names_idx, delim, cells, chosen = _recognised_row(source, lines, warnings)
     rest = [(j, line) for j, line in enumerate(lines) if j > names_idx and line.strip()]
     if not rest:
         raise RecordError(source, "the file has a column row but no samples (header only)", line=names_idx + 1)
@@ -621,7 +632,7 @@ def read_csv_export(path: str | os.PathLike, columns: Mapping[str, tuple[str, st
     data = _read_columns(source, text, sep=delim, decimal=decimal, thousands=thousands, first_data_line=first_data, mapping=mapping)
     meta = {"source_format": "csv", FIRST_DATA_LINE_KEY: str(first_data + 1)}
     meta.update({f"{COLUMN_LABEL_PREFIX}{c.native}": c.label for c in mapping.values()})
-    return Record(meta=meta, data=data, source=source)
+    return Record(meta=meta, data=data, source=source, warnings=warnings)
 
 
 def _resolve_unit(source: str, quantity: str, label: str, given: str | None, in_name: str | None, in_row: str | None, *, units_line: int | None) -> str:
@@ -652,12 +663,7 @@ def _mapped_row(source: str, lines: list[str], columns: Mapping[str, tuple[str, 
     if missing_q or not any(q in columns for q in DISPLACEMENTS):
         lacking = " and ".join([*missing_q, *([] if any(q in columns for q in DISPLACEMENTS) else ["crosshead or extensometer"])])
         raise RecordError(source, f"the column mapping lacks {lacking} (give e.g. --column {(missing_q or ['crosshead'])[0]}=NAME:UNIT)")
-    for i, line in enumerate(lines):
-        if not line.strip():
-            continue
-        delim = sniff_delimiter(line)
-        cells = split_cells(line, delim)
-        split = [split_name_unit(c) for c in cells]
+    for i, delim, cells, split in _candidate_rows(lines):
         chosen = {}
         for quantity, (name, unit) in columns.items():
             k = _find_cell(name, cells, split)
@@ -672,6 +678,15 @@ def _mapped_row(source: str, lines: list[str], columns: Mapping[str, tuple[str, 
     raise RecordError(source, f"no column named {', '.join(map(repr, absent))} (columns found: {', '.join(found)})")
 
 
+def _candidate_rows(lines: list[str]):
+    """Each non-blank line as a possible names row: (index, delimiter, cells, (name, unit) per cell)."""
+    for i, line in enumerate(lines):
+        if line.strip():
+            delim = sniff_delimiter(line)
+            cells = split_cells(line, delim)
+            yield i, delim, cells, [split_name_unit(c) for c in cells]
+
+
 def _find_cell(name: str, cells: list[str], split: list[tuple[str, str | None]]) -> int | None:
     """Index of the cell named ``name``, written with or without its unit (``Load``, ``Load [kN]``)."""
     if name in cells:
@@ -683,17 +698,16 @@ def _find_cell(name: str, cells: list[str], split: list[tuple[str, str | None]])
 DISPLACEMENTS = ("crosshead", "extensometer")
 
 
-def _recognised_row(source: str, lines: list[str]):
+def _recognised_row(source: str, lines: list[str], warnings: list[str]):
     """The first line whose names show a force and a displacement; → (index, delimiter, cells, chosen)."""
-    for i, line in enumerate(lines):
-        if not line.strip():
+    for i, delim, cells, split in _candidate_rows(lines):
+        quantities = [recognise_column(name) for name, _ in split]
+        if "force" not in quantities or not any(q in quantities for q in (*DISPLACEMENTS, UNCERTAIN)):
             continue
-        delim = sniff_delimiter(line)
-        cells = split_cells(line, delim)
-        split = [split_name_unit(c) for c in cells]
-        quantities = [recognise_quantity(name) for name, _ in split]
-        if "force" not in quantities or not any(q in quantities for q in DISPLACEMENTS):
-            continue
+        uncertain = [cells[k] for k, q in enumerate(quantities) if q == UNCERTAIN]
+        if uncertain and not any(q in quantities for q in DISPLACEMENTS):
+            raise RecordError(source, f"column '{uncertain[0]}' is the extensometer when one is fitted, else the crosshead: say which, naming the columns: --column extensometer={uncertain[0]}:UNIT (or crosshead=...) --column force=NAME:UNIT", line=i + 1)
+        warnings += [f"column '{name}' left aside: it is the extensometer when one is fitted, else the crosshead (to use it: --column extensometer={name}:UNIT ...)" for name in uncertain]
         chosen = {}
         for quantity in MAPPED_COLUMNS:
             hits = [k for k, q in enumerate(quantities) if q == quantity]

@@ -11,8 +11,9 @@ Writers (layouts as the vendors' exports are laid out, not as flowcurve writes r
   row ``(s),(mm),(N),(%)``, quoted samples with thousands separators; the strain channel
   "Tensile strain (Strain 1)" in %, and the derived "Tensile stress" (to be left aside).
 * :func:`write_testxpert` — Zwick testXpert text export: German names (Prüfzeit,
-  Standardkraft, Standardweg, Dehnung), a units row, tab-separated with decimal commas,
-  UTF-16 with a BOM (Excel's "Unicode text") or Windows-1252, or ``;``-separated.
+  Standardkraft, Traversenweg absolut, Standardweg, Breitenänderung, Dehnung), a units row,
+  tab-separated with decimal commas, UTF-16 with a BOM (Excel's "Unicode text") or
+  Windows-1252, or ``;``-separated.
 * :func:`write_mts` — MTS TestSuite export: a key/value preamble, then "Running Time",
   "Axial Force", "Axial Displacement", "Axial Strain" with a units row (sec, lbf, in, in/in).
 """
@@ -94,10 +95,14 @@ def write_bluehill(path: Path, truth: Truth, *, strain: bool = True, crosshead: 
 
 
 def write_testxpert(path: Path, truth: Truth, *, encoding: str = "utf-16", sep: str = "\t") -> Path:
-    """Zwick testXpert export: German names, units row, decimal commas, UTF-16 with BOM by default."""
-    lines = ["Prüfprotokoll Zugversuch ISO 6892-1", "Prüfer:\tMüller", "",
-             sep.join(["Prüfzeit", "Standardkraft", "Standardweg", "Dehnung"]), sep.join(["s", "N", "mm", "%"])]
-    for row in zip(truth.time_s, truth.force_N, truth.crosshead_mm, 100.0 * truth.strain):
+    """Zwick testXpert export: a key/value preamble, German channel names as testXpert names them
+    (Prüfzeit, Standardkraft, Traversenweg absolut, Standardweg, Breitenänderung, Dehnung), a
+    units row, decimal commas; UTF-16 with a BOM (Excel's "Unicode text") by default."""
+    lines = ["Prüfprotokoll Zugversuch ISO 6892-1", f"Prüfer{sep}Müller", f"Messlänge Standardweg{sep}{truth.le_mm:g}{sep}mm", "",
+             sep.join(["Prüfzeit", "Standardkraft", "Traversenweg absolut", "Standardweg", "Breitenänderung", "Dehnung"]),
+             sep.join(["s", "N", "mm", "mm", "mm", "%"])]
+    width_change = -0.3 * truth.strain * truth.d0_mm
+    for row in zip(truth.time_s, truth.force_N, truth.crosshead_mm, truth.extensometer_mm, width_change, 100.0 * truth.strain):
         lines.append(sep.join(f"{v:.6f}".replace(".", ",") for v in row))
     path.write_text("\r\n".join(lines) + "\r\n", encoding=encoding)  # Python's utf-16 writes the BOM
     return path

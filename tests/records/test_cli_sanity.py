@@ -14,9 +14,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from flowcurve.cli import main
 from flowcurve.record.format import Record, write_record
 
+from .cli_run import one_error, run_cli
 from .lab_exports import tension_truth, write_bluehill
 
 pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")
@@ -24,17 +24,6 @@ pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")
 GEOMETRY = ["--test", "tension", "--d0", "6", "--l0", "30", "--le", "25"]
 
 
-def _cli(capsys, argv):
-    code = main(argv)
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def _one_error(code: int, out: str, err: str) -> str:
-    assert code != 0
-    lines = [line for line in err.splitlines() if line.startswith("flowcurve: error:")]
-    assert len(lines) == 1 and "Traceback" not in err + out and "internal error" not in err, err
-    return lines[0]
 
 
 @pytest.fixture(scope="module")
@@ -63,20 +52,20 @@ def _native(tmp_path, name, truth, meta=None, **columns):
     ("--set", "post.du_mm=6.1", r"du = 6\.1 mm \(post\.du_mm\) is larger than d0 = 6 mm"),
 ])
 def test_impossible_post_test_measurements(bluehill, tmp_path, capsys, option, value, pattern):
-    line = _one_error(*_cli(capsys, ["identify", str(bluehill), *GEOMETRY, option, value, "--out", str(tmp_path / "o"), "--no-plots"]))
+    line = one_error(*run_cli(capsys, ["identify", str(bluehill), *GEOMETRY, option, value, "--out", str(tmp_path / "o"), "--no-plots"]))
     assert line.startswith(f"flowcurve: error: {bluehill}: ") and re.search(pattern, line), line
 
 
 def test_A_only_when_the_record_reaches_fracture(tmp_path, capsys):
     stopped = write_bluehill(tmp_path / "stopped.csv", tension_truth(fracture=False))  # ends at 1.2 × the strain at Fm
-    code, out, err = _cli(capsys, ["identify", str(stopped), *GEOMETRY, "--out", str(tmp_path / "o"), "--no-plots"])
+    code, out, err = run_cli(capsys, ["identify", str(stopped), *GEOMETRY, "--out", str(tmp_path / "o"), "--no-plots"])
     assert code == 0, err
     result = json.loads((tmp_path / "o" / "stopped" / "result.json").read_text())
     assert result["A_pct"] is None and result["Rm_MPa"] > 0
     assert any("without a fracture: A is not reported" in w for w in result["warnings"])
     assert "A — %" in out and "warning: the record ends at 100 % of Fm without a fracture" in out
     # the same record with Lu measured after the test: A from Lu (3.8), whatever the record shows
-    code, out, err = _cli(capsys, ["identify", str(stopped), *GEOMETRY, "--lu", "36", "--out", str(tmp_path / "o"), "--no-plots"])
+    code, out, err = run_cli(capsys, ["identify", str(stopped), *GEOMETRY, "--lu", "36", "--out", str(tmp_path / "o"), "--no-plots"])
     result = json.loads((tmp_path / "o" / "stopped" / "result.json").read_text())
     assert code == 0 and result["A_pct"] == pytest.approx(20.0)
 
@@ -89,7 +78,7 @@ def test_out_that_is_a_file(bluehill, tmp_path, capsys, sub):
     blocker = tmp_path / "results.txt"
     blocker.write_text("not a folder\n")
     out_dir = blocker / sub if sub else blocker
-    line = _one_error(*_cli(capsys, ["identify", str(bluehill), *GEOMETRY, "--out", str(out_dir), "--no-plots"]))
+    line = one_error(*run_cli(capsys, ["identify", str(bluehill), *GEOMETRY, "--out", str(out_dir), "--no-plots"]))
     assert line == f"flowcurve: error: --out {out_dir}: {'' if not sub else str(blocker) + ' '}is a file, not a folder; choose another --out"
 
 
@@ -105,14 +94,14 @@ def test_out_that_is_a_file(bluehill, tmp_path, capsys, sub):
 ])
 def test_overflow_in_the_header(tmp_path, truth, capsys, value, pattern):
     path = _native(tmp_path, "overflow", truth, {"specimen.d0_mm": value})
-    line = _one_error(*_cli(capsys, ["identify", str(path), "--out", str(tmp_path / "o"), "--no-plots"]))
+    line = one_error(*run_cli(capsys, ["identify", str(path), "--out", str(tmp_path / "o"), "--no-plots"]))
     assert line.startswith(f"flowcurve: error: {path}: ") and re.search(pattern, line), line
 
 
 @pytest.mark.parametrize("option, value", [("--d0", "1e308"), ("--d0", "inf"), ("--l0", "nan"), ("--E", "0"), ("--le", "-25")])
 def test_overflow_in_an_option(bluehill, tmp_path, capsys, option, value):
     argv = ["identify", str(bluehill), "--test", "tension", "--d0", "6", "--l0", "30", "--le", "25", option, value, "--out", str(tmp_path / "o")]
-    line = _one_error(*_cli(capsys, argv))
+    line = one_error(*run_cli(capsys, argv))
     assert line.startswith(f"flowcurve: error: {option} must be a positive number of at most 1e+12, got {float(value)!r}")
 
 
@@ -124,7 +113,7 @@ def test_overflow_in_the_samples_names_line_and_column(tmp_path, truth, capsys, 
     cells[2] = cell  # the Load column
     lines[400] = ",".join(f'"{c}"' for c in cells)
     path.write_text("\n".join(lines) + "\n")
-    line = _one_error(*_cli(capsys, ["identify", str(path), *GEOMETRY, "--out", str(tmp_path / "o"), "--no-plots"]))
+    line = one_error(*run_cli(capsys, ["identify", str(path), *GEOMETRY, "--out", str(tmp_path / "o"), "--no-plots"]))
     assert line.startswith(f"flowcurve: error: {path}, line 401, column 'Load': ") and "beyond any measurement" in line, line
 
 
@@ -143,7 +132,7 @@ def test_a_numpy_warning_becomes_a_result_warning_not_raw_output(bluehill, tmp_p
     monkeypatch.setattr(identify_module, "identify", noisy)
     with warnings.catch_warnings():
         warnings.simplefilter("default", RuntimeWarning)  # as a user runs it, not as this module
-        code, out, err = _cli(capsys, ["identify", str(bluehill), *GEOMETRY, "--out", str(tmp_path / "o"), "--no-plots"])
+        code, out, err = run_cli(capsys, ["identify", str(bluehill), *GEOMETRY, "--out", str(tmp_path / "o"), "--no-plots"])
     assert code == 0 and "RuntimeWarning" not in err and err == "", err
     assert "  warning: numerical warning: divide by zero encountered in log" in out
     result = json.loads((tmp_path / "o" / "bluehill" / "result.json").read_text())
@@ -170,15 +159,15 @@ def test_missing_bulge_names_both_options(tmp_path, capsys):
     force = 20e3 * np.clip(t / 10.0, 0, 1) ** 0.3 + 1.0 * t
     header = {"flowcurve-record": "1", "test": "compression", "specimen.d0_mm": str(d0), "specimen.h0_mm": str(h0), "post.hk_mm": "4.5"}
     path = write_record(tmp_path / "C1.csv", Record(meta=header, data=pd.DataFrame({"time_s": t, "force_N": force, "crosshead_mm": 0.006 * t})))
-    line = _one_error(*_cli(capsys, ["identify", str(path), "--out", str(tmp_path / "o"), "--no-plots"]))
+    line = one_error(*run_cli(capsys, ["identify", str(path), "--out", str(tmp_path / "o"), "--no-plots"]))
     assert line.endswith("required metadata 'post.dmax_mm' or 'post.smax_mm2' is missing (add '# post.dmax_mm: <value>' to the header or give --dmax or --smax)")
 
 
 def test_three_point_blames_dk_only_when_it_is_missing(bluehill, tmp_path, capsys):
     argv = ["identify", str(bluehill), *GEOMETRY, "--hardening", "three-point", "--out", str(tmp_path / "o"), "--no-plots"]
-    line = _one_error(*_cli(capsys, argv))
+    line = one_error(*run_cli(capsys, argv))
     assert "it needs the fracture point: post.dk_mm (--dk)" in line
-    code, out, err = _cli(capsys, [*argv, "--dk", "4.2"])
+    code, out, err = run_cli(capsys, [*argv, "--dk", "4.2"])
     assert code == 0, err
 
 
@@ -197,8 +186,8 @@ def test_extensometer_gap_without_crosshead_says_so(tmp_path, truth, capsys):
     strain = np.where(np.arange(truth.force_N.size) > 900, np.nan, 100 * truth.strain)
     rows = ["Time (s),Load (kN),Strain (%)"] + [f"{a:.3f},{b / 1e3:.6f},{'' if np.isnan(c) else f'{c:.6f}'}" for a, b, c in zip(truth.time_s, truth.force_N, strain)]
     path.write_text("\n".join(rows) + "\n")
-    line = _one_error(*_cli(capsys, ["identify", str(path), *GEOMETRY, "--out", str(tmp_path / "o"), "--no-plots"]))
+    line = one_error(*run_cli(capsys, ["identify", str(path), *GEOMETRY, "--out", str(tmp_path / "o"), "--no-plots"]))
     assert line == (f"flowcurve: error: {path}, column 'extensometer_mm': the extensometer channel has no value from sample 902 on "
                     "(removed before fracture?); the record has no crosshead column to identify from instead")
-    line = _one_error(*_cli(capsys, ["identify", str(path), *GEOMETRY, "--no-extensometer", "--out", str(tmp_path / "o"), "--no-plots"]))
+    line = one_error(*run_cli(capsys, ["identify", str(path), *GEOMETRY, "--no-extensometer", "--out", str(tmp_path / "o"), "--no-plots"]))
     assert "the record has no crosshead column: its strain can only come from the extensometer (leave out --no-extensometer)" in line

@@ -14,10 +14,10 @@ import re
 import numpy as np
 import pytest
 
-from flowcurve.cli import main
 from flowcurve.errors import RecordError
 from flowcurve.record.importers import load_record, recognise_quantity, split_name_unit
 
+from .cli_run import one_error, run_cli
 from .lab_exports import tension_truth, write_bluehill, write_mts, write_testxpert
 
 LE = {"specimen.extensometer_gauge_mm": "25"}
@@ -28,16 +28,6 @@ def truth():
     return tension_truth()
 
 
-def _cli(capsys, argv):
-    code = main(argv)
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def _one_error(err: str) -> str:
-    lines = [line for line in err.splitlines() if line.startswith("flowcurve: error:")]
-    assert len(lines) == 1 and "Traceback" not in err, err
-    return lines[0]
 
 
 # -- names and units -------------------------------------------------------------------------
@@ -55,12 +45,13 @@ def test_unit_written_in_the_column_name(cell, expected):
 
 @pytest.mark.parametrize("name, quantity", [
     ("Time", "time"), ("Prüfzeit", "time"), ("Running Time", "time"), ("Load", "force"), ("Standardkraft", "force"),
-    ("Axial Force", "force"), ("Extension", "crosshead"), ("Standardweg", "crosshead"), ("Axial Displacement", "crosshead"),
+    ("Axial Force", "force"), ("Extension", "crosshead"), ("Traversenweg absolut", "crosshead"), ("Axial Displacement", "crosshead"),
     ("Grip to grip separation", "crosshead"), ("Tensile strain (Strain 1)", "extensometer"), ("Dehnung", "extensometer"),
     ("Extensometer", "extensometer"), ("Temperature", "temperature"),
     # derived or crosshead-based: never taken for a measured channel
     ("Tensile stress", None), ("True Strain", None), ("Tensile strain (Extension)", None), ("Nominal strain", None),
-    ("Strain rate", None), ("Specimen label", None),
+    ("Strain rate", None), ("Specimen label", None), ("Breitenänderung", None),
+    ("Standardweg", None),  # testXpert's standard travel: the extensometer when fitted, else the crosshead
 ])
 def test_recognised_names(name, quantity):
     assert recognise_quantity(name) == quantity
@@ -88,7 +79,20 @@ def test_bluehill_quoted_units_row_strain_in_percent(tmp_path, truth):
 def test_testxpert_utf16_tab_decimal_comma(tmp_path, truth):
     path = write_testxpert(tmp_path / "zwick.txt", truth)
     assert path.read_bytes()[:2] == b"\xff\xfe"  # Excel's "Unicode text": UTF-16 LE with a BOM
-    _assert_samples(load_record(path, meta=LE), truth)
+    rec = load_record(path, meta=LE)
+    _assert_samples(rec, truth)
+    assert rec.warnings == ["column 'Standardweg' left aside: it is the extensometer when one is fitted, else the crosshead "
+                            "(to use it: --column extensometer=Standardweg:UNIT ...)"]
+    # named by the user, the standard travel is the extensometer elongation itself (mm, no Le needed)
+    rec = load_record(path, columns={"force": ("Standardkraft", None), "extensometer": ("Standardweg", None), "time": ("Prüfzeit", None)})
+    np.testing.assert_allclose(rec.column("extensometer_mm"), truth.extensometer_mm, atol=1e-6)
+
+
+def test_standard_travel_alone_asks_which_it_is(tmp_path):
+    path = tmp_path / "zwick.csv"
+    path.write_text("Prüfzeit;Standardkraft;Standardweg\ns;N;mm\n0;0;0\n1;100;0,01\n")
+    with pytest.raises(RecordError, match=r"line 1: column 'Standardweg' is the extensometer when one is fitted, else the crosshead: say which"):
+        load_record(path)
 
 
 def test_testxpert_windows_1252_semicolons(tmp_path, truth):
@@ -144,7 +148,7 @@ WRITERS = {
 @pytest.mark.parametrize("vendor", list(WRITERS))
 def test_identified_from_vendor_export(vendor, tmp_path, truth, capsys):
     path = WRITERS[vendor](tmp_path, truth)
-    code, out, err = _cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--le", "25",
+    code, out, err = run_cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--le", "25",
                                    "--out", str(tmp_path / "out"), "--no-plots"])
     assert code == 0, err
     result = json.loads((tmp_path / "out" / path.stem / "result.json").read_text())
@@ -163,9 +167,9 @@ def test_identified_from_vendor_export(vendor, tmp_path, truth, capsys):
 
 def test_strain_column_without_le_names_the_option(tmp_path, truth, capsys):
     path = write_bluehill(tmp_path / "bluehill.csv", truth)
-    code, out, err = _cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--out", str(tmp_path / "o"), "--no-plots"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--out", str(tmp_path / "o"), "--no-plots"])
     assert code != 0
-    line = _one_error(err)
+    line = one_error(code, out, err)
     assert f"{path}, column 'Tensile strain (Strain 1)': holds strain" in line and "give --le" in line
 
 
@@ -187,9 +191,9 @@ def _plain(tmp_path, header: str, units: str | None = None):
 ])
 def test_unreadable_columns_one_line(tmp_path, capsys, header, units, pattern):
     path = _plain(tmp_path, header, units)
-    code, out, err = _cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--le", "25", "--out", str(tmp_path / "o"), "--no-plots"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--test", "tension", "--d0", "6", "--l0", "30", "--le", "25", "--out", str(tmp_path / "o"), "--no-plots"])
     assert code != 0
-    line = _one_error(err)
+    line = one_error(code, out, err)
     assert line.startswith(f"flowcurve: error: {path}") and re.search(pattern, line), line
 
 

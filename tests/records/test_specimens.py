@@ -12,22 +12,12 @@ import re
 
 import pytest
 
-from flowcurve.cli import main
 from flowcurve.record.specimens import read_specimen_table
 
+from .cli_run import one_error, run_cli
 from .lab_exports import tension_truth, write_bluehill
 
 
-def _cli(capsys, argv):
-    code = main(argv)
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def _one_error(err: str) -> str:
-    lines = [line for line in err.splitlines() if line.startswith("flowcurve: error:")]
-    assert len(lines) == 1 and "Traceback" not in err, err
-    return lines[0]
 
 
 @pytest.fixture
@@ -46,7 +36,7 @@ def test_each_record_gets_its_row(tmp_path, run3, capsys):
     rows = ["File;d0 (mm);L0 [mm];Le (mm);Lu (mm);dk (mm)"]
     rows += [f"{p.stem};{d0:.2f};30;25;33,1;{0.7 * d0:.3f}".replace(".", ",") for p, d0 in zip(paths, d0s)]
     table.write_text("\n".join(rows) + "\n", encoding="utf-8-sig")
-    code, out, err = _cli(capsys, ["identify", *map(str, paths), "--specimens", str(table), "--test", "tension", "--out", str(tmp_path / "o"), "--no-plots"])
+    code, out, err = run_cli(capsys, ["identify", *map(str, paths), "--specimens", str(table), "--test", "tension", "--out", str(tmp_path / "o"), "--no-plots"])
     assert code == 0, err
     for path, d0 in zip(paths, d0s):
         result = json.loads((tmp_path / "o" / path.stem / "result.json").read_text())
@@ -79,10 +69,10 @@ def test_table_errors_one_line(tmp_path, run3, capsys, text, argv, pattern):
     paths, _ = run3
     table = tmp_path / "specimens.csv"
     table.write_text(text)
-    code, out, err = _cli(capsys, ["identify", *map(str, paths), "--specimens", str(table), "--test", "tension", "--le", "25",
+    code, out, err = run_cli(capsys, ["identify", *map(str, paths), "--specimens", str(table), "--test", "tension", "--le", "25",
                                    "--out", str(tmp_path / "o"), "--no-plots", *argv])
     assert code != 0
-    line = _one_error(err)
+    line = one_error(code, out, err)
     assert re.search(pattern, line), line
 
 
@@ -90,7 +80,7 @@ def test_record_without_a_row_and_missing_value_name_table_and_option(tmp_path, 
     paths, _ = run3
     table = tmp_path / "specimens.csv"
     table.write_text("file,d0 (mm),l0 (mm)\nT1.csv,6,30\nT2.csv,,30\nT9.csv,6,30\n")
-    code, out, err = _cli(capsys, ["identify", *map(str, paths), "--specimens", str(table), "--test", "tension", "--le", "25",
+    code, out, err = run_cli(capsys, ["identify", *map(str, paths), "--specimens", str(table), "--test", "tension", "--le", "25",
                                    "--out", str(tmp_path / "o"), "--no-plots"])
     assert code != 0
     errors = [line for line in err.splitlines() if line.startswith("flowcurve: error:")]
