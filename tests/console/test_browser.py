@@ -16,7 +16,7 @@ from flowcurve.cli import main as cli_main
 from flowcurve.record.format import read_record
 from tests.console.conftest import BROWSER_TIME_SCALE
 
-By = pytest.importorskip("selenium.webdriver.common.by").By
+By = pytest.importorskip("selenium.webdriver.common.by", reason="selenium is not installed (pip install -e .[test])").By
 
 RUN_STATES = ("starting", "tare", "waiting", "recording")
 

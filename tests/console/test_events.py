@@ -16,7 +16,7 @@ import threading
 
 import pytest
 
-pytest.importorskip("starlette")
+pytest.importorskip("starlette", reason="starlette is not installed (pip install -e .[test])")
 
 import flowcurve.acquisition.session as session  # noqa: E402
 from flowcurve.console.live_state import ENDED_STATES, ConsoleView  # noqa: E402
