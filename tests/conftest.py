@@ -1,9 +1,10 @@
 """Suite-wide rules.
 
 Tests that need the real validation records in ``shared/`` (beside the checkout, or
-``FLOWCURVE_SHARED``) or the CalculiX solver skip with a reason on a developer's machine that
-lacks them; in CI (``CI`` set) such a skip is a failure, so a missing folder or solver can
-never turn the published-value or solver checks silently off.
+``FLOWCURVE_SHARED``), the CalculiX solver, Chromium or a package of the test extra skip with
+a reason ("… is not installed", "validation data …") on a developer's machine that lacks
+them; in CI (``CI`` set, not "false"/"0") such a skip is a failure, a whole file skipped at
+import included, so a missing folder, solver or browser can never turn checks silently off.
 """
 
 from __future__ import annotations
@@ -15,15 +16,28 @@ import pytest
 MISSING_DATA_WORDS = ("validation data", "is not installed")
 
 
-@pytest.hookimpl(hookwrapper=True)
-def pytest_runtest_makereport(item, call):
-    outcome = yield
-    report = outcome.get_result()
-    if os.environ.get("CI") and report.skipped and isinstance(report.longrepr, tuple):
+def _in_ci() -> bool:
+    return os.environ.get("CI", "").strip().lower() not in ("", "0", "false", "no")
+
+
+def _missing_is_a_failure_in_ci(report) -> None:
+    if _in_ci() and report.skipped and isinstance(report.longrepr, tuple):
         reason = str(report.longrepr[2])
         if any(word in reason for word in MISSING_DATA_WORDS):
             report.outcome = "failed"
             report.longrepr = f"in CI this must be present: {reason}"
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    _missing_is_a_failure_in_ci(outcome.get_result())
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_make_collect_report(collector):  # a module-level importorskip skips the whole file at collection
+    outcome = yield
+    _missing_is_a_failure_in_ci(outcome.get_result())
 
 
 @pytest.fixture

@@ -20,7 +20,8 @@ from typing import Callable
 
 import numpy as np
 
-ENDED_STATES = ("done", "fault")
+ENDED_STATES = ("done", "fault")  # set by the console's runner only, once the test's outcome is known
+STOPPING_STATE = "stopping"  # the procedure has ended, the runner is releasing the rig and taking the outcome
 MAX_POINTS = 20_000  # per plot, before thinning
 COLUMN_FORCE, COLUMN_CROSSHEAD = 1, 2  # record rows: time_s, force_N, crosshead_mm[, temperature_C]
 
@@ -99,7 +100,10 @@ class ConsoleView:
     def show(self, s, force: bool = False) -> None:
         self._heater_state(ended=False)  # catch the short on-pulses between the pages' looks
         with self.lock:
-            self.state, self.message = s.state, s.message
+            # the procedure's "done" comes before the rig is released and its outcome returned:
+            # the page hears "done" (or "fault") from the runner, with the outcome (runner._end)
+            self.state = STOPPING_STATE if s.state in ENDED_STATES else s.state
+            self.message = s.message
             self.progress = s.progress
             self.samples = max(self.samples, int(s.samples or 0))
             readings = {

@@ -64,10 +64,13 @@ class TestRun:
     result: dict | None = None  # summary of the identification
     heater_source: object | None = None  # what tells the heater state (virtual furnace or driver)
     form: dict[str, str] = field(default_factory=dict)  # the set-up form as entered (other pages show it)
+    # set by the test thread once outcome, post and error are final, before it tells the pages:
+    # a page that sees the test ended always sees its outcome with it
+    ended: threading.Event = field(default_factory=threading.Event)
 
     @property
     def running(self) -> bool:
-        return self.thread is not None and self.thread.is_alive()
+        return self.thread is not None and not self.ended.is_set() and self.thread.is_alive()
 
     def summary(self) -> dict:
         o = self.outcome
@@ -150,6 +153,7 @@ class TestRunner:
         if run is not None and run.running:
             log.warning("console shutting down: aborting test %s (%s)", run.test_id, run.record)
             self.abort(SHUTDOWN_SIGNAME)
+        if run is not None and run.thread is not None:
             run.thread.join(timeout_s)
 
     # the test thread -----------------------------------------------------------------------
@@ -172,6 +176,12 @@ class TestRunner:
         return bool(getattr(source, "heater_is_on", False))  # the furnace driver: the last command
 
     def _run(self, run: TestRun) -> None:
+        try:
+            self._procedure(run)
+        finally:
+            self._end(run)
+
+    def _procedure(self, run: TestRun) -> None:
         spec = run.setup.spec
         try:
             if self.virtual:
@@ -198,11 +208,20 @@ class TestRunner:
         except BaseException as exc:  # the procedure closed the record as aborted and switched the heater off
             log.exception("test %s ended with an unexpected error", run.test_id)
             run.error = " ".join(f"{type(exc).__name__}: {exc}".split())
+
+    @staticmethod
+    def _end(run: TestRun) -> None:
+        """Outcome, post and error final → ``ended`` → the view's last state (which wakes the pages).
+
+        In this order, so that a page told "done" or "fault" finds the test's outcome beside it;
+        the procedure's own "done" shows as "stopping" until then (the rig is still being released).
+        """
         o = run.outcome
         if o is not None:
             run.post = dict(o.post)
             if o.error is not None:
                 run.error = str(o.error)
+        run.ended.set()
         if run.error:
             run.view.set_state(FAULT_STATE, f"{run.error} (the record keeps everything up to the fault)" if o is not None else run.error)
         else:

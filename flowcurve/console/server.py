@@ -288,17 +288,20 @@ async def _event_stream(console: Console, request: Request):
     sent_at = loop.time()
     try:
         while not console.closing.is_set() and not await request.is_disconnected():
+            changed.clear()  # before reading: a change from here on wakes the next round (none is lost while sending)
             run = console.runner.current
             if run is not None and run is not listening_to:
                 if forget:
                     forget()
                 forget, listening_to, cursor = run.view.listen(wake), run, None
+            # the state before the summary: a "done" read here was set after the outcome (runner._end),
+            # so the summary read next carries that outcome, and the page gets both in one round
+            status = run.view.status() if run is not None else None
             summary = console.test_summary()
             if summary != last_summary:
                 last_summary = summary
                 yield _sse("test", summary)
             if run is not None:
-                status = run.view.status()
                 if status != last_status:
                     last_status = status
                     yield _sse("status", status)
@@ -309,7 +312,6 @@ async def _event_stream(console: Console, request: Request):
                 last_status = {"state": "idle", "heater": "off"}
                 yield _sse("status", last_status)
             sent_at = loop.time()
-            changed.clear()
             while not changed.is_set() and not console.closing.is_set() and console.runner.current is listening_to:
                 try:
                     await asyncio.wait_for(changed.wait(), WAKE_S)

@@ -27,7 +27,7 @@ class ServedConsole:
 
 @pytest.fixture
 def served_console(tmp_path):
-    pytest.importorskip("uvicorn")
+    pytest.importorskip("uvicorn", reason="uvicorn is not installed (pip install -e .[test])")
     import uvicorn
 
     from flowcurve.console.server import Console, create_app
@@ -53,7 +53,7 @@ def served_console(tmp_path):
 def browser_factory():
     if CHROMIUM is None or CHROMEDRIVER is None:
         pytest.skip("chromium / chromedriver is not installed (apt-get install chromium chromium-driver)")
-    pytest.importorskip("selenium")
+    pytest.importorskip("selenium", reason="selenium is not installed (pip install -e .[test])")
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("starlette")
-pytest.importorskip("httpx")
+pytest.importorskip("starlette", reason="starlette is not installed (pip install -e .[test])")
+pytest.importorskip("httpx", reason="httpx is not installed (pip install -e .[test])")
 
 with warnings.catch_warnings():  # starlette's note about its test client's HTTP library
     warnings.simplefilter("ignore")

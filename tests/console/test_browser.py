@@ -5,6 +5,8 @@ value in the form. Every stage leaves a screenshot (see conftest.ARTIFACTS)."""
 
 from __future__ import annotations
 
+import json
+import math
 import time
 import urllib.request
 
@@ -14,7 +16,7 @@ from flowcurve.cli import main as cli_main
 from flowcurve.record.format import read_record
 from tests.console.conftest import BROWSER_TIME_SCALE
 
-By = pytest.importorskip("selenium.webdriver.common.by").By
+By = pytest.importorskip("selenium.webdriver.common.by", reason="selenium is not installed (pip install -e .[test])").By
 
 RUN_STATES = ("starting", "tare", "waiting", "recording")
 
@@ -133,6 +135,63 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
     body = urllib.request.urlopen(card.get_attribute("href")).read().decode()
     assert "*MAT_JOHNSON_COOK" in body
     shot(driver, "6-records-fit")
+
+
+def shown_figures(driver) -> dict[str, float]:
+    """The identified figures as the page shows them (four significant digits)."""
+    out = {}
+    for div in driver.find_elements(By.CSS_SELECTOR, "#result-figures div"):
+        name, value = div.find_element(By.TAG_NAME, "span").text, div.find_element(By.TAG_NAME, "b").text
+        out[name] = float(value)
+    return out
+
+
+def test_a_tension_test_to_fracture_then_the_post_test_form_gives_the_result(served_console, browser_factory, shot):
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    fill(driver, {**SETUP, "test": "tension", "specimen_id": "T-browser", "speed": ""})  # the virtual run's speed: about 14 wall s
+    assert driver.find_element(By.ID, "f-l0").is_displayed()  # the tension field shows
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: text(driver, "#state").lower() == "recording", what="recording", driver=driver)
+    wait_for(lambda: fd_points(driver) > 20, what="the live plot", driver=driver)
+    shot(driver, "1-recording")
+    wait_for(lambda: text(driver, "#state").lower() == "done", timeout_s=180, what="the fracture", driver=driver)
+    outcome = wait_for(lambda: text(driver, "#outcome"), what="the outcome", driver=driver)
+    assert "complete — fracture" in outcome
+
+    # the post-test form asks for lu, dk, du and the neck radius, in run's words
+    run = served_console.console.runner.current
+    post_form = text(driver, "#post-fields")
+    for words in ("gauge length after fracture lu [mm]", "diameter at fracture dk [mm]", "diameter in the uniform part du [mm]", "neck profile radius [mm]"):
+        assert words in post_form
+    # what an operator reads with calipers on the broken specimen: the virtual rig's values to 0.01 mm
+    measured = dict(run.outcome.post)
+    assert set(measured) == {"post.lu_mm", "post.dk_mm", "post.du_mm", "post.neck_radius_mm"}
+    typed = {k: f"{v:.2f}" for k, v in measured.items()}
+    fill(driver, typed)
+    shot(driver, "2-post-form")
+    driver.find_element(By.ID, "btn-post").click()
+    wait_for(lambda: "JC A_MPa" in text(driver, "#result-figures"), timeout_s=120, what="the identified result", driver=driver)
+    shot(driver, "3-result")
+
+    # the record keeps what was typed; the result follows from it in closed form
+    rec = read_record(run.record)
+    assert {k: rec.meta[k] for k in typed} == typed
+    l0, d0 = float(rec.meta["specimen.l0_mm"]), float(rec.meta["specimen.d0_mm"])
+    lu, dk, radius = (float(typed[k]) for k in ("post.lu_mm", "post.dk_mm", "post.neck_radius_mm"))
+    expected = {"A_pct": (lu - l0) / l0 * 100.0, "Z_pct": (1.0 - (dk / d0) ** 2) * 100.0}  # A = Δl/l0, Z = ΔS/S0
+    result = json.loads(urllib.request.urlopen(served_console.url + "files/results/" + run.record.stem + "/result.json").read())
+    for name, value in expected.items():
+        assert result[name] == pytest.approx(value, rel=1e-12)
+    a_over_R = dk / 2.0 / radius
+    neck = result["neck_corrections"]
+    assert neck["a_over_R_source"] == "measured neck radius" and neck["a_over_R"] == pytest.approx(a_over_R, rel=1e-12)
+    # Bridgman's factor 1 / ((1 + 2R/a) ln(1 + a/2R)) from the typed dk and neck radius
+    assert neck["bridgman"]["factor"] == pytest.approx(1.0 / ((1.0 + 2.0 / a_over_R) * math.log1p(a_over_R / 2.0)), rel=1e-9)
+    shown = shown_figures(driver)
+    for name, value in expected.items():
+        assert shown[name] == pytest.approx(value, rel=5e-4)  # the page rounds to four digits
+    assert shown["JC A_MPa"] > 0 and shown["Rm_MPa"] > shown["Rp02_MPa"]
 
 
 def test_reload_close_and_a_second_page_during_a_test(served_console, browser_factory, shot):

@@ -62,6 +62,7 @@ def test_done_keeps_the_last_readings_and_the_heater_shows_the_relay_once_ended(
     relay["on"] = False
     assert view.status()["heater"] == "on"  # within the controller's window while the test runs
     view.show(Snapshot("done", time_s=6.0, samples=10))
+    assert view.status()["state"] == "stopping"  # the procedure's end: "done" comes from the runner, with the outcome
     view.set_state("done")
     status = view.status()
     assert status["heater"] == "off"  # ended: the relay itself

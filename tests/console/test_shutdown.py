@@ -14,7 +14,7 @@ import urllib.request
 
 import pytest
 
-pytest.importorskip("uvicorn")
+pytest.importorskip("uvicorn", reason="uvicorn is not installed (pip install -e .[test])")
 
 
 def _post(url: str, body: dict) -> dict:

@@ -2,7 +2,7 @@
 "use strict";
 
 const $ = (sel) => document.querySelector(sel);
-const RUNNING = new Set(["starting", "heating", "soaking", "tare", "waiting", "recording"]);
+const RUNNING = new Set(["starting", "heating", "soaking", "tare", "waiting", "recording", "stopping"]);
 const stats = { fdPoints: 0, ttPoints: 0, draws: 0, fdDraws: 0, events: 0, latencies_ms: [] };  // read by the browser tests and the bench
 window.fcStats = stats;
 let info = null;
