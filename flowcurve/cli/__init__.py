@@ -24,6 +24,7 @@ COMMAND_MODULES = (
     "flowcurve.cli.series",  # fit
     "flowcurve.cli.reports",  # card, report
     "flowcurve.cli.rig",  # rig check, rig virtual
+    "flowcurve.cli.fe",  # verify
 )
 
 

@@ -97,8 +97,11 @@ def register(subparsers) -> None:
     m.add_argument("--E", dest="E_MPa", type=float, metavar="MPA", help="elastic modulus to strip elastic strain with (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
     m.add_argument("--true-stress", choices=("gost_3_6", "constant_volume"), help="true stress in the uniform part of a tension test: the corrected (3.6) with bulk modulus (default) or σ·(1 + e) at constant volume")
     m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n)")
-    m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default: the seed's bulge regression)")
-    m.add_argument("--friction-correction", choices=_choices("flowcurve.identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default k_sigma; all are computed)")
+    m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default fe_table: the CalculiX table; all are reported)")
+    m.add_argument("--method", choices=("fast", "inverse-fe"), default="fast", help="compression: fast (default; FE tables, no solver at identification time) or inverse-fe (hardening law and μ fitted with CalculiX in the loop to the force-stroke curve and dmax)")
+    m.add_argument("--workers", type=int, metavar="N", help="inverse-fe: solver runs side by side (default: the cores)")
+    m.add_argument("--scheduler", metavar="ADDRESS", help="inverse-fe: send the solver runs to this Dask distributed scheduler (needs the 'fe' extra)")
+    m.add_argument("--friction-correction", choices=_choices("flowcurve.identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default fe_table: the CalculiX force factor; all are computed)")
     p.set_defaults(func=run)
 
 
@@ -126,6 +129,9 @@ def _options_from_args(args) -> dict:
         "friction_correction": args.friction_correction,
         "E_MPa": args.E_MPa,
         "true_stress": args.true_stress,
+        "method": getattr(args, "method", "fast"),
+        "workers": getattr(args, "workers", None),
+        "scheduler": getattr(args, "scheduler", None),
     }
 
 
@@ -135,7 +141,17 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
     from flowcurve.record.importers import load_record
 
     record = load_record(path, columns=columns, meta=meta)
-    ident = identify(record, **options)
+    options = dict(options)
+    method, workers, scheduler = options.pop("method", "fast"), options.pop("workers", None), options.pop("scheduler", None)
+    if method == "inverse-fe":
+        from flowcurve.identification.fe.inverse import identify_inverse_fe
+
+        def progress(runs, elapsed):
+            print(f"  inverse FE: {runs} solver runs, {elapsed:.0f} s", file=sys.stderr, flush=True)
+
+        ident = identify_inverse_fe(record, law=options.get("law") or "johnson_cook", workers=workers, scheduler=scheduler, progress=progress)
+    else:
+        ident = identify(record, **options)
     if plots:
         from flowcurve.reports.plots import add_plots
 
@@ -166,6 +182,10 @@ def summary_lines(result: dict) -> list[str]:
         methods = result.get("friction") or {}
         extra = "   ".join(f"{k} {_fmt(v, '.3f')}" for k, v in methods.items() if isinstance(v, (int, float)))
         lines.append(f"  friction μ {_fmt(result.get('friction_mu'), '.3f')}" + (f"   ({extra})" if extra else ""))
+    inv = result.get("inverse_fe")
+    if inv:
+        lines.append(f"  inverse FE: μ {_fmt(inv['mu'], '.4f')} ± {_fmt(inv['mu_stderr'], '.4f')}, {inv['solver_runs']} solver runs, {_fmt(inv['wall_s'], '.0f')} s, "
+                     f"force residual rms {_fmt(inv['force_rms_residual_pct'], '.2f')} %, dmax residual {_fmt(inv['dmax_residual_mm'], '+.4f')} mm")
     return lines
 
 
