@@ -3,7 +3,8 @@
 The frame-corrected force–stroke curve of the record (the fast identification's
 ``corrected_diagram``) and the measured bulge diameter dmax are fitted by the upsetting model
 (:mod:`.upsetting`) run to the record's shortening (so the final height hk is met by
-construction): scipy ``least_squares`` over the hardening constants and μ, warm-started from
+construction; the FE dmax is taken after the elastic spring-back d·(1 − ν·σ/E), the unloading
+run itself can fail with friction, CALCULIX.md): scipy ``least_squares`` over the hardening constants and μ, warm-started from
 the fast (``fe_table``) identification. The Jacobian's finite-difference runs go side by side
 (:func:`.pool.run_many`: ``workers`` processes or a Dask ``scheduler``); repeated parameter
 sets come from the run cache. Residuals: force misfit in % at ``FORCE_POINTS`` strokes
@@ -65,7 +66,10 @@ def _run(problem: _Problem, x):
     except SolverError as exc:
         log.info("inverse FE: run at %s failed (%s)", x, exc)
         return None
-    return np.concatenate([[0.0], r.stroke_mm]), np.concatenate([[0.0], r.force_N]), float(r.dmax_mm[-1]), r.wall_s, r.cached
+    # dmax is measured unloaded: elastic spring-back of the diameter, d·(1 − ν·σ/E), σ = F/A at the end
+    sigma_end = r.force_N[-1] / (math.pi * problem.d0**2 * problem.h0 / (4.0 * r.height_mm[-1]))
+    d_unloaded = float(r.dmax_mm[-1]) * (1.0 - r.model.nu * sigma_end / problem.E)
+    return np.concatenate([[0.0], r.stroke_mm]), np.concatenate([[0.0], r.force_N]), d_unloaded, r.wall_s, r.cached
 
 
 def identify_inverse_fe(record, *, law: str = "johnson_cook", workers: int | None = None, scheduler=None, increments: int = 50,
