@@ -8,8 +8,10 @@ height hk, bulge diameter dmax or largest cross-section smax):
 2. current height h = h0 − Δl, strain ε = −ln(h/h0) (3.31), volume-constant diameter
    d_n = d0·√(h0/h) (3.28), mean pressure σ_n = P/S, S = π·d_n²/4 ((3.30)/(3.32));
 3. the friction coefficient by every method of :mod:`identification.friction` (default: the
-   bulge regression (3.19));
-4. the flow curve corrected by every correction (K_σ/K_ε (default), Siebel, exact slab), each
+   CalculiX table ``fe_table``; the seed's bulge regression (3.19) and Ebrahimi–Najafizadeh
+   side by side);
+4. the flow curve corrected by every correction (the CalculiX force factor ``fe_table``
+   (default), K_σ/K_ε, Siebel, exact slab), each
    kept as the curve ``true_<method>``;
 5. the hardening law fitted (:func:`identification.hardening.fit_hardening`) to the default
    corrected curve.
@@ -117,13 +119,13 @@ def _check_crosshead_gaps(src: str, force: np.ndarray, cross: np.ndarray) -> Non
         raise RecordError(src, f"the crosshead channel has no value at sample {gaps[0] + 1} (and {gaps.size - 1} more) while the specimen is loaded; the shortening cannot be followed through the gap", column="crosshead_mm")
 
 
-def _friction_all(geo: dict, chosen: str, warnings: list[str]) -> tuple[fr.FrictionResult, dict[str, fr.FrictionResult | str]]:
+def _friction_all(geo: dict, chosen: str, warnings: list[str], curve=None) -> tuple[fr.FrictionResult, dict[str, fr.FrictionResult | str]]:
     if chosen not in fr.FRICTION_METHODS:
         raise IdentificationError(f"unknown friction method {chosen!r} (choose from {', '.join(fr.FRICTION_METHODS)})")
     results: dict[str, fr.FrictionResult | str] = {}
     for method in fr.FRICTION_METHODS:
         try:
-            results[method] = fr.identify_friction(method, geo["d0"], geo["h0"], geo["hk"], d_max_mm=geo["dmax"], s_max_mm2=geo["smax"], d_top_mm=geo["dtop"])
+            results[method] = fr.identify_friction(method, geo["d0"], geo["h0"], geo["hk"], d_max_mm=geo["dmax"], s_max_mm2=geo["smax"], d_top_mm=geo["dtop"], curve=curve)
         except IdentificationError as exc:
             if method == chosen:
                 raise
@@ -201,9 +203,9 @@ def identify_compression(
 ) -> Identification:
     """Identify a compression record: friction, friction-corrected true curves and hardening.
 
-    Options: ``friction_method`` (one of ``bulge_regression`` (default),
-    ``ebrahimi_najafizadeh``), ``friction_correction`` (``k_sigma`` (default), ``siebel``,
-    ``slab``), ``law`` of the hardening fit, ``E_MPa`` (handbook modulus for elastic strain and
+    Options: ``friction_method`` (one of ``fe_table`` (default), ``bulge_regression``,
+    ``ebrahimi_najafizadeh``), ``friction_correction`` (``fe_table`` (default), ``k_sigma``,
+    ``siebel``, ``slab``), ``law`` of the hardening fit, ``E_MPa`` (handbook modulus for elastic strain and
     spring-back; otherwise the apparent modulus), ``frame_stiffness_N_per_um`` (otherwise the
     record's ``rig.frame_stiffness_N_per_um``), ``modulus_window_MPa`` / ``modulus_window``
     (fractions of the yield stress, or of the largest stress with ``modulus_reference`` "Rm";
@@ -225,8 +227,7 @@ def identify_compression(
     warnings: list[str] = []
 
     # friction first: it needs only the post-test measurements, and bad ones should stop early
-    chosen, frictions = _friction_all(geo, friction_method, warnings)
-    mu = chosen.mu
+    chosen, frictions = _friction_all(geo, friction_method, [])
 
     # -- indicator diagram ------------------------------------------------------------------
     t = record.column("time_s")
@@ -288,6 +289,10 @@ def identify_compression(
         E_used, E_source = line.E_MPa / K_l, "apparent"  # the line's slope on the scaled strain
     elif E_MPa is None:
         E_source = "none"
+
+    # -- friction (again, now with the curve: the FE table's μ depends on the hardening) ----
+    chosen, frictions = _friction_all(geo, friction_method, warnings, curve=(strain, pressure))
+    mu = chosen.mu
 
     # -- friction corrections ---------------------------------------------------------------
     curves: dict[str, pd.DataFrame] = {

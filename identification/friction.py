@@ -6,7 +6,10 @@ in MPa, strains are logarithmic (true) strains.
 
 Friction from the barrelled specimen (each returns a :class:`FrictionResult`):
 
-* ``bulge_regression`` (default): the seed's FE regression (3.18) inverted for the mean
+* ``fe_table`` (default): the bulge ΔR/h of CalculiX upsetting runs over μ, h0/d0, strain and
+  hardening (:mod:`identification.fe.table`, package data) inverted for the Coulomb μ; the
+  hardening exponent is read from the record's own curve when it is given.
+* ``bulge_regression``: the seed's FE regression (3.18) inverted for the mean
   Coulomb coefficient μ (3.19).
 * ``ebrahimi_najafizadeh``: the barrelling method of Ebrahimi & Najafizadeh (2004) for the
   Tresca friction factor m; converted to μ by equating the Tresca shear stress m·σ_f/√3 with
@@ -16,8 +19,9 @@ Friction from the barrelled specimen (each returns a :class:`FrictionResult`):
   is reported alongside as ``mu_equal_slab_pressure``.
 
 Corrections turning the mean pressure p = P/S (S from volume constancy) and the strain into
-flow stress and strain (:data:`CORRECTIONS`): ``k_sigma`` (the seed's K_σ/K_ε regressions
-(3.21)–(3.27), default), ``siebel`` (p/σ_f = 1 + 2μr/(3h)) and ``slab`` (the exact Coulomb
+flow stress and strain (:data:`CORRECTIONS`): ``fe_table`` (default: the CalculiX force factor
+F/(σ_f·A) of the same table), ``k_sigma`` (the seed's K_σ/K_ε regressions
+(3.21)–(3.27)), ``siebel`` (p/σ_f = 1 + 2μr/(3h)) and ``slab`` (the exact Coulomb
 slab solution p/σ_f = 2(e^c − c − 1)/c², c = 2μr/h).
 """
 
@@ -25,14 +29,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from flowcurve.errors import IdentificationError
 
-FRICTION_METHODS = ("bulge_regression", "ebrahimi_najafizadeh")
-DEFAULT_FRICTION_METHOD = "bulge_regression"
+FRICTION_METHODS = ("fe_table", "bulge_regression", "ebrahimi_najafizadeh")
+DEFAULT_FRICTION_METHOD = "fe_table"
 
 # (3.18) regression constants: ΔR/h = C·ε^P·(1 − exp(−K·μ^Q))
 BULGE_C = 0.0683
@@ -240,13 +245,103 @@ def friction_ebrahimi_najafizadeh(d0_mm: float, h0_mm: float, hk_mm: float, *, d
     return FrictionResult("ebrahimi_najafizadeh", mu, inputs, extra)
 
 
-def identify_friction(method: str, d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, d_top_mm: float | None = None) -> FrictionResult:
-    """Friction by the named method (one of :data:`FRICTION_METHODS`)."""
+def identify_friction(method: str, d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, d_top_mm: float | None = None, curve=None) -> FrictionResult:
+    """Friction by the named method (one of :data:`FRICTION_METHODS`); ``curve`` = (strain,
+    mean pressure MPa) of the record, used by ``fe_table`` for the hardening."""
+    if method == "fe_table":
+        return friction_fe_table(d0_mm, h0_mm, hk_mm, d_max_mm=d_max_mm, s_max_mm2=s_max_mm2, curve=curve)
     if method == "bulge_regression":
         return friction_bulge_regression(d0_mm, h0_mm, hk_mm, d_max_mm=d_max_mm, s_max_mm2=s_max_mm2)
     if method == "ebrahimi_najafizadeh":
         return friction_ebrahimi_najafizadeh(d0_mm, h0_mm, hk_mm, d_max_mm=d_max_mm, s_max_mm2=s_max_mm2, d_top_mm=d_top_mm)
     raise IdentificationError(f"unknown friction method {method!r} (choose from {', '.join(FRICTION_METHODS)})")
+
+
+# -- CalculiX table (identification/fe) ----------------------------------------------------
+
+FE_DEFAULT_HARDENING_N = 0.3  # used when the record's curve is not given
+FE_HARDENING_ITERATIONS = 3
+
+
+def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float):
+    """σ_f = p / factor(μ, h0/d0, n, ε) with n read from the corrected curve itself (fixed point)."""
+    from flowcurve.identification.fe.table import effective_hardening_exponent
+
+    strain = np.asarray(strain, dtype=float)
+    pressure = np.asarray(pressure_MPa, dtype=float)
+    lookup = np.clip(strain, 0.0, table.strain[-1])  # beyond the table: its last strain's factor
+    sigma = pressure
+    n = FE_DEFAULT_HARDENING_N
+    for _ in range(FE_HARDENING_ITERATIONS):
+        n = effective_hardening_exponent(strain, sigma)
+        sigma = pressure / table.force_factor_at(mu, h0_d0, n, lookup)
+    return sigma, n
+
+
+def _fe_mu_lowering_n(table, dR_over_h: float, h0_d0: float, n: float, eps: float) -> tuple[float, float, bool]:
+    """(μ, n, clamped) from the table's bulge at hardening n; a bulge too large for n is tried
+    at the table's lower n values (less hardening barrels more); beyond them all, the face
+    sticks: the table's largest μ, flagged as clamped."""
+    candidates = [n] + sorted((float(v) for v in table.n if v < n), reverse=True)
+    for value in candidates:
+        try:
+            return table.mu_from_bulge(dR_over_h, h0_d0, value, eps), value, False
+        except IdentificationError as exc:
+            if "beyond the largest" not in str(exc):
+                raise
+    return table.mu_from_bulge(dR_over_h, h0_d0, candidates[-1], eps, clamp=True), candidates[-1], True
+
+
+def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, curve=None) -> FrictionResult:
+    """Coulomb μ from the bulge by the CalculiX table: ΔR/h (3.29) at ε = ln(h0/hk) (3.31) inverted.
+
+    The table's hardening exponent n comes from ``curve`` = (strain, mean pressure) corrected
+    with the table's own force factor (a fixed point, starting from the uncorrected curve's n);
+    without a curve n = 0.3. A bulge too large for that n is read at the table's lower n.
+    """
+    from flowcurve.identification.fe.table import UpsettingTable
+
+    _check_geometry(d0_mm, h0_mm, hk_mm)
+    d_max, used = _measured_max_diameter(d_max_mm, s_max_mm2)
+    d_n = float(nominal_diameter(d0_mm, h0_mm, hk_mm))
+    delta_r = float(bulge_excess(d_max, d_n))
+    if -DIAMETER_RESOLUTION_MM / 4 <= delta_r < 0:
+        delta_r = 0.0
+    if delta_r < 0:
+        raise IdentificationError(f"FE table: negative bulge ΔR = {delta_r:.4g} mm (dmax below the volume-constant diameter {d_n:.4g} mm; check d0, h0, hk and dmax)")
+    eps_k = float(height_strain(hk_mm, h0_mm))
+    table = UpsettingTable.load()
+    h0_d0 = h0_mm / d0_mm
+    if curve is not None:  # start from the hardening of the uncorrected pressure curve
+        from flowcurve.identification.fe.table import effective_hardening_exponent
+
+        n_start = effective_hardening_exponent(curve[0], curve[1])
+    else:
+        n_start = FE_DEFAULT_HARDENING_N
+    mu, n, clamped = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, n_start, eps_k)
+    if curve is not None:
+        for _ in range(FE_HARDENING_ITERATIONS):
+            _, n = _fe_flow_stress(table, curve[0], curve[1], mu, h0_d0)
+            mu, n, clamped = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, n, eps_k)
+    inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
+    extra = {"d_n_mm": d_n, "delta_R_mm": delta_r, "eps_p": eps_k, "hardening_n": n, "hardening_from": "record curve" if curve is not None else "default",
+             "beyond_table_sticking": clamped,
+             "table": Path(table.path).name, "table_ccx_version": table.meta.get("ccx_version"), "table_date": table.meta.get("date")}
+    return FrictionResult("fe_table", mu, inputs, extra)
+
+
+def correct_fe_table(strain, pressure_MPa, mu, radius_mm, height_mm):
+    """(strain, p) → (strain, σ_f) with the CalculiX force factor F/(σ_f·A) of the FE table."""
+    # σ_f = p / factor(μ, h0/d0, n, ε), factor from identification/fe (make_table)
+    from flowcurve.identification.fe.table import UpsettingTable, specimen_proportion
+
+    strain = np.atleast_1d(np.asarray(strain, dtype=float))
+    radius, height = (np.broadcast_to(np.asarray(v, dtype=float), strain.shape) for v in (radius_mm, height_mm))
+    table = UpsettingTable.load()
+    sel = strain > 0.01
+    h0_d0 = specimen_proportion(strain[sel], radius[sel], height[sel]) if sel.any() else 1.0
+    sigma, _ = _fe_flow_stress(table, strain, pressure_MPa, mu, h0_d0)
+    return strain, sigma
 
 
 # -- corrections of the flow curve ----------------------------------------------------------
@@ -303,11 +398,12 @@ def correct_slab(strain, pressure_MPa, mu, radius_mm, height_mm):
 
 
 CORRECTIONS: dict[str, Callable] = {
+    "fe_table": correct_fe_table,
     "k_sigma": correct_k_sigma,
     "siebel": correct_siebel,
     "slab": correct_slab,
 }
-DEFAULT_CORRECTION = "k_sigma"
+DEFAULT_CORRECTION = "fe_table"
 
 
 def correct(method: str, strain, pressure_MPa, mu, radius_mm, height_mm):

@@ -28,6 +28,7 @@ COMMAND_MODULES = (
     "flowcurve.cli.rig",  # rig check, rig virtual
     "flowcurve.cli.friction",  # friction, friction-demo
     "flowcurve.cli.console",  # console
+    "flowcurve.cli.fe",  # verify
 )
 
 

@@ -111,8 +111,11 @@ def register(subparsers) -> None:
     m.add_argument("--modulus-window", type=_pair, metavar="LO,HI", help="stress window of the elastic-modulus regression: MPa (e.g. 50,300), or fractions of Rm when both are ≤ 1 (e.g. 0.1,0.4); default: the widest linear stretch of the first loading, chosen automatically (all of it when it has few samples)")
     m.add_argument("--fit-range", type=_pair, metavar="LO,HI", help="true plastic strain range of the hardening fit, e.g. 0.01,0.15 (default: from 0.2 %% offset, past a yield plateau, to the end of the uniform range)")
     m.add_argument("--fracture-point", choices=("auto", "include", "exclude"), help="the neck-corrected fracture point in the least-squares hardening fit (tension): include, exclude, or auto (default: included unless it costs the uniform range more than 2 %% max error); both variants are reported")
-    m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default: the seed's bulge regression)")
-    m.add_argument("--friction-correction", choices=_choices("flowcurve.identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default k_sigma; all are computed)")
+    m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default fe_table: the CalculiX table; all are reported)")
+    m.add_argument("--method", choices=("fast", "inverse-fe"), default="fast", help="compression: fast (default; FE tables, no solver at identification time) or inverse-fe (hardening law and μ fitted with CalculiX in the loop to the force-stroke curve and dmax)")
+    m.add_argument("--workers", type=int, metavar="N", help="inverse-fe: solver runs side by side (default: the cores)")
+    m.add_argument("--scheduler", metavar="ADDRESS", help="inverse-fe: send the solver runs to this Dask distributed scheduler (needs the 'fe' extra)")
+    m.add_argument("--friction-correction", choices=_choices("flowcurve.identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default fe_table: the CalculiX force factor; all are computed)")
     p.set_defaults(func=run)
 
 
@@ -163,6 +166,9 @@ def _options_from_args(args) -> dict:
         **_modulus_window_options(args.modulus_window),
         "fit_range": args.fit_range,
         "fracture_point": args.fracture_point,
+        "method": getattr(args, "method", "fast"),
+        "workers": getattr(args, "workers", None),
+        "scheduler": getattr(args, "scheduler", None),
     }
 
 
@@ -175,13 +181,23 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
     from flowcurve.identification.identify import identify
     from flowcurve.record.importers import load_record
 
+    options = dict(options)
+    method, workers, scheduler = options.pop("method", "fast"), options.pop("workers", None), options.pop("scheduler", None)
     raise_runtime = _runtime_warnings_raise()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if raise_runtime:  # '-W error::RuntimeWarning' from outside still raises (tests find the source)
             warnings.simplefilter("error", RuntimeWarning)
         record = load_record(path, columns=columns, meta=meta)
-        ident = identify(record, **options)
+        if method == "inverse-fe":
+            from flowcurve.identification.fe.inverse import identify_inverse_fe
+
+            def progress(runs, elapsed):
+                print(f"  inverse FE: {runs} solver runs, {elapsed:.0f} s", file=sys.stderr, flush=True)
+
+            ident = identify_inverse_fe(record, law=options.get("law") or "johnson_cook", workers=workers, scheduler=scheduler, progress=progress)
+        else:
+            ident = identify(record, **options)
     caught_lines = [f"{'numerical warning' if issubclass(w.category, RuntimeWarning) else w.category.__name__}: {w.message}" for w in caught]
     if caught_lines:
         old = ident.result.setdefault("warnings", [])
@@ -233,6 +249,10 @@ def summary_lines(result: dict) -> list[str]:
         methods = result.get("friction") or {}
         extra = "   ".join(f"{k} {_fmt(v, '.3f')}" for k, v in methods.items() if isinstance(v, (int, float)))
         lines.append(f"  friction μ {_fmt(result.get('friction_mu'), '.3f')}" + (f"   ({extra})" if extra else ""))
+    inv = result.get("inverse_fe")
+    if inv:
+        lines.append(f"  inverse FE: μ {_fmt(inv['mu'], '.4f')} ± {_fmt(inv['mu_stderr'], '.4f')}, {inv['solver_runs']} solver runs, {_fmt(inv['wall_s'], '.0f')} s, "
+                     f"force residual rms {_fmt(inv['force_rms_residual_pct'], '.2f')} %, dmax residual {_fmt(inv['dmax_residual_mm'], '+.4f')} mm")
     return lines
 
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.ccx import run_deck
-from flowcurve.identification.fe.upsetting import SECTOR, plastic_table, _lines
+from flowcurve.identification.fe.upsetting import SECTOR, _lines, check_plastic_table, plastic_table
 
 
 @dataclass(frozen=True)
@@ -37,8 +37,7 @@ class TensionModel:
     def __post_init__(self):
         if not (self.d0_mm > 0 and self.l0_mm > 0 and self.elongation_mm > 0):
             raise IdentificationError(f"tension model: d0, l0 and the elongation must be > 0 (got {self.d0_mm}, {self.l0_mm}, {self.elongation_mm} mm)")
-        if len(self.eps_p) != len(self.stress_MPa) or len(self.eps_p) < 2 or self.eps_p[0] != 0.0:
-            raise IdentificationError("tension model: the plastic table needs ≥ 2 rows, the first at zero plastic strain")
+        check_plastic_table(self.eps_p, self.stress_MPa, "tension model")
 
     @classmethod
     def from_law(cls, d0_mm, l0_mm, elongation_mm, flow_stress, **kw) -> "TensionModel":

@@ -15,7 +15,7 @@ def test_identify_command_writes_the_compression_result(tmp_path, make_record, c
     record, truth = make_record(seed=11)
     path = write_record(tmp_path / "C1.csv", record)
     out = tmp_path / "out"
-    code = main(["identify", str(path), "--out", str(out), "--friction-correction", "slab"])
+    code = main(["identify", str(path), "--out", str(out), "--friction-method", "bulge_regression", "--friction-correction", "slab"])
     captured = capsys.readouterr()
     assert code == 0, captured.err
     folder = out / "C1"
@@ -24,7 +24,7 @@ def test_identify_command_writes_the_compression_result(tmp_path, make_record, c
         assert key in result, key
     assert result["test"] == "compression"
     assert result["friction_mu"] == pytest.approx(truth["mu"], abs=1e-3)
-    assert set(result["friction"]) == {"bulge_regression", "ebrahimi_najafizadeh"}
+    assert set(result["friction"]) == {"fe_table", "bulge_regression", "ebrahimi_najafizadeh"}
     h = result["hardening"]
     assert {"law", "A_MPa", "B_MPa", "n", "fit_error_pct"} <= set(h)
     rec = result["record"]
@@ -43,7 +43,7 @@ def test_identify_command_writes_the_compression_result(tmp_path, make_record, c
 def test_identify_command_missing_height_is_one_line(tmp_path, make_record, capsys):
     record, _ = make_record(drop=("post.hk_mm",))
     path = write_record(tmp_path / "C2.csv", record)
-    code = main(["identify", str(path), "--out", str(tmp_path / "out"), "--no-plots"])
+    code = main(["identify", str(path), "--out", str(tmp_path / "out"), "--no-plots", "--friction-method", "bulge_regression"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2
     assert any("post.hk_mm" in line and "C2.csv" in line for line in err)
@@ -53,7 +53,7 @@ def test_identify_command_missing_height_is_one_line(tmp_path, make_record, caps
 def test_identify_command_options_fill_the_post_measurements(tmp_path, make_record):
     record, truth = make_record(drop=("post.hk_mm", "post.dmax_mm"))
     path = write_record(tmp_path / "C3.csv", record)
-    code = main(["identify", str(path), "--out", str(tmp_path / "out"), "--no-plots", "--hk", f"{truth['hk']:.4f}", "--dmax", f"{truth['dmax']:.4f}"])
+    code = main(["identify", str(path), "--out", str(tmp_path / "out"), "--no-plots", "--friction-method", "bulge_regression", "--hk", f"{truth['hk']:.4f}", "--dmax", f"{truth['dmax']:.4f}"])
     assert code == 0
     result = json.loads((tmp_path / "out" / "C3" / "result.json").read_text())
     assert result["friction_mu"] == pytest.approx(truth["mu"], abs=1e-3)
@@ -66,7 +66,7 @@ def test_identify_command_passes_the_handbook_modulus(tmp_path, make_record):
     record, truth = make_record(seed=12)
     path = write_record(tmp_path / "C4.csv", record)
     out = tmp_path / "out"
-    code = main(["identify", str(path), "--out", str(out), "--no-plots", "--friction-correction", "slab", "--E", repr(truth["E"])])
+    code = main(["identify", str(path), "--out", str(out), "--no-plots", "--friction-method", "bulge_regression", "--friction-correction", "slab", "--E", repr(truth["E"])])
     assert code == 0
     result = json.loads((out / "C4" / "result.json").read_text())
     assert result["E_MPa"] == pytest.approx(truth["E"])

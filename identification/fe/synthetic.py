@@ -1,0 +1,111 @@
+"""Compression records made from CalculiX upsetting runs: the test the rig would have recorded.
+
+The FE force–stroke history of a known flow curve and Coulomb μ becomes a record with the
+rig's artefacts: a seating toe (the crosshead moves ``toe_mm`` while the force rises to
+``toe_force_N``), the frame compliance (crosshead = specimen + toe + F/C), 10 µm encoder
+steps, force noise and an elastic unloading branch. The post-test measurements are taken
+after elastic spring-back: hk = h·(1 + σ/E), dmax = d_max·(1 − ν·σ/E) with σ = F/A at the end
+(the unloading run itself can fail with friction, CALCULIX.md; the spring-back moves hk by
+~0.01 mm and dmax by a few µm).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from flowcurve.record.format import Record
+from flowcurve.identification.fe.upsetting import UpsettingResult
+
+
+def upsetting_record(run: UpsettingResult, *, stiffness_N_per_um: float = 136.0, toe_mm: float = 0.03, toe_force_N: float = 300.0,
+                     noise_N: float = 30.0, step_mm: float = 0.01, speed_mm_per_s: float = 0.01, rate_hz: float = 5.0,
+                     seed: int = 1, material: str = "FE record", specimen_id: str = "fe-1") -> Record:
+    """A compression :class:`Record` of ``run`` (compression negative, as the rig gives it)."""
+    m = run.model
+    rng = np.random.default_rng(seed)
+    stroke = np.concatenate([[0.0], run.stroke_mm])
+    force = np.concatenate([[0.0], run.force_N])
+    # samples at the crosshead speed: specimen stroke on a uniform time grid
+    duration = stroke[-1] / speed_mm_per_s
+    t_load = np.arange(0.0, duration, 1.0 / rate_hz)
+    s = np.interp(t_load * speed_mm_per_s, stroke, stroke)
+    f = np.interp(s, stroke, force)
+    # seating toe before the specimen takes load: force rises quadratically over toe_mm
+    n_toe = max(2, int(round(toe_mm / speed_mm_per_s * rate_hz)))
+    x_toe = np.linspace(0.0, toe_mm, n_toe, endpoint=False)
+    f_toe = toe_force_N * (x_toe / toe_mm) ** 2 if toe_mm > 0 else np.zeros(n_toe)
+    s_toe = np.zeros(n_toe)
+    # elastic unloading in 20 s
+    area = math.pi * m.d0_mm**2 * m.h0_mm / (4.0 * run.height_mm[-1])
+    sigma_end = run.force_N[-1] / area
+    frac = 1.0 - np.arange(1, int(20 * rate_hz) + 1) / (20 * rate_hz)
+    f_un = run.force_N[-1] * frac
+    s_un = stroke[-1] - run.height_mm[-1] * sigma_end / m.E_MPa * (1.0 - frac)
+    F = np.concatenate([f_toe, f, f_un])
+    spec = np.concatenate([s_toe, s, s_un])
+    toe = np.concatenate([x_toe, np.full(f.size + f_un.size, toe_mm)])
+    time = np.arange(F.size) / rate_hz
+    cross = spec + toe + F / (stiffness_N_per_um * 1000.0)
+    cross = np.round(cross / step_mm) * step_mm
+    F_meas = F + rng.normal(0.0, noise_N, F.size)
+    hk = run.height_mm[-1] * (1.0 + sigma_end / m.E_MPa)
+    dmax = run.dmax_mm[-1] * (1.0 - m.nu * sigma_end / m.E_MPa)
+    meta = {
+        "test": "compression", "material": material, "specimen.id": specimen_id, "nominal_temperature_C": "20",
+        "crosshead_speed_mm_per_s": repr(speed_mm_per_s), "rig.frame_stiffness_N_per_um": repr(stiffness_N_per_um),
+        "specimen.d0_mm": repr(m.d0_mm), "specimen.h0_mm": repr(m.h0_mm), "material.E_MPa": repr(m.E_MPa),
+        "post.hk_mm": f"{hk:.4f}", "post.dmax_mm": f"{dmax:.4f}",
+        "fe.mu": repr(m.mu),  # the truth the record was made with
+    }
+    data = pd.DataFrame({"time_s": time, "force_N": -F_meas, "crosshead_mm": -cross})
+    return Record(meta=meta, data=data, source=specimen_id)
+
+
+def johnson_cook_flow(eps_p, A, B, n):
+    """σ = A + B·ε_p^n (the strain part of (2.19))."""
+    return A + B * np.power(np.clip(eps_p, 0.0, None), n)
+
+
+def voce_flow(eps_p, s0, q, b):
+    """σ = s0 + q·(1 − exp(−b·ε_p)) (saturating hardening)."""
+    return s0 + q * (1.0 - np.exp(-b * np.clip(eps_p, 0.0, None)))
+
+
+def swift_flow(eps_p, K, eps0, n):
+    """σ = K·(ε0 + ε_p)^n."""
+    return K * np.power(eps0 + np.clip(eps_p, 0.0, None), n)
+
+
+# Upsetting cases the FE table did not train on: other μ, h0/d0, d0 and hardening laws
+# (the table has Swift K 1000, ε0 0.002, n 0.05/0.2/0.4/0.65, d0 6, μ 0–0.35, h0/d0 0.6/1/1.6/2.5).
+VALIDATION_CASES = (
+    {"name": "seed 12Kh18N12M3TL, mu 0.12, h0/d0 1.5", "law": (johnson_cook_flow, {"A": 105.0, "B": 1392.0, "n": 0.642}), "mu": 0.12, "d0": 6.0, "h0": 9.0, "eps_end": 0.72, "E": 194_000.0},
+    {"name": "12Kh18N10T, mu 0.05, h0/d0 1.25", "law": (johnson_cook_flow, {"A": 280.0, "B": 1215.0, "n": 0.43}), "mu": 0.05, "d0": 8.0, "h0": 10.0, "eps_end": 0.7, "E": 200_000.0},
+    {"name": "steel 45, mu 0.25, h0/d0 1.0", "law": (johnson_cook_flow, {"A": 410.0, "B": 280.0, "n": 0.47}), "mu": 0.25, "d0": 6.0, "h0": 6.0, "eps_end": 0.7, "E": 210_000.0},
+    {"name": "Voce, mu 0.17, h0/d0 1.8", "law": (voce_flow, {"s0": 300.0, "q": 400.0, "b": 5.0}), "mu": 0.17, "d0": 5.0, "h0": 9.0, "eps_end": 0.7, "E": 200_000.0},
+    {"name": "Swift n 0.3, mu 0.08, h0/d0 2.0", "law": (swift_flow, {"K": 800.0, "eps0": 0.01, "n": 0.3}), "mu": 0.08, "d0": 6.0, "h0": 12.0, "eps_end": 0.7, "E": 200_000.0},
+    {"name": "seed law, mu 0.28, h0/d0 1.2", "law": (johnson_cook_flow, {"A": 105.0, "B": 1392.0, "n": 0.642}), "mu": 0.28, "d0": 6.0, "h0": 7.2, "eps_end": 0.7, "E": 194_000.0},
+)
+
+
+def case_flow(case: dict):
+    from functools import partial
+
+    fn, kw = case["law"]
+    return partial(fn, **kw)
+
+
+def case_model(case: dict):
+    from flowcurve.identification.fe.upsetting import UpsettingModel
+
+    return UpsettingModel.from_law(case["d0"], case["h0"], case["h0"] * math.exp(-case["eps_end"]), case["mu"], case_flow(case),
+                                   E_MPa=case["E"], increments=70)
+
+
+def run_case(case: dict):
+    from flowcurve.identification.fe.upsetting import simulate_upsetting
+
+    return simulate_upsetting(case_model(case))

@@ -1,0 +1,146 @@
+"""Run an identified flow curve on a record's specimen in CalculiX and compare force–stroke.
+
+The check the seed did in LS-DYNA (5.1 %), done with an open solver: the identified curve
+(a ``result.json``'s hardening law, or the ``*ELASTIC``/``*PLASTIC`` rows of a CalculiX card)
+and friction μ drive the upsetting model (:mod:`.upsetting`) on the record's d0, h0 to the
+record's largest shortening; the record's frame-corrected force–stroke curve (the fast
+identification's ``corrected_diagram``) is compared with the FE force at the same stroke.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from flowcurve.errors import IdentificationError
+from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
+from flowcurve.identification.hardening import LAWS
+
+DEFAULT_E_MPa = 200_000.0
+COMPARE_FROM_STRAIN = 0.02  # the toe and the elastic rise are left out of the deviation
+
+
+@dataclass
+class FlowCurveSource:
+    eps_p: np.ndarray
+    stress_MPa: np.ndarray
+    E_MPa: float | None
+    mu: float | None
+    what: str
+
+
+def _table_from_function(fn, eps_max: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    eps = np.concatenate([[0.0], np.geomspace(1e-4, eps_max, PLASTIC_ROWS)])
+    return eps, np.asarray(fn(eps), dtype=float)
+
+
+def curve_from_result(result: dict, source: str = "result.json") -> FlowCurveSource:
+    """The hardening law of a ``result.json`` (law + unit-named constants) as a *PLASTIC table."""
+    h = result.get("hardening") or {}
+    law = LAWS.get(h.get("law"))
+    if law is None:
+        raise IdentificationError(f"{source}: no hardening law to verify ('hardening.law' is {h.get('law')!r}; expected one of {', '.join(LAWS)})")
+    try:
+        params = {name: float(h[key]) for name, key in zip(law.names, law.keys)}
+    except (KeyError, TypeError, ValueError):
+        raise IdentificationError(f"{source}: hardening constants {', '.join(law.keys)} missing or not numbers") from None
+    eps, sig = _table_from_function(lambda e: law.func(e, **params))
+    E = result.get("E_MPa") if result.get("E_source") in ("option", "record (material.E_MPa)") else None
+    mu = result.get("friction_mu")
+    return FlowCurveSource(eps, sig, E, None if mu is None else float(mu), f"{source}: {h['law']} {params}")
+
+
+def curve_from_card(text: str, source: str = "card") -> FlowCurveSource:
+    """``*ELASTIC`` (E, ν) and the first temperature's ``*PLASTIC`` rows (σ, ε_p[, T]) of a CalculiX card."""
+    E, rows, block = None, [], None
+    for line_no, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line or line.startswith("**"):
+            continue
+        if line.startswith("*"):
+            block = line.split(",")[0].upper()
+            if block == "*PLASTIC" and "HARDENING=JOHNSON" in line.upper().replace(" ", ""):
+                raise IdentificationError(f"{source}, line {line_no}: *PLASTIC, HARDENING=JOHNSON COOK is misread by ccx 2.20; give a table")
+            continue
+        try:
+            values = [float(v) for v in line.rstrip(",").split(",")]
+        except ValueError:
+            raise IdentificationError(f"{source}, line {line_no}: not a row of numbers: {line[:60]!r}") from None
+        if block == "*ELASTIC" and E is None:
+            E = values[0]
+        elif block == "*PLASTIC":
+            rows.append(values)
+    if len(rows) < 2:
+        raise IdentificationError(f"{source}: no *PLASTIC table (need at least 2 rows)")
+    rows = np.array([r[:3] for r in rows if len(r) >= 2], dtype=object)
+    first_t = rows[0][2] if len(rows[0]) > 2 else None
+    table = np.array([[r[0], r[1]] for r in rows if (len(r) < 3 or r[2] == first_t)], dtype=float)
+    sig, eps = table[:, 0], table[:, 1]
+    if eps[0] != 0.0 or np.any(np.diff(eps) <= 0):
+        raise IdentificationError(f"{source}: *PLASTIC strains must start at 0 and increase")
+    if eps.size > 100:  # keep ccx's table short (CALCULIX.md)
+        grid = np.concatenate([[0.0], np.geomspace(max(eps[1], 1e-5), eps[-1], PLASTIC_ROWS)])
+        sig, eps = np.interp(grid, eps, sig), grid
+    return FlowCurveSource(eps, sig, E, None, f"{source}: *PLASTIC, {eps.size} rows")
+
+
+def load_curve(path: str | Path) -> FlowCurveSource:
+    from flowcurve.identification.outcome import read_json_object
+
+    p = Path(path)
+    if p.is_dir():
+        p = p / "result.json"
+    if p.suffix.lower() == ".json":
+        return curve_from_result(read_json_object(p, IdentificationError, "result file"), str(p))
+    try:
+        return curve_from_card(p.read_text(encoding="utf-8", errors="replace"), str(p))
+    except FileNotFoundError:
+        raise IdentificationError(f"{p}: no such result or card") from None
+
+
+def record_force_stroke(record):
+    """(specimen shortening mm, force N) of the record's loading branch, frame-corrected and
+    scaled to the measured height change by the fast identification."""
+    from flowcurve.identification.compression import identify_compression
+
+    ident = identify_compression(record)
+    d = ident.curves["corrected_diagram"]
+    return d["specimen_displacement_mm"].to_numpy(), d["force_N"].to_numpy(), ident
+
+
+def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = None, increments: int = 50, timeout_s: float = 900.0) -> dict:
+    """FE force–stroke of ``curve`` on ``record``'s specimen vs the record; deviations in %."""
+    if record.test != "compression":
+        raise IdentificationError(f"{record.source}: verify runs upsetting (compression) records; this is a {record.test} record")
+    stroke, force, ident = record_force_stroke(record)
+    d0 = record.positive("specimen.d0_mm", required=True)
+    h0 = record.positive("specimen.h0_mm", required=True)
+    mu = mu if mu is not None else curve.mu if curve.mu is not None else ident.result["friction_mu"]
+    E = curve.E_MPa or record.positive("material.E_MPa") or DEFAULT_E_MPa
+    s_end = float(np.max(stroke))
+    model = UpsettingModel(d0, h0, h0 - s_end, float(mu), tuple(map(float, curve.eps_p)), tuple(map(float, curve.stress_MPa)),
+                           E_MPa=float(E), increments=increments)
+    run = simulate_upsetting(model, timeout_s=timeout_s)
+    s_fe = np.concatenate([[0.0], run.stroke_mm])
+    f_fe = np.concatenate([[0.0], run.force_N])
+    strain = -np.log(1.0 - stroke / h0)
+    sel = strain >= COMPARE_FROM_STRAIN
+    if sel.sum() < 3:
+        raise IdentificationError(f"{record.source}: too little of the record beyond {COMPARE_FROM_STRAIN:g} strain to compare")
+    f_at = np.interp(stroke[sel], s_fe, f_fe)
+    dev = (force[sel] - f_at) / f_at * 100.0
+    post_dmax = record.positive("post.dmax_mm")
+    return {
+        "record": record.source, "curve": curve.what, "mu": float(mu), "E_MPa": float(E),
+        "d0_mm": d0, "h0_mm": h0, "stroke_end_mm": s_end,
+        "max_force_deviation_pct": float(np.max(np.abs(dev))),
+        "rms_force_deviation_pct": float(np.sqrt(np.mean(dev**2))),
+        "final_force_deviation_pct": float(dev[-1]),
+        "fe_dmax_mm": float(run.dmax_mm[-1]), "record_dmax_mm": post_dmax,
+        "dmax_deviation_mm": None if post_dmax is None else float(post_dmax - run.dmax_mm[-1]),
+        "compared_from_strain": COMPARE_FROM_STRAIN, "solver_wall_s": run.wall_s, "solver_cached": run.cached,
+        "curves": {"stroke_mm": stroke[sel], "record_force_N": force[sel], "fe_force_N": f_at, "deviation_pct": dev},
+    }
