@@ -262,6 +262,7 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
             r2 = vxy * vxy / (vxx * vyy)
             if not slope > 0:
                 continue
+            se = max(se, math.sqrt(noise_MPa**2 + (slope * strain_noise) ** 2) / math.sqrt(vxx))  # the readings' own noise
             if r2 < AUTO_WINDOW_R2:
                 best_r2 = max(best_r2, r2)
                 continue

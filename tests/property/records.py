@@ -36,6 +36,7 @@ class Truth:
     Rm_MPa: float  # max recorded force / S0
     elastic_samples: int
     noise_MPa: float
+    sample_step_MPa: float  # the stress change over one plastic sample at Rp0.2 (the curve is drawn at Δεp = 0.001)
 
 
 @st.composite
@@ -114,7 +115,8 @@ def tension_records(draw):
                   Rp02_MPa=None if plateau else rp02_closed_form(law, E, sy),
                   ReH_MPa=float(s_eng[n_el]) if plateau else None, ReL_MPa=float(np.min(s_eng[n_el + 1: n_el + 1 + parts_ep[1].size])) if plateau else None,
                   uniform_plastic_strain=float(ep[min(i_m, ep.size - 1)]), Rm_MPa=float(np.max(force_rec)) / s0,
-                  elastic_samples=n_el, noise_MPa=noise_frac * float(np.max(force)) / s0)
+                  elastic_samples=n_el, noise_MPa=noise_frac * float(np.max(force)) / s0,
+                  sample_step_MPa=float(law(0.003) - law(0.002)))
     return record, truth, description
 
 
