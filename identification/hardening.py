@@ -267,7 +267,8 @@ def _polish(spec: _Law, starts: list[dict[str, float]], eps: np.ndarray, sig: np
     for start in starts:
         x0 = np.clip([start[n] for n in spec.names], lo, hi)
         x0 = np.where(x0 <= lo, lo + 1e-9 * np.maximum(np.abs(lo), 1.0), x0)  # strictly inside for trf
-        sol = least_squares(residual, x0, bounds=(lo, hi), x_scale="jac", max_nfev=MAX_EVALUATIONS)
+        with np.errstate(all="ignore"):  # trial steps may overflow; such steps are rejected by the solver
+            sol = least_squares(residual, x0, bounds=(lo, hi), x_scale="jac", max_nfev=MAX_EVALUATIONS)
         if np.isfinite(sol.cost) and sol.cost < best_cost:
             best_x, best_cost = sol.x, sol.cost
     if best_x is None:

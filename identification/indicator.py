@@ -69,6 +69,14 @@ class LineFit:
         return -self.intercept / self.slope
 
 
+def strain_quantum_noise(strain) -> float:
+    """Standard deviation of the reading error of a quantized strain signal: q/√12, q its
+    smallest non-zero step (negligible for a signal that is not quantized)."""
+    d = np.abs(np.diff(np.asarray(strain, dtype=float)))
+    d = d[np.isfinite(d) & (d > 0)]
+    return float(np.min(d)) / math.sqrt(12.0) if d.size else 0.0
+
+
 def fit_line_in_window(x, y, lo: float, hi: float, *, min_points: int = 5, unit: str = "N") -> LineFit:
     """Least-squares line through the points of the first rise of ``y`` with lo ≤ y ≤ hi.
 
@@ -143,7 +151,7 @@ AUTO_WINDOW_R2 = 0.9995  # a window this linear counts as linear (the Annex G qu
 CONVENTIONAL_WINDOW = (0.10, 0.80)  # used when no stretch is linear (the 42CrMoS4 lab's window)
 FEW_POINTS_TOP = 0.90  # with few samples, all of them up to this fraction of the yield stress
 MIN_LINE_POINTS = 5  # a window with fewer samples is not a candidate of the automatic choice
-MIN_FEW_POINTS = 3  # with fewer samples on the whole elastic line there is no modulus
+MIN_FEW_POINTS = 2  # with fewer samples on the whole elastic line there is no modulus
 FEW_SAMPLES = 10  # an elastic line with fewer samples is used whole, not searched for a window
 
 
@@ -200,7 +208,8 @@ def yield_onset_from_rate(time_s, force_N, levels: int = 400) -> float:
     return float(level[peak + int(below[0])]) if below.size else float(level[-1])
 
 
-def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: bool = False) -> ModulusFit:
+def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: bool = False, noise_MPa: float = 0.0,
+                 strain_noise: float = 0.0) -> ModulusFit:
     """The modulus over the most linear stretch of the first loading (in the manner of
     ISO 6892-1 Annex G / ASTM E111), not over a fixed fraction of the yield stress.
 
@@ -212,6 +221,9 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
     crosshead curve with seating grips), the conventional 0.10–0.80 × the yield stress is used
     and ``source`` says so.
 
+    noise_MPa: the stress noise (standard deviation); with few samples the standard error of E
+    is at least what that noise and the strain noise (e.g. an encoder quantum q: q/√12) give,
+    √(σn² + E²·σε²)/√Σ(ε − ε̄)², so two samples still state one.
     strain_on_stress: regress strain on stress (compliance 1/E) instead of stress on strain:
     unbiased when the strain is the coarse signal (a crosshead with 10 µm steps against a
     specimen that shortens a few µm elastically, where the usual direction dilutes E).
@@ -250,6 +262,7 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
             r2 = vxy * vxy / (vxx * vyy)
             if not slope > 0:
                 continue
+            se = max(se, math.sqrt(noise_MPa**2 + (slope * strain_noise) ** 2) / math.sqrt(vxx))  # the readings' own noise
             if r2 < AUTO_WINDOW_R2:
                 best_r2 = max(best_r2, r2)
                 continue
@@ -277,8 +290,14 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
     slope, intercept, se, r2 = _line_stats(e1[sel], s1[sel], strain_on_stress)
     if not slope > 0:
         raise IdentificationError(f"the stress does not rise with strain on the elastic line ({int(sel.sum())} samples): no modulus")
-    return ModulusFit(slope, se, intercept, r2, int(sel.sum()), (float(window[0]), float(window[1])),
-                      source=f"all {int(sel.sum())} samples of the elastic line (too few for a window)")
+    count = int(sel.sum())
+    x = e1[sel]
+    sxx = float(np.sum((x - x.mean()) ** 2))
+    from_noise = math.sqrt(noise_MPa**2 + (slope * strain_noise) ** 2) / math.sqrt(sxx) if sxx > 0 else float("inf")
+    se = max(se, from_noise) if np.isfinite(se) else from_noise
+    return ModulusFit(slope, se, intercept, r2, count, (float(window[0]), float(window[1])),
+                      source=f"all {count} samples of the elastic line (too few for a window"
+                             + ("; two samples: uncertainty from the force noise only" if count == 2 else "") + ")")
 
 
 def fit_modulus(strain, stress_MPa, window_MPa: tuple[float, float], *, min_points: int = 5,

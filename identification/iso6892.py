@@ -77,9 +77,10 @@ def reduction_of_area_pct(s0_mm2: float, su_mm2: float) -> float:
 # a drop of the stress after a maximum by more than this fraction of it (and 3 noise standard
 # deviations) makes that maximum an upper yield strength
 YIELD_DROP = 0.01
+MAX_YIELD_POINT_EXTENSION_PCT = 0.5  # a force maximum this early is the onset of yield, not of necking
 
 
-def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0) -> dict | None:
+def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | None = None) -> dict | None:
     """Upper and lower yield strength and the yield point extension (ISO 6892-1 3.10.2, 3.7.4).
 
     ReH: the maximum stress before the first drop of more than 1 % (and 3 noise standard
@@ -93,6 +94,8 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0) -> dict | None:
     e = np.asarray(strain, dtype=float)
     s = np.asarray(stress_MPa, dtype=float)
     i_m = int(np.nanargmax(s))
+    if E_MPa is not None and i_m + 1 < s.size and 100.0 * (e[i_m] - s[i_m] / E_MPa) <= MAX_YIELD_POINT_EXTENSION_PCT:
+        i_m = s.size - 1  # the largest force at the onset of yield: an upper yield point, the record may end on the plateau
     head = s[: i_m + 1]
     run = np.maximum.accumulate(head)
     threshold = np.maximum(YIELD_DROP * run, 3.0 * noise_MPa)

@@ -8,6 +8,7 @@ compensated, and scaled to the measured elongation post.lu_mm when it was measur
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
@@ -18,10 +19,12 @@ from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
 from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, fit_hardening, three_point_fit
-from flowcurve.identification.indicator import FEW_SAMPLES, auto_modulus, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
+from flowcurve.identification.indicator import FEW_SAMPLES, auto_modulus, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
 from flowcurve.identification.necking import METHODS as NECK_METHODS
 from flowcurve.identification.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
+
+logger = logging.getLogger(__name__)
 
 TRUE_STRESS_FORMS = ("gost_3_6", "constant_volume")
 HARDENING_METHODS = ("least_squares", "three_point")
@@ -29,6 +32,7 @@ MODULUS_REFERENCES = ("Rp02", "Rm")
 FIT_POINTS = 30  # the uniform range is resampled to this many points, evenly in εp
 MIN_YIELD_OFFSET = 0.002
 FRACTURE_POINT_MODES = ("auto", "include", "exclude")
+MAX_E_UNCERTAINTY = 0.10  # a regressed E less certain than this (relative standard error) is no modulus
 # auto: the fracture point may cost the uniform range at most this much max error (percentage points)
 FRACTURE_POINT_SLACK_PCT = 2.0
 # a record ending below this fraction of Fm, after Fm, has reached fracture (an export cut at
@@ -270,6 +274,18 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
 
     # E, the toe and Rp0.2 depend on each other through the window: iterate to a fixed point
     ref = 0.5 * Rm if modulus_reference == "Rp02" else Rm
+    first_guesses = [Rm]  # when the first guess leaves too few samples on the elastic line
+    if fractions is None and window_fixed_MPa is None and record.has("time_s"):
+        try:  # a yield guess from the force rate (constant speed): a sparse elastic line needs a good one
+            onset = yield_onset_from_rate(data["time_s"].to_numpy(float)[: i_m + 1], force[: i_m + 1]) / s0
+            if 0 < onset <= Rm:
+                first_guesses.insert(0, onset)
+        except IdentificationError as exc:
+            logger.debug("no yield estimate from the force rate: %s", exc)
+    curvature = np.diff(eng_stress[: i_m + 1], 2)  # second differences: a linear trend leaves none, white noise σ leaves σ√6
+    noise_MPa = float(1.4826 * np.median(np.abs(curvature - np.median(curvature))) / math.sqrt(6.0)) if curvature.size else 0.0
+    raw_channel = "extensometer_mm" if src["source"] == "extensometer" else "crosshead_mm"
+    strain_noise = strain_quantum_noise(sub.column(raw_channel)[: i_m + 1] / length)  # the encoder's quantum, before the compliance
     handbook_E = record.positive("material.E_MPa") if E_MPa is None else None
     toe_mm = 0.0
     for step in range(6):
@@ -280,12 +296,18 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
             line_points, how = 5, f"given window {fractions[0]:g}–{fractions[1]:g} × {modulus_reference}"
         else:
             try:
-                auto = auto_modulus(disp0 / length, eng_stress, ref)  # the window is the same before toe and scaling
+                auto = auto_modulus(disp0 / length, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise)  # the window is the same before toe and scaling
             except IdentificationError:
-                if step > 0 or ref >= Rm:
+                if step > 0 or not first_guesses:
                     raise
-                ref = Rm  # a sparse elastic line may hold no sample below the first guess: start from Rm
-                auto = auto_modulus(disp0 / length, eng_stress, ref)
+                while True:  # a sparse elastic line may hold too few samples below the first guess
+                    ref = first_guesses.pop(0)
+                    try:
+                        auto = auto_modulus(disp0 / length, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise)
+                        break
+                    except IdentificationError:
+                        if not first_guesses:
+                            raise
             window_MPa, line_points, how = auto.window_MPa, min(auto.n_points, 5), auto.source
         disp = disp0
         if toe:
@@ -295,11 +317,17 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         strain = disp / length
         mod = fit_modulus(strain, eng_stress, window_MPa, min_points=line_points)
         mod.source = how
+        if window_fixed_MPa is None and fractions is None:
+            mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
         E = mod.E_MPa
         if E_MPa is not None:
             E, mod.source = float(E_MPa), "option E_MPa"
         elif handbook_E is not None and fractions is None and window_fixed_MPa is None and mod.n_points < FEW_SAMPLES:
             E, mod.source = handbook_E, f"handbook material.E_MPa (only {mod.n_points} samples on the elastic line)"
+        if E == mod.E_MPa and not mod.E_stderr_MPa <= MAX_E_UNCERTAINTY * E:
+            raise IdentificationError(
+                f"{record.source}: the elastic line is not resolved: E = {E:.4g} ± {mod.E_stderr_MPa:.2g} MPa from {mod.n_points} samples "
+                f"({mod.source}); give the handbook modulus (--E or material.E_MPa) or sample faster")
         Rp02, _ = iso6892.offset_yield_strength(strain, eng_stress, E, MIN_YIELD_OFFSET, start_MPa=window_MPa[0])
         if window_fixed_MPa is not None or modulus_reference == "Rm" or abs(Rp02 - ref) <= 1e-6 * Rp02:
             break
@@ -310,9 +338,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         warnings.append(f"apparent modulus {E:.4g} MPa is far from any metal's: check units, the frame stiffness or the window")
 
     # ISO 6892-1 results
-    step = np.diff(eng_stress[: i_m + 1])
-    noise_MPa = float(1.4826 * np.median(np.abs(step - np.median(step))) / math.sqrt(2.0)) if step.size else 0.0
-    yp = iso6892.yield_point(strain, eng_stress, noise_MPa=noise_MPa)
+    yp = iso6892.yield_point(strain, eng_stress, noise_MPa=noise_MPa, E_MPa=E)
     if yp is not None:
         warnings.append(f"the curve has a yield point (ReH {yp['ReH_MPa']:.1f} MPa, ReL {yp['ReL_MPa']:.1f} MPa, Ae {yp['Ae_pct']:.2f} %): "
                         "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")
