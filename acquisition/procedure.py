@@ -267,6 +267,7 @@ class Procedure:
         self._t0 = 0.0
         self.writer: RecordWriter | None = None
         self._writing = False
+        self._unshown_rows: list[np.ndarray] = []  # recorded rows no snapshot has carried yet (the last batch)
 
     # clock: test seconds since the procedure started (time-scaled on the virtual rig)
     def clock(self) -> float:
@@ -320,7 +321,9 @@ class Procedure:
                     safety.switch_off(reason or "end of test")
                     self._stop_motion()
                     if sampler is not None:
-                        self.writer.append_rows(sampler.finish())
+                        final = sampler.finish()
+                        self.writer.append_rows(final)
+                        self._unshown_rows.append(final)
                     self._event("stop", reason)
         except BaseException as exc:  # anything unexpected: keep the record, mark it aborted
             self._close(STATUS_ABORTED, {"abort_reason": " ".join(f"{type(exc).__name__}: {exc}".split())})
@@ -335,7 +338,9 @@ class Procedure:
             post = self._post_measurements()
             if post:
                 amend_record(self.path, post)
-        self.view.show(Snapshot("done", time_s=self.clock(), samples=samples, message=reason), force=True)
+        tail = [r for r in self._unshown_rows if r.size]
+        self.view.show(Snapshot("done", time_s=self.clock(), samples=samples, message=reason,
+                                rows=np.concatenate(tail) if tail else None), force=True)
         return Outcome(self.path, status, reason, samples, self.clock(), state.max_force_N, post, error)
 
     # phases --------------------------------------------------------------------------------
@@ -407,6 +412,7 @@ class Procedure:
                     curve_f.append(rows[::10, 1])
                     reason = stop_reason(rows, state, crit)
                     if reason:
+                        self._unshown_rows.append(rows)  # the done snapshot carries them to live plots
                         return reason
                 fault = sampler.fault or sampler.check_silence()
                 if fault is not None:

@@ -160,3 +160,32 @@ def test_q_on_the_terminal_stops_the_test(tmp_path, fake_rig, monkeypatch):
         os.close(master)
     assert out.status == "complete" and out.reason == "operator stop (q)"
     assert read_record(out.path).meta["stop_reason"] == "operator stop (q)"
+
+
+class _RowsView:
+    """A live view that keeps every row the procedure's snapshots carry (as the console does)."""
+
+    def __init__(self):
+        self.rows = []
+
+    def show(self, snapshot, force=False):
+        if snapshot.rows is not None and len(snapshot.rows):
+            self.rows.append(np.asarray(snapshot.rows))
+
+    def say(self, text):
+        pass
+
+    def close(self):
+        pass
+
+
+def test_live_rows_reach_the_view_up_to_the_fracture(tmp_path, fake_rig):
+    """Every recorded row reaches the live view once, the batch that ended the test included
+    (the console's plot stopped short of the fracture drop before)."""
+    rig = fake_rig(x_frac_mm=1.0)
+    view = _RowsView()
+    out = Procedure(rig, spec(), tmp_path / "t.csv", view=view).run()
+    rec = read_record(out.path)
+    shown = np.concatenate(view.rows)
+    assert len(shown) == len(rec.data)
+    np.testing.assert_allclose(shown[:, 1], rec.column("force_N"), atol=1e-6)
