@@ -84,7 +84,9 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | No
     """Upper and lower yield strength and the yield point extension (ISO 6892-1 3.10.2, 3.7.4).
 
     ReH: the maximum stress before the first drop of more than 1 % (and 3 noise standard
-    deviations) — searched before the maximum force. ReL: the lowest stress on the yield plateau,
+    deviations) — searched before the maximum force (over the whole record when, with
+    ``E_MPa``, the maximum force lies within 0.5 % plastic extension: the record ends on the
+    plateau). ReL: the lowest stress on the yield plateau,
     the initial transient (from ReH to the local maximum after the first minimum) disregarded
     unless nothing else is left. Ae: the extension from ReH to the start of uniform work hardening — the last sample up
     to Fm still within the plateau band (ReL + half the drop, at most 2 % of ReL, at least 3

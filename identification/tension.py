@@ -92,30 +92,27 @@ def choose_fracture_variant(pair: dict, eps_p, stress_MPa, mode: str) -> tuple[s
                        "(the law cannot pass through both; see hardening_alternatives)")
 
 
-def _check_window(window, name: str, *, fractions: bool) -> tuple[float, float] | None:
-    """A (lo, hi) modulus window: fractions 0 ≤ lo < hi ≤ 1, or MPa 0 ≤ lo < hi; or None."""
-    if window is None:
+def _two_numbers(value, name: str, what: str, upper: float) -> tuple[float, float] | None:
+    """(lo, hi) with 0 ≤ lo < hi ≤ upper from an option, or None; else a one-line error naming it."""
+    if value is None:
         return None
     try:
-        lo, hi = (float(v) for v in window)
+        lo, hi = (float(v) for v in value)
     except (TypeError, ValueError):
-        raise IdentificationError(f"{name} must be two numbers LO,HI, got {window!r}") from None
-    if not (0 <= lo < hi) or (fractions and hi > 1) or not math.isfinite(hi):
-        raise IdentificationError(f"{name} must be {'fractions 0 ≤ lo < hi ≤ 1' if fractions else 'MPa 0 ≤ lo < hi'}, got {window!r}")
+        raise IdentificationError(f"{name} must be two {what} LO,HI, got {value!r}") from None
+    if not (0 <= lo < hi <= upper):
+        raise IdentificationError(f"{name} must satisfy 0 ≤ LO < HI ≤ {upper:g} ({what}), got {value!r}")
     return lo, hi
+
+
+def _check_window(window, name: str, *, fractions: bool) -> tuple[float, float] | None:
+    """A (lo, hi) modulus window: fractions 0 ≤ lo < hi ≤ 1, or MPa 0 ≤ lo < hi; or None."""
+    return _two_numbers(window, name, "fractions" if fractions else "stresses in MPa", 1.0 if fractions else MAX_STRESS_MPa)
 
 
 def check_fit_range(fit_range) -> tuple[float, float] | None:
     """A (lo, hi) plastic-strain range with 0 ≤ lo < hi, or None."""
-    if fit_range is None:
-        return None
-    try:
-        lo, hi = (float(v) for v in fit_range)
-    except (TypeError, ValueError):
-        raise IdentificationError(f"fit_range must be two plastic strains LO,HI, got {fit_range!r}") from None
-    if not (0 <= lo < hi <= MAX_STRAIN):
-        raise IdentificationError(f"fit_range must satisfy 0 ≤ LO < HI ≤ {MAX_STRAIN:g} (true plastic strain, a fraction), got {lo:g},{hi:g}")
-    return lo, hi
+    return _two_numbers(fit_range, "fit_range", "plastic strains (fractions)", MAX_STRAIN)
 
 
 def _increasing(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -94,7 +94,7 @@ def test_modulus_window_in_MPa_and_result_block(synthetic):
     assert {"E_MPa", "E_stderr_MPa", "r2", "n_points", "window_MPa", "source"} <= set(auto)
     with pytest.raises(IdentificationError, match="not both"):
         identify_tension(rec, modulus_window_MPa=(50.0, 300.0), modulus_window=(0.1, 0.5))
-    with pytest.raises(IdentificationError, match="modulus_window_MPa must be"):
+    with pytest.raises(IdentificationError, match="modulus_window_MPa must satisfy"):
         identify_tension(rec, modulus_window_MPa=(300.0, 50.0))
 
 
