@@ -34,7 +34,8 @@ def wait_for(predicate, timeout_s: float = 60.0, what: str = "condition", driver
         time.sleep(0.1)
     page = ""
     if driver is not None:
-        page = f"; page: state {text(driver, '#state')!r}, message {text(driver, '#message')!r}, form errors {text(driver, '#setup')[-300:]!r}"
+        page = (f"; page: state {text(driver, '#state')!r}, message {text(driver, '#message')!r}, form errors {text(driver, '#setup')[-300:]!r}, "
+                f"post form {text(driver, '#post')[-300:]!r}, result {text(driver, '#result')[:300]!r}")
     raise AssertionError(f"timed out waiting for {what} (last: {last!r}){page}")
 
 
