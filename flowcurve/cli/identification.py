@@ -112,7 +112,7 @@ def register(subparsers) -> None:
     m.add_argument("--fit-range", type=_pair, metavar="LO,HI", help="true plastic strain range of the hardening fit, e.g. 0.01,0.15 (default: from 0.2 %% offset, past a yield plateau, to the end of the uniform range)")
     m.add_argument("--fracture-point", choices=("auto", "include", "exclude"), help="the neck-corrected fracture point in the least-squares hardening fit (tension): include, exclude, or auto (default: included unless it costs the uniform range more than 2 %% max error); both variants are reported")
     m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default fe_table: the CalculiX table; all are reported)")
-    m.add_argument("--method", choices=("fast", "inverse-fe"), default="fast", help="compression: fast (default; FE tables, no solver at identification time) or inverse-fe (hardening law and μ fitted with CalculiX in the loop to the force-stroke curve and dmax)")
+    m.add_argument("--method", choices=("fast", "inverse-fe"), default="fast", help="fast (default; compression: FE tables, no solver at identification time) or inverse-fe (CalculiX in the loop: compression, the hardening law and μ fitted to the force-stroke curve and dmax; tension, the hardening beyond Fm fitted to the force-elongation curve and the neck diameter dk)")
     m.add_argument("--workers", type=int, metavar="N", help="inverse-fe: solver runs side by side (default: the cores)")
     m.add_argument("--scheduler", metavar="ADDRESS", help="inverse-fe: send the solver runs to this Dask distributed scheduler (needs the 'fe' extra)")
     m.add_argument("--friction-correction", choices=_choices("flowcurve.identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default fe_table: the CalculiX force factor; all are computed)")
@@ -250,7 +250,13 @@ def summary_lines(result: dict) -> list[str]:
         extra = "   ".join(f"{k} {_fmt(v, '.3f')}" for k, v in methods.items() if isinstance(v, (int, float)))
         lines.append(f"  friction μ {_fmt(result.get('friction_mu'), '.3f')}" + (f"   ({extra})" if extra else ""))
     inv = result.get("inverse_fe")
-    if inv:
+    if inv and result.get("test") == "tension":
+        necks = ", ".join(f"{k} {v['vs_fe_pct']:+.1f} %" for k, v in inv["neck_corrections_vs_fe"].items())
+        lines.append(f"  inverse FE beyond Fm: H {_fmt(inv['H_MPa'], '.0f')} ± {_fmt(inv['H_MPa_stderr'], '.0f')} MPa, b {_fmt(inv['b'], '.3g')} ± {_fmt(inv['b_stderr'], '.2g')}, "
+                     f"{inv['solver_runs']} solver runs, {_fmt(inv['wall_s'], '.0f')} s, force residual rms {_fmt(inv['force_rms_residual_pct'], '.2f')} %, "
+                     f"fracture stress {_fmt(inv['fracture_true_stress_MPa'], '.1f')} MPa "
+                     f"(closed-form neck corrections against it: {necks})")
+    elif inv:
         lines.append(f"  inverse FE: μ {_fmt(inv['mu'], '.4f')} ± {_fmt(inv['mu_stderr'], '.4f')}, {inv['solver_runs']} solver runs, {_fmt(inv['wall_s'], '.0f')} s, "
                      f"force residual rms {_fmt(inv['force_rms_residual_pct'], '.2f')} %, dmax residual {_fmt(inv['dmax_residual_mm'], '+.4f')} mm")
     return lines

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.fe.pool import run_many
+from flowcurve.identification.fe.solver_fit import fit_with_solver
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 from flowcurve.identification.outcome import Identification
@@ -57,8 +57,17 @@ def _model(problem: _Problem, x) -> UpsettingModel:
                           E_MPa=problem.E, increments=problem.increments)
 
 
-def _run(problem: _Problem, x):
-    """(stroke, force, dmax_end) of one CalculiX run; None when it did not converge."""
+@dataclass(frozen=True)
+class _Run:
+    stroke_mm: np.ndarray
+    force_N: np.ndarray
+    dmax_unloaded_mm: float
+    wall_s: float
+    cached: bool
+
+
+def _run(problem: _Problem, x) -> _Run | None:
+    """Stroke, force and unloaded dmax of one CalculiX run; None when it did not converge."""
     from flowcurve.identification.fe.ccx import SolverError
 
     try:
@@ -69,20 +78,23 @@ def _run(problem: _Problem, x):
     # dmax is measured unloaded: elastic spring-back of the diameter, d·(1 − ν·σ/E), σ = F/A at the end
     sigma_end = r.force_N[-1] / (math.pi * problem.d0**2 * problem.h0 / (4.0 * r.height_mm[-1]))
     d_unloaded = float(r.dmax_mm[-1]) * (1.0 - r.model.nu * sigma_end / problem.E)
-    return np.concatenate([[0.0], r.stroke_mm]), np.concatenate([[0.0], r.force_N]), d_unloaded, r.wall_s, r.cached
+    return _Run(np.concatenate([[0.0], r.stroke_mm]), np.concatenate([[0.0], r.force_N]), d_unloaded, r.wall_s, r.cached)
 
 
 def identify_inverse_fe(record, *, law: str = "johnson_cook", workers: int | None = None, scheduler=None, increments: int = 50,
                         max_runs: int = 150, progress=None) -> Identification:
-    """Fit ``law`` and μ to the record's force–stroke and dmax with CalculiX in the loop."""
-    from scipy.optimize import least_squares
-
+    """Fit ``law`` and μ to the record's force–stroke and dmax with CalculiX in the loop (a tension
+    record: the hardening beyond Fm, :func:`.inverse_tension.identify_inverse_fe_tension`)."""
     from flowcurve.identification.fe.verify import record_force_stroke
 
     if law not in LAWS:
         raise IdentificationError(f"unknown hardening law {law!r}; choose one of {', '.join(LAWS)}")
+    if record.test == "tension":
+        from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
+
+        return identify_inverse_fe_tension(record, workers=workers, scheduler=scheduler, progress=progress, law=law)
     if record.test != "compression":
-        raise IdentificationError(f"{record.source}: --method inverse-fe needs a compression record (this is {record.test}); tension is not done yet")
+        raise IdentificationError(f"{record.source}: --method inverse-fe needs a compression or tension record (this is {record.test!r})")
     t0 = time.perf_counter()
     stroke, force, fast = record_force_stroke(record)
     d0 = record.positive("specimen.d0_mm", required=True)
@@ -112,63 +124,22 @@ def identify_inverse_fe(record, *, law: str = "johnson_cook", workers: int | Non
     hi = np.array([law_info.bounds[n][1] for n in law_info.names] + [MU_BOUNDS[1]])
     x0 = np.clip(x0, lo + 1e-9, np.where(np.isfinite(hi), hi - 1e-9, np.inf))
 
-    runs = {"count": 0, "solver_s": 0.0}
-    memo: dict[tuple, np.ndarray] = {}
     w_d = math.sqrt(FORCE_POINTS)
 
-    def residuals_of(out) -> np.ndarray:
-        if out is None:
-            return np.full(FORCE_POINTS + 1, 1e3)
-        s_fe, f_fe, d_fe, wall, cached = out
-        r_f = 100.0 * (np.interp(s_pts, s_fe, f_fe) - f_pts) / f_pts
-        return np.concatenate([r_f, [w_d * (d_fe - dmax) / DMAX_SCALE_MM]])
-
-    def evaluate(points: list[np.ndarray]) -> list[np.ndarray]:
-        todo = [p for p in points if tuple(p) not in memo]
-        if todo:
-            if runs["count"] + len(todo) > max_runs:
-                raise IdentificationError(f"inverse FE: more than {max_runs} solver runs without convergence")
-            outs = run_many(partial(_run, problem), todo, workers=workers, scheduler=scheduler)
-            for p, o in zip(todo, outs):
-                runs["count"] += 1
-                if o is not None and not o[4]:
-                    runs["solver_s"] += o[3]
-                memo[tuple(p)] = residuals_of(o)
-            if progress:
-                progress(runs["count"], time.perf_counter() - t0)
-        return [memo[tuple(p)] for p in points]
+    def residuals_of(out: _Run) -> np.ndarray:
+        r_f = 100.0 * (np.interp(s_pts, out.stroke_mm, out.force_N) - f_pts) / f_pts
+        return np.concatenate([r_f, [w_d * (out.dmax_unloaded_mm - dmax) / DMAX_SCALE_MM]])
 
     def steps(x):
         h = np.maximum(np.abs(x) * REL_STEP, 1e-6)
         h[-1] = 0.005
         return h
 
-    def fun(x):
-        return evaluate([np.asarray(x, float)])[0]
-
-    def jac(x):
-        x = np.asarray(x, float)
-        h = steps(x)
-        pts = []
-        for i in range(x.size):
-            xp = x.copy()
-            xp[i] = x[i] + h[i] if x[i] + h[i] <= hi[i] else x[i] - h[i]
-            pts.append(xp)
-        res = evaluate([x] + pts)
-        return np.column_stack([(res[i + 1] - res[0]) / (pts[i][i] - x[i]) for i in range(x.size)])
-
     x_scale = np.maximum(np.abs(x0), 1e-3)
     x_scale[-1] = 0.05
-    sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), x_scale=x_scale, xtol=1e-6, ftol=1e-6, gtol=1e-8, max_nfev=20)
-    r = sol.fun
-    J = sol.jac
-    dof = max(1, r.size - x0.size)
-    s2 = float(r @ r) / dof
-    try:
-        cov = np.linalg.inv(J.T @ J) * s2
-        se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    except np.linalg.LinAlgError:
-        se = np.full(x0.size, np.nan)
+    sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1, steps=steps,
+                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress)
+    r, se = sol.residuals, sol.stderr
     params = dict(zip(law_info.names, map(float, sol.x[:-1])))
     mu = float(sol.x[-1])
     wall = time.perf_counter() - t0
@@ -186,9 +157,9 @@ def identify_inverse_fe(record, *, law: str = "johnson_cook", workers: int | Non
         "friction_mu": mu, "friction_method": "inverse_fe", "friction_correction": "inverse_fe",
         "hardening": hardening,
         "inverse_fe": {
-            "mu": mu, "mu_stderr": float(se[-1]), "solver_runs": runs["count"], "solver_s": round(runs["solver_s"], 1),
+            "mu": mu, "mu_stderr": float(se[-1]), "solver_runs": sol.runs, "solver_s": round(sol.solver_s, 1),
             "wall_s": round(wall, 1), "force_rms_residual_pct": force_rms, "force_max_residual_pct": float(np.max(np.abs(r[:-1]))),
-            "dmax_residual_mm": d_res_mm, "optimizer": {"status": int(sol.status), "message": str(sol.message), "nfev": int(sol.nfev)},
+            "dmax_residual_mm": d_res_mm, "optimizer": sol.optimizer(),
             "warm_start": {"mu": mu0, **{k: float(v) for k, v in zip(law_info.keys, p0)}},
             "model": {"increments": increments, "E_MPa": float(E), "h_end_mm": problem.h_end, "force_points": FORCE_POINTS,
                       "dmax_scale_mm": DMAX_SCALE_MM, "from_strain": FROM_STRAIN},

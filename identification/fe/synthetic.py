@@ -1,5 +1,6 @@
-"""Compression records made from CalculiX upsetting runs: the test the rig would have recorded.
+"""Records made from CalculiX runs: the test the rig would have recorded.
 
+Compression (:func:`upsetting_record`):
 The FE force–stroke history of a known flow curve and Coulomb μ becomes a record with the
 rig's artefacts: a seating toe (the crosshead moves ``toe_mm`` while the force rises to
 ``toe_force_N``), the frame compliance (crosshead = specimen + toe + F/C), 10 µm encoder
@@ -18,6 +19,7 @@ import pandas as pd
 
 from flowcurve.record.format import Record
 from flowcurve.identification.fe.upsetting import UpsettingResult
+from flowcurve.identification.fe.tension import TensionResult
 
 
 def upsetting_record(run: UpsettingResult, *, stiffness_N_per_um: float = 136.0, toe_mm: float = 0.03, toe_force_N: float = 300.0,
@@ -61,6 +63,38 @@ def upsetting_record(run: UpsettingResult, *, stiffness_N_per_um: float = 136.0,
         "fe.mu": repr(m.mu),  # the truth the record was made with
     }
     data = pd.DataFrame({"time_s": time, "force_N": -F_meas, "crosshead_mm": -cross})
+    return Record(meta=meta, data=data, source=specimen_id)
+
+
+def tension_record(run: TensionResult, *, stiffness_N_per_um: float = 40.0, noise_N: float = 10.0, step_mm: float = 0.001,
+                   speed_mm_per_s: float = 0.02, rate_hz: float = 10.0, seed: int = 1, material: str = "FE record",
+                   specimen_id: str = "fe-tension-1") -> Record:
+    """A tension :class:`Record` of ``run`` broken at its last increment: the frame compliance
+    (crosshead = elongation + F/C), 1 µm encoder steps, force noise, then the break (the force
+    falls to noise). Post-test: dk = the FE neck diameter, lu = l0 + elongation less the elastic
+    part F_k·l0/(S0·E) (the necked section springs back less; the difference is < 0.01 mm)."""
+    m = run.model
+    rng = np.random.default_rng(seed)
+    elong = np.concatenate([[0.0], run.elongation_mm])
+    force = np.concatenate([[0.0], run.force_N])
+    t = np.arange(0.0, elong[-1] / speed_mm_per_s, 1.0 / rate_hz)
+    e = np.interp(t * speed_mm_per_s, elong, elong)
+    f = np.interp(e, elong, force)
+    n_break = 5
+    e = np.concatenate([e, e[-1] + speed_mm_per_s / rate_hz * np.arange(1, n_break + 1)])
+    f = np.concatenate([f, np.zeros(n_break)])
+    time = np.arange(e.size) / rate_hz
+    cross = np.round((e + f / (stiffness_N_per_um * 1000.0)) / step_mm) * step_mm
+    F_meas = f + rng.normal(0.0, noise_N, f.size)
+    s0 = math.pi * m.d0_mm**2 / 4.0
+    lu = m.l0_mm + float(run.elongation_mm[-1]) - float(run.force_N[-1]) * m.l0_mm / (s0 * m.E_MPa)
+    meta = {
+        "test": "tension", "material": material, "specimen.id": specimen_id, "nominal_temperature_C": "20",
+        "crosshead_speed_mm_per_s": repr(speed_mm_per_s), "rig.frame_stiffness_N_per_um": repr(stiffness_N_per_um),
+        "specimen.d0_mm": repr(m.d0_mm), "specimen.l0_mm": repr(m.l0_mm), "material.E_MPa": repr(m.E_MPa),
+        "post.lu_mm": f"{lu:.3f}", "post.dk_mm": f"{2.0 * float(run.neck_radius_mm[-1]):.3f}",
+    }
+    data = pd.DataFrame({"time_s": time, "force_N": F_meas, "crosshead_mm": cross})
     return Record(meta=meta, data=data, source=specimen_id)
 
 

@@ -93,10 +93,11 @@ class TensionResult:
     completed: bool
     wall_s: float
     message: str = ""
+    cached: bool = False  # read from the run cache, not solved now
 
 
 def simulate_tension(m: TensionModel, *, require_complete: bool = True, timeout_s: float = 600.0, use_cache: bool = True) -> TensionResult:
     out = run_deck(tension_deck(m), name=f"tension d0={m.d0_mm:g}", timeout_s=timeout_s, use_cache=use_cache, require_complete=require_complete)
     r_neck0 = m.d0_mm / 2.0 * (1.0 - m.imperfection)
     return TensionResult(m, out.time, m.elongation_mm * out.time, out.totals["TOP"][:, 1] * SECTOR,
-                         r_neck0 + out.displacements["NECK"][:, 0, 0], out.completed, out.wall_s, out.message)
+                         r_neck0 + out.displacements["NECK"][:, 0, 0], out.completed, out.wall_s, out.message, out.cached)
