@@ -37,6 +37,7 @@ from flowcurve.identification.hardening import HardeningFit, fit_hardening
 from flowcurve.identification.indicator import (ModulusFit, auto_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
                                                 yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
+from flowcurve.identification.results import CompressionHardening, CompressionResult
 from flowcurve.identification.tension import check_fit_range, true_plastic_strain
 
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
@@ -403,48 +404,42 @@ def _curves(diagram: _Diagram, nominal: _Nominal, friction: _Friction, fit: Hard
 
 
 def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: _Nominal, yld: _Yield, friction: _Friction,
-            fits: dict, warnings: list[str], *, E_MPa: float | None, law: str, friction_correction: str, toe: bool) -> dict:
-    """The result.json of a compression identification."""
+            fits: dict, warnings: list[str], *, E_MPa: float | None, law: str, friction_correction: str, toe: bool) -> CompressionResult:
+    """The typed result (result.json) of a compression identification."""
     t, strain, chosen, frictions, fit = diagram.t, nominal.strain, friction.chosen, friction.frictions, fits[friction_correction]
     duration = float(t[-1] - t[0])
     strain_rate = float(strain[-1] / duration) if duration > 0 else None
-    friction_block = {m: (r.mu if isinstance(r, fr.FrictionResult) else None) for m, r in frictions.items()}
-    result = {
-        "test": "compression",
-        "E_MPa": yld.E_used,
-        "E_source": yld.E_source,  # option (handbook) / apparent (initial slope, §2.3) / none
-        "Rp02_MPa": yld.rp02,  # compression yield: mean pressure at 0.2 % plastic strain
-        "Rm_MPa": None,
-        "Ag_pct": None,
-        "A_pct": None,
-        "Z_pct": None,
-        "fracture_true_strain": None,
-        "fracture_true_stress_MPa": None,
-        "max_force_N": float(np.max(diagram.force)),
-        "final_true_strain": float(strain[-1]),
-        "friction_mu": chosen.mu,
-        "friction_method": chosen.method,
-        "friction": friction_block,
-        "friction_details": {m: (r.as_dict() if isinstance(r, fr.FrictionResult) else {"method": m, "error": r}) for m, r in frictions.items()},
-        "friction_correction": friction_correction,
-        "hardening": {**fit.as_dict(), "correction": friction_correction},
-        "hardening_by_correction": {m: f.as_dict() for m, f in fits.items()},
-        "indicator": {
+    K_l, el = nominal.K_l, line.line
+    return CompressionResult(
+        E_MPa=yld.E_used,
+        E_source=yld.E_source,  # option (handbook) / apparent (initial slope, §2.3) / none
+        Rp02_MPa=yld.rp02,  # compression yield: mean pressure at 0.2 % plastic strain
+        max_force_N=float(np.max(diagram.force)),
+        final_true_strain=float(strain[-1]),
+        friction_mu=chosen.mu,
+        friction_method=chosen.method,
+        friction={m: (r.mu if isinstance(r, fr.FrictionResult) else None) for m, r in frictions.items()},
+        friction_details={m: (r.as_dict() if isinstance(r, fr.FrictionResult) else {"method": m, "error": r}) for m, r in frictions.items()},
+        friction_correction=friction_correction,
+        hardening=CompressionHardening(fit=fit, correction=friction_correction),
+        hardening_by_correction={m: f.as_dict() for m, f in fits.items()},
+        indicator={
             "frame_stiffness_N_per_um": diagram.stiffness,
-            "K_l": nominal.K_l,
+            "K_l": K_l,
             "measured_shortening_mm": nominal.measured,
             "springback_mm": nominal.springback,
             "max_specimen_displacement_mm": float(np.max(line.specimen)),
+            **({"toe_compensation_mm": line.toe_mm if toe else None} if el is not None else {}),
         },
-        "methods": {
+        methods={
             "friction": f"{chosen.method} (all: {', '.join(fr.FRICTION_METHODS)})",
             "correction": f"{friction_correction} (all: {', '.join(fr.CORRECTIONS)})",
             "stress": "mean pressure P/S, S = pi*d_n^2/4, d_n = d0*sqrt(h0/h) (3.28)-(3.32)",
             "scaling": "K_l = (h0 - hk [+ spring-back]) / max(specimen displacement) (3.1)",
             "hardening": f"{law} least squares on the {friction_correction} curve, eps_p >= {YIELD_OFFSET}",
         },
-        "warnings": warnings,
-        "record": {
+        warnings=warnings,
+        record={
             "path": record.source,
             "material": record.meta.get("material"),
             "nominal_temperature_C": record.number("nominal_temperature_C"),
@@ -453,15 +448,10 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
             "specimen": {"d0_mm": geo["d0"], "h0_mm": geo["h0"]},
             "post": {"hk_mm": geo["hk"], "dmax_mm": geo["dmax"], "smax_mm2": geo["smax"]},
         },
-    }
-    K_l, el = nominal.K_l, line.line
-    if yld.E_fit is not None:
-        result["E_apparent_stderr_MPa"] = yld.E_fit.E_stderr_MPa / K_l
-    if el is not None:
-        result["modulus"] = {**el.as_dict(), "E_MPa": yld.E_used, "E_line_MPa": el.E_MPa / K_l,
-                             "E_stderr_MPa": el.E_stderr_MPa / K_l, "source": yld.E_source if E_MPa is not None else el.source}
-        result["indicator"]["toe_compensation_mm"] = line.toe_mm if toe else None
-    return result
+        E_apparent_stderr_MPa=yld.E_fit.E_stderr_MPa / K_l if yld.E_fit is not None else None,
+        modulus=None if el is None else {**el.as_dict(), "E_MPa": yld.E_used, "E_line_MPa": el.E_MPa / K_l,
+                                         "E_stderr_MPa": el.E_stderr_MPa / K_l, "source": yld.E_source if E_MPa is not None else el.source},
+    )
 
 
 def identify_compression(

@@ -24,6 +24,7 @@ from flowcurve.identification.indicator import FEW_SAMPLES, ModulusFit, auto_mod
 from flowcurve.identification.necking import METHODS as NECK_METHODS
 from flowcurve.identification.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
+from flowcurve.identification.results import TensionHardening, TensionResult
 
 logger = logging.getLogger(__name__)
 
@@ -582,42 +583,42 @@ def _curves(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, fracture: dict, 
 
 
 def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve, fracture: dict, hard: _Hardening, warnings: list[str], *,
-            toe: bool, true_stress: str, poisson: float, neck: str, law: str, hardening: str) -> dict:
-    """The result.json of a tension identification."""
+            toe: bool, true_stress: str, poisson: float, neck: str, law: str, hardening: str) -> TensionResult:
+    """The typed result (result.json) of a tension identification."""
     E, mod, yp, main = line.E, line.mod, iso.yp, hard.main
-    result = {
-        "test": "tension",
-        "E_MPa": E,
-        "E_stderr_MPa": mod.E_stderr_MPa if E == mod.E_MPa else None,
-        "modulus": {**mod.as_dict(), "E_MPa": E, "E_regressed_MPa": mod.E_MPa},
-        "Rp02_MPa": line.Rp02,
-        "yield_point": yp is not None,  # ISO 6892-1: with a yield point ReH/ReL are the yield strengths
-        "ReH_MPa": yp["ReH_MPa"] if yp else None,
-        "ReL_MPa": yp["ReL_MPa"] if yp else None,
-        "Ae_pct": yp["Ae_pct"] if yp else None,
-        "Rm_MPa": inp.Rm,
-        "Fm_N": inp.Fm,
-        "Ag_pct": iso.Ag,
-        "Agt_pct": 100.0 * iso.e_m,
-        "A_pct": iso.A,
-        "A_method": iso.A_method,
-        "Z_pct": iso.Z,
-        "uniform_true_strain": true.eps_u,
-        "uniform_true_plastic_strain": true.eps_p_at_Rm,
-        "fracture_true_strain": fracture.get("true_strain"),
-        "fracture_true_stress_MPa": fracture[neck]["stress_MPa"] if fracture else None,
-        "fracture_avg_stress_MPa": fracture.get("avg_stress_MPa"),
-        "neck_corrections": {k: v for k, v in fracture.items() if k in NECK_METHODS or k.startswith("a_over_R")},
-        "hardening": {**main.as_dict(), "fracture_point_weight": hard.weight if hard.extra and hard.main_fracture[0] == "with" else None,
-                      "fracture_point": {"with": "included", "without": "excluded"}.get(hard.main_fracture[0], "none"),
-                      "fracture_point_choice": hard.main_fracture[1],
-                      "uniform_range_error_pct": uniform_error_pct(main, hard.grid, hard.fit_sig),
-                      "fit_range": [float(hard.grid[0]), float(hard.grid[-1])]},
-        "hardening_alternatives": {**{k: f.as_dict() for k, f in hard.fits.items() if k != hard.main_key},
-                                   **{k: f.as_dict() for k, f in hard.variants.items()}},
-        "three_points": [{"true_plastic_strain": e, "true_stress_MPa": s} for e, s in hard.three_points] if hard.three_points else None,
-        "modulus_window_MPa": list(line.window_MPa),
-        "methods": {
+    return TensionResult(
+        E_MPa=E,
+        E_stderr_MPa=mod.E_stderr_MPa if E == mod.E_MPa else None,
+        modulus={**mod.as_dict(), "E_MPa": E, "E_regressed_MPa": mod.E_MPa},
+        Rp02_MPa=line.Rp02,
+        yield_point=yp is not None,  # ISO 6892-1: with a yield point ReH/ReL are the yield strengths
+        ReH_MPa=yp["ReH_MPa"] if yp else None,
+        ReL_MPa=yp["ReL_MPa"] if yp else None,
+        Ae_pct=yp["Ae_pct"] if yp else None,
+        Rm_MPa=inp.Rm,
+        Fm_N=inp.Fm,
+        Ag_pct=iso.Ag,
+        Agt_pct=100.0 * iso.e_m,
+        A_pct=iso.A,
+        A_method=iso.A_method,
+        Z_pct=iso.Z,
+        uniform_true_strain=true.eps_u,
+        uniform_true_plastic_strain=true.eps_p_at_Rm,
+        fracture_true_strain=fracture.get("true_strain"),
+        fracture_true_stress_MPa=fracture[neck]["stress_MPa"] if fracture else None,
+        fracture_avg_stress_MPa=fracture.get("avg_stress_MPa"),
+        neck_corrections={k: v for k, v in fracture.items() if k in NECK_METHODS or k.startswith("a_over_R")},
+        hardening=TensionHardening(
+            fit=main, fracture_point_weight=hard.weight if hard.extra and hard.main_fracture[0] == "with" else None,
+            fracture_point={"with": "included", "without": "excluded"}.get(hard.main_fracture[0], "none"),
+            fracture_point_choice=hard.main_fracture[1],
+            uniform_range_error_pct=uniform_error_pct(main, hard.grid, hard.fit_sig),
+            fit_range=[float(hard.grid[0]), float(hard.grid[-1])]),
+        hardening_alternatives={**{k: f.as_dict() for k, f in hard.fits.items() if k != hard.main_key},
+                                **{k: f.as_dict() for k, f in hard.variants.items()}},
+        three_points=[{"true_plastic_strain": e, "true_stress_MPa": s} for e, s in hard.three_points] if hard.three_points else None,
+        modulus_window_MPa=list(line.window_MPa),
+        methods={
             "strain_source": inp.src["source"],
             "strain_length_mm": inp.length,
             "frame_stiffness_N_per_um": inp.src["stiffness"],
@@ -633,10 +634,9 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
             "neck_correction": neck,
             "hardening": f"{hardening} {law}",
         },
-        "warnings": warnings,
-    }
-    result["record"] = record_summary(inp.record)
-    return result
+        warnings=warnings,
+        record=record_summary(inp.record),
+    )
 
 
 def identify_tension(record: Record, *, use_extensometer: bool | None = None, frame_stiffness_N_per_um: float | None = None,
