@@ -25,6 +25,7 @@ spring-back before the shortening is scaled.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -32,10 +33,11 @@ import pandas as pd
 from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
-from flowcurve.identification.hardening import fit_hardening
+from flowcurve.identification.hardening import HardeningFit, fit_hardening
 from flowcurve.identification.indicator import (ModulusFit, auto_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
                                                 yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
+from flowcurve.identification.results import CompressionHardening, CompressionResult
 from flowcurve.identification.tension import check_fit_range, true_plastic_strain
 
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
@@ -187,6 +189,271 @@ def compensate_toe_line(specimen_mm, force_N, line: ModulusFit, toe_mm: float, *
     return out
 
 
+@dataclass
+class _Diagram:
+    """The loading branch of the indicator diagram: time, force and travel made positive, the
+    specimen's displacement (frame compliance removed when the stiffness is known)."""
+
+    t: np.ndarray
+    force: np.ndarray
+    travel: np.ndarray
+    specimen: np.ndarray
+    stiffness: float | None
+    warnings: list[str]
+
+
+@dataclass
+class _Line:
+    """The elastic line (None when there is none), its toe, and the toe-compensated displacement."""
+
+    line: ModulusFit | None
+    toe_mm: float
+    specimen: np.ndarray
+    warnings: list[str]
+
+
+@dataclass
+class _Nominal:
+    """The shortening scaled to the measured height change, and the nominal curve it gives."""
+
+    springback: float
+    measured: float  # the shortening the scaling aims at, mm
+    shortening: np.ndarray
+    K_l: float
+    h: np.ndarray
+    strain: np.ndarray
+    d_n: np.ndarray
+    pressure: np.ndarray
+    warnings: list[str]
+
+
+@dataclass
+class _Yield:
+    """The modulus that strips elastic strain, where it came from, and the compression yield."""
+
+    E_used: float | None
+    E_fit: ModulusFit | None  # the elastic line when E is its apparent modulus
+    E_source: str
+    rp02: float | None
+    i_yield: int  # the first sample at Rp0.2 (0 without one)
+
+
+@dataclass
+class _Friction:
+    """μ by every method, the chosen one, and the curve by every friction correction."""
+
+    chosen: fr.FrictionResult
+    frictions: dict
+    corrected: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]  # method → (εp, σ, ε)
+    warnings: list[str]
+
+
+def _check_options(friction_correction: str, E_MPa: float | None) -> None:
+    """The friction correction and the handbook modulus, checked."""
+    if friction_correction not in fr.CORRECTIONS:
+        raise IdentificationError(f"unknown friction correction {friction_correction!r} (choose from {', '.join(fr.CORRECTIONS)})")
+    if E_MPa is not None and not (math.isfinite(E_MPa) and E_MPa > 0):
+        raise IdentificationError(f"E_MPa must be > 0, got {E_MPa!r}")
+
+
+def _handbook_modulus(record: Record, E_MPa: float | None) -> tuple[float | None, str]:
+    """The handbook modulus (the option, else the record's material.E_MPa) and its source."""
+    if E_MPa is None and record.positive("material.E_MPa") is not None:
+        # a short stiff specimen's elastic line is about one encoder count: the handbook
+        # modulus the operator entered strips elastic strain better than a regression on it
+        return record.positive("material.E_MPa"), "record (material.E_MPa)"
+    return E_MPa, "option"
+
+
+def _inputs(record: Record, frame_stiffness_N_per_um: float | None) -> _Diagram:
+    """The indicator diagram's loading branch, the frame compliance removed (§2.1)."""
+    src = record.source
+    warnings: list[str] = []
+    t = record.column("time_s")
+    force_raw = record.column("force_N")
+    cross_raw = record.column("crosshead_mm")
+    _check_crosshead_gaps(src, force_raw, cross_raw)
+    ok = np.isfinite(t) & np.isfinite(force_raw) & np.isfinite(cross_raw)
+    t, force_raw, cross_raw = t[ok], force_raw[ok], cross_raw[ok]
+    if t.size < 10:
+        raise RecordError(src, f"only {t.size} complete samples (time, force, crosshead); a compression identification needs more")
+    force = force_raw * compression_sign(force_raw)
+    travel = cross_raw - cross_raw[0]
+    travel = travel * compression_sign(travel)
+
+    stiffness = frame_stiffness_N_per_um if frame_stiffness_N_per_um is not None else record.positive("rig.frame_stiffness_N_per_um")
+    if stiffness is not None:
+        specimen = remove_frame_compliance(travel, force, stiffness)
+    else:
+        specimen = travel.copy()
+        warnings.append("no frame stiffness ('rig.frame_stiffness_N_per_um'): the frame compliance is left to the scaling K_l")
+    end = loading_branch_end(travel, force)
+    t, force, travel, specimen = t[: end + 1], force[: end + 1], travel[: end + 1], specimen[: end + 1]
+    if end < 10:
+        raise IdentificationError(f"{src}: the loading branch has only {end + 1} samples")
+    return _Diagram(t=t, force=force, travel=travel, specimen=specimen, stiffness=stiffness, warnings=warnings)
+
+
+def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_window_MPa, modulus_window,
+                  modulus_reference: str, toe: bool) -> _Line:
+    """The elastic line and the toe: the linear part extended to zero force (ISO 6892-1)."""
+    warnings: list[str] = []
+    area0 = math.pi * geo["d0"] ** 2 / 4.0
+    specimen = diagram.specimen
+    try:
+        line, toe_mm = elastic_line(diagram.t, specimen, diagram.force, area0_mm2=area0, h0_mm=geo["h0"], window_MPa=modulus_window_MPa,
+                                    window=modulus_window, modulus_reference=modulus_reference)
+    except IdentificationError as exc:
+        line, toe_mm = None, 0.0
+        warnings.append(f"no elastic line ({exc}): the toe is not compensated; "
+                        + (f"the handbook E = {E_MPa:g} MPa strips the elastic strain" if E_MPa is not None
+                           else "no modulus, so the elastic strain is not removed and there is no Rp0.2 — give E_MPa"))
+    if line is not None and toe:
+        specimen = compensate_toe_line(specimen, diagram.force, line, toe_mm, area0_mm2=area0, h0_mm=geo["h0"])
+    return _Line(line=line, toe_mm=toe_mm, specimen=specimen, warnings=warnings)
+
+
+def _nominal_curve(diagram: _Diagram, geo: dict, specimen: np.ndarray, E_MPa: float | None) -> _Nominal:
+    """The shortening scaled to the measured one (3.1) and the nominal curve: strain (3.31), mean pressure (3.28)–(3.32)."""
+    warnings: list[str] = []
+    d0, h0, hk, force = geo["d0"], geo["h0"], geo["hk"], diagram.force
+    # measured shortening at the largest load: h0 − hk plus the elastic spring-back when E is known
+    d_k = float(fr.nominal_diameter(d0, h0, hk))
+    springback = 0.0
+    if E_MPa is not None:
+        springback = hk * (force[-1] / (math.pi * d_k**2 / 4.0)) / E_MPa  # elastic strain σ/E over hk
+    measured = h0 - hk + springback
+    shortening, K_l = scale_to_measured(np.clip(specimen, 0.0, None), measured)  # (3.1) K_l = (h0 − hk)/max Δl
+    if abs(K_l - 1.0) > 0.1:
+        warnings.append(f"scaling factor K_l = {K_l:.3f} differs from 1 by more than 10 %: check the frame stiffness, hk and the crosshead channel")
+    h = h0 - shortening
+    strain = fr.height_strain(h, h0)  # (3.31)
+    d_n = fr.nominal_diameter(d0, h0, h)  # (3.28)
+    area = math.pi * d_n**2 / 4.0  # (3.30)
+    pressure = force / area  # (3.32) σ_n = P/S_i
+    return _Nominal(springback=springback, measured=measured, shortening=shortening, K_l=K_l, h=h, strain=strain, d_n=d_n,
+                    pressure=pressure, warnings=warnings)
+
+
+def _modulus_and_yield(nominal: _Nominal, line: ModulusFit | None, E_MPa: float | None, E_source: str) -> _Yield:
+    """E (handbook, else the elastic line's slope on the scaled strain) and Rp0.2 on the nominal curve."""
+    E_used, E_fit = E_MPa, None
+    if E_MPa is None and line is not None:
+        E_fit = line
+        E_used, E_source = line.E_MPa / nominal.K_l, "apparent"  # the line's slope on the scaled strain
+    elif E_MPa is None:
+        E_source = "none"
+    pressure = nominal.pressure
+    rp02 = offset_yield(plastic_strain(nominal.strain, pressure, E_used), pressure) if E_used is not None else None
+    i_yield = int(np.argmax(pressure >= rp02)) if rp02 is not None else 0
+    return _Yield(E_used=E_used, E_fit=E_fit, E_source=E_source, rp02=rp02, i_yield=i_yield)
+
+
+def _friction_correction(geo: dict, nominal: _Nominal, friction_method: str, E_used: float | None) -> _Friction:
+    """μ (again, now with the curve: the FE table's μ depends on the hardening) and the curve by every correction."""
+    warnings: list[str] = []
+    chosen, frictions = _friction_all(geo, friction_method, warnings, curve=(nominal.strain, nominal.pressure))
+    corrected = {}
+    for method in fr.CORRECTIONS:
+        eps_t, sig_t = fr.correct(method, nominal.strain, nominal.pressure, chosen.mu, nominal.d_n / 2.0, nominal.h)
+        corrected[method] = (plastic_strain(eps_t, sig_t, E_used), sig_t, eps_t)
+    return _Friction(chosen=chosen, frictions=frictions, corrected=corrected, warnings=warnings)
+
+
+def _hardening_fits(src: str, corrected: dict, i_yield: int, fit_range, law: str, friction_correction: str) -> tuple[dict, list[str]]:
+    """The hardening law fitted to every corrected curve from the yield sample on: (fits, warnings)."""
+    warnings: list[str] = []
+    fits = {}
+    fit_range = check_fit_range(fit_range)
+    for method, (eps_tp, sig_t, _) in corrected.items():
+        idx = _fit_subset(eps_tp, YIELD_OFFSET, i_yield)
+        if fit_range is not None:
+            idx = idx[(eps_tp[idx] >= fit_range[0]) & (eps_tp[idx] <= fit_range[1])]
+        if idx.size < 4:
+            if method == friction_correction:
+                raise IdentificationError(f"{src}: the plastic range has only {idx.size} points; nothing to fit (did the specimen yield?)")
+            continue
+        try:
+            fits[method] = fit_hardening(eps_tp[idx], sig_t[idx], law)
+        except IdentificationError as exc:
+            if method == friction_correction:
+                raise
+            warnings.append(f"hardening fit on the {method} curve failed: {exc}")
+    warnings += [f"hardening: {w}" for w in fits[friction_correction].warnings]
+    return fits, warnings
+
+
+def _flow_curve(eps_p: np.ndarray, stress_MPa: np.ndarray, i_yield: int) -> pd.DataFrame:
+    """The curve a card starts from: where the plastic strain has passed the 0.2 % offset."""
+    plastic = np.nonzero((np.maximum.accumulate(eps_p) >= YIELD_OFFSET) & (eps_p >= 0) & (np.arange(eps_p.size) >= i_yield))[0]
+    return pd.DataFrame({"true_plastic_strain": eps_p[plastic], "true_stress_MPa": stress_MPa[plastic]})
+
+
+def _curves(diagram: _Diagram, nominal: _Nominal, friction: _Friction, fit: HardeningFit) -> dict[str, pd.DataFrame]:
+    """The intermediate curves for plots: raw and corrected diagram, nominal, one per correction, the fit."""
+    curves: dict[str, pd.DataFrame] = {
+        "raw_diagram": pd.DataFrame({"crosshead_displacement_mm": diagram.travel, "force_N": diagram.force}),
+        "corrected_diagram": pd.DataFrame({"specimen_displacement_mm": nominal.shortening, "force_N": diagram.force}),
+        "nominal": pd.DataFrame({"true_strain": nominal.strain, "mean_pressure_MPa": nominal.pressure, "height_mm": nominal.h}),
+    }
+    for method, (eps_tp, sig_t, eps_t) in friction.corrected.items():
+        curves[f"true_{method}"] = pd.DataFrame({"true_plastic_strain": eps_tp, "true_stress_MPa": sig_t, "true_strain": eps_t})
+    grid = np.linspace(fit.strain_range[0], fit.strain_range[1], FIT_CURVE_POINTS)
+    curves["fit"] = pd.DataFrame({"true_plastic_strain": grid, "true_stress_MPa": fit(grid)})
+    return curves
+
+
+def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: _Nominal, yld: _Yield, friction: _Friction,
+            fits: dict, warnings: list[str], *, E_MPa: float | None, law: str, friction_correction: str, toe: bool) -> CompressionResult:
+    """The typed result (result.json) of a compression identification."""
+    t, strain, chosen, frictions, fit = diagram.t, nominal.strain, friction.chosen, friction.frictions, fits[friction_correction]
+    duration = float(t[-1] - t[0])
+    strain_rate = float(strain[-1] / duration) if duration > 0 else None
+    K_l, el = nominal.K_l, line.line
+    return CompressionResult(
+        E_MPa=yld.E_used,
+        E_source=yld.E_source,  # option (handbook) / apparent (initial slope, §2.3) / none
+        Rp02_MPa=yld.rp02,  # compression yield: mean pressure at 0.2 % plastic strain
+        max_force_N=float(np.max(diagram.force)),
+        final_true_strain=float(strain[-1]),
+        friction_mu=chosen.mu,
+        friction_method=chosen.method,
+        friction={m: (r.mu if isinstance(r, fr.FrictionResult) else None) for m, r in frictions.items()},
+        friction_details={m: (r.as_dict() if isinstance(r, fr.FrictionResult) else {"method": m, "error": r}) for m, r in frictions.items()},
+        friction_correction=friction_correction,
+        hardening=CompressionHardening(fit=fit, correction=friction_correction),
+        hardening_by_correction={m: f.as_dict() for m, f in fits.items()},
+        indicator={
+            "frame_stiffness_N_per_um": diagram.stiffness,
+            "K_l": K_l,
+            "measured_shortening_mm": nominal.measured,
+            "springback_mm": nominal.springback,
+            "max_specimen_displacement_mm": float(np.max(line.specimen)),
+            **({"toe_compensation_mm": line.toe_mm if toe else None} if el is not None else {}),
+        },
+        methods={
+            "friction": f"{chosen.method} (all: {', '.join(fr.FRICTION_METHODS)})",
+            "correction": f"{friction_correction} (all: {', '.join(fr.CORRECTIONS)})",
+            "stress": "mean pressure P/S, S = pi*d_n^2/4, d_n = d0*sqrt(h0/h) (3.28)-(3.32)",
+            "scaling": "K_l = (h0 - hk [+ spring-back]) / max(specimen displacement) (3.1)",
+            "hardening": f"{law} least squares on the {friction_correction} curve, eps_p >= {YIELD_OFFSET}",
+        },
+        warnings=warnings,
+        record={
+            "path": record.source,
+            "material": record.meta.get("material"),
+            "nominal_temperature_C": record.number("nominal_temperature_C"),
+            "crosshead_speed_mm_per_s": record.number("crosshead_speed_mm_per_s"),
+            "strain_rate_per_s": strain_rate,  # mean true strain rate of the loading branch
+            "specimen": {"d0_mm": geo["d0"], "h0_mm": geo["h0"]},
+            "post": {"hk_mm": geo["hk"], "dmax_mm": geo["dmax"], "smax_mm2": geo["smax"]},
+        },
+        E_apparent_stderr_MPa=yld.E_fit.E_stderr_MPa / K_l if yld.E_fit is not None else None,
+        modulus=None if el is None else {**el.as_dict(), "E_MPa": yld.E_used, "E_line_MPa": el.E_MPa / K_l,
+                                         "E_stderr_MPa": el.E_stderr_MPa / K_l, "source": yld.E_source if E_MPa is not None else el.source},
+    )
+
+
 def identify_compression(
     record: Record,
     *,
@@ -212,183 +479,20 @@ def identify_compression(
     default: the widest linear stretch, :func:`elastic_line`), ``toe`` (compensate a soft
     start, default on), ``fit_range`` (LO, HI true plastic strain of the hardening fit).
     """
-    src = record.source
-    if friction_correction not in fr.CORRECTIONS:
-        raise IdentificationError(f"unknown friction correction {friction_correction!r} (choose from {', '.join(fr.CORRECTIONS)})")
-    if E_MPa is not None and not (math.isfinite(E_MPa) and E_MPa > 0):
-        raise IdentificationError(f"E_MPa must be > 0, got {E_MPa!r}")
-    E_source = "option"
-    if E_MPa is None and record.positive("material.E_MPa") is not None:
-        # a short stiff specimen's elastic line is about one encoder count: the handbook
-        # modulus the operator entered strips elastic strain better than a regression on it
-        E_MPa, E_source = record.positive("material.E_MPa"), "record (material.E_MPa)"
+    _check_options(friction_correction, E_MPa)
+    E_MPa, E_source = _handbook_modulus(record, E_MPa)
     geo = _meta_geometry(record)
-    d0, h0, hk = geo["d0"], geo["h0"], geo["hk"]
-    warnings: list[str] = []
-
-    # friction first: it needs only the post-test measurements, and bad ones should stop early
-    chosen, frictions = _friction_all(geo, friction_method, [])
-
-    # -- indicator diagram ------------------------------------------------------------------
-    t = record.column("time_s")
-    force_raw = record.column("force_N")
-    cross_raw = record.column("crosshead_mm")
-    _check_crosshead_gaps(src, force_raw, cross_raw)
-    ok = np.isfinite(t) & np.isfinite(force_raw) & np.isfinite(cross_raw)
-    t, force_raw, cross_raw = t[ok], force_raw[ok], cross_raw[ok]
-    if t.size < 10:
-        raise RecordError(src, f"only {t.size} complete samples (time, force, crosshead); a compression identification needs more")
-    force = force_raw * compression_sign(force_raw)
-    travel = cross_raw - cross_raw[0]
-    travel = travel * compression_sign(travel)
-
-    stiffness = frame_stiffness_N_per_um if frame_stiffness_N_per_um is not None else record.positive("rig.frame_stiffness_N_per_um")
-    if stiffness is not None:
-        specimen = remove_frame_compliance(travel, force, stiffness)
-    else:
-        specimen = travel.copy()
-        warnings.append("no frame stiffness ('rig.frame_stiffness_N_per_um'): the frame compliance is left to the scaling K_l")
-    end = loading_branch_end(travel, force)
-    t, force, travel, specimen = t[: end + 1], force[: end + 1], travel[: end + 1], specimen[: end + 1]
-    if end < 10:
-        raise IdentificationError(f"{src}: the loading branch has only {end + 1} samples")
-
-    # -- elastic line and toe: the linear part extended to zero force (ISO 6892-1) ----------
-    area0 = math.pi * d0**2 / 4.0
-    try:
-        line, toe_mm = elastic_line(t, specimen, force, area0_mm2=area0, h0_mm=h0, window_MPa=modulus_window_MPa,
-                                    window=modulus_window, modulus_reference=modulus_reference)
-    except IdentificationError as exc:
-        line, toe_mm = None, 0.0
-        warnings.append(f"no elastic line ({exc}): the toe is not compensated; "
-                        + (f"the handbook E = {E_MPa:g} MPa strips the elastic strain" if E_MPa is not None
-                           else "no modulus, so the elastic strain is not removed and there is no Rp0.2 — give E_MPa"))
-    if line is not None and toe:
-        specimen = compensate_toe_line(specimen, force, line, toe_mm, area0_mm2=area0, h0_mm=h0)
-
-    # measured shortening at the largest load: h0 − hk plus the elastic spring-back when E is known
-    d_k = float(fr.nominal_diameter(d0, h0, hk))
-    springback = 0.0
-    if E_MPa is not None:
-        springback = hk * (force[-1] / (math.pi * d_k**2 / 4.0)) / E_MPa  # elastic strain σ/E over hk
-    measured = h0 - hk + springback
-    shortening, K_l = scale_to_measured(np.clip(specimen, 0.0, None), measured)  # (3.1) K_l = (h0 − hk)/max Δl
-    if abs(K_l - 1.0) > 0.1:
-        warnings.append(f"scaling factor K_l = {K_l:.3f} differs from 1 by more than 10 %: check the frame stiffness, hk and the crosshead channel")
-
-    # -- nominal curve ----------------------------------------------------------------------
-    h = h0 - shortening
-    strain = fr.height_strain(h, h0)  # (3.31)
-    d_n = fr.nominal_diameter(d0, h0, h)  # (3.28)
-    area = math.pi * d_n**2 / 4.0  # (3.30)
-    pressure = force / area  # (3.32) σ_n = P/S_i
-
-    E_used, E_fit = E_MPa, None
-    if E_MPa is None and line is not None:
-        E_fit = line
-        E_used, E_source = line.E_MPa / K_l, "apparent"  # the line's slope on the scaled strain
-    elif E_MPa is None:
-        E_source = "none"
-
-    # -- friction (again, now with the curve: the FE table's μ depends on the hardening) ----
-    chosen, frictions = _friction_all(geo, friction_method, warnings, curve=(strain, pressure))
-    mu = chosen.mu
-
-    # -- friction corrections ---------------------------------------------------------------
-    curves: dict[str, pd.DataFrame] = {
-        "raw_diagram": pd.DataFrame({"crosshead_displacement_mm": travel, "force_N": force}),
-        "corrected_diagram": pd.DataFrame({"specimen_displacement_mm": shortening, "force_N": force}),
-        "nominal": pd.DataFrame({"true_strain": strain, "mean_pressure_MPa": pressure, "height_mm": h}),
-    }
-    corrected: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    for method in fr.CORRECTIONS:
-        eps_t, sig_t = fr.correct(method, strain, pressure, mu, d_n / 2.0, h)
-        eps_tp = plastic_strain(eps_t, sig_t, E_used)
-        corrected[method] = (eps_tp, sig_t)
-        curves[f"true_{method}"] = pd.DataFrame({"true_plastic_strain": eps_tp, "true_stress_MPa": sig_t, "true_strain": eps_t})
-
-    # -- hardening fits, from the yield sample on ----------------------------------------------
-    rp02 = offset_yield(plastic_strain(strain, pressure, E_used), pressure) if E_used is not None else None
-    i_yield = int(np.argmax(pressure >= rp02)) if rp02 is not None else 0
-    fits = {}
-    fit_range = check_fit_range(fit_range)
-    for method, (eps_tp, sig_t) in corrected.items():
-        idx = _fit_subset(eps_tp, YIELD_OFFSET, i_yield)
-        if fit_range is not None:
-            idx = idx[(eps_tp[idx] >= fit_range[0]) & (eps_tp[idx] <= fit_range[1])]
-        if idx.size < 4:
-            if method == friction_correction:
-                raise IdentificationError(f"{src}: the plastic range has only {idx.size} points; nothing to fit (did the specimen yield?)")
-            continue
-        try:
-            fits[method] = fit_hardening(eps_tp[idx], sig_t[idx], law)
-        except IdentificationError as exc:
-            if method == friction_correction:
-                raise
-            warnings.append(f"hardening fit on the {method} curve failed: {exc}")
-    fit = fits[friction_correction]
-    warnings += [f"hardening: {w}" for w in fit.warnings]
-    eps_def, sig_def = corrected[friction_correction]
-    grid = np.linspace(fit.strain_range[0], fit.strain_range[1], FIT_CURVE_POINTS)
-    curves["fit"] = pd.DataFrame({"true_plastic_strain": grid, "true_stress_MPa": fit(grid)})
-
-    # from where the plastic strain has passed the 0.2 % offset: the curve a card starts from
-    plastic = np.nonzero((np.maximum.accumulate(eps_def) >= YIELD_OFFSET) & (eps_def >= 0) & (np.arange(eps_def.size) >= i_yield))[0]
-    true_curve = pd.DataFrame({"true_plastic_strain": eps_def[plastic], "true_stress_MPa": sig_def[plastic]})
-
-    duration = float(t[-1] - t[0])
-    strain_rate = float(strain[-1] / duration) if duration > 0 else None
-
-    friction_block = {m: (r.mu if isinstance(r, fr.FrictionResult) else None) for m, r in frictions.items()}
-    result = {
-        "test": "compression",
-        "E_MPa": E_used,
-        "E_source": E_source,  # option (handbook) / apparent (initial slope, §2.3) / none
-        "Rp02_MPa": rp02,  # compression yield: mean pressure at 0.2 % plastic strain
-        "Rm_MPa": None,
-        "Ag_pct": None,
-        "A_pct": None,
-        "Z_pct": None,
-        "fracture_true_strain": None,
-        "fracture_true_stress_MPa": None,
-        "max_force_N": float(np.max(force)),
-        "final_true_strain": float(strain[-1]),
-        "friction_mu": mu,
-        "friction_method": chosen.method,
-        "friction": friction_block,
-        "friction_details": {m: (r.as_dict() if isinstance(r, fr.FrictionResult) else {"method": m, "error": r}) for m, r in frictions.items()},
-        "friction_correction": friction_correction,
-        "hardening": {**fit.as_dict(), "correction": friction_correction},
-        "hardening_by_correction": {m: f.as_dict() for m, f in fits.items()},
-        "indicator": {
-            "frame_stiffness_N_per_um": stiffness,
-            "K_l": K_l,
-            "measured_shortening_mm": measured,
-            "springback_mm": springback,
-            "max_specimen_displacement_mm": float(np.max(specimen)),
-        },
-        "methods": {
-            "friction": f"{chosen.method} (all: {', '.join(fr.FRICTION_METHODS)})",
-            "correction": f"{friction_correction} (all: {', '.join(fr.CORRECTIONS)})",
-            "stress": "mean pressure P/S, S = pi*d_n^2/4, d_n = d0*sqrt(h0/h) (3.28)-(3.32)",
-            "scaling": "K_l = (h0 - hk [+ spring-back]) / max(specimen displacement) (3.1)",
-            "hardening": f"{law} least squares on the {friction_correction} curve, eps_p >= {YIELD_OFFSET}",
-        },
-        "warnings": warnings,
-        "record": {
-            "path": src,
-            "material": record.meta.get("material"),
-            "nominal_temperature_C": record.number("nominal_temperature_C"),
-            "crosshead_speed_mm_per_s": record.number("crosshead_speed_mm_per_s"),
-            "strain_rate_per_s": strain_rate,  # mean true strain rate of the loading branch
-            "specimen": {"d0_mm": d0, "h0_mm": h0},
-            "post": {"hk_mm": hk, "dmax_mm": geo["dmax"], "smax_mm2": geo["smax"]},
-        },
-    }
-    if E_fit is not None:
-        result["E_apparent_stderr_MPa"] = E_fit.E_stderr_MPa / K_l
-    if line is not None:
-        result["modulus"] = {**line.as_dict(), "E_MPa": E_used, "E_line_MPa": line.E_MPa / K_l,
-                             "E_stderr_MPa": line.E_stderr_MPa / K_l, "source": E_source if E_MPa is not None else line.source}
-        result["indicator"]["toe_compensation_mm"] = toe_mm if toe else None
-    return Identification(result=result, true_curve=true_curve, curves=curves)
+    _friction_all(geo, friction_method, [])  # friction first: it needs only the post-test measurements, and bad ones should stop early
+    diagram = _inputs(record, frame_stiffness_N_per_um)
+    line = _elastic_line(diagram, geo, E_MPa=E_MPa, modulus_window_MPa=modulus_window_MPa, modulus_window=modulus_window,
+                         modulus_reference=modulus_reference, toe=toe)
+    nominal = _nominal_curve(diagram, geo, line.specimen, E_MPa)
+    yld = _modulus_and_yield(nominal, line.line, E_MPa, E_source)
+    friction = _friction_correction(geo, nominal, friction_method, yld.E_used)
+    fits, fit_warnings = _hardening_fits(record.source, friction.corrected, yld.i_yield, fit_range, law, friction_correction)
+    warnings = diagram.warnings + line.warnings + nominal.warnings + friction.warnings + fit_warnings
+    result = _result(record, geo, diagram, line, nominal, yld, friction, fits, warnings, E_MPa=E_MPa, law=law,
+                     friction_correction=friction_correction, toe=toe)
+    eps_def, sig_def, _ = friction.corrected[friction_correction]
+    return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield),
+                          curves=_curves(diagram, nominal, friction, fits[friction_correction]))

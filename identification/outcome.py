@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
@@ -25,7 +26,9 @@ TRUE_CURVE_COLUMNS = ("true_plastic_strain", "true_stress_MPa")
 class Identification:
     """Results of identifying one record.
 
-    result: the JSON-able dict written to ``result.json`` (keys carry units: ``Rm_MPa``).
+    result: what is written to ``result.json`` (keys carry units: ``Rm_MPa``): a
+        :class:`identification.results.TensionResult` or ``CompressionResult`` (typed, and
+        readable as a mapping), or a plain dict (the inverse-FE identification's).
     true_curve: DataFrame with at least the columns of :data:`TRUE_CURVE_COLUMNS`.
     curves: named intermediate curves for plots and comparison (e.g. "raw_diagram",
         "corrected_diagram", "engineering", "true", "fit", one per correction method), each a
@@ -34,7 +37,7 @@ class Identification:
         ``reports`` (identification does not import reports) and :meth:`write` calls them.
     """
 
-    result: dict
+    result: Mapping  # TensionResult | CompressionResult | dict
     true_curve: pd.DataFrame
     curves: dict[str, pd.DataFrame] = field(default_factory=dict)
     plots: dict[str, Callable[[Path], None]] = field(default_factory=dict)
@@ -50,8 +53,9 @@ class Identification:
 
 
 def to_jsonable(value):
-    """numpy scalars/arrays → Python; NaN/inf → None (JSON has no NaN)."""
-    if isinstance(value, dict):
+    """numpy scalars/arrays → Python; NaN/inf → None (JSON has no NaN); a mapping (a typed
+    result) → dict."""
+    if isinstance(value, Mapping):
         return {str(k): to_jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [to_jsonable(v) for v in value]

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -18,11 +19,12 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
-from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, fit_hardening, three_point_fit
-from flowcurve.identification.indicator import FEW_SAMPLES, auto_modulus, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
+from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, HardeningFit, fit_hardening, three_point_fit
+from flowcurve.identification.indicator import FEW_SAMPLES, ModulusFit, auto_modulus, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
 from flowcurve.identification.necking import METHODS as NECK_METHODS
 from flowcurve.identification.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
+from flowcurve.identification.results import TensionHardening, TensionResult
 
 logger = logging.getLogger(__name__)
 
@@ -191,6 +193,452 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
     return {"disp": disp, "length": float(length), "source": "crosshead", "stiffness": stiffness, "scalable": True, "warnings": warnings}
 
 
+@dataclass
+class _Inputs:
+    """What the record gives: geometry, the force (finite samples only), stress, strain source."""
+
+    record: Record
+    d0: float
+    l0: float
+    s0: float
+    data: pd.DataFrame  # the samples with a force value
+    sub: Record  # the record of those samples
+    force: np.ndarray
+    eng_stress: np.ndarray
+    i_m: int  # index of the maximum force
+    Fm: float
+    Rm: float
+    src: dict  # :func:`_strain_source`: displacement, its length, how it was obtained
+    lu: float | None
+    length: float  # the length the strain refers to (l0 when scaled to a measured Lu)
+    warnings: list[str]
+
+
+@dataclass
+class _ElasticLine:
+    """E, Rp0.2 and the strain they define (toe-compensated, scaled)."""
+
+    E: float
+    mod: ModulusFit
+    Rp02: float
+    window_MPa: tuple[float, float]
+    disp: np.ndarray  # corrected elongation, mm
+    strain: np.ndarray  # engineering strain
+    toe_mm: float
+    scale_factor: float | None
+    noise_MPa: float
+    warnings: list[str]
+
+
+@dataclass
+class _IsoResults:
+    """ISO 6892-1 results beyond Rp0.2: yield point, Ag, A, Z."""
+
+    yp: dict | None
+    e_m: float  # engineering strain at Fm
+    Ag: float
+    i_k: int  # index of the fracture
+    A: float | None
+    A_method: str | None
+    su: float | None  # area after fracture, mm²
+    su_source: str | None
+    dk: float | None
+    Z: float | None
+    warnings: list[str]
+
+
+@dataclass
+class _TrueCurve:
+    """True strain, stress and plastic strain; the uniform range up to Fm, increasing in εp."""
+
+    log_strain: np.ndarray
+    sig_t: np.ndarray
+    eps_p: np.ndarray
+    eps_u: float  # true strain at Fm
+    ep_u: np.ndarray  # the uniform range, εp strictly increasing
+    sig_u: np.ndarray
+    curve: pd.DataFrame  # the flow curve from Rp0.2 on (true_curve.csv)
+    sig_t_rp: float | None  # true stress at 0.2 % plastic strain
+    eps_p_at_Rm: float
+
+
+@dataclass
+class _Hardening:
+    """The hardening fits: the main one, the alternatives, and the points they were fitted to."""
+
+    grid: np.ndarray
+    fit_sig: np.ndarray
+    weight: float
+    extra: list
+    three_points: list | None
+    fits: dict
+    variants: dict
+    main_key: str
+    main: HardeningFit
+    main_fracture: tuple
+    warnings: list[str]
+
+
+def _check_options(*, true_stress, neck, hardening, modulus_reference, fracture_point, fit_range, modulus_window, modulus_window_MPa):
+    """The options, checked: (fit_range, modulus window fractions, modulus window MPa)."""
+    if true_stress not in TRUE_STRESS_FORMS:
+        raise IdentificationError(f"true_stress must be one of {', '.join(TRUE_STRESS_FORMS)}, not {true_stress!r}")
+    if neck not in NECK_METHODS:
+        raise IdentificationError(f"neck must be one of {', '.join(NECK_METHODS)}, not {neck!r}")
+    if hardening not in HARDENING_METHODS:
+        raise IdentificationError(f"hardening must be one of {', '.join(HARDENING_METHODS)}, not {hardening!r}")
+    if modulus_reference not in MODULUS_REFERENCES:
+        raise IdentificationError(f"modulus_reference must be one of {', '.join(MODULUS_REFERENCES)}, not {modulus_reference!r}")
+    if fracture_point not in FRACTURE_POINT_MODES:
+        raise IdentificationError(f"fracture_point must be one of {', '.join(FRACTURE_POINT_MODES)}, not {fracture_point!r}")
+    fit_range = check_fit_range(fit_range)
+    fractions = _check_window(modulus_window, "modulus_window", fractions=True)
+    window_fixed_MPa = _check_window(modulus_window_MPa, "modulus_window_MPa", fractions=False)
+    if fractions is not None and window_fixed_MPa is not None:
+        raise IdentificationError("give modulus_window (fractions) or modulus_window_MPa, not both")
+    return fit_range, fractions, window_fixed_MPa
+
+
+def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, crosshead_length_mm, scale: bool) -> _Inputs:
+    """Geometry, force and engineering stress, and the strain source of a tension record."""
+    warnings: list[str] = []
+    d0 = record.positive("specimen.d0_mm", required=True)
+    l0 = record.positive("specimen.l0_mm", required=True)
+    s0 = record.positive("specimen.s0_mm2", default=math.pi * d0**2 / 4.0)  # F0 = π d0²/4
+    force = record.column("force_N")
+    ok = np.isfinite(force)
+    if not ok.all():
+        warnings.append(f"{int((~ok).sum())} samples without a force value were left out")
+    data = record.data[ok].reset_index(drop=True)
+    force = force[ok]
+    sub = Record(meta=record.meta, data=data, source=record.source)
+    i_m = iso6892.max_force_index(force)
+    Fm = float(force[i_m])
+    if Fm <= 0 or i_m == 0 or Fm - force[0] <= 0.05 * abs(Fm):
+        raise RecordError(record.source, "the force never rises: no tension test in this record (check the force column and its sign)", column="force_N")
+    eng_stress = force / s0
+    Rm = Fm / s0
+    if Rm > MAX_STRESS_MPa:
+        raise IdentificationError(f"{record.source}: Rm = {Rm:.4g} MPa is implausible - check units of force (N) and diameter (mm)")
+
+    src = _strain_source(sub, use_extensometer, force, l0, {"frame_stiffness_N_per_um": frame_stiffness_N_per_um, "crosshead_length_mm": crosshead_length_mm})
+    warnings += src["warnings"]
+    lu = record.positive("post.lu_mm")
+    _check_post_dimensions(record, d0, l0, lu)
+    length = src["length"]
+    if src["scalable"] and scale and lu is not None:
+        if lu <= l0:
+            raise IdentificationError(f"{record.source}: post.lu_mm = {lu:g} mm is not longer than l0 = {l0:g} mm")
+        length = l0
+    return _Inputs(record=record, d0=d0, l0=l0, s0=s0, data=data, sub=sub, force=force, eng_stress=eng_stress, i_m=i_m,
+                   Fm=Fm, Rm=Rm, src=src, lu=lu, length=length, warnings=warnings)
+
+
+def _stress_noise_MPa(stress_MPa: np.ndarray) -> float:
+    """Noise standard deviation of a stress signal from its second differences (robust MAD)."""
+    curvature = np.diff(stress_MPa, 2)  # second differences: a linear trend leaves none, white noise σ leaves σ√6
+    return float(1.4826 * np.median(np.abs(curvature - np.median(curvature))) / math.sqrt(6.0)) if curvature.size else 0.0
+
+
+def _first_guesses(inp: _Inputs, automatic: bool) -> list[float]:
+    """Yield stresses to start the automatic window from: the force rate's onset (if any), then Rm."""
+    first_guesses = [inp.Rm]  # when the first guess leaves too few samples on the elastic line
+    if automatic and inp.record.has("time_s"):
+        try:  # a yield guess from the force rate (constant speed): a sparse elastic line needs a good one
+            onset = yield_onset_from_rate(inp.data["time_s"].to_numpy(float)[: inp.i_m + 1], inp.force[: inp.i_m + 1]) / inp.s0
+            if 0 < onset <= inp.Rm:
+                first_guesses.insert(0, onset)
+        except IdentificationError as exc:
+            logger.debug("no yield estimate from the force rate: %s", exc)
+    return first_guesses
+
+
+def _modulus_window(step: int, ref: float, first_guesses: list[float], strain0, eng_stress, *, fractions, window_fixed_MPa,
+                    modulus_reference: str, noise_MPa: float, strain_noise: float):
+    """The stress window of the elastic line at one step: given (MPa, or × the reference stress) or
+    the most linear stretch; returns (window_MPa, line_points, how, auto fit or None, reference)."""
+    if window_fixed_MPa is not None:
+        return window_fixed_MPa, 5, "given window (MPa)", None, ref
+    if fractions is not None:
+        return (fractions[0] * ref, fractions[1] * ref), 5, f"given window {fractions[0]:g}–{fractions[1]:g} × {modulus_reference}", None, ref
+    try:
+        auto = auto_modulus(strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise)  # the window is the same before toe and scaling
+    except IdentificationError:
+        if step > 0 or not first_guesses:
+            raise
+        while True:  # a sparse elastic line may hold too few samples below the first guess
+            ref = first_guesses.pop(0)
+            try:
+                auto = auto_modulus(strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise)
+                break
+            except IdentificationError:
+                if not first_guesses:
+                    raise
+    return auto.window_MPa, min(auto.n_points, 5), auto.source, auto, ref
+
+
+def _chosen_modulus(mod: ModulusFit, E_MPa: float | None, handbook_E: float | None, given_window: bool) -> float:
+    """The E used: the option, else the handbook's when the line has few samples, else the regressed
+    one; ``mod.source`` says which."""
+    if E_MPa is not None:
+        E, mod.source = float(E_MPa), "option E_MPa"
+    elif handbook_E is not None and not given_window and mod.n_points < FEW_SAMPLES:
+        E, mod.source = handbook_E, f"handbook material.E_MPa (only {mod.n_points} samples on the elastic line)"
+    else:
+        E = mod.E_MPa
+    return E
+
+
+def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_reference: str, E_MPa: float | None,
+                  toe: bool, scale: bool) -> _ElasticLine:
+    """E, the toe and Rp0.2, which depend on each other through the window: iterated to a fixed point."""
+    record, force, eng_stress, i_m, length, src = inp.record, inp.force, inp.eng_stress, inp.i_m, inp.length, inp.src
+    automatic = fractions is None and window_fixed_MPa is None
+    ref = 0.5 * inp.Rm if modulus_reference == "Rp02" else inp.Rm
+    first_guesses = _first_guesses(inp, automatic)
+    noise_MPa = _stress_noise_MPa(eng_stress[: i_m + 1])
+    raw_channel = "extensometer_mm" if src["source"] == "extensometer" else "crosshead_mm"
+    strain_noise = strain_quantum_noise(inp.sub.column(raw_channel)[: i_m + 1] / length)  # the encoder's quantum, before the compliance
+    handbook_E = record.positive("material.E_MPa") if E_MPa is None else None
+    disp0 = src["disp"]
+    toe_mm, scale_factor = 0.0, None
+    for step in range(6):
+        window_MPa, line_points, how, auto, ref = _modulus_window(
+            step, ref, first_guesses, disp0 / length, eng_stress, fractions=fractions, window_fixed_MPa=window_fixed_MPa,
+            modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise)
+        disp = disp0
+        if toe:
+            disp, toe_mm = compensate_toe(disp0, force, window_N=(window_MPa[0] * inp.s0, window_MPa[1] * inp.s0), min_points=line_points)
+        if src["scalable"] and scale and inp.lu is not None:
+            disp, scale_factor = scale_to_measured(disp, inp.lu - inp.l0)  # (3.1) K_l = Δl_p / max Δl
+        strain = disp / length
+        mod = fit_modulus(strain, eng_stress, window_MPa, min_points=line_points)
+        mod.source = how
+        if auto is not None:
+            mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
+        E = _chosen_modulus(mod, E_MPa, handbook_E, given_window=not automatic)
+        if E == mod.E_MPa and not mod.E_stderr_MPa <= MAX_E_UNCERTAINTY * E:
+            raise IdentificationError(
+                f"{record.source}: the elastic line is not resolved: E = {E:.4g} ± {mod.E_stderr_MPa:.2g} MPa from {mod.n_points} samples "
+                f"({mod.source}); give the handbook modulus (--E or material.E_MPa) or sample faster")
+        Rp02, _ = iso6892.offset_yield_strength(strain, eng_stress, E, MIN_YIELD_OFFSET, start_MPa=window_MPa[0])
+        if window_fixed_MPa is not None or modulus_reference == "Rm" or abs(Rp02 - ref) <= 1e-6 * Rp02:
+            break
+        ref = Rp02
+    if np.nanmax(np.abs(strain)) > MAX_STRAIN:
+        raise IdentificationError(f"{record.source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
+    warnings: list[str] = []
+    if E > 1e6 or E < 1e3:
+        warnings.append(f"apparent modulus {E:.4g} MPa is far from any metal's: check units, the frame stiffness or the window")
+    return _ElasticLine(E=E, mod=mod, Rp02=Rp02, window_MPa=window_MPa, disp=disp, strain=strain, toe_mm=toe_mm,
+                        scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings)
+
+
+def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
+    """ISO 6892-1 results after Rp0.2: yield point (ReH, ReL, Ae), Ag, A and Z."""
+    record, force, strain, eng_stress, E = inp.record, inp.force, line.strain, inp.eng_stress, line.E
+    warnings: list[str] = []
+    yp = iso6892.yield_point(strain, eng_stress, noise_MPa=line.noise_MPa, E_MPa=E)
+    if yp is not None:
+        warnings.append(f"the curve has a yield point (ReH {yp['ReH_MPa']:.1f} MPa, ReL {yp['ReL_MPa']:.1f} MPa, Ae {yp['Ae_pct']:.2f} %): "
+                        "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")
+    e_m = float(strain[inp.i_m])
+    Ag = float(iso6892.plastic_extension_pct(e_m, inp.Rm, E))
+    i_k = iso6892.fracture_index(force)
+    if inp.lu is not None:
+        A, A_method = iso6892.elongation_after_fracture_pct(inp.l0, inp.lu), "measured gauge length after fracture (post.lu_mm)"
+    elif reaches_fracture(force):
+        A = float(iso6892.plastic_extension_pct(strain[i_k], eng_stress[i_k], E))
+        A_method = f"{inp.src['source']} at fracture, elastic part removed (no post.lu_mm)"
+    else:
+        A, A_method = None, None
+        warnings.append(f"the record ends at {100.0 * force[-1] / inp.Fm:.0f} % of Fm without a fracture: A is not reported (measure Lu and give it: post.lu_mm, --lu)")
+    su = record.positive("post.sk_mm2")
+    dk = record.positive("post.dk_mm")
+    su_source = "post.sk_mm2" if su is not None else None
+    if su is None and dk is not None:
+        su, su_source = math.pi * dk**2 / 4.0, "post.dk_mm"
+    Z = iso6892.reduction_of_area_pct(inp.s0, su) if su is not None else None
+    return _IsoResults(yp=yp, e_m=e_m, Ag=Ag, i_k=i_k, A=A, A_method=A_method, su=su, su_source=su_source, dk=dk, Z=Z, warnings=warnings)
+
+
+def _true_curve(inp: _Inputs, line: _ElasticLine, true_stress: str, poisson: float) -> _TrueCurve:
+    """The true curve of the uniform range (up to Fm): true strain, stress and plastic strain."""
+    strain, E, i_m = line.strain, line.E, inp.i_m
+    log_strain = np.log1p(strain)  # (3.2) ε = ln((l0 + Δl)/l0)
+    if true_stress == "gost_3_6":
+        sig_t = true_stress_gost(inp.eng_stress, log_strain, bulk_modulus(E, poisson))
+    else:
+        sig_t = true_stress_constant_volume(inp.eng_stress, strain)
+    eps_p = true_plastic_strain(log_strain, sig_t, E)
+    uni = slice(0, i_m + 1)
+    ep_u, sig_u = _increasing(eps_p[uni], sig_t[uni])
+    in_range = ep_u >= MIN_YIELD_OFFSET  # the flow curve from Rp0.2 on, as for compression; elastic jitter left out
+    curve = pd.DataFrame({"true_plastic_strain": ep_u[in_range], "true_stress_MPa": sig_u[in_range]})
+    sig_t_rp = float(np.interp(MIN_YIELD_OFFSET, ep_u, sig_u)) if ep_u[-1] > MIN_YIELD_OFFSET else None
+    return _TrueCurve(log_strain=log_strain, sig_t=sig_t, eps_p=eps_p, eps_u=float(log_strain[i_m]), ep_u=ep_u, sig_u=sig_u,
+                      curve=curve, sig_t_rp=sig_t_rp, eps_p_at_Rm=float(eps_p[i_m]))
+
+
+def _neck_correction(inp: _Inputs, iso: _IsoResults, true: _TrueCurve) -> tuple[dict, list[str]]:
+    """The fracture point with every neck correction (empty without the area after fracture), and warnings."""
+    if iso.su is None:
+        return {}, ["no post.dk_mm or post.sk_mm2: no reduction of area, fracture point or neck correction; the hardening law is fitted to the uniform range only"]
+    su, force_k = iso.su, float(inp.force[iso.i_k])
+    eps_f = math.log(inp.s0 / su)  # (3.13) ε_f = ln(F0/Fk)
+    avg = float(inp.force[iso.i_k] / su)  # P_k / F_k
+    neck_radius = inp.record.positive("post.neck_radius_mm")
+    dk_for_neck = iso.dk if iso.dk is not None else math.sqrt(4.0 * su / math.pi)
+    fracture = neck_corrections(avg, eps_f, true.eps_u, d_k_mm=dk_for_neck, neck_radius_mm=neck_radius)
+    fracture.update({"true_strain": eps_f, "avg_stress_MPa": avg, "force_N": force_k, "area_source": iso.su_source})
+    return fracture, []
+
+
+def _fit_points(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fit_range) -> tuple[np.ndarray, np.ndarray, float]:
+    """The uniform range resampled evenly in εp for the fits (from past a Lüders plateau, within
+    fit_range): (grid, stress, the fit range's lower end)."""
+    plateau_end = float(true.eps_p[iso.yp["plateau_end_index"]]) if iso.yp is not None else MIN_YIELD_OFFSET
+    fit_lo, fit_hi = (max(MIN_YIELD_OFFSET, plateau_end), np.inf) if fit_range is None else fit_range
+    ep_u, sig_u = true.ep_u, true.sig_u
+    sel = (ep_u >= max(fit_lo, MIN_YIELD_OFFSET)) & (ep_u <= fit_hi)
+    if sel.sum() < 4:
+        raise IdentificationError(f"{inp.record.source}: the uniform range has fewer than 4 points beyond 0.2 % plastic strain"
+                                  + (f" within the fit range {fit_lo:g}–{fit_hi:g}" if fit_range is not None else "") + "; no hardening law")
+    grid = np.linspace(ep_u[sel][0], ep_u[sel][-1], FIT_POINTS)
+    return grid, np.interp(grid, ep_u[sel], sig_u[sel]), fit_lo
+
+
+def _three_points(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: dict, neck: str, fit_lo: float) -> list | None:
+    """The three points of the three-point fits (yield, Fm, fracture), or None without a fracture point or Rp0.2."""
+    if not fracture or true.sig_t_rp is None:
+        return None
+    first = (MIN_YIELD_OFFSET, true.sig_t_rp) if iso.yp is None else (fit_lo, float(np.interp(fit_lo, true.ep_u, true.sig_u)))
+    return [first, (true.eps_p_at_Rm, float(true.sig_t[inp.i_m])), (fracture["true_strain"], fracture[neck]["stress_MPa"])]
+
+
+def _fit_laws(grid, fit_sig, extra: list, three_points: list | None, fracture_point: str) -> tuple[dict, dict, dict, list[str]]:
+    """Every law by least squares (with and without the fracture point) and by three points:
+    (fits, least-squares variants, fracture-point choices, warnings)."""
+    fits: dict = {}
+    variants: dict = {}
+    choices: dict = {}
+    warnings: list[str] = []
+    for name in ("johnson_cook", "swift", "voce"):
+        try:
+            pair = {"without": fit_hardening(grid, fit_sig, name)}
+            if extra:
+                pair["with"] = fit_hardening(grid, fit_sig, name, extra_points=extra)
+        except IdentificationError as exc:
+            warnings.append(f"least-squares {name} fit failed: {exc}")
+        else:
+            chosen, why = choose_fracture_variant(pair, grid, fit_sig, fracture_point)
+            fits[f"least_squares_{name}"] = pair[chosen]
+            choices[name] = (chosen, why)
+            variants.update({f"least_squares_{name}_{v}_fracture_point": f for v, f in pair.items()})
+        if three_points is not None:
+            try:
+                fits[f"three_point_{name}"] = three_point_fit(three_points, name, curve=(grid, fit_sig))
+            except IdentificationError as exc:
+                warnings.append(f"three-point {name} fit failed: {exc}")
+    return fits, variants, choices, warnings
+
+
+def _hardening_fits(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: dict, *, neck: str, law: str, hardening: str,
+                    fracture_weight: float | None, fit_range, fracture_point: str) -> _Hardening:
+    """The hardening laws fitted to the uniform range (and the fracture point); the main one chosen."""
+    warnings: list[str] = []
+    grid, fit_sig, fit_lo = _fit_points(inp, iso, true, fit_range)
+    weight = math.sqrt(FIT_POINTS) if fracture_weight is None else float(fracture_weight)
+    extra = [(fracture["true_strain"], fracture[neck]["stress_MPa"], weight)] if fracture else []
+    if fracture_point == "include" and not extra:
+        warnings.append("--fracture-point include: there is no fracture point (post.dk_mm or post.sk_mm2 missing); the uniform range alone is fitted")
+    three_points = _three_points(inp, iso, true, fracture, neck, fit_lo)
+    fits, variants, choices, fit_warnings = _fit_laws(grid, fit_sig, extra, three_points, fracture_point)
+    warnings += fit_warnings
+    main_key = f"{hardening}_{law}"
+    if main_key not in fits:
+        raise IdentificationError(f"{inp.record.source}: the {hardening.replace('_', ' ')} {law} fit is not available ({_why_no_fit(hardening, law, fracture, true.sig_t_rp, warnings)})")
+    main = fits[main_key]
+    main_fracture = choices.get(law, (None, None)) if hardening == "least_squares" else ("with", "three-point fit through the fracture point")
+    warnings += [f"hardening: {w}" for w in main.warnings]
+    return _Hardening(grid=grid, fit_sig=fit_sig, weight=weight, extra=extra, three_points=three_points, fits=fits, variants=variants,
+                      main_key=main_key, main=main, main_fracture=main_fracture, warnings=warnings)
+
+
+def _curves(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, fracture: dict, hard: _Hardening, neck: str) -> dict[str, pd.DataFrame]:
+    """The intermediate curves for plots: raw and corrected diagram, engineering, true, fit, fracture point."""
+    data, uni = inp.data, slice(0, inp.i_m + 1)
+    eps_end = fracture.get("true_strain", float(hard.grid[-1]))
+    fit_eps = np.linspace(0.0, eps_end, 200)
+    curves = {
+        "raw_diagram": data[[c for c in ("time_s", "force_N", "crosshead_mm", "extensometer_mm") if c in data.columns]].copy(),
+        "corrected_diagram": pd.DataFrame({"elongation_mm": line.disp, "force_N": inp.force}),
+        "engineering": pd.DataFrame({"engineering_strain": line.strain, "engineering_stress_MPa": inp.eng_stress}),
+        "true": pd.DataFrame({"true_strain": true.log_strain[uni], "true_plastic_strain": true.eps_p[uni], "true_stress_MPa": true.sig_t[uni]}),
+        "fit": pd.DataFrame({"true_plastic_strain": fit_eps, "true_stress_MPa": hard.main(fit_eps)}),
+    }
+    if fracture:
+        curves["fracture_point"] = pd.DataFrame({"true_plastic_strain": [fracture["true_strain"]], "true_stress_MPa": [fracture[neck]["stress_MPa"]]})
+    return curves
+
+
+def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve, fracture: dict, hard: _Hardening, warnings: list[str], *,
+            toe: bool, true_stress: str, poisson: float, neck: str, law: str, hardening: str) -> TensionResult:
+    """The typed result (result.json) of a tension identification."""
+    E, mod, yp, main = line.E, line.mod, iso.yp, hard.main
+    return TensionResult(
+        E_MPa=E,
+        E_stderr_MPa=mod.E_stderr_MPa if E == mod.E_MPa else None,
+        modulus={**mod.as_dict(), "E_MPa": E, "E_regressed_MPa": mod.E_MPa},
+        Rp02_MPa=line.Rp02,
+        yield_point=yp is not None,  # ISO 6892-1: with a yield point ReH/ReL are the yield strengths
+        ReH_MPa=yp["ReH_MPa"] if yp else None,
+        ReL_MPa=yp["ReL_MPa"] if yp else None,
+        Ae_pct=yp["Ae_pct"] if yp else None,
+        Rm_MPa=inp.Rm,
+        Fm_N=inp.Fm,
+        Ag_pct=iso.Ag,
+        Agt_pct=100.0 * iso.e_m,
+        A_pct=iso.A,
+        A_method=iso.A_method,
+        Z_pct=iso.Z,
+        uniform_true_strain=true.eps_u,
+        uniform_true_plastic_strain=true.eps_p_at_Rm,
+        fracture_true_strain=fracture.get("true_strain"),
+        fracture_true_stress_MPa=fracture[neck]["stress_MPa"] if fracture else None,
+        fracture_avg_stress_MPa=fracture.get("avg_stress_MPa"),
+        neck_corrections={k: v for k, v in fracture.items() if k in NECK_METHODS or k.startswith("a_over_R")},
+        hardening=TensionHardening(
+            fit=main, fracture_point_weight=hard.weight if hard.extra and hard.main_fracture[0] == "with" else None,
+            fracture_point={"with": "included", "without": "excluded"}.get(hard.main_fracture[0], "none"),
+            fracture_point_choice=hard.main_fracture[1],
+            uniform_range_error_pct=uniform_error_pct(main, hard.grid, hard.fit_sig),
+            fit_range=[float(hard.grid[0]), float(hard.grid[-1])]),
+        hardening_alternatives={**{k: f.as_dict() for k, f in hard.fits.items() if k != hard.main_key},
+                                **{k: f.as_dict() for k, f in hard.variants.items()}},
+        three_points=[{"true_plastic_strain": e, "true_stress_MPa": s} for e, s in hard.three_points] if hard.three_points else None,
+        modulus_window_MPa=list(line.window_MPa),
+        methods={
+            "strain_source": inp.src["source"],
+            "strain_length_mm": inp.length,
+            "frame_stiffness_N_per_um": inp.src["stiffness"],
+            "toe_compensation_mm": line.toe_mm if toe else None,
+            "scale_factor_Kl": line.scale_factor,
+            "modulus": mod.source,
+            "modulus_r2": mod.r2,
+            "Rp02": "offset method, ISO 6892-1: intersection with the 0.2 % line of slope E",
+            "Ag": "plastic extension at maximum force, 100·(e_m − Rm/E)",
+            "Z": "(S0 − Su)/S0" if iso.Z is not None else None,
+            "true_stress": "(3.6) corrected, K = E/(3(1 − 2ν))" if true_stress == "gost_3_6" else "σ_e(1 + e), constant volume",
+            "poisson": poisson,
+            "neck_correction": neck,
+            "hardening": f"{hardening} {law}",
+        },
+        warnings=warnings,
+        record=record_summary(inp.record),
+    )
+
+
 def identify_tension(record: Record, *, use_extensometer: bool | None = None, frame_stiffness_N_per_um: float | None = None,
                      crosshead_length_mm: float | None = None, toe: bool = True, scale: bool = True,
                      modulus_window: tuple[float, float] | None = None, modulus_reference: str = "Rp02",
@@ -221,274 +669,19 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         2 percentage points of max error (:func:`choose_fracture_variant`); both variants are
         kept in ``hardening_alternatives``.
     """
-    if true_stress not in TRUE_STRESS_FORMS:
-        raise IdentificationError(f"true_stress must be one of {', '.join(TRUE_STRESS_FORMS)}, not {true_stress!r}")
-    if neck not in NECK_METHODS:
-        raise IdentificationError(f"neck must be one of {', '.join(NECK_METHODS)}, not {neck!r}")
-    if hardening not in HARDENING_METHODS:
-        raise IdentificationError(f"hardening must be one of {', '.join(HARDENING_METHODS)}, not {hardening!r}")
-    if modulus_reference not in MODULUS_REFERENCES:
-        raise IdentificationError(f"modulus_reference must be one of {', '.join(MODULUS_REFERENCES)}, not {modulus_reference!r}")
-    if fracture_point not in FRACTURE_POINT_MODES:
-        raise IdentificationError(f"fracture_point must be one of {', '.join(FRACTURE_POINT_MODES)}, not {fracture_point!r}")
-    fit_range = check_fit_range(fit_range)
-    fractions = _check_window(modulus_window, "modulus_window", fractions=True)
-    window_fixed_MPa = _check_window(modulus_window_MPa, "modulus_window_MPa", fractions=False)
-    if fractions is not None and window_fixed_MPa is not None:
-        raise IdentificationError("give modulus_window (fractions) or modulus_window_MPa, not both")
-
-    warnings: list[str] = []
-    d0 = record.positive("specimen.d0_mm", required=True)
-    l0 = record.positive("specimen.l0_mm", required=True)
-    s0 = record.positive("specimen.s0_mm2", default=math.pi * d0**2 / 4.0)  # F0 = π d0²/4
-    force = record.column("force_N")
-    ok = np.isfinite(force)
-    if not ok.all():
-        warnings.append(f"{int((~ok).sum())} samples without a force value were left out")
-    data = record.data[ok].reset_index(drop=True)
-    force = force[ok]
-    sub = Record(meta=record.meta, data=data, source=record.source)
-    i_m = iso6892.max_force_index(force)
-    Fm = float(force[i_m])
-    if Fm <= 0 or i_m == 0 or Fm - force[0] <= 0.05 * abs(Fm):
-        raise RecordError(record.source, "the force never rises: no tension test in this record (check the force column and its sign)", column="force_N")
-    eng_stress = force / s0
-    Rm = Fm / s0
-    if Rm > MAX_STRESS_MPa:
-        raise IdentificationError(f"{record.source}: Rm = {Rm:.4g} MPa is implausible - check units of force (N) and diameter (mm)")
-
-    src = _strain_source(sub, use_extensometer, force, l0, {"frame_stiffness_N_per_um": frame_stiffness_N_per_um, "crosshead_length_mm": crosshead_length_mm})
-    warnings += src["warnings"]
-    disp0 = src["disp"]
-    lu = record.positive("post.lu_mm")
-    _check_post_dimensions(record, d0, l0, lu)
-    scale_factor = None
-    length = src["length"]
-    if src["scalable"] and scale and lu is not None:
-        if lu <= l0:
-            raise IdentificationError(f"{record.source}: post.lu_mm = {lu:g} mm is not longer than l0 = {l0:g} mm")
-        length = l0
-
-    # E, the toe and Rp0.2 depend on each other through the window: iterate to a fixed point
-    ref = 0.5 * Rm if modulus_reference == "Rp02" else Rm
-    first_guesses = [Rm]  # when the first guess leaves too few samples on the elastic line
-    if fractions is None and window_fixed_MPa is None and record.has("time_s"):
-        try:  # a yield guess from the force rate (constant speed): a sparse elastic line needs a good one
-            onset = yield_onset_from_rate(data["time_s"].to_numpy(float)[: i_m + 1], force[: i_m + 1]) / s0
-            if 0 < onset <= Rm:
-                first_guesses.insert(0, onset)
-        except IdentificationError as exc:
-            logger.debug("no yield estimate from the force rate: %s", exc)
-    curvature = np.diff(eng_stress[: i_m + 1], 2)  # second differences: a linear trend leaves none, white noise σ leaves σ√6
-    noise_MPa = float(1.4826 * np.median(np.abs(curvature - np.median(curvature))) / math.sqrt(6.0)) if curvature.size else 0.0
-    raw_channel = "extensometer_mm" if src["source"] == "extensometer" else "crosshead_mm"
-    strain_noise = strain_quantum_noise(sub.column(raw_channel)[: i_m + 1] / length)  # the encoder's quantum, before the compliance
-    handbook_E = record.positive("material.E_MPa") if E_MPa is None else None
-    toe_mm = 0.0
-    for step in range(6):
-        if window_fixed_MPa is not None:
-            window_MPa, line_points, how = window_fixed_MPa, 5, "given window (MPa)"
-        elif fractions is not None:
-            window_MPa = (fractions[0] * ref, fractions[1] * ref)
-            line_points, how = 5, f"given window {fractions[0]:g}–{fractions[1]:g} × {modulus_reference}"
-        else:
-            try:
-                auto = auto_modulus(disp0 / length, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise)  # the window is the same before toe and scaling
-            except IdentificationError:
-                if step > 0 or not first_guesses:
-                    raise
-                while True:  # a sparse elastic line may hold too few samples below the first guess
-                    ref = first_guesses.pop(0)
-                    try:
-                        auto = auto_modulus(disp0 / length, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise)
-                        break
-                    except IdentificationError:
-                        if not first_guesses:
-                            raise
-            window_MPa, line_points, how = auto.window_MPa, min(auto.n_points, 5), auto.source
-        disp = disp0
-        if toe:
-            disp, toe_mm = compensate_toe(disp0, force, window_N=(window_MPa[0] * s0, window_MPa[1] * s0), min_points=line_points)
-        if src["scalable"] and scale and lu is not None:
-            disp, scale_factor = scale_to_measured(disp, lu - l0)  # (3.1) K_l = Δl_p / max Δl
-        strain = disp / length
-        mod = fit_modulus(strain, eng_stress, window_MPa, min_points=line_points)
-        mod.source = how
-        if window_fixed_MPa is None and fractions is None:
-            mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
-        E = mod.E_MPa
-        if E_MPa is not None:
-            E, mod.source = float(E_MPa), "option E_MPa"
-        elif handbook_E is not None and fractions is None and window_fixed_MPa is None and mod.n_points < FEW_SAMPLES:
-            E, mod.source = handbook_E, f"handbook material.E_MPa (only {mod.n_points} samples on the elastic line)"
-        if E == mod.E_MPa and not mod.E_stderr_MPa <= MAX_E_UNCERTAINTY * E:
-            raise IdentificationError(
-                f"{record.source}: the elastic line is not resolved: E = {E:.4g} ± {mod.E_stderr_MPa:.2g} MPa from {mod.n_points} samples "
-                f"({mod.source}); give the handbook modulus (--E or material.E_MPa) or sample faster")
-        Rp02, _ = iso6892.offset_yield_strength(strain, eng_stress, E, MIN_YIELD_OFFSET, start_MPa=window_MPa[0])
-        if window_fixed_MPa is not None or modulus_reference == "Rm" or abs(Rp02 - ref) <= 1e-6 * Rp02:
-            break
-        ref = Rp02
-    if np.nanmax(np.abs(strain)) > MAX_STRAIN:
-        raise IdentificationError(f"{record.source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
-    if E > 1e6 or E < 1e3:
-        warnings.append(f"apparent modulus {E:.4g} MPa is far from any metal's: check units, the frame stiffness or the window")
-
-    # ISO 6892-1 results
-    yp = iso6892.yield_point(strain, eng_stress, noise_MPa=noise_MPa, E_MPa=E)
-    if yp is not None:
-        warnings.append(f"the curve has a yield point (ReH {yp['ReH_MPa']:.1f} MPa, ReL {yp['ReL_MPa']:.1f} MPa, Ae {yp['Ae_pct']:.2f} %): "
-                        "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")
-    e_m = float(strain[i_m])
-    Ag = float(iso6892.plastic_extension_pct(e_m, Rm, E))
-    i_k = iso6892.fracture_index(force)
-    if lu is not None:
-        A, A_method = iso6892.elongation_after_fracture_pct(l0, lu), "measured gauge length after fracture (post.lu_mm)"
-    elif reaches_fracture(force):
-        A = float(iso6892.plastic_extension_pct(strain[i_k], eng_stress[i_k], E))
-        A_method = f"{src['source']} at fracture, elastic part removed (no post.lu_mm)"
-    else:
-        A, A_method = None, None
-        warnings.append(f"the record ends at {100.0 * force[-1] / Fm:.0f} % of Fm without a fracture: A is not reported (measure Lu and give it: post.lu_mm, --lu)")
-    su = record.positive("post.sk_mm2")
-    dk = record.positive("post.dk_mm")
-    su_source = "post.sk_mm2" if su is not None else None
-    if su is None and dk is not None:
-        su, su_source = math.pi * dk**2 / 4.0, "post.dk_mm"
-    Z = iso6892.reduction_of_area_pct(s0, su) if su is not None else None
-
-    # true curve (uniform range up to Fm)
-    log_strain = np.log1p(strain)  # (3.2) ε = ln((l0 + Δl)/l0)
-    if true_stress == "gost_3_6":
-        sig_t = true_stress_gost(eng_stress, log_strain, bulk_modulus(E, poisson))
-    else:
-        sig_t = true_stress_constant_volume(eng_stress, strain)
-    eps_p = true_plastic_strain(log_strain, sig_t, E)
-    uni = slice(0, i_m + 1)
-    eps_u = float(log_strain[i_m])
-    ep_u, sig_u = _increasing(eps_p[uni], sig_t[uni])
-    in_range = ep_u >= MIN_YIELD_OFFSET  # the flow curve from Rp0.2 on, as for compression; elastic jitter left out
-    true_curve = pd.DataFrame({"true_plastic_strain": ep_u[in_range], "true_stress_MPa": sig_u[in_range]})
-    sig_t_rp = float(np.interp(MIN_YIELD_OFFSET, ep_u, sig_u)) if ep_u[-1] > MIN_YIELD_OFFSET else None
-    eps_p_at_Rm = float(eps_p[i_m])
-
-    # fracture point with the neck corrections
-    fracture: dict = {}
-    if su is not None:
-        eps_f = math.log(s0 / su)  # (3.13) ε_f = ln(F0/Fk)
-        avg = float(force[i_k] / su)  # P_k / F_k
-        neck_radius = record.positive("post.neck_radius_mm")
-        dk_for_neck = dk if dk is not None else math.sqrt(4.0 * su / math.pi)
-        fracture = neck_corrections(avg, eps_f, eps_u, d_k_mm=dk_for_neck, neck_radius_mm=neck_radius)
-        fracture.update({"true_strain": eps_f, "avg_stress_MPa": avg, "force_N": float(force[i_k]), "area_source": su_source})
-    else:
-        warnings.append("no post.dk_mm or post.sk_mm2: no reduction of area, fracture point or neck correction; the hardening law is fitted to the uniform range only")
-
-    # hardening
-    plateau_end = float(eps_p[yp["plateau_end_index"]]) if yp is not None else MIN_YIELD_OFFSET
-    fit_lo, fit_hi = (max(MIN_YIELD_OFFSET, plateau_end), np.inf) if fit_range is None else fit_range
-    sel = (ep_u >= max(fit_lo, MIN_YIELD_OFFSET)) & (ep_u <= fit_hi)
-    if sel.sum() < 4:
-        raise IdentificationError(f"{record.source}: the uniform range has fewer than 4 points beyond 0.2 % plastic strain"
-                                  + (f" within the fit range {fit_lo:g}–{fit_hi:g}" if fit_range is not None else "") + "; no hardening law")
-    grid = np.linspace(ep_u[sel][0], ep_u[sel][-1], FIT_POINTS)
-    fit_sig = np.interp(grid, ep_u[sel], sig_u[sel])
-    weight = math.sqrt(FIT_POINTS) if fracture_weight is None else float(fracture_weight)
-    extra = [(fracture["true_strain"], fracture[neck]["stress_MPa"], weight)] if fracture else []
-    if fracture_point == "include" and not extra:
-        warnings.append("--fracture-point include: there is no fracture point (post.dk_mm or post.sk_mm2 missing); the uniform range alone is fitted")
-    three_points = None
-    if fracture and sig_t_rp is not None:
-        first = (MIN_YIELD_OFFSET, sig_t_rp) if yp is None else (fit_lo, float(np.interp(fit_lo, ep_u, sig_u)))
-        three_points = [first, (eps_p_at_Rm, float(sig_t[i_m])), (fracture["true_strain"], fracture[neck]["stress_MPa"])]
-    fits: dict = {}
-    variants: dict = {}
-    choices: dict = {}
-    for name in ("johnson_cook", "swift", "voce"):
-        try:
-            pair = {"without": fit_hardening(grid, fit_sig, name)}
-            if extra:
-                pair["with"] = fit_hardening(grid, fit_sig, name, extra_points=extra)
-        except IdentificationError as exc:
-            warnings.append(f"least-squares {name} fit failed: {exc}")
-        else:
-            chosen, why = choose_fracture_variant(pair, grid, fit_sig, fracture_point)
-            fits[f"least_squares_{name}"] = pair[chosen]
-            choices[name] = (chosen, why)
-            variants.update({f"least_squares_{name}_{v}_fracture_point": f for v, f in pair.items()})
-        if three_points is not None:
-            try:
-                fits[f"three_point_{name}"] = three_point_fit(three_points, name, curve=(grid, fit_sig))
-            except IdentificationError as exc:
-                warnings.append(f"three-point {name} fit failed: {exc}")
-    main_key = f"{hardening}_{law}"
-    if main_key not in fits:
-        raise IdentificationError(f"{record.source}: the {hardening.replace('_', ' ')} {law} fit is not available ({_why_no_fit(hardening, law, fracture, sig_t_rp, warnings)})")
-    main = fits[main_key]
-    main_fracture = choices.get(law, (None, None)) if hardening == "least_squares" else ("with", "three-point fit through the fracture point")
-    warnings += [f"hardening: {w}" for w in main.warnings]
-
-    eps_end = fracture.get("true_strain", float(grid[-1]))
-    fit_eps = np.linspace(0.0, eps_end, 200)
-    curves = {
-        "raw_diagram": data[[c for c in ("time_s", "force_N", "crosshead_mm", "extensometer_mm") if c in data.columns]].copy(),
-        "corrected_diagram": pd.DataFrame({"elongation_mm": disp, "force_N": force}),
-        "engineering": pd.DataFrame({"engineering_strain": strain, "engineering_stress_MPa": eng_stress}),
-        "true": pd.DataFrame({"true_strain": log_strain[uni], "true_plastic_strain": eps_p[uni], "true_stress_MPa": sig_t[uni]}),
-        "fit": pd.DataFrame({"true_plastic_strain": fit_eps, "true_stress_MPa": main(fit_eps)}),
-    }
-    if fracture:
-        curves["fracture_point"] = pd.DataFrame({"true_plastic_strain": [fracture["true_strain"]], "true_stress_MPa": [fracture[neck]["stress_MPa"]]})
-
-    result = {
-        "test": "tension",
-        "E_MPa": E,
-        "E_stderr_MPa": mod.E_stderr_MPa if E == mod.E_MPa else None,
-        "modulus": {**mod.as_dict(), "E_MPa": E, "E_regressed_MPa": mod.E_MPa},
-        "Rp02_MPa": Rp02,
-        "yield_point": yp is not None,  # ISO 6892-1: with a yield point ReH/ReL are the yield strengths
-        "ReH_MPa": yp["ReH_MPa"] if yp else None,
-        "ReL_MPa": yp["ReL_MPa"] if yp else None,
-        "Ae_pct": yp["Ae_pct"] if yp else None,
-        "Rm_MPa": Rm,
-        "Fm_N": Fm,
-        "Ag_pct": Ag,
-        "Agt_pct": 100.0 * e_m,
-        "A_pct": A,
-        "A_method": A_method,
-        "Z_pct": Z,
-        "uniform_true_strain": eps_u,
-        "uniform_true_plastic_strain": eps_p_at_Rm,
-        "fracture_true_strain": fracture.get("true_strain"),
-        "fracture_true_stress_MPa": fracture[neck]["stress_MPa"] if fracture else None,
-        "fracture_avg_stress_MPa": fracture.get("avg_stress_MPa"),
-        "neck_corrections": {k: v for k, v in fracture.items() if k in NECK_METHODS or k.startswith("a_over_R")},
-        "hardening": {**main.as_dict(), "fracture_point_weight": weight if extra and main_fracture[0] == "with" else None,
-                      "fracture_point": {"with": "included", "without": "excluded"}.get(main_fracture[0], "none"),
-                      "fracture_point_choice": main_fracture[1],
-                      "uniform_range_error_pct": uniform_error_pct(main, grid, fit_sig),
-                      "fit_range": [float(grid[0]), float(grid[-1])]},
-        "hardening_alternatives": {**{k: f.as_dict() for k, f in fits.items() if k != main_key},
-                                   **{k: f.as_dict() for k, f in variants.items()}},
-        "three_points": [{"true_plastic_strain": e, "true_stress_MPa": s} for e, s in three_points] if three_points else None,
-        "modulus_window_MPa": list(window_MPa),
-        "methods": {
-            "strain_source": src["source"],
-            "strain_length_mm": length,
-            "frame_stiffness_N_per_um": src["stiffness"],
-            "toe_compensation_mm": toe_mm if toe else None,
-            "scale_factor_Kl": scale_factor,
-            "modulus": mod.source,
-            "modulus_r2": mod.r2,
-            "Rp02": "offset method, ISO 6892-1: intersection with the 0.2 % line of slope E",
-            "Ag": "plastic extension at maximum force, 100·(e_m − Rm/E)",
-            "Z": "(S0 − Su)/S0" if Z is not None else None,
-            "true_stress": "(3.6) corrected, K = E/(3(1 − 2ν))" if true_stress == "gost_3_6" else "σ_e(1 + e), constant volume",
-            "poisson": poisson,
-            "neck_correction": neck,
-            "hardening": f"{hardening} {law}",
-        },
-        "warnings": warnings,
-    }
-    result["record"] = record_summary(record)
-    return Identification(result=result, true_curve=true_curve, curves=curves)
+    fit_range, fractions, window_fixed_MPa = _check_options(
+        true_stress=true_stress, neck=neck, hardening=hardening, modulus_reference=modulus_reference, fracture_point=fracture_point,
+        fit_range=fit_range, modulus_window=modulus_window, modulus_window_MPa=modulus_window_MPa)
+    inp = _inputs(record, use_extensometer=use_extensometer, frame_stiffness_N_per_um=frame_stiffness_N_per_um,
+                  crosshead_length_mm=crosshead_length_mm, scale=scale)
+    line = _elastic_line(inp, fractions=fractions, window_fixed_MPa=window_fixed_MPa, modulus_reference=modulus_reference,
+                         E_MPa=E_MPa, toe=toe, scale=scale)
+    iso = _iso_results(inp, line)
+    true = _true_curve(inp, line, true_stress, poisson)
+    fracture, neck_warnings = _neck_correction(inp, iso, true)
+    hard = _hardening_fits(inp, iso, true, fracture, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
+                           fit_range=fit_range, fracture_point=fracture_point)
+    warnings = inp.warnings + line.warnings + iso.warnings + neck_warnings + hard.warnings
+    result = _result(inp, line, iso, true, fracture, hard, warnings, toe=toe, true_stress=true_stress, poisson=poisson,
+                     neck=neck, law=law, hardening=hardening)
+    return Identification(result=result, true_curve=true.curve, curves=_curves(inp, line, true, fracture, hard, neck))

@@ -1,0 +1,467 @@
+"""Johnson–Cook constants of a test series: the reference condition, the global and stepwise
+fits, the tabulated curves per condition, and :func:`fit_series` that does it all (fit.json).
+
+Part of :mod:`identification.series` (which re-exports these names); the members the fits take
+are in :mod:`identification.series_members`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import lmfit
+import numpy as np
+import pandas as pd
+
+from flowcurve.errors import IdentificationError
+from flowcurve.identification.hardening import POOR_FIT_PCT, fit_hardening
+from flowcurve.identification.johnson_cook import (CONVENTIONS, EQUATION, homologous_temperature, johnson_cook_reduced,
+                                                  log_rate_ratio)
+from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
+from flowcurve.identification.damage import DamageFit, FracturePoint, fit_damage
+from flowcurve.identification.series_members import MAX_POINTS, SeriesMember
+
+PARAMS = ("A", "B", "n", "C", "m")
+KEYS = {"A": "A_MPa", "B": "B_MPa", "n": "n", "C": "C", "m": "m"}
+BOUNDS = {"A": (0.0, np.inf), "B": (0.0, np.inf), "n": (1e-3, 1.5), "C": (0.0, 5.0), "m": (1e-3, 20.0)}
+
+# the reference condition of the stepwise procedure
+REF_TEMPERATURE_TOL_C = 5.0
+REF_RATE_FACTOR = 1.25
+# two records are at the same condition (one tabulated curve) within these
+SAME_TEMPERATURE_C = 1.0
+SAME_RATE_REL = 0.02
+# distinct conditions: clamped ln ε̇* and T* differing by more than these
+DISTINCT_LOG_RATE = 0.05
+DISTINCT_T_STAR = 1e-3
+
+
+
+# -- reference and what the series can determine ------------------------------------------
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The stated inputs of the model: ε̇0 (1/s), T_r and T_m (°C), with where they came from."""
+
+    strain_rate_per_s: float
+    temperature_C: float
+    melt_temperature_C: float
+    strain_rate_source: str = "given"
+    temperature_source: str = "given"
+
+    def reduced(self, member: SeriesMember) -> tuple[float, float]:
+        """(clamped ln ε̇*, clamped T*) of a member."""
+        return (float(log_rate_ratio(member.strain_rate_per_s, self.strain_rate_per_s)),
+                float(homologous_temperature(member.temperature_C, self.temperature_C, self.melt_temperature_C)))
+
+
+def make_reference(members: Sequence[SeriesMember], *, ref_strain_rate_per_s: float | None = None,
+                   ref_temperature_C: float | None = None, melt_temperature_C: float | None = None) -> Reference:
+    """The reference condition: given values, else the lowest rate / temperature of the series.
+
+    The melting temperature is a property of the material and must be given.
+    """
+    if not members:
+        raise IdentificationError("the series is empty: give at least one record or result folder")
+    rate_src = temp_src = "given"
+    if ref_strain_rate_per_s is None:
+        ref_strain_rate_per_s, rate_src = min(m.strain_rate_per_s for m in members), "lowest in the series"
+    if ref_temperature_C is None:
+        ref_temperature_C, temp_src = min(m.temperature_C for m in members), "lowest in the series"
+    if not (math.isfinite(ref_strain_rate_per_s) and ref_strain_rate_per_s > 0):
+        raise IdentificationError(f"the reference strain rate must be > 0 1/s, got {ref_strain_rate_per_s:g}")
+    if melt_temperature_C is None:
+        raise IdentificationError("the melting temperature is needed for T* = (T - T_ref)/(T_melt - T_ref): give it (--melt-temp, °C)")
+    if not melt_temperature_C > ref_temperature_C:
+        raise IdentificationError(f"the melting temperature ({melt_temperature_C:g} °C) must be above the reference temperature ({ref_temperature_C:g} °C)")
+    hot = [m.name for m in members if m.temperature_C >= melt_temperature_C]
+    if hot:
+        raise IdentificationError(f"record(s) {', '.join(hot)} at or above the melting temperature {melt_temperature_C:g} °C: check --melt-temp (°C, not K)")
+    return Reference(float(ref_strain_rate_per_s), float(ref_temperature_C), float(melt_temperature_C), rate_src, temp_src)
+
+
+def _distinct(values: Sequence[float], tol: float) -> list[float]:
+    out: list[float] = []
+    for v in sorted(values):
+        if not out or v - out[-1] > tol:
+            out.append(v)
+    return out
+
+
+def check_identifiable(members: Sequence[SeriesMember], ref: Reference, fixed: dict[str, float]) -> None:
+    """Refuse, with the reason, to fit C or m from a series that cannot determine it."""
+    reduced = [ref.reduced(m) for m in members]
+    if "C" not in fixed and len(_distinct([r[0] for r in reduced], DISTINCT_LOG_RATE)) < 2:
+        rates = ", ".join(sorted({f"{m.strain_rate_per_s:.3g}" for m in members}))
+        raise IdentificationError(
+            f"the series has one strain rate only as the model sees it (rates {rates} 1/s with the reference "
+            f"{ref.strain_rate_per_s:g} 1/s; rates below the reference count as the reference): C cannot be identified - "
+            "add records at other rates or fix C (--fix-C VALUE)")
+    if "m" not in fixed and len(_distinct([r[1] for r in reduced], DISTINCT_T_STAR)) < 2:
+        temps = ", ".join(sorted({f"{m.temperature_C:g}" for m in members}))
+        raise IdentificationError(
+            f"the series has one temperature only as the model sees it ({temps} °C with the reference "
+            f"{ref.temperature_C:g} °C; temperatures below the reference count as the reference): m cannot be identified - "
+            "add records at other temperatures or fix m (--fix-m VALUE)")
+    bad = {k: v for k, v in fixed.items() if k not in ("C", "m")}
+    if bad:
+        raise IdentificationError(f"only C and m can be fixed, not {', '.join(bad)}")
+    for k, v in fixed.items():
+        lo, hi = BOUNDS[k]
+        if not (lo <= v <= hi):
+            raise IdentificationError(f"fixed {k} = {v:g} is outside its range [{lo:g}, {hi:g}]")
+
+
+# -- fits ---------------------------------------------------------------------------------
+
+
+@dataclass
+class JohnsonCookFit:
+    """Identified Johnson–Cook constants with their uncertainties and the quality of fit."""
+
+    method: str
+    params: dict[str, float]
+    stderr: dict[str, float | None]
+    reference: Reference
+    fixed: dict[str, float] = field(default_factory=dict)
+    correlations: dict[str, dict[str, float]] = field(default_factory=dict)
+    fit_error_pct: float = float("nan")
+    rms_error_pct: float = float("nan")
+    record_errors: dict[str, dict[str, float]] = field(default_factory=dict)
+    report: str = ""
+
+    def __call__(self, eps_p, strain_rate_per_s, temperature_C):
+        """Flow stress (MPa) of the identified model."""
+        r = self.reference
+        return johnson_cook_reduced(eps_p, log_rate_ratio(strain_rate_per_s, r.strain_rate_per_s),
+                                    homologous_temperature(temperature_C, r.temperature_C, r.melt_temperature_C),
+                                    **self.params)
+
+    def as_dict(self) -> dict:
+        """The parameter block of fit.json (keys with units, see docs/fit-json.md)."""
+        out: dict = {"method": self.method}
+        for p in PARAMS:
+            out[KEYS[p]] = float(self.params[p])
+        for p in PARAMS:
+            se = self.stderr.get(p)
+            out[f"{KEYS[p]}_stderr"] = None if se is None or not math.isfinite(se) else float(se)
+        out["fixed"] = {p: float(v) for p, v in self.fixed.items()}
+        out["correlations"] = {KEYS[p]: {KEYS[q]: float(c) for q, c in row.items()} for p, row in self.correlations.items()}
+        out["fit_error_pct"] = float(self.fit_error_pct)
+        out["rms_error_pct"] = float(self.rms_error_pct)
+        out["record_errors"] = self.record_errors
+        out["report"] = self.report
+        return out
+
+
+def _stack(members: Sequence[SeriesMember], ref: Reference, max_points: int):
+    """All fit points: εp, σ, clamped ln ε̇*, clamped T*, and each point's member index."""
+    cols = [[], [], [], [], []]
+    for i, m in enumerate(members):
+        eps, sig = m.fit_points(max_points)
+        lr, ts = ref.reduced(m)
+        for col, values in zip(cols, (eps, sig, np.full(eps.size, lr), np.full(eps.size, ts), np.full(eps.size, i))):
+            col.append(values)
+    eps, sig, lr, ts, idx = (np.concatenate(c) for c in cols)
+    return eps, sig, lr, ts, idx.astype(int)
+
+
+def _errors(fit: JohnsonCookFit, members: Sequence[SeriesMember], max_points: int) -> None:
+    """Fill the overall and per-record errors (max and RMS of |σ_model/σ − 1|, %)."""
+    all_rel = []
+    for m in members:
+        eps, sig = m.fit_points(max_points)
+        rel = fit(eps, m.strain_rate_per_s, m.temperature_C) / sig - 1.0
+        all_rel.append(rel)
+        fit.record_errors[m.name] = {"fit_error_pct": float(100 * np.max(np.abs(rel))),
+                                     "rms_error_pct": float(100 * np.sqrt(np.mean(rel**2)))}
+    rel = np.concatenate(all_rel)
+    fit.fit_error_pct = float(100 * np.max(np.abs(rel)))
+    fit.rms_error_pct = float(100 * np.sqrt(np.mean(rel**2)))
+
+
+def _start_static(members: Sequence[SeriesMember], ref: Reference, max_points: int) -> dict[str, float]:
+    """Start values of A, B, n: a hardening fit to the members nearest the reference condition."""
+    reduced = [ref.reduced(m) for m in members]
+    best = min(reduced, key=lambda r: (r[1], r[0]))
+    near = [m for m, r in zip(members, reduced) if abs(r[1] - best[1]) <= DISTINCT_T_STAR and abs(r[0] - best[0]) <= DISTINCT_LOG_RATE]
+    pts = [m.fit_points(max_points) for m in near]
+    hf = fit_hardening(np.concatenate([p[0] for p in pts]), np.concatenate([p[1] for p in pts]), "johnson_cook")
+    return {"A": max(hf.params["A"], 0.0), "B": hf.params["B"], "n": float(np.clip(hf.params["n"], 0.01, 1.5))}
+
+
+def fit_global(members: Sequence[SeriesMember], ref: Reference, *, fixed: dict[str, float] | None = None,
+               max_points: int = MAX_POINTS) -> JohnsonCookFit:
+    """# (2.19) A, B, n, C, m in one least-squares problem over all true curves (lmfit).
+
+    Residuals in MPa; each record contributes at most ``max_points`` points evenly spaced in εp.
+    ``fixed`` holds constants that are not fitted (``{"m": 1.0}``).
+    """
+    fixed = dict(fixed or {})
+    check_identifiable(members, ref, fixed)
+    eps, sig, lr, ts, _ = _stack(members, ref, max_points)
+    start = {**_start_static(members, ref, max_points), "C": 0.01, "m": 1.0}
+    params = lmfit.Parameters()
+    for p in PARAMS:
+        lo, hi = BOUNDS[p]
+        value = fixed.get(p, start[p])
+        params.add(p, value=float(np.clip(value, lo, hi)), min=lo, max=hi, vary=p not in fixed)
+
+    def residual(pars):
+        v = pars.valuesdict()
+        return johnson_cook_reduced(eps, lr, ts, v["A"], v["B"], v["n"], v["C"], v["m"]) - sig
+
+    result = lmfit.minimize(residual, params, method="least_squares")
+    if not result.success:
+        raise IdentificationError(f"the global Johnson-Cook fit did not converge: {result.message}")
+    fit = JohnsonCookFit(method="global", params={p: float(result.params[p].value) for p in PARAMS},
+                         stderr={p: (None if p in fixed or result.params[p].stderr is None else float(result.params[p].stderr)) for p in PARAMS},
+                         reference=ref, fixed=fixed,
+                         correlations={p: {q: float(c) for q, c in (result.params[p].correl or {}).items()} for p in PARAMS if p not in fixed},
+                         report=lmfit.fit_report(result))
+    _errors(fit, members, max_points)
+    return fit
+
+
+def _is_reference_temperature(m: SeriesMember, ref: Reference) -> bool:
+    return m.temperature_C <= ref.temperature_C + REF_TEMPERATURE_TOL_C
+
+
+def _fit_one(name: str, func, points, start: float, what: str) -> tuple[float, float | None, str]:
+    """Least squares of one constant ``name`` with the others fixed (a stepwise step)."""
+    eps, sig, lr, ts = points
+    lo, hi = BOUNDS[name]
+    params = lmfit.Parameters()
+    params.add(name, value=start, min=lo, max=hi)
+    result = lmfit.minimize(lambda p: func(p[name].value, eps, lr, ts) - sig, params, method="least_squares")
+    if not result.success:
+        raise IdentificationError(f"stepwise fit of {name} ({what}) did not converge: {result.message}")
+    se = result.params[name].stderr
+    return float(result.params[name].value), (None if se is None else float(se)), lmfit.fit_report(result)
+
+
+def fit_stepwise(members: Sequence[SeriesMember], ref: Reference, *, fixed: dict[str, float] | None = None,
+                 max_points: int = MAX_POINTS) -> JohnsonCookFit:
+    """The classic stepwise identification: A, B, n, then C, then m.
+
+    1. A, B, n: :func:`identification.hardening.fit_hardening` on the records at the reference
+       condition (T within 5 °C of T_r or below it, ε̇ ≤ 1.25·ε̇0);
+    2. C: records at the reference temperature, A, B, n fixed;
+    3. m: records above the reference temperature, A, B, n, C fixed.
+    Each step's uncertainties are conditional on the constants of the previous steps.
+    """
+    fixed = dict(fixed or {})
+    check_identifiable(members, ref, fixed)
+    at_ref_t = [m for m in members if _is_reference_temperature(m, ref)]
+    at_ref = [m for m in at_ref_t if m.strain_rate_per_s <= REF_RATE_FACTOR * ref.strain_rate_per_s]
+    if not at_ref:
+        raise IdentificationError(
+            f"stepwise fit needs records at the reference condition ({ref.temperature_C:g} °C, "
+            f"{ref.strain_rate_per_s:g} 1/s); none is within {REF_TEMPERATURE_TOL_C:g} °C and a factor {REF_RATE_FACTOR:g} of the rate")
+    pts = [m.fit_points(max_points) for m in at_ref]
+    hf = fit_hardening(np.concatenate([p[0] for p in pts]), np.concatenate([p[1] for p in pts]), "johnson_cook")
+    A, B, n = hf.params["A"], hf.params["B"], hf.params["n"]
+    stderr: dict[str, float | None] = {p: hf.stderr.get(p) for p in ("A", "B", "n")}
+    reports = ["[[Step 1: A, B, n at the reference condition]]", hf.report]
+
+    def points(group):
+        eps, sig, lr, ts, _ = _stack(group, ref, max_points)
+        return eps, sig, lr, ts
+
+    if "C" in fixed:
+        C, stderr["C"] = fixed["C"], None
+    else:
+        faster = [m for m in at_ref_t if ref.reduced(m)[0] > DISTINCT_LOG_RATE]
+        if not faster:
+            raise IdentificationError(
+                f"stepwise fit: no record at the reference temperature ({ref.temperature_C:g} °C) above the reference rate "
+                f"{ref.strain_rate_per_s:g} 1/s, so step 2 cannot give C; use the global fit or fix C (--fix-C VALUE)")
+        C, stderr["C"], rep = _fit_one("C", lambda c, e, lr, ts: johnson_cook_reduced(e, lr, 0.0, A, B, n, c, 1.0),
+                                       points(at_ref_t), 0.01, "reference-temperature records")
+        reports += ["[[Step 2: C at the reference temperature]]", rep]
+    if "m" in fixed:
+        m_, stderr["m"] = fixed["m"], None
+    else:
+        hot = [m for m in members if not _is_reference_temperature(m, ref)]
+        if not hot:
+            raise IdentificationError(
+                f"stepwise fit: no record more than {REF_TEMPERATURE_TOL_C:g} °C above the reference temperature "
+                f"{ref.temperature_C:g} °C, so step 3 cannot give m; fix m (--fix-m VALUE)")
+        m_, stderr["m"], rep = _fit_one("m", lambda mm, e, lr, ts: johnson_cook_reduced(e, lr, ts, A, B, n, C, mm),
+                                        points(hot), 1.0, "records above the reference temperature")
+        reports += ["[[Step 3: m above the reference temperature]]", rep]
+    fit = JohnsonCookFit(method="stepwise", params={"A": A, "B": B, "n": n, "C": C, "m": m_}, stderr=stderr,
+                         reference=ref, fixed=fixed,
+                         correlations={p: {q: c for q, c in hf.correlations.get(p, {}).items()} for p in ("A", "B", "n")},
+                         report="\n".join(reports))
+    _errors(fit, members, max_points)
+    return fit
+
+
+# -- the whole series ---------------------------------------------------------------------
+
+
+@dataclass
+class ConditionCurve:
+    """The measured true curve at one (temperature, strain rate), averaged over its records."""
+
+    temperature_C: float
+    strain_rate_per_s: float
+    records: list[str]
+    table: pd.DataFrame  # columns true_plastic_strain, true_stress_MPa
+
+    @property
+    def filename(self) -> str:
+        return f"T{self.temperature_C:.0f}C_rate{self.strain_rate_per_s:.3g}_per_s.csv"
+
+
+def condition_curves(members: Sequence[SeriesMember], max_points: int = MAX_POINTS) -> list[ConditionCurve]:
+    """Group the records by condition and tabulate one curve each (mean over the shared εp range)."""
+    groups: list[list[SeriesMember]] = []
+    for m in sorted(members, key=lambda m: (m.temperature_C, m.strain_rate_per_s)):
+        for g in groups:
+            g0 = g[0]
+            if (abs(g0.temperature_C - m.temperature_C) <= SAME_TEMPERATURE_C
+                    and abs(m.strain_rate_per_s / g0.strain_rate_per_s - 1.0) <= SAME_RATE_REL):
+                g.append(m)
+                break
+        else:
+            groups.append([m])
+    out = []
+    for g in groups:
+        lo = max(m.plastic_strain[0] for m in g)
+        hi = min(m.plastic_strain[-1] for m in g)
+        if hi <= lo:  # no shared range: keep the longest curve
+            g = [max(g, key=lambda m: np.ptp(m.plastic_strain))]
+            lo, hi = g[0].plastic_strain[0], g[0].plastic_strain[-1]
+        grid = np.linspace(lo, hi, max_points) if len(g) > 1 or g[0].plastic_strain.size > max_points else g[0].plastic_strain
+        stress = np.mean([np.interp(grid, m.plastic_strain, m.stress_MPa) for m in g], axis=0)
+        out.append(ConditionCurve(float(np.mean([m.temperature_C for m in g])),
+                                  float(np.exp(np.mean([np.log(m.strain_rate_per_s) for m in g]))),
+                                  [m.name for m in g],
+                                  pd.DataFrame({TRUE_CURVE_COLUMNS[0]: grid, TRUE_CURVE_COLUMNS[1]: stress})))
+    return out
+
+
+@dataclass
+class SeriesFit:
+    """Everything ``flowcurve fit`` writes: the chosen fit, the other for comparison, the series."""
+
+    method: str
+    fit: JohnsonCookFit
+    global_fit: JohnsonCookFit | None
+    stepwise_fit: JohnsonCookFit | None
+    stepwise_note: str | None
+    members: list[SeriesMember]
+    curves: list[ConditionCurve]
+    warnings: list[str] = field(default_factory=list)
+    max_points: int = MAX_POINTS
+    damage: DamageFit | None = None  # D1-D5 when the series holds fracture data
+
+    @property
+    def quality(self) -> str:
+        """"good", or "poor" when the chosen fit's largest relative error exceeds 10 %."""
+        return "poor" if not self.fit.fit_error_pct <= POOR_FIT_PCT else "good"
+
+    def covered_range(self) -> dict[str, list[float]]:
+        """The plastic strain, strain rate (1/s) and temperature (°C) the constants were identified on."""
+        ms = self.members
+        return {"plastic_strain": [min(float(m.plastic_strain[0]) for m in ms), max(float(m.plastic_strain[-1]) for m in ms)],
+                "strain_rate_per_s": [min(m.strain_rate_per_s for m in ms), max(m.strain_rate_per_s for m in ms)],
+                "temperature_C": [min(m.temperature_C for m in ms), max(m.temperature_C for m in ms)]}
+
+    def as_dict(self) -> dict:
+        """fit.json (docs/fit-json.md) without the file references of records and curves."""
+        ref = self.fit.reference
+        top = self.fit.as_dict()
+        out: dict = {"schema": "flowcurve-fit/1", "model": "johnson_cook", "method": self.method,
+                     "equation": EQUATION, "conventions": CONVENTIONS}
+        material = " / ".join(dict.fromkeys(m.material for m in self.members if m.material))
+        if material:  # absent, not null, when unknown: readers default it
+            out["material"] = material
+        out.update({k: v for k, v in top.items() if k not in ("method", "record_errors", "report")})
+        out["quality"] = self.quality
+        out.update({"ref_strain_rate_per_s": ref.strain_rate_per_s, "ref_strain_rate_source": ref.strain_rate_source,
+                    "ref_temperature_C": ref.temperature_C, "ref_temperature_source": ref.temperature_source,
+                    "melt_temperature_C": ref.melt_temperature_C})
+        ms = self.members
+        out["range"] = self.covered_range()
+        out["records"] = [{"name": m.name, "source": m.source, "kind": m.kind, "test": m.test,
+                           "temperature_C": m.temperature_C, "temperature_source": m.temperature_source,
+                           "strain_rate_per_s": m.strain_rate_per_s, "strain_rate_source": m.strain_rate_source,
+                           "plastic_strain": [float(m.plastic_strain[0]), float(m.plastic_strain[-1])],
+                           "points": int(m.fit_points(self.max_points)[0].size), **self.fit.record_errors[m.name]} for m in ms]
+        out["curves"] = [{"temperature_C": c.temperature_C, "strain_rate_per_s": c.strain_rate_per_s,
+                          "file": f"curves/{c.filename}", "records": c.records,
+                          "plastic_strain": [float(c.table.iloc[0, 0]), float(c.table.iloc[-1, 0])],
+                          "model_stress_at_zero_strain_MPa": float(self.fit(0.0, c.strain_rate_per_s, c.temperature_C))}
+                         for c in self.curves]
+        out["global"] = self.global_fit.as_dict() if self.global_fit else None
+        out["stepwise"] = self.stepwise_fit.as_dict() if self.stepwise_fit else None
+        out["stepwise_note"] = self.stepwise_note
+        mus = [m.friction_mu for m in ms if m.test == "compression" and m.friction_mu is not None]
+        out["friction_mu"] = float(np.mean(mus)) if mus else None
+        out["friction_mu_records"] = len(mus)
+        Es = [m.E_MPa for m in ms if m.E_MPa is not None]
+        out["E_MPa"] = float(np.mean(Es)) if Es else None
+        out["E_MPa_source"] = ("mean of the records' E_MPa (apparent modulus of the indicator diagram unless an extensometer was used)"
+                               if Es else None)
+        nus = [m.poisson_ratio for m in ms if m.poisson_ratio is not None]
+        out["poisson_ratio"] = float(np.mean(nus)) if nus else None
+        out["warnings"] = list(self.warnings)
+        if self.damage is not None:
+            out.update(self.damage.as_dict())
+        return out
+
+
+def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_strain_rate_per_s: float | None = None,
+               ref_temperature_C: float | None = None, melt_temperature_C: float | None = None,
+               fixed: dict[str, float] | None = None, max_points: int = MAX_POINTS,
+               fracture_points: Sequence[FracturePoint] = ()) -> SeriesFit:
+    """Fit the series by ``method`` ("global" or "stepwise") and the other one for comparison;
+    D1-D5 from the members' fractures and ``fracture_points`` (measured elsewhere) when given."""
+    if method not in ("global", "stepwise"):
+        raise IdentificationError(f"unknown fit method {method!r}; choose global or stepwise")
+    if max_points < 5:
+        raise IdentificationError(f"max_points must be at least 5 points per record, got {max_points}")
+    members = list(members)
+    ref = make_reference(members, ref_strain_rate_per_s=ref_strain_rate_per_s, ref_temperature_C=ref_temperature_C,
+                         melt_temperature_C=melt_temperature_C)
+    fixed = dict(fixed or {})
+    warnings = [f"{k} was not identified but fixed at {v:g} by the user" for k, v in fixed.items()]
+    stepwise, note = None, None
+    if method == "stepwise":
+        stepwise = fit_stepwise(members, ref, fixed=fixed, max_points=max_points)
+    else:
+        try:
+            stepwise = fit_stepwise(members, ref, fixed=fixed, max_points=max_points)
+        except IdentificationError as exc:
+            note = f"no stepwise comparison: {exc}"
+    glob = fit_global(members, ref, fixed=fixed, max_points=max_points)
+    chosen = glob if method == "global" else stepwise
+    if chosen.fit_error_pct > POOR_FIT_PCT:
+        worst = sorted(chosen.record_errors.items(), key=lambda kv: -kv[1]["fit_error_pct"])[:3]
+        warnings.append(f"the {method} fit is poor: max error {chosen.fit_error_pct:.3g} % (> {POOR_FIT_PCT:g} %); worst records "
+                        + ", ".join(f"{name} {e['fit_error_pct']:.3g} %" for name, e in worst))
+    damage = _fit_damage(members, list(fracture_points), ref, warnings)
+    return SeriesFit(method=method, fit=chosen, global_fit=glob, stepwise_fit=stepwise, stepwise_note=note,
+                     members=members, curves=condition_curves(members, max_points), warnings=warnings,
+                     max_points=max_points, damage=damage)
+
+
+def _fit_damage(members, extra: list[FracturePoint], ref: Reference, warnings: list[str]) -> DamageFit | None:
+    """D1-D5 at the flow fit's reference, or None with a warning saying why (no fracture data: silent)."""
+    points = [m.fracture for m in members if m.fracture is not None] + extra
+    if not points:
+        return None
+    try:
+        damage = fit_damage(points, ref_strain_rate_per_s=ref.strain_rate_per_s, ref_temperature_C=ref.temperature_C,
+                            melt_temperature_C=ref.melt_temperature_C)
+    except IdentificationError as exc:
+        warnings.append(f"no Johnson-Cook fracture constants: {exc}")
+        return None
+    warnings.extend(f"fracture: {w}" for w in damage.warnings)
+    return damage

@@ -1,0 +1,274 @@
+"""The members of a test series: one true curve σ(εp) with the strain rate and temperature it
+was run at (:class:`SeriesMember`), built from a record (identified on the way) or from a
+result folder of ``flowcurve identify``; :func:`load_members` takes either.
+
+Part of :mod:`identification.series` (which re-exports these names); the fits are in
+:mod:`identification.series_fit`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable
+
+import numpy as np
+import pandas as pd
+
+from flowcurve.record.format import Record
+from flowcurve.errors import IdentificationError, RecordError
+from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
+from flowcurve.identification.damage import FracturePoint, fracture_point_from_result
+
+PLASTIC_START = 0.002  # εp where the plastic range starts (the 0.2 % offset)
+MAX_POINTS = 60  # points per record in a fit, so that every record weighs the same
+
+
+@dataclass
+class SeriesMember:
+    """One test of a series: its true curve and the conditions it was run at."""
+
+    name: str
+    plastic_strain: np.ndarray
+    stress_MPa: np.ndarray
+    strain_rate_per_s: float
+    temperature_C: float
+    source: str = "<memory>"
+    kind: str = "given"  # "record", "result" (folder of flowcurve identify) or "given"
+    test: str | None = None
+    strain_rate_source: str = "given"
+    temperature_source: str = "given"
+    friction_mu: float | None = None
+    E_MPa: float | None = None
+    poisson_ratio: float | None = None
+    material: str | None = None
+    fracture: FracturePoint | None = None  # the test's fracture (tension with a section after fracture)
+
+    def __post_init__(self):
+        where = self.source if self.source != "<memory>" else self.name
+        eps = np.asarray(self.plastic_strain, dtype=float).ravel()
+        sig = np.asarray(self.stress_MPa, dtype=float).ravel()
+        if eps.shape != sig.shape:
+            raise RecordError(where, f"true curve: {eps.size} strains but {sig.size} stresses")
+        ok = np.isfinite(eps) & np.isfinite(sig)
+        eps, sig = eps[ok], sig[ok]
+        order = np.argsort(eps, kind="stable")
+        eps, sig = eps[order], sig[order]
+        if eps.size < 4 or np.ptp(eps) <= 0:
+            raise RecordError(where, f"true curve has {eps.size} usable points; a series fit needs at least 4 over a strain range")
+        if np.min(eps) < 0 or np.min(sig) <= 0:
+            raise RecordError(where, "true curve must have εp ≥ 0 and stress > 0 (MPa)")
+        self.plastic_strain, self.stress_MPa = eps, sig
+        for value, what, hint in ((self.strain_rate_per_s, "strain rate", "strain_rate_per_s"),
+                                  (self.temperature_C, "temperature", "nominal_temperature_C")):
+            if value is None or not math.isfinite(float(value)):
+                raise RecordError(where, f"the {what} of this test is unknown (give {hint})")
+        self.strain_rate_per_s = float(self.strain_rate_per_s)
+        self.temperature_C = float(self.temperature_C)
+        if self.strain_rate_per_s <= 0:
+            raise RecordError(where, f"strain rate must be > 0, got {self.strain_rate_per_s:g} 1/s")
+
+    def fit_points(self, max_points: int = MAX_POINTS) -> tuple[np.ndarray, np.ndarray]:
+        """The curve on at most ``max_points`` points evenly spaced in εp (all points if fewer)."""
+        eps, sig = self.plastic_strain, self.stress_MPa
+        if eps.size <= max_points:
+            return eps, sig
+        grid = np.linspace(eps[0], eps[-1], max_points)
+        return grid, np.interp(grid, eps, sig)
+
+
+def strain_rate_from_record(record: Record, E_MPa: float | None, plastic_start: float = PLASTIC_START) -> tuple[float, np.ndarray]:
+    """Plastic strain rate (1/s) of a record from its data, and the plastic-range sample mask.
+
+    The specimen's true strain from the extensometer (tension records that have one) or the
+    crosshead (frame compliance removed when the record states the frame stiffness),
+    εp = ε − σ/E, and the least-squares slope of εp against time over the plastic range: from
+    the first sample with εp ≥ ``plastic_start`` to the force maximum (tension) or the end of
+    loading (compression). Without a modulus (``E_MPa`` None) the total strain stands for εp.
+    """
+    test = record.test
+    t = record.column("time_s")
+    force = np.abs(record.column("force_N"))
+    area0 = math.pi * record.positive("specimen.d0_mm", required=True) ** 2 / 4.0
+    if test == "tension" and record.has("extensometer_mm"):
+        ext = record.column("extensometer_mm")
+        l0 = record.positive("specimen.l0_mm", required=True)
+        d, length = np.abs(ext - ext[0]), record.positive("specimen.extensometer_gauge_mm", default=l0)
+    else:
+        d = np.abs(record.column("crosshead_mm") - record.column("crosshead_mm")[0])
+        stiffness = record.positive("rig.frame_stiffness_N_per_um")
+        if stiffness:
+            from flowcurve.identification.indicator import remove_frame_compliance
+
+            d = np.abs(remove_frame_compliance(d, force - force[0], stiffness))
+        length = record.positive("specimen.l0_mm" if test == "tension" else "specimen.h0_mm", required=True)
+    if test == "tension":
+        eps = np.log1p(d / length)  # (3.2)
+        sigma = force / area0 * np.exp(eps)  # volume constancy: F0/F = l/l0
+        end = int(np.nanargmax(force))
+    else:
+        eps = -np.log(np.clip(1.0 - d / length, 1e-9, None))  # (3.31)
+        sigma = force / area0 * np.exp(-eps)  # (3.30) S = F0·h0/h
+        end = int(np.nanargmax(d))
+    if E_MPa is not None and math.isfinite(E_MPa) and E_MPa > 0:
+        from flowcurve.identification.tension import true_plastic_strain
+
+        eps_p = true_plastic_strain(eps, sigma, E_MPa)  # (3.7)
+    else:
+        eps_p = eps  # no modulus: the total strain's rate (the elastic part is small past yield)
+    mask = np.zeros(t.size, dtype=bool)
+    mask[: end + 1] = True
+    mask &= np.isfinite(eps_p) & np.isfinite(t)
+    started = np.maximum.accumulate(np.where(mask, eps_p, -np.inf)) >= plastic_start
+    mask &= started
+    if mask.sum() < 3 or np.ptp(t[mask]) <= 0:
+        raise IdentificationError(f"{record.source}: fewer than 3 samples in the plastic range (εp ≥ {plastic_start:g}); the strain rate cannot be computed from the data")
+    slope = float(np.polyfit(t[mask], eps_p[mask], 1)[0])
+    if not slope > 0:
+        raise IdentificationError(f"{record.source}: the plastic strain does not grow with time ({slope:.3g} 1/s); check the time_s and crosshead_mm columns")
+    return slope, mask
+
+
+def plastic_part(plastic_strain, stress_MPa, plastic_start: float = PLASTIC_START) -> tuple[np.ndarray, np.ndarray]:
+    """The points of a true curve with εp ≥ ``plastic_start``: below the 0.2 % offset a true curve
+    of ``flowcurve identify`` still holds the elastic-plastic transition, which no hardening law
+    describes."""
+    eps = np.asarray(plastic_strain, dtype=float)
+    keep = eps >= plastic_start
+    return eps[keep], np.asarray(stress_MPa, dtype=float)[keep]
+
+
+def member_from_record(record: Record, **identify_options) -> SeriesMember:
+    """Identify a record (tension or compression) and make it a series member.
+
+    Strain rate from the data (:func:`strain_rate_from_record`); temperature the mean of the
+    ``temperature_C`` column over the plastic range, else ``nominal_temperature_C``.
+    """
+    from flowcurve.identification.identify import identify
+
+    ident = identify(record, **identify_options)
+    result = ident.result
+    rate, mask = strain_rate_from_record(record, result.get("E_MPa"))
+    if record.has("temperature_C") and np.isfinite(record.column("temperature_C")[mask]).any():
+        temperature, t_source = float(np.nanmean(record.column("temperature_C")[mask])), "data"
+    else:
+        temperature = record.number("nominal_temperature_C")
+        t_source = "nominal"
+        if temperature is None:
+            raise RecordError(record.source, "the test temperature is unknown: add '# nominal_temperature_C: <value>' to the header or a temperature_C column")
+    eps, sig = plastic_part(ident.true_curve[TRUE_CURVE_COLUMNS[0]], ident.true_curve[TRUE_CURVE_COLUMNS[1]])
+    return SeriesMember(name=record.name, plastic_strain=eps, stress_MPa=sig, strain_rate_per_s=rate,
+                        temperature_C=temperature, source=record.source, kind="record", test=record.test,
+                        strain_rate_source="data" if _number(result.get("E_MPa")) else "data (total strain: no E_MPa)",
+                        temperature_source=t_source,
+                        friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
+                        poisson_ratio=_number(result.get("poisson_ratio")), material=record.meta.get("material"),
+                        fracture=fracture_point_from_result(dict(result, test=record.test), record.meta, rate, temperature,
+                                                            record.source))
+
+
+def member_from_result(folder: str | Path) -> SeriesMember:
+    """A series member from a result folder of ``flowcurve identify`` (result.json + true_curve.csv).
+
+    Strain rate: ``record.strain_rate_per_s`` of result.json, else crosshead speed / gauge
+    length (l0 in tension, h0 in compression); temperature ``record.nominal_temperature_C``.
+    """
+    folder = Path(folder)
+    path = folder / "result.json"
+    try:
+        result = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise RecordError(folder, "no result.json: not a result folder of 'flowcurve identify'") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise RecordError(path, f"is not valid JSON ({exc})") from None
+    if not isinstance(result, dict):
+        raise RecordError(path, "is not a JSON object")
+    block = result.get("record") or {}
+    if not isinstance(block, dict):
+        raise RecordError(path, "'record' is not a JSON object")
+    test = result.get("test") or block.get("test")
+    temperature = _number(block.get("nominal_temperature_C"))
+    if temperature is None:
+        raise RecordError(path, "record.nominal_temperature_C is missing: the temperature of this test is unknown")
+    rate = _number(block.get("strain_rate_per_s"))
+    rate_source = "result.json"
+    if rate is None:
+        speed = _number(block.get("crosshead_speed_mm_per_s"))
+        specimen = block.get("specimen") or {}
+        gauge_key = "h0_mm" if test == "compression" else "l0_mm"
+        gauge = _number(specimen.get(gauge_key) if isinstance(specimen, dict) else None)
+        if gauge is None:
+            gauge = _number(block.get(f"specimen.{gauge_key}"))
+        if speed is None or not gauge:
+            raise RecordError(path, f"the strain rate is unknown: record.strain_rate_per_s is missing and so is record.crosshead_speed_mm_per_s or the specimen {gauge_key}")
+        rate, rate_source = speed / gauge, "crosshead speed / gauge length"
+    curve_path = folder / "true_curve.csv"
+    try:
+        curve = pd.read_csv(curve_path)
+    except FileNotFoundError:
+        raise RecordError(folder, "no true_curve.csv in the result folder") from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise RecordError(curve_path, f"cannot be read as CSV ({exc})") from None
+    missing = [c for c in TRUE_CURVE_COLUMNS if c not in curve.columns]
+    if missing:
+        raise RecordError(curve_path, f"missing column(s) {', '.join(missing)}")
+    try:
+        eps = curve[TRUE_CURVE_COLUMNS[0]].to_numpy(float)
+        sig = curve[TRUE_CURVE_COLUMNS[1]].to_numpy(float)
+    except ValueError:
+        raise RecordError(curve_path, "the curve holds cells that are not numbers") from None
+    eps, sig = plastic_part(eps, sig)
+    return SeriesMember(name=str(block.get("name") or folder.name), plastic_strain=eps, stress_MPa=sig,
+                        strain_rate_per_s=rate, temperature_C=temperature, source=str(folder), kind="result",
+                        test=test, strain_rate_source=rate_source, temperature_source="nominal",
+                        friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
+                        poisson_ratio=_number(result.get("poisson_ratio")), material=block.get("material"),
+                        fracture=fracture_point_from_result(dict(result, test=test), _flat_specimen(block), rate,
+                                                            temperature, str(folder)))
+
+
+def _flat_specimen(block: dict) -> dict:
+    """result.json's record block with its specimen keys as in a record header (specimen.d0_mm)."""
+    specimen = block.get("specimen") if isinstance(block.get("specimen"), dict) else {}
+    return {**block, **{f"specimen.{k}": v for k, v in specimen.items()}}
+
+
+def load_members(paths: Iterable[str | Path], **identify_options) -> list[SeriesMember]:
+    """Series members from record files, result folders, or folders of result folders."""
+    from flowcurve.record.importers import load_record
+
+    members: list[SeriesMember] = []
+    for p in paths:
+        p = Path(p)
+        if p.is_dir():
+            if (p / "result.json").exists():
+                members.append(member_from_result(p))
+                continue
+            subs = sorted(d for d in p.iterdir() if d.is_dir() and (d / "result.json").exists())
+            if not subs:
+                raise RecordError(p, "is a folder without result.json and without result folders of 'flowcurve identify'")
+            members.extend(member_from_result(d) for d in subs)
+        elif p.exists():
+            members.append(member_from_record(load_record(p), **identify_options))
+        else:
+            raise RecordError(p, "no such file or folder")
+    no_modulus = [m.name for m in members if m.kind == "record" and m.E_MPa is None]
+    if no_modulus:
+        raise IdentificationError(
+            f"record(s) {', '.join(no_modulus)} have no elastic modulus (no elastic line was found and no handbook E given), so their "
+            "plastic strain would be the total strain: add material.E_MPa to the records or give the modulus (--E)")
+    names = [m.name for m in members]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise IdentificationError(f"two series members have the same name {', '.join(dup)}; rename one (names label the per-record errors and plots)")
+    return members
+
+
+def _number(value) -> float | None:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return None
+    return number if math.isfinite(number) else None
