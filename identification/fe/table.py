@@ -70,13 +70,16 @@ class UpsettingTable:
         return out
 
     def _along_mu(self, rows: np.ndarray, mu: float) -> np.ndarray:
+        """Monotone cubic (PCHIP) along μ in every column of ``rows`` (μ, strain); one
+        interpolant per pattern of converged runs, not one per column (a record has thousands)."""
         from scipy.interpolate import PchipInterpolator
 
         out = np.full(rows.shape[1], np.nan)
-        for c in range(rows.shape[1]):
-            ok = np.isfinite(rows[:, c])
+        patterns, which = np.unique(np.isfinite(rows).T, axis=0, return_inverse=True)
+        for k, ok in enumerate(patterns):
+            cols = np.flatnonzero(which.ravel() == k)
             if ok.sum() >= 2 and mu <= self.mu[ok][-1] + 1e-12:
-                out[c] = PchipInterpolator(self.mu[ok], rows[ok, c])(mu)
+                out[cols] = PchipInterpolator(self.mu[ok], rows[np.ix_(ok, cols)], axis=0)(mu)
         return out
 
     def force_factor_at(self, mu: float, h0_d0: float, n: float, strain) -> np.ndarray:
