@@ -1,4 +1,4 @@
-"""The virtual rig's compression response from its own copy of CalculiX upsetting runs.
+"""The virtual rig's compression response from its own copy of CalculiX upsetting runs (docs/methods.md §4.7).
 
 ``data/upsetting_response.npz`` (written by ``python -m flowcurve.identification.fe.make_table
 --virtual-copy-only``; provenance in the ``.json`` beside it) holds, over μ × h0/d0 × Swift n ×
