@@ -208,9 +208,10 @@ class VirtualRun:
     strain_rate_per_s: float  # the model's nominal rate (v / l0 or v / h0)
     temperature_C: float  # furnace temperature while loading
     friction_mu: float
+    compression_response: str = "fe"  # the virtual rig's compression response (physics.COMPRESSION_RESPONSES)
 
 
-def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty", stop_requested=None) -> VirtualRun:
+def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty", stop_requested=None, compression_response: str = "fe") -> VirtualRun:
     """Run ``spec`` on a virtual rig in this process through the real drivers.
 
     The devices sit on ptys in real time by default; ``link="inprocess"`` with a
@@ -219,7 +220,8 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
     ``rig_setup(virtual_rig)`` may inject faults or change the model before the test
     starts; ``config_overrides`` go to ``rig.config.virtual_config``
     (e.g. ``furnace_max_temperature_C=500``); ``stop_requested`` goes to the
-    :class:`Procedure` (a stop button in another thread).
+    :class:`Procedure` (a stop button in another thread); ``compression_response`` chooses the
+    virtual rig's compression physics ("fe" CalculiX runs, or "slab" with the seed's (3.18)).
     """
     from flowcurve.acquisition.procedure import Procedure
     from flowcurve.rig.config import virtual_config
@@ -228,8 +230,9 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
 
     g = spec.geometry_mm
     specimen = Specimen.tension(g["d0_mm"], g["l0_mm"]) if spec.test == "tension" else Specimen.compression(g["d0_mm"], g["h0_mm"])
-    with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu, temperature_C=initial_temperature_C, clock=clock, link=link) as vr:
-        spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}")
+    with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu, temperature_C=initial_temperature_C, clock=clock, link=link, compression_response=compression_response) as vr:
+        response = f", compression response {compression_response}" if spec.test == "compression" else ""
+        spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}{response}")
         spec.extra_meta.setdefault("material.E_MPa", repr(float(vr.model.material.E_MPa)))  # the handbook value an operator would enter
         if rig_setup is not None:
             rig_setup(vr)
@@ -237,4 +240,5 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
         with DriverRig(config, time_scale=time_scale, virtual=vr, stream=stream) as rig:
             outcome = Procedure(rig, spec, path, view=view, interactive=interactive, stop_requested=stop_requested).run()
         model = vr.model
-        return VirtualRun(outcome, model.material, model.nominal_strain_rate_per_s, model.temperature_C, friction_mu)
+        return VirtualRun(outcome, model.material, model.nominal_strain_rate_per_s, model.temperature_C, friction_mu,
+                          compression_response)

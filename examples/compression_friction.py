@@ -5,8 +5,9 @@ stress alone needs. The friction coefficient μ comes from the barrel: the large
 after the test (post.dmax_mm) and the final height (post.hk_mm) (docs/methods.md §4.2); the
 flow stress is the mean platen pressure divided by a friction factor (§4.4, §4.5). Several
 corrections are computed; this script asks for the slab method's, which is also the
-friction law of the virtual rig that made the record (the default, k_sigma, reads a few
-per cent higher on it).
+friction law of the virtual rig that made the record (recorded before the rig's compression
+came from CalculiX runs: its force is the slab factor's and its barrel the seed's (3.18), the
+rig's ``compression_response="slab"`` today; the default corrections read a few per cent off on it).
 
 The record was made on the virtual rig (examples/data/README.md), whose material and
 friction are known: the script prints what it identified; tests/test_examples.py compares

@@ -51,6 +51,9 @@ def test_the_wheel_holds_flowcurve_alone(wheel):
             inside = "/".join((*package.split("."), *path.relative_to(ROOT / folder).parts))
             assert inside in names, f"{path.relative_to(ROOT)} is missing from the wheel (as {inside})"
     assert "flowcurve/rig/example-rig.toml" in names  # package data travels too
+    for data in ("flowcurve/rig/virtual/data/upsetting_response.npz", "flowcurve/rig/virtual/data/upsetting_response.json",
+                 "flowcurve/identification/fe/data/upsetting_table.npz"):
+        assert data in names  # the FE tables the virtual rig and the identification read
 
 
 def _dummy_wheel(tmp_path: Path, name: str) -> Path:
@@ -96,6 +99,7 @@ def test_installed_beside_packages_named_rig_and_reports_every_command_answers(w
     Path(site, "dependencies.pth").write_text("\n".join(outer_sites) + "\n")
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     check = ("import rig, reports, flowcurve, flowcurve.rig.codecs.aed, flowcurve.reports.cards; "
+             "from flowcurve.rig.virtual.fe_response import UpsettingResponse; UpsettingResponse.load(); "  # its package data
              "print(rig.WHO, reports.WHO, flowcurve.__file__)")
     out = subprocess.run([str(python), "-c", check], cwd=tmp_path, env=env, check=True, capture_output=True, text=True).stdout
     assert out.startswith("the other rig the other reports ") and str(env_dir) in out

@@ -13,6 +13,10 @@ whole history; the table samples it on a strain grid:
 for a Swift law σ = K·(ε0 + ε_p)^n. Points a run did not reach (too many cutbacks near
 sticking at small h0/d0) are NaN. The .npz sits beside a .json with the provenance (mesh,
 increments, ccx version, date, command, run times).
+
+The virtual rig (``flowcurve.rig.virtual``, which may not import this layer) makes its
+compression response from its own copy of the same runs, ``rig/virtual/data/upsetting_response.npz``:
+written beside every default table, or alone from the existing table with ``--virtual-copy-only``.
 """
 
 from __future__ import annotations
@@ -36,6 +40,8 @@ from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upset
 log = logging.getLogger(__name__)
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "data" / "upsetting_table.npz"
+# the source tree's rig/virtual/data (the table is regenerated in a checkout, never in a wheel)
+VIRTUAL_RIG_COPY = Path(__file__).resolve().parents[2] / "rig" / "virtual" / "data" / "upsetting_response.npz"
 MU = (0.0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.35)
 H0_D0 = (0.6, 1.0, 1.6, 2.5)
 N = (0.05, 0.2, 0.4, 0.65)
@@ -126,6 +132,34 @@ def build_table(mu=MU, h0_d0=H0_D0, n=N, *, workers: int = 2, scheduler=None, ou
     return meta
 
 
+def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_COPY) -> dict:
+    """The virtual rig's copy of the table's runs: force factor and bulge (less the μ = 0 run's
+    mesh offset) on a strain grid starting at 0, NaN where a run stopped; provenance beside it."""
+    table, out = Path(table), Path(out)
+    with np.load(table) as z:
+        strain = np.concatenate([[0.0], z["strain"]])
+        pad = lambda a, v: np.concatenate([np.full(a.shape[:3] + (1,), v), a], axis=3)  # noqa: E731
+        bulge = z["bulge_dR_over_h"] - z["bulge_dR_over_h"][0][None]  # μ = 0 has no barrel: its ΔR/h is the mesh's
+        arrays = {"mu": z["mu"], "h0_d0": z["h0_d0"], "n": z["n"], "strain": strain,
+                  "force_factor": pad(z["force_factor"], 1.0), "bulge_dR_over_h": pad(bulge, 0.0)}
+    source = json.loads(table.with_suffix(".json").read_text()) if table.with_suffix(".json").exists() else {}
+    meta = {
+        "what": "the virtual rig's compression response: force factor F/(sigma_f*A) (normalised by mu = 0) and "
+                "bulge dR/h (less the mu = 0 run's mesh offset) over mu x h0/d0 x Swift n x strain ln(h0/h)",
+        "axes": {"mu": "Coulomb friction coefficient", "h0_d0": "initial height/diameter", "n": "Swift hardening exponent",
+                 "strain": "ln(h0/h), leading 0 added (factor 1, bulge 0)"},
+        "nan": "strain points a CalculiX run did not reach",
+        "copied_from": str(table.name), "copied_at": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "command": "python -m flowcurve.identification.fe.make_table --virtual-copy-only",
+        "source": {k: source[k] for k in ("what", "model", "mesh", "increments", "d0_mm", "eps_end", "material",
+                                          "ccx_version", "date", "command", "runs", "incomplete_runs") if k in source},
+    }
+    out.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(out, **arrays)
+    out.with_suffix(".json").write_text(json.dumps(meta, indent=2) + "\n")
+    return meta
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m flowcurve.identification.fe.make_table", description=__doc__.split("\n\n")[0])
     p.add_argument("--out", type=Path, default=DEFAULT_OUT)
@@ -134,11 +168,19 @@ def main(argv=None) -> int:
     p.add_argument("--mu", type=float, nargs="+", default=list(MU))
     p.add_argument("--h0-d0", type=float, nargs="+", default=list(H0_D0))
     p.add_argument("--n", type=float, nargs="+", default=list(N))
+    p.add_argument("--virtual-copy-only", action="store_true",
+                   help="no solver runs: write the virtual rig's copy (rig/virtual/data) of the existing table")
     a = p.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
+    if a.virtual_copy_only:
+        write_virtual_rig_copy(a.out)
+        print(f"wrote {VIRTUAL_RIG_COPY} from {a.out}")
+        return 0
     meta = build_table(a.mu, a.h0_d0, a.n, workers=a.workers, scheduler=a.scheduler, out=a.out,
                        command="python -m flowcurve.identification.fe.make_table " + " ".join(argv if argv is not None else sys.argv[1:]))
     print(json.dumps({k: meta[k] for k in ("runs", "wall_s", "solver_s", "ccx_version")}), "incomplete:", len(meta["incomplete_runs"]))
+    if Path(a.out).resolve() == DEFAULT_OUT:
+        write_virtual_rig_copy(a.out)
     return 0
 
 

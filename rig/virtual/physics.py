@@ -20,15 +20,20 @@ read it. Conventions:
   when the neck strain reaches the material's fracture strain (force drops to zero). The
   neck radius reported after the test follows the same law, so a Bridgman correction with
   the measured radius recovers the flow stress at fracture exactly.
-* Compression: flow stress × current area × the exact Coulomb slab factor
-  2(e^c − c − 1)/c², c = 2μr/h, with plastic volume constancy; the bulge measured after
-  the test follows the seed's regression (3.18) at μ.
+* Compression (default ``compression_response="fe"``): flow stress × volume-constant area ×
+  the force factor F/(σ_f·A) of CalculiX upsetting runs, and the bulge measured after the test
+  from the same runs' ΔR/h (:mod:`flowcurve.rig.virtual.fe_response`, the rig's own copy and
+  interpolation), at the rig's μ, h0/d0 and the material's effective hardening exponent. These
+  are not the formulas the identification's seed and slab methods invert, so the demo shows
+  their real error. ``compression_response="slab"`` keeps the analytic mirror: the exact
+  Coulomb slab factor 2(e^c − c − 1)/c², c = 2μr/h, and the seed's bulge regression (3.18).
 * Frame: crosshead = specimen Δl + P/C_frame.
 * Furnace: C·dT/dt = P_heater·u(t − τ_dead) − (k1 + k2·(T − T_amb))·(T − T_amb).
 """
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field
 
@@ -38,7 +43,10 @@ from scipy.optimize import brentq
 from flowcurve.errors import ConfigError
 from flowcurve.rig.virtual.materials import Material, get_material
 
+log = logging.getLogger(__name__)
+
 LE_ROY_SLOPE = 1.1  # a/R = 1.1·(ε − ε_u), Le Roy et al. (1981)
+COMPRESSION_RESPONSES = ("fe", "slab")  # FE runs (default) / slab factor and (3.18), the analytic mirror
 
 
 def neck_a_over_R(eps_u, eps):
@@ -142,11 +150,14 @@ class Mechanics:
     """
 
     def __init__(self, material: Material, specimen: Specimen, frame_stiffness_N_per_um: float,
-                 friction_mu: float = 0.1):
+                 friction_mu: float = 0.1, compression_response: str = "fe"):
         if not frame_stiffness_N_per_um > 0:
             raise ConfigError(f"rig.frame_stiffness_N_per_um: must be positive, got {frame_stiffness_N_per_um}")
         if friction_mu < 0:
             raise ConfigError(f"friction_mu: must be ≥ 0, got {friction_mu}")
+        if compression_response not in COMPRESSION_RESPONSES:
+            raise ConfigError(f"compression_response: must be one of {', '.join(COMPRESSION_RESPONSES)}, got '{compression_response}'")
+        self.compression_response = compression_response
         self.material = material
         self.specimen = specimen
         self.C_N_per_mm = frame_stiffness_N_per_um * 1000.0
@@ -155,6 +166,49 @@ class Mechanics:
         self.strain_rate_per_s = 0.0
         self.temperature_C = material.T_ref_C
         self._considere: tuple[tuple[float, float], float] | None = None
+        self._fe_curve: tuple[np.ndarray, np.ndarray] | None = None  # (ε grid, force factor) at this μ, h0/d0, n
+
+    # -- FE compression response ------------------------------------------------------------
+    def fe_lookup(self) -> tuple[float, float, float]:
+        """(μ, h0/d0, n) at which the FE response is read: the rig's friction, the specimen's
+        slenderness and the material's effective Swift exponent (rate and temperature enter the
+        Johnson–Cook law as a factor, so they do not change it)."""
+        from flowcurve.rig.virtual.fe_response import effective_hardening_exponent
+
+        m = self.material
+        n = effective_hardening_exponent(lambda e: m.flow_stress(e, 0.0, m.T_ref_C))
+        return self.mu, self.specimen.h0_mm / self.specimen.d0_mm, n
+
+    def _fe_factor_curve(self) -> tuple[np.ndarray, np.ndarray]:
+        """The force factor along the table's strain grid at :meth:`fe_lookup` (computed once;
+        linear between grid strains, as the table's interpolation is)."""
+        if self._fe_curve is None:
+            from flowcurve.rig.virtual.fe_response import UpsettingResponse
+
+            table = UpsettingResponse.load()
+            mu, h0_d0, n = self.fe_lookup()
+            for message in table.in_range(mu, h0_d0, n):
+                log.warning("virtual rig: %s", message)
+            self._fe_curve = (table.strain, table.force_factor_at(mu, h0_d0, n, table.strain))
+        return self._fe_curve
+
+    def friction_force_factor(self, eps_p: float) -> float:
+        """F/(σ_f·π r²) at plastic strain eps_p: the FE force factor, or the slab factor."""
+        s = self.specimen
+        if self.compression_response == "slab":
+            r = s.d0_mm / 2.0 * math.exp(eps_p / 2.0)
+            h = s.h0_mm * math.exp(-eps_p)
+            return float(slab_friction_factor(2.0 * self.mu * r / h))
+        strain, factor = self._fe_factor_curve()
+        return float(np.interp(eps_p, strain, factor))  # held beyond the table's last strain
+
+    def bulge_dR_over_h(self, eps_p: float) -> float:
+        """ΔR/h of the barrel at plastic strain eps_p: the FE runs', or the seed's (3.18)."""
+        if self.compression_response == "slab":
+            return float(bulge_delta_R_over_h(eps_p, self.mu))
+        from flowcurve.rig.virtual.fe_response import UpsettingResponse
+
+        return float(UpsettingResponse.load().bulge_at(*self.fe_lookup(), eps_p))
 
     # -- conditions -----------------------------------------------------------------
     def set_conditions(self, strain_rate_per_s: float, temperature_C: float) -> None:
@@ -263,11 +317,9 @@ class Mechanics:
 
     # -- compression ----------------------------------------------------------------
     def compression_force(self, eps_p: float, sigma: float) -> float:
-        """P = σ·π r²·2(e^c − c − 1)/c², r = r0·e^{εp/2}, h = h0·e^{−εp}, c = 2μr/h."""
-        s = self.specimen
-        r = s.d0_mm / 2.0 * math.exp(eps_p / 2.0)
-        h = s.h0_mm * math.exp(-eps_p)
-        return sigma * math.pi * r * r * float(slab_friction_factor(2.0 * self.mu * r / h))
+        """P = σ·π r²·f(εp), r = r0·e^{εp/2}: f the FE force factor or the slab 2(e^c − c − 1)/c², c = 2μr/h."""
+        r = self.specimen.d0_mm / 2.0 * math.exp(eps_p / 2.0)
+        return sigma * math.pi * r * r * self.friction_force_factor(eps_p)
 
     def _compression_x(self, eps_p: float, sigma: float) -> tuple[float, float]:
         s = self.specimen
@@ -325,7 +377,7 @@ class Mechanics:
             eps = st.eps_p
             hk = s.h0_mm * math.exp(-eps)
             dn = s.d0_mm * math.sqrt(s.h0_mm / hk)  # (3.17) volume constancy
-            dmax = dn + 2.0 * hk * float(bulge_delta_R_over_h(eps, self.mu))  # (3.18)
+            dmax = dn + 2.0 * hk * self.bulge_dR_over_h(eps)  # FE ΔR/h, or (3.18)
             out["post.hk_mm"] = f"{hk:.4f}"
             out["post.dmax_mm"] = f"{dmax:.4f}"
             out["post.smax_mm2"] = f"{math.pi * dmax**2 / 4.0:.4f}"
@@ -421,7 +473,9 @@ class RigModel:
     ``speed_mm_per_s`` is the crosshead speed; the crosshead moves only between
     :meth:`start_crosshead` and :meth:`stop_crosshead`, and stops by itself at fracture or
     at ``stroke_limit_mm`` (default: none for tension, the crosshead at εp = 0.68 for
-    compression, the seed's worked example).
+    compression, the seed's worked example). ``compression_response`` is ``"fe"`` (default:
+    force factor and bulge from CalculiX runs) or ``"slab"`` (the slab factor and the seed's
+    (3.18): the analytic mirror of the identification's slab and seed methods).
     """
 
     def __init__(self, material: str | Material = "12Kh18N12M3TL", test: str = "tension",
@@ -429,7 +483,7 @@ class RigModel:
                  frame_stiffness_N_per_um: float = 136.0, friction_mu: float = 0.1,
                  furnace: FurnaceParams = FurnaceParams(), initial_temperature_C: float | None = None,
                  force_noise_N: float = 3.0, counts_per_mm: float = 100.0,
-                 stroke_limit_mm: float | None = None, seed: int = 0):
+                 stroke_limit_mm: float | None = None, seed: int = 0, compression_response: str = "fe"):
         self.material = get_material(material)
         if specimen is None:
             specimen = Specimen.tension() if test == "tension" else Specimen.compression()
@@ -441,7 +495,7 @@ class RigModel:
         self.specimen = specimen
         self.speed_mm_per_s = float(speed_mm_per_s)
         self.frame_stiffness_N_per_um = float(frame_stiffness_N_per_um)
-        self.mechanics = Mechanics(self.material, specimen, frame_stiffness_N_per_um, friction_mu)
+        self.mechanics = Mechanics(self.material, specimen, frame_stiffness_N_per_um, friction_mu, compression_response)
         self.furnace = Furnace(furnace, initial_temperature_C)
         self.force_noise_N = float(force_noise_N)
         self.counts_per_mm = float(counts_per_mm)

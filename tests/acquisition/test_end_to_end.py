@@ -5,7 +5,7 @@ identified, and compared with the virtual material the rig was built from."""
 import numpy as np
 import pytest
 
-from flowcurve.demo import demo_specs, identify_and_write, summary_lines
+from flowcurve.demo import demo_specs, friction_comparison, friction_comparison_lines, identify_and_write, summary_lines
 from flowcurve.record.format import read_record
 from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.identification.identify import identify
@@ -45,23 +45,70 @@ def test_virtual_tension_identified_within_3_percent(tmp_path, device_link):
     assert res["Rm_MPa"] == pytest.approx(rm_true, rel=0.01)
 
 
+def seed_mu_of_the_fe_barrel(run, h0_d0, eps):
+    """The μ the seed's (3.19) reads from the barrel the FE runs give at the rig's inputs: the
+    npz's ΔR/h at the true μ (a grid value), linear in ln(h0/d0), n and ε, n the material's
+    log-log slope over εp 0.05–0.9, then (3.19) inverted by hand."""
+    from flowcurve.rig.virtual.fe_response import DATA
+
+    e = np.linspace(0.05, 0.9, 60)
+    n = np.polyfit(np.log(e), np.log(run.material.flow_stress(e)), 1)[0]
+    with np.load(DATA) as z:
+        i = int(np.flatnonzero(np.isclose(z["mu"], run.friction_mu))[0])
+        lh, ns, b = np.log(z["h0_d0"]), z["n"], z["bulge_dR_over_h"][i]
+        j = np.searchsorted(lh, np.log(h0_d0)) - 1
+        k = np.searchsorted(ns, n) - 1
+        wj, wk = (np.log(h0_d0) - lh[j]) / (lh[j + 1] - lh[j]), (n - ns[k]) / (ns[k + 1] - ns[k])
+        col = (1 - wj) * (1 - wk) * b[j, k] + wj * (1 - wk) * b[j + 1, k] + (1 - wj) * wk * b[j, k + 1] + wj * wk * b[j + 1, k + 1]
+        dR_h = np.interp(eps, z["strain"], col)
+    return (np.log(1 - dR_h * eps**-0.83 / 0.0683) / -26.7) ** (1 / 1.53)  # (3.19)
+
+
 def test_virtual_compression_identified_and_friction_recovered(tmp_path, device_link):
     spec = demo_specs(MATERIAL)[1]
     # slower than the tension test: the stiff short specimen leaves few samples on the elastic line
     run = run_virtual_test(spec, tmp_path / "c.csv", material=MATERIAL, time_scale=10.0, friction_mu=0.1,
                            **device_link)
-    assert run.outcome.status == "complete"
+    assert run.outcome.status == "complete" and run.compression_response == "fe"
     rec = read_record(run.outcome.path)
-    h0, hk = float(rec.meta["specimen.h0_mm"]), float(rec.meta["post.hk_mm"])
+    h0, hk, d0 = float(rec.meta["specimen.h0_mm"]), float(rec.meta["post.hk_mm"]), float(rec.meta["specimen.d0_mm"])
     reached = np.log(h0 / hk)  # true strain the test reached
-    # the virtual rig's friction law is the slab integral and its barrel the seed's (3.18), so
-    # the slab correction with the (3.19) friction is the identification that must reproduce its
-    # material (the default CalculiX table is reported too; issue 11: an FE-made virtual rig)
-    ident = identify(rec, friction_method="bulge_regression", friction_correction="slab")
+    # the virtual rig's force and barrel come from CalculiX runs; the default identification
+    # (fe_table) reads a table of the same runs, interpolated its own way (PCHIP along μ) and
+    # with the hardening exponent of the measured curve: μ within 0.01, the curve within 3 %
+    ident = identify(rec)
     res = ident.result
+    assert res["friction_method"] == "fe_table" and res["friction_correction"] == "fe_table"
     assert "friction μ" in "\n".join(summary_lines(run, ident, tmp_path))  # the demo's report
     assert res["friction_mu"] == pytest.approx(run.friction_mu, abs=0.01)
-    hard = res["hardening"]
     assert res["E_source"] == "record (material.E_MPa)"  # the handbook E the virtual operator entered
-    dev = max_dev_pct(hard, run, 0.002, reached)
+    dev = max_dev_pct(res["hardening"], run, 0.002, reached)
+    assert dev < 3.0, f"compression hardening {dev:.1f} % off (E {res.get('E_MPa')} MPa, warnings {res.get('warnings')})"
+    # the seed's regression (3.18)/(3.19) was fitted to other FE runs: it reads the FE barrel
+    # with its real error, the one (3.19) of the FE ΔR/h at the rig's true inputs has
+    seed_expected = seed_mu_of_the_fe_barrel(run, h0 / d0, reached)
+    assert res["friction"]["bulge_regression"] == pytest.approx(seed_expected, abs=0.003)
+    assert abs(seed_expected - run.friction_mu) > 0.01  # not a mirror any more: the seed errs here
+    # the demo's table: every friction method, μ and the corrected curves' errors
+    table = friction_comparison(rec, run, default=ident)
+    rows = {r["method"]: r for r in table["rows"]}
+    assert rows["fe_table"]["mu"] == res["friction_mu"] and rows["bulge_regression"]["mu"] == pytest.approx(seed_expected, abs=0.003)
+    assert rows["fe_table"]["error_pct"]["fe_table"] < 3.0
+    text = "\n".join(friction_comparison_lines(table, run))
+    assert all(m in text for m in rows) and all(c in text for c in table["corrections"])
+
+
+def test_virtual_compression_on_the_slab_mirror_is_read_exactly_by_the_seed(tmp_path, device_link):
+    # the analytic rig (slab force, (3.18) barrel): the seed's (3.19) with the slab correction
+    # inverts exactly what made the record
+    spec = demo_specs(MATERIAL)[1]
+    run = run_virtual_test(spec, tmp_path / "c.csv", material=MATERIAL, time_scale=10.0, friction_mu=0.1,
+                           compression_response="slab", **device_link)
+    assert run.outcome.status == "complete"
+    rec = read_record(run.outcome.path)
+    assert "compression response slab" in rec.meta["rig.virtual"]
+    reached = np.log(float(rec.meta["specimen.h0_mm"]) / float(rec.meta["post.hk_mm"]))
+    res = identify(rec, friction_method="bulge_regression", friction_correction="slab").result
+    assert res["friction_mu"] == pytest.approx(run.friction_mu, abs=0.01)
+    dev = max_dev_pct(res["hardening"], run, 0.002, reached)
     assert dev < 3.0, f"compression hardening {dev:.1f} % off (E {res.get('E_MPa')} MPa, warnings {res.get('warnings')})"

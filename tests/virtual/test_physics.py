@@ -127,7 +127,9 @@ def test_slab_factor_matches_integrated_coulomb_pressure():
 
 @pytest.mark.parametrize("mu", [0.05, 0.1, 0.25])
 def test_compression_force_uses_slab_factor_and_bulge_inverts_to_mu(mu):
-    m = RigModel("12Kh18N12M3TL", "compression", speed_mm_per_s=0.01, friction_mu=mu, force_noise_N=0.0)
+    # the analytic mirror, kept as an option: slab force and the seed's (3.18) barrel
+    m = RigModel("12Kh18N12M3TL", "compression", speed_mm_per_s=0.01, friction_mu=mu, force_noise_N=0.0,
+                 compression_response="slab")
     run(m, 20.0)
     s, st = m.specimen, m.state
     eps = st.eps_p
