@@ -349,13 +349,39 @@ def _modulus_and_yield(nominal: _Nominal, line: ModulusFit | None, E_MPa: float 
     return _Yield(E_used=E_used, E_fit=E_fit, E_source=E_source, rp02=rp02, i_yield=i_yield)
 
 
+MU_RESOLUTION_WARN = 0.02  # μ moved by more than this by one dmax resolution step: say so
+
+
+def _fe_table_warnings(chosen: fr.FrictionResult) -> list[str]:
+    """What the FE table's μ cannot promise: a hardening beyond its axes, a barrel that no
+    longer grows with μ (near sticking: μ is then a lower bound; the force factor is as flat)."""
+    if chosen.method != "fe_table":
+        return []
+    out = [f"FE table: {w}; read at the table's edge (--method inverse-fe runs the record's own law)" for w in chosen.extra.get("outside_table", [])]
+    continued = chosen.extra.get("continued_runs_from_strain")
+    if continued is not None:
+        out.append(f"FE table: μ and the correction beyond ε {continued:.2f} rest on runs that stopped there (the side folding onto the "
+                   "platen) and were continued along the next lower μ: an estimate (--method inverse-fe runs the record itself)")
+    sensitivity = chosen.extra.get("sensitivity", {})
+    dmu = sensitivity.get("mu_per_dmax_resolution")
+    if sensitivity and dmu is None:
+        out.append(f"FE table: the bulge does not grow with μ near {chosen.mu:.3f} (the faces stick): take μ as a lower bound")
+    elif dmu is not None and dmu > MU_RESOLUTION_WARN:
+        out.append(f"FE table: μ {chosen.mu:.3f} is poorly told by the bulge (a dmax reading off by {fr.DIAMETER_RESOLUTION_MM} mm moves it by "
+                   f"{dmu:.2g}; the faces nearly stick): take μ as a lower bound")
+    return out
+
+
 def _friction_correction(geo: dict, nominal: _Nominal, friction_method: str, E_used: float | None) -> _Friction:
     """μ (again, now with the curve: the FE table's μ depends on the hardening) and the curve by every correction."""
     warnings: list[str] = []
-    chosen, frictions = _friction_all(geo, friction_method, warnings, curve=(nominal.strain, nominal.pressure))
+    eps_p = plastic_strain(nominal.strain, nominal.pressure, E_used) if E_used is not None else None
+    curve = (nominal.strain, nominal.pressure) if eps_p is None else (nominal.strain, nominal.pressure, eps_p)
+    chosen, frictions = _friction_all(geo, friction_method, warnings, curve=curve)
+    warnings += _fe_table_warnings(chosen)
     corrected = {}
     for method in fr.CORRECTIONS:
-        eps_t, sig_t = fr.correct(method, nominal.strain, nominal.pressure, chosen.mu, nominal.d_n / 2.0, nominal.h)
+        eps_t, sig_t = fr.correct(method, nominal.strain, nominal.pressure, chosen.mu, nominal.d_n / 2.0, nominal.h, eps_p=eps_p)
         corrected[method] = (plastic_strain(eps_t, sig_t, E_used), sig_t, eps_t)
     return _Friction(chosen=chosen, frictions=frictions, corrected=corrected, warnings=warnings)
 

@@ -247,7 +247,7 @@ def friction_ebrahimi_najafizadeh(d0_mm: float, h0_mm: float, hk_mm: float, *, d
 
 def identify_friction(method: str, d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, d_top_mm: float | None = None, curve=None) -> FrictionResult:
     """Friction by the named method (one of :data:`FRICTION_METHODS`); ``curve`` = (strain,
-    mean pressure MPa) of the record, used by ``fe_table`` for the hardening."""
+    mean pressure MPa[, plastic strain]) of the record, used by ``fe_table`` for the hardening."""
     if method == "fe_table":
         return friction_fe_table(d0_mm, h0_mm, hk_mm, d_max_mm=d_max_mm, s_max_mm2=s_max_mm2, curve=curve)
     if method == "bulge_regression":
@@ -259,45 +259,58 @@ def identify_friction(method: str, d0_mm: float, h0_mm: float, hk_mm: float, *, 
 
 # -- CalculiX table (identification/fe) ----------------------------------------------------
 
-FE_DEFAULT_HARDENING_N = 0.3  # used when the record's curve is not given
+FE_DEFAULT_HARDENING = (0.3, 0.002)  # Swift (n, ε0) used when the record's curve is not given
 FE_HARDENING_ITERATIONS = 3
 
 
-def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float):
-    """σ_f = p / factor(μ, h0/d0, n, ε) with n read from the corrected curve itself (fixed point)."""
-    from flowcurve.identification.fe.table import effective_hardening_exponent
+FE_FIT_FROM_TOTAL_STRAIN = 0.02  # without the plastic strain, the Swift fit starts where the elastic part is small
 
+
+def _swift_of(eps_p, sigma, plastic: bool) -> tuple[float, float]:
+    from flowcurve.identification.fe.table import SWIFT_FIT_FROM, swift_hardening
+
+    return swift_hardening(eps_p, sigma, start=SWIFT_FIT_FROM if plastic else FE_FIT_FROM_TOTAL_STRAIN)
+
+
+def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=None):
+    """σ_f = p / factor(μ, h0/d0, n, ε0, ε) with the Swift (n, ε0) read from the corrected curve
+    σ_f(ε_p) itself (fixed point) → (σ_f, (n, ε0)). Without ``eps_p`` the total strain stands in,
+    from ε = 0.02 on."""
     strain = np.asarray(strain, dtype=float)
     pressure = np.asarray(pressure_MPa, dtype=float)
+    plastic = eps_p is not None
+    eps_fit = np.asarray(eps_p, dtype=float) if plastic else strain
     lookup = np.clip(strain, 0.0, table.strain[-1])  # beyond the table: its last strain's factor
     sigma = pressure
-    n = FE_DEFAULT_HARDENING_N
+    hardening = FE_DEFAULT_HARDENING
     for _ in range(FE_HARDENING_ITERATIONS):
-        n = effective_hardening_exponent(strain, sigma)
-        sigma = pressure / table.force_factor_at(mu, h0_d0, n, lookup)
-    return sigma, n
+        hardening = _swift_of(eps_fit, sigma, plastic)
+        sigma = pressure / table.force_factor_at(mu, h0_d0, hardening[0], lookup, eps0=hardening[1])
+    return sigma, hardening
 
 
-def _fe_mu_lowering_n(table, dR_over_h: float, h0_d0: float, n: float, eps: float) -> tuple[float, float, bool]:
-    """(μ, n, clamped) from the table's bulge at hardening n; a bulge too large for n is tried
-    at the table's lower n values (less hardening barrels more); beyond them all, the face
-    sticks: the table's largest μ, flagged as clamped."""
+def _fe_mu_lowering_n(table, dR_over_h: float, h0_d0: float, hardening: tuple[float, float], eps: float) -> tuple[float, tuple[float, float], bool]:
+    """(μ, (n, ε0), clamped) from the table's bulge at the Swift hardening (n, ε0); a bulge too
+    large for n is tried at the table's lower n values (less hardening barrels more); beyond
+    them all, the face sticks: the table's largest μ, flagged as clamped."""
+    n, eps0 = hardening
     candidates = [n] + sorted((float(v) for v in table.n if v < n), reverse=True)
     for value in candidates:
         try:
-            return table.mu_from_bulge(dR_over_h, h0_d0, value, eps), value, False
+            return table.mu_from_bulge(dR_over_h, h0_d0, value, eps, eps0=eps0), (value, eps0), False
         except IdentificationError as exc:
             if "beyond the largest" not in str(exc):
                 raise
-    return table.mu_from_bulge(dR_over_h, h0_d0, candidates[-1], eps, clamp=True), candidates[-1], True
+    return table.mu_from_bulge(dR_over_h, h0_d0, candidates[-1], eps, eps0=eps0, clamp=True), (candidates[-1], eps0), True
 
 
 def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, curve=None) -> FrictionResult:
     """Coulomb μ from the bulge by the CalculiX table: ΔR/h (3.29) at ε = ln(h0/hk) (3.31) inverted.
 
-    The table's hardening exponent n comes from ``curve`` = (strain, mean pressure) corrected
-    with the table's own force factor (a fixed point, starting from the uncorrected curve's n);
-    without a curve n = 0.3. A bulge too large for that n is read at the table's lower n.
+    The table's hardening, the Swift (n, ε0) of the curve, comes from ``curve`` = (strain, mean
+    pressure[, plastic strain]) corrected with the table's own force factor (a fixed point,
+    starting from the uncorrected curve); without a curve n = 0.3, ε0 = 0.002. A bulge too large
+    for that n is read at the table's lower n.
     """
     from flowcurve.identification.fe.table import UpsettingTable
 
@@ -312,26 +325,57 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
     eps_k = float(height_strain(hk_mm, h0_mm))
     table = UpsettingTable.load()
     h0_d0 = h0_mm / d0_mm
-    if curve is not None:  # start from the hardening of the uncorrected pressure curve
-        from flowcurve.identification.fe.table import effective_hardening_exponent
-
-        n_start = effective_hardening_exponent(curve[0], curve[1])
-    else:
-        n_start = FE_DEFAULT_HARDENING_N
-    mu, n, clamped = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, n_start, eps_k)
+    eps_p = curve[2] if curve is not None and len(curve) > 2 else None
+    hardening = _swift_of(curve[0] if eps_p is None else eps_p, curve[1], eps_p is not None) if curve is not None else FE_DEFAULT_HARDENING
+    mu, hardening, clamped = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)
     if curve is not None:
         for _ in range(FE_HARDENING_ITERATIONS):
-            _, n = _fe_flow_stress(table, curve[0], curve[1], mu, h0_d0)
-            mu, n, clamped = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, n, eps_k)
+            _, hardening = _fe_flow_stress(table, curve[0], curve[1], mu, h0_d0, eps_p)
+            mu, hardening, clamped = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)
+    n, eps0 = hardening
     inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
-    extra = {"d_n_mm": d_n, "delta_R_mm": delta_r, "eps_p": eps_k, "hardening_n": n, "hardening_from": "record curve" if curve is not None else "default",
-             "beyond_table_sticking": clamped,
+    extra = {"d_n_mm": d_n, "delta_R_mm": delta_r, "eps_p": eps_k, "hardening_n": n, "hardening_eps0": eps0,
+             "hardening_from": "record curve (Swift fit)" if curve is not None else "default",
+             "beyond_table_sticking": clamped, "sensitivity": _fe_mu_sensitivity(table, mu, h0_d0, hardening, eps_k, hk_mm),
              "table": Path(table.path).name, "table_ccx_version": table.meta.get("ccx_version"), "table_date": table.meta.get("date")}
+    outside = _outside_table(table, h0_d0, n, eps0)
+    if outside:
+        extra["outside_table"] = outside
+    continued = table.continued_at(mu, h0_d0, n, eps_k, eps0)
+    if continued is not None:
+        extra["continued_runs_from_strain"] = continued
     return FrictionResult("fe_table", mu, inputs, extra)
 
 
-def correct_fe_table(strain, pressure_MPa, mu, radius_mm, height_mm):
-    """(strain, p) → (strain, σ_f) with the CalculiX force factor F/(σ_f·A) of the FE table."""
+def _fe_mu_sensitivity(table, mu: float, h0_d0: float, hardening: tuple[float, float], eps: float, hk_mm: float) -> dict:
+    """How well the bulge tells μ: the μ a dmax reading off by its resolution (0.01 mm) moves.
+    Near sticking the barrel stops growing with μ, and μ is then a lower bound at best."""
+    # ΔR = (dmax − d_n)/2 → δμ = (δd/2) / (dΔR/dμ), dΔR/dμ = hk·d(ΔR/h)/dμ
+    n, eps0 = hardening
+    lo, hi = max(mu - 0.02, 0.0), min(mu + 0.02, float(table.mu[-1]))
+    if hi <= lo:
+        return {}
+    b_lo, b_hi = (float(table.bulge_at(m, h0_d0, n, [eps], eps0)[0]) for m in (lo, hi))
+    slope_mm = (b_hi - b_lo) * hk_mm / (hi - lo)  # dΔR/dμ, mm
+    if not (math.isfinite(slope_mm) and slope_mm > 0):  # a flat barrel: no μ moves it (None: not told at all)
+        return {"dR_mm_per_mu": slope_mm if math.isfinite(slope_mm) else None, "mu_per_dmax_resolution": None}
+    return {"dR_mm_per_mu": slope_mm, "mu_per_dmax_resolution": DIAMETER_RESOLUTION_MM / 2.0 / slope_mm}
+
+
+def _outside_table(table, h0_d0: float, n: float, eps0: float) -> list[str]:
+    """The record's hardening beyond the table's axes (read at the nearest edge)."""
+    out = []
+    if not (table.n[0] - 1e-9 <= n <= table.n[-1] + 1e-9):
+        out.append(f"hardening n {n:.3g} outside the table's {table.n[0]:g}–{table.n[-1]:g}")
+    if table.eps0.size > 1 and eps0 > table.eps0[-1] * 1.001:  # below the first ε0 the early hardening is inside the 0.2 % offset
+        out.append(f"Swift ε0 {eps0:.3g} (a high yield for its hardening) beyond the table's {table.eps0[-1]:g}")
+    return out
+
+
+def correct_fe_table(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None):
+    """(strain, p) → (strain, σ_f) with the CalculiX force factor F/(σ_f·A) of the FE table; the
+    table's hardening from the Swift fit of σ_f over ``eps_p`` (the plastic strain; without it
+    the total strain from 0.02 on)."""
     # σ_f = p / factor(μ, h0/d0, n, ε), factor from identification/fe (make_table)
     from flowcurve.identification.fe.table import UpsettingTable, specimen_proportion
 
@@ -340,7 +384,7 @@ def correct_fe_table(strain, pressure_MPa, mu, radius_mm, height_mm):
     table = UpsettingTable.load()
     sel = strain > 0.01
     h0_d0 = specimen_proportion(strain[sel], radius[sel], height[sel]) if sel.any() else 1.0
-    sigma, _ = _fe_flow_stress(table, strain, pressure_MPa, mu, h0_d0)
+    sigma, _ = _fe_flow_stress(table, strain, pressure_MPa, mu, h0_d0, eps_p)
     return strain, sigma
 
 
@@ -406,12 +450,15 @@ CORRECTIONS: dict[str, Callable] = {
 DEFAULT_CORRECTION = "fe_table"
 
 
-def correct(method: str, strain, pressure_MPa, mu, radius_mm, height_mm):
-    """Apply the named correction (one of :data:`CORRECTIONS`) → (strain, flow stress MPa)."""
+def correct(method: str, strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None):
+    """Apply the named correction (one of :data:`CORRECTIONS`) → (strain, flow stress MPa);
+    ``eps_p`` (the plastic strain) lets ``fe_table`` read the curve's hardening."""
     try:
         fn = CORRECTIONS[method]
     except KeyError:
         raise IdentificationError(f"unknown friction correction {method!r} (choose from {', '.join(CORRECTIONS)})") from None
     if not (math.isfinite(mu) and mu >= 0):
         raise IdentificationError(f"friction correction: μ = {mu} must be a finite number ≥ 0")
+    if fn is correct_fe_table:
+        return fn(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p)
     return fn(strain, pressure_MPa, mu, radius_mm, height_mm)

@@ -1,14 +1,16 @@
 """The FE upsetting table (package data made by :mod:`.make_table`) and its inverse.
 
-The table holds, for μ × h0/d0 × n (Swift hardening exponent) × strain ε = ln(h0/h):
+The table holds, for μ × h0/d0 × Swift hardening (n, ε0) × strain ε = ln(h0/h):
 
 * the force factor F/(σ_f·A), A = π·d0²·h0/(4h), normalised by the μ = 0 run (CalculiX's own
   0.3–0.6 % mesh deficit cancels);
 * the bulge ΔR/h (3.29), less the μ = 0 run's (the same mesh offset, ~0.003 at ε = 0.9).
 
-Values between grid points: linear in ln(h0/d0), n and ε, then monotone cubic (PCHIP) along μ.
-The hardening of a measured curve enters as its effective exponent n = d ln σ / d ln ε_p,
-fitted over ε_p ≥ 0.05 (:func:`effective_hardening_exponent`).
+Values between grid points: linear in ln(h0/d0), n, ln ε0 and ε, then monotone cubic (PCHIP)
+along μ. The hardening of a measured curve enters as its Swift fit σ ≈ K·(ε0 + ε_p)^n
+(:func:`swift_hardening`): n alone (a table of one ε0) does not carry the barrel of a law with a
+high yield or a saturating one; the pair does (docs/methods.md §4a). A table without an ε0 axis
+(the first, n only) still loads, as one ε0.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from flowcurve.errors import IdentificationError
 log = logging.getLogger(__name__)
 
 PACKAGE_TABLE = Path(__file__).resolve().parent / "data" / "upsetting_table.npz"
-HARDENING_FIT_FROM = 0.05  # effective n fitted from this plastic strain on
+SWIFT_FIT_FROM = 0.002  # the Swift fit (n, ε0) from the 0.2 % offset on
 
 
 @dataclass(frozen=True)
@@ -35,9 +37,11 @@ class UpsettingTable:
     mu: np.ndarray
     h0_d0: np.ndarray
     n: np.ndarray
+    eps0: np.ndarray  # Swift ε0 (one value in a table of n only)
     strain: np.ndarray  # with a leading 0 (factor 1, bulge 0)
-    force_factor: np.ndarray  # (mu, h0_d0, n, strain)
+    force_factor: np.ndarray  # (mu, h0_d0, n, eps0, strain)
     bulge: np.ndarray
+    reached: np.ndarray  # (mu, h0_d0, n, eps0): the last strain each run converged to (beyond: continued)
     meta: dict = field(default_factory=dict)
     path: str = ""
 
@@ -52,21 +56,48 @@ class UpsettingTable:
             raise IdentificationError(f"FE table: h0/d0 = {h0_d0:.3g} is outside the table's range {lo:g}–{hi:g} ({self.path})")
         return min(max(h0_d0, lo), hi), float(np.clip(n, self.n[0], self.n[-1]))
 
-    def _mu_rows(self, values: np.ndarray, h0_d0: float, n: float, strain) -> np.ndarray:
-        """Linear interpolation in ln(h0/d0), n and ε at every grid μ → (n_mu, n_strain)."""
+    def continued_at(self, mu: float, h0_d0: float, n: float, strain: float, eps0: float | None = None) -> float | None:
+        """The smallest last converged strain of the runs a reading at (μ, h0/d0, n, ε0, ε) rests
+        on, when it is below ``strain`` (the reading used continued runs); else None."""
+        h0_d0, n = self._check(h0_d0, n)
+        m = int(np.clip(np.searchsorted(self.mu, mu), 1, self.mu.size - 1))
+        idx = [self._bracket(np.log(self.h0_d0), math.log(h0_d0)), self._bracket(self.n, n),
+               self._bracket(np.log(self.eps0), math.log(self.clamp_eps0(eps0)))]
+        corners = [self.reached[a, i + di, j + dj, k + dk] for a in (m - 1, m) for (i, _), di in ((idx[0], 0), (idx[0], 1))
+                   for (j, _), dj in ((idx[1], 0), (idx[1], 1)) for (k, _), dk in ((idx[2], 0), (idx[2], 1))
+                   if i + di < self.h0_d0.size and j + dj < self.n.size and k + dk < self.eps0.size]
+        low = float(min(corners))
+        return low if low < strain - 1e-9 else None
+
+    def clamp_eps0(self, eps0: float | None) -> float:
+        """ε0 within the table's range (None: its first, the n-only table's ε0)."""
+        return float(self.eps0[0]) if eps0 is None else float(np.clip(eps0, self.eps0[0], self.eps0[-1]))
+
+    @staticmethod
+    def _bracket(axis: np.ndarray, x: float) -> tuple[int, float]:
+        """(i, w): x = (1 − w)·axis[i] + w·axis[i + 1]; an axis of one value → (0, 0)."""
+        if axis.size == 1:
+            return 0, 0.0
+        i = int(np.clip(np.searchsorted(axis, x) - 1, 0, axis.size - 2))
+        return i, (x - axis[i]) / (axis[i + 1] - axis[i])
+
+    def _mu_rows(self, values: np.ndarray, h0_d0: float, n: float, strain, eps0: float | None = None) -> np.ndarray:
+        """Linear interpolation in ln(h0/d0), n, ln ε0 and ε at every grid μ → (n_mu, n_strain)."""
         h0_d0, n = self._check(h0_d0, n)
         strain = np.atleast_1d(np.asarray(strain, dtype=float))
-        lh = np.log(self.h0_d0)
-        i = int(np.clip(np.searchsorted(lh, math.log(h0_d0)) - 1, 0, lh.size - 2))
-        wi = (math.log(h0_d0) - lh[i]) / (lh[i + 1] - lh[i])
-        j = int(np.clip(np.searchsorted(self.n, n) - 1, 0, self.n.size - 2))
-        wj = (n - self.n[j]) / (self.n[j + 1] - self.n[j])
-        block = ((1 - wi) * (1 - wj) * values[:, i, j] + wi * (1 - wj) * values[:, i + 1, j]
-                 + (1 - wi) * wj * values[:, i, j + 1] + wi * wj * values[:, i + 1, j + 1])  # (mu, strain grid)
+        i, wi = self._bracket(np.log(self.h0_d0), math.log(h0_d0))
+        j, wj = self._bracket(self.n, n)
+        k, wk = self._bracket(np.log(self.eps0), math.log(self.clamp_eps0(eps0)))
+        block = np.zeros((self.mu.size, self.strain.size))
+        for di, a in ((0, 1 - wi), (1, wi)):
+            for dj, b in ((0, 1 - wj), (1, wj)):
+                for dk, c in ((0, 1 - wk), (1, wk)):
+                    if a * b * c:
+                        block = block + a * b * c * values[:, i + di, j + dj, k + dk]
         s = np.clip(strain, self.strain[0], None)
         out = np.empty((self.mu.size, s.size))
-        for k in range(self.mu.size):
-            out[k] = np.interp(s, self.strain, block[k], right=np.nan)
+        for m in range(self.mu.size):
+            out[m] = np.interp(s, self.strain, block[m], right=np.nan)
         return out
 
     def _along_mu(self, rows: np.ndarray, mu: float) -> np.ndarray:
@@ -82,15 +113,15 @@ class UpsettingTable:
                 out[cols] = PchipInterpolator(self.mu[ok], rows[np.ix_(ok, cols)], axis=0)(mu)
         return out
 
-    def force_factor_at(self, mu: float, h0_d0: float, n: float, strain) -> np.ndarray:
+    def force_factor_at(self, mu: float, h0_d0: float, n: float, strain, eps0: float | None = None) -> np.ndarray:
         """F/(σ_f·A) at the strains ``strain`` (NaN beyond the table)."""
-        return self._along_mu(self._mu_rows(self.force_factor, h0_d0, n, strain), mu)
+        return self._along_mu(self._mu_rows(self.force_factor, h0_d0, n, strain, eps0), mu)
 
-    def bulge_at(self, mu: float, h0_d0: float, n: float, strain) -> np.ndarray:
+    def bulge_at(self, mu: float, h0_d0: float, n: float, strain, eps0: float | None = None) -> np.ndarray:
         """ΔR/h at the strains ``strain``."""
-        return self._along_mu(self._mu_rows(self.bulge, h0_d0, n, strain), mu)
+        return self._along_mu(self._mu_rows(self.bulge, h0_d0, n, strain, eps0), mu)
 
-    def mu_from_bulge(self, dR_over_h: float, h0_d0: float, n: float, strain: float, *, clamp: bool = False) -> float:
+    def mu_from_bulge(self, dR_over_h: float, h0_d0: float, n: float, strain: float, *, eps0: float | None = None, clamp: bool = False) -> float:
         """The μ whose bulge at (h0/d0, n, ε) is ``dR_over_h`` (inverse of :meth:`bulge_at`);
         a bulge beyond the table's largest is an error, or with ``clamp`` its largest μ."""
         from scipy.interpolate import PchipInterpolator
@@ -99,7 +130,7 @@ class UpsettingTable:
             raise IdentificationError(f"FE table: need a finite bulge and a strain > 0 (ΔR/h = {dR_over_h}, ε = {strain})")
         if strain > self.strain[-1] + 1e-9:
             raise IdentificationError(f"FE table: the final strain ε = {strain:.3g} is beyond the table's {self.strain[-1]:g}")
-        col = self._mu_rows(self.bulge, h0_d0, n, [strain])[:, 0]
+        col = self._mu_rows(self.bulge, h0_d0, n, [strain], eps0)[:, 0]
         ok = np.isfinite(col)
         if ok.sum() < 2:
             raise IdentificationError(f"FE table: no converged runs at h0/d0 = {h0_d0:.3g}, ε = {strain:.3g}")
@@ -132,26 +163,65 @@ def _load(path: str) -> UpsettingTable:
         if mu[0] != 0.0:
             raise IdentificationError(f"{p}: FE table needs μ = 0 first")
         strain = np.concatenate([[0.0], z["strain"]])
-        pad = lambda a, v: np.concatenate([np.full(a.shape[:3] + (1,), v), a], axis=3)  # noqa: E731
-        factor = pad(z["force_factor"], 1.0)
-        bulge = z["bulge_dR_over_h"] - z["bulge_dR_over_h"][0][None]  # less the μ = 0 mesh offset
-        bulge = pad(bulge, 0.0)
-        tab = UpsettingTable(mu=mu, h0_d0=z["h0_d0"], n=z["n"], strain=strain, force_factor=factor, bulge=bulge, path=str(p))
+        factor, bulge = z["force_factor"], z["bulge_dR_over_h"]
+        if "eps0" in z:
+            eps0 = z["eps0"]
+        else:  # the first table: n only, at the Swift ε0 of its provenance
+            eps0 = np.array([0.002])
+            factor, bulge = factor[:, :, :, None], bulge[:, :, :, None]
+        pad = lambda a, v: np.concatenate([np.full(a.shape[:4] + (1,), v), a], axis=4)  # noqa: E731
+        bulge = pad(bulge - bulge[0][None], 0.0)  # less the μ = 0 mesh offset
+        factor = pad(factor, 1.0)
+        reached = np.where(np.isnan(factor), -np.inf, strain).max(axis=-1)
+        tab = UpsettingTable(mu=mu, h0_d0=z["h0_d0"], n=z["n"], eps0=eps0, strain=strain, force_factor=continue_stopped_runs(factor),
+                             bulge=continue_stopped_runs(bulge), reached=reached, path=str(p))
     meta_path = p.with_suffix(".json")
     if meta_path.exists():
         object.__setattr__(tab, "meta", json.loads(meta_path.read_text()))
     return tab
 
 
-def effective_hardening_exponent(eps_p, stress_MPa, start: float = HARDENING_FIT_FROM) -> float:
-    """Slope of ln σ over ln ε_p for ε_p ≥ ``start`` (least squares): the table's n axis."""
-    # σ ≈ K·ε_p^n → n = d ln σ / d ln ε_p
+def continue_stopped_runs(values: np.ndarray) -> np.ndarray:
+    """NaN tails (a run that stopped with too many cutbacks as the side folds onto the platen)
+    continued with the strain increments of the run one μ step lower, which the μ = 0 runs
+    anchor: value(μ_k, ε_s) = value(μ_k, ε_s−1) + value(μ_k−1, ε_s) − value(μ_k−1, ε_s−1).
+    An estimate, not a run: :meth:`UpsettingTable.continued_at` says when a reading used it."""
+    out = values.copy()
+    if np.isnan(out[0]).any():
+        raise IdentificationError("FE table: the μ = 0 runs must be complete (they anchor the continuation of stopped runs)")
+    for i in range(1, out.shape[0]):
+        row, ref = out[i], out[i - 1]
+        for s in range(1, out.shape[-1]):
+            gap = np.isnan(row[..., s])
+            row[..., s] = np.where(gap, row[..., s - 1] + ref[..., s] - ref[..., s - 1], row[..., s])
+    return out
+
+
+def swift_hardening(eps_p, stress_MPa, start: float = SWIFT_FIT_FROM) -> tuple[float, float]:
+    """(n, ε0) of the Swift law σ = K·(ε0 + ε_p)^n fitted to the curve for ε_p ≥ ``start``:
+    the table's hardening axes. Least squares in ln σ on a uniform ε_p grid (the samples'
+    density does not weigh), linear in (ln K, n) at each ε0, ε0 by a bounded scalar search."""
+    # ln σ = ln K + n·ln(ε0 + ε_p)
+    from scipy.optimize import minimize_scalar
+
     e = np.asarray(eps_p, dtype=float)
     s = np.asarray(stress_MPa, dtype=float)
     ok = np.isfinite(e) & np.isfinite(s) & (e >= start) & (s > 0)
-    if ok.sum() < 3 or e[ok].max() < 1.5 * start:
-        return 0.3  # too short a curve: a mid-range hardening
-    return float(np.polyfit(np.log(e[ok]), np.log(s[ok]), 1)[0])
+    if ok.sum() < 5 or e[ok].max() < 10 * start:
+        return 0.3, 0.002  # too short a curve: a mid-range hardening
+    e, s = e[ok], s[ok]
+    order = np.argsort(e, kind="stable")
+    grid = np.linspace(e[order][0], e[order][-1], 200)
+    ln_s = np.log(np.interp(grid, e[order], s[order]))
+
+    def fit(log_eps0):
+        A = np.column_stack([np.ones_like(grid), np.log(math.exp(log_eps0) + grid)])
+        coef, *_ = np.linalg.lstsq(A, ln_s, rcond=None)
+        return coef, float(np.sum((A @ coef - ln_s) ** 2))
+
+    best = minimize_scalar(lambda x: fit(x)[1], bounds=(math.log(1e-5), math.log(2.0)), method="bounded", options={"xatol": 1e-3})
+    coef, _ = fit(best.x)
+    return float(coef[1]), float(math.exp(best.x))
 
 
 def specimen_proportion(strain, radius_mm, height_mm) -> float:
