@@ -1,0 +1,100 @@
+"""A six-record compression series made with CalculiX, identified without a handbook E.
+
+Six upsetting runs of one Johnson–Cook material at three temperatures and two strain rates
+(the flow curve of each run is the law at that temperature and at the plastic strain rate the
+series will read off the record's data, so the truth is exact), each made a 10 Hz record with
+a seating toe, 10 µm encoder steps, force noise and frame compliance, and no ``material.E_MPa``.
+``flowcurve fit`` of the six records (each identified by the default method, E from its own
+elastic line) gave A = 0 with 709 % error before the elastic line, toe and hardening fits were
+made robust (issue 10); now the fitted law is within 1 % of the input at every condition.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from functools import partial
+
+import numpy as np
+import pytest
+
+from flowcurve.cli import main
+from flowcurve.identification.fe.synthetic import upsetting_record
+from flowcurve.identification.johnson_cook import johnson_cook
+from flowcurve.record.format import write_record
+
+pytestmark = [pytest.mark.slow, pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]
+
+TRUE = {"A": 350.0, "B": 600.0, "n": 0.35, "C": 0.02, "m": 1.0}
+REF = {"ref_strain_rate_per_s": 0.002, "ref_temperature_C": 20.0, "melt_temperature_C": 1500.0}
+D0, H0, EPS_END, MU, RATE_HZ = 6.0, 9.0, 0.7, 0.1, 10.0
+CONDITIONS = [(T, rate, E) for T, E in ((20.0, 200_000.0), (300.0, 185_000.0), (600.0, 165_000.0)) for rate in (0.002, 0.02)]
+
+
+def plastic_rate(nominal_rate: float) -> float:
+    """The least-squares slope of ε = ln(h0/(h0 − v·t)) over the loading at v = rate·h0: the
+    strain rate the series reads off a constant-speed upsetting record (the law is evaluated at it)."""
+    v = nominal_rate * H0
+    t = np.linspace(0.0, H0 * (1.0 - math.exp(-EPS_END)) / v, 2001)
+    return float(np.polyfit(t, np.log(H0 / (H0 - v * t)), 1)[0])
+
+
+def record_of(T: float, rate: float, E: float, seed: int):
+    from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
+
+    law = partial(johnson_cook, strain_rate_per_s=plastic_rate(rate), temperature_C=T, **TRUE, **REF)
+    # a small first increment resolves the elastic line and the yield (1/70 of the stroke steps over both)
+    model = UpsettingModel.from_law(D0, H0, H0 * math.exp(-EPS_END), MU, law, E_MPa=E, increments=70, first_increment=1.0 / 3000)
+    record = upsetting_record(simulate_upsetting(model), speed_mm_per_s=rate * H0, rate_hz=RATE_HZ, seed=seed,
+                              specimen_id=f"T{T:.0f}_r{rate:g}")
+    record.meta["nominal_temperature_C"] = repr(T)
+    del record.meta["material.E_MPa"]  # no handbook modulus: each record's own elastic line
+    return record
+
+
+@pytest.fixture(scope="module")
+def series_fit(tmp_path_factory):
+    """``flowcurve fit --strict`` of the six records (no handbook E): (exit code, fit.json, stderr)."""
+    import contextlib
+    import io
+
+    tmp = tmp_path_factory.mktemp("fe_series")
+    paths = [write_record(tmp / f"C{k}.csv", record_of(T, rate, E, seed=10 + k)) for k, (T, rate, E) in enumerate(CONDITIONS)]
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["fit", *map(str, paths), "--out", str(tmp / "fit"), "--strict", "--ref-rate", str(REF["ref_strain_rate_per_s"]),
+                     "--ref-temp", str(REF["ref_temperature_C"]), "--melt-temp", str(REF["melt_temperature_C"])])
+    fit = json.loads((tmp / "fit" / "fit.json").read_text()) if code == 0 else {}
+    return code, fit, err.getvalue()
+
+
+def _constants(fit):
+    return {"A": fit["A_MPa"], "B": fit["B_MPa"], "n": fit["n"], "C": fit["C"], "m": fit["m"]}
+
+
+def test_six_fe_records_give_the_law_without_handbook_E(series_fit):
+    """Each record's own E; the fitted law reproduces the input law within 1 % at every
+    condition over ε_p 0.01–0.6, with B, C and m within 3 %, quality good."""
+    code, fit, err = series_fit
+    assert code == 0, err
+    assert fit["quality"] == "good" and fit["E_MPa_source"].startswith("mean of the records' E_MPa")
+    got = _constants(fit)
+    for key in ("B", "C", "m"):
+        assert got[key] == pytest.approx(TRUE[key], rel=0.03), (key, got[key])
+    eps = np.linspace(0.01, 0.6, 60)
+    for T, rate, _ in CONDITIONS:
+        fitted = johnson_cook(eps, plastic_rate(rate), T, **got, **REF)
+        true = johnson_cook(eps, plastic_rate(rate), T, **TRUE, **REF)
+        assert np.max(np.abs(fitted / true - 1.0)) < 0.01, (T, rate)
+
+
+@pytest.mark.xfail(strict=True, reason="A 367 MPa (+4.9 %) and n 0.374 (+7 %): A and n correlate at 0.95 in the fit, so the friction "
+                   "correction's sub-percent shape residual (−0.3 % at ε_p 0.05–0.2, +0.2 % at 0.6) moves them 5–7 %; B 590 (−1.7 %), "
+                   "C and m within 1 %, the law within 1 % of the input everywhere")
+def test_six_fe_records_recover_A_and_n_within_3_percent(series_fit):
+    code, fit, err = series_fit
+    assert code == 0, err
+    got = _constants(fit)
+    for key in ("A", "n"):
+        assert got[key] == pytest.approx(TRUE[key], rel=0.03), (key, got[key])
