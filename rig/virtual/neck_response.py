@@ -1,4 +1,4 @@
-"""The virtual rig's tension neck from its own copy of CalculiX necking runs (docs/methods.md §4.7).
+"""The virtual rig's tension neck from its own copy of CalculiX necking runs (docs/methods.md §3.6).
 
 ``data/tension_response.npz`` (written by ``python -m flowcurve.identification.fe.make_tension_response``;
 provenance in the ``.json`` beside it) holds, for Swift laws σ = K·(ε0 + ε_p)^n over n and the
@@ -35,7 +35,6 @@ Interpolation is linear in ε_n and in n: it returns a grid run's values for its
 
 from __future__ import annotations
 
-import json
 import logging
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -44,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from flowcurve.errors import ConfigError
+from flowcurve.rig.virtual.fe_data import read_arrays, read_provenance
 
 log = logging.getLogger(__name__)
 
@@ -150,7 +150,7 @@ class TensionResponse:
         beta = runs["force_factor"] / runs["force_factor"][:, :1]  # each run relative to its onset
         lam = runs["neck_elongation_over_d0"] - runs["neck_elongation_over_d0"][:, :1]
         lam = np.maximum.accumulate(np.sum(w * lam, axis=0))  # the neck does not shorten
-        used = np.any(w[:, upto] > 0, axis=1)
+        used = np.any(w[:, upto] > 0, axis=1) if upto.any() else np.any(w > 0, axis=1)  # (fracture before the neck)
         end = float(min(self.reached[k] - cs[k] for k in np.nonzero(used)[0]))
         return NeckCurve(float(considere_strain), delta, np.sum(w * beta, axis=0), lam,
                          np.maximum(np.sum(w * runs["neck_a_over_R"], axis=0), 0.0), end)
@@ -159,18 +159,8 @@ class TensionResponse:
 @lru_cache(maxsize=2)
 def _load(path: str) -> TensionResponse:
     p = Path(path)
-    try:
-        z = np.load(p)
-    except FileNotFoundError:
-        raise ConfigError(f"{p}: the virtual rig's FE tension response is missing (write it: "
-                          "python -m flowcurve.identification.fe.make_tension_response)") from None
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{p}: the virtual rig's FE tension response is unreadable ({exc})") from None
-    with z:
-        try:
-            arrays = {k: np.asarray(z[k], float) for k in ("n", "considere_strain", "neck_strain", *QUANTITIES)}
-        except KeyError as exc:
-            raise ConfigError(f"{p}: the FE tension response lacks {exc}") from None
+    arrays = read_arrays(p, ("n", "considere_strain", "neck_strain", *QUANTITIES), "the virtual rig's FE tension response",
+                         "python -m flowcurve.identification.fe.make_tension_response")
     cs, eps = arrays["considere_strain"], arrays["neck_strain"]
     shape = (cs.size, eps.size)
     if cs.size < 2 or np.any(np.diff(cs) <= 0) or np.any(np.diff(eps) <= 0):
@@ -182,7 +172,5 @@ def _load(path: str) -> TensionResponse:
     short = [f"n {n:g}" for n, r, c in zip(arrays["n"], reached, cs) if not r > c + 2 * CONTINUATION_SPAN]
     if short:
         raise ConfigError(f"{p}: FE necking runs ({', '.join(short)}) stop before their force maximum is well passed")
-    meta_path = p.with_suffix(".json")
-    meta = json.loads(meta_path.read_text(encoding="utf-8")) if meta_path.exists() else {}
     return TensionResponse(arrays["n"], cs, eps, arrays["force_factor"], arrays["neck_elongation_over_d0"],
-                           arrays["neck_a_over_R"], reached, meta, str(p))
+                           arrays["neck_a_over_R"], reached, read_provenance(p), str(p))
