@@ -56,6 +56,7 @@ from flowcurve.rig.virtual.responses import COMPRESSION_RESPONSES, TENSION_RESPO
 log = logging.getLogger(__name__)
 
 LE_ROY_SLOPE = 1.1  # a/R = 1.1·(ε − ε_u), Le Roy et al. (1981)
+NECK_REUSE_STRAIN = 1e-6  # the FE neck is made again only when the Considère strain moves more
 
 
 def neck_a_over_R(eps_u, eps):
@@ -267,10 +268,10 @@ class Mechanics:
     # -- FE tension response ------------------------------------------------------------
     def fe_neck(self):
         """The FE neck (:class:`~flowcurve.rig.virtual.neck_response.NeckCurve`) at the material's
-        Considère strain (made once per strain; rate and temperature scale the Johnson–Cook law
-        and leave it unchanged)."""
+        Considère strain (made once per strain, to 1e-6: rate and temperature scale the
+        Johnson–Cook law and leave it unchanged, but the root search moves in its last digits)."""
         eps_u = self.considere_strain()
-        if self._neck is None or self._neck.considere_strain != eps_u:
+        if self._neck is None or abs(self._neck.considere_strain - eps_u) > NECK_REUSE_STRAIN:
             from flowcurve.rig.virtual.neck_response import TensionResponse
 
             m, rate, T = self.material, self.strain_rate_per_s, self.temperature_C
@@ -563,6 +564,8 @@ class RigModel:
         self.thermocouple_open = False
         self.events: list[tuple[float, str]] = []
         self._update_conditions()
+        if test == "tension" and tension_response == "fe":
+            self.mechanics.fe_neck()  # made now, not in the model step that starts the test (the devices wait on it)
         if stroke_limit_mm is None and test == "compression":
             stroke_limit_mm = self.mechanics.compression_crosshead(0.68)
         self.stroke_limit_mm = math.inf if stroke_limit_mm is None else float(stroke_limit_mm)
