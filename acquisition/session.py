@@ -208,10 +208,11 @@ class VirtualRun:
     strain_rate_per_s: float  # the model's nominal rate (v / l0 or v / h0)
     temperature_C: float  # furnace temperature while loading
     friction_mu: float
-    compression_response: str = "fe"  # the virtual rig's compression response (physics.COMPRESSION_RESPONSES)
+    compression_response: str = "fe"  # the virtual rig's compression response (rig.virtual.responses.COMPRESSION_RESPONSES)
+    tension_response: str = "fe"  # the virtual rig's tension neck (rig.virtual.responses.TENSION_RESPONSES)
 
 
-def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty", stop_requested=None, compression_response: str = "fe") -> VirtualRun:
+def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty", stop_requested=None, compression_response: str = "fe", tension_response: str = "fe") -> VirtualRun:
     """Run ``spec`` on a virtual rig in this process through the real drivers.
 
     The devices sit on ptys in real time by default; ``link="inprocess"`` with a
@@ -221,7 +222,9 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
     starts; ``config_overrides`` go to ``rig.config.virtual_config``
     (e.g. ``furnace_max_temperature_C=500``); ``stop_requested`` goes to the
     :class:`Procedure` (a stop button in another thread); ``compression_response`` chooses the
-    virtual rig's compression physics ("fe" CalculiX runs, or "slab" with the seed's (3.18)).
+    virtual rig's compression physics ("fe" CalculiX runs, or "slab" with the seed's (3.18)) and
+    ``tension_response`` its neck ("fe" CalculiX necking runs, or "bridgman" with Le Roy's a/R);
+    the record's header says which (``virtual.compression_response`` / ``virtual.tension_response``).
     """
     from flowcurve.acquisition.procedure import Procedure
     from flowcurve.rig.config import virtual_config
@@ -230,9 +233,10 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
 
     g = spec.geometry_mm
     specimen = Specimen.tension(g["d0_mm"], g["l0_mm"]) if spec.test == "tension" else Specimen.compression(g["d0_mm"], g["h0_mm"])
-    with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu, temperature_C=initial_temperature_C, clock=clock, link=link, compression_response=compression_response) as vr:
-        response = f", compression response {compression_response}" if spec.test == "compression" else ""
-        spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}{response}")
+    with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu, temperature_C=initial_temperature_C, clock=clock, link=link, compression_response=compression_response, tension_response=tension_response) as vr:
+        response = compression_response if spec.test == "compression" else tension_response
+        spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}, {spec.test} response {response}")
+        spec.extra_meta.setdefault(f"virtual.{spec.test}_response", response)
         spec.extra_meta.setdefault("material.E_MPa", repr(float(vr.model.material.E_MPa)))  # the handbook value an operator would enter
         if rig_setup is not None:
             rig_setup(vr)
@@ -241,4 +245,4 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
             outcome = Procedure(rig, spec, path, view=view, interactive=interactive, stop_requested=stop_requested).run()
         model = vr.model
         return VirtualRun(outcome, model.material, model.nominal_strain_rate_per_s, model.temperature_C, friction_mu,
-                          compression_response)
+                          compression_response, tension_response)

@@ -11,6 +11,13 @@ the demo prints, for every friction method and every correction, the μ it reads
 of the corrected flow curve against the virtual material (:func:`friction_comparison`). The
 identification's ``fe_table`` method reads the same CalculiX runs (interpolated and with a
 hardening exponent of its own): it is the reference, not an independent check.
+
+Likewise the virtual tension test's neck comes from CalculiX necking runs, not from the
+Bridgman factor and Le Roy's a/R the identification's neck corrections use, so the demo prints
+each neck correction's fracture stress — with the neck radius the rig reports and with Le Roy's
+estimate — and the identified curve past necking against the virtual material
+(:func:`neck_comparison`). ``tension_response="bridgman"`` / ``compression_response="slab"``
+run the analytic mirrors instead (the errors then show what the identification adds itself).
 """
 
 from __future__ import annotations
@@ -89,6 +96,54 @@ def friction_comparison_lines(table: dict, run) -> list[str]:
     return lines
 
 
+def neck_comparison(record, ident, run) -> dict:
+    """Every neck correction of one tension identification, with the measured neck radius and
+    with Le Roy's a/R, against the virtual material's flow stress at the fracture strain; and
+    the identified hardening law's deviation from the truth between the maximum force and fracture.
+
+    Returns ``{"eps_u", "eps_f", "truth_MPa", "methods", "rows": [{"source", "a_over_R",
+    "error_pct": {method: %}}], "curve_error_pct", "curve_range"}`` (empty without a fracture point).
+    """
+    from flowcurve.identification.necking import METHODS, neck_corrections
+
+    res = ident.result
+    eps_f, avg = res.get("fracture_true_strain"), res.get("fracture_avg_stress_MPa")
+    if eps_f is None or avg is None:
+        return {}
+    eps_u = float(res["uniform_true_strain"])
+    truth = float(run.material.flow_stress(eps_f, run.strain_rate_per_s, run.temperature_C))
+    dk = record.positive("post.dk_mm")
+    variants = [("reported", res["neck_corrections"])]
+    if record.positive("post.neck_radius_mm") is not None:  # the same without the radius: Le Roy's a/R
+        variants.append(("Le Roy", neck_corrections(avg, eps_f, eps_u, d_k_mm=dk)))
+    rows = [{"source": corr["a_over_R_source"] if name == "reported" else corr["a_over_R_source"].split(":")[0],
+             "a_over_R": corr["a_over_R"], "error_pct": {m: 100.0 * (corr[m]["stress_MPa"] / truth - 1.0) for m in METHODS}}
+            for name, corr in variants]
+    hard = res["hardening"]
+    lo = float(res["uniform_true_plastic_strain"])
+    curve = (hardening_deviation_pct(hard, run.material, run.strain_rate_per_s, run.temperature_C, (lo, eps_f))
+             if {"A_MPa", "B_MPa", "n"} <= set(hard) and eps_f > lo else math.nan)
+    return {"eps_u": eps_u, "eps_f": float(eps_f), "truth_MPa": truth, "avg_MPa": float(avg), "methods": list(METHODS),
+            "rows": rows, "curve_error_pct": curve, "curve_range": (lo, float(eps_f)), "law": hard.get("law", "")}
+
+
+def neck_comparison_lines(table: dict, run) -> list[str]:
+    """The demo's neck table: error of every neck correction at fracture, per a/R source."""
+    if not table:
+        return ["  neck corrections: no fracture point (no post.dk_mm), nothing to compare"]
+    cols = table["methods"]
+    lines = [f"  neck corrections at fracture (rig tension response {getattr(run, 'tension_response', 'fe')}): ε_f {table['eps_f']:.3f}, "
+             f"P_k/F_k {table['avg_MPa']:.0f} MPa, virtual σ_f(ε_f) {table['truth_MPa']:.0f} MPa; σ/σ_true − 1 of each correction",
+             "    " + f"{'a/R from':34s} {'a/R':>6s}  " + "  ".join(f"{c:>10s}" for c in cols)]
+    for row in table["rows"]:
+        errs = "  ".join(f"{row['error_pct'][c]:+9.1f}%" for c in cols)
+        lines.append(f"    {row['source'][:34]:34s} {row['a_over_R']:6.3f}  {errs}")
+    lo, hi = table["curve_range"]
+    if math.isfinite(table["curve_error_pct"]):
+        lines.append(f"  identified curve ({table['law']}) past necking: max |σ/σ_true − 1| over εp {lo:.3f}…{hi:.3f}: {table['curve_error_pct']:.1f} %")
+    return lines
+
+
 def hardening_deviation_pct(fit: dict, material, strain_rate_per_s: float, temperature_C: float, strain_range) -> float:
     """Max |fitted / true − 1| in % of a JC fit (A_MPa, B_MPa, n) over ``strain_range``."""
     lo, hi = (float(v) for v in strain_range)
@@ -148,15 +203,18 @@ def summary_lines(run, ident, folder: Path) -> list[str]:
     return lines
 
 
-def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_scale: float = DEMO_TIME_SCALE) -> int:
+def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_scale: float = DEMO_TIME_SCALE,
+             compression_response: str = "fe", tension_response: str = "fe") -> int:
     out = Path(out)
     view = LiveView(quiet=quiet)
     t_start = time.monotonic()
-    print(f"flowcurve demo — virtual rig ({material}), real drivers over pseudo-terminals, time scale {time_scale:g}")
+    print(f"flowcurve demo — virtual rig ({material}; tension response {tension_response}, compression response "
+          f"{compression_response}), real drivers over pseudo-terminals, time scale {time_scale:g}")
     for spec in demo_specs(material):
         record_path = out / "records" / f"{spec.test}.csv"
         t0 = time.monotonic()
-        run = run_virtual_test(spec, record_path, material=material, time_scale=time_scale, view=view)
+        run = run_virtual_test(spec, record_path, material=material, time_scale=time_scale, view=view,
+                               compression_response=compression_response, tension_response=tension_response)
         o = run.outcome
         print(f"\n{spec.test}: recorded {o.samples} samples ({o.duration_s:.0f} s of test in {time.monotonic() - t0:.1f} s) → {o.path}; {o.reason}")
         if o.status != "complete":
@@ -166,6 +224,8 @@ def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_
         print("\n".join(summary_lines(run, ident, folder)))
         if spec.test == "compression":
             print("\n".join(friction_comparison_lines(friction_comparison(read_record(o.path), run, default=ident), run)))
+        else:
+            print("\n".join(neck_comparison_lines(neck_comparison(read_record(o.path), ident, run), run)))
     print(f"\ndone in {time.monotonic() - t_start:.1f} s. Next: flowcurve identify {out / 'records' / 'tension.csv'} --out results/; "
           f"'flowcurve run tension --help' for a test of your own.")
     return 0

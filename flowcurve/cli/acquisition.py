@@ -19,6 +19,7 @@ from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMET
 from flowcurve.record.format import amend_record, read_record, recover_record
 from flowcurve.cli.specimen import add_geometry_options, add_modulus_option, check_specimen_options, measurement
 from flowcurve.errors import FlowcurveError, RecordError
+from flowcurve.rig.virtual.responses import COMPRESSION_HELP, COMPRESSION_RESPONSES, TENSION_HELP, TENSION_RESPONSES
 
 DEFAULT_VIRTUAL_MATERIAL = "steel45"
 
@@ -42,12 +43,14 @@ def register(subparsers) -> None:
     run.add_argument("--quiet", action="store_true", help="no live view, no prompts (for scripts)")
     run.add_argument("--time-scale", type=float, default=None, metavar="X", help="virtual rig: model seconds per wall second (in this process: default 15; with --config: what 'flowcurve rig virtual --time-scale' runs at)")
     run.add_argument("--poll", action="store_true", help="poll the load cell (MSV?) instead of streaming (MSV?0)")
+    add_virtual_response_options(run, " (the virtual rig in this process only; recorded in the header)")
     run.set_defaults(func=cmd_run)
 
     demo = subparsers.add_parser("demo", help="a virtual tension and compression test, recorded and identified", description="Run a virtual tension test and a virtual compression test (time-scaled), identify both, and compare with the virtual material's true constants.")
     demo.add_argument("--out", type=Path, default=Path("flowcurve-demo"), help="output folder (default ./flowcurve-demo)")
     demo.add_argument("--material", default=DEFAULT_VIRTUAL_MATERIAL, help="virtual material (default steel45)")
     demo.add_argument("--quiet", action="store_true", help="only the summary")
+    add_virtual_response_options(demo, " (recorded in the header)")
     demo.set_defaults(func=cmd_demo)
 
     rec = subparsers.add_parser("recover", help="complete the header of a record cut short (power cut, kill -9)")
@@ -61,6 +64,17 @@ def register(subparsers) -> None:
 
 
 # -- helpers ----------------------------------------------------------------------------------
+
+
+def add_virtual_response_options(parser, note: str = "") -> None:
+    """``--compression-response fe|slab`` and ``--tension-response fe|bridgman``: the virtual rig's physics."""
+    parser.add_argument("--compression-response", choices=COMPRESSION_RESPONSES, help=COMPRESSION_HELP + note)
+    parser.add_argument("--tension-response", choices=TENSION_RESPONSES, help=TENSION_HELP + note)
+
+
+def virtual_responses(args) -> dict[str, str]:
+    """The virtual rig's responses the options ask for (fe where not given)."""
+    return {"compression_response": args.compression_response or "fe", "tension_response": args.tension_response or "fe"}
 
 
 def parse_assignments(items: list[str], *, numeric_prefix: str = "post.") -> dict[str, str | None]:
@@ -163,6 +177,10 @@ def cmd_run(args) -> int:
     view = LiveView(quiet=args.quiet)
     out_path = args.out or default_out(args.test)
     if args.config is not None:
+        given = [f"--{k.replace('_', '-')}" for k in ("compression_response", "tension_response") if getattr(args, k) is not None]
+        if given:
+            raise FlowcurveError(f"{' and '.join(given)}: the virtual rig in this process only; with --config the rig is the "
+                                 "configured one (for 'flowcurve rig virtual' give the option there)")
         return _run_configured(args, view, out_path)
     return _run_virtual(args, view, out_path)
 
@@ -212,7 +230,8 @@ def _run_virtual(args, view: LiveView, out_path: Path) -> int:
     from flowcurve.acquisition.session import run_virtual_test
 
     spec, name, scale = virtual_spec(args, view)
-    run = run_virtual_test(spec, out_path, material=name, time_scale=scale, view=view, interactive=_interactive(args), stream=not args.poll)
+    run = run_virtual_test(spec, out_path, material=name, time_scale=scale, view=view, interactive=_interactive(args), stream=not args.poll,
+                           **virtual_responses(args))
     return report_outcome(run.outcome, view)
 
 
@@ -243,4 +262,4 @@ def cmd_annotate(args) -> int:
 def cmd_demo(args) -> int:
     from flowcurve.demo import run_demo
 
-    return run_demo(args.out, material=args.material, quiet=args.quiet)
+    return run_demo(args.out, material=args.material, quiet=args.quiet, **virtual_responses(args))

@@ -19,6 +19,7 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+from flowcurve.cli.acquisition import add_virtual_response_options, virtual_responses
 from flowcurve.errors import DeviceError, FlowcurveError
 from flowcurve.rig.config import RigConfig, load_config, to_toml
 
@@ -53,6 +54,7 @@ def register(subparsers) -> None:
     virtual.add_argument("--time-scale", type=float, default=1.0,
                          help="model seconds per wall-clock second (default 1)")
     virtual.add_argument("--checksum", action="store_true", help="DCON checksums on")
+    add_virtual_response_options(virtual)
     virtual.add_argument("--motor-start-after", type=float, default=None, metavar="S",
                          help="start the virtual crosshead motor S wall-clock seconds after launch (for "
                               "scripts); interactively, press Enter here to start and stop it, as the "
@@ -213,14 +215,16 @@ def run_virtual(args) -> int:
 
     if not (args.time_scale > 0 and math.isfinite(args.time_scale)):
         raise FlowcurveError(f"--time-scale must be a positive number, got {args.time_scale}")
+    responses = virtual_responses(args)
     with VirtualRig(args.material, test=args.test, temperature_C=args.temperature,
-                    time_scale=args.time_scale, checksum=args.checksum) as rig:
+                    time_scale=args.time_scale, checksum=args.checksum, **responses) as rig:
         path = args.config
         if path is None:
             path = Path(tempfile.mkdtemp(prefix="flowcurve-virtual-rig-")) / "flowcurve.rig.toml"
         path.write_text(to_toml(rig.config()))
         for name, port in rig.ports.items():
             print(f"{name:9s} {port}")
+        print(f"{args.test} response: {responses[args.test + '_response']}")
         print(f"configuration: {path}")
         print(f"try: flowcurve rig check --config {path}")
         previous = signal.signal(signal.SIGTERM, _stop_on_sigterm)  # kill/systemd: stop cleanly too

@@ -33,6 +33,7 @@ class TensionModel:
     nz: int = 30
     imperfection: float = 0.005
     increments: int = 100
+    surface: bool = False  # also print the outer surface's nodes (the neck profile); the default deck is unchanged
 
     def __post_init__(self):
         if not (self.d0_mm > 0 and self.l0_mm > 0 and self.elongation_mm > 0):
@@ -80,6 +81,11 @@ def tension_deck(m: TensionModel) -> str:
               "*STEP,NLGEOM,INC=10000", "*STATIC", f"{dt:.9g},1.,{dt * 1e-3:.9g},{dt:.9g}",
               "*BOUNDARY", f"TOP,2,2,{m.elongation_mm / 2.0:.9g}",
               "*NODE PRINT,NSET=TOP,TOTALS=ONLY", "RF", "*NODE PRINT,NSET=NECK", "U", "*END STEP"]
+    if m.surface:  # the outer surface from the neck (z = 0) to the end, corner and mid-side nodes
+        surf = [ids[nr2, j] for j in range(nz2 + 1)]
+        at = lines.index("*MATERIAL,NAME=SPECIMEN")
+        lines[at:at] = ["*NSET,NSET=SURF", *_lines(surf)]
+        lines[-1:-1] = ["*NODE PRINT,NSET=SURF", "U"]
     return "\n".join(lines) + "\n"
 
 
@@ -94,10 +100,23 @@ class TensionResult:
     wall_s: float
     message: str = ""
     cached: bool = False  # read from the run cache, not solved now
+    surface_r_mm: np.ndarray | None = None  # (increment, node) outer radius from z = 0 to l0/2 (model.surface)
+    surface_z_mm: np.ndarray | None = None  # (increment, node) axial position of the same nodes
 
 
 def simulate_tension(m: TensionModel, *, require_complete: bool = True, timeout_s: float = 600.0, use_cache: bool = True) -> TensionResult:
     out = run_deck(tension_deck(m), name=f"tension d0={m.d0_mm:g}", timeout_s=timeout_s, use_cache=use_cache, require_complete=require_complete)
     r_neck0 = m.d0_mm / 2.0 * (1.0 - m.imperfection)
-    return TensionResult(m, out.time, m.elongation_mm * out.time, out.totals["TOP"][:, 1] * SECTOR,
-                         r_neck0 + out.displacements["NECK"][:, 0, 0], out.completed, out.wall_s, out.message, out.cached)
+    res = TensionResult(m, out.time, m.elongation_mm * out.time, out.totals["TOP"][:, 1] * SECTOR,
+                        r_neck0 + out.displacements["NECK"][:, 0, 0], out.completed, out.wall_s, out.message, out.cached)
+    if m.surface:
+        r0, z0 = surface_nodes(m)
+        res.surface_r_mm = r0[None, :] + out.displacements["SURF"][:, :, 0]
+        res.surface_z_mm = z0[None, :] + out.displacements["SURF"][:, :, 1]
+    return res
+
+
+def surface_nodes(m: TensionModel) -> tuple[np.ndarray, np.ndarray]:
+    """Initial (r, z) of the outer surface's nodes, z = 0 (the neck) to l0/2, as the deck places them."""
+    z = (m.l0_mm / 2.0) * np.arange(2 * m.nz + 1) / (2 * m.nz)
+    return m.d0_mm / 2.0 * (1.0 - m.imperfection * np.cos(np.pi * z / m.l0_mm)), z

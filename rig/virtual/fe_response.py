@@ -29,7 +29,6 @@ nodes and stays between neighbouring nodes.
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 from dataclasses import dataclass, field
@@ -39,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from flowcurve.errors import ConfigError
+from flowcurve.rig.virtual.fe_data import read_arrays, read_provenance
 
 log = logging.getLogger(__name__)
 
@@ -136,16 +136,10 @@ def _fill_stopped_runs(values: np.ndarray, mu: np.ndarray, h0_d0: np.ndarray, n:
 @lru_cache(maxsize=2)
 def _load(path: str) -> UpsettingResponse:
     p = Path(path)
-    try:
-        z = np.load(p)
-    except FileNotFoundError:
-        raise ConfigError(f"{p}: the virtual rig's FE response is missing (write it: "
-                          "python -m flowcurve.identification.fe.make_table --virtual-copy-only)") from None
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{p}: the virtual rig's FE response is unreadable ({exc})") from None
-    with z:
-        mu, h0_d0, n, strain = (np.asarray(z[k], float) for k in ("mu", "h0_d0", "n", "strain"))
-        factor, bulge = np.asarray(z["force_factor"], float), np.asarray(z["bulge_dR_over_h"], float)
+    z = read_arrays(p, ("mu", "h0_d0", "n", "strain", "force_factor", "bulge_dR_over_h"), "the virtual rig's FE response",
+                    "python -m flowcurve.identification.fe.make_table --virtual-copy-only")
+    mu, h0_d0, n, strain = z["mu"], z["h0_d0"], z["n"], z["strain"]
+    factor, bulge = z["force_factor"], z["bulge_dR_over_h"]
     if mu[0] != 0.0 or strain[0] != 0.0:
         raise ConfigError(f"{p}: the FE response needs μ = 0 and ε = 0 first")
     factor, filled = _fill_stopped_runs(factor, mu, h0_d0, n, strain)
@@ -154,10 +148,8 @@ def _load(path: str) -> UpsettingResponse:
     if filled:
         log.info("FE response %s: %d stopped CalculiX runs continued with their lower-μ neighbour's increments: %s", p.name,
                  len(filled), ", ".join(f"μ {m:g} h0/d0 {h:g} n {e:g} after ε {s:.2f}" for m, h, e, s in filled))
-    meta_path = p.with_suffix(".json")
-    meta = json.loads(meta_path.read_text(encoding="utf-8")) if meta_path.exists() else {}
     return UpsettingResponse(mu=mu, h0_d0=h0_d0, n=n, strain=strain, force_factor=factor, bulge_dR_over_h=bulge,
-                             filled_runs=filled, meta=meta, path=str(p))
+                             filled_runs=filled, meta=read_provenance(p), path=str(p))
 
 
 def effective_hardening_exponent(flow_stress, strain_range=HARDENING_FIT_RANGE, points: int = 60) -> float:

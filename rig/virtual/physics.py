@@ -12,14 +12,23 @@ read it. Conventions:
   test, v/l0 (tension) or v/h0 (compression), and at the furnace's true temperature.
 * Tension: uniform deformation with plastic incompressibility, F = F0·exp(−εp) (elastic
   volume change neglected), until the force maximum (Considère, dσ/dεp = σ); then a neck
-  zone of initial length ``neck_length_mm`` (default d0) strains alone while the rest
-  unloads elastically; the neck's mean axial stress is the flow stress times Bridgman's
-  factor (1 + 2R/a)·ln(1 + a/(2R)). The neck curvature follows Le Roy et al. (1981),
-  a/R = 1.1·(ε − ε_u), with a smooth onset: a/R = 1.1·δ²/(δ + ε_u), δ = ε − ε_u (a neck
-  that curves at once, linear in δ, would make the force rise past Considère); fracture
-  when the neck strain reaches the material's fracture strain (force drops to zero). The
-  neck radius reported after the test follows the same law, so a Bridgman correction with
-  the measured radius recovers the flow stress at fracture exactly.
+  strains alone while the rest unloads elastically; fracture when the neck strain reaches the
+  material's fracture strain (force drops to zero). With the default
+  ``tension_response="fe"`` the neck is that of CalculiX necking runs
+  (:mod:`flowcurve.rig.virtual.neck_response`, the rig's own copy and interpolation, read
+  from the material's Considère strain on with its hardening ratio θ/σ): the neck's mean axial
+  stress is the flow stress times the FE's factor β(ε_n − ε_u), the elongation is the rest's
+  l0·(e^(ε_u + σ/E) − 1) plus the FE neck's d0·λ(ε_n − ε_u) (runs of l0/d0 = 5), and the
+  neck's dk and profile radius measured after the test are the FE's. These are not the
+  formulas the identification's neck corrections invert, so the demo shows their real error.
+  The specimen itself stays ideal up to Considère (an FE run's imperfection ends the uniform
+  elongation earlier: the rig's Ag is the perfect specimen's). ``tension_response="bridgman"`` keeps the analytic mirror:
+  a neck zone of initial length ``neck_length_mm`` (default d0), Bridgman's factor
+  (1 + 2R/a)·ln(1 + a/(2R)) with Le Roy's curvature a/R = 1.1·(ε − ε_u) (Le Roy et al. 1981)
+  given a smooth onset a/R = 1.1·δ²/(δ + ε_u), δ = ε − ε_u (a neck that curves at once,
+  linear in δ, would make the force rise past Considère), and the reported neck radius from
+  the same law, so a Bridgman correction with the measured radius recovers the flow stress at
+  fracture exactly.
 * Compression (default ``compression_response="fe"``): flow stress × volume-constant area ×
   the force factor F/(σ_f·A) of CalculiX upsetting runs, and the bulge measured after the test
   from the same runs' ΔR/h (:mod:`flowcurve.rig.virtual.fe_response`, the rig's own copy and
@@ -42,11 +51,12 @@ from scipy.optimize import brentq
 
 from flowcurve.errors import ConfigError
 from flowcurve.rig.virtual.materials import Material, get_material
+from flowcurve.rig.virtual.responses import COMPRESSION_RESPONSES, TENSION_RESPONSES
 
 log = logging.getLogger(__name__)
 
 LE_ROY_SLOPE = 1.1  # a/R = 1.1·(ε − ε_u), Le Roy et al. (1981)
-COMPRESSION_RESPONSES = ("fe", "slab")  # FE runs (default) / slab factor and (3.18), the analytic mirror
+NECK_REUSE_STRAIN = 1e-6  # the FE neck is made again only when the Considère strain moves more
 
 
 def neck_a_over_R(eps_u, eps):
@@ -90,8 +100,8 @@ def furnace_steady_state_C(power_W, ambient_C, k1_W_per_K, k2_W_per_K2):
 # ----------------------------------------------------------------------------- specimen
 @dataclass(frozen=True)
 class Specimen:
-    """Specimen geometry in mm. Tension uses d0, l0 (gauge) and the neck-zone length;
-    compression uses d0, h0."""
+    """Specimen geometry in mm. Tension uses d0, l0 (gauge) and, with the ``bridgman`` tension
+    response, the neck-zone length; compression uses d0, h0."""
 
     test: str = "tension"
     d0_mm: float = 6.0
@@ -150,14 +160,17 @@ class Mechanics:
     """
 
     def __init__(self, material: Material, specimen: Specimen, frame_stiffness_N_per_um: float,
-                 friction_mu: float = 0.1, compression_response: str = "fe"):
+                 friction_mu: float = 0.1, compression_response: str = "fe", tension_response: str = "fe"):
         if not frame_stiffness_N_per_um > 0:
             raise ConfigError(f"rig.frame_stiffness_N_per_um: must be positive, got {frame_stiffness_N_per_um}")
         if friction_mu < 0:
             raise ConfigError(f"friction_mu: must be ≥ 0, got {friction_mu}")
         if compression_response not in COMPRESSION_RESPONSES:
             raise ConfigError(f"compression_response: must be one of {', '.join(COMPRESSION_RESPONSES)}, got '{compression_response}'")
+        if tension_response not in TENSION_RESPONSES:
+            raise ConfigError(f"tension_response: must be one of {', '.join(TENSION_RESPONSES)}, got '{tension_response}'")
         self.compression_response = compression_response
+        self.tension_response = tension_response
         self.material = material
         self.specimen = specimen
         self.C_N_per_mm = frame_stiffness_N_per_um * 1000.0
@@ -167,6 +180,7 @@ class Mechanics:
         self.temperature_C = material.T_ref_C
         self._considere: tuple[tuple[float, float], float] | None = None
         self._fe_curve: tuple[np.ndarray, np.ndarray] | None = None  # (ε grid, force factor) at this μ, h0/d0, n
+        self._neck = None  # the FE neck (neck_response.NeckCurve) at the material's Considère strain
 
     # -- FE compression response ------------------------------------------------------------
     def fe_lookup(self) -> tuple[float, float, float]:
@@ -251,17 +265,58 @@ class Mechanics:
         dl = s.l0_mm * math.expm1(eps_p + sigma / E)
         return force, dl + force / self.C_N_per_mm
 
+    # -- FE tension response ------------------------------------------------------------
+    def fe_neck(self):
+        """The FE neck (:class:`~flowcurve.rig.virtual.neck_response.NeckCurve`) at the material's
+        Considère strain (made once per strain, to 1e-6: rate and temperature scale the
+        Johnson–Cook law and leave it unchanged, but the root search moves in its last digits)."""
+        eps_u = self.considere_strain()
+        if self._neck is None or abs(self._neck.considere_strain - eps_u) > NECK_REUSE_STRAIN:
+            from flowcurve.rig.virtual.neck_response import TensionResponse
+
+            m, rate, T = self.material, self.strain_rate_per_s, self.temperature_C
+            ratio = lambda e: m.hardening_slope(e, rate, T) / m.flow_stress(e, rate, T)  # noqa: E731  θ/σ
+            self._neck = TensionResponse.load().curve(eps_u, ratio, fracture_delta=self.fracture_strain - eps_u)
+            if self.fracture_strain - eps_u > self._neck.table_end:
+                log.warning("virtual rig: the fracture strain %.3g lies %.2f beyond the FE necking runs' last neck strain: "
+                            "the neck is continued with their slope", self.fracture_strain, self.fracture_strain - eps_u - self._neck.table_end)
+        return self._neck
+
+    def neck_profile_a_over_R(self, eps_u: float, eps_n: float) -> float:
+        """a/R of the neck profile: the FE runs', or Le Roy's with the smooth onset."""
+        if self.tension_response == "bridgman":
+            return float(neck_a_over_R(eps_u, eps_n))
+        return float(self.fe_neck().a_over_R_at(eps_n - eps_u))
+
+    def neck_extension_mm(self, eps_u: float, eps_n: float) -> float:
+        """Plastic elongation the neck adds beyond the uniform l0·(e^ε_u − 1): the FE neck's
+        d0·λ(ε_n − ε_u), or the neck zone's L_n·(e^ε_n − e^ε_u)."""
+        s = self.specimen
+        if self.tension_response == "bridgman":
+            return s.neck_mm * (math.exp(eps_n) - math.exp(eps_u))
+        return s.d0_mm * float(self.fe_neck().elongation_over_d0_at(eps_n - eps_u))
+
     def _tension_necked(self, eps_u: float, eps_n: float, force: float) -> float:
         """Crosshead of a necked specimen carrying ``force``."""
         s, E = self.specimen, self.material.E_MPa
         sig_u = force / (s.area0_mm2 * math.exp(-eps_u))
-        sig_n = force / (s.area0_mm2 * math.exp(-eps_n))
-        dl = (s.l0_mm - s.neck_mm) * math.expm1(eps_u + sig_u / E) + s.neck_mm * math.expm1(eps_n + sig_n / E)
+        if self.tension_response == "bridgman":
+            sig_n = force / (s.area0_mm2 * math.exp(-eps_n))
+            dl = (s.l0_mm - s.neck_mm) * math.expm1(eps_u + sig_u / E) + s.neck_mm * math.expm1(eps_n + sig_n / E)
+        else:  # the FE's λ was taken under load: the neck's own elastic stretch is in it
+            dl = s.l0_mm * math.expm1(eps_u + sig_u / E) + self.neck_extension_mm(eps_u, eps_n)
         return dl + force / self.C_N_per_mm
 
+    def _tension_unloaded(self, eps_u: float, eps_n: float) -> float:
+        """Elongation of the necked specimen without load (plastic only)."""
+        return self.specimen.l0_mm * math.expm1(eps_u) + self.neck_extension_mm(eps_u, eps_n)
+
     def neck_force(self, eps_u: float, eps_n: float) -> float:
-        """Force carried by the neck at strain eps_n: σ_flow·Bridgman(a/R)·F0·exp(−εn)."""
-        beta = float(bridgman_factor(neck_a_over_R(eps_u, eps_n)))
+        """Force carried by the neck at strain eps_n: σ_flow·β·F0·exp(−εn), β the FE factor or Bridgman's at Le Roy's a/R."""
+        if self.tension_response == "bridgman":
+            beta = float(bridgman_factor(neck_a_over_R(eps_u, eps_n)))
+        else:
+            beta = float(self.fe_neck().factor_at(eps_n - eps_u))
         return self.flow(eps_n) * beta * self.specimen.area0_mm2 * math.exp(-eps_n)
 
     def _tension_solve(self, x: float) -> SpecimenState:
@@ -293,7 +348,7 @@ class Mechanics:
         # necked
         eps_u, eps_hist = st.eps_p, st.eps_neck
         p_y = self.neck_force(eps_u, eps_hist)
-        unloaded = (s.l0_mm - s.neck_mm) * math.expm1(eps_u) + s.neck_mm * math.expm1(eps_hist)
+        unloaded = self._tension_unloaded(eps_u, eps_hist)
         if x <= unloaded:
             return SpecimenState(0.0, eps_u, eps_hist, True, False, unloaded)
         if self._tension_necked(eps_u, eps_hist, p_y) >= x:  # elastic
@@ -301,8 +356,7 @@ class Mechanics:
             return SpecimenState(f, eps_u, eps_hist, True, False, x - f / self.C_N_per_mm)
         xn = lambda e: self._tension_necked(eps_u, e, self.neck_force(eps_u, e)) - x
         if xn(eps_f) <= 0:
-            lu = (s.l0_mm - s.neck_mm) * math.expm1(eps_u) + s.neck_mm * math.expm1(eps_f)
-            return SpecimenState(0.0, eps_u, eps_f, True, True, lu)
+            return SpecimenState(0.0, eps_u, eps_f, True, True, self._tension_unloaded(eps_u, eps_f))
         e = brentq(xn, eps_hist, eps_f, xtol=1e-13)
         f = self.neck_force(eps_u, e)
         return SpecimenState(f, eps_u, e, True, False, x - f / self.C_N_per_mm)
@@ -366,13 +420,13 @@ class Mechanics:
         out: dict[str, str] = {}
         if s.test == "tension":
             eps_u, eps_n = st.eps_p, st.eps_neck
-            lu = (s.l0_mm - s.neck_mm) * math.exp(eps_u) + s.neck_mm * math.exp(eps_n)
+            lu = s.l0_mm * math.exp(eps_u) + (self.neck_extension_mm(eps_u, eps_n) if st.necked else 0.0)
             dk = s.d0_mm * math.exp(-eps_n / 2.0)
             out["post.lu_mm"] = f"{lu:.4f}"
             out["post.dk_mm"] = f"{dk:.4f}"
             out["post.du_mm"] = f"{s.d0_mm * math.exp(-eps_u / 2.0):.4f}"
             if eps_n - eps_u > 1e-6:
-                out["post.neck_radius_mm"] = f"{(dk / 2.0) / float(neck_a_over_R(eps_u, eps_n)):.4f}"
+                out["post.neck_radius_mm"] = f"{(dk / 2.0) / self.neck_profile_a_over_R(eps_u, eps_n):.4f}"
         else:
             eps = st.eps_p
             hk = s.h0_mm * math.exp(-eps)
@@ -475,7 +529,9 @@ class RigModel:
     at ``stroke_limit_mm`` (default: none for tension, the crosshead at εp = 0.68 for
     compression, the seed's worked example). ``compression_response`` is ``"fe"`` (default:
     force factor and bulge from CalculiX runs) or ``"slab"`` (the slab factor and the seed's
-    (3.18): the analytic mirror of the identification's slab and seed methods).
+    (3.18): the analytic mirror of the identification's slab and seed methods);
+    ``tension_response`` is ``"fe"`` (default: the neck of CalculiX necking runs) or
+    ``"bridgman"`` (Bridgman's factor with Le Roy's a/R: the mirror of the neck corrections).
     """
 
     def __init__(self, material: str | Material = "12Kh18N12M3TL", test: str = "tension",
@@ -483,7 +539,8 @@ class RigModel:
                  frame_stiffness_N_per_um: float = 136.0, friction_mu: float = 0.1,
                  furnace: FurnaceParams = FurnaceParams(), initial_temperature_C: float | None = None,
                  force_noise_N: float = 3.0, counts_per_mm: float = 100.0,
-                 stroke_limit_mm: float | None = None, seed: int = 0, compression_response: str = "fe"):
+                 stroke_limit_mm: float | None = None, seed: int = 0, compression_response: str = "fe",
+                 tension_response: str = "fe"):
         self.material = get_material(material)
         if specimen is None:
             specimen = Specimen.tension() if test == "tension" else Specimen.compression()
@@ -495,7 +552,8 @@ class RigModel:
         self.specimen = specimen
         self.speed_mm_per_s = float(speed_mm_per_s)
         self.frame_stiffness_N_per_um = float(frame_stiffness_N_per_um)
-        self.mechanics = Mechanics(self.material, specimen, frame_stiffness_N_per_um, friction_mu, compression_response)
+        self.mechanics = Mechanics(self.material, specimen, frame_stiffness_N_per_um, friction_mu, compression_response,
+                                   tension_response)
         self.furnace = Furnace(furnace, initial_temperature_C)
         self.force_noise_N = float(force_noise_N)
         self.counts_per_mm = float(counts_per_mm)
@@ -506,6 +564,8 @@ class RigModel:
         self.thermocouple_open = False
         self.events: list[tuple[float, str]] = []
         self._update_conditions()
+        if test == "tension" and tension_response == "fe":
+            self.mechanics.fe_neck()  # made now, not in the model step that starts the test (the devices wait on it)
         if stroke_limit_mm is None and test == "compression":
             stroke_limit_mm = self.mechanics.compression_crosshead(0.68)
         self.stroke_limit_mm = math.inf if stroke_limit_mm is None else float(stroke_limit_mm)

@@ -51,7 +51,7 @@ class VirtualRig:
                  furnace: FurnaceParams = FurnaceParams(), stroke_limit_mm: float | None = None,
                  loadcell_address: int = 31, furnace_address: int = 0x01, encoder_address: int = 0x02,
                  checksum: bool = False, encoder_initial_count: int = 0, aed_settings: dict | None = None,
-                 clock: Clock = WALL, link: str = "pty", compression_response: str = "fe"):
+                 clock: Clock = WALL, link: str = "pty", compression_response: str = "fe", tension_response: str = "fe"):
         if not time_scale > 0:
             raise ConfigError(f"time_scale: must be positive, got {time_scale}")
         self.time_scale = float(time_scale)
@@ -59,7 +59,7 @@ class VirtualRig:
                               frame_stiffness_N_per_um=frame_stiffness_N_per_um, friction_mu=friction_mu,
                               furnace=furnace, initial_temperature_C=temperature_C,
                               force_noise_N=force_noise_N, stroke_limit_mm=stroke_limit_mm, seed=seed,
-                              compression_response=compression_response)
+                              compression_response=compression_response, tension_response=tension_response)
         self.nominal_load_N = float(nominal_load_N)
         self.checksum = checksum
         self._lock = threading.RLock()

@@ -123,3 +123,60 @@ def test_run_with_config_needs_geometry(tmp_path, capsys):
         cfg.write_text(to_toml(vr.config()))
         code, _, err = run_cli(capsys, "run", "tension", "--config", cfg, "--quiet", "--d0", "6", "--out", tmp_path / "r.csv")
     assert code == 2 and "give --l0" in err
+
+
+def le_roy_smooth_a_over_R(rec):
+    """a/R the analytic mirror gives at the record's dk and du: 1.1·δ²/(δ + ε_u), δ = ε_f − ε_u."""
+    d0 = float(rec.meta["specimen.d0_mm"])
+    eps_f = 2 * np.log(d0 / float(rec.meta["post.dk_mm"]))
+    eps_u = 2 * np.log(d0 / float(rec.meta["post.du_mm"]))
+    d = eps_f - eps_u
+    return 1.1 * d * d / (d + eps_u)
+
+
+@pytest.mark.parametrize("response", ["bridgman", "fe"])
+def test_run_tension_response_option_reaches_the_rig_and_the_header(tmp_path, capsys, virtual_runs_on, response):
+    p = tmp_path / "t.csv"
+    code, out, err = run_cli(capsys, "run", "tension", "--quiet", "--time-scale", "60", "--out", p, "--tension-response", response)
+    assert code == 0, err
+    rec = read_record(p)
+    assert rec.meta["virtual.tension_response"] == response and f"tension response {response}" in rec.meta["rig.virtual"]
+    a_over_R = float(rec.meta["post.dk_mm"]) / 2 / float(rec.meta["post.neck_radius_mm"])
+    if response == "bridgman":  # the neck radius is Le Roy's
+        assert a_over_R == pytest.approx(le_roy_smooth_a_over_R(rec), rel=3e-3)
+    else:  # the CalculiX neck is blunter (tests/virtual/test_neck_response.py)
+        assert a_over_R < 0.85 * le_roy_smooth_a_over_R(rec)
+
+
+def test_run_compression_response_option_reaches_the_rig_and_the_header(tmp_path, capsys, virtual_runs_on):
+    p = tmp_path / "c.csv"
+    code, out, err = run_cli(capsys, "run", "compression", "--quiet", "--time-scale", "60", "--out", p, "--compression-response", "slab")
+    assert code == 0, err
+    rec = read_record(p)
+    assert rec.meta["virtual.compression_response"] == "slab" and "compression response slab" in rec.meta["rig.virtual"]
+    h0, d0 = float(rec.meta["specimen.h0_mm"]), float(rec.meta["specimen.d0_mm"])
+    hk, dmax = float(rec.meta["post.hk_mm"]), float(rec.meta["post.dmax_mm"])
+    eps, mu = np.log(h0 / hk), 0.1  # the virtual rig's default friction
+    dn = d0 * np.sqrt(h0 / hk)
+    seed = 0.0683 * eps**0.83 * (1 - np.exp(-26.7 * mu**1.53))  # (3.18), the slab mirror's barrel
+    assert (dmax - dn) / 2 / hk == pytest.approx(seed, abs=3e-5)
+
+
+def test_response_options_are_refused_with_a_configured_rig(tmp_path, capsys):
+    code, _, err = run_cli(capsys, "run", "tension", "--config", tmp_path / "rig.toml", "--quiet", "--d0", "6", "--l0", "30",
+                           "--tension-response", "bridgman", "--out", tmp_path / "r.csv")
+    assert code == 2 and "--tension-response" in err and "virtual rig in this process" in err and err.count("\n") == 1
+
+
+def test_demo_passes_both_responses_to_the_rig_and_prints_the_neck_table(tmp_path, capsys, monkeypatch, device_link):
+    import flowcurve.demo as demo
+
+    real = demo.run_virtual_test
+    monkeypatch.setattr(demo, "run_virtual_test", lambda *args, **kwargs: real(*args, **device_link, **kwargs))
+    code, out, err = run_cli(capsys, "demo", "--out", tmp_path, "--quiet", "--tension-response", "bridgman",
+                             "--compression-response", "slab")
+    assert code == 0, err
+    assert read_record(tmp_path / "records" / "tension.csv").meta["virtual.tension_response"] == "bridgman"
+    assert read_record(tmp_path / "records" / "compression.csv").meta["virtual.compression_response"] == "slab"
+    assert "tension response bridgman" in out and "rig response slab" in out
+    assert "neck corrections at fracture" in out and "Le Roy et al. (1981)" in out

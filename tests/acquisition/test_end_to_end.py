@@ -5,7 +5,8 @@ identified, and compared with the virtual material the rig was built from."""
 import numpy as np
 import pytest
 
-from flowcurve.demo import demo_specs, friction_comparison, friction_comparison_lines, identify_and_write, summary_lines
+from flowcurve.demo import (demo_specs, friction_comparison, friction_comparison_lines, identify_and_write, neck_comparison,
+                            neck_comparison_lines, summary_lines)
 from flowcurve.record.format import read_record
 from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.identification.identify import identify
@@ -22,12 +23,14 @@ def max_dev_pct(fit, run, lo, hi):
     return 100 * np.max(np.abs(fitted / truth - 1))
 
 
-def test_virtual_tension_identified_within_3_percent(tmp_path, device_link):
+def test_virtual_tension_identified_within_3_percent_up_to_the_neck(tmp_path, device_link):
+    # the default rig: its neck from CalculiX runs, not from the neck corrections' own formulas
     spec = demo_specs(MATERIAL)[0]
     run = run_virtual_test(spec, tmp_path / "t.csv", material=MATERIAL, time_scale=TIME_SCALE, **device_link)
     assert run.outcome.status == "complete" and "fracture" in run.outcome.reason
     rec = read_record(run.outcome.path)
     assert rec.test == "tension" and not rec.truncated
+    assert rec.meta["virtual.tension_response"] == "fe" and "tension response fe" in rec.meta["rig.virtual"]
     assert float(rec.meta["post.lu_mm"]) > 30.0
     ident, folder = identify_and_write(run.outcome.path, tmp_path / "results")
     res = ident.result
@@ -38,11 +41,36 @@ def test_virtual_tension_identified_within_3_percent(tmp_path, device_link):
     # the strain range the test reached: up to the fracture point (uniform part + neck)
     hi = min(hard["strain_range"][1], res["fracture_true_strain"])
     assert hi > 0.3
-    assert max_dev_pct(hard, run, 0.002, hi) < 3.0
+    assert max_dev_pct(hard, run, 0.002, res["uniform_true_plastic_strain"]) < 3.0
+    # past necking, the neck corrections' real error on the FE neck: Davidenkov with the FE
+    # profile radius reads the fracture stress 3.3 % high (flowcurve demo, docs/methods.md §3.6)
+    assert max_dev_pct(hard, run, 0.002, hi) < 5.0
+    table = neck_comparison(rec, ident, run)
+    truth = run.material.flow_stress(res["fracture_true_strain"], run.strain_rate_per_s, run.temperature_C)
+    davidenkov = res["neck_corrections"]["davidenkov"]["stress_MPa"]
+    assert table["rows"][0]["error_pct"]["davidenkov"] == pytest.approx(100 * (davidenkov / truth - 1), abs=1e-9)
+    assert 0.0 < table["rows"][0]["error_pct"]["davidenkov"] < 5.0  # blunter than Le Roy's neck: under-corrected
+    assert [r["source"] for r in table["rows"]] == ["measured neck radius", "Le Roy et al. (1981)"]
+    assert "davidenkov" in "\n".join(neck_comparison_lines(table, run))
     # Rm against Considere's closed form on the true law: max over eps of sigma(eps)·exp(-eps)
     eps = np.linspace(1e-4, 1.0, 20001)
     rm_true = np.max(run.material.flow_stress(eps, run.strain_rate_per_s, run.temperature_C) * np.exp(-eps))
     assert res["Rm_MPa"] == pytest.approx(rm_true, rel=0.01)
+
+
+def test_virtual_tension_on_the_bridgman_mirror_is_read_exactly_by_bridgman(tmp_path, device_link):
+    # the analytic rig (Bridgman's factor with Le Roy's a/R, the neck radius from the same law):
+    # Bridgman with the measured radius inverts exactly what made the record
+    spec = demo_specs(MATERIAL)[0]
+    run = run_virtual_test(spec, tmp_path / "t.csv", material=MATERIAL, time_scale=TIME_SCALE, tension_response="bridgman",
+                           **device_link)
+    assert run.outcome.status == "complete" and run.tension_response == "bridgman"
+    rec = read_record(run.outcome.path)
+    assert rec.meta["virtual.tension_response"] == "bridgman"
+    res = identify(rec).result
+    truth = run.material.flow_stress(res["fracture_true_strain"], run.strain_rate_per_s, run.temperature_C)
+    assert res["neck_corrections"]["bridgman"]["stress_MPa"] == pytest.approx(truth, rel=5e-3)
+    assert max_dev_pct(res["hardening"], run, 0.002, res["fracture_true_strain"]) < 3.0
 
 
 def seed_mu_of_the_fe_barrel(run, h0_d0, eps):

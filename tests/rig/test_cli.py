@@ -185,3 +185,21 @@ def test_rig_virtual_serves_ptys_starts_its_motor_for_a_driver_in_another_proces
         stop_rig_virtual(proc, signal.SIGTERM)
     finally:
         kill_if_running(proc)
+
+
+def test_rig_virtual_passes_the_response_options_to_the_rig(monkeypatch, tmp_path):
+    import flowcurve.rig.virtual.rig as virtual_rig
+
+    seen = {}
+
+    class Built(Exception):
+        pass
+
+    def fake_rig(*args, **kwargs):
+        seen.update(kwargs)
+        raise Built
+
+    monkeypatch.setattr(virtual_rig, "VirtualRig", fake_rig)
+    with pytest.raises(Built):
+        main(["rig", "virtual", "--config", str(tmp_path / "v.toml"), "--tension-response", "bridgman"])
+    assert seen["tension_response"] == "bridgman" and seen["compression_response"] == "fe"

@@ -54,9 +54,10 @@ def test_uniform_tension_force_and_crosshead_follow_volume_constancy(material):
     np.testing.assert_allclose(x, expected_x, rtol=1e-6)
 
 
+@pytest.mark.parametrize("response", ["fe", "bridgman"])
 @pytest.mark.parametrize("material", ["steel45", "12Kh18N10T"])
-def test_force_maximum_at_considere_point(material):
-    m = RigModel(material, "tension", speed_mm_per_s=0.01, force_noise_N=0.0)
+def test_force_maximum_at_considere_point(material, response):
+    m = RigModel(material, "tension", speed_mm_per_s=0.01, force_noise_N=0.0, tension_response=response)
     mat = m.material
     rate = 0.01 / m.specimen.l0_mm
     # Considère dσ/dε = σ solved independently with a finite-difference slope.
@@ -67,7 +68,11 @@ def test_force_maximum_at_considere_point(material):
     i = int(np.argmax(rec[:, 1]))
     assert rec[i, 2] == pytest.approx(eps_u, abs=2e-3)
     f_max = mat.flow_stress(eps_u, rate) * m.specimen.area0_mm2 * math.exp(-eps_u)
-    assert rec[i, 1] == pytest.approx(f_max, rel=1e-5)
+    if response == "bridgman":  # Le Roy's smooth onset: the neck carries the Considère force at first
+        assert rec[i, 1] == pytest.approx(f_max, rel=1e-5)
+    else:  # the FE neck curves a little at once: its maximum comes just past Considère, as in the
+        # CalculiX runs (0.004–0.027 of neck strain later, forces 5e-5–2e-4 above, tests/virtual/test_neck_response.py)
+        assert rec[i, 3] - eps_u < 0.03 and 0.0 <= rec[i, 1] / f_max - 1.0 < 5e-4
     # after the maximum the force only falls, the neck strains, and the specimen breaks
     assert np.all(np.diff(rec[i:-1, 1]) <= 1e-9)
     assert rec[-1, 1] == 0.0 and m.fractured
@@ -76,7 +81,8 @@ def test_force_maximum_at_considere_point(material):
 
 @pytest.mark.parametrize("material", ["steel45", "12Kh18N10T"])
 def test_bridgman_with_the_measured_neck_radius_recovers_flow_stress_at_fracture(material):
-    m = RigModel(material, "tension", speed_mm_per_s=0.01, force_noise_N=0.0)
+    # the analytic mirror, kept as an option: Bridgman's factor with Le Roy's a/R
+    m = RigModel(material, "tension", speed_mm_per_s=0.01, force_noise_N=0.0, tension_response="bridgman")
     rec = run(m, 0.5)
     post = {k: float(v) for k, v in m.post_test_measurements().items()}
     p_k = rec[rec[:, 1] > 0, 1][-1]  # last force before the break
@@ -88,8 +94,9 @@ def test_bridgman_with_the_measured_neck_radius_recovers_flow_stress_at_fracture
     assert s_eq == pytest.approx(m.material.flow_stress(eps_f, 0.01 / 30), rel=5e-3)
 
 
-def test_fracture_post_measurements_are_consistent():
-    m = RigModel("12Kh18N10T", "tension", speed_mm_per_s=0.02, force_noise_N=0.0)
+@pytest.mark.parametrize("response", ["fe", "bridgman"])
+def test_fracture_post_measurements_are_consistent(response):
+    m = RigModel("12Kh18N10T", "tension", speed_mm_per_s=0.02, force_noise_N=0.0, tension_response=response)
     run(m, 10.0)
     post = {k: float(v) for k, v in m.post_test_measurements().items()}
     d0, l0 = m.specimen.d0_mm, m.specimen.l0_mm
@@ -97,11 +104,13 @@ def test_fracture_post_measurements_are_consistent():
     assert 2 * math.log(d0 / post["post.dk_mm"]) == pytest.approx(m.material.fracture_strain_at(0.02 / l0), rel=1e-3)
     eps_u = 2 * math.log(d0 / post["post.du_mm"])
     assert eps_u == pytest.approx(m.state.eps_p, rel=1e-3)
-    # Le Roy a/R = 1.1 (eps_f - eps_u), with the model's smooth onset δ/(δ + eps_u)
     a_over_R = (post["post.dk_mm"] / 2) / post["post.neck_radius_mm"]
     eps_f = 2 * math.log(d0 / post["post.dk_mm"])
     d = eps_f - eps_u
-    assert a_over_R == pytest.approx(1.1 * d * d / (d + eps_u), rel=2e-3)
+    if response == "bridgman":  # Le Roy a/R = 1.1 (eps_f - eps_u), with the model's smooth onset δ/(δ + eps_u)
+        assert a_over_R == pytest.approx(1.1 * d * d / (d + eps_u), rel=2e-3)
+    else:  # a curved neck, blunter than Le Roy's (tests/virtual/test_neck_response.py has the FE's values)
+        assert 0.05 < a_over_R < 1.1 * d
     assert l0 * math.exp(eps_u) < post["post.lu_mm"] < l0 * math.exp(eps_f)
     assert not m.moving  # the crosshead stopped at fracture
 
