@@ -10,7 +10,7 @@ strain ε = ln(h0/h):
 The rig layer may not import :mod:`flowcurve.identification`, so this module reads the copy
 and interpolates it with code of its own. What it does with the table's gaps and edges:
 
-* **Stopped runs.** 18 of the 112 CalculiX runs stopped early (too many cutbacks near
+* **Stopped runs.** 35 of the 112 CalculiX runs stopped early (too many cutbacks near
   sticking, all at μ ≥ 0.15); their tails are NaN in the file. Each missing point is filled
   by continuing the run with the strain increments of its neighbour one μ step lower (same
   h0/d0 and n), processed in increasing μ so that neighbour is complete: no jump where the run
