@@ -60,13 +60,11 @@ class UpsettingTable:
         """The smallest last converged strain of the runs a reading at (μ, h0/d0, n, ε0, ε) rests
         on, when it is below ``strain`` (the reading used continued runs); else None."""
         h0_d0, n = self._check(h0_d0, n)
-        m = int(np.clip(np.searchsorted(self.mu, mu), 1, self.mu.size - 1))
-        idx = [self._bracket(np.log(self.h0_d0), math.log(h0_d0)), self._bracket(self.n, n),
-               self._bracket(np.log(self.eps0), math.log(self.clamp_eps0(eps0)))]
-        corners = [self.reached[a, i + di, j + dj, k + dk] for a in (m - 1, m) for (i, _), di in ((idx[0], 0), (idx[0], 1))
-                   for (j, _), dj in ((idx[1], 0), (idx[1], 1)) for (k, _), dk in ((idx[2], 0), (idx[2], 1))
-                   if i + di < self.h0_d0.size and j + dj < self.n.size and k + dk < self.eps0.size]
-        low = float(min(corners))
+        m = int(np.clip(np.searchsorted(self.mu, mu), 1, self.mu.size - 1))  # the two μ rows around μ
+        brackets = (self._bracket(np.log(self.h0_d0), math.log(h0_d0)), self._bracket(self.n, n),
+                    self._bracket(np.log(self.eps0), math.log(self.clamp_eps0(eps0))))
+        used = [[i] + ([i + 1] if w > 0 else []) for i, w in brackets]  # the grid points the interpolation weighs
+        low = float(self.reached[np.ix_([m - 1, m], *used)].min())
         return low if low < strain - 1e-9 else None
 
     def clamp_eps0(self, eps0: float | None) -> float:

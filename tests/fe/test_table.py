@@ -113,3 +113,23 @@ def test_mu_near_sticking_is_flagged_as_a_lower_bound(table):
     dmu = high.extra["sensitivity"]["mu_per_dmax_resolution"]
     assert dmu is None or dmu > 0.02
     assert any("lower bound" in w for w in _fe_table_warnings(high))
+
+
+def test_a_stopped_run_is_continued_along_the_next_lower_mu_and_said():
+    """continue_stopped_runs: a run that stopped after ε index 2 goes on with the increments of
+    the run one μ step lower (closed form below); continued_at names the strain it stopped at."""
+    from flowcurve.identification.fe.table import UpsettingTable, continue_stopped_runs
+
+    strain = np.array([0.0, 0.2, 0.4, 0.6, 0.8])
+    mu0 = np.array([0.0, 0.01, 0.02, 0.03, 0.04])
+    mu1 = np.array([0.0, 0.02, 0.05, np.nan, np.nan])
+    values = np.stack([mu0, mu1]).reshape(2, 1, 1, 1, 5)
+    filled = continue_stopped_runs(values)
+    np.testing.assert_allclose(filled[1, 0, 0, 0], [0.0, 0.02, 0.05, 0.06, 0.07])
+    reached = np.where(np.isnan(values), -np.inf, strain).max(axis=-1)
+    tab = UpsettingTable(mu=np.array([0.0, 0.1]), h0_d0=np.array([1.0]), n=np.array([0.3]), eps0=np.array([0.002]), strain=strain,
+                         force_factor=filled, bulge=filled, reached=reached)
+    assert tab.continued_at(0.05, 1.0, 0.3, 0.7) == pytest.approx(0.4)
+    assert tab.continued_at(0.05, 1.0, 0.3, 0.4) is None
+    with pytest.raises(IdentificationError, match="μ = 0 runs must be complete"):
+        continue_stopped_runs(np.stack([mu1, mu0]).reshape(2, 1, 1, 1, 5))
