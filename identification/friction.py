@@ -422,21 +422,21 @@ def slab_factor(mu, radius_mm, height_mm):
     return np.where(small, series, exact)
 
 
-def correct_k_sigma(strain, pressure_MPa, mu, radius_mm=None, height_mm=None):
-    """(strain, σ_n) → (ε_t, σ_t) by the seed's regressions."""
+def correct_k_sigma(strain, pressure_MPa, mu, radius_mm=None, height_mm=None, eps_p=None):
+    """(strain, σ_n) → (ε_t, σ_t) by the seed's regressions (no hardening enters: ``eps_p`` unused)."""
     # (3.21) σ_t = K_σ·σ_n, (3.25) ε_t = K_ε·ε_n
     strain = np.asarray(strain, dtype=float)
     return k_eps(mu, strain) * strain, k_sigma(mu, strain) * np.asarray(pressure_MPa, dtype=float)
 
 
-def correct_siebel(strain, pressure_MPa, mu, radius_mm, height_mm):
-    """(strain, p) → (strain, σ_f) with Siebel's mean-pressure factor."""
+def correct_siebel(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None):
+    """(strain, p) → (strain, σ_f) with Siebel's mean-pressure factor (``eps_p`` unused)."""
     # σ_f = p / (1 + 2μr/(3h))
     return np.asarray(strain, dtype=float), np.asarray(pressure_MPa, dtype=float) / siebel_factor(mu, radius_mm, height_mm)
 
 
-def correct_slab(strain, pressure_MPa, mu, radius_mm, height_mm):
-    """(strain, p) → (strain, σ_f) with the exact Coulomb slab factor."""
+def correct_slab(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None):
+    """(strain, p) → (strain, σ_f) with the exact Coulomb slab factor (``eps_p`` unused)."""
     # σ_f = p·c²/(2(e^c − c − 1)), c = 2μr/h
     return np.asarray(strain, dtype=float), np.asarray(pressure_MPa, dtype=float) / slab_factor(mu, radius_mm, height_mm)
 
@@ -459,6 +459,4 @@ def correct(method: str, strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=N
         raise IdentificationError(f"unknown friction correction {method!r} (choose from {', '.join(CORRECTIONS)})") from None
     if not (math.isfinite(mu) and mu >= 0):
         raise IdentificationError(f"friction correction: μ = {mu} must be a finite number ≥ 0")
-    if fn is correct_fe_table:
-        return fn(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p)
-    return fn(strain, pressure_MPa, mu, radius_mm, height_mm)
+    return fn(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=eps_p)

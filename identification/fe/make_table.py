@@ -23,23 +23,20 @@ written beside every default table, or alone from the existing table with ``--vi
 
 from __future__ import annotations
 
-import argparse
-import datetime as _dt
 import json
 import logging
 import math
-import sys
-import time
 from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-from flowcurve.identification.fe.ccx import ccx_version
-from flowcurve.identification.fe.pool import run_many
+from flowcurve.identification.fe import generator
 from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
 
 log = logging.getLogger(__name__)
+
+MODULE = "flowcurve.identification.fe.make_table"
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "data" / "upsetting_table.npz"
 # the source tree's rig/virtual/data (the table is regenerated in a checkout, never in a wheel)
@@ -109,12 +106,7 @@ def build_table(mu=MU, h0_d0=H0_D0, n=N, eps0=EPS0, *, workers: int = 2, schedul
     if 0.0 not in mu:
         raise ValueError("the grid needs μ = 0 (the force factor is normalised by it)")
 
-    def progress(done, total, elapsed):
-        print(f"  {done}/{total} runs, {elapsed:.0f} s", file=sys.stderr, flush=True)
-
-    t0 = time.perf_counter()
-    runs = run_many(sample_run, points, workers=workers, scheduler=scheduler, progress=progress)
-    wall = time.perf_counter() - t0
+    runs, wall = generator.run_timed(sample_run, points, workers=workers, scheduler=scheduler)
     shape = (len(mu), len(h0_d0), len(n), len(eps0), STRAIN.size)
     raw = np.array([r["factor_raw"] for r in runs]).reshape(shape)
     bulge = np.array([r["bulge"] for r in runs]).reshape(shape)
@@ -125,9 +117,7 @@ def build_table(mu=MU, h0_d0=H0_D0, n=N, eps0=EPS0, *, workers: int = 2, schedul
                  "surface-to-surface Coulomb contact (linear overclosure 1e8 MPa/mm, stick slope 1e7)",
         "mesh": MESH, "increments": INCREMENTS, "d0_mm": D0_MM, "eps_end": EPS_END,
         "material": {"law": "swift", "K_MPa": SWIFT_K_MPa, "eps0": list(map(float, eps0)), "E_MPa": E_MPa, "nu": NU},
-        "ccx_version": ccx_version(), "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "command": command or "python -m flowcurve.identification.fe.make_table", "runs": len(points),
-        "wall_s": round(wall, 1), "solver_s": round(sum(r["wall_s"] for r in runs), 1),
+        **generator.provenance(command or f"python -m {MODULE}", runs, wall),
         "incomplete_runs": [{"mu": p[0], "h0_d0": p[1], "n": p[2], "eps0": p[3], "reached_strain": r["reached_strain"], "message": r["message"]}
                             for p, r in zip(points, runs) if not r["completed"]],
     }
@@ -162,7 +152,7 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
                  "n": "Swift hardening exponent (the table's first Swift eps0)",
                  "strain": "ln(h0/h), leading 0 added (factor 1, bulge 0)"},
         "nan": "strain points a CalculiX run did not reach",
-        "copied_from": str(table.name), "copied_at": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "copied_from": str(table.name), "copied_at": generator.now_utc(),
         "command": "python -m flowcurve.identification.fe.make_table --virtual-copy-only",
         "source": {k: source[k] for k in ("what", "model", "mesh", "increments", "d0_mm", "eps_end", "material",
                                           "ccx_version", "date", "command", "runs", "incomplete_runs") if k in source},
@@ -174,10 +164,7 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m flowcurve.identification.fe.make_table", description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", type=Path, default=DEFAULT_OUT)
-    p.add_argument("--workers", type=int, default=2, help="ccx runs at once (default 2)")
-    p.add_argument("--scheduler", default=None, help="Dask scheduler address")
+    p = generator.parser(MODULE, __doc__, DEFAULT_OUT)
     p.add_argument("--mu", type=float, nargs="+", default=list(MU))
     p.add_argument("--h0-d0", type=float, nargs="+", default=list(H0_D0))
     p.add_argument("--n", type=float, nargs="+", default=list(N))
@@ -191,8 +178,8 @@ def main(argv=None) -> int:
         print(f"wrote {VIRTUAL_RIG_COPY} from {a.out}")
         return 0
     meta = build_table(a.mu, a.h0_d0, a.n, a.eps0, workers=a.workers, scheduler=a.scheduler, out=a.out,
-                       command="python -m flowcurve.identification.fe.make_table " + " ".join(argv if argv is not None else sys.argv[1:]))
-    print(json.dumps({k: meta[k] for k in ("runs", "wall_s", "solver_s", "ccx_version")}), "incomplete:", len(meta["incomplete_runs"]))
+                       command=generator.command_line(MODULE, argv))
+    print(generator.summary(meta))
     if Path(a.out).resolve() == DEFAULT_OUT:
         write_virtual_rig_copy(a.out)
     return 0

@@ -30,24 +30,21 @@ the provenance beside it (ccx version, mesh, increments, imperfection, date, com
 
 from __future__ import annotations
 
-import argparse
-import datetime as _dt
 import json
 import logging
 import math
-import sys
-import time
 from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-from flowcurve.identification.fe.ccx import ccx_version
-from flowcurve.identification.fe.pool import run_many
+from flowcurve.identification.fe import generator
 from flowcurve.identification.fe.synthetic import swift_flow
 from flowcurve.identification.fe.tension import TensionModel, simulate_tension
 
 log = logging.getLogger(__name__)
+
+MODULE = "flowcurve.identification.fe.make_tension_response"
 
 # the source tree's rig/virtual/data (the response is regenerated in a checkout, never in a wheel)
 DEFAULT_OUT = Path(__file__).resolve().parents[2] / "rig" / "virtual" / "data" / "tension_response.npz"
@@ -144,12 +141,7 @@ def sample_run(n: float, strain=NECK_STRAIN) -> dict:
 def build_response(n=N, *, workers: int = 2, scheduler=None, out: Path = DEFAULT_OUT, command: str = "") -> dict:
     n = tuple(sorted(float(v) for v in n))
 
-    def progress(done, total, elapsed):
-        print(f"  {done}/{total} runs, {elapsed:.0f} s", file=sys.stderr, flush=True)
-
-    t0 = time.perf_counter()
-    runs = run_many(sample_run, n, workers=workers, scheduler=scheduler, progress=progress)
-    wall = time.perf_counter() - t0
+    runs, wall = generator.run_timed(sample_run, n, workers=workers, scheduler=scheduler)
     rows = lambda key: np.array([r[key] for r in runs])  # noqa: E731
     meta = {
         "what": "the virtual rig's tension response after the force maximum: CalculiX necking runs of Swift laws, "
@@ -172,9 +164,7 @@ def build_response(n=N, *, workers: int = 2, scheduler=None, out: Path = DEFAULT
         "elongation_mm": {str(v): round(r["elongation_mm"], 4) for v, r in zip(n, runs)},
         "d0_mm": D0_MM, "l0_mm": L0_MM,
         "material": {"law": "swift", "K_MPa": SWIFT_K_MPa, "eps0": SWIFT_EPS0, "E_MPa": E_MPa, "nu": NU},
-        "ccx_version": ccx_version(), "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "command": command or "python -m flowcurve.identification.fe.make_tension_response", "runs": len(n),
-        "wall_s": round(wall, 1), "solver_s": round(sum(r["wall_s"] for r in runs), 1),
+        **generator.provenance(command or f"python -m {MODULE}", runs, wall),
         "run_wall_s": {str(v): round(r["wall_s"], 1) for v, r in zip(n, runs)},
         "cached_runs": [v for v, r in zip(n, runs) if r["cached"]],
         "incomplete_runs": [{"n": v, "reached_neck_strain": r["reached_neck_strain"], "message": r["message"]}
@@ -192,16 +182,12 @@ def build_response(n=N, *, workers: int = 2, scheduler=None, out: Path = DEFAULT
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m flowcurve.identification.fe.make_tension_response", description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", type=Path, default=DEFAULT_OUT)
-    p.add_argument("--workers", type=int, default=2, help="ccx runs at once (default 2)")
-    p.add_argument("--scheduler", default=None, help="Dask scheduler address")
+    p = generator.parser(MODULE, __doc__, DEFAULT_OUT)
     p.add_argument("--n", type=float, nargs="+", default=list(N), help="Swift exponents of the runs")
     a = p.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
-    meta = build_response(a.n, workers=a.workers, scheduler=a.scheduler, out=a.out,
-                          command="python -m flowcurve.identification.fe.make_tension_response " + " ".join(argv if argv is not None else sys.argv[1:]))
-    print(json.dumps({k: meta[k] for k in ("runs", "wall_s", "solver_s", "ccx_version")}), "incomplete:", len(meta["incomplete_runs"]))
+    meta = build_response(a.n, workers=a.workers, scheduler=a.scheduler, out=a.out, command=generator.command_line(MODULE, argv))
+    print(generator.summary(meta))
     print(f"wrote {a.out}")
     return 0
 

@@ -59,12 +59,8 @@ class UpsettingTable:
     def continued_at(self, mu: float, h0_d0: float, n: float, strain: float, eps0: float | None = None) -> float | None:
         """The smallest last converged strain of the runs a reading at (μ, h0/d0, n, ε0, ε) rests
         on, when it is below ``strain`` (the reading used continued runs); else None."""
-        h0_d0, n = self._check(h0_d0, n)
         m = int(np.clip(np.searchsorted(self.mu, mu), 1, self.mu.size - 1))  # the two μ rows around μ
-        brackets = (self._bracket(np.log(self.h0_d0), math.log(h0_d0)), self._bracket(self.n, n),
-                    self._bracket(np.log(self.eps0), math.log(self.clamp_eps0(eps0))))
-        used = [[i] + ([i + 1] if w > 0 else []) for i, w in brackets]  # the grid points the interpolation weighs
-        low = float(self.reached[np.ix_([m - 1, m], *used)].min())
+        low = float(min(self.reached[row, i, j, k] for row in (m - 1, m) for (i, j, k), _ in self._corners(h0_d0, n, eps0)))
         return low if low < strain - 1e-9 else None
 
     def clamp_eps0(self, eps0: float | None) -> float:
@@ -79,19 +75,25 @@ class UpsettingTable:
         i = int(np.clip(np.searchsorted(axis, x) - 1, 0, axis.size - 2))
         return i, (x - axis[i]) / (axis[i + 1] - axis[i])
 
+    def _corners(self, h0_d0: float, n: float, eps0: float | None):
+        """The grid points (i, j, k) of (h0/d0, n, ε0) a reading weighs and their weights
+        (linear in ln h0/d0, n and ln ε0); points of zero weight left out."""
+        from itertools import product
+
+        h0_d0, n = self._check(h0_d0, n)
+        brackets = (self._bracket(np.log(self.h0_d0), math.log(h0_d0)), self._bracket(self.n, n),
+                    self._bracket(np.log(self.eps0), math.log(self.clamp_eps0(eps0))))
+        for steps in product((0, 1), repeat=3):
+            weight = math.prod(w if step else 1.0 - w for step, (_, w) in zip(steps, brackets))
+            if weight:
+                yield tuple(i + step for step, (i, _) in zip(steps, brackets)), weight
+
     def _mu_rows(self, values: np.ndarray, h0_d0: float, n: float, strain, eps0: float | None = None) -> np.ndarray:
         """Linear interpolation in ln(h0/d0), n, ln ε0 and ε at every grid μ → (n_mu, n_strain)."""
-        h0_d0, n = self._check(h0_d0, n)
         strain = np.atleast_1d(np.asarray(strain, dtype=float))
-        i, wi = self._bracket(np.log(self.h0_d0), math.log(h0_d0))
-        j, wj = self._bracket(self.n, n)
-        k, wk = self._bracket(np.log(self.eps0), math.log(self.clamp_eps0(eps0)))
         block = np.zeros((self.mu.size, self.strain.size))
-        for di, a in ((0, 1 - wi), (1, wi)):
-            for dj, b in ((0, 1 - wj), (1, wj)):
-                for dk, c in ((0, 1 - wk), (1, wk)):
-                    if a * b * c:
-                        block = block + a * b * c * values[:, i + di, j + dj, k + dk]
+        for (i, j, k), weight in self._corners(h0_d0, n, eps0):
+            block = block + weight * values[:, i, j, k]
         s = np.clip(strain, self.strain[0], None)
         out = np.empty((self.mu.size, s.size))
         for m in range(self.mu.size):
