@@ -443,6 +443,7 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
         max_force_N=float(np.max(diagram.force)),
         final_true_strain=float(strain[-1]),
         friction_mu=chosen.mu,
+        friction_mu_range=chosen.extra.get("mu_range"),
         friction_method=chosen.method,
         friction={m: (r.mu if isinstance(r, fr.FrictionResult) else None) for m, r in frictions.items()},
         friction_details={m: (r.as_dict() if isinstance(r, fr.FrictionResult) else {"method": m, "error": r}) for m, r in frictions.items()},

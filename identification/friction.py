@@ -337,6 +337,8 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
     extra = {"d_n_mm": d_n, "delta_R_mm": delta_r, "eps_p": eps_k, "hardening_n": n, "hardening_eps0": eps0,
              "hardening_from": "record curve (Swift fit)" if curve is not None else "default",
              "beyond_table_sticking": clamped, "sensitivity": _fe_mu_sensitivity(table, mu, h0_d0, hardening, eps_k, hk_mm),
+             "mu_range": _fe_mu_range(table, delta_r, hk_mm, h0_d0, hardening, eps_k),
+             "mu_range_basis": f"the bulge with dmax ± {DIAMETER_RESOLUTION_MM} mm",
              "table": Path(table.path).name, "table_ccx_version": table.meta.get("ccx_version"), "table_date": table.meta.get("date")}
     outside = _outside_table(table, h0_d0, n, eps0)
     if outside:
@@ -360,6 +362,16 @@ def _fe_mu_sensitivity(table, mu: float, h0_d0: float, hardening: tuple[float, f
     if not (math.isfinite(slope_mm) and slope_mm > 0):  # a flat barrel: no μ moves it (None: not told at all)
         return {"dR_mm_per_mu": slope_mm if math.isfinite(slope_mm) else None, "mu_per_dmax_resolution": None}
     return {"dR_mm_per_mu": slope_mm, "mu_per_dmax_resolution": DIAMETER_RESOLUTION_MM / 2.0 / slope_mm}
+
+
+def _fe_mu_range(table, delta_r_mm: float, hk_mm: float, h0_d0: float, hardening: tuple[float, float], eps: float) -> list[float]:
+    """[μ_lo, μ_hi]: the μ the table reads for dmax one resolution (0.01 mm) below and above the
+    measured one. Near sticking the barrel stops growing with μ and the interval opens up to the
+    table's largest μ: what the bulge can tell, stated rather than hidden in a point value."""
+    # ΔR ± δd/2 (3.29) inverted at the record's (h0/d0, n, ε0, ε)
+    n, eps0 = hardening
+    half = DIAMETER_RESOLUTION_MM / 2.0
+    return [table.mu_from_bulge(max(delta_r_mm + sign * half, 0.0) / hk_mm, h0_d0, n, eps, eps0=eps0, clamp=True) for sign in (-1.0, 1.0)]
 
 
 def _outside_table(table, h0_d0: float, n: float, eps0: float) -> list[str]:

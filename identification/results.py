@@ -132,7 +132,7 @@ class TensionResult(_ResultMapping):
 class CompressionResult(_ResultMapping):
     """A compression identification: friction by every method, corrected curves, hardening."""
 
-    _optional = ("E_apparent_stderr_MPa", "modulus")
+    _optional = ("E_apparent_stderr_MPa", "modulus", "friction_mu_range")
 
     test: str = "compression"
     E_MPa: float | None
@@ -147,6 +147,7 @@ class CompressionResult(_ResultMapping):
     max_force_N: float
     final_true_strain: float
     friction_mu: float
+    friction_mu_range: list | None = None  # [lo, hi] the friction method's μ for dmax ± its resolution (fe_table only)
     friction_method: str
     friction: dict  # method → μ (None where not applicable)
     friction_details: dict

@@ -248,7 +248,9 @@ def summary_lines(result: dict) -> list[str]:
     if result.get("test") == "compression":
         methods = result.get("friction") or {}
         extra = "   ".join(f"{k} {_fmt(v, '.3f')}" for k, v in methods.items() if isinstance(v, (int, float)))
-        lines.append(f"  friction μ {_fmt(result.get('friction_mu'), '.3f')}" + (f"   ({extra})" if extra else ""))
+        span = result.get("friction_mu_range")
+        span = f" [{_fmt(span[0], '.3f')}–{_fmt(span[1], '.3f')} for dmax ± 0.01 mm]" if span else ""
+        lines.append(f"  friction μ {_fmt(result.get('friction_mu'), '.3f')}{span}" + (f"   ({extra})" if extra else ""))
     inv = result.get("inverse_fe")
     if inv and result.get("test") == "tension":
         necks = ", ".join(f"{k} {v['vs_fe_pct']:+.1f} %" for k, v in inv["neck_corrections_vs_fe"].items())

@@ -56,6 +56,10 @@ INCREMENTS = 60
 # bulge, and its barrel depends on σ/E by 10 %; this one is within 0.6 % in force of 120 increments
 # and of the next refinements, and its barrel within 3 % over a 1.5× stress level (bench/fe_mesh.py)
 MESH = {"nr": 24, "layers": 2, "layer_fraction": 1.0 / 24.0, "platen_radius_factor": 2.5}
+# a run that stops ("too many cutbacks": a contact node flips between stick and slip as the side folds onto
+# the platen) is run again with a softer stick slope; where both finish they agree within 0.02 % in force and
+# 0.4 µm in dmax (μ 0.3, h0/d0 1, ε 0.9). The run that got farther is kept, its settings in the provenance.
+RETRY_SETTINGS = ({"stick_slope_MPa_per_mm": 1.0e6},)
 
 
 def swift(eps_p, n, eps0=SWIFT_EPS0):
@@ -64,10 +68,25 @@ def swift(eps_p, n, eps0=SWIFT_EPS0):
 
 
 def grid_model(mu: float, h0_d0: float, n: float, eps0: float = SWIFT_EPS0, *, d0_mm: float = D0_MM, eps_end: float = EPS_END,
-               increments: int = INCREMENTS) -> UpsettingModel:
+               increments: int = INCREMENTS, **settings) -> UpsettingModel:
     h0 = h0_d0 * d0_mm
     return UpsettingModel.from_law(d0_mm, h0, h0 * math.exp(-eps_end), mu, partial(swift, n=n, eps0=eps0), E_MPa=E_MPa, nu=NU,
-                                   increments=increments, **MESH)
+                                   increments=increments, **MESH, **settings)
+
+
+def run_with_retries(mu: float, h0_d0: float, n: float, eps0: float, *, eps_end: float = EPS_END, increments: int = INCREMENTS):
+    """(model, result, settings): the grid run, again with :data:`RETRY_SETTINGS` while it stops
+    short; the run that reached the largest strain."""
+    best = None
+    for settings in ({}, *RETRY_SETTINGS):
+        m = grid_model(mu, h0_d0, n, eps0, eps_end=eps_end, increments=increments, **settings)
+        r = simulate_upsetting(m, require_complete=False, timeout_s=900.0)
+        reached = float(r.strain[-1]) if r.strain.size else 0.0
+        if best is None or reached > best[3] + 1e-9:
+            best = (m, r, settings, reached)
+        if r.completed:
+            break
+    return best[:3]
 
 
 def plastic_strain_at(eps, flow, E=E_MPa, iterations: int = 8):
@@ -83,8 +102,7 @@ def sample_run(point: tuple, strain=STRAIN, eps_end: float = EPS_END, increments
     """One CalculiX run at (μ, h0/d0, n[, ε0]) sampled on the strain grid: raw force factor and
     bulge (NaN where not reached)."""
     mu, h0_d0, n, eps0 = (tuple(point) + (SWIFT_EPS0,))[:4]
-    m = grid_model(mu, h0_d0, n, eps0, eps_end=eps_end, increments=increments)
-    r = simulate_upsetting(m, require_complete=False, timeout_s=900.0)
+    m, r, settings = run_with_retries(mu, h0_d0, n, eps0, eps_end=eps_end, increments=increments)
     flow = partial(swift, n=n, eps0=eps0)
     eps = r.strain
     sigma = flow(plastic_strain_at(eps, flow))
@@ -98,7 +116,7 @@ def sample_run(point: tuple, strain=STRAIN, eps_end: float = EPS_END, increments
     out_f = np.where(inside, np.interp(strain, e, np.concatenate([[1.0], factor])), np.nan)
     out_b = np.where(inside, np.interp(strain, e, np.concatenate([[0.0], bulge])), np.nan)
     return {"factor_raw": out_f, "bulge": out_b, "reached_strain": reached, "completed": r.completed,
-            "wall_s": r.wall_s, "cached": r.cached, "increments": int(eps.size), "message": r.message}
+            "wall_s": r.wall_s, "cached": r.cached, "increments": int(eps.size), "message": r.message, "settings": settings}
 
 
 def build_table(mu=MU, h0_d0=H0_D0, n=N, eps0=EPS0, *, workers: int = 2, scheduler=None, out: Path = DEFAULT_OUT, command: str = "") -> dict:
@@ -114,10 +132,13 @@ def build_table(mu=MU, h0_d0=H0_D0, n=N, eps0=EPS0, *, workers: int = 2, schedul
     meta = {
         "what": "CalculiX upsetting table: force factor F/(sigma_f*A) (normalised by mu = 0) and bulge dR/h",
         "model": "axisymmetric half model, CAX4R O-grid core + boundary layer at the rim corner, meshed rigid carbide platen, "
-                 "surface-to-surface Coulomb contact (linear overclosure 1e8 MPa/mm, stick slope 1e7)",
+                 "surface-to-surface Coulomb contact (linear overclosure 1e8 MPa/mm, stick slope 1e7; 1e6 in the retried_runs)",
         "mesh": MESH, "increments": INCREMENTS, "d0_mm": D0_MM, "eps_end": EPS_END,
         "material": {"law": "swift", "K_MPa": SWIFT_K_MPa, "eps0": list(map(float, eps0)), "E_MPa": E_MPa, "nu": NU},
         **generator.provenance(command or f"python -m {MODULE}", runs, wall),
+        "retry_settings": list(RETRY_SETTINGS),
+        "retried_runs": [{"mu": p[0], "h0_d0": p[1], "n": p[2], "eps0": p[3], **r["settings"], "reached_strain": r["reached_strain"]}
+                         for p, r in zip(points, runs) if r["settings"]],
         "incomplete_runs": [{"mu": p[0], "h0_d0": p[1], "n": p[2], "eps0": p[3], "reached_strain": r["reached_strain"], "message": r["message"]}
                             for p, r in zip(points, runs) if not r["completed"]],
     }

@@ -115,6 +115,26 @@ def test_mu_near_sticking_is_flagged_as_a_lower_bound(table):
     assert any("lower bound" in w for w in _fe_table_warnings(high))
 
 
+def test_mu_range_is_the_mu_of_dmax_one_resolution_either_side(table):
+    """friction_mu_range: the table's bulge at each end of the range is the measured ΔR ∓ 0.005 mm
+    (half of dmax's 0.01 mm), the point μ inside it; narrow on a tall specimen at low μ (a well
+    told μ), open to the table's largest μ on a squat one near sticking (a lower bound)."""
+    def read(mu, h0_d0):
+        d0, h0 = 6.0, 6.0 * h0_d0
+        hk = h0 * math.exp(-0.6)
+        dR = hk * float(table.bulge_at(mu, h0_d0, fr.FE_DEFAULT_HARDENING[0], [0.6])[0])
+        return fr.identify_friction("fe_table", d0, h0, hk, d_max_mm=d0 * math.sqrt(h0 / hk) + 2 * dR), dR, hk, h0_d0
+
+    for mu, h0_d0 in ((0.05, 1.6), (0.1, 1.0)):
+        res, dR, hk, h = read(mu, h0_d0)
+        lo, hi = res.extra["mu_range"]
+        assert lo < res.mu < hi and hi - lo < 0.04
+        for m, sign in ((lo, -1), (hi, 1)):
+            assert hk * float(table.bulge_at(m, h, fr.FE_DEFAULT_HARDENING[0], [0.6])[0]) == pytest.approx(dR + sign * fr.DIAMETER_RESOLUTION_MM / 2, abs=2e-4)
+    high, *_ = read(float(table.mu[-1]) - 0.01, 0.6)
+    assert high.extra["mu_range"][1] == pytest.approx(float(table.mu[-1])) and high.extra["mu_range"][0] < high.mu
+
+
 def test_a_stopped_run_is_continued_along_the_next_lower_mu_and_said():
     """continue_stopped_runs: a run that stopped after ε index 2 goes on with the increments of
     the run one μ step lower (closed form below); continued_at names the strain it stopped at."""
