@@ -25,6 +25,10 @@ from flowcurve.identification.series_members import MAX_POINTS, SeriesMember
 
 PARAMS = ("A", "B", "n", "C", "m")
 KEYS = {"A": "A_MPa", "B": "B_MPa", "n": "n", "C": "C", "m": "m"}
+# the RMS shape error the friction correction leaves on CalculiX compression records with a known law
+# (0.40 % over the fit points of six records, docs/methods.md §5.7): how well the curves tell the constants apart
+SHAPE_ERROR_PCT = 0.4
+LOOSE_CONSTANT_PCT = 3.0  # a constant the shape error can move more than this is flagged
 BOUNDS = {"A": (0.0, np.inf), "B": (0.0, np.inf), "n": (1e-3, 1.5), "C": (0.0, 5.0), "m": (1e-3, 20.0)}
 
 # the reference condition of the stepwise procedure
@@ -360,6 +364,7 @@ class SeriesFit:
     warnings: list[str] = field(default_factory=list)
     max_points: int = MAX_POINTS
     damage: DamageFit | None = None  # D1-D5 when the series holds fracture data
+    shape_uncertainty: dict | None = None  # how far each constant can move under a SHAPE_ERROR_PCT shape error of the curves
 
     @property
     def quality(self) -> str:
@@ -411,6 +416,7 @@ class SeriesFit:
                                if Es else None)
         nus = [m.poisson_ratio for m in ms if m.poisson_ratio is not None]
         out["poisson_ratio"] = float(np.mean(nus)) if nus else None
+        out["shape_uncertainty"] = self.shape_uncertainty
         out["warnings"] = list(self.warnings)
         if self.damage is not None:
             out.update(self.damage.as_dict())
@@ -420,13 +426,15 @@ class SeriesFit:
 def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_strain_rate_per_s: float | None = None,
                ref_temperature_C: float | None = None, melt_temperature_C: float | None = None,
                fixed: dict[str, float] | None = None, max_points: int = MAX_POINTS,
-               fracture_points: Sequence[FracturePoint] = ()) -> SeriesFit:
+               fracture_points: Sequence[FracturePoint] = (), shape_error_pct: float = SHAPE_ERROR_PCT) -> SeriesFit:
     """Fit the series by ``method`` ("global" or "stepwise") and the other one for comparison;
     D1-D5 from the members' fractures and ``fracture_points`` (measured elsewhere) when given."""
     if method not in ("global", "stepwise"):
         raise IdentificationError(f"unknown fit method {method!r}; choose global or stepwise")
     if max_points < 5:
         raise IdentificationError(f"max_points must be at least 5 points per record, got {max_points}")
+    if not (math.isfinite(shape_error_pct) and shape_error_pct >= 0):
+        raise IdentificationError(f"the curves' shape error must be a finite percentage ≥ 0 (--shape-error), got {shape_error_pct:g}")
     members = list(members)
     ref = make_reference(members, ref_strain_rate_per_s=ref_strain_rate_per_s, ref_temperature_C=ref_temperature_C,
                          melt_temperature_C=melt_temperature_C)
@@ -446,10 +454,43 @@ def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_s
         worst = sorted(chosen.record_errors.items(), key=lambda kv: -kv[1]["fit_error_pct"])[:3]
         warnings.append(f"the {method} fit is poor: max error {chosen.fit_error_pct:.3g} % (> {POOR_FIT_PCT:g} %); worst records "
                         + ", ".join(f"{name} {e['fit_error_pct']:.3g} %" for name, e in worst))
+    band = shape_uncertainty(members, ref, chosen, max_points=max_points, shape_error_pct=shape_error_pct)
+    loose = {p: 100.0 * band[KEYS[p]] / abs(chosen.params[p]) for p in ("A", "B", "n")
+             if band.get(KEYS[p]) is not None and abs(chosen.params[p]) > 0}
+    loose = {p: v for p, v in loose.items() if v > LOOSE_CONSTANT_PCT}
+    if loose:
+        corr = chosen.correlations.get("A", {}).get("n")
+        warnings.append("the curves do not tell " + ", ".join(loose) + f" apart well{f' (A–n correlation {corr:.2f})' if corr is not None else ''}: "
+                        f"a {shape_error_pct:g} % shape error of the curves moves "
+                        + ", ".join(f"{p} by up to {v:.2g} %" for p, v in loose.items())
+                        + "; the fitted law is better determined than these constants (fit.json shape_uncertainty)")
     damage = _fit_damage(members, list(fracture_points), ref, warnings)
     return SeriesFit(method=method, fit=chosen, global_fit=glob, stepwise_fit=stepwise, stepwise_note=note,
                      members=members, curves=condition_curves(members, max_points), warnings=warnings,
-                     max_points=max_points, damage=damage)
+                     max_points=max_points, damage=damage, shape_uncertainty=band)
+
+
+def shape_uncertainty(members: Sequence[SeriesMember], ref: Reference, fit: JohnsonCookFit, *,
+                      max_points: int = MAX_POINTS, shape_error_pct: float = SHAPE_ERROR_PCT) -> dict:
+    """How far each fitted constant can move when the curves carry a shape error of RMS
+    ``shape_error_pct`` (a systematic error the fit's own residual does not show): the linearised
+    least-squares bound δp = s·√N·√diag((JᵀJ)⁻¹) with J the relative sensitivities ∂σ/σ∂p at the
+    fit points. Strongly correlated constants (JC's A and n) get a wide band."""
+    # δp_max over ‖J·δp‖₂/√N ≤ s: the covariance of a residual of RMS s
+    eps, _, lr, ts, _ = _stack(members, ref, max_points)
+    free = [p for p in PARAMS if p not in fit.fixed]
+    base = johnson_cook_reduced(eps, lr, ts, **fit.params)
+    cols = []
+    for p in free:
+        h = 1e-6 * max(abs(fit.params[p]), 1e-3)
+        cols.append((johnson_cook_reduced(eps, lr, ts, **{**fit.params, p: fit.params[p] + h}) - base) / (h * base))
+    J = np.array(cols).T
+    try:
+        cov = np.linalg.inv(J.T @ J)
+    except np.linalg.LinAlgError:
+        return {"curve_shape_error_pct": shape_error_pct, **{KEYS[p]: None for p in free}}
+    band = shape_error_pct / 100.0 * math.sqrt(eps.size) * np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    return {"curve_shape_error_pct": shape_error_pct, **{KEYS[p]: float(v) for p, v in zip(free, band)}}
 
 
 def _fit_damage(members, extra: list[FracturePoint], ref: Reference, warnings: list[str]) -> DamageFit | None:

@@ -25,7 +25,8 @@ def test_a_heavy_import_is_seen():
 
 def test_the_fit_command_states_the_series_fits_default():
     """`flowcurve fit --help` names the default without importing the fit; the two agree."""
-    from flowcurve.cli.series import DEFAULT_MAX_POINTS
+    from flowcurve.cli.series import DEFAULT_MAX_POINTS, DEFAULT_SHAPE_ERROR_PCT
     from flowcurve.identification.series import MAX_POINTS
+    from flowcurve.identification.series_fit import SHAPE_ERROR_PCT
 
-    assert DEFAULT_MAX_POINTS == MAX_POINTS
+    assert DEFAULT_MAX_POINTS == MAX_POINTS and DEFAULT_SHAPE_ERROR_PCT == SHAPE_ERROR_PCT

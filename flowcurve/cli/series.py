@@ -22,6 +22,7 @@ if TYPE_CHECKING:  # the series fit (lmfit, pandas) is imported when a fit runs,
 # the series fit's MAX_POINTS, written here so that --help need not import the fit (lmfit);
 # tests/test_startup.py keeps the two equal
 DEFAULT_MAX_POINTS = 60
+DEFAULT_SHAPE_ERROR_PCT = 0.4  # series_fit.SHAPE_ERROR_PCT, likewise
 
 
 def register(subparsers) -> None:
@@ -47,6 +48,9 @@ def register(subparsers) -> None:
     p.add_argument("--E", dest="E_MPa", type=float, metavar="MPA", help="elastic modulus for records that have no handbook material.E_MPa (default: each record's identified modulus)")
     p.add_argument("--strict", action="store_true", help="exit non-zero when the fit is poor (max error above 10 %%); fit.json is still written, marked poor")
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, metavar="N", help=f"points per record in the fit, the same for every record (default {DEFAULT_MAX_POINTS})")
+    p.add_argument("--shape-error", type=float, default=DEFAULT_SHAPE_ERROR_PCT, metavar="PCT",
+                   help="RMS shape error assumed for the true curves, %% (default %(default)s: what the friction correction leaves on "
+                        "FE compression records); fit.json's shape_uncertainty says how far it can move each constant")
     p.add_argument("--fracture-points", metavar="FILE.csv",
                    help="fracture points measured elsewhere for the Johnson-Cook fracture constants D1-D5 (columns triaxiality "
                         "[sigma_m/sigma_eq, positive in tension], strain_rate_per_s, temperature_C, fracture_strain); "
@@ -62,7 +66,8 @@ def run(args) -> int:
     fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
     extra = read_fracture_points(args.fracture_points) if args.fracture_points else ()
     series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
-                        melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points, fracture_points=extra)
+                        melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points, fracture_points=extra,
+                        shape_error_pct=args.shape_error)
     out = write_fit(series, args.out)
     print(summary(series, out))
     if series.quality == "poor" and args.strict:

@@ -158,7 +158,8 @@ class Workspace:
         members = load_members(args.inputs)
         fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
         series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
-                            melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points)
+                            melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points,
+                            shape_error_pct=args.shape_error)
         fit_json = write_fit(series, out)
         text = summary(series, fit_json)
         fmt = str(options.get("format") or "lsdyna")
