@@ -176,7 +176,7 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
         "copied_from": str(table.name), "copied_at": generator.now_utc(),
         "command": "python -m flowcurve.identification.fe.make_table --virtual-copy-only",
         "source": {k: source[k] for k in ("what", "model", "mesh", "increments", "d0_mm", "eps_end", "material",
-                                          "ccx_version", "date", "command", "runs", "incomplete_runs") if k in source},
+                                          "ccx_version", "date", "command", "runs", "retry_settings", "retried_runs", "incomplete_runs") if k in source},
     }
     out.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(out, **arrays)

@@ -5,9 +5,10 @@ steps, noise and frame compliance) to within 2 % over ε_p 0.05–0.6 and μ ± 
 The records are made with a finer mesh (30 core elements, a d0/30 rim layer; 24 for the one
 case the finer mesh cannot finish) than the table's, 70 increments and a resolved elastic line.
 Known limits, measured and kept here as strict expected failures so a fix shows up: where the
-barrel hardly grows with μ (near sticking) one 0.01 mm of dmax moves μ by 0.05–0.12, and on tall
-specimens at μ ≥ 0.15 the table's runs stop at ε 0.3–0.6 (the side folds onto the platen) and
-are continued along the next lower μ. Each such record carries an FE-table warning: a miss
+barrel hardly grows with μ (near sticking) one 0.01 mm of dmax moves μ by 0.04–0.05 (the reported
+friction_mu_range then opens to the table's largest μ), and on specimens of h0/d0 ≥ 1.6 at
+μ ≥ 0.15 the table's runs stop at ε 0.3–0.55 (the side folds onto the platen), even when run
+again with the softer stick slope, and are continued along the next lower μ. Each such record carries an FE-table warning: a miss
 never leaves without one (test_a_record_the_default_misses_is_flagged)."""
 
 from __future__ import annotations
@@ -30,19 +31,21 @@ def test_table_points_regenerate_with_ccx(tmp_path, monkeypatch):
 
     monkeypatch.setenv("FLOWCURVE_FE_CACHE", str(tmp_path))
     z = np.load(PACKAGE_TABLE)
-    for mu, h0_d0, n, eps0 in ((0.2, 1.0, 0.4, 0.02), (0.05, 1.6, 0.2, 0.1)):
+    # the last stopped with stick slope 1e7 at ε 0.41 and is in the table from its retry (1e6)
+    for mu, h0_d0, n, eps0 in ((0.2, 1.0, 0.4, 0.02), (0.05, 1.6, 0.2, 0.1), (0.3, 1.6, 0.4, 0.02)):
         i, j, k, m = (list(z[axis]).index(v) for axis, v in (("mu", mu), ("h0_d0", h0_d0), ("n", n), ("eps0", eps0)))
         run = sample_run((mu, h0_d0, n, eps0))
-        assert not run["cached"]
+        assert not run["cached"] and run["completed"]
         np.testing.assert_allclose(run["factor_raw"], z["force_factor_raw"][i, j, k, m], rtol=1e-6)
         np.testing.assert_allclose(run["bulge"], z["bulge_dR_over_h"][i, j, k, m], rtol=1e-5, atol=1e-7)
 
 
-LIMITS = {2: "steel 45 at μ 0.25, h0/d0 1: the barrel hardly grows with μ there (one 0.01 mm of dmax moves μ by 0.05): μ read 0.285, "
-             "flagged; the curve within 1.9 %",
-          3: "Voce at μ 0.17, h0/d0 1.8: the table's runs at μ ≥ 0.15 stop at ε 0.38–0.47 on tall specimens (continued, flagged): "
-             "μ 0.27, the curve 2.1 % off",
-          5: "seed law at μ 0.28, h0/d0 1.2: runs continued beyond ε 0.32 and a barrel flat in μ (flagged): μ 0.345, the curve 3.1 % off"}
+LIMITS = {2: "steel 45 at μ 0.25, h0/d0 1: the barrel hardly grows with μ there (one 0.01 mm of dmax moves μ by 0.05): μ read 0.285 "
+             "(friction_mu_range 0.248–0.35 holds the truth), flagged; the curve within 1.9 %",
+          3: "Voce at μ 0.17, h0/d0 1.8: μ 0.189, but the curve 2.3 % off at ε_p 0.6 (2.6 % with the true μ): the table's runs at "
+             "μ ≥ 0.15 on h0/d0 ≥ 1.6 stop at ε 0.3–0.55 with either stick slope and are continued (flagged)",
+          5: "seed law at μ 0.28, h0/d0 1.2: μ 0.321, the curve 2.6 % off (2.9 % with the true μ; the record's own fold-over "
+             "sawtooth is ±1 %): runs continued beyond ε 0.52 (flagged)"}
 CASES = [pytest.param(c, marks=pytest.mark.xfail(strict=True, reason=LIMITS[k])) if k in LIMITS else c for k, c in enumerate(VALIDATION_CASES)]
 
 
@@ -71,3 +74,17 @@ def test_a_record_the_default_misses_is_flagged(case):
     flagged = [w for w in ident.result["warnings"] if w.startswith("FE table:")]
     if missed:
         assert flagged, (ident.result["friction_mu"], err)
+
+
+RANGE_LIMITS = {5: "seed law at μ 0.28: friction_mu_range 0.287–0.35 misses 0.28 by 0.007 (the range counts the dmax "
+                   "resolution, not the table's continued runs beyond ε 0.52, which a warning names)"}
+
+
+@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.xfail(strict=True, reason=RANGE_LIMITS[k])) if k in RANGE_LIMITS else c
+                                  for k, c in enumerate(VALIDATION_CASES)], ids=[c["name"] for c in VALIDATION_CASES])
+def test_the_true_mu_is_inside_the_reported_range(case):
+    """friction_mu_range (the μ of dmax ± 0.01 mm) holds the true μ on every record, also where
+    the point value misses ±0.02 because the barrel hardly grows with μ (near sticking)."""
+    ident, _ = _read(case)
+    lo, hi = ident.result["friction_mu_range"]
+    assert lo - 0.005 <= case["mu"] <= hi + 0.005, (lo, hi)
