@@ -72,7 +72,8 @@ class UpsettingModel:
     first_increment: float = 0.0  # initial increment as a fraction of the step (0: 1/increments); ccx grows it when
     # it converges easily, so a small one resolves the elastic line and the yield that 1/increments steps over
     platen_radius_factor: float = 2.5  # platen radius / R0 (the top face spreads with friction)
-    # tangential (stick) stiffness of the contact: 1e6 gives the same force (0.02 %) and dmax (0.4 µm) as 1e7 where
+    # tangential (stick) stiffness of the contact: 1e6 gives the same force (0.02 %; up to 1 % while a side node folds
+    # over, the fold-over sawtooth shifted in time) and dmax (0.5 µm) as 1e7 where
     # both converge, and carries runs past the fold-over where 1e7 stops with "too many cutbacks" (make_table)
     stick_slope_MPa_per_mm: float = STICK_SLOPE_MPa_per_mm
 
