@@ -56,8 +56,8 @@ INCREMENTS = 60
 # bulge, and its barrel depends on σ/E by 10 %; this one is within 0.6 % in force of 120 increments
 # and of the next refinements, and its barrel within 3 % over a 1.5× stress level (bench/fe_mesh.py)
 MESH = {"nr": 24, "layers": 2, "layer_fraction": 1.0 / 24.0, "platen_radius_factor": 2.5}
-# a run that stops ("too many cutbacks": a contact node flips between stick and slip as the side folds onto
-# the platen) is run again with a softer stick slope; where both finish (μ 0.3, h0/d0 1, ε 0.9) they agree within
+# a run that stops ("too many cutbacks" as the side folds onto the platen, the face-to-face contact loop at its
+# iteration limit) is run again with a softer stick slope; where both finish (μ 0.3, h0/d0 1, ε 0.9) they agree within
 # 0.02 % in force except while a side node folds over (up to 1.1 % near ε 0.8, the model's own 1–2 % sawtooth
 # shifted a little in time) and within 0.5 µm in dmax. The run that got farther is kept, its settings in the provenance.
 RETRY_SETTINGS = ({"stick_slope_MPa_per_mm": 1.0e6},)
