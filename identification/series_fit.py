@@ -480,6 +480,8 @@ def shape_uncertainty(members: Sequence[SeriesMember], ref: Reference, fit: John
     eps, _, lr, ts, _ = _stack(members, ref, max_points)
     free = [p for p in PARAMS if p not in fit.fixed]
     base = johnson_cook_reduced(eps, lr, ts, **fit.params)
+    keep = np.isfinite(base) & (base > 0)  # a point at or above the melt has no relative sensitivity
+    eps, lr, ts, base = eps[keep], lr[keep], ts[keep], base[keep]
     cols = []
     for p in free:
         h = 1e-6 * max(abs(fit.params[p]), 1e-3)
