@@ -6,15 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from flowcurve.rig.virtual.fe_response import DATA, UpsettingResponse, effective_hardening_exponent
+from flowcurve.rig.virtual.fe_response import DATA, UpsettingResponse, effective_hardening_exponent  # DATA: the conftest raw fixture reads it
 from flowcurve.rig.virtual.physics import RigModel, Specimen
-
-
-@pytest.fixture(scope="module")
-def raw():
-    """The rig's data file as stored (NaN where a CalculiX run stopped)."""
-    with np.load(DATA) as z:
-        return {k: np.asarray(z[k], float) for k in z.files}
 
 
 @pytest.fixture(scope="module")

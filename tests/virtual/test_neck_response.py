@@ -12,17 +12,10 @@ import pytest
 
 from flowcurve.errors import ConfigError
 from flowcurve.rig.virtual.materials import Material
-from flowcurve.rig.virtual.neck_response import DATA, TensionResponse, equivalent_swift_exponent
+from flowcurve.rig.virtual.neck_response import DATA, TensionResponse, equivalent_swift_exponent  # DATA: the conftest raw fixture reads it
 from flowcurve.rig.virtual.physics import RigModel
 
 EPS0 = 0.002  # the runs' Swift ε0 (their .json says so; checked below)
-
-
-@pytest.fixture(scope="module")
-def raw():
-    """The rig's data file as stored."""
-    with np.load(DATA) as z:
-        return {k: np.asarray(z[k], float) for k in z.files}
 
 
 @pytest.fixture(scope="module")
