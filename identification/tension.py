@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -377,6 +377,11 @@ def _modulus_window(step: int, ref: float, first_guesses: list[float], strain0, 
     return auto.window_MPa, min(auto.n_points, 5), auto.source, auto, ref
 
 
+def _resolved(mod: ModulusFit) -> bool:
+    """A regressed E known to within :data:`MAX_E_UNCERTAINTY` (relative standard error)."""
+    return bool(mod.E_stderr_MPa <= MAX_E_UNCERTAINTY * mod.E_MPa)
+
+
 def _chosen_modulus(mod: ModulusFit, E_MPa: float | None, handbook_E: float | None, given_window: bool) -> float:
     """The E used: the option, else the handbook's when the line has few samples, else the regressed
     one; ``mod.source`` says which."""
@@ -402,10 +407,16 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
     handbook_E = record.positive("material.E_MPa") if E_MPa is None else None
     disp0 = src["disp"]
     toe_mm, scale_factor = 0.0, None
+    unresolved = None  # the line's fit when it was not resolved and the handbook E took its place (kept from then on)
     for step in range(6):
-        window_MPa, line_points, how, auto, ref = _modulus_window(
-            step, ref, first_guesses, disp0 / length, eng_stress, fractions=fractions, window_fixed_MPa=window_fixed_MPa,
-            modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise)
+        try:
+            window_MPa, line_points, how, auto, ref = _modulus_window(
+                step, ref, first_guesses, disp0 / length, eng_stress, fractions=fractions, window_fixed_MPa=window_fixed_MPa,
+                modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise)
+        except IdentificationError:
+            if unresolved is None:
+                raise
+            break  # no line below the handbook E's Rp0.2 either: the last step's window and Rp0.2 stand
         disp = disp0
         if toe:
             disp, toe_mm = compensate_toe(disp0, force, window_N=(window_MPa[0] * inp.s0, window_MPa[1] * inp.s0), min_points=line_points)
@@ -416,8 +427,12 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         mod.source = how
         if auto is not None:
             mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
-        E = _chosen_modulus(mod, E_MPa, handbook_E, given_window=not automatic)
-        if E == mod.E_MPa and not mod.E_stderr_MPa <= MAX_E_UNCERTAINTY * E:
+        E = _chosen_modulus(mod, E_MPa, handbook_E if unresolved is None else None, given_window=not automatic)
+        if handbook_E is not None and (unresolved is not None or (E == mod.E_MPa and not _resolved(mod))):
+            unresolved = unresolved or replace(mod)
+            E, mod.source = handbook_E, (f"handbook material.E_MPa (the elastic line is not resolved: E = {unresolved.E_MPa:.4g} ± "
+                                         f"{unresolved.E_stderr_MPa:.2g} MPa from {unresolved.n_points} samples, {unresolved.source})")
+        if E == mod.E_MPa and not _resolved(mod):
             raise IdentificationError(
                 f"{record.source}: the elastic line is not resolved: E = {E:.4g} ± {mod.E_stderr_MPa:.2g} MPa from {mod.n_points} samples "
                 f"({mod.source}); give the handbook modulus (--E or material.E_MPa) or sample faster")
@@ -428,6 +443,9 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
     if np.nanmax(np.abs(strain)) > MAX_STRAIN:
         raise IdentificationError(f"{record.source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
     warnings: list[str] = []
+    if unresolved is not None:
+        warnings.append(f"the elastic line is not resolved (E = {unresolved.E_MPa:.4g} ± {unresolved.E_stderr_MPa:.2g} MPa from "
+                        f"{unresolved.n_points} samples): the handbook E = {E:.4g} MPa is used instead (sample faster to measure E)")
     if E > 1e6 or E < 1e3:
         warnings.append(f"apparent modulus {E:.4g} MPa is far from any metal's: check units, the frame stiffness or the window")
     return _ElasticLine(E=E, mod=mod, Rp02=Rp02, window_MPa=window_MPa, disp=disp, strain=strain, toe_mm=toe_mm,
@@ -657,7 +675,9 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         or Rm); modulus_window_MPa: over (lo, hi) MPa; neither (default): over the most linear
         stretch of the first loading (:func:`identification.indicator.auto_modulus`), or all of
         its samples when there are few — then the handbook ``material.E_MPa`` when the record
-        has one. The window in MPa and ``modulus.source`` are reported. E_MPa fixes the modulus.
+        has one. A line whose E is not resolved (standard error over 10 %) gives way to the
+        handbook E with a warning, and without one is an error. The window in MPa and
+        ``modulus.source`` are reported. E_MPa fixes the modulus.
     true_stress: "gost_3_6" (the corrected (3.6), with ν = ``poisson``) or "constant_volume".
     neck: the neck correction used for the fracture point (all are reported).
     law, hardening: the hardening law and method of the main fit; the others are reported.
