@@ -25,7 +25,7 @@ spring-back before the shortening is scaled.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -35,11 +35,12 @@ from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
 from flowcurve.identification.hardening import HardeningFit, fit_hardening
 from flowcurve.identification.indicator import (ModulusFit, auto_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
-                                                yield_onset_from_rate)
+                                                interpolate_steps, stepped_fraction, yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
 from flowcurve.identification.tension import check_fit_range, true_plastic_strain
 
+STEPPED_FRACTION = 0.5  # a crosshead reading unchanged between more than half of the samples is interpolated between its steps
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
 LOADED_FRACTION = 0.05  # samples above this fraction of the peak force belong to the test
 MAX_FIT_POINTS = 600  # the hardening fit uses at most this many points, evenly spread in strain
@@ -178,6 +179,19 @@ def elastic_line(t, specimen_mm, force_N, *, area0_mm2: float, h0_mm: float, win
     return line, float(toe_mm)
 
 
+def toe_on_known_modulus(specimen_mm, force_N, window_MPa, *, E_MPa: float, area0_mm2: float, h0_mm: float) -> float:
+    """The toe (mm) of an elastic line of known slope E: the median offset Δl − h0·σ/E of the first
+    loading's samples in the window. A short specimen's line is a few µm long (7 mm at 100 MPa:
+    3.6 µm), too short to carry a slope of its own; its offset is read well with the slope given."""
+    stress = np.asarray(force_N, dtype=float) / area0_mm2
+    disp = np.asarray(specimen_mm, dtype=float)
+    top = int(np.argmax(stress >= window_MPa[1])) if np.any(stress >= window_MPa[1]) else stress.size
+    on = np.flatnonzero(stress[:top] >= window_MPa[0])
+    if on.size == 0:
+        raise IdentificationError("no sample of the first loading in the elastic window")
+    return float(np.median(disp[on] - h0_mm * stress[on] / E_MPa))  # Δl = Δl0 + h0·σ/E
+
+
 def compensate_toe_line(specimen_mm, force_N, line: ModulusFit, toe_mm: float, *, area0_mm2: float, h0_mm: float) -> np.ndarray:
     """ISO 6892-1 toe compensation: the displacement shifted so that the elastic line passes
     through zero force, and the samples before the line (the toe) replaced by the line."""
@@ -200,6 +214,7 @@ class _Diagram:
     specimen: np.ndarray
     stiffness: float | None
     warnings: list[str]
+    step_mm: float | None = None  # the crosshead's reading step, when it was interpolated between steps
 
 
 @dataclass
@@ -278,6 +293,13 @@ def _inputs(record: Record, frame_stiffness_N_per_um: float | None) -> _Diagram:
     if t.size < 10:
         raise RecordError(src, f"only {t.size} complete samples (time, force, crosshead); a compression identification needs more")
     force = force_raw * compression_sign(force_raw)
+    step = None
+    if stepped_fraction(cross_raw) > STEPPED_FRACTION:
+        # an encoder step spans several samples (10 µm is 0.15 % of a 7 mm specimen): its sawtooth
+        # against the rising force would run the plastic strain backwards within each step
+        steps = np.abs(np.diff(cross_raw))
+        step = float(np.min(steps[steps > 0])) if np.any(steps > 0) else None
+        cross_raw = interpolate_steps(t, cross_raw)
     travel = cross_raw - cross_raw[0]
     travel = travel * compression_sign(travel)
 
@@ -291,7 +313,7 @@ def _inputs(record: Record, frame_stiffness_N_per_um: float | None) -> _Diagram:
     t, force, travel, specimen = t[: end + 1], force[: end + 1], travel[: end + 1], specimen[: end + 1]
     if end < 10:
         raise IdentificationError(f"{src}: the loading branch has only {end + 1} samples")
-    return _Diagram(t=t, force=force, travel=travel, specimen=specimen, stiffness=stiffness, warnings=warnings)
+    return _Diagram(t=t, force=force, travel=travel, specimen=specimen, stiffness=stiffness, warnings=warnings, step_mm=step)
 
 
 def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_window_MPa, modulus_window,
@@ -308,8 +330,11 @@ def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_
         warnings.append(f"no elastic line ({exc}): the toe is not compensated; "
                         + (f"the handbook E = {E_MPa:g} MPa strips the elastic strain" if E_MPa is not None
                            else "no modulus, so the elastic strain is not removed and there is no Rp0.2 — give E_MPa"))
+    if line is not None and E_MPa is not None:
+        toe_mm = toe_on_known_modulus(specimen, diagram.force, line.window_MPa, E_MPa=E_MPa, area0_mm2=area0, h0_mm=geo["h0"])
     if line is not None and toe:
-        specimen = compensate_toe_line(specimen, diagram.force, line, toe_mm, area0_mm2=area0, h0_mm=geo["h0"])
+        on_line = line if E_MPa is None else replace(line, E_MPa=E_MPa)  # the toe replaced by the line the offset was read on
+        specimen = compensate_toe_line(specimen, diagram.force, on_line, toe_mm, area0_mm2=area0, h0_mm=geo["h0"])
     return _Line(line=line, toe_mm=toe_mm, specimen=specimen, warnings=warnings)
 
 
@@ -456,6 +481,7 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
             "measured_shortening_mm": nominal.measured,
             "springback_mm": nominal.springback,
             "max_specimen_displacement_mm": float(np.max(line.specimen)),
+            "crosshead_step_interpolated_mm": diagram.step_mm,  # a stepped reading re-read between its steps (None: as read)
             **({"toe_compensation_mm": line.toe_mm if toe else None} if el is not None else {}),
         },
         methods={

@@ -77,6 +77,40 @@ def strain_quantum_noise(strain) -> float:
     return float(np.min(d)) / math.sqrt(12.0) if d.size else 0.0
 
 
+def stepped_fraction(reading) -> float:
+    """The share of consecutive samples with the same reading: near 1 for an encoder whose step
+    spans many samples, 0 for a signal that changes at every sample."""
+    d = np.diff(np.asarray(reading, dtype=float))
+    d = d[np.isfinite(d)]
+    return float(np.mean(d == 0.0)) if d.size else 0.0
+
+
+def interpolate_steps(time_s, reading) -> np.ndarray:
+    """A stepped (quantized) reading re-read between its steps.
+
+    A change of the reading between samples i and i+1 is taken as the moment the position crossed
+    the middle of the two levels, halfway between the two sample times; between two crossings of
+    the same direction the position is interpolated linearly in time. Each value stays inside its
+    reading's cell (b ± q/2). Samples before the first crossing, after the last, and between
+    crossings of opposite directions (a turn, or an encoder dithering at rest) keep the reading.
+    """
+    t, x = np.asarray(time_s, dtype=float), np.asarray(reading, dtype=float)
+    out = x.copy()
+    change = np.flatnonzero(np.diff(x) != 0.0)
+    if change.size < 2:
+        return out
+    tc = 0.5 * (t[change] + t[change + 1])  # crossing times
+    xc = 0.5 * (x[change] + x[change + 1])  # mid-levels crossed
+    way = np.sign(x[change + 1] - x[change])
+    k = np.searchsorted(tc, t, side="right") - 1  # the crossing before each sample
+    inside = np.flatnonzero((k >= 0) & (k < tc.size - 1))
+    k = k[inside]
+    ok = (way[k] == way[k + 1]) & (tc[k + 1] > tc[k])
+    i, k = inside[ok], k[ok]
+    out[i] = xc[k] + (xc[k + 1] - xc[k]) * (t[i] - tc[k]) / (tc[k + 1] - tc[k])
+    return out
+
+
 def fit_line_in_window(x, y, lo: float, hi: float, *, min_points: int = 5, unit: str = "N") -> LineFit:
     """Least-squares line through the points of the first rise of ``y`` with lo ≤ y ≤ hi.
 

@@ -19,13 +19,20 @@ def test_rp02_within_3_percent_with_a_toe_and_without_handbook_E(rate_hz, toe_mm
     r = ident.result
     # the model's mean pressure at εp = 0.002 (flow stress × the Coulomb slab factor)
     assert r["Rp02_MPa"] == pytest.approx(truth["rp02_pressure_MPa"], rel=0.03)
-    # the toe found is the seating travel, within one encoder step
-    assert r["indicator"]["toe_compensation_mm"] == pytest.approx(toe_mm, abs=0.01)
+    # the toe found is the seating travel, within one encoder step; with the handbook E the line's
+    # offset is read on its known slope, within 1 µm, and Rp0.2 within 1.5 % (10 noise seeds: 1.3 % at most)
+    assert r["indicator"]["toe_compensation_mm"] == pytest.approx(toe_mm, abs=0.001 if handbook_E else 0.01)
+    if handbook_E:
+        assert r["Rp02_MPa"] == pytest.approx(truth["rp02_pressure_MPa"], rel=0.015)
     # the true curve starts at the yield, not near zero stress
     first = ident.true_curve["true_stress_MPa"].iloc[0]
     assert first >= 0.9 * r["Rp02_MPa"]
     assert r["modulus"]["source"] and (handbook_E == ("material.E_MPa" in r["E_source"]))
-    assert r["hardening"]["quality"] in ("good", "poor")
+    # the record's force is the slab solution's: corrected by it, the curve is Johnson–Cook again. The
+    # FE-consistent default reads this record's bulge, made with (3.18), as μ ≈ 0.18 for 0.11, and its
+    # fit may be poor — then it says so
+    assert identify_compression(record, friction_correction="slab").result["hardening"]["quality"] == "good"
+    assert r["hardening"]["quality"] == "good" or r["hardening"]["warnings"]
 
 
 def test_yield_onset_from_the_force_rate_ignores_displacement():
