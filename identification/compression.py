@@ -41,6 +41,8 @@ from flowcurve.identification.results import CompressionHardening, CompressionRe
 from flowcurve.identification.tension import check_fit_range, true_plastic_strain
 
 STEPPED_FRACTION = 0.5  # a crosshead reading unchanged between more than half of the samples is interpolated between its steps
+UNLOADING_BAND = (0.1, 0.9)  # the part of the unloading (× the largest force) the spring-back is read on
+MIN_UNLOADING_SAMPLES = 10
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
 LOADED_FRACTION = 0.05  # samples above this fraction of the peak force belong to the test
 MAX_FIT_POINTS = 600  # the hardening fit uses at most this many points, evenly spread in strain
@@ -62,6 +64,25 @@ def loading_branch_end(travel_mm: np.ndarray, force_N: np.ndarray, near: float =
     top = np.nanmax(travel_mm)
     candidates = np.nonzero(travel_mm >= top * (1.0 - near))[0]
     return int(candidates[np.nanargmax(force_N[candidates])])
+
+
+def springback_from_unloading(force_N: np.ndarray, specimen_mm: np.ndarray, end: int, *, band=UNLOADING_BAND) -> tuple[float, int] | None:
+    """(spring-back in mm, samples) the unloading branch shows, or None when it has too few samples.
+
+    The specimen's displacement (frame compliance removed) against the force over the first
+    unloading from ``band`` × the largest force (the turn and a seat re-opening at low force left
+    out): Δl = Δl_k + F·c, so the elastic spring-back from the largest force to none is F_max·c."""
+    f, d = np.asarray(force_N[end:], dtype=float), np.asarray(specimen_mm[end:], dtype=float)
+    if f.size < 2:
+        return None
+    f_max = float(force_N[end])
+    below = np.flatnonzero(f < band[0] * f_max)  # the first unloading ends where the force first leaves the band
+    stop = int(below[0]) if below.size else f.size
+    on = np.flatnonzero(f[:stop] <= band[1] * f_max)
+    if on.size < MIN_UNLOADING_SAMPLES:
+        return None
+    slope = float(np.polyfit(f[on], d[on], 1)[0])  # Δl = Δl_k + c·F → c (mm/N)
+    return (f_max * slope, int(on.size)) if slope > 0 else None
 
 
 def offset_yield(eps_p, stress_MPa, offset: float = YIELD_OFFSET) -> float | None:
@@ -215,6 +236,7 @@ class _Diagram:
     stiffness: float | None
     warnings: list[str]
     step_mm: float | None = None  # the crosshead's reading step, when it was interpolated between steps
+    springback: tuple[float, int] | None = None  # (mm, samples) the unloading branch shows
 
 
 @dataclass
@@ -232,6 +254,7 @@ class _Nominal:
     """The shortening scaled to the measured height change, and the nominal curve it gives."""
 
     springback: float
+    springback_source: str | None
     measured: float  # the shortening the scaling aims at, mm
     shortening: np.ndarray
     K_l: float
@@ -310,10 +333,11 @@ def _inputs(record: Record, frame_stiffness_N_per_um: float | None) -> _Diagram:
         specimen = travel.copy()
         warnings.append("no frame stiffness ('rig.frame_stiffness_N_per_um'): the frame compliance is left to the scaling K_l")
     end = loading_branch_end(travel, force)
+    springback = springback_from_unloading(force, specimen, end)
     t, force, travel, specimen = t[: end + 1], force[: end + 1], travel[: end + 1], specimen[: end + 1]
     if end < 10:
         raise IdentificationError(f"{src}: the loading branch has only {end + 1} samples")
-    return _Diagram(t=t, force=force, travel=travel, specimen=specimen, stiffness=stiffness, warnings=warnings, step_mm=step)
+    return _Diagram(t=t, force=force, travel=travel, specimen=specimen, stiffness=stiffness, warnings=warnings, step_mm=step, springback=springback)
 
 
 def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_window_MPa, modulus_window,
@@ -342,11 +366,15 @@ def _nominal_curve(diagram: _Diagram, geo: dict, specimen: np.ndarray, E_MPa: fl
     """The shortening scaled to the measured one (3.1) and the nominal curve: strain (3.31), mean pressure (3.28)–(3.32)."""
     warnings: list[str] = []
     d0, h0, hk, force = geo["d0"], geo["h0"], geo["hk"], diagram.force
-    # measured shortening at the largest load: h0 − hk plus the elastic spring-back when E is known
+    # measured shortening at the largest load: h0 − hk plus the elastic spring-back — from the handbook E,
+    # else as the unloading branch shows it (the frame compliance removed), else none (K_l then scales
+    # the loaded shortening to the unloaded one: 0.5 % short for a 9 mm specimen at 1000 MPa)
     d_k = float(fr.nominal_diameter(d0, h0, hk))
-    springback = 0.0
+    springback, source = 0.0, None
     if E_MPa is not None:
-        springback = hk * (force[-1] / (math.pi * d_k**2 / 4.0)) / E_MPa  # elastic strain σ/E over hk
+        springback, source = hk * (force[-1] / (math.pi * d_k**2 / 4.0)) / E_MPa, "handbook E"  # elastic strain σ/E over hk
+    elif diagram.springback is not None and diagram.stiffness is not None:
+        springback, source = diagram.springback[0], f"unloading branch ({diagram.springback[1]} samples)"
     measured = h0 - hk + springback
     shortening, K_l = scale_to_measured(np.clip(specimen, 0.0, None), measured)  # (3.1) K_l = (h0 − hk)/max Δl
     if abs(K_l - 1.0) > 0.1:
@@ -356,7 +384,7 @@ def _nominal_curve(diagram: _Diagram, geo: dict, specimen: np.ndarray, E_MPa: fl
     d_n = fr.nominal_diameter(d0, h0, h)  # (3.28)
     area = math.pi * d_n**2 / 4.0  # (3.30)
     pressure = force / area  # (3.32) σ_n = P/S_i
-    return _Nominal(springback=springback, measured=measured, shortening=shortening, K_l=K_l, h=h, strain=strain, d_n=d_n,
+    return _Nominal(springback=springback, springback_source=source, measured=measured, shortening=shortening, K_l=K_l, h=h, strain=strain, d_n=d_n,
                     pressure=pressure, warnings=warnings)
 
 
@@ -480,6 +508,7 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
             "K_l": K_l,
             "measured_shortening_mm": nominal.measured,
             "springback_mm": nominal.springback,
+            "springback_source": nominal.springback_source,  # handbook E / unloading branch / None (not added)
             "max_specimen_displacement_mm": float(np.max(line.specimen)),
             "crosshead_step_interpolated_mm": diagram.step_mm,  # a stepped reading re-read between its steps (None: as read)
             **({"toe_compensation_mm": line.toe_mm if toe else None} if el is not None else {}),

@@ -30,7 +30,8 @@ def mean_pressure_factor(mu: float, r_over_h: np.ndarray) -> np.ndarray:
 def make_toe_compression(*, toe_mm=0.05, toe_force_N=600.0, rate_hz=10.0, mu=0.11, d0=5.989, h0=6.982,
                          eps_end=0.65, speed=0.01, stiffness=136.0, step_mm=0.01, noise_N=20.0, seed=2,
                          law=SEED_LAW, E=E_HANDBOOK_MPa, handbook_E=False):
-    """(Record, truth): truth["rp02_pressure_MPa"] is the mean pressure at εp = 0.002 of the model."""
+    """(Record, truth): truth["rp02_pressure_MPa"] is the mean pressure at εp = 0.002 of the model,
+    truth["springback_mm"] the elastic height the unloading gives back."""
     rng = np.random.default_rng(seed)
     eps_el = np.linspace(0.0, law["A"] / E, 400, endpoint=False)
     eps_p = np.concatenate([np.zeros_like(eps_el), np.geomspace(1e-6, eps_end, 4000)])
@@ -65,5 +66,6 @@ def make_toe_compression(*, toe_mm=0.05, toe_force_N=600.0, rate_hz=10.0, mu=0.1
     i = int(np.searchsorted(eps_p, 0.002))
     r_y = d0 / 2 * math.sqrt(h0 / h[i])
     truth = {"rp02_pressure_MPa": float(flow_stress(0.002, **law) * mean_pressure_factor(mu, np.array([r_y / h[i]]))[0]),
-             "elastic_samples": int(np.sum((F > 0.05 * force[i]) & (F < 0.9 * force[i]))), "law": law}
+             "elastic_samples": int(np.sum((F > 0.05 * force[i]) & (F < 0.9 * force[i]))), "law": law,
+             "springback_mm": float(hh[-1] * sigma[-1] / E)}  # what the unloading gives back
     return Record(meta=meta, data=data, source="synthetic-toe"), truth
