@@ -35,12 +35,11 @@ from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
 from flowcurve.identification.hardening import HardeningFit, fit_hardening
 from flowcurve.identification.indicator import (ModulusFit, auto_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
-                                                interpolate_steps, stepped_fraction, yield_onset_from_rate)
+                                                reread_if_stepped, yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
 from flowcurve.identification.tension import check_fit_range, true_plastic_strain
 
-STEPPED_FRACTION = 0.5  # a crosshead reading unchanged between more than half of the samples is interpolated between its steps
 UNLOADING_BAND = (0.1, 0.9)  # the part of the unloading (× the largest force) the spring-back is read on
 MIN_UNLOADING_SAMPLES = 10
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
@@ -316,13 +315,9 @@ def _inputs(record: Record, frame_stiffness_N_per_um: float | None) -> _Diagram:
     if t.size < 10:
         raise RecordError(src, f"only {t.size} complete samples (time, force, crosshead); a compression identification needs more")
     force = force_raw * compression_sign(force_raw)
-    step = None
-    if stepped_fraction(cross_raw) > STEPPED_FRACTION:
-        # an encoder step spans several samples (10 µm is 0.15 % of a 7 mm specimen): its sawtooth
-        # against the rising force would run the plastic strain backwards within each step
-        steps = np.abs(np.diff(cross_raw))
-        step = float(np.min(steps[steps > 0])) if np.any(steps > 0) else None
-        cross_raw = interpolate_steps(t, cross_raw)
+    # an encoder count spanning several samples (10 µm is 0.15 % of a 7 mm specimen): its sawtooth
+    # against the rising force would run the plastic strain backwards within each count
+    cross_raw, step = reread_if_stepped(t, cross_raw)
     travel = cross_raw - cross_raw[0]
     travel = travel * compression_sign(travel)
 

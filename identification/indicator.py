@@ -111,6 +111,28 @@ def interpolate_steps(time_s, reading) -> np.ndarray:
     return out
 
 
+STEPPED_FRACTION = 0.2  # a counted reading unchanged between more than this part of its samples is re-read between its counts
+
+
+def reread_if_stepped(time_s, reading) -> tuple[np.ndarray, float | None]:
+    """(reading, step): a counted reading — every change a whole number of its smallest step, and
+    unchanged between more than :data:`STEPPED_FRACTION` of the samples (a count spans several) —
+    interpolated between its counts on its finite samples (:func:`interpolate_steps`), with that
+    step; any other reading (a noisy analogue one, a count finer than the motion) as it is, with None."""
+    t, x = np.asarray(time_s, dtype=float), np.asarray(reading, dtype=float)
+    ok = np.flatnonzero(np.isfinite(t) & np.isfinite(x))
+    if ok.size < 3 or stepped_fraction(x[ok]) <= STEPPED_FRACTION:
+        return x, None
+    steps = np.abs(np.diff(x[ok]))
+    step = float(np.min(steps[steps > 0]))
+    counts = steps[steps > 0] / step
+    if np.mean(np.abs(counts - np.round(counts)) < 0.01) < 0.99:  # changes that are not whole counts: not an encoder
+        return x, None
+    out = x.copy()
+    out[ok] = interpolate_steps(t[ok], x[ok])
+    return out, step
+
+
 def fit_line_in_window(x, y, lo: float, hi: float, *, min_points: int = 5, unit: str = "N") -> LineFit:
     """Least-squares line through the points of the first rise of ``y`` with lo ≤ y ≤ hi.
 

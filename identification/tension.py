@@ -20,7 +20,7 @@ from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
 from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, HardeningFit, fit_hardening, three_point_fit
-from flowcurve.identification.indicator import FEW_SAMPLES, ModulusFit, auto_modulus, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
+from flowcurve.identification.indicator import FEW_SAMPLES, ModulusFit, auto_modulus, reread_if_stepped, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
 from flowcurve.identification.necking import METHODS as NECK_METHODS
 from flowcurve.identification.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
@@ -181,6 +181,9 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
     gaps = np.nonzero(~np.isfinite(cross[: iso6892.fracture_index(force) + 1]))[0]
     if gaps.size:
         raise RecordError(record.source, f"the crosshead channel has no value at sample {gaps[0] + 1} (of {gaps.size} before fracture); the strain cannot be followed through the gap", column="crosshead_mm")
+    step = None
+    if record.has("time_s"):  # a 10 µm count is 3e-4 of a 30 mm length: re-read between counts
+        cross, step = reread_if_stepped(record.column("time_s"), cross)
     disp = cross - cross[0]
     stiffness = options.get("frame_stiffness_N_per_um")
     if stiffness is None:
@@ -190,7 +193,8 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
     else:
         warnings.append("no frame stiffness (rig.frame_stiffness_N_per_um): the crosshead displacement still includes the frame; strains and E are not the specimen's")
     length = options.get("crosshead_length_mm") or record.positive("specimen.parallel_length_mm", default=l0)
-    return {"disp": disp, "length": float(length), "source": "crosshead", "stiffness": stiffness, "scalable": True, "warnings": warnings}
+    return {"disp": disp, "length": float(length), "source": "crosshead", "stiffness": stiffness, "scalable": True, "warnings": warnings,
+            "step_mm": step}
 
 
 @dataclass
@@ -640,6 +644,7 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
             "strain_source": inp.src["source"],
             "strain_length_mm": inp.length,
             "frame_stiffness_N_per_um": inp.src["stiffness"],
+            "crosshead_step_interpolated_mm": inp.src.get("step_mm"),  # a stepped reading re-read between its steps (None: as read)
             "toe_compensation_mm": line.toe_mm if toe else None,
             "scale_factor_Kl": line.scale_factor,
             "modulus": mod.source,

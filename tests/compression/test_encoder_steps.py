@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flowcurve.identification.compression import identify_compression
-from flowcurve.identification.indicator import interpolate_steps, stepped_fraction
+from flowcurve.identification.indicator import interpolate_steps, reread_if_stepped, stepped_fraction
 
 from .toe_records import make_toe_compression
 
@@ -51,3 +51,13 @@ def test_the_plastic_strain_of_a_10_um_record_rises_with_the_stress():
     fine = record.data.assign(crosshead_mm=record.data["crosshead_mm"] + np.arange(len(record.data)) * 1e-9)
     as_read = identify_compression(type(record)(meta=dict(record.meta), data=fine, source=record.source))
     assert as_read.result["indicator"]["crosshead_step_interpolated_mm"] is None
+
+
+def test_only_a_counted_reading_is_re_read():
+    t = np.arange(0.0, 50.0, 0.1)
+    analogue = 0.001 * t + np.random.default_rng(1).normal(0.0, 1e-4, t.size)  # noisy, never the same twice
+    assert reread_if_stepped(t, analogue)[1] is None
+    counted = np.round(0.001 * t / Q) * Q
+    counted[100] = np.nan  # a missing sample stays missing, the rest is re-read
+    out, step = reread_if_stepped(t, counted)
+    assert step == pytest.approx(Q) and np.isnan(out[100]) and np.nanmax(np.abs(out - 0.001 * t)[60:440]) < 0.02 * Q  # between the first and last crossings
