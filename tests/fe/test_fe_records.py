@@ -26,19 +26,22 @@ pytestmark = [pytest.mark.slow, pytest.mark.solver, pytest.mark.skipif(shutil.wh
 
 
 def test_table_points_regenerate_with_ccx(tmp_path, monkeypatch):
-    """Two of the shipped table's runs, run again (no cache), give the same numbers."""
+    """Three of the shipped table's runs, run again (no cache), give the same numbers."""
     from flowcurve.identification.fe.make_table import sample_run
     from flowcurve.identification.fe.table import PACKAGE_TABLE
 
     monkeypatch.setenv("FLOWCURVE_FE_CACHE", str(tmp_path))
     z = np.load(PACKAGE_TABLE)
-    # the last stopped with stick slope 1e7 at ε 0.41 and is in the table from its retry (1e6)
-    for mu, h0_d0, n, eps0 in ((0.2, 1.0, 0.4, 0.02), (0.05, 1.6, 0.2, 0.1), (0.3, 1.6, 0.4, 0.02)):
+    # the last stopped with stick slope 1e7 at ε 0.41 and is in the table from its retry (1e6). That run is
+    # not bit-reproducible: of 7 fresh runs 5 gave the table's numbers exactly and 2 differed by up to 5.1e-5 in
+    # the force factor at ε ≥ 0.7, while the side folds onto the platen (ccx itself: one thread, the same deck)
+    for (mu, h0_d0, n, eps0), rtol, atol in (((0.2, 1.0, 0.4, 0.02), 1e-6, 1e-7), ((0.05, 1.6, 0.2, 0.1), 1e-6, 1e-7),
+                                             ((0.3, 1.6, 0.4, 0.02), 1e-4, 1e-4)):
         i, j, k, m = (list(z[axis]).index(v) for axis, v in (("mu", mu), ("h0_d0", h0_d0), ("n", n), ("eps0", eps0)))
         run = sample_run((mu, h0_d0, n, eps0))
         assert not run["cached"] and run["completed"]
-        np.testing.assert_allclose(run["factor_raw"], z["force_factor_raw"][i, j, k, m], rtol=1e-6)
-        np.testing.assert_allclose(run["bulge"], z["bulge_dR_over_h"][i, j, k, m], rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(run["factor_raw"], z["force_factor_raw"][i, j, k, m], rtol=rtol)
+        np.testing.assert_allclose(run["bulge"], z["bulge_dR_over_h"][i, j, k, m], rtol=10 * rtol, atol=atol)
 
 
 LIMITS = {2: "steel 45 at μ 0.25, h0/d0 1: the barrel hardly grows with μ there (one 0.01 mm of dmax moves μ by 0.05): μ read 0.285 "
