@@ -431,9 +431,10 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         mod.source = how
         if auto is not None:
             mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
-        E = _chosen_modulus(mod, E_MPa, handbook_E if unresolved is None else None, given_window=not automatic)
-        if handbook_E is not None and (unresolved is not None or (E == mod.E_MPa and not _resolved(mod))):
-            unresolved = unresolved or replace(mod)
+        E = _chosen_modulus(mod, E_MPa, handbook_E, given_window=not automatic)
+        if unresolved is None and handbook_E is not None and E == mod.E_MPa and not _resolved(mod):
+            unresolved = replace(mod)
+        if unresolved is not None:
             E, mod.source = handbook_E, (f"handbook material.E_MPa (the elastic line is not resolved: E = {unresolved.E_MPa:.4g} ± "
                                          f"{unresolved.E_stderr_MPa:.2g} MPa from {unresolved.n_points} samples, {unresolved.source})")
         if E == mod.E_MPa and not _resolved(mod):
