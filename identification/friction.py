@@ -274,8 +274,8 @@ def _swift_of(eps_p, sigma, plastic: bool) -> tuple[float, float]:
 
 def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=None):
     """σ_f = p / factor(μ, h0/d0, n, ε0, ε) with the Swift (n, ε0) read from the corrected curve
-    σ_f(ε_p) itself (fixed point) → (σ_f, (n, ε0)). Without ``eps_p`` the total strain stands in,
-    from ε = 0.02 on."""
+    σ_f(ε_p) itself (fixed point) → (σ_f, (n, ε0)); below the table's first strain the factor is
+    read on ε_p (the table's start). Without ``eps_p`` the total strain stands in, from ε = 0.02 on."""
     strain = np.asarray(strain, dtype=float)
     pressure = np.asarray(pressure_MPa, dtype=float)
     plastic = eps_p is not None
@@ -285,7 +285,7 @@ def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=
     hardening = FE_DEFAULT_HARDENING
     for _ in range(FE_HARDENING_ITERATIONS):
         hardening = _swift_of(eps_fit, sigma, plastic)
-        sigma = pressure / table.force_factor_at(mu, h0_d0, hardening[0], lookup, eps0=hardening[1])
+        sigma = pressure / table.force_factor_at(mu, h0_d0, hardening[0], lookup, eps0=hardening[1], eps_p=eps_p)
     return sigma, hardening
 
 

@@ -1,6 +1,6 @@
 """Regenerate the FE upsetting table: CalculiX runs over μ, h0/d0 and the Swift hardening (n, ε0).
 
-    python -m flowcurve.identification.fe.make_table [--out FILE.npz] [--workers 2] [--scheduler ADDR]
+    python -m flowcurve.identification.fe.make_table [--out FILE.npz] [--workers 2] [--scheduler ADDR] [--start]
 
 Each run (:mod:`.upsetting`, d0 = 6 mm, compressed to ε = ln(h0/h) = ``EPS_END``) gives its
 whole history; the table samples it on a strain grid:
@@ -9,6 +9,10 @@ whole history; the table samples it on a strain grid:
   ε_p = ε − σ/E, divided by the same ratio of the μ = 0 run (the mesh's own deficit of
   0.3–0.6 %, CALCULIX.md, cancels; the μ = 0 row is exactly 1);
 * ``bulge`` ΔR/h = (d_max − d_n)/(2h) (3.29), d_n = d0·√(h0/h) (3.28);
+
+and, from short runs to ε 0.03 (:func:`sample_start_run`, ``--start`` alone adds them to an
+existing table), the start of the force factor on the plastic strain ε_p 0.0005–0.02 (the long
+runs' first output is at ε 0.015);
 
 for a Swift law σ = K·(ε0 + ε_p)^n over n × ε0: n alone (one ε0) does not carry the barrel of
 a law with a high yield (a JC steel with A ≫ B) or a saturating one — their Swift fits (n, ε0)
@@ -61,6 +65,12 @@ MESH = {"nr": 24, "layers": 2, "layer_fraction": 1.0 / 24.0, "platen_radius_fact
 # 0.02 % in force except while a side node folds over (up to 1.1 % near ε 0.8, the model's own 1–2 % sawtooth
 # shifted a little in time) and within 0.5 µm in dmax. The run that got farther is kept, its settings in the provenance.
 RETRY_SETTINGS = ({"stick_slope_MPa_per_mm": 1.0e6},)
+# the start of the curve: the long runs' first output is at ε 0.015, and a factor read between the
+# table's leading 1 (ε 0) and its value at ε 0.02 left the curve's first percent 0.5–1 % high. Short
+# runs to ε 0.03 with 1/60 increments sample it on the plastic strain ε_p, the axis along which it is
+# nearly the same for different yield/E (at ε_p 0.002 within 0.1 % for E 200 and 70 GPa)
+START_EPS_P = np.array([0.0005, 0.001, 0.002, 0.003, 0.005, 0.0075, 0.01, 0.015, 0.02])
+START_EPS_END, START_INCREMENTS = 0.03, 60
 
 
 def swift(eps_p, n, eps0=SWIFT_EPS0):
@@ -120,6 +130,50 @@ def sample_run(point: tuple, strain=STRAIN, eps_end: float = EPS_END, increments
             "wall_s": r.wall_s, "cached": r.cached, "increments": int(eps.size), "message": r.message, "settings": settings}
 
 
+def sample_start_run(point: tuple) -> dict:
+    """One short CalculiX run at (μ, h0/d0, n, ε0) to ε = :data:`START_EPS_END`, its raw force
+    factor sampled on the plastic strain grid :data:`START_EPS_P` (NaN where not reached)."""
+    mu, h0_d0, n, eps0 = point
+    m = grid_model(mu, h0_d0, n, eps0, eps_end=START_EPS_END, increments=START_INCREMENTS)
+    r = simulate_upsetting(m, require_complete=False, timeout_s=300.0)
+    flow = partial(swift, n=n, eps0=eps0)
+    eps_p = plastic_strain_at(r.strain, flow)
+    area = math.pi * m.d0_mm**2 * m.h0_mm / (4.0 * r.height_mm)  # (3.28)/(3.30)
+    factor = r.force_N / (flow(eps_p) * area)
+    plastic = eps_p > 0.0
+    reached = float(eps_p[-1]) if eps_p.size else 0.0
+    out = np.where(START_EPS_P <= reached + 1e-12, np.interp(START_EPS_P, eps_p[plastic], factor[plastic]) if plastic.sum() >= 2 else np.nan, np.nan)
+    return {"factor_raw": out, "reached_plastic_strain": reached, "completed": r.completed, "wall_s": r.wall_s,
+            "cached": r.cached, "message": r.message}
+
+
+def build_start(out: Path = DEFAULT_OUT, *, workers: int = 2, scheduler=None, command: str = "") -> dict:
+    """Add the start of the curve (:func:`sample_start_run` over the table's grid, normalised by
+    the μ = 0 runs) to the table at ``out``: arrays ``start_plastic_strain`` and
+    ``start_force_factor``, provenance under ``start`` in the .json."""
+    out = Path(out)
+    with np.load(out) as z:
+        arrays = {k: z[k] for k in z.files}
+    axes = [arrays[k] for k in ("mu", "h0_d0", "n", "eps0")]
+    points = [(float(a), float(b), float(c), float(d)) for a in axes[0] for b in axes[1] for c in axes[2] for d in axes[3]]
+    runs, wall = generator.run_timed(sample_start_run, points, workers=workers, scheduler=scheduler)
+    shape = tuple(a.size for a in axes) + (START_EPS_P.size,)
+    raw = np.array([r["factor_raw"] for r in runs]).reshape(shape)
+    arrays.update(start_plastic_strain=START_EPS_P, start_force_factor=raw / raw[0][None], start_force_factor_raw=raw)
+    np.savez_compressed(out, **arrays)
+    meta_path = out.with_suffix(".json")
+    meta = json.loads(meta_path.read_text()) if meta_path.exists() else {}
+    meta["start"] = {
+        "what": "force factor F/(sigma_f*A) (normalised by mu = 0) on the plastic strain eps_p = eps - sigma_f/E, from short runs",
+        "eps_end": START_EPS_END, "increments": START_INCREMENTS, "plastic_strain": START_EPS_P.tolist(),
+        **generator.provenance(command or f"python -m {MODULE} --start", runs, wall),
+        "incomplete_runs": [{"mu": p[0], "h0_d0": p[1], "n": p[2], "eps0": p[3], "reached_plastic_strain": r["reached_plastic_strain"],
+                             "message": r["message"]} for p, r in zip(points, runs) if not r["completed"]],
+    }
+    meta_path.write_text(json.dumps(meta, indent=2) + "\n")
+    return meta["start"]
+
+
 def build_table(mu=MU, h0_d0=H0_D0, n=N, eps0=EPS0, *, workers: int = 2, scheduler=None, out: Path = DEFAULT_OUT, command: str = "") -> dict:
     points = [(float(a), float(b), float(c), float(d)) for a in mu for b in h0_d0 for c in n for d in eps0]
     if 0.0 not in mu:
@@ -163,21 +217,30 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
         if factor.ndim == 5:  # the rig's response is over n only: the runs of the table's first Swift ε0
             factor, bulge = factor[:, :, :, 0], bulge[:, :, :, 0]
         pad = lambda a, v: np.concatenate([np.full(a.shape[:3] + (1,), v), a], axis=3)  # noqa: E731
-        bulge = bulge - bulge[0][None]  # μ = 0 has no barrel: its ΔR/h is the mesh's
-        arrays = {"mu": z["mu"], "h0_d0": z["h0_d0"], "n": z["n"], "strain": strain,
-                  "force_factor": pad(factor, 1.0), "bulge_dR_over_h": pad(bulge, 0.0)}
+        bulge = pad(bulge - bulge[0][None], 0.0)  # μ = 0 has no barrel: its ΔR/h is the mesh's
+        factor = pad(factor, 1.0)
+        if "start_force_factor" in z:  # the start's factor on ε_p (the rig reads the response at ε_p), before the first strain
+            early = z["start_plastic_strain"] < strain[1]
+            start = z["start_force_factor"][..., early]
+            start = start[:, :, :, 0] if start.ndim == 5 else start
+            at = z["start_plastic_strain"][early]
+            factor = np.concatenate([factor[..., :1], start, factor[..., 1:]], axis=3)
+            bulge = np.concatenate([bulge[..., :1], bulge[..., 1:2] * (at / strain[1]), bulge[..., 1:]], axis=3)  # linear from 0, as before
+            strain = np.concatenate([strain[:1], at, strain[1:]])
+        arrays = {"mu": z["mu"], "h0_d0": z["h0_d0"], "n": z["n"], "strain": strain, "force_factor": factor, "bulge_dR_over_h": bulge}
     source = json.loads(table.with_suffix(".json").read_text()) if table.with_suffix(".json").exists() else {}
     meta = {
         "what": "the virtual rig's compression response: force factor F/(sigma_f*A) (normalised by mu = 0) and "
                 "bulge dR/h (less the mu = 0 run's mesh offset) over mu x h0/d0 x Swift n x strain ln(h0/h)",
         "axes": {"mu": "Coulomb friction coefficient", "h0_d0": "initial height/diameter",
                  "n": "Swift hardening exponent (the table's first Swift eps0)",
-                 "strain": "ln(h0/h), leading 0 added (factor 1, bulge 0)"},
+                 "strain": "ln(h0/h), leading 0 added (factor 1, bulge 0); below the first long-run strain the short "
+                           "runs' plastic strain (the table's start)"},
         "nan": "strain points a CalculiX run did not reach",
         "copied_from": str(table.name), "copied_at": generator.now_utc(),
         "command": "python -m flowcurve.identification.fe.make_table --virtual-copy-only",
         "source": {k: source[k] for k in ("what", "model", "mesh", "increments", "d0_mm", "eps_end", "material",
-                                          "ccx_version", "date", "command", "runs", "retry_settings", "retried_runs", "incomplete_runs") if k in source},
+                                          "ccx_version", "date", "command", "runs", "retry_settings", "retried_runs", "incomplete_runs", "start") if k in source},
     }
     out.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(out, **arrays)
@@ -191,6 +254,8 @@ def main(argv=None) -> int:
     p.add_argument("--h0-d0", type=float, nargs="+", default=list(H0_D0))
     p.add_argument("--n", type=float, nargs="+", default=list(N))
     p.add_argument("--eps0", type=float, nargs="+", default=list(EPS0), help="Swift ε0 values")
+    p.add_argument("--start", action="store_true",
+                   help="only the short runs of the curve's start, added to the existing table at --out")
     p.add_argument("--virtual-copy-only", action="store_true",
                    help="no solver runs: write the virtual rig's copy (rig/virtual/data) of the existing table")
     a = p.parse_args(argv)
@@ -199,9 +264,10 @@ def main(argv=None) -> int:
         write_virtual_rig_copy(a.out)
         print(f"wrote {VIRTUAL_RIG_COPY} from {a.out}")
         return 0
-    meta = build_table(a.mu, a.h0_d0, a.n, a.eps0, workers=a.workers, scheduler=a.scheduler, out=a.out,
-                       command=generator.command_line(MODULE, argv))
-    print(generator.summary(meta))
+    command = generator.command_line(MODULE, argv)
+    if not a.start:
+        print(generator.summary(build_table(a.mu, a.h0_d0, a.n, a.eps0, workers=a.workers, scheduler=a.scheduler, out=a.out, command=command)))
+    print(generator.summary(build_start(a.out, workers=a.workers, scheduler=a.scheduler, command=command)))
     if Path(a.out).resolve() == DEFAULT_OUT:
         write_virtual_rig_copy(a.out)
     return 0

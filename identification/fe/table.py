@@ -4,7 +4,9 @@ The table holds, for μ × h0/d0 × Swift hardening (n, ε0) × strain ε = ln(h
 
 * the force factor F/(σ_f·A), A = π·d0²·h0/(4h), normalised by the μ = 0 run (CalculiX's own
   0.3–0.6 % mesh deficit cancels);
-* the bulge ΔR/h (3.29), less the μ = 0 run's (the same mesh offset, ~0.003 at ε = 0.9).
+* the bulge ΔR/h (3.29), less the μ = 0 run's (the same mesh offset, ~0.003 at ε = 0.9);
+* the start of the curve, below the first strain (0.02): the force factor of short runs on the
+  plastic strain ε_p (``start_plastic_strain``), read at the curve's own ε_p where it is given.
 
 Values between grid points: linear in ln(h0/d0), n, ln ε0 and ε, then monotone cubic (PCHIP)
 along μ. The hardening of a measured curve enters as its Swift fit σ ≈ K·(ε0 + ε_p)^n
@@ -44,6 +46,8 @@ class UpsettingTable:
     reached: np.ndarray  # (mu, h0_d0, n, eps0): the last strain each run converged to (beyond: continued)
     meta: dict = field(default_factory=dict)
     path: str = ""
+    start_plastic_strain: np.ndarray | None = None  # ε_p of the start (below the first strain); None in older tables
+    start_force_factor: np.ndarray | None = None  # (mu, h0_d0, n, eps0, start_plastic_strain)
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> "UpsettingTable":
@@ -88,16 +92,18 @@ class UpsettingTable:
             if weight:
                 yield tuple(i + step for step, (i, _) in zip(steps, brackets)), weight
 
-    def _mu_rows(self, values: np.ndarray, h0_d0: float, n: float, strain, eps0: float | None = None) -> np.ndarray:
-        """Linear interpolation in ln(h0/d0), n, ln ε0 and ε at every grid μ → (n_mu, n_strain)."""
+    def _mu_rows(self, values: np.ndarray, h0_d0: float, n: float, strain, eps0: float | None = None, axis: np.ndarray | None = None) -> np.ndarray:
+        """Linear interpolation in ln(h0/d0), n, ln ε0 and ε (or along ``axis``, held at its
+        ends) at every grid μ → (n_mu, n_strain)."""
         strain = np.atleast_1d(np.asarray(strain, dtype=float))
-        block = np.zeros((self.mu.size, self.strain.size))
+        grid = self.strain if axis is None else axis
+        block = np.zeros((self.mu.size, grid.size))
         for (i, j, k), weight in self._corners(h0_d0, n, eps0):
             block = block + weight * values[:, i, j, k]
-        s = np.clip(strain, self.strain[0], None)
+        s = np.clip(strain, grid[0], None)
         out = np.empty((self.mu.size, s.size))
         for m in range(self.mu.size):
-            out[m] = np.interp(s, self.strain, block[m], right=np.nan)
+            out[m] = np.interp(s, grid, block[m], right=np.nan if axis is None else block[m, -1])
         return out
 
     def _along_mu(self, rows: np.ndarray, mu: float) -> np.ndarray:
@@ -113,9 +119,20 @@ class UpsettingTable:
                 out[cols] = PchipInterpolator(self.mu[ok], rows[np.ix_(ok, cols)], axis=0)(mu)
         return out
 
-    def force_factor_at(self, mu: float, h0_d0: float, n: float, strain, eps0: float | None = None) -> np.ndarray:
-        """F/(σ_f·A) at the strains ``strain`` (NaN beyond the table)."""
-        return self._along_mu(self._mu_rows(self.force_factor, h0_d0, n, strain, eps0), mu)
+    def force_factor_at(self, mu: float, h0_d0: float, n: float, strain, eps0: float | None = None, eps_p=None) -> np.ndarray:
+        """F/(σ_f·A) at the strains ``strain`` (NaN beyond the table). With the plastic strains
+        ``eps_p`` of the same points, those below the table's first strain are read from its
+        start, on ε_p (held below its first ε_p)."""
+        out = self._along_mu(self._mu_rows(self.force_factor, h0_d0, n, strain, eps0), mu)
+        if eps_p is None or self.start_force_factor is None:
+            return out
+        strain = np.atleast_1d(np.asarray(strain, dtype=float))
+        early = strain < self.strain[1]
+        if early.any():
+            eps_p = np.broadcast_to(np.asarray(eps_p, dtype=float), strain.shape)[early]
+            rows = self._mu_rows(self.start_force_factor, h0_d0, n, eps_p, eps0, axis=self.start_plastic_strain)
+            out[early] = self._along_mu(rows, mu)
+        return out
 
     def bulge_at(self, mu: float, h0_d0: float, n: float, strain, eps0: float | None = None) -> np.ndarray:
         """ΔR/h at the strains ``strain``."""
@@ -173,8 +190,11 @@ def _load(path: str) -> UpsettingTable:
         bulge = pad(bulge - bulge[0][None], 0.0)  # less the μ = 0 mesh offset
         factor = pad(factor, 1.0)
         reached = np.where(np.isnan(factor), -np.inf, strain).max(axis=-1)
+        start = {}
+        if "start_force_factor" in z:
+            start = {"start_plastic_strain": z["start_plastic_strain"], "start_force_factor": continue_stopped_runs(z["start_force_factor"])}
         tab = UpsettingTable(mu=mu, h0_d0=z["h0_d0"], n=z["n"], eps0=eps0, strain=strain, force_factor=continue_stopped_runs(factor),
-                             bulge=continue_stopped_runs(bulge), reached=reached, path=str(p))
+                             bulge=continue_stopped_runs(bulge), reached=reached, path=str(p), **start)
     meta_path = p.with_suffix(".json")
     if meta_path.exists():
         object.__setattr__(tab, "meta", json.loads(meta_path.read_text()))

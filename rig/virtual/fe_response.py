@@ -18,7 +18,8 @@ and interpolates it with code of its own. What it does with the table's gaps and
 * **ε = 0.** The file's leading ε = 0 column (factor 1, bulge 0) is padding, not a run result:
   friction acts from the first yield (the slab solution gives 1 + c/3 there, not 1), so the
   force factor below the first computed strain is held at that strain's value; the bulge does
-  go to 0 at ε = 0.
+  go to 0 at ε = 0. Between 0 and the long runs' first strain (0.02) the copy holds the short
+  runs' factor on the plastic strain (the table's start, 0.0005–0.015), the axis the rig reads.
 * **Edges.** μ, h0/d0 and n are clamped to the table's range (a μ above the largest is near
   sticking already); beyond the last strain the force factor is held and the bulge continues
   with its slope over the last 0.1 of strain.

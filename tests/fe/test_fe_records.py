@@ -44,6 +44,20 @@ def test_table_points_regenerate_with_ccx(tmp_path, monkeypatch):
         np.testing.assert_allclose(run["bulge"], z["bulge_dR_over_h"][i, j, k, m], rtol=10 * rtol, atol=atol)
 
 
+def test_table_start_points_regenerate_with_ccx(tmp_path, monkeypatch):
+    """Two of the table's start runs (short, on ε_p), run again (no cache), give the same numbers."""
+    from flowcurve.identification.fe.make_table import sample_start_run
+    from flowcurve.identification.fe.table import PACKAGE_TABLE
+
+    monkeypatch.setenv("FLOWCURVE_FE_CACHE", str(tmp_path))
+    z = np.load(PACKAGE_TABLE)
+    for mu, h0_d0, n, eps0 in ((0.2, 1.0, 0.4, 0.02), (0.1, 2.5, 0.05, 0.1)):
+        i, j, k, m = (list(z[axis]).index(v) for axis, v in (("mu", mu), ("h0_d0", h0_d0), ("n", n), ("eps0", eps0)))
+        run = sample_start_run((mu, h0_d0, n, eps0))
+        assert not run["cached"] and run["completed"]
+        np.testing.assert_allclose(run["factor_raw"], z["start_force_factor_raw"][i, j, k, m], rtol=1e-6)
+
+
 LIMITS = {2: "steel 45 at μ 0.25, h0/d0 1: the barrel hardly grows with μ there (one 0.01 mm of dmax moves μ by 0.05): μ read 0.285 "
              "(friction_mu_range 0.248–0.35 holds the truth), flagged; the curve within 1.8 %",
           3: "Voce at μ 0.17, h0/d0 1.8: μ 0.189, but the curve 2.3 % off at ε_p 0.6 (2.6 % with the true μ): the table's runs at "

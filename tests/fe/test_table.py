@@ -43,6 +43,53 @@ def test_force_factor_matches_the_slab_solution_at_low_friction(table, mu, h0_d0
     assert np.all(np.abs(fe / slab - 1.0) < 0.01), fe / slab
 
 
+@pytest.mark.parametrize("mu", [0.05, 0.1])
+@pytest.mark.parametrize("h0_d0", [0.6, 1.0, 1.6])
+def test_the_start_of_the_curve_matches_the_slab_solution(table, mu, h0_d0):
+    """Below the long runs' first strain (0.02) the factor comes from the table's start, short
+    runs read on ε_p: within 1 % of the slab solution over ε_p 0.003–0.015, as the table is from
+    ε 0.1. Read between the padded 1 at ε 0 and the value at 0.02, as before the start existed,
+    it was 0.8–4.2 % under the slab factor at ε_p 0.003."""
+    eps_p = np.array([0.003, 0.005, 0.01, 0.015])
+    eps = eps_p + 0.002  # σ/E of a steel: a total strain below the first long-run strain
+    h = h0_d0 * np.exp(-eps)
+    r = 0.5 * np.sqrt(h0_d0 / h)
+    fe = table.force_factor_at(mu, h0_d0, 0.2, eps, eps_p=eps_p)
+    assert np.all(np.abs(fe / fr.slab_factor(mu, r, h) - 1.0) < 0.01), fe / fr.slab_factor(mu, r, h)
+
+
+def test_the_start_joins_the_long_runs(table):
+    """Two sets of runs, one point: the short runs' factor at the plastic strain the long runs'
+    first strain (ε 0.02) has agrees with the long runs' at every μ > 0 node within 0.25 %, and
+    at 95 % of them within 0.1 % (the long runs' value there is interpolated between their
+    increments at ε 0.015 and 0.03; the largest gaps are on squat, strongly hardening, high-μ
+    nodes, where the factor still rises fastest)."""
+    from flowcurve.identification.fe.make_table import E_MPa, plastic_strain_at, swift
+
+    gaps = []
+    for i in range(1, table.mu.size):
+        for j in range(table.h0_d0.size):
+            for k, n in enumerate(table.n):
+                for m, eps0 in enumerate(table.eps0):
+                    eps_p = float(plastic_strain_at(table.strain[1], lambda e: swift(e, n, eps0), E=E_MPa))
+                    start = np.interp(eps_p, table.start_plastic_strain, table.start_force_factor[i, j, k, m])
+                    gaps.append(abs(start / table.force_factor[i, j, k, m, 1] - 1.0))
+    assert len(gaps) == (table.mu.size - 1) * table.h0_d0.size * table.n.size * table.eps0.size
+    assert max(gaps) < 2.5e-3 and np.percentile(gaps, 95) < 1e-3, (max(gaps), np.percentile(gaps, 95))
+
+
+def test_the_start_is_read_on_the_plastic_strain_only_below_the_first_strain(table):
+    """Its nodes come back exactly; from ε 0.02 on the plastic strain changes nothing."""
+    i, j, k, m = 2, 2, 1, 1
+    args = (table.mu[i], table.h0_d0[j], table.n[k])
+    eps_p = table.start_plastic_strain[:-1]
+    np.testing.assert_allclose(table.force_factor_at(*args, eps_p + 0.001, eps0=table.eps0[m], eps_p=eps_p),
+                               table.start_force_factor[i, j, k, m, :-1], rtol=0, atol=1e-12)
+    late = np.array([0.02, 0.3])
+    assert np.array_equal(table.force_factor_at(*args, late, eps0=table.eps0[m], eps_p=late - 0.001),
+                          table.force_factor_at(*args, late, eps0=table.eps0[m]))
+
+
 def test_frictionless_row_and_monotone_friction(table):
     assert np.allclose(table.force_factor_at(0.0, 1.3, 0.3, [0.2, 0.5]), 1.0)
     b = [float(table.bulge_at(mu, 1.3, 0.3, [0.5])[0]) for mu in (0.0, 0.05, 0.1, 0.2, 0.3)]
