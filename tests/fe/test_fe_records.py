@@ -58,11 +58,13 @@ def test_table_start_points_regenerate_with_ccx(tmp_path, monkeypatch):
         np.testing.assert_allclose(run["factor_raw"], z["start_force_factor_raw"][i, j, k, m], rtol=1e-6)
 
 
-LIMITS = {2: "steel 45 at μ 0.25, h0/d0 1: the barrel hardly grows with μ there (one 0.01 mm of dmax moves μ by 0.05): μ read 0.285 "
-             "(friction_mu_range 0.248–0.35 holds the truth), flagged; the curve within 1.8 %",
-          3: "Voce at μ 0.17, h0/d0 1.8: μ 0.189, but the curve 2.3 % off at ε_p 0.6 (2.6 % with the true μ): the table's runs at "
-             "μ 0.15–0.2 on h0/d0 ≥ 1.6 stop at ε 0.27–0.9 with either stick slope and are continued (flagged)",
-          5: "seed law at μ 0.28, h0/d0 1.2: μ 0.320, the curve 2.5 % off (2.9 % with the true μ; the record's own fold-over "
+LIMITS = {2: "steel 45 at μ 0.25, h0/d0 1: the barrel hardly grows with μ there (one 0.01 mm of dmax moves μ by 0.05): μ read 0.288 "
+             "(friction_mu_range 0.25–0.35 holds the truth), flagged; the curve within 1.8 %",
+          3: "Voce at μ 0.17, h0/d0 1.8: μ 0.190, but the curve 2.3 % off at ε_p 0.6 (2.6 % with the true μ): the table's runs at "
+             "μ 0.15–0.2 on h0/d0 ≥ 1.6 stop at ε 0.27–0.9 with either stick slope (and with the record's 30-element mesh, or its "
+             "70 increments to ε 0.7) and are continued (flagged); measured against the record's own factor (its run over a μ = 0 "
+             "run of the same model) the table's is within 0.2 % to ε 0.3 and 0.9–2 % high from ε 0.4, where the continued runs begin",
+          5: "seed law at μ 0.28, h0/d0 1.2: μ 0.319, the curve 2.5 % off (2.9 % with the true μ; the record's own fold-over "
              "sawtooth is ±1 %): runs continued beyond ε 0.52 (flagged)"}
 CASES = [pytest.param(c, marks=pytest.mark.xfail(strict=True, reason=LIMITS[k])) if k in LIMITS else c for k, c in enumerate(VALIDATION_CASES)]
 
