@@ -30,16 +30,22 @@ def test_table_points_regenerate_with_ccx(tmp_path, monkeypatch):
     from flowcurve.identification.fe.make_table import sample_run
     from flowcurve.identification.fe.table import PACKAGE_TABLE
 
-    monkeypatch.setenv("FLOWCURVE_FE_CACHE", str(tmp_path))
     z = np.load(PACKAGE_TABLE)
     # the last stopped with stick slope 1e7 at ε 0.41 and is in the table from its retry (1e6). That run is
     # not bit-reproducible: of 7 fresh runs 5 gave the table's numbers exactly and 2 differed by up to 5.1e-5 in
-    # the force factor at ε ≥ 0.7, while the side folds onto the platen (ccx itself: one thread, the same deck)
+    # the force factor at ε ≥ 0.7, while the side folds onto the platen (ccx itself: one thread, the same deck).
+    # Once in CI (seventh stop) one of the three fresh runs stopped short, which the fresh runs of the
+    # retried point did not (12 of 12 finished): a stop is run once more from an empty cache, and the numbers of a finished run
+    # must still match
     for (mu, h0_d0, n, eps0), rtol, atol in (((0.2, 1.0, 0.4, 0.02), 1e-6, 1e-7), ((0.05, 1.6, 0.2, 0.1), 1e-6, 1e-7),
                                              ((0.3, 1.6, 0.4, 0.02), 1e-4, 1e-4)):
         i, j, k, m = (list(z[axis]).index(v) for axis, v in (("mu", mu), ("h0_d0", h0_d0), ("n", n), ("eps0", eps0)))
-        run = sample_run((mu, h0_d0, n, eps0))
-        assert not run["cached"] and run["completed"]
+        for attempt in range(2):
+            monkeypatch.setenv("FLOWCURVE_FE_CACHE", str(tmp_path / f"{mu}-{h0_d0}-{n}-{eps0}-{attempt}"))
+            run = sample_run((mu, h0_d0, n, eps0))
+            if run["completed"]:
+                break
+        assert not run["cached"] and run["completed"], ((mu, h0_d0, n, eps0), run["reached_strain"], run["settings"], run["message"])
         np.testing.assert_allclose(run["factor_raw"], z["force_factor_raw"][i, j, k, m], rtol=rtol)
         np.testing.assert_allclose(run["bulge"], z["bulge_dR_over_h"][i, j, k, m], rtol=10 * rtol, atol=atol)
 
@@ -54,7 +60,7 @@ def test_table_start_points_regenerate_with_ccx(tmp_path, monkeypatch):
     for mu, h0_d0, n, eps0 in ((0.2, 1.0, 0.4, 0.02), (0.1, 2.5, 0.05, 0.1)):
         i, j, k, m = (list(z[axis]).index(v) for axis, v in (("mu", mu), ("h0_d0", h0_d0), ("n", n), ("eps0", eps0)))
         run = sample_start_run((mu, h0_d0, n, eps0))
-        assert not run["cached"] and run["completed"]
+        assert not run["cached"] and run["completed"], ((mu, h0_d0, n, eps0), run["reached_plastic_strain"], run["message"])
         np.testing.assert_allclose(run["factor_raw"], z["start_force_factor_raw"][i, j, k, m], rtol=1e-6)
 
 
