@@ -131,7 +131,8 @@ def _meta_geometry(record: Record) -> dict:
     if dmax is None and smax is None:
         raise MissingValueError(src, ("post.dmax_mm", "post.smax_mm2"), what="the friction needs the bulge diameter dmax or the largest cross-section smax")
     dtop = record.positive("post.dtop_mm")
-    return {"d0": d0, "h0": h0, "hk": hk, "dmax": dmax, "smax": smax, "dtop": dtop}
+    dface = record.positive("post.dface_mm")  # the original end face (fe_table reads μ from it when given)
+    return {"d0": d0, "h0": h0, "hk": hk, "dmax": dmax, "smax": smax, "dtop": dtop, "dface": dface}
 
 
 def _check_crosshead_gaps(src: str, force: np.ndarray, cross: np.ndarray) -> None:
@@ -148,7 +149,8 @@ def _friction_all(geo: dict, chosen: str, warnings: list[str], curve=None) -> tu
     results: dict[str, fr.FrictionResult | str] = {}
     for method in fr.FRICTION_METHODS:
         try:
-            results[method] = fr.identify_friction(method, geo["d0"], geo["h0"], geo["hk"], d_max_mm=geo["dmax"], s_max_mm2=geo["smax"], d_top_mm=geo["dtop"], curve=curve)
+            results[method] = fr.identify_friction(method, geo["d0"], geo["h0"], geo["hk"], d_max_mm=geo["dmax"], s_max_mm2=geo["smax"], d_top_mm=geo["dtop"], curve=curve,
+                                                     d_face_mm=geo.get("dface"))
         except IdentificationError as exc:
             if method == chosen:
                 raise
@@ -411,12 +413,16 @@ def _fe_table_warnings(chosen: fr.FrictionResult) -> list[str]:
         out.append(f"FE table: μ and the correction beyond ε {continued:.2f} rest on runs that stopped there (the side folding onto the "
                    "platen) and were continued along the next lower μ: an estimate (--method inverse-fe runs the record itself)")
     sensitivity = chosen.extra.get("sensitivity", {})
-    dmu = sensitivity.get("mu_per_dmax_resolution")
+    by_face = "mu_per_dface_resolution" in sensitivity
+    dmu = sensitivity.get("mu_per_dface_resolution" if by_face else "mu_per_dmax_resolution")
+    told_by = "the end face (a dface" if by_face else "the bulge (a dmax"
     if sensitivity and dmu is None:
-        out.append(f"FE table: the bulge does not grow with μ near {chosen.mu:.3f} (the faces stick): take μ as a lower bound")
+        out.append(f"FE table: the bulge does not grow with μ near {chosen.mu:.3f} (the faces stick): take μ as a lower bound, or measure "
+                   "the original end face's diameter (post.dface_mm), which still shrinks with μ there")
     elif dmu is not None and dmu > MU_RESOLUTION_WARN:
-        out.append(f"FE table: μ {chosen.mu:.3f} is poorly told by the bulge (a dmax reading off by {fr.DIAMETER_RESOLUTION_MM} mm moves it by "
-                   f"{dmu:.2g}; the faces nearly stick): take μ as a lower bound")
+        out.append(f"FE table: μ {chosen.mu:.3f} is poorly told by {told_by} reading off by {fr.DIAMETER_RESOLUTION_MM} mm moves it by "
+                   f"{dmu:.2g}; the faces nearly stick): take μ as a lower bound"
+                   + ("" if by_face else ", or measure the original end face's diameter (post.dface_mm), which still shrinks with μ there"))
     return out
 
 

@@ -245,11 +245,13 @@ def friction_ebrahimi_najafizadeh(d0_mm: float, h0_mm: float, hk_mm: float, *, d
     return FrictionResult("ebrahimi_najafizadeh", mu, inputs, extra)
 
 
-def identify_friction(method: str, d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, d_top_mm: float | None = None, curve=None) -> FrictionResult:
+def identify_friction(method: str, d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, d_top_mm: float | None = None, curve=None,
+                      d_face_mm: float | None = None) -> FrictionResult:
     """Friction by the named method (one of :data:`FRICTION_METHODS`); ``curve`` = (strain,
-    mean pressure MPa[, plastic strain]) of the record, used by ``fe_table`` for the hardening."""
+    mean pressure MPa[, plastic strain]) of the record, used by ``fe_table`` for the hardening;
+    ``d_face_mm`` (the original end face) is read by ``fe_table`` in place of the bulge."""
     if method == "fe_table":
-        return friction_fe_table(d0_mm, h0_mm, hk_mm, d_max_mm=d_max_mm, s_max_mm2=s_max_mm2, curve=curve)
+        return friction_fe_table(d0_mm, h0_mm, hk_mm, d_max_mm=d_max_mm, s_max_mm2=s_max_mm2, curve=curve, d_face_mm=d_face_mm)
     if method == "bulge_regression":
         return friction_bulge_regression(d0_mm, h0_mm, hk_mm, d_max_mm=d_max_mm, s_max_mm2=s_max_mm2)
     if method == "ebrahimi_najafizadeh":
@@ -304,13 +306,19 @@ def _fe_mu_lowering_n(table, dR_over_h: float, h0_d0: float, hardening: tuple[fl
     return table.mu_from_bulge(dR_over_h, h0_d0, candidates[-1], eps, eps0=eps0, clamp=True), (candidates[-1], eps0), True
 
 
-def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, curve=None) -> FrictionResult:
+def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, curve=None,
+                      d_face_mm: float | None = None) -> FrictionResult:
     """Coulomb μ from the bulge by the CalculiX table: ΔR/h (3.29) at ε = ln(h0/hk) (3.31) inverted.
 
     The table's hardening, the Swift (n, ε0) of the curve, comes from ``curve`` = (strain, mean
     pressure[, plastic strain]) corrected with the table's own force factor (a fixed point,
     starting from the uncorrected curve); without a curve n = 0.3, ε0 = 0.002. A bulge too large
     for that n is read at the table's lower n.
+
+    With ``d_face_mm``, the diameter of the original end face (its machined area, not the side
+    folded onto the platen), μ comes from the face instead: near sticking it still shrinks with
+    μ where the barrel has stopped growing (at h0/d0 1, μ 0.2 → 0.3: 0.56 mm against 0.04 mm of
+    dmax). The bulge's μ stays in the result (``mu_from_bulge``).
     """
     from flowcurve.identification.fe.table import UpsettingTable
 
@@ -327,19 +335,42 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
     h0_d0 = h0_mm / d0_mm
     eps_p = curve[2] if curve is not None and len(curve) > 2 else None
     hardening = _swift_of(curve[0] if eps_p is None else eps_p, curve[1], eps_p is not None) if curve is not None else FE_DEFAULT_HARDENING
-    mu, hardening, clamped = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)
+    face = None
+    if d_face_mm is not None:
+        if not (math.isfinite(d_face_mm) and 0 < d_face_mm <= d_n + DIAMETER_RESOLUTION_MM):
+            raise IdentificationError(f"FE table: the end face's diameter {d_face_mm:g} mm must be positive and not above the volume-constant diameter {d_n:.4g} mm")
+        face = min(d_face_mm / d_n, 1.0)
+
+    def read_mu(hardening):
+        if face is None:
+            return _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)
+        mu = table.mu_from_face(face, h0_d0, hardening[0], eps_k, eps0=hardening[1], clamp=True)
+        return mu, hardening, mu >= float(table.mu[-1]) - 1e-12
+
+    mu, hardening, clamped = read_mu(hardening)
     if curve is not None:
         for _ in range(FE_HARDENING_ITERATIONS):
             _, hardening = _fe_flow_stress(table, curve[0], curve[1], mu, h0_d0, eps_p)
-            mu, hardening, clamped = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)
+            mu, hardening, clamped = read_mu(hardening)
     n, eps0 = hardening
-    inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
+    inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used, **({"dface_mm": float(d_face_mm)} if face is not None else {})}
     extra = {"d_n_mm": d_n, "delta_R_mm": delta_r, "eps_p": eps_k, "hardening_n": n, "hardening_eps0": eps0,
-             "hardening_from": "record curve (Swift fit)" if curve is not None else "default",
-             "beyond_table_sticking": clamped, "sensitivity": _fe_mu_sensitivity(table, mu, h0_d0, hardening, eps_k, hk_mm),
-             "mu_range": _fe_mu_range(table, delta_r, hk_mm, h0_d0, hardening, eps_k),
-             "mu_range_basis": f"the bulge with dmax ± {DIAMETER_RESOLUTION_MM} mm",
+             "hardening_from": "record curve (Swift fit)" if curve is not None else "default", "beyond_table_sticking": clamped,
              "table": Path(table.path).name, "table_ccx_version": table.meta.get("ccx_version"), "table_date": table.meta.get("date")}
+    if face is None:
+        extra.update(mu_basis="bulge (dmax)", sensitivity=_fe_mu_sensitivity(table, mu, h0_d0, hardening, eps_k, hk_mm),
+                     mu_range=_fe_mu_range(table, delta_r, hk_mm, h0_d0, hardening, eps_k),
+                     mu_range_basis=f"the bulge with dmax ± {DIAMETER_RESOLUTION_MM} mm")
+    else:
+        half = DIAMETER_RESOLUTION_MM / d_n
+        lo, hi = (table.mu_from_face(min(face + sign * half, 1.0), h0_d0, n, eps_k, eps0=eps0, clamp=True) for sign in (1.0, -1.0))
+        try:
+            bulge_mu = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)[0]
+        except IdentificationError:
+            bulge_mu = None
+        extra.update(mu_basis="original end face (dface)", mu_from_bulge=bulge_mu, d_face_over_d_n=face,
+                     sensitivity={"mu_per_dface_resolution": max(hi - lo, 0.0) / 2.0}, mu_range=[lo, hi],
+                     mu_range_basis=f"the end face with dface ± {DIAMETER_RESOLUTION_MM} mm")
     outside = _outside_table(table, h0_d0, n, eps0)
     if outside:
         extra["outside_table"] = outside

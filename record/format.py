@@ -85,6 +85,7 @@ KNOWN_KEYS = (
     "post.hk_mm",
     "post.dmax_mm",
     "post.smax_mm2",
+    "post.dface_mm",
 )
 
 # metadata numbers beyond these magnitudes (native units: mm, N, s, MPa, N/µm, mm/s) are

@@ -38,6 +38,7 @@ TABLE_COLUMNS: dict[str, tuple[str, str | None]] = {
     "hk": ("post.hk_mm", "length"),
     "dmax": ("post.dmax_mm", "length"),
     "smax": ("post.smax_mm2", "area"),
+    "dface": ("post.dface_mm", "length"),
     "speed": ("crosshead_speed_mm_per_s", "speed"),
     "temperature": ("nominal_temperature_C", "temperature"),
     "test": ("test", None),

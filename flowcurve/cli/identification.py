@@ -29,6 +29,7 @@ META_OPTIONS = {
     "hk": "post.hk_mm",
     "dmax": "post.dmax_mm",
     "smax": "post.smax_mm2",
+    "dface": "post.dface_mm",
     "neck_radius": "post.neck_radius_mm",
     "frame_stiffness": "rig.frame_stiffness_N_per_um",
     "speed": "crosshead_speed_mm_per_s",
@@ -85,7 +86,7 @@ def register(subparsers) -> None:
                         "the file's units row is used. Repeat per column. Units are converted, never guessed.")
     p.add_argument("--specimens", metavar="TABLE.csv",
                    help="per-specimen dimensions for several records: a table with a 'file' column naming each record and "
-                        "columns d0, l0, h0, le, lu, dk, du, hk, dmax, smax, neck_radius, speed, temperature, test, material, "
+                        "columns d0, l0, h0, le, lu, dk, du, hk, dmax, smax, dface, neck_radius, speed, temperature, test, material, "
                         "each with its unit in the name ('d0 (mm)', 'd0_mm') or in a units row")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG plots (faster for long series)")
     g = p.add_argument_group("specimen and test (override the record's header)")
@@ -98,6 +99,8 @@ def register(subparsers) -> None:
     g.add_argument("--hk", type=float, metavar="MM", help="specimen height after the test (compression), mm")
     g.add_argument("--dmax", type=float, metavar="MM", help="largest (bulge) diameter after the test (compression), mm")
     g.add_argument("--smax", type=float, metavar="MM2", help="largest cross-section area after the test (compression), mm², instead of --dmax")
+    g.add_argument("--dface", type=float, metavar="MM", help="diameter of the original end face after the test (compression; its machined "
+                   "area, not the side folded onto the platen), mm: the FE table reads μ from it, which near sticking the bulge cannot tell")
     g.add_argument("--speed", type=float, metavar="MM_PER_S", help="crosshead speed, mm/s (needed when a CSV has no time column)")
     g.add_argument("--frame-stiffness", type=float, metavar="N_PER_UM", help="stiffness of the machine frame and grips, N/µm, subtracted from the crosshead travel (rig figure: 136)")
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="any other metadata key, e.g. --set nominal_temperature_C=600")
@@ -249,7 +252,8 @@ def summary_lines(result: dict) -> list[str]:
         methods = result.get("friction") or {}
         extra = "   ".join(f"{k} {_fmt(v, '.3f')}" for k, v in methods.items() if isinstance(v, (int, float)))
         span = result.get("friction_mu_range")
-        span = f" [{_fmt(span[0], '.3f')}–{_fmt(span[1], '.3f')} for dmax ± 0.01 mm]" if span else ""
+        basis = (result.get("friction_details") or {}).get(result.get("friction_method"), {}).get("mu_range_basis", "dmax ± 0.01 mm")
+        span = f" [{_fmt(span[0], '.3f')}–{_fmt(span[1], '.3f')} for {basis}]" if span else ""
         lines.append(f"  friction μ {_fmt(result.get('friction_mu'), '.3f')}{span}" + (f"   ({extra})" if extra else ""))
     inv = result.get("inverse_fe")
     if inv and result.get("test") == "tension":

@@ -9,6 +9,8 @@ whole history; the table samples it on a strain grid:
   ε_p = ε − σ/E, divided by the same ratio of the μ = 0 run (the mesh's own deficit of
   0.3–0.6 %, CALCULIX.md, cancels; the μ = 0 row is exactly 1);
 * ``bulge`` ΔR/h = (d_max − d_n)/(2h) (3.29), d_n = d0·√(h0/h) (3.28);
+* ``face_d_over_dn`` the diameter of the original end face (the top rim node) over d_n: near
+  sticking it still moves with μ where the bulge has stopped;
 
 and, from short runs to ε 0.03 (:func:`sample_start_run`, ``--start`` alone adds them to an
 existing table), the start of the force factor on the plastic strain ε_p 0.0005–0.02 (the long
@@ -126,7 +128,8 @@ def sample_run(point: tuple, strain=STRAIN, eps_end: float = EPS_END, increments
     e = np.concatenate([[0.0], eps])
     out_f = np.where(inside, np.interp(strain, e, np.concatenate([[1.0], factor])), np.nan)
     out_b = np.where(inside, np.interp(strain, e, np.concatenate([[0.0], bulge])), np.nan)
-    return {"factor_raw": out_f, "bulge": out_b, "reached_strain": reached, "completed": r.completed,
+    out_face = np.where(inside, np.interp(strain, e, np.concatenate([[1.0], r.dtop_mm / d_n])), np.nan)  # the original end face
+    return {"factor_raw": out_f, "bulge": out_b, "face": out_face, "reached_strain": reached, "completed": r.completed,
             "wall_s": r.wall_s, "cached": r.cached, "increments": int(eps.size), "message": r.message, "settings": settings}
 
 
@@ -183,6 +186,7 @@ def build_table(mu=MU, h0_d0=H0_D0, n=N, eps0=EPS0, *, workers: int = 2, schedul
     shape = (len(mu), len(h0_d0), len(n), len(eps0), STRAIN.size)
     raw = np.array([r["factor_raw"] for r in runs]).reshape(shape)
     bulge = np.array([r["bulge"] for r in runs]).reshape(shape)
+    face = np.array([r["face"] for r in runs]).reshape(shape)
     factor = raw / raw[list(mu).index(0.0)][None]
     meta = {
         "what": "CalculiX upsetting table: force factor F/(sigma_f*A) (normalised by mu = 0) and bulge dR/h",
@@ -200,7 +204,7 @@ def build_table(mu=MU, h0_d0=H0_D0, n=N, eps0=EPS0, *, workers: int = 2, schedul
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(out, mu=np.array(mu, float), h0_d0=np.array(h0_d0, float), n=np.array(n, float), eps0=np.array(eps0, float),
-                        strain=STRAIN, force_factor=factor, force_factor_raw=raw, bulge_dR_over_h=bulge,
+                        strain=STRAIN, force_factor=factor, force_factor_raw=raw, bulge_dR_over_h=bulge, face_d_over_dn=face,
                         run_wall_s=np.array([r["wall_s"] for r in runs]).reshape(shape[:4]),
                         reached_strain=np.array([r["reached_strain"] for r in runs]).reshape(shape[:4]))
     out.with_suffix(".json").write_text(json.dumps(meta, indent=2) + "\n")

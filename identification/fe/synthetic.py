@@ -25,8 +25,9 @@ from flowcurve.identification.fe.tension import TensionResult
 
 def upsetting_record(run: UpsettingResult, *, stiffness_N_per_um: float = 136.0, toe_mm: float = 0.03, toe_force_N: float = 300.0,
                      noise_N: float = 30.0, step_mm: float = 0.01, speed_mm_per_s: float = 0.01, rate_hz: float = 5.0,
-                     seed: int = 1, material: str = "FE record", specimen_id: str = "fe-1") -> Record:
-    """A compression :class:`Record` of ``run`` (compression negative, as the rig gives it)."""
+                     seed: int = 1, material: str = "FE record", specimen_id: str = "fe-1", end_face: bool = False) -> Record:
+    """A compression :class:`Record` of ``run`` (compression negative, as the rig gives it);
+    with ``end_face`` the post-test measurements include the original end face's diameter."""
     m = run.model
     rng = np.random.default_rng(seed)
     stroke = np.concatenate([[0.0], run.stroke_mm])
@@ -64,6 +65,8 @@ def upsetting_record(run: UpsettingResult, *, stiffness_N_per_um: float = 136.0,
         "post.hk_mm": f"{hk:.4f}", "post.dmax_mm": f"{dmax:.4f}",
         "fe.mu": repr(m.mu),  # the truth the record was made with
     }
+    if end_face:  # the top rim node's diameter, sprung back like dmax
+        meta["post.dface_mm"] = f"{run.dtop_mm[-1] * (1.0 - m.nu * sigma_end / m.E_MPa):.4f}"
     data = pd.DataFrame({"time_s": time, "force_N": -F_meas, "crosshead_mm": -cross})
     return Record(meta=meta, data=data, source=specimen_id)
 

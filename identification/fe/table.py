@@ -5,6 +5,8 @@ The table holds, for μ × h0/d0 × Swift hardening (n, ε0) × strain ε = ln(h
 * the force factor F/(σ_f·A), A = π·d0²·h0/(4h), normalised by the μ = 0 run (CalculiX's own
   0.3–0.6 % mesh deficit cancels);
 * the bulge ΔR/h (3.29), less the μ = 0 run's (the same mesh offset, ~0.003 at ε = 0.9);
+* the original end face's diameter over d_n (the same offset removed): near sticking it still
+  moves with μ where the bulge has stopped;
 * the start of the curve, below the first strain (0.02): the force factor of short runs on the
   plastic strain ε_p (``start_plastic_strain``), read at the curve's own ε_p where it is given.
 
@@ -46,6 +48,7 @@ class UpsettingTable:
     reached: np.ndarray  # (mu, h0_d0, n, eps0): the last strain each run converged to (beyond: continued)
     meta: dict = field(default_factory=dict)
     path: str = ""
+    face: np.ndarray | None = None  # original end face d/d_n (mu, h0_d0, n, eps0, strain); None in older tables
     start_plastic_strain: np.ndarray | None = None  # ε_p of the start (below the first strain); None in older tables
     start_force_factor: np.ndarray | None = None  # (mu, h0_d0, n, eps0, start_plastic_strain)
 
@@ -138,32 +141,50 @@ class UpsettingTable:
         """ΔR/h at the strains ``strain``."""
         return self._along_mu(self._mu_rows(self.bulge, h0_d0, n, strain, eps0), mu)
 
+    def face_at(self, mu: float, h0_d0: float, n: float, strain, eps0: float | None = None) -> np.ndarray:
+        """The original end face's diameter over d_n at the strains ``strain``."""
+        if self.face is None:
+            raise IdentificationError(f"FE table {self.path}: no end-face array (regenerate it)")
+        return self._along_mu(self._mu_rows(self.face, h0_d0, n, strain, eps0), mu)
+
     def mu_from_bulge(self, dR_over_h: float, h0_d0: float, n: float, strain: float, *, eps0: float | None = None, clamp: bool = False) -> float:
         """The μ whose bulge at (h0/d0, n, ε) is ``dR_over_h`` (inverse of :meth:`bulge_at`);
         a bulge beyond the table's largest is an error, or with ``clamp`` its largest μ."""
+        return self._mu_from(self.bulge, "bulge ΔR/h", dR_over_h, h0_d0, n, strain, eps0, clamp, grows=True)
+
+    def mu_from_face(self, d_over_dn: float, h0_d0: float, n: float, strain: float, *, eps0: float | None = None, clamp: bool = False) -> float:
+        """The μ whose original end face at (h0/d0, n, ε) is ``d_over_dn`` of d_n (inverse of
+        :meth:`face_at`; the face shrinks with μ); one smaller than the table's smallest is an
+        error, or with ``clamp`` its largest μ."""
+        if self.face is None:
+            raise IdentificationError(f"FE table {self.path}: no end-face array (regenerate it)")
+        return self._mu_from(self.face, "end face d/d_n", d_over_dn, h0_d0, n, strain, eps0, clamp, grows=False)
+
+    def _mu_from(self, values: np.ndarray, what: str, target: float, h0_d0: float, n: float, strain: float, eps0, clamp: bool, grows: bool) -> float:
         from scipy.interpolate import PchipInterpolator
 
-        if not (math.isfinite(dR_over_h) and math.isfinite(strain) and strain > 0):
-            raise IdentificationError(f"FE table: need a finite bulge and a strain > 0 (ΔR/h = {dR_over_h}, ε = {strain})")
+        if not (math.isfinite(target) and math.isfinite(strain) and strain > 0):
+            raise IdentificationError(f"FE table: need a finite {what} and a strain > 0 ({what} = {target}, ε = {strain})")
         if strain > self.strain[-1] + 1e-9:
             raise IdentificationError(f"FE table: the final strain ε = {strain:.3g} is beyond the table's {self.strain[-1]:g}")
-        col = self._mu_rows(self.bulge, h0_d0, n, [strain], eps0)[:, 0]
+        col = self._mu_rows(values, h0_d0, n, [strain], eps0)[:, 0]
         ok = np.isfinite(col)
         if ok.sum() < 2:
             raise IdentificationError(f"FE table: no converged runs at h0/d0 = {h0_d0:.3g}, ε = {strain:.3g}")
+        sign = 1.0 if grows else -1.0  # read a shrinking quantity as its negative: one code path
         mus = np.linspace(0.0, self.mu[ok][-1], 701)
-        b = PchipInterpolator(self.mu[ok], col[ok])(mus)
-        b = np.maximum.accumulate(b)  # the bulge grows with μ; flat once the face sticks
-        if dR_over_h <= b[0]:
+        b = np.maximum.accumulate(sign * PchipInterpolator(self.mu[ok], col[ok])(mus))  # monotone in μ; flat once the face sticks
+        x = sign * target
+        if x <= b[0]:
             return 0.0
-        if dR_over_h > b[-1] and clamp:
+        if x > b[-1] and clamp:
             return float(mus[-1])
-        if dR_over_h > b[-1]:
-            raise IdentificationError(f"FE table: bulge ΔR/h = {dR_over_h:.4g} is beyond the largest the table gives at ε = {strain:.3g}, h0/d0 = {h0_d0:.3g} ({b[-1]:.4g} at μ = {mus[-1]:g})")
-        k = int(np.argmax(b >= dR_over_h))
+        if x > b[-1]:
+            raise IdentificationError(f"FE table: {what} = {target:.4g} is beyond the {'largest' if grows else 'smallest'} the table gives at ε = {strain:.3g}, h0/d0 = {h0_d0:.3g} ({sign * b[-1]:.4g} at μ = {mus[-1]:g})")
+        k = int(np.argmax(b >= x))
         if b[k] == b[k - 1]:
             return float(mus[k])
-        return float(mus[k - 1] + (dR_over_h - b[k - 1]) / (b[k] - b[k - 1]) * (mus[k] - mus[k - 1]))
+        return float(mus[k - 1] + (x - b[k - 1]) / (b[k] - b[k - 1]) * (mus[k] - mus[k - 1]))
 
 
 @lru_cache(maxsize=4)
@@ -190,9 +211,12 @@ def _load(path: str) -> UpsettingTable:
         bulge = pad(bulge - bulge[0][None], 0.0)  # less the μ = 0 mesh offset
         factor = pad(factor, 1.0)
         reached = np.where(np.isnan(factor), -np.inf, strain).max(axis=-1)
-        start = {}
+        start = {}  # the optional arrays of later tables
+        if "face_d_over_dn" in z:
+            face = pad(z["face_d_over_dn"], 1.0)
+            start["face"] = continue_stopped_runs(face - (face[0][None] - 1.0))  # less the μ = 0 run's mesh offset
         if "start_force_factor" in z:
-            start = {"start_plastic_strain": z["start_plastic_strain"], "start_force_factor": continue_stopped_runs(z["start_force_factor"])}
+            start.update(start_plastic_strain=z["start_plastic_strain"], start_force_factor=continue_stopped_runs(z["start_force_factor"]))
         tab = UpsettingTable(mu=mu, h0_d0=z["h0_d0"], n=z["n"], eps0=eps0, strain=strain, force_factor=continue_stopped_runs(factor),
                              bulge=continue_stopped_runs(bulge), reached=reached, path=str(p), **start)
     meta_path = p.with_suffix(".json")

@@ -73,3 +73,21 @@ def test_identify_command_passes_the_handbook_modulus(tmp_path, make_record):
     curve = pd.read_csv(out / "C4" / "true_curve.csv")
     elastic_strain = truth["sigma_end"] / truth["E"]
     assert curve["true_plastic_strain"].max() == pytest.approx(truth["eps_p_end"], abs=elastic_strain / 2)
+
+
+def test_identify_command_reads_mu_from_the_end_face_when_given(tmp_path, make_record, capsys):
+    """--dface (post.dface_mm) routes the FE table's μ to the original end face; the bulge's μ
+    stays beside it, and the screen names the basis of the μ range."""
+    import math
+
+    record, _ = make_record(seed=13)
+    path = write_record(tmp_path / "C5.csv", record)
+    d0, h0, hk = (float(record.meta[k]) for k in ("specimen.d0_mm", "specimen.h0_mm", "post.hk_mm"))
+    dface = round(0.93 * d0 * math.sqrt(h0 / hk), 3)
+    code = main(["identify", str(path), "--out", str(tmp_path / "out"), "--no-plots", "--dface", str(dface)])
+    out = capsys.readouterr().out
+    assert code == 0
+    details = json.loads((tmp_path / "out" / "C5" / "result.json").read_text())["friction_details"]["fe_table"]
+    assert details["mu_basis"] == "original end face (dface)" and details["inputs"]["dface_mm"] == dface
+    assert 0.0 < details["mu"] < 0.35 and details["mu_from_bulge"] is not None
+    assert "for the end face with dface ± 0.01 mm" in out

@@ -200,3 +200,37 @@ def test_a_stopped_run_is_continued_along_the_next_lower_mu_and_said():
     assert tab.continued_at(0.05, 1.0, 0.3, 0.4) is None
     with pytest.raises(IdentificationError, match="μ = 0 runs must be complete"):
         continue_stopped_runs(np.stack([mu1, mu0]).reshape(2, 1, 1, 1, 5))
+
+
+def test_the_end_face_inverts_and_shrinks_with_friction(table):
+    """The original end face (d/d_n of the top rim node): 1 without friction, smaller with every
+    μ step on complete runs, and read back to its μ off the grid."""
+    eps = [0.5]
+    faces = [float(table.face_at(mu, 1.3, 0.3, eps, 0.02)[0]) for mu in (0.0, 0.05, 0.1, 0.2, 0.3)]
+    assert faces[0] == pytest.approx(1.0, abs=1e-12) and np.all(np.diff(faces) < 0), faces
+    for mu in (0.07, 0.22, 0.28):
+        face = float(table.face_at(mu, 1.3, 0.3, eps, 0.02)[0])
+        assert table.mu_from_face(face, 1.3, 0.3, 0.5, eps0=0.02) == pytest.approx(mu, abs=2e-3)
+
+
+def test_near_sticking_the_end_face_tells_mu_where_the_bulge_cannot(table):
+    """A squat specimen near sticking (h0/d0 1, μ 0.3): one dmax resolution (0.01 mm) moves the
+    bulge's μ by more than 0.02 (a lower bound, warned); the same resolution on the end face's
+    diameter moves μ by less than 0.005, the warning goes and the bulge's μ is kept beside it."""
+    from flowcurve.identification.compression import _fe_table_warnings
+
+    d0, h0, mu, n, eps = 6.0, 6.0, 0.3, 0.2, 0.6
+    hk = h0 * math.exp(-eps)
+    d_n = d0 * math.sqrt(h0 / hk)
+    dmax = d_n + 2 * hk * float(table.bulge_at(mu, 1.0, n, [eps])[0])
+    dface = d_n * float(table.face_at(mu, 1.0, n, [eps])[0])
+    by_bulge = fr.identify_friction("fe_table", d0, h0, hk, d_max_mm=dmax)
+    by_face = fr.identify_friction("fe_table", d0, h0, hk, d_max_mm=dmax, d_face_mm=dface)
+    assert by_bulge.extra["mu_basis"] == "bulge (dmax)" and any("lower bound" in w for w in _fe_table_warnings(by_bulge))
+    assert by_face.extra["mu_basis"] == "original end face (dface)" and by_face.inputs["dface_mm"] == dface
+    assert by_face.extra["sensitivity"]["mu_per_dface_resolution"] < 0.005 and not any("lower bound" in w for w in _fe_table_warnings(by_face))
+    lo, hi = by_face.extra["mu_range"]
+    assert lo <= by_face.mu <= hi and hi - lo < 0.01
+    assert by_face.extra["mu_from_bulge"] == pytest.approx(by_bulge.mu)
+    with pytest.raises(IdentificationError, match="end face's diameter"):
+        fr.identify_friction("fe_table", d0, h0, hk, d_max_mm=dmax, d_face_mm=d_n + 0.5)
