@@ -38,7 +38,7 @@ FORCE_LIMIT_OF_CAPACITY = 0.98  # default force limit: this fraction of the fram
 TEST_GEOMETRY = {"tension": ("d0_mm", "l0_mm"), "compression": ("d0_mm", "h0_mm")}
 POST_KEYS = {
     "tension": ("post.lu_mm", "post.dk_mm", "post.du_mm", "post.neck_radius_mm"),
-    "compression": ("post.hk_mm", "post.dmax_mm"),
+    "compression": ("post.hk_mm", "post.dmax_mm", "post.dface_mm"),  # dface optional: μ near sticking (docs/methods.md §4a.2)
 }
 POST_PROMPTS = {
     "post.lu_mm": "gauge length after fracture lu [mm]",
@@ -47,6 +47,7 @@ POST_PROMPTS = {
     "post.neck_radius_mm": "neck profile radius [mm]",
     "post.hk_mm": "final height hk [mm]",
     "post.dmax_mm": "maximum barrel diameter dmax [mm]",
+    "post.dface_mm": "original end-face diameter dface, its machined area without the folded side [mm] (optional)",
 }
 
 
