@@ -400,6 +400,7 @@ def _modulus_and_yield(nominal: _Nominal, line: ModulusFit | None, E_MPa: float 
 
 
 MU_RESOLUTION_WARN = 0.02  # μ moved by more than this by one dmax resolution step: say so
+MEASURE_THE_FACE = ", or measure the original end face's diameter (post.dface_mm), which still shrinks with μ there"
 
 
 def _fe_table_warnings(chosen: fr.FrictionResult) -> list[str]:
@@ -417,12 +418,11 @@ def _fe_table_warnings(chosen: fr.FrictionResult) -> list[str]:
     dmu = sensitivity.get("mu_per_dface_resolution" if by_face else "mu_per_dmax_resolution")
     told_by = "the end face (a dface" if by_face else "the bulge (a dmax"
     if sensitivity and dmu is None:
-        out.append(f"FE table: the bulge does not grow with μ near {chosen.mu:.3f} (the faces stick): take μ as a lower bound, or measure "
-                   "the original end face's diameter (post.dface_mm), which still shrinks with μ there")
+        out.append(f"FE table: the bulge does not grow with μ near {chosen.mu:.3f} (the faces stick): take μ as a lower bound{MEASURE_THE_FACE}")
     elif dmu is not None and dmu > MU_RESOLUTION_WARN:
         out.append(f"FE table: μ {chosen.mu:.3f} is poorly told by {told_by} reading off by {fr.DIAMETER_RESOLUTION_MM} mm moves it by "
                    f"{dmu:.2g}; the faces nearly stick): take μ as a lower bound"
-                   + ("" if by_face else ", or measure the original end face's diameter (post.dface_mm), which still shrinks with μ there"))
+                   + ("" if by_face else MEASURE_THE_FACE))
     return out
 
 

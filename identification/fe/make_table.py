@@ -111,16 +111,28 @@ def plastic_strain_at(eps, flow, E=E_MPa, iterations: int = 8):
     return eps_p
 
 
+def raw_force_factor(m, r, n: float, eps0: float) -> tuple[np.ndarray, np.ndarray]:
+    """(ε_p, F/(σ_f(ε_p)·A)) of a run of the Swift law (n, ε0), A = π·d0²·h0/(4h)."""
+    flow = partial(swift, n=n, eps0=eps0)
+    eps_p = plastic_strain_at(r.strain, flow)
+    area = math.pi * m.d0_mm**2 * m.h0_mm / (4.0 * r.height_mm)  # (3.28)/(3.30)
+    return eps_p, r.force_N / (flow(eps_p) * area)
+
+
+def grid_points(*axes) -> list[tuple[float, ...]]:
+    """Every (μ, h0/d0, n, ε0) of the grid, μ slowest (the table's array order)."""
+    from itertools import product
+
+    return [tuple(map(float, p)) for p in product(*axes)]
+
+
 def sample_run(point: tuple, strain=STRAIN, eps_end: float = EPS_END, increments: int = INCREMENTS) -> dict:
     """One CalculiX run at (μ, h0/d0, n[, ε0]) sampled on the strain grid: raw force factor and
     bulge (NaN where not reached)."""
     mu, h0_d0, n, eps0 = (tuple(point) + (SWIFT_EPS0,))[:4]
     m, r, settings = run_with_retries(mu, h0_d0, n, eps0, eps_end=eps_end, increments=increments)
-    flow = partial(swift, n=n, eps0=eps0)
     eps = r.strain
-    sigma = flow(plastic_strain_at(eps, flow))
-    area = math.pi * m.d0_mm**2 * m.h0_mm / (4.0 * r.height_mm)  # (3.28)/(3.30)
-    factor = r.force_N / (sigma * area)
+    _, factor = raw_force_factor(m, r, n, eps0)
     d_n = m.d0_mm * np.sqrt(m.h0_mm / r.height_mm)
     bulge = (r.dmax_mm - d_n) / (2.0 * r.height_mm)  # (3.29) ΔR/h
     reached = float(eps[-1]) if eps.size else 0.0
@@ -139,10 +151,7 @@ def sample_start_run(point: tuple) -> dict:
     mu, h0_d0, n, eps0 = point
     m = grid_model(mu, h0_d0, n, eps0, eps_end=START_EPS_END, increments=START_INCREMENTS)
     r = simulate_upsetting(m, require_complete=False, timeout_s=300.0)
-    flow = partial(swift, n=n, eps0=eps0)
-    eps_p = plastic_strain_at(r.strain, flow)
-    area = math.pi * m.d0_mm**2 * m.h0_mm / (4.0 * r.height_mm)  # (3.28)/(3.30)
-    factor = r.force_N / (flow(eps_p) * area)
+    eps_p, factor = raw_force_factor(m, r, n, eps0)
     plastic = eps_p > 0.0
     reached = float(eps_p[-1]) if eps_p.size else 0.0
     out = np.where(START_EPS_P <= reached + 1e-12, np.interp(START_EPS_P, eps_p[plastic], factor[plastic]) if plastic.sum() >= 2 else np.nan, np.nan)
@@ -158,7 +167,7 @@ def build_start(out: Path = DEFAULT_OUT, *, workers: int = 2, scheduler=None, co
     with np.load(out) as z:
         arrays = {k: z[k] for k in z.files}
     axes = [arrays[k] for k in ("mu", "h0_d0", "n", "eps0")]
-    points = [(float(a), float(b), float(c), float(d)) for a in axes[0] for b in axes[1] for c in axes[2] for d in axes[3]]
+    points = grid_points(*axes)
     runs, wall = generator.run_timed(sample_start_run, points, workers=workers, scheduler=scheduler)
     shape = tuple(a.size for a in axes) + (START_EPS_P.size,)
     raw = np.array([r["factor_raw"] for r in runs]).reshape(shape)
@@ -178,7 +187,7 @@ def build_start(out: Path = DEFAULT_OUT, *, workers: int = 2, scheduler=None, co
 
 
 def build_table(mu=MU, h0_d0=H0_D0, n=N, eps0=EPS0, *, workers: int = 2, scheduler=None, out: Path = DEFAULT_OUT, command: str = "") -> dict:
-    points = [(float(a), float(b), float(c), float(d)) for a in mu for b in h0_d0 for c in n for d in eps0]
+    points = grid_points(mu, h0_d0, n, eps0)
     if 0.0 not in mu:
         raise ValueError("the grid needs μ = 0 (the force factor is normalised by it)")
 
@@ -225,8 +234,7 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
         factor = pad(factor, 1.0)
         if "start_force_factor" in z:  # the start's factor on ε_p (the rig reads the response at ε_p), before the first strain
             early = z["start_plastic_strain"] < strain[1]
-            start = z["start_force_factor"][..., early]
-            start = start[:, :, :, 0] if start.ndim == 5 else start
+            start = z["start_force_factor"][:, :, :, 0][..., early]  # the start exists only in tables with an ε0 axis
             at = z["start_plastic_strain"][early]
             factor = np.concatenate([factor[..., :1], start, factor[..., 1:]], axis=3)
             bulge = np.concatenate([bulge[..., :1], bulge[..., 1:2] * (at / strain[1]), bulge[..., 1:]], axis=3)  # linear from 0, as before
