@@ -274,10 +274,16 @@ def _swift_of(eps_p, sigma, plastic: bool) -> tuple[float, float]:
     return swift_hardening(eps_p, sigma, start=SWIFT_FIT_FROM if plastic else FE_FIT_FROM_TOTAL_STRAIN)
 
 
-def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=None):
+def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=None, *, local: bool = True):
     """σ_f = p / factor(μ, h0/d0, n, ε0, ε) with the Swift (n, ε0) read from the corrected curve
     σ_f(ε_p) itself (fixed point) → (σ_f, (n, ε0)); below the table's first strain the factor is
-    read on ε_p (the table's start). Without ``eps_p`` the total strain stands in, from ε = 0.02 on."""
+    read on ε_p (the table's start). Without ``eps_p`` the total strain stands in, from ε = 0.02 on.
+    With ``local`` each point's factor is read at the curve's Swift exponent near its strain
+    (:func:`~flowcurve.identification.fe.table.local_swift_exponent`, the whole curve's ε0): the
+    factor follows the hardening at the strain, which for a saturating law falls well below the
+    whole curve's n. The returned (n, ε0) is the whole curve's."""
+    from flowcurve.identification.fe.table import SWIFT_FIT_FROM, local_swift_exponent
+
     strain = np.asarray(strain, dtype=float)
     pressure = np.asarray(pressure_MPa, dtype=float)
     plastic = eps_p is not None
@@ -287,7 +293,11 @@ def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=
     hardening = FE_DEFAULT_HARDENING
     for _ in range(FE_HARDENING_ITERATIONS):
         hardening = _swift_of(eps_fit, sigma, plastic)
-        sigma = pressure / table.force_factor_at(mu, h0_d0, hardening[0], lookup, eps0=hardening[1], eps_p=eps_p)
+        n = hardening[0]
+        if local:
+            start = SWIFT_FIT_FROM if plastic else FE_FIT_FROM_TOTAL_STRAIN
+            n = local_swift_exponent(eps_fit, sigma, hardening[1], eps_fit, start=start, fallback=hardening[0])
+        sigma = pressure / table.force_factor_at(mu, h0_d0, n, lookup, eps0=hardening[1], eps_p=eps_p)
     return sigma, hardening
 
 

@@ -10,10 +10,12 @@ The table holds, for μ × h0/d0 × Swift hardening (n, ε0) × strain ε = ln(h
 * the start of the curve, below the first strain (0.02): the force factor of short runs on the
   plastic strain ε_p (``start_plastic_strain``), read at the curve's own ε_p where it is given.
 
-Values between grid points: linear in ln(h0/d0), n, ln ε0 and ε, then monotone cubic (PCHIP)
-along μ. The hardening of a measured curve enters as its Swift fit σ ≈ K·(ε0 + ε_p)^n
+Values between grid points: linear in n, ln ε0 and ε and in d0/h0 (the force factor and the
+end face: the slab solution's friction term grows with d/h) or ln(h0/d0) (the bulge), then
+monotone cubic (PCHIP) along μ; a plane of the table held out is predicted best that way. The hardening of a measured curve enters as its Swift fit σ ≈ K·(ε0 + ε_p)^n
 (:func:`swift_hardening`): n alone (a table of one ε0) does not carry the barrel of a law with a
-high yield or a saturating one; the pair does (docs/methods.md §4a). A table without an ε0 axis
+high yield or a saturating one; the pair does (docs/methods.md §4a). The force factor at a
+strain is read at the curve's Swift exponent near that strain (:func:`local_swift_exponent`). A table without an ε0 axis
 (the first, n only) still loads, as one ε0.
 """
 
@@ -34,6 +36,11 @@ log = logging.getLogger(__name__)
 
 PACKAGE_TABLE = Path(__file__).resolve().parent / "data" / "upsetting_table.npz"
 SWIFT_FIT_FROM = 0.002  # the Swift fit (n, ε0) from the 0.2 % offset on
+# the force factor at a strain follows the hardening near that strain, not the whole curve's: on a CalculiX record of a
+# saturating (Voce) law the factor at ε 0.6 is that of Swift n 0.09 (its local exponent) where the whole-curve fit has
+# 0.2 — 1.9 % apart (docs/methods.md §4a.2). The local exponent: least squares over ε_p ± this half-width
+LOCAL_HALF_WIDTH = 0.2
+N_STEP = 0.002  # a per-point exponent is read to this step (the factor moves ~0.15 per unit n: < 0.02 %)
 
 
 @dataclass(frozen=True)
@@ -82,26 +89,29 @@ class UpsettingTable:
         i = int(np.clip(np.searchsorted(axis, x) - 1, 0, axis.size - 2))
         return i, (x - axis[i]) / (axis[i + 1] - axis[i])
 
-    def _corners(self, h0_d0: float, n: float, eps0: float | None):
+    def _corners(self, h0_d0: float, n: float, eps0: float | None, slender: bool = False):
         """The grid points (i, j, k) of (h0/d0, n, ε0) a reading weighs and their weights
-        (linear in ln h0/d0, n and ln ε0); points of zero weight left out."""
+        (linear in n, ln ε0 and in ln h0/d0, or with ``slender`` in d0/h0); points of zero
+        weight left out."""
         from itertools import product
 
         h0_d0, n = self._check(h0_d0, n)
-        brackets = (self._bracket(np.log(self.h0_d0), math.log(h0_d0)), self._bracket(self.n, n),
+        proportion = self._bracket(-1.0 / self.h0_d0, -1.0 / h0_d0) if slender else self._bracket(np.log(self.h0_d0), math.log(h0_d0))
+        brackets = (proportion, self._bracket(self.n, n),
                     self._bracket(np.log(self.eps0), math.log(self.clamp_eps0(eps0))))
         for steps in product((0, 1), repeat=3):
             weight = math.prod(w if step else 1.0 - w for step, (_, w) in zip(steps, brackets))
             if weight:
                 yield tuple(i + step for step, (i, _) in zip(steps, brackets)), weight
 
-    def _mu_rows(self, values: np.ndarray, h0_d0: float, n: float, strain, eps0: float | None = None, axis: np.ndarray | None = None) -> np.ndarray:
-        """Linear interpolation in ln(h0/d0), n, ln ε0 and ε (or along ``axis``, held at its
-        ends) at every grid μ → (n_mu, n_strain)."""
+    def _mu_rows(self, values: np.ndarray, h0_d0: float, n: float, strain, eps0: float | None = None, axis: np.ndarray | None = None,
+                 slender: bool = False) -> np.ndarray:
+        """Linear interpolation in ln(h0/d0) (``slender``: d0/h0), n, ln ε0 and ε (or along
+        ``axis``, held at its ends) at every grid μ → (n_mu, n_strain)."""
         strain = np.atleast_1d(np.asarray(strain, dtype=float))
         grid = self.strain if axis is None else axis
         block = np.zeros((self.mu.size, grid.size))
-        for (i, j, k), weight in self._corners(h0_d0, n, eps0):
+        for (i, j, k), weight in self._corners(h0_d0, n, eps0, slender):
             block = block + weight * values[:, i, j, k]
         s = np.clip(strain, grid[0], None)
         out = np.empty((self.mu.size, s.size))
@@ -122,19 +132,33 @@ class UpsettingTable:
                 out[cols] = PchipInterpolator(self.mu[ok], rows[np.ix_(ok, cols)], axis=0)(mu)
         return out
 
-    def force_factor_at(self, mu: float, h0_d0: float, n: float, strain, eps0: float | None = None, eps_p=None) -> np.ndarray:
+    def force_factor_at(self, mu: float, h0_d0: float, n, strain, eps0: float | None = None, eps_p=None) -> np.ndarray:
         """F/(σ_f·A) at the strains ``strain`` (NaN beyond the table). With the plastic strains
         ``eps_p`` of the same points, those below the table's first strain are read from its
-        start, on ε_p (held below its first ε_p)."""
-        out = self._along_mu(self._mu_rows(self.force_factor, h0_d0, n, strain, eps0), mu)
+        start, on ε_p (held below its first ε_p). ``n`` is one Swift exponent, or one per point
+        (the curve's local exponent, :func:`local_swift_exponent`), read to :data:`N_STEP`."""
+        if np.ndim(n):
+            return self._factor_per_point_n(mu, h0_d0, n, strain, eps0, eps_p)
+        out = self._along_mu(self._mu_rows(self.force_factor, h0_d0, n, strain, eps0, slender=True), mu)
         if eps_p is None or self.start_force_factor is None:
             return out
         strain = np.atleast_1d(np.asarray(strain, dtype=float))
         early = strain < self.strain[1]
         if early.any():
             eps_p = np.broadcast_to(np.asarray(eps_p, dtype=float), strain.shape)[early]
-            rows = self._mu_rows(self.start_force_factor, h0_d0, n, eps_p, eps0, axis=self.start_plastic_strain)
+            rows = self._mu_rows(self.start_force_factor, h0_d0, n, eps_p, eps0, axis=self.start_plastic_strain, slender=True)
             out[early] = self._along_mu(rows, mu)
+        return out
+
+    def _factor_per_point_n(self, mu: float, h0_d0: float, n, strain, eps0, eps_p) -> np.ndarray:
+        """:meth:`force_factor_at` with an exponent per point: one reading per distinct n (to N_STEP)."""
+        strain = np.atleast_1d(np.asarray(strain, dtype=float))
+        keys = np.round(np.broadcast_to(np.asarray(n, dtype=float), strain.shape) / N_STEP) * N_STEP
+        eps_p = None if eps_p is None else np.broadcast_to(np.asarray(eps_p, dtype=float), strain.shape)
+        out = np.empty(strain.shape)
+        for value in np.unique(keys):
+            sel = keys == value
+            out[sel] = self.force_factor_at(mu, h0_d0, float(value), strain[sel], eps0, None if eps_p is None else eps_p[sel])
         return out
 
     def bulge_at(self, mu: float, h0_d0: float, n: float, strain, eps0: float | None = None) -> np.ndarray:
@@ -145,7 +169,7 @@ class UpsettingTable:
         """The original end face's diameter over d_n at the strains ``strain``."""
         if self.face is None:
             raise IdentificationError(f"FE table {self.path}: no end-face array (regenerate it)")
-        return self._along_mu(self._mu_rows(self.face, h0_d0, n, strain, eps0), mu)
+        return self._along_mu(self._mu_rows(self.face, h0_d0, n, strain, eps0, slender=True), mu)
 
     def mu_from_bulge(self, dR_over_h: float, h0_d0: float, n: float, strain: float, *, eps0: float | None = None, clamp: bool = False) -> float:
         """The μ whose bulge at (h0/d0, n, ε) is ``dR_over_h`` (inverse of :meth:`bulge_at`);
@@ -158,16 +182,17 @@ class UpsettingTable:
         error, or with ``clamp`` its largest μ."""
         if self.face is None:
             raise IdentificationError(f"FE table {self.path}: no end-face array (regenerate it)")
-        return self._mu_from(self.face, "end face d/d_n", d_over_dn, h0_d0, n, strain, eps0, clamp, grows=False)
+        return self._mu_from(self.face, "end face d/d_n", d_over_dn, h0_d0, n, strain, eps0, clamp, grows=False, slender=True)
 
-    def _mu_from(self, values: np.ndarray, what: str, target: float, h0_d0: float, n: float, strain: float, eps0, clamp: bool, grows: bool) -> float:
+    def _mu_from(self, values: np.ndarray, what: str, target: float, h0_d0: float, n: float, strain: float, eps0, clamp: bool, grows: bool,
+                 slender: bool = False) -> float:
         from scipy.interpolate import PchipInterpolator
 
         if not (math.isfinite(target) and math.isfinite(strain) and strain > 0):
             raise IdentificationError(f"FE table: need a finite {what} and a strain > 0 ({what} = {target}, ε = {strain})")
         if strain > self.strain[-1] + 1e-9:
             raise IdentificationError(f"FE table: the final strain ε = {strain:.3g} is beyond the table's {self.strain[-1]:g}")
-        col = self._mu_rows(values, h0_d0, n, [strain], eps0)[:, 0]
+        col = self._mu_rows(values, h0_d0, n, [strain], eps0, slender=slender)[:, 0]
         ok = np.isfinite(col)
         if ok.sum() < 2:
             raise IdentificationError(f"FE table: no converged runs at h0/d0 = {h0_d0:.3g}, ε = {strain:.3g}")
@@ -266,6 +291,32 @@ def swift_hardening(eps_p, stress_MPa, start: float = SWIFT_FIT_FROM) -> tuple[f
     best = minimize_scalar(lambda x: fit(x)[1], bounds=(math.log(1e-5), math.log(2.0)), method="bounded", options={"xatol": 1e-3})
     coef, _ = fit(best.x)
     return float(coef[1]), float(math.exp(best.x))
+
+
+def local_swift_exponent(eps_p, stress_MPa, eps0: float, at, *, half_width: float | None = None, start: float = SWIFT_FIT_FROM,
+                         fallback: float | None = None) -> np.ndarray:
+    """The Swift exponent of the curve near each strain of ``at``: the slope of ln σ against
+    ln(ε0 + ε_p) by least squares over ε_p within ± ``half_width`` (cut at the curve's ends;
+    held beyond them). For a Swift curve of this ε0 it is n everywhere; for a saturating law it
+    falls with the strain. Too short a curve: ``fallback`` everywhere."""
+    # n(ε) = d ln σ / d ln(ε0 + ε_p), windowed least squares on a uniform ε_p grid (sums by cumulative sums)
+    e = np.asarray(eps_p, dtype=float)
+    s = np.asarray(stress_MPa, dtype=float)
+    at = np.asarray(at, dtype=float)
+    ok = np.isfinite(e) & np.isfinite(s) & (e >= start) & (s > 0)
+    if ok.sum() < 5 or e[ok].max() < 10 * start:
+        return np.full(at.shape, np.nan if fallback is None else fallback)
+    order = np.argsort(e[ok], kind="stable")
+    e, s = e[ok][order], s[ok][order]
+    grid = np.linspace(e[0], e[-1], 400)
+    x, y = np.log(eps0 + grid), np.log(np.interp(grid, e, s))
+    half_width = LOCAL_HALF_WIDTH if half_width is None else half_width
+    sums = [np.concatenate([[0.0], np.cumsum(v)]) for v in (np.ones_like(x), x, y, x * x, x * y)]
+    lo = np.searchsorted(grid, grid - half_width, side="left")
+    hi = np.searchsorted(grid, grid + half_width, side="right")
+    c, sx, sy, sxx, sxy = (v[hi] - v[lo] for v in sums)
+    slope = (c * sxy - sx * sy) / np.maximum(c * sxx - sx * sx, 1e-300)
+    return np.interp(at, grid, slope)
 
 
 def specimen_proportion(strain, radius_mm, height_mm) -> float:

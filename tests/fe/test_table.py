@@ -234,3 +234,67 @@ def test_near_sticking_the_end_face_tells_mu_where_the_bulge_cannot(table):
     assert by_face.extra["mu_from_bulge"] == pytest.approx(by_bulge.mu)
     with pytest.raises(IdentificationError, match="end face's diameter"):
         fr.identify_friction("fe_table", d0, h0, hk, d_max_mm=dmax, d_face_mm=d_n + 0.5)
+
+
+# -- the hardening near the strain, and the proportion axis (docs/methods.md §4a.3) -----------------------
+
+
+@pytest.mark.parametrize("n, eps0", [(0.1, 0.002), (0.45, 0.03)])
+def test_local_exponent_of_a_swift_curve_is_its_n(n, eps0):
+    from flowcurve.identification.fe.table import local_swift_exponent
+
+    e = np.linspace(0.0, 0.8, 900)
+    local = local_swift_exponent(e, 700.0 * (eps0 + e) ** n, eps0, [0.002, 0.05, 0.3, 0.79])
+    np.testing.assert_allclose(local, n, atol=1e-4)  # the curve is read on a grid, linearly
+
+
+def test_local_exponent_of_a_saturating_law_follows_its_slope():
+    """Voce σ = s0 + q(1 − e^(−bε)): d ln σ / d ln(ε0 + ε) = q·b·e^(−bε)·(ε0 + ε)/σ, falling from
+    0.28 at ε 0.1 to 0.09 at 0.6; the windowed fit (± 0.2) within 0.02 of it where the window
+    is whole (measured 0.009–0.017), and far below the whole curve's Swift n (0.21) at ε 0.6."""
+    from flowcurve.identification.fe.table import local_swift_exponent
+
+    s0, q, b = 300.0, 400.0, 5.0
+    e = np.linspace(0.0, 0.9, 1200)
+    sigma = s0 + q * (1.0 - np.exp(-b * e))
+    n_all, eps0 = swift_hardening(e, sigma)
+    at = np.array([0.3, 0.4, 0.5, 0.6])
+    exact = q * b * np.exp(-b * at) * (eps0 + at) / (s0 + q * (1.0 - np.exp(-b * at)))
+    local = local_swift_exponent(e, sigma, eps0, at)
+    np.testing.assert_allclose(local, exact, atol=0.02)
+    assert local[-1] < 0.6 * n_all
+
+
+def test_a_per_point_exponent_reads_as_the_same_exponent_alone(table):
+    eps = np.linspace(0.05, 0.7, 30)
+    n = np.where(eps < 0.4, 0.25, 0.12)
+    per_point = table.force_factor_at(0.17, 1.8, n, eps, eps0=0.005)
+    alone = np.where(eps < 0.4, table.force_factor_at(0.17, 1.8, 0.25, eps, eps0=0.005), table.force_factor_at(0.17, 1.8, 0.12, eps, eps0=0.005))
+    np.testing.assert_allclose(per_point, alone, rtol=1e-12)
+
+
+def _held_out_plane(values, h0_d0, axis):
+    """Errors of the h0/d0 plane 1 predicted from planes 0 and 2 (and 1.6 from 1.0 and 2.5),
+    linear along ``axis`` (a function of h0/d0), where the runs reached."""
+    out = []
+    for i0, i1, i2 in ((0, 1, 2), (1, 2, 3)):
+        w = (axis(h0_d0[i1]) - axis(h0_d0[i0])) / (axis(h0_d0[i2]) - axis(h0_d0[i0]))
+        err = (1.0 - w) * values[1:, i0] + w * values[1:, i2] - values[1:, i1]
+        out.append(err[np.isfinite(err)])
+    return np.concatenate(out)
+
+
+def test_the_force_factor_interpolates_in_d0_over_h0_and_the_bulge_in_ln_h0_over_d0():
+    """Between the table's proportions, which axis is nearer linear, checked on the table's own
+    runs with a plane held out: the force factor (slab solution: friction's part ∝ d/h) and
+    the end face in d0/h0 (RMS error 0.97 % against 1.37 % in ln h0/d0 for the factor), the
+    bulge in ln h0/d0 (0.0033 against 0.0043 in ΔR/h)."""
+    with np.load(UpsettingTable.load().path) as z:
+        h0_d0 = z["h0_d0"]
+        factor, face = z["force_factor"], z["face_d_over_dn"]
+        bulge = z["bulge_dR_over_h"] - z["bulge_dR_over_h"][0][None]
+    rms = lambda a: float(np.sqrt(np.mean(a**2)))  # noqa: E731
+    slender, log = (lambda x: -1.0 / x), np.log
+    assert rms(_held_out_plane(factor, h0_d0, slender)) < 0.8 * rms(_held_out_plane(factor, h0_d0, log))
+    assert rms(_held_out_plane(face, h0_d0, slender)) < 0.9 * rms(_held_out_plane(face, h0_d0, log))
+    assert rms(_held_out_plane(bulge, h0_d0, log)) < rms(_held_out_plane(bulge, h0_d0, slender))
