@@ -163,8 +163,8 @@ def _offset_onset_MPa(strain0, stress0, line: ModulusFit, offset: float = YIELD_
     """Stress where the strain first exceeds the elastic line by ``offset`` (the line's zero at
     zero stress, i.e. toe-compensated): the yield estimate that sets the next window."""
     beyond = strain0 - (stress0 - line.intercept_MPa) / line.E_MPa
-    past = np.nonzero(beyond >= offset)[0]
-    return float(stress0[past[0]]) if past.size else None
+    past = np.nonzero((beyond >= offset) & (stress0 >= line.window_MPa[0]))[0]  # on the line's rise, not in the toe's noise
+    return float(stress0[past[0]]) if past.size and stress0[past[0]] > 0 else None
 
 
 def elastic_line(t, specimen_mm, force_N, *, area0_mm2: float, h0_mm: float, window_MPa=None, window=None,

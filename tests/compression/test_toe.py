@@ -53,3 +53,21 @@ def test_the_modulus_window_option_reaches_compression():
     assert r["Rp02_MPa"] == pytest.approx(truth["rp02_pressure_MPa"], rel=0.03)
     r = identify_compression(record, modulus_window=(0.1, 0.6)).result
     assert r["modulus"]["source"].startswith("given window 0.1–0.6 × the yield stress")
+
+
+def test_the_next_window_is_set_on_the_lines_rise_not_in_the_noise_before_it():
+    """The yield estimate that sets the next modulus window is the first sample past the 0.2 %
+    offset *on the line's rise*: a line whose zero force lies at negative strain (here −0.3 %)
+    puts the samples at zero force past the offset too, and one of them with a noise of
+    −0.007 MPa once made the window's reference negative ("no elastic line" on the demo's own
+    compression record)."""
+    from flowcurve.identification.compression import _offset_onset_MPa
+    from flowcurve.identification.indicator import ModulusFit
+
+    E = 200_000.0
+    line = ModulusFit(E_MPa=E, E_stderr_MPa=100.0, intercept_MPa=0.003 * E, r2=0.9999, n_points=6, window_MPa=(100.0, 250.0))
+    stress = np.array([-0.007, 0.0, 50.0, 100.0, 150.0, 200.0, 250.0, 300.0, 330.0, 340.0])
+    strain = (stress - line.intercept_MPa) / E  # on the line ...
+    strain[:2] = 0.0  # ... but at zero force the specimen has not moved: 0.3 % "past" the line
+    strain[-2:] += [0.0025, 0.006]  # ... until it yields
+    assert _offset_onset_MPa(strain, stress, line) == 330.0
