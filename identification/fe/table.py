@@ -40,7 +40,6 @@ SWIFT_FIT_FROM = 0.002  # the Swift fit (n, ε0) from the 0.2 % offset on
 # saturating (Voce) law the factor at ε 0.6 is that of Swift n 0.09 (its local exponent) where the whole-curve fit has
 # 0.2 — 1.9 % apart (docs/methods.md §4a.2). The local exponent: least squares over ε_p ± this half-width
 LOCAL_HALF_WIDTH = 0.2
-N_STEP = 0.002  # a per-point exponent is read to this step (the factor moves ~0.15 per unit n: < 0.02 %)
 
 
 @dataclass(frozen=True)
@@ -136,30 +135,33 @@ class UpsettingTable:
         """F/(σ_f·A) at the strains ``strain`` (NaN beyond the table). With the plastic strains
         ``eps_p`` of the same points, those below the table's first strain are read from its
         start, on ε_p (held below its first ε_p). ``n`` is one Swift exponent, or one per point
-        (the curve's local exponent, :func:`local_swift_exponent`), read to :data:`N_STEP`."""
-        if np.ndim(n):
-            return self._factor_per_point_n(mu, h0_d0, n, strain, eps0, eps_p)
-        out = self._along_mu(self._mu_rows(self.force_factor, h0_d0, n, strain, eps0, slender=True), mu)
+        (the curve's local exponent, :func:`local_swift_exponent`)."""
+        strain = np.atleast_1d(np.asarray(strain, dtype=float))
+        out = self._along_mu(self._rows_at_n(self.force_factor, h0_d0, n, strain, eps0), mu)
         if eps_p is None or self.start_force_factor is None:
             return out
-        strain = np.atleast_1d(np.asarray(strain, dtype=float))
         early = strain < self.strain[1]
         if early.any():
             eps_p = np.broadcast_to(np.asarray(eps_p, dtype=float), strain.shape)[early]
-            rows = self._mu_rows(self.start_force_factor, h0_d0, n, eps_p, eps0, axis=self.start_plastic_strain, slender=True)
-            out[early] = self._along_mu(rows, mu)
+            n_early = n if not np.ndim(n) else np.broadcast_to(np.asarray(n, dtype=float), strain.shape)[early]
+            out[early] = self._along_mu(self._rows_at_n(self.start_force_factor, h0_d0, n_early, eps_p, eps0, axis=self.start_plastic_strain), mu)
         return out
 
-    def _factor_per_point_n(self, mu: float, h0_d0: float, n, strain, eps0, eps_p) -> np.ndarray:
-        """:meth:`force_factor_at` with an exponent per point: one reading per distinct n (to N_STEP)."""
-        strain = np.atleast_1d(np.asarray(strain, dtype=float))
-        keys = np.round(np.broadcast_to(np.asarray(n, dtype=float), strain.shape) / N_STEP) * N_STEP
-        eps_p = None if eps_p is None else np.broadcast_to(np.asarray(eps_p, dtype=float), strain.shape)
-        out = np.empty(strain.shape)
-        for value in np.unique(keys):
-            sel = keys == value
-            out[sel] = self.force_factor_at(mu, h0_d0, float(value), strain[sel], eps0, None if eps_p is None else eps_p[sel])
-        return out
+    def _rows_at_n(self, values: np.ndarray, h0_d0: float, n, x: np.ndarray, eps0, axis: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`_mu_rows` of the force factor (in d0/h0) at one n or one n per point: the
+        reading is linear in n between the table's nodes, so per point it weighs the rows read
+        at the two nodes around its n (each node read once for all points)."""
+        if not np.ndim(n) or self.n.size == 1:
+            return self._mu_rows(values, h0_d0, float(np.mean(n)) if np.ndim(n) else n, x, eps0, axis=axis, slender=True)
+        n = np.clip(np.broadcast_to(np.asarray(n, dtype=float), x.shape), self.n[0], self.n[-1])
+        j = np.clip(np.searchsorted(self.n, n) - 1, 0, self.n.size - 2)
+        w = (n - self.n[j]) / (self.n[j + 1] - self.n[j])
+        rows = np.zeros((self.n.size, self.mu.size, x.size))
+        for k in np.unique(np.concatenate([j, j + 1])):
+            rows[k] = self._mu_rows(values, h0_d0, float(self.n[k]), x, eps0, axis=axis, slender=True)
+        points = np.arange(x.size)
+        low, high = rows[j, :, points].T, rows[j + 1, :, points].T  # (μ, points)
+        return np.where(w == 0.0, low, np.where(w == 1.0, high, (1.0 - w) * low + w * high))
 
     def bulge_at(self, mu: float, h0_d0: float, n: float, strain, eps0: float | None = None) -> np.ndarray:
         """ΔR/h at the strains ``strain``."""
