@@ -110,7 +110,8 @@ def register(subparsers) -> None:
     m.add_argument("--hardening", choices=tuple(HARDENING_CHOICES), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
     add_modulus_option(m, "strips elastic strain with it (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
     m.add_argument("--true-stress", choices=("gost_3_6", "constant_volume"), help="true stress in the uniform part of a tension test: the corrected (3.6) with bulk modulus (default) or σ·(1 + e) at constant volume")
-    m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n)")
+    m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n; with --method inverse-fe on compression the law "
+                   "that best fits the fast curve)")
     m.add_argument("--modulus-window", type=_pair, metavar="LO,HI", help="stress window of the elastic-modulus regression: MPa (e.g. 50,300), or fractions of Rm when both are ≤ 1 (e.g. 0.1,0.4); default: the widest linear stretch of the first loading, chosen automatically (all of it when it has few samples)")
     m.add_argument("--fit-range", type=_pair, metavar="LO,HI", help="true plastic strain range of the hardening fit, e.g. 0.01,0.15 (default: from 0.2 %% offset, past a yield plateau, to the end of the uniform range)")
     m.add_argument("--fracture-point", choices=("auto", "include", "exclude"), help="the neck-corrected fracture point in the least-squares hardening fit (tension): include, exclude, or auto (default: included unless it costs the uniform range more than 2 %% max error); both variants are reported")
@@ -198,7 +199,7 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
             def progress(runs, elapsed):
                 print(f"  inverse FE: {runs} solver runs, {elapsed:.0f} s", file=sys.stderr, flush=True)
 
-            ident = identify_inverse_fe(record, law=options.get("law") or "johnson_cook", workers=workers, scheduler=scheduler, progress=progress)
+            ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, scheduler=scheduler, progress=progress)
         else:
             ident = identify(record, **options)
     caught_lines = [f"{'numerical warning' if issubclass(w.category, RuntimeWarning) else w.category.__name__}: {w.message}" for w in caught]

@@ -82,6 +82,9 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
         res = evaluate([x] + pts)
         return np.column_stack([(res[i + 1] - res[0]) / (pts[i][i] - x[i]) for i in range(x.size)])
 
+    if evaluate([np.asarray(x0, float)])[0][0] == FAILED_RUN_RESIDUAL:  # no Jacobian can be formed around a failed run
+        raise IdentificationError(f"{what}: the solver run at the warm start {np.round(np.asarray(x0, float), 4).tolist()} failed "
+                                  "(see the log); the fast result is the one to use for this record")
     sol = least_squares(fun, np.asarray(x0, float), jac=jac, bounds=(lo, hi), x_scale=x_scale, xtol=xtol, ftol=ftol,
                         gtol=1e-8, max_nfev=max_nfev)
     r, J = sol.fun, sol.jac
