@@ -1,5 +1,6 @@
-"""The inverse FE fit's law when none is given: the one that best fits the fast curve. Checked on
-closed-form curves of each law (with 0.3 % noise) — the law that made the curve must win."""
+"""The inverse FE fit's law when none is given: the one that best fits the fast curve, checked on
+closed-form curves of each law (with 0.3 % noise) — the law that made the curve must win; and a
+fit that cannot be trusted says so."""
 
 from __future__ import annotations
 
@@ -24,3 +25,44 @@ def test_the_law_that_made_the_curve_is_chosen(law):
     chosen, rms = best_law_for(pd.DataFrame({"true_plastic_strain": e, "true_stress_MPa": s}))
     assert chosen == law, rms
     assert set(rms) == set(CURVES) and rms[law] < 0.5
+
+
+# -- a fit that cannot be trusted says so (no solver needed: a closed-form "run") ----------------------------
+
+
+class _Out:
+    wall_s, cached = 0.0, False
+
+    def __init__(self, y):
+        self.y = y
+
+
+def _line_run(x):
+    """y = a·t + b at five t; None (a failed run) where a > 5."""
+    return None if x[0] > 5.0 else _Out(x[0] * np.arange(5.0) + x[1])
+
+
+def test_the_solver_fit_recovers_a_closed_form_and_refuses_a_failed_warm_start():
+    from flowcurve.errors import IdentificationError
+    from flowcurve.identification.fe.solver_fit import fit_with_solver
+
+    target = 2.0 * np.arange(5.0) + 1.0
+    kw = dict(n_residuals=5, steps=lambda x: np.full(2, 1e-4), x_scale=np.ones(2), workers=1)
+    fit = fit_with_solver(_line_run, lambda out: out.y - target, [1.0, 0.0], [-10.0, -10.0], [10.0, 10.0], **kw)
+    np.testing.assert_allclose(fit.x, [2.0, 1.0], atol=1e-6)
+    with pytest.raises(IdentificationError, match="warm start .* failed") as info:
+        fit_with_solver(_line_run, lambda out: out.y - target, [6.0, 0.0], [-10.0, -10.0], [10.0, 10.0], **kw)
+    assert "\n" not in str(info.value)
+
+
+def test_a_poor_inverse_fit_carries_warnings():
+    from types import SimpleNamespace
+
+    from flowcurve.identification.fe.inverse import MU_BOUNDS, _fit_warnings
+
+    converged = SimpleNamespace(status=2, message="ftol")
+    assert _fit_warnings(0.4, 0.004, 0.12, converged) == []
+    assert any("misses the force by 1.9 %" in w for w in _fit_warnings(1.9, 0.004, 0.12, converged))
+    assert any("misses dmax by +0.030 mm" in w for w in _fit_warnings(0.4, 0.03, 0.12, converged))
+    assert any("on its bound" in w for w in _fit_warnings(0.4, 0.004, MU_BOUNDS[1], converged))
+    assert any("before converging" in w for w in _fit_warnings(0.4, 0.004, 0.12, SimpleNamespace(status=0, message="max nfev")))
