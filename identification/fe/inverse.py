@@ -39,6 +39,8 @@ DMAX_SCALE_MM = 0.005
 FROM_STRAIN = 0.02
 MU_BOUNDS = (0.0, 0.35)
 REL_STEP = 0.01  # finite-difference step, relative (absolute 0.005 for μ)
+# a warm start whose run stops (near sticking, or a tall specimen folding onto the platen at some μ) is moved in μ
+START_MU_STEPS = (-0.01, 0.01, -0.02, 0.02)
 
 
 @dataclass(frozen=True)
@@ -199,7 +201,8 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     x_scale = np.maximum(np.abs(x0), 1e-3)
     x_scale[-1] = 0.05
     sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
-                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress)
+                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress,
+                          other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS])
     r, se = sol.residuals, sol.stderr
     params = dict(zip(law_info.names, map(float, sol.x[:-1])))
     mu = float(sol.x[-1])

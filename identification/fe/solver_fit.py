@@ -40,11 +40,13 @@ class SolverFit:
 def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[Any], np.ndarray], x0, lo, hi, *,
                     n_residuals: int, steps: Callable[[np.ndarray], np.ndarray], x_scale, workers: int | None = None,
                     scheduler=None, max_runs: int = 150, max_nfev: int = 20, xtol: float = 1e-6, ftol: float = 1e-6,
-                    progress=None, what: str = "inverse FE") -> SolverFit:
+                    progress=None, what: str = "inverse FE", other_starts=()) -> SolverFit:
     """Minimise |residuals_of(run(x))|² over lo ≤ x ≤ hi from x0.
 
     ``run`` must be picklable (a module-level function or a ``functools.partial`` of one) and
-    return an object with ``wall_s`` and ``cached`` attributes, or None for a failed run.
+    return an object with ``wall_s`` and ``cached`` attributes, or None for a failed run. When
+    the run at x0 fails, ``other_starts`` are tried in turn; a Jacobian step whose run fails is
+    taken the other way.
     """
     from scipy.optimize import least_squares
 
@@ -70,8 +72,11 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     def fun(x):
         return evaluate([np.asarray(x, float)])[0]
 
+    def failed(r) -> bool:
+        return bool(r[0] == FAILED_RUN_RESIDUAL)
+
     def jac(x):
-        # forward differences, backward at an upper bound; the runs of one Jacobian go side by side
+        # forward differences, backward at an upper bound or where the forward run failed; the runs of one Jacobian go side by side
         x = np.asarray(x, float)
         h = steps(x)
         pts = []
@@ -80,11 +85,21 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
             xp[i] = x[i] + h[i] if x[i] + h[i] <= hi[i] else x[i] - h[i]
             pts.append(xp)
         res = evaluate([x] + pts)
+        flip = [i for i in range(x.size) if failed(res[i + 1]) and lo[i] <= 2.0 * x[i] - pts[i][i] <= hi[i]]
+        for i in flip:
+            pts[i] = pts[i].copy()
+            pts[i][i] = 2.0 * x[i] - pts[i][i]
+        if flip:
+            res = evaluate([x] + pts)
         return np.column_stack([(res[i + 1] - res[0]) / (pts[i][i] - x[i]) for i in range(x.size)])
 
-    if evaluate([np.asarray(x0, float)])[0][0] == FAILED_RUN_RESIDUAL:  # no Jacobian can be formed around a failed run
-        raise IdentificationError(f"{what}: the solver run at the warm start {np.round(np.asarray(x0, float), 4).tolist()} failed "
-                                  "(see the log); the fast result is the one to use for this record")
+    starts = [np.asarray(x0, float)] + [np.clip(np.asarray(s, float), lo, hi) for s in other_starts]
+    for x0 in starts:  # no Jacobian can be formed around a failed run
+        if not failed(evaluate([x0])[0]):
+            break
+    else:
+        raise IdentificationError(f"{what}: the solver run failed at the warm start {np.round(starts[0], 4).tolist()} and at "
+                                  f"{len(starts) - 1} other starts (see the log); the fast result is the one to use for this record")
     sol = least_squares(fun, np.asarray(x0, float), jac=jac, bounds=(lo, hi), x_scale=x_scale, xtol=xtol, ftol=ftol,
                         gtol=1e-8, max_nfev=max_nfev)
     r, J = sol.fun, sol.jac
