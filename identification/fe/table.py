@@ -12,11 +12,13 @@ The table holds, for μ × h0/d0 × Swift hardening (n, ε0) × strain ε = ln(h
 
 Values between grid points: linear in n, ln ε0 and ε and in d0/h0 (the force factor and the
 end face: the slab solution's friction term grows with d/h) or ln(h0/d0) (the bulge), then
-monotone cubic (PCHIP) along μ; a plane of the table held out is predicted best that way. The hardening of a measured curve enters as its Swift fit σ ≈ K·(ε0 + ε_p)^n
+monotone cubic (PCHIP) along μ; a plane of the table held out is predicted best that way.
+
+The hardening of a measured curve enters as its Swift fit σ ≈ K·(ε0 + ε_p)^n
 (:func:`swift_hardening`): n alone (a table of one ε0) does not carry the barrel of a law with a
 high yield or a saturating one; the pair does (docs/methods.md §4a). The force factor at a
-strain is read at the curve's Swift exponent near that strain (:func:`local_swift_exponent`). A table without an ε0 axis
-(the first, n only) still loads, as one ε0.
+strain is read at the curve's Swift exponent near that strain (:func:`local_swift_exponent`).
+A table without an ε0 axis (the first, n only) still loads, as one ε0.
 """
 
 from __future__ import annotations
