@@ -268,21 +268,27 @@ FE_HARDENING_ITERATIONS = 3
 FE_FIT_FROM_TOTAL_STRAIN = 0.02  # without the plastic strain, the Swift fit starts where the elastic part is small
 
 
+def _fit_start(plastic: bool) -> float:
+    from flowcurve.identification.fe.table import SWIFT_FIT_FROM
+
+    return SWIFT_FIT_FROM if plastic else FE_FIT_FROM_TOTAL_STRAIN
+
+
 def _swift_of(eps_p, sigma, plastic: bool) -> tuple[float, float]:
-    from flowcurve.identification.fe.table import SWIFT_FIT_FROM, swift_hardening
+    from flowcurve.identification.fe.table import swift_hardening
 
-    return swift_hardening(eps_p, sigma, start=SWIFT_FIT_FROM if plastic else FE_FIT_FROM_TOTAL_STRAIN)
+    return swift_hardening(eps_p, sigma, start=_fit_start(plastic))
 
 
-def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=None, *, local: bool = True):
+def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=None):
     """σ_f = p / factor(μ, h0/d0, n, ε0, ε) with the Swift (n, ε0) read from the corrected curve
     σ_f(ε_p) itself (fixed point) → (σ_f, (n, ε0)); below the table's first strain the factor is
     read on ε_p (the table's start). Without ``eps_p`` the total strain stands in, from ε = 0.02 on.
-    With ``local`` each point's factor is read at the curve's Swift exponent near its strain
+    Each point's factor is read at the curve's Swift exponent near its strain
     (:func:`~flowcurve.identification.fe.table.local_swift_exponent`, the whole curve's ε0): the
     factor follows the hardening at the strain, which for a saturating law falls well below the
     whole curve's n. The returned (n, ε0) is the whole curve's."""
-    from flowcurve.identification.fe.table import SWIFT_FIT_FROM, local_swift_exponent
+    from flowcurve.identification.fe.table import local_swift_exponent
 
     strain = np.asarray(strain, dtype=float)
     pressure = np.asarray(pressure_MPa, dtype=float)
@@ -293,10 +299,7 @@ def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=
     hardening = FE_DEFAULT_HARDENING
     for _ in range(FE_HARDENING_ITERATIONS):
         hardening = _swift_of(eps_fit, sigma, plastic)
-        n = hardening[0]
-        if local:
-            start = SWIFT_FIT_FROM if plastic else FE_FIT_FROM_TOTAL_STRAIN
-            n = local_swift_exponent(eps_fit, sigma, hardening[1], eps_fit, start=start, fallback=hardening[0])
+        n = local_swift_exponent(eps_fit, sigma, hardening[1], eps_fit, start=_fit_start(plastic), fallback=hardening[0])
         sigma = pressure / table.force_factor_at(mu, h0_d0, n, lookup, eps0=hardening[1], eps_p=eps_p)
     return sigma, hardening
 

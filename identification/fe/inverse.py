@@ -8,11 +8,12 @@ met by construction; the FE diameters are taken after the elastic spring-back d�
 the unloading run itself can fail with friction, CALCULIX.md): scipy ``least_squares`` over the
 hardening constants and μ, warm-started from the fast (``fe_table``) identification. A run that
 stops is run again with the table's softer stick slope; a fit that leaves a force or shape
-misfit, or μ on a bound, says so in ``warnings`` (hardening quality "poor"). The Jacobian's finite-difference runs go side by side
-(:func:`.pool.run_many`: ``workers`` processes or a Dask ``scheduler``); repeated parameter
-sets come from the run cache. Residuals: force misfit in % at ``FORCE_POINTS`` strokes
-(ε ≥ 0.02), and the dmax (and dface) misfit in units of ``DMAX_SCALE_MM`` weighted by
-√(force points) so the shape counts as much as the whole force curve. Uncertainties from (JᵀJ)⁻¹·s².
+misfit, or μ on a bound, says so in ``warnings`` (hardening quality "poor"). The Jacobian's
+finite-difference runs go side by side (:func:`.pool.run_many`: ``workers`` processes or a Dask
+``scheduler``); repeated parameter sets come from the run cache. Residuals: force misfit in % at
+``FORCE_POINTS`` strokes (ε ≥ 0.02), and the dmax (and dface) misfit in units of
+``DMAX_SCALE_MM`` weighted by √(force points) so the shape counts as much as the whole force
+curve. Uncertainties from (JᵀJ)⁻¹·s².
 """
 
 from __future__ import annotations

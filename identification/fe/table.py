@@ -270,6 +270,20 @@ def continue_stopped_runs(values: np.ndarray) -> np.ndarray:
     return out
 
 
+def _log_curve_on_grid(eps_p, stress_MPa, start: float, size: int):
+    """(uniform ε_p grid from ``start`` on, ln σ on it), so that the samples' density does not
+    weigh a fit; None for a curve too short to fit (< 5 samples, or ending before 10 × start)."""
+    e = np.asarray(eps_p, dtype=float)
+    s = np.asarray(stress_MPa, dtype=float)
+    ok = np.isfinite(e) & np.isfinite(s) & (e >= start) & (s > 0)
+    if ok.sum() < 5 or e[ok].max() < 10 * start:
+        return None
+    order = np.argsort(e[ok], kind="stable")
+    e, s = e[ok][order], s[ok][order]
+    grid = np.linspace(e[0], e[-1], size)
+    return grid, np.log(np.interp(grid, e, s))
+
+
 def swift_hardening(eps_p, stress_MPa, start: float = SWIFT_FIT_FROM) -> tuple[float, float]:
     """(n, ε0) of the Swift law σ = K·(ε0 + ε_p)^n fitted to the curve for ε_p ≥ ``start``:
     the table's hardening axes. Least squares in ln σ on a uniform ε_p grid (the samples'
@@ -277,15 +291,10 @@ def swift_hardening(eps_p, stress_MPa, start: float = SWIFT_FIT_FROM) -> tuple[f
     # ln σ = ln K + n·ln(ε0 + ε_p)
     from scipy.optimize import minimize_scalar
 
-    e = np.asarray(eps_p, dtype=float)
-    s = np.asarray(stress_MPa, dtype=float)
-    ok = np.isfinite(e) & np.isfinite(s) & (e >= start) & (s > 0)
-    if ok.sum() < 5 or e[ok].max() < 10 * start:
+    curve = _log_curve_on_grid(eps_p, stress_MPa, start, 200)
+    if curve is None:
         return 0.3, 0.002  # too short a curve: a mid-range hardening
-    e, s = e[ok], s[ok]
-    order = np.argsort(e, kind="stable")
-    grid = np.linspace(e[order][0], e[order][-1], 200)
-    ln_s = np.log(np.interp(grid, e[order], s[order]))
+    grid, ln_s = curve
 
     def fit(log_eps0):
         A = np.column_stack([np.ones_like(grid), np.log(math.exp(log_eps0) + grid)])
@@ -304,16 +313,12 @@ def local_swift_exponent(eps_p, stress_MPa, eps0: float, at, *, half_width: floa
     held beyond them). For a Swift curve of this ε0 it is n everywhere; for a saturating law it
     falls with the strain. Too short a curve: ``fallback`` everywhere."""
     # n(ε) = d ln σ / d ln(ε0 + ε_p), windowed least squares on a uniform ε_p grid (sums by cumulative sums)
-    e = np.asarray(eps_p, dtype=float)
-    s = np.asarray(stress_MPa, dtype=float)
     at = np.asarray(at, dtype=float)
-    ok = np.isfinite(e) & np.isfinite(s) & (e >= start) & (s > 0)
-    if ok.sum() < 5 or e[ok].max() < 10 * start:
+    curve = _log_curve_on_grid(eps_p, stress_MPa, start, 400)
+    if curve is None:
         return np.full(at.shape, np.nan if fallback is None else fallback)
-    order = np.argsort(e[ok], kind="stable")
-    e, s = e[ok][order], s[ok][order]
-    grid = np.linspace(e[0], e[-1], 400)
-    x, y = np.log(eps0 + grid), np.log(np.interp(grid, e, s))
+    grid, y = curve
+    x = np.log(eps0 + grid)
     half_width = LOCAL_HALF_WIDTH if half_width is None else half_width
     sums = [np.concatenate([[0.0], np.cumsum(v)]) for v in (np.ones_like(x), x, y, x * x, x * y)]
     lo = np.searchsorted(grid, grid - half_width, side="left")
