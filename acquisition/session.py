@@ -237,7 +237,8 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
         response = compression_response if spec.test == "compression" else tension_response
         spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}, {spec.test} response {response}")
         spec.extra_meta.setdefault(f"virtual.{spec.test}_response", response)
-        spec.extra_meta.setdefault("material.E_MPa", repr(float(vr.model.material.E_MPa)))  # the handbook value an operator would enter
+        spec.extra_meta.setdefault("material.E_MPa", repr(float(vr.model.material.E_MPa)))  # the handbook values an operator would enter
+        spec.extra_meta.setdefault("material.nu", repr(float(vr.model.material.nu)))
         if rig_setup is not None:
             rig_setup(vr)
         config = virtual_config(**{**vr.config_kwargs(), **(config_overrides or {})})

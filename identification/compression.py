@@ -132,7 +132,11 @@ def _meta_geometry(record: Record) -> dict:
         raise MissingValueError(src, ("post.dmax_mm", "post.smax_mm2"), what="the friction needs the bulge diameter dmax or the largest cross-section smax")
     dtop = record.positive("post.dtop_mm")
     dface = record.positive("post.dface_mm")  # the original end face (fe_table reads μ from it when given)
-    return {"d0": d0, "h0": h0, "hk": hk, "dmax": dmax, "smax": smax, "dtop": dtop, "dface": dface}
+    nu = record.number("material.nu")
+    if nu is not None and not (0.0 <= nu < 0.5):
+        raise RecordError(src, f"'material.nu' = {nu:g}: Poisson's ratio must be within [0, 0.5)")
+    return {"d0": d0, "h0": h0, "hk": hk, "dmax": dmax, "smax": smax, "dtop": dtop, "dface": dface,
+            "nu": fr.DEFAULT_POISSON if nu is None else nu, "nu_source": "assumed (metals)" if nu is None else "record (material.nu)"}
 
 
 def _check_crosshead_gaps(src: str, force: np.ndarray, cross: np.ndarray) -> None:
@@ -434,8 +438,9 @@ def _friction_correction(geo: dict, nominal: _Nominal, friction_method: str, E_u
     chosen, frictions = _friction_all(geo, friction_method, warnings, curve=curve)
     warnings += _fe_table_warnings(chosen)
     corrected = {}
+    elastic = None if E_used is None else (E_used, geo["nu"])  # fe_table: the pressure on the loaded area
     for method in fr.CORRECTIONS:
-        eps_t, sig_t = fr.correct(method, nominal.strain, nominal.pressure, chosen.mu, nominal.d_n / 2.0, nominal.h, eps_p=eps_p)
+        eps_t, sig_t = fr.correct(method, nominal.strain, nominal.pressure, chosen.mu, nominal.d_n / 2.0, nominal.h, eps_p=eps_p, elastic=elastic)
         corrected[method] = (plastic_strain(eps_t, sig_t, E_used), sig_t, eps_t)
     return _Friction(chosen=chosen, frictions=frictions, corrected=corrected, warnings=warnings)
 
@@ -519,6 +524,8 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
             "correction": f"{friction_correction} (all: {', '.join(fr.CORRECTIONS)})",
             "stress": "mean pressure P/S, S = pi*d_n^2/4, d_n = d0*sqrt(h0/h) (3.28)-(3.32)",
             "scaling": "K_l = (h0 - hk [+ spring-back]) / max(specimen displacement) (3.1)",
+            "elastic_volume": (f"fe_table: sigma_f = p / (factor * J), J = exp(-(1 - 2 nu) sigma_f / E), nu {geo['nu']:g} ({geo['nu_source']})"
+                               if yld.E_used is not None else "fe_table: volume-constant area (no modulus)"),
             "hardening": f"{law} least squares on the {friction_correction} curve, eps_p >= {YIELD_OFFSET}",
         },
         warnings=warnings,

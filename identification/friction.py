@@ -428,11 +428,26 @@ def _outside_table(table, h0_d0: float, n: float, eps0: float) -> list[str]:
     return out
 
 
-def correct_fe_table(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None):
+DEFAULT_POISSON = 0.3  # metals; a record's material.nu replaces it
+
+
+def elastic_volume_ratio(stress_MPa, E_MPa: float, nu: float = DEFAULT_POISSON):
+    """V/V0 of a specimen under the axial compressive stress σ (positive): plastic flow keeps the
+    volume, the elastic strains (−σ/E axial, +νσ/E lateral) shrink it."""
+    # J = exp(ε_axial + 2·ε_lateral) = exp(−(1 − 2ν)·σ/E)
+    return np.exp(-(1.0 - 2.0 * nu) * np.asarray(stress_MPa, dtype=float) / E_MPa)
+
+
+def correct_fe_table(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None, elastic=None):
     """(strain, p) → (strain, σ_f) with the CalculiX force factor F/(σ_f·A) of the FE table; the
     table's hardening from the Swift fit of σ_f over ``eps_p`` (the plastic strain; without it
-    the total strain from 0.02 on)."""
-    # σ_f = p / factor(μ, h0/d0, n, ε), factor from identification/fe (make_table)
+    the total strain from 0.02 on).
+
+    The table's factor is relative to its μ = 0 run, whose force is σ_f times the *loaded* area:
+    A·J, smaller than the volume-constant A by the elastic volume change J. With ``elastic`` =
+    (E MPa, ν) the pressure p = F/A is put on that area, as the table's reference was (+0.1–0.3 %
+    at 300–1100 MPa; CalculiX's own homogeneous runs show it: docs/methods.md §4a.2)."""
+    # σ_f = p / (factor(μ, h0/d0, n, ε)·J(σ_f)), factor from identification/fe (make_table), J one fixed-point step
     from flowcurve.identification.fe.table import UpsettingTable, specimen_proportion
 
     strain = np.atleast_1d(np.asarray(strain, dtype=float))
@@ -441,6 +456,8 @@ def correct_fe_table(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None)
     sel = strain > 0.01
     h0_d0 = specimen_proportion(strain[sel], radius[sel], height[sel]) if sel.any() else 1.0
     sigma, _ = _fe_flow_stress(table, strain, pressure_MPa, mu, h0_d0, eps_p)
+    if elastic is not None:
+        sigma = sigma / elastic_volume_ratio(sigma, *elastic)
     return strain, sigma
 
 
@@ -506,13 +523,17 @@ CORRECTIONS: dict[str, Callable] = {
 DEFAULT_CORRECTION = "fe_table"
 
 
-def correct(method: str, strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None):
+def correct(method: str, strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None, elastic=None):
     """Apply the named correction (one of :data:`CORRECTIONS`) → (strain, flow stress MPa);
-    ``eps_p`` (the plastic strain) lets ``fe_table`` read the curve's hardening."""
+    ``eps_p`` (the plastic strain) lets ``fe_table`` read the curve's hardening, ``elastic``
+    (E MPa, ν) puts its pressure on the loaded area (:func:`correct_fe_table`). The analytic
+    corrections keep their textbook volume-constant area."""
     try:
         fn = CORRECTIONS[method]
     except KeyError:
         raise IdentificationError(f"unknown friction correction {method!r} (choose from {', '.join(CORRECTIONS)})") from None
     if not (math.isfinite(mu) and mu >= 0):
         raise IdentificationError(f"friction correction: μ = {mu} must be a finite number ≥ 0")
+    if fn is correct_fe_table:
+        return fn(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=eps_p, elastic=elastic)
     return fn(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=eps_p)

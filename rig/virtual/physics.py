@@ -371,8 +371,10 @@ class Mechanics:
 
     # -- compression ----------------------------------------------------------------
     def compression_force(self, eps_p: float, sigma: float) -> float:
-        """P = σ·π r²·f(εp), r = r0·e^{εp/2}: f the FE force factor or the slab 2(e^c − c − 1)/c², c = 2μr/h."""
-        r = self.specimen.d0_mm / 2.0 * math.exp(eps_p / 2.0)
+        """P = σ·π r²·f(εp), r = r0·e^{εp/2 + νσ/E} (the plastic flow keeps the volume, the elastic
+        lateral strain νσ/E widens it): f the FE force factor or the slab 2(e^c − c − 1)/c², c = 2μr/h."""
+        m = self.material
+        r = self.specimen.d0_mm / 2.0 * math.exp(eps_p / 2.0 + m.nu * sigma / m.E_MPa)
         return sigma * math.pi * r * r * self.friction_force_factor(eps_p)
 
     def _compression_x(self, eps_p: float, sigma: float) -> tuple[float, float]:

@@ -106,6 +106,19 @@ def test_without_friction_all_corrections_agree_and_recover_the_law(make_record)
     assert np.max(np.abs(binned_deviation(eps, sig, truth["law"]))) < 0.01
 
 
+def test_the_fe_table_curve_is_on_the_loaded_area(make_record):
+    """The FE table's factor is relative to a μ = 0 run on the loaded area A·J, J = exp(−(1 − 2ν)σ/E):
+    an incompressible specimen (ν → 0.5) reads the volume-constant area, ν = 0 the most shrunk."""
+    curves = {}
+    for nu in ("0.4999999", "0"):
+        record, _ = make_record(mu=0.0, noise_N=20.0, seed=3, meta_extra={"material.nu": nu})
+        ident = identify_compression(record, E_MPa=E_HANDBOOK)
+        assert f"nu {float(nu):g} (record (material.nu))" in ident.result["methods"]["elastic_volume"]
+        curves[nu] = ident.curves["true_fe_table"]["true_stress_MPa"].to_numpy()
+    incompressible, shrunk = curves["0.4999999"], curves["0"]
+    np.testing.assert_allclose(shrunk / incompressible, np.exp(incompressible / E_HANDBOOK), rtol=2e-5)
+
+
 def test_other_law_and_friction(make_record):
     # a different material and a higher friction: steel 45 of table 3.2, μ = 0.2
     law = {"A": 410.0, "B": 280.0, "n": 0.47}
@@ -198,6 +211,7 @@ def test_missing_bulge_names_both_keys(make_record):
         ({"post.dmax_mm": "9.9"}, "logarithm argument"),
         ({"post.dmax_mm": "7.9"}, "negative bulge"),
         ({"post.dmax_mm": "abc"}, "not a number"),
+        ({"material.nu": "0.6"}, "Poisson's ratio"),
     ],
 )
 def test_out_of_range_post_measurements(make_record, meta, words):

@@ -115,14 +115,18 @@ def test_fracture_post_measurements_are_consistent(response):
     assert not m.moving  # the crosshead stopped at fracture
 
 
-def test_compression_without_friction_is_flow_stress_times_volume_constant_area():
+def test_compression_without_friction_is_flow_stress_times_loaded_area():
+    """μ = 0: F = σ·A, A the volume-constant area of the plastic strain widened by the elastic
+    lateral strain νσ/E on each side (2νσ/E in area)."""
     m = RigModel("12Kh18N12M3TL", "compression", speed_mm_per_s=0.01, friction_mu=0.0, force_noise_N=0.0)
     rec = run(m, 10.0)
     s, mat = m.specimen, m.material
     plastic = rec[:, 2] > 0.01
     eps = rec[plastic, 2]
     h = s.h0_mm * np.exp(-eps)
-    expected = mat.flow_stress(eps, 0.01 / s.h0_mm) * s.area0_mm2 * s.h0_mm / h
+    sigma = mat.flow_stress(eps, 0.01 / s.h0_mm)
+    lat = mat.nu * sigma / mat.E_MPa  # e^{2·lat} by its series
+    expected = sigma * s.area0_mm2 * s.h0_mm / h * (1.0 + 2.0 * lat + 2.0 * lat**2 + 4.0 / 3.0 * lat**3)
     np.testing.assert_allclose(rec[plastic, 1], expected, rtol=1e-9)
     assert rec[-1, 2] == pytest.approx(0.68, abs=1e-6)  # default stroke limit
 
@@ -146,7 +150,8 @@ def test_compression_force_uses_slab_factor_and_bulge_inverts_to_mu(mu):
     h = s.h0_mm * math.exp(-eps)
     sigma = m.material.flow_stress(eps, 0.01 / s.h0_mm)
     c = 2 * mu * r / h
-    assert st.force_N == pytest.approx(sigma * math.pi * r * r * 2 * (math.exp(c) - c - 1) / c**2, rel=1e-9)
+    r_loaded = r * math.exp(m.material.nu * sigma / m.material.E_MPa)  # the elastic lateral strain νσ/E
+    assert st.force_N == pytest.approx(sigma * math.pi * r_loaded**2 * 2 * (math.exp(c) - c - 1) / c**2, rel=1e-9)
     post = {k: float(v) for k, v in m.post_test_measurements().items()}
     hk, dmax = post["post.hk_mm"], post["post.dmax_mm"]
     dn = s.d0_mm * math.sqrt(s.h0_mm / hk)  # (3.17)
