@@ -60,7 +60,7 @@ def _model(problem: _Problem, x) -> UpsettingModel:
     eps = np.concatenate([[0.0], np.geomspace(1e-4, 2.0, PLASTIC_ROWS)])
     sig = law.func(eps, **params)
     return UpsettingModel(problem.d0, problem.h0, problem.h_end, float(x[-1]), tuple(map(float, eps)), tuple(map(float, sig)),
-                          E_MPa=problem.E, increments=problem.increments)
+                          E_MPa=problem.E, increments=problem.increments).realising()  # the law as the specimen's, not ccx's reading
 
 
 @dataclass(frozen=True)

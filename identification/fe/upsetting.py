@@ -23,7 +23,7 @@ height, the stroke and the bulge (largest outer diameter) at every increment.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -92,6 +92,16 @@ class UpsettingModel:
     @property
     def stroke_mm(self) -> float:
         return self.h0_mm - self.h_end_mm
+
+    def realising(self) -> "UpsettingModel":
+        """This model with the ``*PLASTIC`` stresses CalculiX realises as the given ones in
+        homogeneous compression on the same strain path (:mod:`.realised_law`): for runs whose
+        force is the result (records from a law, the inverse FE, verify), not for the table."""
+        from flowcurve.identification.fe.realised_law import realising_rows
+
+        rows = realising_rows(self.eps_p, self.stress_MPa, E_MPa=self.E_MPa, nu=self.nu, h0_mm=self.h0_mm, h_end_mm=self.h_end_mm,
+                              increments=self.increments, first_increment=self.first_increment)
+        return replace(self, stress_MPa=tuple(float(v) for v in rows))
 
 
 @dataclass

@@ -122,7 +122,7 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
     E = curve.E_MPa or record.positive("material.E_MPa") or DEFAULT_E_MPa
     s_end = float(np.max(stroke))
     model = UpsettingModel(d0, h0, h0 - s_end, float(mu), tuple(map(float, curve.eps_p)), tuple(map(float, curve.stress_MPa)),
-                           E_MPa=float(E), increments=increments)
+                           E_MPa=float(E), increments=increments).realising()  # the curve as the specimen's, not ccx's reading
     run = simulate_upsetting(model, timeout_s=timeout_s)
     s_fe = np.concatenate([[0.0], run.stroke_mm])
     f_fe = np.concatenate([[0.0], run.force_N])

@@ -16,7 +16,8 @@ import pytest
 from scipy.optimize import brentq
 
 from flowcurve.identification.fe.ccx import SolverError, run_deck
-from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
+from flowcurve.identification.fe.realised_law import one_element_deck
+from flowcurve.identification.fe.upsetting import UpsettingModel, plastic_table, simulate_upsetting
 
 pytestmark = [pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]
 
@@ -47,6 +48,25 @@ def test_frictionless_upsetting_is_the_homogeneous_closed_form():
     # the second call is served from the cache, the same numbers
     again = simulate_upsetting(m)
     assert again.cached and np.array_equal(again.force_N, r.force_N)
+
+
+def test_loaded_area_shrinks_by_the_elastic_volume_change():
+    """Plastic flow keeps the volume, the elastic strains do not: CalculiX's loaded cylinder has
+    the area A·J of :func:`elastic_volume_ratio`, J = exp(−(1 − 2ν)σ/E), below the volume-constant
+    A = A0·h0/h — the reference the FE table's force factor (normalised by μ = 0) was taken on."""
+    from flowcurve.identification.friction import elastic_volume_ratio
+
+    E_soft, nu = 80_000.0, 0.3  # a low modulus: J − 1 ≈ −0.5 % at 1000 MPa, well above the check's 0.02 %
+    eps_rows, stress_rows = plastic_table(swift)
+    deck = one_element_deck(eps_rows, stress_rows, radius_mm=3.0, height_mm=3.0, h_end_mm=3.0 * math.exp(-0.4), E_MPa=E_soft, nu=nu, increments=40)
+    out = run_deck(deck, name="one element", use_cache=False)
+    h = 3.0 + (3.0 * math.exp(-0.4) - 3.0) * out.time
+    radius = 3.0 + out.displacements["OUTER"][:, -1, 0]
+    sigma = -out.totals["TOP"][:, 1] * 180.0 / (math.pi * radius**2)  # the 2° sector's reaction, on the loaded area
+    loaded_over_constant = radius**2 / (9.0 * 3.0 / h)
+    sel = sigma > 500.0
+    assert sel.sum() > 10 and np.all(1.0 - elastic_volume_ratio(sigma[sel], E_soft, nu) > 2e-3)
+    np.testing.assert_allclose(loaded_over_constant[sel], elastic_volume_ratio(sigma[sel], E_soft, nu), rtol=2e-4)
 
 
 def test_a_deck_ccx_rejects_is_a_solver_error():
