@@ -69,11 +69,11 @@ SEED_LAW_CAUSE = ("measured against the record's own factor (its run over a μ =
                   "platen, and 1.2 % low at 0.5, where the table's runs dip. A finer record mesh (36 or 48 elements) keeps ±1 % "
                   "dips and reads 3.2–3.5 %")
 VOCE_CAUSE = ("Voce at μ 0.17, h0/d0 1.8, to ε 0.7: the bulge hardly grows with μ there (0.01 mm of dmax moves μ by 0.1) and the "
-              "table's runs at μ ≥ 0.15 on h0/d0 1.6–2.5 stopped near ε 0.4–0.6 and are continued beyond — both flagged. (Its "
+              "table's runs at μ ≥ 0.15 on h0/d0 1.6–2.5 stop near ε 0.4–0.7 (also on 80 or 50 increments) and are continued beyond — both flagged. (Its "
               "record used to stop at ε 0.60, where dmax read 0.190; it now runs to 0.7 with 80 increments)")
 LIMITS = {2: "steel 45 at μ 0.25, h0/d0 1: the barrel hardly grows with μ there (one 0.01 mm of dmax moves μ by 0.05): μ read 0.288 "
              "(friction_mu_range 0.25–0.35 holds the truth), flagged; the curve within 1.9 %",
-          3: "μ read 0.232 (the curve within 1.5 %): " + VOCE_CAUSE,
+          3: "μ read 0.214 (the curve within 1.4 %): " + VOCE_CAUSE,
           5: "seed law at μ 0.28, h0/d0 1.2: μ 0.319 near sticking (flagged); the curve within 1.8 %"}
 CASES = [pytest.param(c, marks=pytest.mark.xfail(strict=True, reason=LIMITS[k])) if k in LIMITS else c for k, c in enumerate(VALIDATION_CASES)]
 
@@ -106,7 +106,7 @@ def test_a_record_the_default_misses_is_flagged(case):
             assert flagged, (end_face, ident.result["friction_mu"], err)
 
 
-RANGE_LIMITS = {3: "friction_mu_range 0.183–0.35 misses 0.17 by 0.013 (the range counts the dmax resolution, not the continued "
+RANGE_LIMITS = {3: "friction_mu_range 0.179–0.35 misses 0.17 by 0.009 (the range counts the dmax resolution, not the continued "
                    "runs beyond ε 0.40, which a warning names): " + VOCE_CAUSE,
                 5: "seed law at μ 0.28: friction_mu_range 0.286–0.35 misses 0.28 by 0.006 (the range counts the dmax "
                    "resolution, not the table's fold-over dips and continued runs beyond ε 0.52, which a warning names)"}
