@@ -54,13 +54,14 @@ class _Problem:
     increments: int
 
 
-def _model(problem: _Problem, x) -> UpsettingModel:
+def _model(problem: _Problem, x, **settings) -> UpsettingModel:
+    """The run at parameters x (law…, μ); ``settings`` of a retry (another stick slope or increments)."""
     law = LAWS[problem.law]
     params = dict(zip(law.names, (float(v) for v in x[:-1])))
     eps = np.concatenate([[0.0], np.geomspace(1e-4, 2.0, PLASTIC_ROWS)])
     sig = law.func(eps, **params)
     return UpsettingModel(problem.d0, problem.h0, problem.h_end, float(x[-1]), tuple(map(float, eps)), tuple(map(float, sig)),
-                          E_MPa=problem.E, increments=problem.increments).realising()  # the law as the specimen's, not ccx's reading
+                          E_MPa=problem.E, **{"increments": problem.increments, **settings}).realising()  # the law as the specimen's, not ccx's reading
 
 
 @dataclass(frozen=True)
@@ -75,16 +76,15 @@ class _Run:
 
 def _run(problem: _Problem, x) -> _Run | None:
     """Stroke, force and unloaded dmax of one CalculiX run; None when it did not converge, also
-    when run again with the table's softer stick slope (:data:`.make_table.RETRY_SETTINGS`)."""
-    from dataclasses import replace
-
+    when run again with the table's retries (:data:`.make_table.RETRY_SETTINGS`: a softer stick
+    slope, other increments — where the side folds onto the platen a run stops at a strain that
+    moves with the increment size)."""
     from flowcurve.identification.fe.ccx import SolverError
     from flowcurve.identification.fe.make_table import RETRY_SETTINGS
 
-    model = _model(problem, x)
     for settings in ({}, *RETRY_SETTINGS):
         try:
-            r = simulate_upsetting(replace(model, **settings))
+            r = simulate_upsetting(_model(problem, x, **settings))
             break
         except SolverError as exc:
             log.info("inverse FE: run at %s%s failed (%s)", x, f" with {settings}" if settings else "", exc)
