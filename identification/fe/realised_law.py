@@ -20,24 +20,21 @@ import math
 import numpy as np
 
 from flowcurve.identification.fe.ccx import run_deck
-
-SECTOR = 180.0  # CAX reactions are for a 2° sector
+from flowcurve.identification.fe.upsetting import SECTOR, plastic_lines, static_step
 
 
 def one_element_deck(eps_p, stress_MPa, *, radius_mm: float, height_mm: float, h_end_mm: float, E_MPa: float, nu: float,
                      increments: int, first_increment: float = 0.0) -> str:
     """One CAX4R element radius × height, its top pushed to h_end with no contact (a homogeneous
     cylinder), with the step control of an upsetting run of ``increments``."""
-    dt = 1.0 / increments
-    dt0 = first_increment if 0.0 < first_increment < dt else dt
     r, h = radius_mm, height_mm
     return "\n".join([
         "*HEADING", "flowcurve one-element compression", "*NODE", "1,0,0", f"2,{r:.9g},0", f"3,{r:.9g},{h:.9g}", f"4,0,{h:.9g}",
         "*ELEMENT,TYPE=CAX4R,ELSET=SPEC", "1,1,2,3,4",
         "*NSET,NSET=AXIS", "1,4", "*NSET,NSET=BOT", "1,2", "*NSET,NSET=TOP", "3,4", "*NSET,NSET=OUTER", "2,3",
-        "*MATERIAL,NAME=S", "*ELASTIC", f"{E_MPa:.9g},{nu:.9g}", "*PLASTIC", *[f"{s:.9g},{e:.9g}" for e, s in zip(eps_p, stress_MPa)],
+        "*MATERIAL,NAME=S", "*ELASTIC", f"{E_MPa:.9g},{nu:.9g}", "*PLASTIC", *plastic_lines(eps_p, stress_MPa),
         "*SOLID SECTION,ELSET=SPEC,MATERIAL=S", "*BOUNDARY", "AXIS,1,1,0.", "BOT,2,2,0.",
-        "*STEP,NLGEOM,INC=10000", "*STATIC", f"{dt0:.9g},1.,{min(dt0, dt * 1e-3):.9g},{dt:.9g}",
+        "*STEP,NLGEOM,INC=10000", "*STATIC", static_step(increments, first_increment),
         "*BOUNDARY", f"TOP,2,2,{h_end_mm - h:.9g}", "*NODE PRINT,NSET=TOP,TOTALS=ONLY", "RF", "*NODE PRINT,NSET=OUTER", "U",
         "*END STEP"]) + "\n"
 

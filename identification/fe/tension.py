@@ -17,7 +17,7 @@ import numpy as np
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.ccx import run_deck
-from flowcurve.identification.fe.upsetting import SECTOR, _lines, check_plastic_table, plastic_table
+from flowcurve.identification.fe.upsetting import SECTOR, _lines, check_plastic_table, plastic_lines, plastic_table
 
 
 @dataclass(frozen=True)
@@ -75,7 +75,7 @@ def tension_deck(m: TensionModel) -> str:
     lines += ["*NSET,NSET=AXIS", *_lines(axis), "*NSET,NSET=MID", *_lines(mid_plane), "*NSET,NSET=TOP", *_lines(top),
               "*NSET,NSET=NECK", str(ids[nr2, 0]),
               "*MATERIAL,NAME=SPECIMEN", "*ELASTIC", f"{m.E_MPa:.9g},{m.nu:.9g}", "*PLASTIC",
-              *[f"{s:.9g},{e:.9g}" for e, s in zip(eps, sig)],
+              *plastic_lines(eps, sig),
               "*SOLID SECTION,ELSET=SPEC,MATERIAL=SPECIMEN",
               "*BOUNDARY", "AXIS,1,1,0.", "MID,2,2,0.",
               "*STEP,NLGEOM,INC=10000", "*STATIC", f"{dt:.9g},1.,{dt * 1e-3:.9g},{dt:.9g}",

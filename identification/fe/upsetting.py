@@ -192,13 +192,24 @@ def _lines(values, per_line: int = 12) -> list[str]:
     return [",".join(values[i:i + per_line]) for i in range(0, len(values), per_line)]
 
 
+def static_step(increments: int, first_increment: float = 0.0) -> str:
+    """The ``*STATIC`` data line: first increment (1/increments unless a smaller one is given),
+    step 1, the smallest increment, the largest 1/increments."""
+    dt = 1.0 / increments
+    dt0 = first_increment if 0.0 < first_increment < dt else dt
+    return f"{dt0:.9g},1.,{min(dt0, dt * 1e-3):.9g},{dt:.9g}"
+
+
+def plastic_lines(eps_p, stress_MPa) -> list[str]:
+    """``*PLASTIC`` data lines (stress, plastic strain)."""
+    return [f"{sig:.9g},{e:.9g}" for e, sig in zip(eps_p, stress_MPa)]
+
+
 def upsetting_deck(m: UpsettingModel) -> str:
     """The ccx input deck of one upsetting run."""
     mesh, s = build_mesh(m)
     dz = m.stroke_mm / 2.0
     es = s["n_spec_elems"]
-    dt = 1.0 / m.increments
-    dt0 = m.first_increment if 0.0 < m.first_increment < dt else dt
     lines = ["*HEADING", f"flowcurve upsetting d0={m.d0_mm:g} h0={m.h0_mm:g} h_end={m.h_end_mm:g} mu={m.mu:g}", "*NODE"]
     lines += [f"{k},{r:.9g},{z:.9g}" for k, (r, z) in enumerate(mesh.nodes, start=1)]
     lines += ["*ELEMENT,TYPE=CAX4R,ELSET=SPEC"] + [f"{k},{a},{b},{c},{d}" for k, (a, b, c, d) in enumerate(mesh.elements[:es], start=1)]
@@ -209,7 +220,7 @@ def upsetting_deck(m: UpsettingModel) -> str:
     lines += ["*SURFACE,NAME=SSLAVE,TYPE=ELEMENT", *[f"{e},S{f}" for e, f in s["slave"]],
               "*SURFACE,NAME=SMASTER,TYPE=ELEMENT", *[f"{e},S{f}" for e, f in s["master"]]]
     lines += ["*MATERIAL,NAME=SPECIMEN", "*ELASTIC", f"{m.E_MPa:.9g},{m.nu:.9g}", "*PLASTIC",
-              *[f"{sig:.9g},{e:.9g}" for e, sig in zip(m.eps_p, m.stress_MPa)],
+              *plastic_lines(m.eps_p, m.stress_MPa),
               "*MATERIAL,NAME=CARBIDE", "*ELASTIC", f"{CARBIDE_E_MPa:.9g},{CARBIDE_NU}",
               "*SOLID SECTION,ELSET=SPEC,MATERIAL=SPECIMEN", "*SOLID SECTION,ELSET=PLAT,MATERIAL=CARBIDE",
               "*SURFACE INTERACTION,NAME=SI", "*SURFACE BEHAVIOR,PRESSURE-OVERCLOSURE=LINEAR", f"{CONTACT_SLOPE_MPa_per_mm:.3g},1.0"]
@@ -217,7 +228,7 @@ def upsetting_deck(m: UpsettingModel) -> str:
         lines += ["*FRICTION", f"{m.mu:.9g},{m.stick_slope_MPa_per_mm:.3g}"]
     lines += ["*CONTACT PAIR,INTERACTION=SI,TYPE=SURFACE TO SURFACE", "SSLAVE,SMASTER",
               "*BOUNDARY", "AXIS,1,1,0.", "BOT,2,2,0.",
-              "*STEP,NLGEOM,INC=10000", "*STATIC", f"{dt0:.9g},1.,{min(dt0, dt * 1e-3):.9g},{dt:.9g}",
+              "*STEP,NLGEOM,INC=10000", "*STATIC", static_step(m.increments, m.first_increment),
               "*BOUNDARY", "PLN,1,1,0.", f"PLN,2,2,{-dz:.9g}", f"TOPAX,2,2,{-dz:.9g}",
               "*NODE PRINT,NSET=PLN,TOTALS=ONLY", "RF", "*NODE PRINT,NSET=OUTER", "U", "*END STEP"]
     return "\n".join(lines) + "\n"
