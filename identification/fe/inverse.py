@@ -212,7 +212,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     force_rms = float(np.sqrt(np.mean(r_force**2)))
     d_res_mm = float(r[FORCE_POINTS] / w_d * DMAX_SCALE_MM)
     face_res_mm = float(r[FORCE_POINTS + 1] / w_d * DMAX_SCALE_MM) if dface is not None else None
-    warnings = _fit_warnings(force_rms, d_res_mm, mu, sol)
+    warnings = _fit_warnings(force_rms, d_res_mm, mu, sol) + sol.undetermined_warnings([*law_info.keys, "μ"])
     if face_res_mm is not None and not abs(face_res_mm) <= POOR_DMAX_MM:
         warnings.append(f"inverse FE: the fitted model misses the end face dface by {face_res_mm:+.3f} mm")
 

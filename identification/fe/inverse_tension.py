@@ -182,6 +182,7 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
     warnings = list(res.get("warnings", []))
     if res_warning:
         warnings.append(res_warning)
+    warnings += sol.undetermined_warnings(["H", "b"], "inverse FE (tension)")
     if dk is None:
         warnings.append("inverse FE: no post.dk_mm: only the force beyond Fm is fitted, not the neck diameter")
 

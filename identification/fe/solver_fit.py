@@ -4,7 +4,10 @@ scipy ``least_squares`` over a few parameters whose residuals come from one solv
 The Jacobian's finite-difference runs go side by side (:func:`.pool.run_many`: ``workers``
 processes or a Dask ``scheduler``); a parameter set seen before is not run again. A run that
 fails (``run`` returns None) gets residuals of 1e3, which steers the optimiser away from it.
-Uncertainties from the Gauss–Newton covariance (JᵀJ)⁻¹·s², s² = rᵀr/(m − p).
+Uncertainties from the Gauss–Newton covariance (JᵀJ)⁻¹·s², s² = rᵀr/(m − p), taken through the
+SVD of the scaled Jacobian (:func:`parameter_stderr`): a parameter the residuals do not tell at
+the solution — a null direction of J, or a Jacobian column whose runs on both sides failed — has
+no standard error (NaN, ``SolverFit.undetermined``), never a clipped 0.
 """
 
 from __future__ import annotations
@@ -19,6 +22,32 @@ from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.pool import run_many
 
 FAILED_RUN_RESIDUAL = 1e3
+RCOND = 1e-7  # singular values below RCOND·s_max of the scaled Jacobian are null directions (finite-difference noise)
+
+
+def parameter_stderr(jac, residuals, x_scale=None, *, rcond: float = RCOND) -> tuple[np.ndarray, tuple[int, ...]]:
+    """(standard errors, undetermined parameters) of a least-squares solution.
+
+    Gauss–Newton covariance C = (JᵀJ)⁻¹·s², s² = rᵀr/(m − rank J), computed as V·diag(1/σ²)·Vᵀ·s² from
+    the SVD J·D = U·diag(σ)·Vᵀ of the Jacobian scaled by D = diag(x_scale) (so the rank test does
+    not depend on the parameters' units). A parameter with a share (|V_ki| > √rcond) in a direction
+    whose σ_i ≤ rcond·σ_max is not told by the residuals: its standard error is NaN, not the 0 or
+    the negative variance an explicit inverse of a singular JᵀJ gives.
+    """
+    J = np.asarray(jac, float)
+    r = np.asarray(residuals, float)
+    m, p = J.shape
+    d = np.ones(p) if x_scale is None else np.asarray(x_scale, float)
+    if not np.all(np.isfinite(J)):
+        return np.full(p, np.nan), tuple(range(p))
+    _, sv, vt = np.linalg.svd(J * d, full_matrices=False)
+    null = sv <= rcond * (sv[0] if sv.size and sv[0] > 0 else 1.0)
+    s2 = float(r @ r) / max(1, m - int((~null).sum()))  # the degrees of freedom count the parameters the data tell
+    undetermined = tuple(int(k) for k in range(p) if np.any(np.abs(vt[null, k]) > np.sqrt(rcond)))
+    var_scaled = ((vt[~null].T / sv[~null]) ** 2).sum(axis=1) * s2  # diag(V·Σ⁻²·Vᵀ)·s²
+    se = np.sqrt(var_scaled) * np.abs(d)
+    se[list(undetermined)] = np.nan
+    return se, undetermined
 
 
 @dataclass
@@ -32,9 +61,15 @@ class SolverFit:
     status: int
     message: str
     nfev: int
+    undetermined: tuple[int, ...] = ()  # parameters the residuals do not tell at x (stderr NaN)
 
     def optimizer(self) -> dict:
         return {"status": self.status, "message": self.message, "nfev": self.nfev}
+
+    def undetermined_warnings(self, names, what: str = "inverse FE") -> list[str]:
+        """One warning per parameter the residuals do not tell at the solution (no standard error)."""
+        return [f"{what}: the record does not determine {names[k]} at the fit (its value is where the optimiser left it; "
+                f"no standard error: the residuals do not change with it, or its runs failed on both sides)" for k in self.undetermined]
 
 
 def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[Any], np.ndarray], x0, lo, hi, *,
@@ -54,6 +89,7 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     runs = {"count": 0, "solver_s": 0.0}
     memo: dict[tuple, np.ndarray] = {}
+    blind: dict[tuple, list[int]] = {}  # at x: the Jacobian columns whose runs failed on both sides
 
     def evaluate(points: list[np.ndarray]) -> list[np.ndarray]:
         todo = list({tuple(p): p for p in points if tuple(p) not in memo}.values())
@@ -91,7 +127,11 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
             pts[i][i] = 2.0 * x[i] - pts[i][i]
         if flip:
             res = evaluate([x] + pts)
-        return np.column_stack([(res[i + 1] - res[0]) / (pts[i][i] - x[i]) for i in range(x.size)])
+        # a column whose runs failed both ways is unknown, not the 1e3 of a failed run over a step: a zero column
+        # keeps the optimiser from moving on it, and the parameter is reported undetermined if it stays so at the end
+        blind[tuple(x)] = [i for i in range(x.size) if failed(res[i + 1])]
+        return np.column_stack([np.zeros(len(res[0])) if i in blind[tuple(x)] else (res[i + 1] - res[0]) / (pts[i][i] - x[i])
+                                for i in range(x.size)])
 
     starts = [np.asarray(x0, float)] + [np.clip(np.asarray(s, float), lo, hi) for s in other_starts]
     for x0 in starts:  # no Jacobian can be formed around a failed run
@@ -102,11 +142,9 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
                                   f"{len(starts) - 1} other starts (see the log); the fast result is the one to use for this record")
     sol = least_squares(fun, np.asarray(x0, float), jac=jac, bounds=(lo, hi), x_scale=x_scale, xtol=xtol, ftol=ftol,
                         gtol=1e-8, max_nfev=max_nfev)
-    r, J = sol.fun, sol.jac
-    s2 = float(r @ r) / max(1, r.size - sol.x.size)
-    try:
-        se = np.sqrt(np.clip(np.diag(np.linalg.inv(J.T @ J) * s2), 0.0, None))
-    except np.linalg.LinAlgError:
-        se = np.full(sol.x.size, np.nan)
-    return SolverFit(x=sol.x, stderr=se, residuals=r, runs=runs["count"], solver_s=runs["solver_s"],
-                     wall_s=time.perf_counter() - t0, status=int(sol.status), message=str(sol.message), nfev=int(sol.nfev))
+    se, undetermined = parameter_stderr(sol.jac, sol.fun, x_scale)
+    undetermined = tuple(sorted({*undetermined, *blind.get(tuple(sol.x), [])}))
+    se[list(undetermined)] = np.nan
+    return SolverFit(x=sol.x, stderr=se, residuals=sol.fun, runs=runs["count"], solver_s=runs["solver_s"],
+                     wall_s=time.perf_counter() - t0, status=int(sol.status), message=str(sol.message), nfev=int(sol.nfev),
+                     undetermined=undetermined)

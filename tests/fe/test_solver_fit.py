@@ -1,0 +1,94 @@
+"""The solver fit's standard errors: the Gauss–Newton covariance against the closed-form
+standard errors of a straight-line fit, and no standard error (NaN, a warning) for a parameter
+the residuals do not tell — where the explicit inverse of a singular JᵀJ gave a clipped 0
+("μ ± 0.0000" on a record where μ is poorly told). Closed-form "runs", no solver."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from flowcurve.identification.fe.solver_fit import fit_with_solver, parameter_stderr
+
+T = np.linspace(0.0, 4.0, 9)
+NOISE = np.random.default_rng(11).normal(0.0, 0.05, T.size)
+TARGET = 2.0 * T + 1.0 + NOISE
+
+
+class _Out:
+    wall_s, cached = 0.0, False
+
+    def __init__(self, y):
+        self.y = y
+
+
+def _line(x):
+    return _Out(x[0] * T + x[1])
+
+
+def _line_and_idle(x):
+    """y = a·t + b; the third parameter does nothing."""
+    return _Out(x[0] * T + x[1] + 0.0 * x[2])
+
+
+def _line_and_fragile(x):
+    """y = a·t + b; any run with the third parameter off 0.1 fails (a run that stops on both sides)."""
+    return None if abs(x[2] - 0.1) > 1e-12 else _Out(x[0] * T + x[1])
+
+
+def _ols_stderr():
+    """Textbook standard errors of slope and intercept: s/√Sxx and s·√(1/n + t̄²/Sxx)."""
+    n, tm = T.size, T.mean()
+    sxx = float(((T - tm) ** 2).sum())
+    slope = float(((T - tm) * (TARGET - TARGET.mean())).sum()) / sxx
+    icpt = TARGET.mean() - slope * tm
+    s = np.sqrt(float(((TARGET - slope * T - icpt) ** 2).sum()) / (n - 2))
+    return np.array([slope, icpt]), np.array([s / np.sqrt(sxx), s * np.sqrt(1.0 / n + tm**2 / sxx)])
+
+
+KW = dict(lo=[-10.0, -10.0], hi=[10.0, 10.0], n_residuals=T.size, steps=lambda x: np.full(x.size, 1e-4), workers=1)
+
+
+def test_standard_errors_are_the_closed_form_ones_of_a_line():
+    x_ols, se_ols = _ols_stderr()
+    fit = fit_with_solver(_line, lambda o: o.y - TARGET, [1.0, 0.0], KW["lo"], KW["hi"], x_scale=np.array([1.0, 0.1]),
+                          **{k: v for k, v in KW.items() if k not in ("lo", "hi")})
+    np.testing.assert_allclose(fit.x, x_ols, atol=1e-6)
+    np.testing.assert_allclose(fit.stderr, se_ols, rtol=1e-4)
+    assert fit.undetermined == () and fit.undetermined_warnings(["a", "b"]) == []
+
+
+def test_a_parameter_the_residuals_do_not_see_has_no_standard_error():
+    J = np.column_stack([T, np.ones_like(T), np.zeros_like(T)])
+    se, und = parameter_stderr(J, NOISE, [1.0, 1.0, 1.0])
+    assert und == (2,) and np.isnan(se[2]) and np.all(np.isfinite(se[:2]))
+    # two parameters that act only as their sum: neither is told, whatever their units
+    se, und = parameter_stderr(np.column_stack([T, T * 1e3, np.ones_like(T)]), NOISE, [1.0, 1e-3, 1.0])
+    assert und == (0, 1) and np.isnan(se[:2]).all() and np.isfinite(se[2])
+    # the explicit inverse this replaces: a singular JᵀJ, and no usable variance from it
+    with pytest.raises(np.linalg.LinAlgError):
+        np.linalg.inv(J.T @ J)
+
+
+def test_the_fit_reports_an_idle_parameter_undetermined():
+    lo, hi = [-10.0, -10.0, -1.0], [10.0, 10.0, 1.0]
+    kw = {k: v for k, v in KW.items() if k not in ("lo", "hi")}
+    fit = fit_with_solver(_line_and_idle, lambda o: o.y - TARGET, [1.0, 0.0, 0.1], lo, hi, x_scale=np.ones(3), **kw)
+    x_ols, se_ols = _ols_stderr()
+    np.testing.assert_allclose(fit.x[:2], x_ols, atol=1e-6)
+    np.testing.assert_allclose(fit.stderr[:2], se_ols, rtol=1e-4)
+    assert fit.undetermined == (2,) and np.isnan(fit.stderr[2])
+    (w,) = fit.undetermined_warnings(["a", "b", "μ"])
+    assert "does not determine μ" in w
+
+
+def test_runs_failing_on_both_sides_leave_the_parameter_undetermined_not_sharp():
+    """Before: the column (1e3 − r)/h of the failed runs read as an enormous sensitivity, and the
+    parameter came out with a standard error of 0."""
+    lo, hi = [-10.0, -10.0, -1.0], [10.0, 10.0, 1.0]
+    kw = {k: v for k, v in KW.items() if k not in ("lo", "hi")}
+    fit = fit_with_solver(_line_and_fragile, lambda o: o.y - TARGET, [1.0, 0.0, 0.1], lo, hi, x_scale=np.ones(3), **kw)
+    x_ols, se_ols = _ols_stderr()
+    np.testing.assert_allclose(fit.x, [*x_ols, 0.1], atol=1e-6)  # the blind column did not push it anywhere
+    np.testing.assert_allclose(fit.stderr[:2], se_ols, rtol=1e-4)
+    assert fit.undetermined == (2,) and np.isnan(fit.stderr[2])
