@@ -13,7 +13,8 @@ finite-difference runs go side by side (:func:`.pool.run_many`: ``workers`` proc
 ``scheduler``); repeated parameter sets come from the run cache. Residuals: force misfit in % at
 ``FORCE_POINTS`` strokes (ε ≥ 0.02), and the dmax (and dface) misfit in units of
 ``DMAX_SCALE_MM`` weighted by √(force points) so the shape counts as much as the whole force
-curve. Uncertainties from (JᵀJ)⁻¹·s².
+curve. Uncertainties from (JᵀJ)⁻¹·s² (:func:`.solver_fit.parameter_stderr`); a parameter the
+residuals do not tell at the fit has none (null) and a warning.
 """
 
 from __future__ import annotations
