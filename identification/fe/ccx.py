@@ -4,11 +4,12 @@ Each run gets its own temporary folder and ``OMP_NUM_THREADS=1`` (two one-thread
 side beat one two-thread job, CALCULIX.md). A run counts as failed when ccx exits non-zero,
 prints ``*ERROR`` (it can exit 0 after one), or when the last printed step time is below 1.0
 (unconverged: too many cutbacks). One ``*ERROR`` does not fail a run that printed its converged
-state at step time 1: with cutbacks, ccx's summed time can end 10⁻⁶ short of 1, and the extra
-10⁻⁶ increment it then tries is below the smallest increment ("increment size smaller than
-minimum") — 21 of 159 runs of one inverse fit were thrown away for that. The cache folder is ``$FLOWCURVE_FE_CACHE`` or
-``~/.cache/flowcurve/fe``; a cached result is keyed by the SHA-256 of the deck text and the
-ccx version line, so a changed deck or solver is a new run.
+state at step time 1 (:func:`reached_the_end`): with cutbacks, ccx's summed time can end 10⁻⁶
+short of 1, and the extra 10⁻⁶ increment it then tries is below the smallest increment
+("increment size smaller than minimum") — 21 of 159 runs of one inverse fit were thrown away
+for that. The cache folder is ``$FLOWCURVE_FE_CACHE`` or ``~/.cache/flowcurve/fe``; a cached
+result is keyed by the SHA-256 of the deck text and the ccx version line, so a changed deck or
+solver is a new run.
 """
 
 from __future__ import annotations

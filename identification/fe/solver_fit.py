@@ -4,7 +4,7 @@ scipy ``least_squares`` over a few parameters whose residuals come from one solv
 The Jacobian's finite-difference runs go side by side (:func:`.pool.run_many`: ``workers``
 processes or a Dask ``scheduler``); a parameter set seen before is not run again. A run that
 fails (``run`` returns None) gets residuals of 1e3, which steers the optimiser away from it.
-Uncertainties from the Gauss–Newton covariance (JᵀJ)⁻¹·s², s² = rᵀr/(m − p), taken through the
+Uncertainties from the Gauss–Newton covariance (JᵀJ)⁻¹·s², s² = rᵀr/(m − rank J), taken through the
 SVD of the scaled Jacobian (:func:`parameter_stderr`): a parameter the residuals do not tell at
 the solution — a null direction of J, or a Jacobian column whose runs on both sides failed — has
 no standard error (NaN, ``SolverFit.undetermined``), never a clipped 0.
