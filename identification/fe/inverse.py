@@ -83,9 +83,14 @@ def _run(problem: _Problem, x) -> _Run | None:
     from flowcurve.identification.fe.ccx import SolverError
     from flowcurve.identification.fe.make_table import RETRY_SETTINGS
 
+    tried = []
     for settings in ({}, *RETRY_SETTINGS):
+        model = _model(problem, x, **settings)
+        if model in tried:  # a retry on the inverse's own increments is the first run again
+            continue
+        tried.append(model)
         try:
-            r = simulate_upsetting(_model(problem, x, **settings))
+            r = simulate_upsetting(model)
             break
         except SolverError as exc:
             log.info("inverse FE: run at %s%s failed (%s)", x, f" with {settings}" if settings else "", exc)
