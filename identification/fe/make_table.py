@@ -283,16 +283,21 @@ def retry_stopped(out: Path = DEFAULT_OUT, *, workers: int = 2, scheduler=None, 
 
 
 def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_COPY) -> dict:
-    """The virtual rig's copy of the table's runs: force factor and bulge (less the μ = 0 run's
-    mesh offset) on a strain grid starting at 0, NaN where a run stopped; provenance beside it."""
+    """The virtual rig's copy of the table's runs: force factor and bulge (as measured on the
+    unloaded specimen, :func:`~flowcurve.identification.fe.table.bulge_as_measured`) on a strain
+    grid starting at 0, NaN where a run stopped; provenance beside it."""
+    from flowcurve.identification.fe.table import bulge_as_measured
+
     table, out = Path(table), Path(out)
     with np.load(table) as z:
         strain = np.concatenate([[0.0], z["strain"]])
-        factor, bulge = z["force_factor"], z["bulge_dR_over_h"]
-        if factor.ndim == 5:  # the rig's response is over n only: the runs of the table's first Swift ε0
-            factor, bulge = factor[:, :, :, 0], bulge[:, :, :, 0]
+        material = json.loads(table.with_suffix(".json").read_text())["material"]
+        measured = bulge_as_measured(z["bulge_dR_over_h"], z["force_factor_raw"], z["strain"], z["h0_d0"], z["n"], z["eps0"],
+                                     K_MPa=material["K_MPa"], E_MPa=material["E_MPa"], nu=material["nu"])
+        # the rig's response is over n only: the runs of the table's first Swift ε0
+        factor, bulge = z["force_factor"][:, :, :, 0], measured[:, :, :, 0]
         pad = lambda a, v: np.concatenate([np.full(a.shape[:3] + (1,), v), a], axis=3)  # noqa: E731
-        bulge = pad(bulge - bulge[0][None], 0.0)  # μ = 0 has no barrel: its ΔR/h is the mesh's
+        bulge = pad(bulge, 0.0)
         factor = pad(factor, 1.0)
         if "start_force_factor" in z:  # the start's factor on ε_p (the rig reads the response at ε_p), before the first strain
             early = z["start_plastic_strain"] < strain[1]
@@ -305,10 +310,11 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
     source = json.loads(table.with_suffix(".json").read_text()) if table.with_suffix(".json").exists() else {}
     meta = {
         "what": "the virtual rig's compression response: force factor F/(sigma_f*A) (normalised by mu = 0) and "
-                "bulge dR/h (less the mu = 0 run's mesh offset) over mu x h0/d0 x Swift n x strain ln(h0/h)",
+                "bulge dR/h as measured on the unloaded specimen (elastic spring-back h(1 + s/E), d(1 - nu*s/E); "
+                "no barrel at mu = 0) over mu x h0/d0 x Swift n x strain ln(h0/hk)",
         "axes": {"mu": "Coulomb friction coefficient", "h0_d0": "initial height/diameter",
                  "n": "Swift hardening exponent (the table's first Swift eps0)",
-                 "strain": "ln(h0/h), leading 0 added (factor 1, bulge 0); below the first long-run strain the short "
+                 "strain": "ln(h0/h) under load for the force factor, ln(h0/hk) after unloading for the bulge, leading 0 added (factor 1, bulge 0); below the first long-run strain the short "
                            "runs' plastic strain (the table's start)"},
         "nan": "strain points a CalculiX run did not reach",
         "copied_from": str(table.name), "copied_at": generator.now_utc(),

@@ -4,9 +4,10 @@ The table holds, for μ × h0/d0 × Swift hardening (n, ε0) × strain ε = ln(h
 
 * the force factor F/(σ_f·A), A = π·d0²·h0/(4h), normalised by the μ = 0 run (CalculiX's own
   0.3–0.6 % mesh deficit cancels);
-* the bulge ΔR/h (3.29), less the μ = 0 run's (the same mesh offset, ~0.003 at ε = 0.9);
-* the original end face's diameter over d_n (the same offset removed): near sticking it still
-  moves with μ where the bulge has stopped;
+* the bulge ΔR/h (3.29) as it is measured, on the unloaded specimen against ln(h0/hk)
+  (:func:`bulge_as_measured`; 0 at μ = 0);
+* the original end face's diameter over d_n under load, less the μ = 0 run's (the rim node's
+  mesh lag, 0.2 %): near sticking it still moves with μ where the bulge has stopped;
 * the start of the curve, below the first strain (0.02): the force factor of short runs on the
   plastic strain ε_p (``start_plastic_strain``), read at the curve's own ε_p where it is given.
 
@@ -237,7 +238,13 @@ def _load(path: str) -> UpsettingTable:
             eps0 = np.array([0.002])
             factor, bulge = factor[:, :, :, None], bulge[:, :, :, None]
         pad = lambda a, v: np.concatenate([np.full(a.shape[:4] + (1,), v), a], axis=4)  # noqa: E731
-        bulge = pad(bulge - bulge[0][None], 0.0)  # less the μ = 0 mesh offset
+        material = _table_material(p)
+        if material is not None and "force_factor_raw" in z and "eps0" in z:
+            bulge = bulge_as_measured(bulge, z["force_factor_raw"], z["strain"], z["h0_d0"], z["n"], eps0, **material)
+        else:  # an older table without its raw force or material: under load, less the μ = 0 run's largest radius
+            log.warning("%s: no raw force factor or material in the FE table; its bulge is read under load (regenerate the table)", p)
+            bulge = bulge - bulge[0][None]
+        bulge = pad(bulge, 0.0)
         factor = pad(factor, 1.0)
         reached = np.where(np.isnan(factor), -np.inf, strain).max(axis=-1)
         start = {}  # the optional arrays of later tables
@@ -252,6 +259,73 @@ def _load(path: str) -> UpsettingTable:
     if meta_path.exists():
         object.__setattr__(tab, "meta", json.loads(meta_path.read_text()))
     return tab
+
+
+def _table_material(path: Path) -> dict | None:
+    """The Swift K, E and ν the table's runs were made with (its provenance), or None."""
+    meta_path = path.with_suffix(".json")
+    if not meta_path.exists():
+        return None
+    material = json.loads(meta_path.read_text()).get("material", {})
+    if not all(k in material for k in ("K_MPa", "E_MPa", "nu")):
+        return None
+    return {"K_MPa": float(material["K_MPa"]), "E_MPa": float(material["E_MPa"]), "nu": float(material["nu"])}
+
+
+def swift_stress_on_grid(strain, n, eps0, K_MPa: float, E_MPa: float, iterations: int = 8) -> np.ndarray:
+    """σ_f = K·(ε0 + ε_p)^n of the table's runs at the height strains ``strain``, with
+    ε_p = ε − σ_f/E (fixed point, σ/E ≪ 1) → shape (n, ε0, strain)."""
+    # (3.7) ε_p = ε − σ/E
+    e = np.asarray(strain, dtype=float)[None, None, :]
+    n = np.asarray(n, dtype=float)[:, None, None]
+    eps0 = np.asarray(eps0, dtype=float)[None, :, None]
+    eps_p = np.broadcast_to(e, np.broadcast_shapes(e.shape, n.shape, eps0.shape))
+    for _ in range(iterations):
+        eps_p = np.clip(e - K_MPa * np.power(eps0 + eps_p, n) / E_MPa, 0.0, None)
+    return K_MPa * np.power(eps0 + eps_p, n)
+
+
+def bulge_as_measured(bulge, factor_raw, strain, h0_d0, n, eps0, *, K_MPa: float, E_MPa: float, nu: float) -> np.ndarray:
+    """The runs' bulge ΔR/h as it is measured: on the unloaded specimen, against its height hk.
+
+    ``bulge`` (μ, h0/d0, n, ε0, ε) is what the runs printed under load: (d_max − d_n)/(2h) with
+    d_n = d0·√(h0/h) at ε = ln(h0/h). Under load the specimen is elastically compressed: its
+    volume is V0·(1 − (1 − 2ν)·σ/E), so even without friction d_max lies below d_n (by
+    (½ − ν)·σ/E·d_n, ~0.001 in ΔR/h at ε 0.7). After the test the elastic part springs back,
+    h → h·(1 + σ/E) and d → d·(1 − ν·σ/E), σ = F/A the mean axial stress (``factor_raw``·σ_f),
+    the same spring-back the inverse FE and the FE records apply. The result is on the same grid
+    of the measured strain ln(h0/hk) (a run's last ~0.005 of strain continued linearly); NaN
+    where a run did not reach.
+
+    The μ = 0 row is 0: without friction there is no barrel. The μ = 0 runs' largest radius is
+    the rim corner's mesh bump (at 0.8–0.95 of the half height; at d0 6, h 3 it stands 0.0071 mm
+    above the mid-plane with 24 elements, 0.0022 mm with 64, while the mid-plane radius is the
+    homogeneous one within 0.8 µm), not a barrel; with friction the barrel at mid-height is the
+    largest radius. The table used to subtract that bump from every row and read the bulge under
+    load: together 0.0006–0.0018 low in ΔR/h at ε 0.7, μ 0.03–0.04 high near sticking.
+    """
+    # (3.28) d_n = d0·√(h0/h); (3.29) ΔR/h = (d_max − d_n)/(2h); elastic spring-back h(1 + σ/E), d(1 − ν·σ/E)
+    bulge = np.asarray(bulge, dtype=float)
+    eps_l = np.asarray(strain, dtype=float)
+    s = np.asarray(factor_raw, dtype=float) * swift_stress_on_grid(eps_l, n, eps0, K_MPa, E_MPa)[None, None] / E_MPa
+    h_l = np.asarray(h0_d0, dtype=float)[None, :, None, None, None] * np.exp(-eps_l)  # in units of d0
+    d_max = np.exp(eps_l / 2.0) + 2.0 * h_l * bulge
+    h_u = h_l * (1.0 + s)
+    eps_u = eps_l - np.log1p(s)
+    measured = (d_max * (1.0 - nu * s) - np.exp(eps_u / 2.0)) / (2.0 * h_u)
+    out = np.full(bulge.shape, np.nan)
+    for run in np.ndindex(bulge.shape[:-1]):
+        ok = np.isfinite(measured[run]) & np.isfinite(eps_u[run])
+        if ok.sum() < 2:
+            continue
+        x, y = eps_u[run][ok], measured[run][ok]
+        reach = eps_l[ok][-1]  # the loaded strain it got to: the grid up to there is the run's
+        row = np.interp(eps_l, x, y)
+        beyond = eps_l > x[-1]
+        row[beyond] = y[-1] + (eps_l[beyond] - x[-1]) * (y[-1] - y[-2]) / (x[-1] - x[-2])
+        out[run] = np.where(eps_l <= reach + 1e-12, row, np.nan)
+    out[0] = 0.0
+    return out
 
 
 def continue_stopped_runs(values: np.ndarray) -> np.ndarray:

@@ -5,7 +5,8 @@
 strain ε = ln(h0/h):
 
 * ``force_factor`` F/(σ_f·A), A = π·d0²·h0/(4h), normalised by the μ = 0 run;
-* ``bulge_dR_over_h`` ΔR/h of the barrel, less the μ = 0 run's mesh offset.
+* ``bulge_dR_over_h`` ΔR/h of the barrel as measured on the unloaded specimen, against ln(h0/hk)
+  (the table's ``bulge_as_measured``; 0 at μ = 0).
 
 The rig layer may not import :mod:`flowcurve.identification`, so this module reads the copy
 and interpolates it with code of its own. What it does with the table's gaps and edges:

@@ -4,8 +4,11 @@ steps, noise and frame compliance) to within 2 % over ε_p 0.05–0.6 and μ ± 
 
 The records are made with a finer mesh (30 core elements, a d0/30 rim layer; 24 for the one
 case the finer mesh cannot finish) than the table's, 70 increments and a resolved elastic line.
+The table's bulge is the one measured on the unloaded specimen (table.bulge_as_measured); read
+under load and less the μ = 0 runs' rim-corner mesh bump, as it was, it read μ 0.03–0.04 high
+near sticking (steel 45 0.288 for 0.25, the seed law 0.319 for 0.28).
 Known limits, measured and kept here as strict expected failures so a fix shows up: where the
-barrel hardly grows with μ (near sticking) one 0.01 mm of dmax moves μ by 0.04–0.05 (the reported
+barrel hardly grows with μ (near sticking) one 0.01 mm of dmax moves μ by 0.03–0.1 (the reported
 friction_mu_range then opens to the table's largest μ), and near sticking the force itself dips
 by 1–2 % each time a node of the side folds onto the platen, at other strains in the record than
 in the table's runs (which on h0/d0 ≥ 1.6 at μ ≥ 0.15 also stop at ε 0.27–0.9 and are continued
@@ -71,10 +74,8 @@ SEED_LAW_CAUSE = ("measured against the record's own factor (its run over a μ =
 VOCE_CAUSE = ("Voce at μ 0.17, h0/d0 1.8, to ε 0.7: the bulge hardly grows with μ there (0.01 mm of dmax moves μ by 0.1) and the "
               "table's runs at μ ≥ 0.15 on h0/d0 1.6–2.5 stop near ε 0.4–0.7 (also on 80 or 50 increments) and are continued beyond — both flagged. (Its "
               "record used to stop at ε 0.60, where dmax read 0.190; it now runs to 0.7 with 80 increments)")
-LIMITS = {2: "steel 45 at μ 0.25, h0/d0 1: the barrel hardly grows with μ there (one 0.01 mm of dmax moves μ by 0.05): μ read 0.288 "
-             "(friction_mu_range 0.25–0.35 holds the truth), flagged; the curve within 1.9 %",
-          3: "μ read 0.214 (the curve within 1.4 %): " + VOCE_CAUSE,
-          5: "seed law at μ 0.28, h0/d0 1.2: μ 0.319 near sticking (flagged); the curve within 1.8 %"}
+LIMITS = {3: "μ read 0.220 (the curve within 1.4 %): " + VOCE_CAUSE,
+          5: "seed law at μ 0.28, h0/d0 1.2: μ read 0.279, the curve 2.12 % off at ε 0.45 (flagged): " + SEED_LAW_CAUSE}
 CASES = [pytest.param(c, marks=pytest.mark.xfail(strict=True, reason=LIMITS[k])) if k in LIMITS else c for k, c in enumerate(VALIDATION_CASES)]
 
 
@@ -106,10 +107,8 @@ def test_a_record_the_default_misses_is_flagged(case):
             assert flagged, (end_face, ident.result["friction_mu"], err)
 
 
-RANGE_LIMITS = {3: "friction_mu_range 0.179–0.35 misses 0.17 by 0.009 (the range counts the dmax resolution, not the continued "
-                   "runs beyond ε 0.40, which a warning names): " + VOCE_CAUSE,
-                5: "seed law at μ 0.28: friction_mu_range 0.286–0.35 misses 0.28 by 0.006 (the range counts the dmax "
-                   "resolution, not the table's fold-over dips and continued runs beyond ε 0.52, which a warning names)"}
+RANGE_LIMITS = {3: "friction_mu_range 0.184–0.35 misses 0.17 by 0.014 (the range counts the dmax resolution, not the continued "
+                   "runs beyond ε 0.40, which a warning names): " + VOCE_CAUSE}
 
 
 @pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.xfail(strict=True, reason=RANGE_LIMITS[k])) if k in RANGE_LIMITS else c
@@ -129,8 +128,8 @@ FACE_LIMITS = {5: "seed law at μ 0.28, h0/d0 1.2: the end face gives μ 0.287, 
                                   for k, c in enumerate(VALIDATION_CASES)], ids=[c["name"] for c in VALIDATION_CASES])
 def test_with_the_end_face_the_default_reads_fe_records(case):
     """With the original end face measured (post.dface_mm; the record's rim node, another mesh
-    than the table's), the default reads μ from it: steel 45, whose barrel cannot tell μ near
-    sticking (0.288 for 0.25 from dmax), now reads 0.250 and its curve 1.5 % off."""
+    than the table's), the default reads μ from it: steel 45, whose barrel hardly tells μ near
+    sticking (dmax ± 0.01 mm spans μ 0.22–0.28), reads 0.250 and its curve 1.5 % off."""
     ident, err = _read(case, end_face=True)
     assert ident.result["friction_details"]["fe_table"]["mu_basis"] == "original end face (dface)"
     assert ident.result["friction_mu"] == pytest.approx(case["mu"], abs=0.02)
@@ -139,7 +138,7 @@ def test_with_the_end_face_the_default_reads_fe_records(case):
 
 def test_the_end_face_tells_mu_on_every_record():
     """μ from the end face within 0.015 of the truth on all six records (measured: at most
-    0.0097, Voce at μ 0.17; from the bulge up to 0.062), its range at most 0.01 wide."""
+    0.0079, Voce at μ 0.17; from the bulge up to 0.050), its range at most 0.01 wide."""
     for case in VALIDATION_CASES:
         ident, _ = _read(case, end_face=True)
         lo, hi = ident.result["friction_mu_range"]
