@@ -35,6 +35,7 @@ from typing import Callable
 import numpy as np
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.fe.upsetting import MESH_BULGE_UNCERTAINTY, MESH_FACE_UNCERTAINTY
 
 FRICTION_METHODS = ("fe_table", "bulge_regression", "ebrahimi_najafizadeh")
 DEFAULT_FRICTION_METHOD = "fe_table"
@@ -373,17 +374,20 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
     if face is None:
         extra.update(mu_basis="bulge (dmax)", sensitivity=_fe_mu_sensitivity(table, mu, h0_d0, hardening, eps_k, hk_mm),
                      mu_range=_fe_mu_range(table, delta_r, hk_mm, h0_d0, hardening, eps_k),
-                     mu_range_basis=f"the bulge with dmax ± {DIAMETER_RESOLUTION_MM} mm")
+                     mu_range_basis=f"the bulge with dmax ± {DIAMETER_RESOLUTION_MM} mm and the FE mesh's ± {MESH_BULGE_UNCERTAINTY:.0%} of it")
     else:
-        half = DIAMETER_RESOLUTION_MM / d_n
-        lo, hi = (table.mu_from_face(min(face + sign * half, 1.0), h0_d0, n, eps_k, eps0=eps0, clamp=True) for sign in (1.0, -1.0))
+        def face_mu(half):
+            return [table.mu_from_face(min(face + sign * half, 1.0), h0_d0, n, eps_k, eps0=eps0, clamp=True) for sign in (1.0, -1.0)]
+
+        lo, hi = face_mu(face_half_width(d_n))
+        lo_res, hi_res = face_mu(DIAMETER_RESOLUTION_MM / d_n)
         try:
             bulge_mu = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)[0]
         except IdentificationError:
             bulge_mu = None
         extra.update(mu_basis="original end face (dface)", mu_from_bulge=bulge_mu, d_face_over_d_n=face,
-                     sensitivity={"mu_per_dface_resolution": max(hi - lo, 0.0) / 2.0}, mu_range=[lo, hi],
-                     mu_range_basis=f"the end face with dface ± {DIAMETER_RESOLUTION_MM} mm")
+                     sensitivity={"mu_per_dface_resolution": max(hi_res - lo_res, 0.0) / 2.0}, mu_range=[lo, hi],
+                     mu_range_basis=f"the end face with dface ± {DIAMETER_RESOLUTION_MM} mm and the FE mesh's ± {MESH_FACE_UNCERTAINTY} of d/d_n")
     outside = _outside_table(table, h0_d0, n, eps0)
     if outside:
         extra["outside_table"] = outside
@@ -408,13 +412,26 @@ def _fe_mu_sensitivity(table, mu: float, h0_d0: float, hardening: tuple[float, f
     return {"dR_mm_per_mu": slope_mm, "mu_per_dmax_resolution": DIAMETER_RESOLUTION_MM / 2.0 / slope_mm}
 
 
+def bulge_half_width(delta_r_mm: float) -> float:
+    """The uncertainty of a bulge ΔR (mm) against the FE table or model: half of dmax's
+    resolution and the mesh's share of ΔR (:data:`~.fe.upsetting.MESH_BULGE_UNCERTAINTY`), in quadrature."""
+    return math.hypot(DIAMETER_RESOLUTION_MM / 2.0, MESH_BULGE_UNCERTAINTY * delta_r_mm)
+
+
+def face_half_width(d_n_mm: float) -> float:
+    """The uncertainty of the end face's d/d_n against the FE table or model: dface's resolution
+    over d_n and the mesh's :data:`~.fe.upsetting.MESH_FACE_UNCERTAINTY`, in quadrature."""
+    return math.hypot(DIAMETER_RESOLUTION_MM / d_n_mm, MESH_FACE_UNCERTAINTY)
+
+
 def _fe_mu_range(table, delta_r_mm: float, hk_mm: float, h0_d0: float, hardening: tuple[float, float], eps: float) -> list[float]:
-    """[μ_lo, μ_hi]: the μ the table reads for dmax one resolution (0.01 mm) below and above the
-    measured one. Near sticking the barrel stops growing with μ and the interval opens up to the
-    table's largest μ: what the bulge can tell, stated rather than hidden in a point value."""
-    # ΔR ± δd/2 (3.29) inverted at the record's (h0/d0, n, ε0, ε)
+    """[μ_lo, μ_hi]: the μ the table reads for the bulge ΔR less and plus its uncertainty
+    (:func:`bulge_half_width`: dmax's resolution, 0.01 mm, and the mesh's share of ΔR). Near
+    sticking the barrel stops growing with μ and the interval opens up to the table's largest μ:
+    what the bulge can tell, stated rather than hidden in a point value."""
+    # ΔR ± √((δd/2)² + (u·ΔR)²) (3.29) inverted at the record's (h0/d0, n, ε0, ε)
     n, eps0 = hardening
-    half = DIAMETER_RESOLUTION_MM / 2.0
+    half = bulge_half_width(delta_r_mm)
     return [table.mu_from_bulge(max(delta_r_mm + sign * half, 0.0) / hk_mm, h0_d0, n, eps, eps0=eps0, clamp=True) for sign in (-1.0, 1.0)]
 
 

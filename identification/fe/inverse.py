@@ -13,8 +13,13 @@ finite-difference runs go side by side (:func:`.pool.run_many`: ``workers`` proc
 ``scheduler``); repeated parameter sets come from the run cache. Residuals: force misfit in % at
 ``FORCE_POINTS`` strokes (ε ≥ 0.02), and the dmax (and dface) misfit in units of
 ``DMAX_SCALE_MM`` weighted by √(force points) so the shape counts as much as the whole force
-curve. Uncertainties from (JᵀJ)⁻¹·s² (:func:`.solver_fit.parameter_stderr`); a parameter the
-residuals do not tell at the fit has none (null) and a warning.
+curve. Uncertainties from the weighted Gauss–Newton covariance (:func:`.solver_fit.parameter_stderr`):
+the force points with the scatter of their own misfit, dmax and dface with what is known of them —
+their resolution (0.01 mm) and the mesh's share of the shape (:data:`.upsetting.MESH_BULGE_UNCERTAINTY`,
+:data:`.upsetting.MESH_FACE_UNCERTAINTY`). The fit meets one diameter almost exactly, so its own
+residual cannot tell how well μ is known; near sticking, where dmax hardly moves with μ, μ ± its
+standard error is then wide, and a warning says so beyond ±0.02. A parameter the residuals do not
+tell at the fit has no standard error (null) and a warning.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ import pandas as pd
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.solver_fit import fit_with_solver
+from flowcurve.identification.friction import bulge_half_width, face_half_width
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 from flowcurve.identification.outcome import Identification
@@ -43,6 +49,7 @@ MU_BOUNDS = (0.0, 0.35)
 REL_STEP = 0.01  # finite-difference step, relative (absolute 0.005 for μ)
 # a warm start whose run stops (near sticking, or a tall specimen folding onto the platen at some μ) is moved in μ
 START_MU_STEPS = (-0.01, 0.01, -0.02, 0.02)
+MU_TOLD = 0.02  # a μ standard error beyond this is said to be poorly told (as the fast method's dmax sensitivity)
 
 
 @dataclass(frozen=True)
@@ -192,6 +199,13 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     x0 = np.clip(x0, lo + 1e-9, np.where(np.isfinite(hi), hi - 1e-9, np.inf))
 
     w_d = math.sqrt(FORCE_POINTS)
+    # what is known of the shape rows beforehand (diameters, mm): resolution and the mesh's share, in quadrature
+    hk = record.positive("post.hk_mm") or problem.h_end
+    d_n = d0 * math.sqrt(h0 / hk)  # (3.28)
+    shape_sigma = {"dmax": 2.0 * bulge_half_width(max(dmax - d_n, 0.0) / 2.0)}
+    if dface is not None:
+        shape_sigma["dface"] = face_half_width(d_n) * d_n
+    row_sigma = np.array([np.nan] * FORCE_POINTS + [v * w_d / DMAX_SCALE_MM for v in shape_sigma.values()])
 
     def residuals_of(out: _Run) -> np.ndarray:
         r_f = 100.0 * (np.interp(s_pts, out.stroke_mm, out.force_N) - f_pts) / f_pts
@@ -209,7 +223,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     x_scale[-1] = 0.05
     sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
                           x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress,
-                          other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS])
+                          other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma)
     r, se = sol.residuals, sol.stderr
     params = dict(zip(law_info.names, map(float, sol.x[:-1])))
     mu = float(sol.x[-1])
@@ -221,6 +235,10 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     warnings = _fit_warnings(force_rms, d_res_mm, mu, sol) + sol.undetermined_warnings([*law_info.keys, "μ"])
     if face_res_mm is not None and not abs(face_res_mm) <= POOR_DMAX_MM:
         warnings.append(f"inverse FE: the fitted model misses the end face dface by {face_res_mm:+.3f} mm")
+    if se[-1] > MU_TOLD:  # NaN (undetermined) is warned above
+        told_by = "dmax and dface" if dface is not None else "dmax (the faces nearly stick; the original end face, post.dface_mm, would tell it)"
+        warnings.append(f"inverse FE: μ {mu:.3f} ± {se[-1]:.3f} is poorly told by {told_by}: dmax is known to ± "
+                        f"{shape_sigma['dmax']:.3f} mm (its resolution and the FE mesh's share of the bulge), and μ moves it little here")
 
     e_hi = float(fast.result["hardening"]["strain_range"][1]) if fast.result.get("hardening") else float(strain.max())
     grid = np.linspace(0.002, e_hi, 200)
@@ -234,7 +252,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         "hardening": hardening,
         "inverse_fe": {
             "law": law_choice,
-            "mu": mu, "mu_stderr": float(se[-1]), "solver_runs": sol.runs, "solver_s": round(sol.solver_s, 1),
+            "mu": mu, "mu_stderr": float(se[-1]), "shape_sigma_mm": shape_sigma, "solver_runs": sol.runs, "solver_s": round(sol.solver_s, 1),
             "wall_s": round(wall, 1), "force_rms_residual_pct": force_rms, "force_max_residual_pct": float(np.max(np.abs(r_force))),
             "dmax_residual_mm": d_res_mm, **({"dface_residual_mm": face_res_mm} if dface is not None else {}),
             "shape_measured": ["hk", "dmax"] + (["dface"] if dface is not None else []), "optimizer": sol.optimizer(),

@@ -25,7 +25,7 @@ FAILED_RUN_RESIDUAL = 1e3
 RCOND = 1e-7  # singular values below RCOND·s_max of the scaled Jacobian are null directions (finite-difference noise)
 
 
-def parameter_stderr(jac, residuals, x_scale=None, *, rcond: float = RCOND) -> tuple[np.ndarray, tuple[int, ...]]:
+def parameter_stderr(jac, residuals, x_scale=None, *, rcond: float = RCOND, row_sigma=None) -> tuple[np.ndarray, tuple[int, ...]]:
     """(standard errors, undetermined parameters) of a least-squares solution.
 
     Gauss–Newton covariance C = (JᵀJ)⁻¹·s², s² = rᵀr/(m − rank J), computed as V·diag(1/σ²)·Vᵀ·s² from
@@ -33,7 +33,15 @@ def parameter_stderr(jac, residuals, x_scale=None, *, rcond: float = RCOND) -> t
     not depend on the parameters' units). A parameter with a share (|V_ki| > √rcond) in a direction
     whose σ_i ≤ rcond·σ_max is not told by the residuals: its standard error is NaN, not the 0 or
     the negative variance an explicit inverse of a singular JᵀJ gives.
+
+    ``row_sigma``: a residual's standard deviation where it is known beforehand (NaN where it is
+    not). A row the fit can match exactly — one measured diameter against as many parameters —
+    has a residual near 0, which says nothing about how well it was measured or modelled; pooling
+    it into s² would credit it with the scatter of the others. With ``row_sigma`` the rows are
+    weighted by 1/σ: s² is pooled over the unknown rows only, m counting those, and the known ones
+    enter with their own σ — C = (JᵀWJ)⁻¹, W = diag(1/σ²) (weighted least squares).
     """
+    # C = (Jᵀ W J)⁻¹, W = diag(1/σ_i²) with σ_i² = s² (pooled) on the rows of unknown variance
     J = np.asarray(jac, float)
     r = np.asarray(residuals, float)
     m, p = J.shape
@@ -42,9 +50,19 @@ def parameter_stderr(jac, residuals, x_scale=None, *, rcond: float = RCOND) -> t
         return np.full(p, np.nan), tuple(range(p))
     _, sv, vt = np.linalg.svd(J * d, full_matrices=False)
     null = sv <= rcond * (sv[0] if sv.size and sv[0] > 0 else 1.0)
-    s2 = float(r @ r) / max(1, m - int((~null).sum()))  # the degrees of freedom count the parameters the data tell
     undetermined = tuple(int(k) for k in range(p) if np.any(np.abs(vt[null, k]) > np.sqrt(rcond)))
-    var_scaled = ((vt[~null].T / sv[~null]) ** 2).sum(axis=1) * s2  # diag(V·Σ⁻²·Vᵀ)·s²
+    rank = int((~null).sum())
+    if row_sigma is None:
+        s2 = float(r @ r) / max(1, m - rank)  # the degrees of freedom count the parameters the data tell
+        var_scaled = ((vt[~null].T / sv[~null]) ** 2).sum(axis=1) * s2  # diag(V·Σ⁻²·Vᵀ)·s²
+    else:
+        sigma = np.asarray(row_sigma, float)
+        pooled = ~np.isfinite(sigma)
+        s2 = float(r[pooled] @ r[pooled]) / max(1, int(pooled.sum()) - rank) if pooled.any() else 1.0
+        sigma = np.where(pooled, np.sqrt(s2), sigma)
+        _, sw, vw = np.linalg.svd(J * d / sigma[:, None], full_matrices=False)
+        keep = sw > rcond * (sw[0] if sw.size and sw[0] > 0 else 1.0)
+        var_scaled = ((vw[keep].T / sw[keep]) ** 2).sum(axis=1)
     se = np.sqrt(var_scaled) * np.abs(d)
     se[list(undetermined)] = np.nan
     return se, undetermined
@@ -75,13 +93,14 @@ class SolverFit:
 def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[Any], np.ndarray], x0, lo, hi, *,
                     n_residuals: int, steps: Callable[[np.ndarray], np.ndarray], x_scale, workers: int | None = None,
                     scheduler=None, max_runs: int = 150, max_nfev: int = 20, xtol: float = 1e-6, ftol: float = 1e-6,
-                    progress=None, what: str = "inverse FE", other_starts=()) -> SolverFit:
+                    progress=None, what: str = "inverse FE", other_starts=(), row_sigma=None) -> SolverFit:
     """Minimise |residuals_of(run(x))|² over lo ≤ x ≤ hi from x0.
 
     ``run`` must be picklable (a module-level function or a ``functools.partial`` of one) and
     return an object with ``wall_s`` and ``cached`` attributes, or None for a failed run. When
     the run at x0 fails, ``other_starts`` are tried in turn; a Jacobian step whose run fails is
-    taken the other way.
+    taken the other way. ``row_sigma``: the residuals' known standard deviations, NaN where the
+    fit's scatter stands in (:func:`parameter_stderr`).
     """
     from scipy.optimize import least_squares
 
@@ -142,7 +161,7 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
                                   f"{len(starts) - 1} other starts (see the log); the fast result is the one to use for this record")
     sol = least_squares(fun, np.asarray(x0, float), jac=jac, bounds=(lo, hi), x_scale=x_scale, xtol=xtol, ftol=ftol,
                         gtol=1e-8, max_nfev=max_nfev)
-    se, undetermined = parameter_stderr(sol.jac, sol.fun, x_scale)
+    se, undetermined = parameter_stderr(sol.jac, sol.fun, x_scale, row_sigma=row_sigma)
     undetermined = tuple(sorted({*undetermined, *blind.get(tuple(sol.x), [])}))
     se[list(undetermined)] = np.nan
     return SolverFit(x=sol.x, stderr=se, residuals=sol.fun, runs=runs["count"], solver_s=runs["solver_s"],

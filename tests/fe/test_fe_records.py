@@ -107,15 +107,12 @@ def test_a_record_the_default_misses_is_flagged(case):
             assert flagged, (end_face, ident.result["friction_mu"], err)
 
 
-RANGE_LIMITS = {3: "friction_mu_range 0.184–0.35 misses 0.17 by 0.014 (the range counts the dmax resolution, not the continued "
-                   "runs beyond ε 0.40, which a warning names): " + VOCE_CAUSE}
-
-
-@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.xfail(strict=True, reason=RANGE_LIMITS[k])) if k in RANGE_LIMITS else c
-                                  for k, c in enumerate(VALIDATION_CASES)], ids=[c["name"] for c in VALIDATION_CASES])
+@pytest.mark.parametrize("case", VALIDATION_CASES, ids=[c["name"] for c in VALIDATION_CASES])
 def test_the_true_mu_is_inside_the_reported_range(case):
-    """friction_mu_range (the μ of dmax ± 0.01 mm) holds the true μ on every record, also where
-    the point value misses ±0.02 because the barrel hardly grows with μ (near sticking)."""
+    """friction_mu_range (the μ of the bulge ± dmax's 0.01 mm and the FE mesh's 4 % of it) holds
+    the true μ on every record, also where the point value misses ±0.02 because the barrel hardly
+    grows with μ (near sticking): Voce at μ 0.17 reads 0.220 in 0.175–0.35. Counting dmax's
+    resolution alone, that range began at 0.184 and missed."""
     ident, _ = _read(case)
     lo, hi = ident.result["friction_mu_range"]
     assert lo - 0.005 <= case["mu"] <= hi + 0.005, (lo, hi)
@@ -138,12 +135,13 @@ def test_with_the_end_face_the_default_reads_fe_records(case):
 
 def test_the_end_face_tells_mu_on_every_record():
     """μ from the end face within 0.015 of the truth on all six records (measured: at most
-    0.0079, Voce at μ 0.17; from the bulge up to 0.050), its range at most 0.01 wide."""
+    0.0079, Voce at μ 0.17; from the bulge up to 0.050), its range (dface ± 0.01 mm and the FE
+    mesh's ± 0.005 of d/d_n) at most 0.02 wide (measured 0.006–0.017; from the bulge up to 0.175)."""
     for case in VALIDATION_CASES:
         ident, _ = _read(case, end_face=True)
         lo, hi = ident.result["friction_mu_range"]
         assert ident.result["friction_mu"] == pytest.approx(case["mu"], abs=0.015), case["name"]
-        assert lo <= ident.result["friction_mu"] <= hi and hi - lo <= 0.01, (case["name"], lo, hi)
+        assert lo <= ident.result["friction_mu"] <= hi and hi - lo <= 0.02, (case["name"], lo, hi)
 
 
 def test_the_force_factor_follows_the_hardening_near_the_strain():

@@ -92,3 +92,30 @@ def test_runs_failing_on_both_sides_leave_the_parameter_undetermined_not_sharp()
     np.testing.assert_allclose(fit.x, [*x_ols, 0.1], atol=1e-6)  # the blind column did not push it anywhere
     np.testing.assert_allclose(fit.stderr[:2], se_ols, rtol=1e-4)
     assert fit.undetermined == (2,) and np.isnan(fit.stderr[2])
+
+
+def test_a_row_of_known_sigma_weighs_by_it_and_not_by_the_others_scatter():
+    """Rows of known σ (one measured diameter, say) against rows whose scatter is estimated: the
+    covariance is (XᵀWX)⁻¹ with W = 1/σ² on the known row and 1/s² on the others, s² pooled over
+    those alone (m − 2). Checked against the normal equations written out; a known row of huge σ
+    counts as absent (the textbook line of the other rows); and pooled in, as before, a row known
+    to ± 0.2 is weighed like the others' 0.05 scatter, which claims the line better known."""
+    x_row, y_known = 10.0, 21.0  # a point beyond the others, on the line
+    X = np.column_stack([np.append(T, x_row), np.ones(T.size + 1)])
+    y = np.append(TARGET, y_known)
+    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = y - X @ coef
+    for sigma_known in (0.02, 0.2, 1e6):
+        s2 = float(r[:-1] @ r[:-1]) / (T.size - 2)
+        w = np.append(np.full(T.size, 1.0 / s2), 1.0 / sigma_known**2)
+        cov = np.linalg.inv(X.T @ (w[:, None] * X))
+        se, undetermined = parameter_stderr(X, r, row_sigma=np.append(np.full(T.size, np.nan), sigma_known))
+        np.testing.assert_allclose(se, np.sqrt(np.diag(cov)), rtol=1e-9)
+        assert undetermined == ()
+    _, se_ols = _ols_stderr()
+    se_far, _ = parameter_stderr(X, np.append(TARGET - X[:-1] @ _ols_stderr()[0], 0.0), row_sigma=np.append(np.full(T.size, np.nan), 1e6))
+    np.testing.assert_allclose(se_far, se_ols, rtol=1e-6)
+    # without row_sigma the known row is pooled in and weighed like the others: a smaller error than its σ allows
+    se_pooled, _ = parameter_stderr(X, r)
+    se_known, _ = parameter_stderr(X, r, row_sigma=np.append(np.full(T.size, np.nan), 0.2))
+    assert se_known[1] > se_pooled[1]
