@@ -17,9 +17,11 @@ curve. Uncertainties from the weighted Gauss–Newton covariance (:func:`.solver
 the force points with the scatter of their own misfit, dmax and dface with what is known of them —
 their resolution (0.01 mm) and the mesh's share of the shape (:data:`.upsetting.MESH_BULGE_UNCERTAINTY`,
 :data:`.upsetting.MESH_FACE_UNCERTAINTY`). The fit meets one diameter almost exactly, so its own
-residual cannot tell how well μ is known; near sticking, where dmax hardly moves with μ, μ ± its
-standard error is then wide, and a warning says so beyond ±0.02. A parameter the residuals do not
-tell at the fit has no standard error (null) and a warning.
+residual cannot tell how well μ is known. The covariance takes the force points as independent,
+which the model's force error is not: μ's standard error is at least what the shape alone tells,
+σ_d/|∂dmax/∂μ|. Near sticking, where dmax hardly moves with μ, μ ± its standard error is then
+wide, and a warning says so beyond ±0.02. A parameter the residuals do not tell at the fit has
+no standard error (null) and a warning.
 """
 
 from __future__ import annotations
@@ -224,7 +226,14 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
                           x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress,
                           other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma)
-    r, se = sol.residuals, sol.stderr
+    r, se = sol.residuals, sol.stderr.copy()
+    # the fit's covariance takes the force points as independent, which the model's own force error (its mesh,
+    # the fold-over) is not; what the shape alone tells of μ is a floor μ's standard error does not go below
+    shape_rows = list(range(FORCE_POINTS, len(row_sigma)))
+    mu_se_fit, mu_se_shape = float(se[-1]), sol.stderr_from_rows(len(sol.x) - 1, shape_rows, row_sigma)
+    if np.isfinite(mu_se_fit) and np.isfinite(mu_se_shape):
+        se[-1] = max(mu_se_fit, mu_se_shape)
+    mu_se_shape = mu_se_shape if np.isfinite(mu_se_shape) else None
     params = dict(zip(law_info.names, map(float, sol.x[:-1])))
     mu = float(sol.x[-1])
     wall = time.perf_counter() - t0
@@ -252,7 +261,8 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         "hardening": hardening,
         "inverse_fe": {
             "law": law_choice,
-            "mu": mu, "mu_stderr": float(se[-1]), "shape_sigma_mm": shape_sigma, "solver_runs": sol.runs, "solver_s": round(sol.solver_s, 1),
+            "mu": mu, "mu_stderr": float(se[-1]), "mu_stderr_fit": mu_se_fit, "mu_stderr_shape_alone": mu_se_shape,
+            "shape_sigma_mm": shape_sigma, "solver_runs": sol.runs, "solver_s": round(sol.solver_s, 1),
             "wall_s": round(wall, 1), "force_rms_residual_pct": force_rms, "force_max_residual_pct": float(np.max(np.abs(r_force))),
             "dmax_residual_mm": d_res_mm, **({"dface_residual_mm": face_res_mm} if dface is not None else {}),
             "shape_measured": ["hk", "dmax"] + (["dface"] if dface is not None else []), "optimizer": sol.optimizer(),

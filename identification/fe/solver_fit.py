@@ -80,6 +80,16 @@ class SolverFit:
     message: str
     nfev: int
     undetermined: tuple[int, ...] = ()  # parameters the residuals do not tell at x (stderr NaN)
+    jac: np.ndarray | None = None  # the Jacobian at x (residuals × parameters)
+
+    def stderr_from_rows(self, k: int, rows, row_sigma) -> float:
+        """The standard error of parameter ``k`` that ``rows`` alone give, the other parameters
+        held: 1/√Σ(J_ik/σ_i)² (NaN without a Jacobian, inf where the rows do not move with it)."""
+        # σ_k = (Σ_i (∂r_i/∂x_k / σ_i)²)^(−1/2) over the given rows
+        if self.jac is None:
+            return float("nan")
+        info = float(np.sum((np.asarray(self.jac, float)[rows, k] / np.asarray(row_sigma, float)[rows]) ** 2))
+        return 1.0 / np.sqrt(info) if info > 0 else float("inf")
 
     def optimizer(self) -> dict:
         return {"status": self.status, "message": self.message, "nfev": self.nfev}
@@ -166,4 +176,4 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     se[list(undetermined)] = np.nan
     return SolverFit(x=sol.x, stderr=se, residuals=sol.fun, runs=runs["count"], solver_s=runs["solver_s"],
                      wall_s=time.perf_counter() - t0, status=int(sol.status), message=str(sol.message), nfev=int(sol.nfev),
-                     undetermined=undetermined)
+                     undetermined=undetermined, jac=np.asarray(sol.jac, float))
