@@ -147,7 +147,7 @@ class CompressionResult(_ResultMapping):
     max_force_N: float
     final_true_strain: float
     friction_mu: float
-    friction_mu_range: list | None = None  # [lo, hi] the friction method's μ for dmax ± its resolution (fe_table only)
+    friction_mu_range: list | None = None  # [lo, hi] the friction method's μ for the measured shape ± its resolution and the FE mesh's share (fe_table only)
     friction_method: str
     friction: dict  # method → μ (None where not applicable)
     friction_details: dict

@@ -246,8 +246,9 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         warnings.append(f"inverse FE: the fitted model misses the end face dface by {face_res_mm:+.3f} mm")
     if se[-1] > MU_TOLD:  # NaN (undetermined) is warned above
         told_by = "dmax and dface" if dface is not None else "dmax (the faces nearly stick; the original end face, post.dface_mm, would tell it)"
-        warnings.append(f"inverse FE: μ {mu:.3f} ± {se[-1]:.3f} is poorly told by {told_by}: dmax is known to ± "
-                        f"{shape_sigma['dmax']:.3f} mm (its resolution and the FE mesh's share of the bulge), and μ moves it little here")
+        known = " and ".join(f"{k} to ± {v:.3f} mm" for k, v in shape_sigma.items())
+        warnings.append(f"inverse FE: μ {mu:.3f} ± {se[-1]:.3f} is poorly told by {told_by}: the model knows {known} (the "
+                        f"resolution and the FE mesh's share of the shape), and μ moves them little here")
 
     e_hi = float(fast.result["hardening"]["strain_range"][1]) if fast.result.get("hardening") else float(strain.max())
     grid = np.linspace(0.002, e_hi, 200)

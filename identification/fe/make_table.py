@@ -314,8 +314,8 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
                 "no barrel at mu = 0) over mu x h0/d0 x Swift n x strain ln(h0/hk)",
         "axes": {"mu": "Coulomb friction coefficient", "h0_d0": "initial height/diameter",
                  "n": "Swift hardening exponent (the table's first Swift eps0)",
-                 "strain": "ln(h0/h) under load for the force factor, ln(h0/hk) after unloading for the bulge, leading 0 added (factor 1, bulge 0); below the first long-run strain the short "
-                           "runs' plastic strain (the table's start)"},
+                 "strain": "ln(h0/h) under load for the force factor, ln(h0/hk) after unloading for the bulge, leading 0 added "
+                           "(factor 1, bulge 0); below the first long-run strain the short runs' plastic strain (the table's start)"},
         "nan": "strain points a CalculiX run did not reach",
         "copied_from": str(table.name), "copied_at": generator.now_utc(),
         "command": "python -m flowcurve.identification.fe.make_table --virtual-copy-only",
