@@ -37,7 +37,7 @@ import pandas as pd
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.solver_fit import fit_with_solver
-from flowcurve.identification.friction import bulge_half_width, face_half_width
+from flowcurve.identification.friction import bulge_half_width, face_half_width, nominal_diameter
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 from flowcurve.identification.outcome import Identification
@@ -203,7 +203,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     w_d = math.sqrt(FORCE_POINTS)
     # what is known of the shape rows beforehand (diameters, mm): resolution and the mesh's share, in quadrature
     hk = record.positive("post.hk_mm") or problem.h_end
-    d_n = d0 * math.sqrt(h0 / hk)  # (3.28)
+    d_n = float(nominal_diameter(d0, h0, hk))
     shape_sigma = {"dmax": 2.0 * bulge_half_width(max(dmax - d_n, 0.0) / 2.0)}
     if dface is not None:
         shape_sigma["dface"] = face_half_width(d_n) * d_n

@@ -286,14 +286,16 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
     """The virtual rig's copy of the table's runs: force factor and bulge (as measured on the
     unloaded specimen, :func:`~flowcurve.identification.fe.table.bulge_as_measured`) on a strain
     grid starting at 0, NaN where a run stopped; provenance beside it."""
-    from flowcurve.identification.fe.table import bulge_as_measured
+    from flowcurve.identification.fe.table import bulge_as_measured, table_material
 
     table, out = Path(table), Path(out)
+    source = json.loads(table.with_suffix(".json").read_text()) if table.with_suffix(".json").exists() else {}
+    material = table_material(source)
+    if material is None:
+        raise ValueError(f"{table}: its provenance (.json) names no material (Swift K, E, ν); regenerate the table")
     with np.load(table) as z:
         strain = np.concatenate([[0.0], z["strain"]])
-        material = json.loads(table.with_suffix(".json").read_text())["material"]
-        measured = bulge_as_measured(z["bulge_dR_over_h"], z["force_factor_raw"], z["strain"], z["h0_d0"], z["n"], z["eps0"],
-                                     K_MPa=material["K_MPa"], E_MPa=material["E_MPa"], nu=material["nu"])
+        measured = bulge_as_measured(z["bulge_dR_over_h"], z["force_factor_raw"], z["strain"], z["h0_d0"], z["n"], z["eps0"], **material)
         # the rig's response is over n only: the runs of the table's first Swift ε0
         factor, bulge = z["force_factor"][:, :, :, 0], measured[:, :, :, 0]
         pad = lambda a, v: np.concatenate([np.full(a.shape[:3] + (1,), v), a], axis=3)  # noqa: E731
@@ -307,7 +309,6 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
             bulge = np.concatenate([bulge[..., :1], bulge[..., 1:2] * (at / strain[1]), bulge[..., 1:]], axis=3)  # linear from 0, as before
             strain = np.concatenate([strain[:1], at, strain[1:]])
         arrays = {"mu": z["mu"], "h0_d0": z["h0_d0"], "n": z["n"], "strain": strain, "force_factor": factor, "bulge_dR_over_h": bulge}
-    source = json.loads(table.with_suffix(".json").read_text()) if table.with_suffix(".json").exists() else {}
     meta = {
         "what": "the virtual rig's compression response: force factor F/(sigma_f*A) (normalised by mu = 0) and "
                 "bulge dR/h as measured on the unloaded specimen (elastic spring-back h(1 + s/E), d(1 - nu*s/E); "

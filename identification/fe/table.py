@@ -226,6 +226,8 @@ def _load(path: str) -> UpsettingTable:
         raise IdentificationError(f"{p}: FE table missing (regenerate: python -m flowcurve.identification.fe.make_table)") from None
     except (OSError, ValueError) as exc:
         raise IdentificationError(f"{p}: FE table unreadable ({exc})") from None
+    meta_path = p.with_suffix(".json")
+    meta = json.loads(meta_path.read_text()) if meta_path.exists() else {}
     with z:
         mu = z["mu"]
         if mu[0] != 0.0:
@@ -238,7 +240,7 @@ def _load(path: str) -> UpsettingTable:
             eps0 = np.array([0.002])
             factor, bulge = factor[:, :, :, None], bulge[:, :, :, None]
         pad = lambda a, v: np.concatenate([np.full(a.shape[:4] + (1,), v), a], axis=4)  # noqa: E731
-        material = _table_material(p)
+        material = table_material(meta)
         if material is not None and "force_factor_raw" in z and "eps0" in z:
             bulge = bulge_as_measured(bulge, z["force_factor_raw"], z["strain"], z["h0_d0"], z["n"], eps0, **material)
         else:  # an older table without its raw force or material: under load, less the μ = 0 run's largest radius
@@ -255,18 +257,13 @@ def _load(path: str) -> UpsettingTable:
             start.update(start_plastic_strain=z["start_plastic_strain"], start_force_factor=continue_stopped_runs(z["start_force_factor"]))
         tab = UpsettingTable(mu=mu, h0_d0=z["h0_d0"], n=z["n"], eps0=eps0, strain=strain, force_factor=continue_stopped_runs(factor),
                              bulge=continue_stopped_runs(bulge), reached=reached, path=str(p), **start)
-    meta_path = p.with_suffix(".json")
-    if meta_path.exists():
-        object.__setattr__(tab, "meta", json.loads(meta_path.read_text()))
+    object.__setattr__(tab, "meta", meta)
     return tab
 
 
-def _table_material(path: Path) -> dict | None:
-    """The Swift K, E and ν the table's runs were made with (its provenance), or None."""
-    meta_path = path.with_suffix(".json")
-    if not meta_path.exists():
-        return None
-    material = json.loads(meta_path.read_text()).get("material", {})
+def table_material(meta: dict) -> dict | None:
+    """The Swift K, E and ν the table's runs were made with (from its provenance ``meta``), or None."""
+    material = meta.get("material", {})
     if not all(k in material for k in ("K_MPa", "E_MPa", "nu")):
         return None
     return {"K_MPa": float(material["K_MPa"]), "E_MPa": float(material["E_MPa"]), "nu": float(material["nu"])}
