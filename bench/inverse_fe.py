@@ -37,8 +37,8 @@ def main(argv=None):
     ap.add_argument("--law", default="auto", help="hardening law of the inverse (default: the best fit to the fast curve)")
     ap.add_argument("--face", action="store_true", help="the records carry the original end face's diameter (post.dface_mm)")
     a = ap.parse_args(argv)
-    print("| FE record | true μ | fast μ | law | inverse μ ± se | fast err | inverse err | runs | wall s | force rms % |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| FE record | true μ | fast μ | law | inverse μ ± se | se, dmax alone | ρ force | fast err | inverse err | runs | wall s | force rms % |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for k in a.cases:
         case = VALIDATION_CASES[k]
         rec = upsetting_record(run_case(case), seed=5, specimen_id=case["name"], end_face=a.face)
@@ -51,6 +51,7 @@ def main(argv=None):
         flow = case_flow(case)
         r = inv.result["inverse_fe"]
         print(f"| {case['name']} | {case['mu']:.2f} | {fast.result['friction_mu']:.3f} | {inv.result['hardening']['law']} | {r['mu']:.4f} ± {r['mu_stderr']:.4f} | "
+              f"{r['mu_stderr_shape_alone'] or float('nan'):.4f} | {r['force_residual_serial_correlation']:.2f} | "
               f"{100 * curve_error(fast.true_curve, flow):.2f} % | {100 * curve_error(inv.true_curve, flow):.2f} % | {r['solver_runs']} | {wall:.0f} | {r['force_rms_residual_pct']:.3f} |", flush=True)
 
 

@@ -6,6 +6,7 @@ outcome (no CalculiX needed); the fit itself is tested in tests/fe/test_solver_f
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import flowcurve.identification.fe.inverse as inverse
 from flowcurve.identification.fe.solver_fit import SolverFit
@@ -42,30 +43,38 @@ def test_a_told_mu_has_no_such_warning(monkeypatch, seed_like_record):
     assert to_jsonable(result)["inverse_fe"]["mu_stderr"] == 0.01
 
 
-def test_mu_is_no_better_known_than_the_shape_alone_tells(monkeypatch, seed_like_record):
-    """The fit's covariance takes the force points as independent; μ's standard error is at least
-    what dmax alone tells: σ_d/|∂dmax/∂μ| with σ_d = √(0.01² + (0.04·(dmax − d_n))²) mm. A fit
-    whose dmax hardly moves with μ (0.2 mm per unit μ, as at h0/d0 1 near sticking) reports that
-    floor, above ±0.02, with the "poorly told" warning; one whose dmax moves 2 mm per unit μ keeps
-    the fit's 0.01."""
+def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_alone(monkeypatch, seed_like_record):
+    """μ's standard error is the fit's, asked for with the force misfit counted as serially
+    correlated; what dmax alone tells, σ_d/|∂dmax/∂μ| with σ_d = √(0.01² + (0.04·(dmax − d_n))²)
+    mm, is reported beside it; beyond ±0.02 a "poorly told" warning."""
     import math
 
     record, _ = seed_like_record
     d0, h0 = (float(record.meta[k]) for k in ("specimen.d0_mm", "specimen.h0_mm"))
     hk, dmax = float(record.meta["post.hk_mm"]), float(record.meta["post.dmax_mm"])
     sigma_d = math.hypot(0.01, 0.04 * (dmax - d0 * math.sqrt(h0 / hk)))
-    w = math.sqrt(inverse.FORCE_POINTS) / inverse.DMAX_SCALE_MM  # residual units of the dmax row per mm
+    w = 1.0 / sigma_d  # residual units of the dmax row per mm (its misfit over its σ)
 
-    for ddmax_dmu, expected in ((0.2, sigma_d / 0.2), (2.0, 0.01)):
+    for mu_se in (0.01, 0.03):
+        asked = {}
+
         def outcome(run, residuals_of, x0, lo, hi, *, n_residuals, **kw):
+            asked.update(kw)
             jac = np.zeros((n_residuals, len(x0)))
             jac[: inverse.FORCE_POINTS, :] = 1.0
-            jac[inverse.FORCE_POINTS, -1] = ddmax_dmu * w
-            return SolverFit(x=np.asarray(x0, float), stderr=np.full(len(x0), 0.01), residuals=np.zeros(n_residuals), runs=9, solver_s=1.0,
-                             wall_s=1.0, status=2, message="ftol", nfev=3, jac=jac)
+            jac[inverse.FORCE_POINTS, -1] = 0.2 * w  # dmax moves 0.2 mm per unit μ
+            se = np.full(len(x0), 0.01)
+            se[-1] = mu_se
+            residuals = np.zeros(n_residuals)
+            residuals[: inverse.FORCE_POINTS] = np.linspace(-1.0, 1.0, inverse.FORCE_POINTS)  # a misfit that runs along the curve
+            return SolverFit(x=np.asarray(x0, float), stderr=se, residuals=residuals, runs=9, solver_s=1.0, wall_s=1.0, status=2,
+                             message="ftol", nfev=3, jac=jac)
 
         monkeypatch.setattr(inverse, "fit_with_solver", outcome)
         result = inverse.identify_inverse_fe(record, law="johnson_cook").result
-        assert abs(result["inverse_fe"]["mu_stderr"] - expected) < 1e-9
-        assert result["inverse_fe"]["mu_stderr_fit"] == 0.01
-        assert any("poorly told" in w for w in result.get("warnings", [])) == (expected > inverse.MU_TOLD)
+        inv = result["inverse_fe"]
+        assert asked["correlated"] is True
+        assert inv["mu_stderr"] == mu_se
+        assert inv["mu_stderr_shape_alone"] == pytest.approx(sigma_d / 0.2)
+        assert 0.8 < inv["force_residual_serial_correlation"] <= 0.9
+        assert any("poorly told" in x for x in result.get("warnings", [])) == (mu_se > inverse.MU_TOLD)
