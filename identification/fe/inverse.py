@@ -16,15 +16,16 @@ what is known of it beforehand (weighted least squares): the force at ``FORCE_PO
 their resolution (0.01 mm) and the mesh's share of the shape (:data:`.upsetting.MESH_BULGE_UNCERTAINTY`,
 :data:`.upsetting.MESH_FACE_UNCERTAINTY`), in quadrature. Near sticking, where dmax hardly moves
 with μ and the model's barrel is 3.5 % mesh-dependent, the force curve then tells μ as much as the
-diameter does (a dmax met to 5 µm at any price read steel 45's μ 0.225 for 0.25; weighed so, 0.259).
+diameter does (a dmax met to 5 µm at any price read steel 45's μ 0.225 for 0.25; weighed so, 0.256).
 Uncertainties from the weighted Gauss–Newton covariance (:func:`.solver_fit.parameter_stderr`):
 the diameters with their σ, the force points with the scatter of their own misfit, which is not
 independent from point to point (the model's force error — its mesh, the fold-over sawtooth —
 runs along the curve): its variance is inflated by (1 + ρ)/(1 − ρ), ρ the misfit's lag-1
 autocorrelation (``force_residual_serial_correlation``). On five of the six FE records μ came out
-within 1.01 of these standard errors of the truth (on the sixth, Voce, μ is undetermined at the fit). What dmax alone would tell of μ, σ_d/|∂dmax/∂μ|, is
-reported beside it (``mu_stderr_shape_alone``; near sticking 0.04–0.12, and as noisy as the
-finite difference of a diameter that hardly moves). A μ standard error beyond ±0.02 has a "poorly
+within 1.01 of these standard errors of the truth (on the sixth, Voce, μ is undetermined at the
+fit). What dmax alone would tell of μ, σ_d/|∂dmax/∂μ|, is reported beside it
+(``mu_stderr_shape_alone``; near sticking 0.04–0.12, and as noisy as the finite difference of a
+diameter that hardly moves). A μ standard error beyond ±0.02 has a "poorly
 told" warning; a parameter the residuals do not tell at the fit has no standard error (null) and
 a warning.
 """
