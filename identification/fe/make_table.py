@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from flowcurve.identification.fe import generator
+from flowcurve.identification.fe.table import plastic_strain_at
 from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
 
 log = logging.getLogger(__name__)
@@ -106,19 +107,10 @@ def run_with_retries(mu: float, h0_d0: float, n: float, eps0: float, *, eps_end:
     return best[:3]
 
 
-def plastic_strain_at(eps, flow, E=E_MPa, iterations: int = 8):
-    """ε_p with ε_p + σ_f(ε_p)/E = ε (fixed point; σ/E ≪ 1)."""
-    # (3.7) ε_p = ε − σ/E
-    eps_p = np.asarray(eps, dtype=float).copy()
-    for _ in range(iterations):
-        eps_p = np.clip(eps - flow(eps_p) / E, 0.0, None)
-    return eps_p
-
-
 def raw_force_factor(m, r, n: float, eps0: float) -> tuple[np.ndarray, np.ndarray]:
     """(ε_p, F/(σ_f(ε_p)·A)) of a run of the Swift law (n, ε0), A = π·d0²·h0/(4h)."""
     flow = partial(swift, n=n, eps0=eps0)
-    eps_p = plastic_strain_at(r.strain, flow)
+    eps_p = plastic_strain_at(r.strain, flow, E=E_MPa)
     area = math.pi * m.d0_mm**2 * m.h0_mm / (4.0 * r.height_mm)  # (3.28)/(3.30)
     return eps_p, r.force_N / (flow(eps_p) * area)
 
@@ -286,10 +278,10 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
     """The virtual rig's copy of the table's runs: force factor and bulge (as measured on the
     unloaded specimen, :func:`~flowcurve.identification.fe.table.bulge_as_measured`) on a strain
     grid starting at 0, NaN where a run stopped; provenance beside it."""
-    from flowcurve.identification.fe.table import bulge_as_measured, table_material
+    from flowcurve.identification.fe.table import bulge_as_measured, table_material, table_provenance
 
     table, out = Path(table), Path(out)
-    source = json.loads(table.with_suffix(".json").read_text()) if table.with_suffix(".json").exists() else {}
+    source = table_provenance(table)
     material = table_material(source)
     if material is None:
         raise ValueError(f"{table}: its provenance (.json) names no material (Swift K, E, ν); regenerate the table")

@@ -226,8 +226,7 @@ def _load(path: str) -> UpsettingTable:
         raise IdentificationError(f"{p}: FE table missing (regenerate: python -m flowcurve.identification.fe.make_table)") from None
     except (OSError, ValueError) as exc:
         raise IdentificationError(f"{p}: FE table unreadable ({exc})") from None
-    meta_path = p.with_suffix(".json")
-    meta = json.loads(meta_path.read_text()) if meta_path.exists() else {}
+    meta = table_provenance(p)
     with z:
         mu = z["mu"]
         if mu[0] != 0.0:
@@ -269,17 +268,32 @@ def table_material(meta: dict) -> dict | None:
     return {"K_MPa": float(material["K_MPa"]), "E_MPa": float(material["E_MPa"]), "nu": float(material["nu"])}
 
 
-def swift_stress_on_grid(strain, n, eps0, K_MPa: float, E_MPa: float, iterations: int = 8) -> np.ndarray:
-    """σ_f = K·(ε0 + ε_p)^n of the table's runs at the height strains ``strain``, with
-    ε_p = ε − σ_f/E (fixed point, σ/E ≪ 1) → shape (n, ε0, strain)."""
+def plastic_strain_at(eps, flow, *, E: float, iterations: int = 8):
+    """ε_p with ε_p + σ_f(ε_p)/E = ε (fixed point; σ/E ≪ 1)."""
     # (3.7) ε_p = ε − σ/E
-    e = np.asarray(strain, dtype=float)[None, None, :]
+    eps_p = np.asarray(eps, dtype=float).copy()
+    for _ in range(iterations):
+        eps_p = np.clip(eps - flow(eps_p) / E, 0.0, None)
+    return eps_p
+
+
+def swift_stress_on_grid(strain, n, eps0, K_MPa: float, E_MPa: float) -> np.ndarray:
+    """σ_f = K·(ε0 + ε_p)^n of the table's runs at the height strains ``strain``, with
+    ε_p = ε − σ_f/E (:func:`plastic_strain_at`) → shape (n, ε0, strain)."""
     n = np.asarray(n, dtype=float)[:, None, None]
     eps0 = np.asarray(eps0, dtype=float)[None, :, None]
-    eps_p = np.broadcast_to(e, np.broadcast_shapes(e.shape, n.shape, eps0.shape))
-    for _ in range(iterations):
-        eps_p = np.clip(e - K_MPa * np.power(eps0 + eps_p, n) / E_MPa, 0.0, None)
-    return K_MPa * np.power(eps0 + eps_p, n)
+    e = np.broadcast_to(np.asarray(strain, dtype=float)[None, None, :], (n.shape[0], eps0.shape[1], np.size(strain)))
+
+    def flow(eps_p):
+        return K_MPa * np.power(eps0 + eps_p, n)
+
+    return flow(plastic_strain_at(e, flow, E=E_MPa))
+
+
+def table_provenance(path) -> dict:
+    """The provenance beside a table file (its ``.json``), {} when there is none."""
+    meta_path = Path(path).with_suffix(".json")
+    return json.loads(meta_path.read_text()) if meta_path.exists() else {}
 
 
 def bulge_as_measured(bulge, factor_raw, strain, h0_d0, n, eps0, *, K_MPa: float, E_MPa: float, nu: float) -> np.ndarray:
