@@ -50,7 +50,15 @@ def serial_inflation(residuals) -> float:
 
 def parameter_stderr(jac, residuals, x_scale=None, *, rcond: float = RCOND, row_sigma=None,
                      correlated: bool = False) -> tuple[np.ndarray, tuple[int, ...]]:
-    """(standard errors, undetermined parameters) of a least-squares solution.
+    """(standard errors, undetermined parameters) of a least-squares solution: the square roots
+    of :func:`parameter_covariance`'s diagonal."""
+    cov, undetermined = parameter_covariance(jac, residuals, x_scale, rcond=rcond, row_sigma=row_sigma, correlated=correlated)
+    return np.sqrt(np.diag(cov)), undetermined
+
+
+def parameter_covariance(jac, residuals, x_scale=None, *, rcond: float = RCOND, row_sigma=None,
+                         correlated: bool = False) -> tuple[np.ndarray, tuple[int, ...]]:
+    """(covariance, undetermined parameters) of a least-squares solution.
 
     Gauss–Newton covariance C = (JᵀJ)⁻¹·s², s² = rᵀr/(m − rank J), computed as V·diag(1/σ²)·Vᵀ·s² from
     the SVD J·D = U·diag(σ)·Vᵀ of the Jacobian scaled by D = diag(x_scale) (so the rank test does
@@ -75,7 +83,7 @@ def parameter_stderr(jac, residuals, x_scale=None, *, rcond: float = RCOND, row_
     m, p = J.shape
     d = np.ones(p) if x_scale is None else np.asarray(x_scale, float)
     if not np.all(np.isfinite(J)):
-        return np.full(p, np.nan), tuple(range(p))
+        return np.full((p, p), np.nan), tuple(range(p))
     _, sv, vt = np.linalg.svd(J * d, full_matrices=False)
     null = sv <= rcond * (sv[0] if sv.size and sv[0] > 0 else 1.0)
     undetermined = tuple(int(k) for k in range(p) if np.any(np.abs(vt[null, k]) > np.sqrt(rcond)))
@@ -83,7 +91,7 @@ def parameter_stderr(jac, residuals, x_scale=None, *, rcond: float = RCOND, row_
     if row_sigma is None:
         s2 = float(r @ r) / max(1, m - rank)  # the degrees of freedom count the parameters the data tell
         s2 *= serial_inflation(r) if correlated else 1.0
-        var_scaled = ((vt[~null].T / sv[~null]) ** 2).sum(axis=1) * s2  # diag(V·Σ⁻²·Vᵀ)·s²
+        half = vt[~null].T / sv[~null] * np.sqrt(s2)  # V·Σ⁻¹·s: the covariance is half·halfᵀ
     else:
         sigma = np.asarray(row_sigma, float)
         pooled = ~np.isfinite(sigma)
@@ -92,10 +100,11 @@ def parameter_stderr(jac, residuals, x_scale=None, *, rcond: float = RCOND, row_
         sigma = np.where(pooled, np.sqrt(s2), sigma)
         _, sw, vw = np.linalg.svd(J * d / sigma[:, None], full_matrices=False)
         keep = sw > rcond * (sw[0] if sw.size and sw[0] > 0 else 1.0)
-        var_scaled = ((vw[keep].T / sw[keep]) ** 2).sum(axis=1)
-    se = np.sqrt(var_scaled) * np.abs(d)
-    se[list(undetermined)] = np.nan
-    return se, undetermined
+        half = vw[keep].T / sw[keep]
+    cov = (half @ half.T) * np.outer(d, d)  # back from the scaled parameters
+    cov[list(undetermined), :] = np.nan
+    cov[:, list(undetermined)] = np.nan
+    return cov, undetermined
 
 
 @dataclass
@@ -111,6 +120,7 @@ class SolverFit:
     nfev: int
     undetermined: tuple[int, ...] = ()  # parameters the residuals do not tell at x (stderr NaN)
     jac: np.ndarray | None = None  # the Jacobian at x (residuals × parameters)
+    covariance: np.ndarray | None = None  # of x (NaN rows and columns for the undetermined)
 
     def stderr_from_rows(self, k: int, rows, row_sigma) -> float:
         """The standard error of parameter ``k`` that ``rows`` alone give, the other parameters
@@ -133,13 +143,15 @@ class SolverFit:
 def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[Any], np.ndarray], x0, lo, hi, *,
                     n_residuals: int, steps: Callable[[np.ndarray], np.ndarray], x_scale, workers: int | None = None,
                     scheduler=None, max_runs: int = 150, max_nfev: int = 20, xtol: float = 1e-6, ftol: float = 1e-6,
-                    progress=None, what: str = "inverse FE", other_starts=(), row_sigma=None, correlated: bool = False) -> SolverFit:
+                    progress=None, what: str = "inverse FE", other_starts=(), best_start: bool = False, row_sigma=None,
+                    correlated: bool = False) -> SolverFit:
     """Minimise |residuals_of(run(x))|² over lo ≤ x ≤ hi from x0.
 
     ``run`` must be picklable (a module-level function or a ``functools.partial`` of one) and
     return an object with ``wall_s`` and ``cached`` attributes, or None for a failed run. When
-    the run at x0 fails, ``other_starts`` are tried in turn; a Jacobian step whose run fails is
-    taken the other way. ``row_sigma``: the residuals' known standard deviations, NaN where the
+    the run at x0 fails, ``other_starts`` are tried in turn; with ``best_start`` they are all run at
+    once (side by side) and the fit starts from the one that misses least. A Jacobian step whose run
+    fails is taken the other way. ``row_sigma``: the residuals' known standard deviations, NaN where the
     fit's scatter stands in (:func:`parameter_stderr`); ``correlated``: that scatter runs along the
     rows (its variance inflated by :func:`serial_inflation`).
     """
@@ -194,6 +206,9 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
                                 for i in range(x.size)])
 
     starts = [np.asarray(x0, float)] + [np.clip(np.asarray(s, float), lo, hi) for s in other_starts]
+    if best_start:  # all starts side by side, the least misfit first (a failed run's 1e3 residuals last)
+        costs = [float(r @ r) for r in evaluate(starts)]
+        starts = [starts[k] for k in np.argsort(costs, kind="stable")]
     for x0 in starts:  # no Jacobian can be formed around a failed run
         if not failed(evaluate([x0])[0]):
             break
@@ -202,9 +217,10 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
                                   f"{len(starts) - 1} other starts (see the log); the fast result is the one to use for this record")
     sol = least_squares(fun, np.asarray(x0, float), jac=jac, bounds=(lo, hi), x_scale=x_scale, xtol=xtol, ftol=ftol,
                         gtol=1e-8, max_nfev=max_nfev)
-    se, undetermined = parameter_stderr(sol.jac, sol.fun, x_scale, row_sigma=row_sigma, correlated=correlated)
+    cov, undetermined = parameter_covariance(sol.jac, sol.fun, x_scale, row_sigma=row_sigma, correlated=correlated)
     undetermined = tuple(sorted({*undetermined, *blind.get(tuple(sol.x), [])}))
-    se[list(undetermined)] = np.nan
-    return SolverFit(x=sol.x, stderr=se, residuals=sol.fun, runs=runs["count"], solver_s=runs["solver_s"],
+    cov[list(undetermined), :] = np.nan
+    cov[:, list(undetermined)] = np.nan
+    return SolverFit(x=sol.x, stderr=np.sqrt(np.diag(cov)), residuals=sol.fun, runs=runs["count"], solver_s=runs["solver_s"],
                      wall_s=time.perf_counter() - t0, status=int(sol.status), message=str(sol.message), nfev=int(sol.nfev),
-                     undetermined=undetermined, jac=np.asarray(sol.jac, float))
+                     undetermined=undetermined, jac=np.asarray(sol.jac, float), covariance=cov)

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flowcurve.identification.fe.solver_fit import fit_with_solver, parameter_stderr
+from flowcurve.identification.fe.solver_fit import fit_with_solver, parameter_covariance, parameter_stderr
 
 T = np.linspace(0.0, 4.0, 9)
 NOISE = np.random.default_rng(11).normal(0.0, 0.05, T.size)
@@ -56,12 +56,22 @@ def test_standard_errors_are_the_closed_form_ones_of_a_line():
     np.testing.assert_allclose(fit.x, x_ols, atol=1e-6)
     np.testing.assert_allclose(fit.stderr, se_ols, rtol=1e-4)
     assert fit.undetermined == () and fit.undetermined_warnings(["a", "b"]) == []
+    # the covariance of slope and intercept: −t̄·s²/Sxx (the textbook off-diagonal), so that a
+    # derived value (the line at t) has the variance s²·(1/n + (t − t̄)²/Sxx) through it
+    s2_over_sxx = se_ols[0] ** 2
+    assert fit.covariance[0, 1] == pytest.approx(-T.mean() * s2_over_sxx, rel=1e-4)
+    g = np.array([3.0, 1.0])  # ∂(a·t + b)/∂(a, b) at t = 3
+    n, sxx = T.size, float(((T - T.mean()) ** 2).sum())
+    s2 = s2_over_sxx * sxx
+    assert float(g @ fit.covariance @ g) == pytest.approx(s2 * (1.0 / n + (3.0 - T.mean()) ** 2 / sxx), rel=1e-4)
 
 
 def test_a_parameter_the_residuals_do_not_see_has_no_standard_error():
     J = np.column_stack([T, np.ones_like(T), np.zeros_like(T)])
     se, und = parameter_stderr(J, NOISE, [1.0, 1.0, 1.0])
     assert und == (2,) and np.isnan(se[2]) and np.all(np.isfinite(se[:2]))
+    cov, _ = parameter_covariance(J, NOISE, [1.0, 1.0, 1.0])
+    assert np.isnan(cov[2]).all() and np.isnan(cov[:, 2]).all() and np.isfinite(cov[:2, :2]).all()
     # two parameters that act only as their sum: neither is told, whatever their units
     se, und = parameter_stderr(np.column_stack([T, T * 1e3, np.ones_like(T)]), NOISE, [1.0, 1e-3, 1.0])
     assert und == (0, 1) and np.isnan(se[:2]).all() and np.isfinite(se[2])
@@ -162,3 +172,20 @@ def test_with_ar1_errors_the_inflated_standard_errors_cover_the_truth_far_better
             z_corr.append((coef[0] - 2.0) / parameter_stderr(X, r, correlated=True)[0][0])
         assert plain_band[0] < np.std(z_plain) < plain_band[1]
         assert corr_band[0] < np.std(z_corr) < corr_band[1]
+
+
+def test_best_start_runs_every_start_and_fits_from_the_one_that_misses_least():
+    """y = sin(a·t) against a = 3 has other minima in a: from a = 0.5 the fit stays in one, from the
+    nearest of the other starts (a failed one among them) it finds 3."""
+    t = np.linspace(0.0, 6.0, 40)
+    target = np.sin(3.0 * t)
+
+    def wave(x):
+        return None if x[0] > 5.0 else _Out(np.sin(x[0] * t))
+
+    kw = dict(n_residuals=t.size, steps=lambda x: np.full(x.size, 1e-5), x_scale=np.ones(1), workers=1)
+    stuck = fit_with_solver(wave, lambda o: o.y - target, [0.5], [0.0], [10.0], **kw)
+    assert abs(stuck.x[0] - 3.0) > 0.5
+    best = fit_with_solver(wave, lambda o: o.y - target, [0.5], [0.0], [10.0], other_starts=[[6.0], [2.8], [1.5]], best_start=True, **kw)
+    assert best.x[0] == pytest.approx(3.0, abs=1e-6)
+    assert best.runs >= 4  # every start was run
