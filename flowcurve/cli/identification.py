@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import os
 import sys
 import warnings
@@ -228,7 +229,8 @@ def _runtime_warnings_raise() -> bool:
 
 
 def _fmt(value, spec: str = ".4g") -> str:
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
+    """A number as ``spec``; "—" for a missing or undetermined one (None, NaN)."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
         return format(value, spec)
     return "—"
 
@@ -259,10 +261,13 @@ def summary_lines(result: dict) -> list[str]:
     inv = result.get("inverse_fe")
     if inv and result.get("test") == "tension":
         necks = ", ".join(f"{k} {v['vs_fe_pct']:+.1f} %" for k, v in inv["neck_corrections_vs_fe"].items())
-        lines.append(f"  inverse FE beyond Fm: H {_fmt(inv['H_MPa'], '.0f')} ± {_fmt(inv['H_MPa_stderr'], '.0f')} MPa, b {_fmt(inv['b'], '.3g')} ± {_fmt(inv['b_stderr'], '.2g')}, "
+        taper = inv.get("taper")
+        lines.append(f"  inverse FE beyond ε_p {_fmt(inv.get('measured_to_true_plastic_strain'), '.3f')}: fracture stress "
+                     f"{_fmt(inv['fracture_true_stress_MPa'], '.1f')} ± {_fmt(inv.get('fracture_true_stress_MPa_stderr'), '.1f')} MPa "
+                     f"(closed-form neck corrections against it: {necks}), taper {_fmt(100.0 * taper if taper is not None else None, '.2f')} ± "
+                     f"{_fmt(100.0 * inv['taper_stderr'] if inv.get('taper_stderr') is not None else None, '.2f')} %, "
                      f"{inv['solver_runs']} solver runs, {_fmt(inv['wall_s'], '.0f')} s, force residual rms {_fmt(inv['force_rms_residual_pct'], '.2f')} %, "
-                     f"fracture stress {_fmt(inv['fracture_true_stress_MPa'], '.1f')} MPa "
-                     f"(closed-form neck corrections against it: {necks})")
+                     f"neck radius residual {_fmt(inv.get('neck_radius_residual_mm'), '+.4f')} mm")
     elif inv:
         lines.append(f"  inverse FE: μ {_fmt(inv['mu'], '.4f')} ± {_fmt(inv['mu_stderr'], '.4f')}, {inv['solver_runs']} solver runs, {_fmt(inv['wall_s'], '.0f')} s, "
                      f"force residual rms {_fmt(inv['force_rms_residual_pct'], '.2f')} %, dmax residual {_fmt(inv['dmax_residual_mm'], '+.4f')} mm")

@@ -161,7 +161,8 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
                         max_runs: int = 150, progress=None) -> Identification:
     """Fit ``law`` and μ to the record's force–stroke and dmax with CalculiX in the loop (a tension
     record: the hardening beyond Fm, :func:`.inverse_tension.identify_inverse_fe_tension`).
-    ``law="auto"``: the law that best fits the fast identification's curve (:func:`best_law_for`)."""
+    ``law="auto"``: the law that best fits the fast identification's curve (:func:`best_law_for`);
+    on tension, the law that best fits the FE-consistent curve."""
     from flowcurve.identification.fe.verify import record_force_stroke
 
     if law not in LAWS and law != "auto":
@@ -170,7 +171,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
 
         return identify_inverse_fe_tension(record, workers=workers, scheduler=scheduler, progress=progress,
-                                           law="johnson_cook" if law == "auto" else law)
+                                           law="johnson_cook" if law == "auto" else law, refit_law=None if law == "auto" else law)
     if record.test != "compression":
         raise IdentificationError(f"{record.source}: --method inverse-fe needs a compression or tension record (this is {record.test!r})")
     t0 = time.perf_counter()
