@@ -122,3 +122,27 @@ def test_the_fracture_stress_error_is_the_covariance_carried_through_the_extensi
     # no covariance, or an undetermined parameter in it: no standard error
     assert fracture_stress_stderr(None, x, d) is None
     assert fracture_stress_stderr(np.full((4, 4), np.nan), x, d) is None
+
+
+def test_a_model_that_cannot_follow_the_record_is_said_so_not_returned_quietly(monkeypatch):
+    """Stand-in runs that miss the record's force by 3 % whatever the parameters (no solver): the
+    result warns of the misfit and of every parameter the residuals do not tell, and gives no
+    fracture-stress error rather than a made-up one."""
+    import flowcurve.identification.fe.inverse_tension as inv
+
+    from flowcurve.identification.tension import identify_tension
+
+    rec = _record(0.7)
+    diagram = identify_tension(rec).curves["corrected_diagram"]
+    elong, force = diagram["elongation_mm"].to_numpy(), diagram["force_N"].to_numpy()
+
+    def off_by_3_pct(problem, x):
+        return inv._Run(elong, 1.03 * force, np.full(elong.size, 2.2), 0.0, False)
+
+    monkeypatch.setattr(inv, "_run", off_by_3_pct)
+    result = identify_inverse_fe(rec, workers=1).result
+    warnings = " | ".join(result["warnings"])
+    assert "the model does not follow the record" in warnings and "force residual 3.0" in warnings
+    for name in ("H", "beta", "c", "taper"):
+        assert f"does not determine {name} at the fit" in warnings
+    assert result["inverse_fe"]["fracture_true_stress_MPa_stderr"] is None
