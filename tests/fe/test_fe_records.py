@@ -37,11 +37,13 @@ def test_table_points_regenerate_with_ccx(tmp_path, monkeypatch):
     # the last stopped with stick slope 1e7 at ε 0.41 and is in the table from its retry (1e6). That run is
     # not bit-reproducible: of 7 fresh runs 5 gave the table's numbers exactly and 2 differed by up to 5.1e-5 in
     # the force factor at ε ≥ 0.7, while the side folds onto the platen (ccx itself: one thread, the same deck).
+    # One CI rehearsal (stop 26) met a run 1.04e-3 off at ε ≥ 0.6 (10 of 45 points); 4 fresh runs the same day
+    # gave the table's numbers exactly. Its tolerance is that scatter, 2e-3; the other two points hold to 1e-6.
     # Once in CI (seventh stop) one of the three fresh runs stopped short, which the fresh runs of the
     # retried point did not (12 of 12 finished): a stop is run once more from an empty cache, and the numbers of a finished run
     # must still match
     for (mu, h0_d0, n, eps0), rtol, atol in (((0.2, 1.0, 0.4, 0.02), 1e-6, 1e-7), ((0.05, 1.6, 0.2, 0.1), 1e-6, 1e-7),
-                                             ((0.3, 1.6, 0.4, 0.02), 1e-4, 1e-4)):
+                                             ((0.3, 1.6, 0.4, 0.02), 2e-3, 1e-4)):
         i, j, k, m = (list(z[axis]).index(v) for axis, v in (("mu", mu), ("h0_d0", h0_d0), ("n", n), ("eps0", eps0)))
         for attempt in range(2):
             monkeypatch.setenv("FLOWCURVE_FE_CACHE", str(tmp_path / f"{mu}-{h0_d0}-{n}-{eps0}-{attempt}"))
@@ -50,7 +52,7 @@ def test_table_points_regenerate_with_ccx(tmp_path, monkeypatch):
                 break
         assert not run["cached"] and run["completed"], ((mu, h0_d0, n, eps0), run["reached_strain"], run["settings"], run["message"])
         np.testing.assert_allclose(run["factor_raw"], z["force_factor_raw"][i, j, k, m], rtol=rtol)
-        np.testing.assert_allclose(run["bulge"], z["bulge_dR_over_h"][i, j, k, m], rtol=10 * rtol, atol=atol)
+        np.testing.assert_allclose(run["bulge"], z["bulge_dR_over_h"][i, j, k, m], rtol=min(10 * rtol, 2e-3), atol=atol)
 
 
 def test_table_start_points_regenerate_with_ccx(tmp_path, monkeypatch):
