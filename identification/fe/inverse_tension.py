@@ -295,17 +295,17 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
     r = sol.residuals
     r_force = r[:n_force] * FORCE_SIGMA_PCT
     names = ("H", "beta", "c", "taper")
-    on_bound = [name for k, (name, v, l_, h_) in enumerate(zip(names, sol.x, lo, hi)) if (v <= l_ + 1e-9 and k != 2) or v >= h_ - 1e-9]
-    res_warning = f"inverse FE: {', '.join(on_bound)} on a bound; the necking range may not be matched" if on_bound else None
-    force_rms = float(np.sqrt(np.mean(r_force**2)))
-    if force_rms > POOR_FORCE_RMS_PCT or float(np.max(np.abs(r_force))) > 5.0:
-        res_warning = ((res_warning + "; " if res_warning else "inverse FE: ") + f"force residual {force_rms:.2f} % RMS, up to "
-                       f"{float(np.max(np.abs(r_force))):.1f} % beyond ε_a: the model does not follow the record")
-    if sol.status <= 0:
-        res_warning = (res_warning + "; " if res_warning else "inverse FE: ") + f"the optimiser stopped before converging ({sol.message})"
+    # c's lower bound, 0, is Voce itself, not a limit the fit ran into
+    on_bound = [name for name, v, l_, h_ in zip(names, sol.x, lo, hi) if (v <= l_ + 1e-9 and name != "c") or v >= h_ - 1e-9]
+    force_rms, force_max = float(np.sqrt(np.mean(r_force**2))), float(np.max(np.abs(r_force)))
     neck_res_mm = float(r[n_force] * neck_sigma) if dk is not None else None
+    problems = [f"{', '.join(on_bound)} on a bound; the necking range may not be matched"] if on_bound else []
+    if force_rms > POOR_FORCE_RMS_PCT or force_max > 5.0:
+        problems.append(f"force residual {force_rms:.2f} % RMS, up to {force_max:.1f} % beyond ε_a: the model does not follow the record")
+    if sol.status <= 0:
+        problems.append(f"the optimiser stopped before converging ({sol.message})")
     if neck_res_mm is not None and abs(neck_res_mm) > 3.0 * neck_sigma:
-        res_warning = (res_warning + "; " if res_warning else "inverse FE: ") + f"the fitted model misses the neck radius by {neck_res_mm:+.3f} mm"
+        problems.append(f"the fitted model misses the neck radius by {neck_res_mm:+.3f} mm")
 
     grid = np.linspace(0.002, e_end, 200)
     flow = extended_curve(grid, rows_e, rows_s, H, beta, c)
@@ -322,8 +322,8 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
     necks = {m: {"stress_MPa": v["stress_MPa"], "vs_fe_pct": 100.0 * (v["stress_MPa"] / fe_fracture - 1.0)}
              for m, v in (res.get("neck_corrections") or {}).items() if isinstance(v, dict) and fe_fracture}
     warnings = list(res.get("warnings", []))
-    if res_warning:
-        warnings.append(res_warning)
+    if problems:
+        warnings.append("inverse FE: " + "; ".join(problems))
     if warnings_law:
         warnings.append(warnings_law)
     warnings += sol.undetermined_warnings(list(names), "inverse FE (tension)")
@@ -344,7 +344,7 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
         "uniform_true_plastic_strain": eps_pu, "fracture_true_stress_MPa": fe_fracture, "fracture_true_stress_MPa_stderr": fe_fracture_se,
         "neck_corrections_vs_fe": necks,
         "solver_runs": sol.runs, "solver_s": round(sol.solver_s, 1), "wall_s": round(time.perf_counter() - t0, 1),
-        "force_rms_residual_pct": force_rms, "force_max_residual_pct": float(np.max(np.abs(r_force))),
+        "force_rms_residual_pct": force_rms, "force_max_residual_pct": force_max,
         "force_residual_serial_correlation": serial_correlation(r[:n_force]),
         "neck_radius_residual_mm": neck_res_mm,
         "law_rms_error_pct": law_rms, "optimizer": sol.optimizer(),
