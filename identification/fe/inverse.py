@@ -249,7 +249,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     force_rms = float(np.sqrt(np.mean(r_force**2)))
     d_res_mm = float(r[FORCE_POINTS] * shape_sigma["dmax"])
     face_res_mm = float(r[FORCE_POINTS + 1] * shape_sigma["dface"]) if dface is not None else None
-    warnings = _fit_warnings(force_rms, d_res_mm, mu, sol) + sol.undetermined_warnings([*law_info.keys, "μ"])
+    warnings = _fit_warnings(force_rms, d_res_mm, mu, sol) + sol.failed_runs_warnings() + sol.undetermined_warnings([*law_info.keys, "μ"])
     if face_res_mm is not None and not abs(face_res_mm) <= POOR_DMAX_MM:
         warnings.append(f"inverse FE: the fitted model misses the end face dface by {face_res_mm:+.3f} mm")
     if se[-1] > MU_TOLD:  # NaN (undetermined) is warned above
@@ -271,7 +271,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         "inverse_fe": {
             "law": law_choice,
             "mu": mu, "mu_stderr": float(se[-1]), "mu_stderr_shape_alone": mu_se_shape, "force_residual_serial_correlation": rho,
-            "shape_sigma_mm": shape_sigma, "solver_runs": sol.runs, "solver_s": round(sol.solver_s, 1),
+            "shape_sigma_mm": shape_sigma, "solver_runs": sol.runs, "failed_solver_runs": sol.failed_runs, "solver_s": round(sol.solver_s, 1),
             "wall_s": round(wall, 1), "force_rms_residual_pct": force_rms, "force_max_residual_pct": float(np.max(np.abs(r_force))),
             "dmax_residual_mm": d_res_mm, **({"dface_residual_mm": face_res_mm} if dface is not None else {}),
             "shape_measured": ["hk", "dmax"] + (["dface"] if dface is not None else []), "optimizer": sol.optimizer(),

@@ -326,7 +326,7 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
         warnings.append("inverse FE: " + "; ".join(problems))
     if warnings_law:
         warnings.append(warnings_law)
-    warnings += sol.undetermined_warnings(list(names), "inverse FE (tension)")
+    warnings += sol.failed_runs_warnings("inverse FE (tension)") + sol.undetermined_warnings(list(names), "inverse FE (tension)")
     if dk is None:
         warnings.append("inverse FE: no post.dk_mm: only the force is fitted, not the neck diameter; the taper and the hardening "
                         "beyond Fm are then told apart by the force curve alone")
@@ -343,7 +343,8 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
         "uniform_rows": {"true_plastic_strain": rows_e, "true_stress_MPa": rows_s},
         "uniform_true_plastic_strain": eps_pu, "fracture_true_stress_MPa": fe_fracture, "fracture_true_stress_MPa_stderr": fe_fracture_se,
         "neck_corrections_vs_fe": necks,
-        "solver_runs": sol.runs, "solver_s": round(sol.solver_s, 1), "wall_s": round(time.perf_counter() - t0, 1),
+        "solver_runs": sol.runs, "failed_solver_runs": sol.failed_runs, "solver_s": round(sol.solver_s, 1),
+        "wall_s": round(time.perf_counter() - t0, 1),
         "force_rms_residual_pct": force_rms, "force_max_residual_pct": force_max,
         "force_residual_serial_correlation": serial_correlation(r[:n_force]),
         "neck_radius_residual_mm": neck_res_mm,

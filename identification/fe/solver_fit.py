@@ -24,6 +24,7 @@ from flowcurve.identification.fe.pool import run_many
 
 FAILED_RUN_RESIDUAL = 1e3
 RCOND = 1e-7  # singular values below RCOND·s_max of the scaled Jacobian are null directions (finite-difference noise)
+FAILED_SHARE_WARN = 0.2  # a fit whose runs failed this often says so (the optimiser steered around what it could not run)
 MAX_SERIAL_CORRELATION = 0.9  # the pooled rows' lag-1 autocorrelation is held below this (an information of ≥ 1/19 of the rows')
 
 
@@ -121,6 +122,7 @@ class SolverFit:
     undetermined: tuple[int, ...] = ()  # parameters the residuals do not tell at x (stderr NaN)
     jac: np.ndarray | None = None  # the Jacobian at x (residuals × parameters)
     covariance: np.ndarray | None = None  # of x (NaN rows and columns for the undetermined)
+    failed_runs: int = 0  # runs that did not converge (counted in runs), whose parameter sets the optimiser was steered from
 
     def stderr_from_rows(self, k: int, rows, row_sigma) -> float:
         """The standard error of parameter ``k`` that ``rows`` alone give, the other parameters
@@ -133,6 +135,16 @@ class SolverFit:
 
     def optimizer(self) -> dict:
         return {"status": self.status, "message": self.message, "nfev": self.nfev}
+
+    def failed_runs_warnings(self, what: str = "inverse FE") -> list[str]:
+        """A warning when at least :data:`FAILED_SHARE_WARN` of the runs failed: each failed one
+        stood in the fit as a misfit of 1e3, so the optimiser went round its parameter set, and
+        may have stopped short of the best fit or left a parameter undetermined."""
+        if not (self.runs and self.failed_runs >= FAILED_SHARE_WARN * self.runs):
+            return []
+        return [f"{what}: {self.failed_runs} of {self.runs} solver runs did not converge (also when run again with other "
+                "settings); the optimiser was steered around those parameter sets, so the fit may have stopped short of the "
+                "best one — compare it with the fast result"]
 
     def undetermined_warnings(self, names, what: str = "inverse FE") -> list[str]:
         """One warning per parameter the residuals do not tell at the solution (no standard error)."""
@@ -159,7 +171,7 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
 
     t0 = time.perf_counter()
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    runs = {"count": 0, "solver_s": 0.0}
+    runs = {"count": 0, "solver_s": 0.0, "failed": 0}
     memo: dict[tuple, np.ndarray] = {}
     blind: dict[tuple, list[int]] = {}  # at x: the Jacobian columns whose runs failed on both sides
 
@@ -170,6 +182,7 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
                 raise IdentificationError(f"{what}: more than {max_runs} solver runs without convergence")
             for p, out in zip(todo, run_many(run, todo, workers=workers, scheduler=scheduler)):
                 runs["count"] += 1
+                runs["failed"] += out is None
                 if out is not None and not out.cached:
                     runs["solver_s"] += out.wall_s
                 memo[tuple(p)] = np.full(n_residuals, FAILED_RUN_RESIDUAL) if out is None else residuals_of(out)
@@ -223,4 +236,4 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     cov[:, list(undetermined)] = np.nan
     return SolverFit(x=sol.x, stderr=np.sqrt(np.diag(cov)), residuals=sol.fun, runs=runs["count"], solver_s=runs["solver_s"],
                      wall_s=time.perf_counter() - t0, status=int(sol.status), message=str(sol.message), nfev=int(sol.nfev),
-                     undetermined=undetermined, jac=np.asarray(sol.jac, float), covariance=cov)
+                     undetermined=undetermined, jac=np.asarray(sol.jac, float), covariance=cov, failed_runs=runs["failed"])

@@ -78,3 +78,22 @@ def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_al
         assert inv["mu_stderr_shape_alone"] == pytest.approx(sigma_d / 0.2)
         assert 0.8 < inv["force_residual_serial_correlation"] <= 0.9
         assert any("poorly told" in x for x in result.get("warnings", [])) == (mu_se > inverse.MU_TOLD)
+
+
+def test_a_fit_whose_runs_failed_often_says_so_in_the_result_and_the_summary(monkeypatch, seed_like_record):
+    """Voce's record (h0/d0 1.8) stopped 67 of 121 runs where the side folds onto the platen; a
+    result that rests on such a fit carries the count, a warning and a poor quality."""
+    from flowcurve.cli.identification import summary_lines
+
+    record, _ = seed_like_record
+
+    def outcome(run, residuals_of, x0, lo, hi, *, n_residuals, **kw):
+        return SolverFit(x=np.asarray(x0, float), stderr=np.full(len(x0), 0.01), residuals=np.zeros(n_residuals), runs=121, solver_s=1.0,
+                         wall_s=1.0, status=2, message="ftol", nfev=3, failed_runs=67)
+
+    monkeypatch.setattr(inverse, "fit_with_solver", outcome)
+    result = inverse.identify_inverse_fe(record, law="johnson_cook").result
+    assert result["inverse_fe"]["failed_solver_runs"] == 67
+    assert any("67 of 121 solver runs did not converge" in w for w in result["warnings"])
+    assert result["hardening"]["quality"] == "poor"
+    assert any("121 solver runs (67 did not converge)" in line for line in summary_lines(result))

@@ -85,3 +85,29 @@ def test_the_solver_fit_moves_a_failed_start_and_steps_back_from_a_failed_run():
     fit = fit_with_solver(_edge_run, lambda out: out.y - target, [1.0, 0.0], [-10.0, -10.0], [10.0, 10.0], **kw)
     np.testing.assert_allclose(fit.x, [2.0, 1.0], atol=1e-4)
     assert np.all(np.abs(fit.residuals) < 1e-3)
+
+
+def test_failed_runs_are_counted_and_a_fit_that_met_many_says_so():
+    """The count is checked against the runs that returned None as the run function itself saw
+    them (in-process with one worker); the warning comes from that share."""
+    from flowcurve.identification.fe.solver_fit import FAILED_SHARE_WARN, fit_with_solver
+
+    seen = []
+
+    def counted(x):
+        out = _line_run(x)
+        seen.append(out is None)
+        return out
+
+    target = 2.0 * np.arange(5.0) + 1.0
+    kw = dict(n_residuals=5, steps=lambda x: np.full(2, 1e-4), x_scale=np.ones(2), workers=1)
+    fit = fit_with_solver(counted, lambda out: out.y - target, [6.0, 0.0], [-10.0, -10.0], [10.0, 10.0],
+                          other_starts=[[5.5, 0.0], [1.0, 0.0]], **kw)
+    assert fit.runs == len(seen) and fit.failed_runs == sum(seen) >= 2  # the two failed starts at least
+    said = fit.failed_runs_warnings("inverse FE")
+    assert bool(said) == (sum(seen) >= FAILED_SHARE_WARN * len(seen))
+    seen.clear()
+    clean = fit_with_solver(counted, lambda out: out.y - target, [1.0, 0.0], [-10.0, -10.0], [4.0, 10.0], **kw)
+    assert clean.failed_runs == 0 == sum(seen) and clean.failed_runs_warnings() == []
+    many = type(clean)(**{**clean.__dict__, "runs": 10, "failed_runs": 3})
+    assert "3 of 10 solver runs did not converge" in many.failed_runs_warnings("inverse FE (tension)")[0]

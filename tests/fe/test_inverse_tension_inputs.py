@@ -146,3 +146,4 @@ def test_a_model_that_cannot_follow_the_record_is_said_so_not_returned_quietly(m
     for name in ("H", "beta", "c", "taper"):
         assert f"does not determine {name} at the fit" in warnings
     assert result["inverse_fe"]["fracture_true_stress_MPa_stderr"] is None
+    assert result["inverse_fe"]["failed_solver_runs"] == 0 and "did not converge" not in warnings  # every stand-in run returned
