@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 
+from flowcurve.cli.identification import solver_runs_text
 from flowcurve.identification.compression import identify_compression
 from flowcurve.identification.fe.inverse import identify_inverse_fe
 from flowcurve.identification.fe.synthetic import VALIDATION_CASES, case_flow, run_case, upsetting_record
@@ -52,7 +53,7 @@ def main(argv=None):
         r = inv.result["inverse_fe"]
         print(f"| {case['name']} | {case['mu']:.2f} | {fast.result['friction_mu']:.3f} | {inv.result['hardening']['law']} | {r['mu']:.4f} ± {r['mu_stderr']:.4f} | "
               f"{r['mu_stderr_shape_alone'] or float('nan'):.4f} | {r['force_residual_serial_correlation']:.2f} | "
-              f"{100 * curve_error(fast.true_curve, flow):.2f} % | {100 * curve_error(inv.true_curve, flow):.2f} % | {r['solver_runs']} | {wall:.0f} | {r['force_rms_residual_pct']:.3f} |", flush=True)
+              f"{100 * curve_error(fast.true_curve, flow):.2f} % | {100 * curve_error(inv.true_curve, flow):.2f} % | {solver_runs_text(r, '')} | {wall:.0f} | {r['force_rms_residual_pct']:.3f} |", flush=True)
 
 
 if __name__ == "__main__":

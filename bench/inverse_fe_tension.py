@@ -3,7 +3,8 @@
     python bench/inverse_fe_tension.py [--workers 2] [--cases voce swift jc]
 
 Each record is a CalculiX necking run of a known law on a finer mesh (10×40) than the inverse's
-model (8×30), with its own taper, 120 increments, noise, 1 µm encoder steps and frame compliance
+model (8×30), with its own taper, 120 increments (a small first one: the elastic line resolved), noise, 1 µm
+encoder steps and frame compliance
 (:func:`flowcurve.identification.fe.synthetic.tension_record`). It is identified with
 ``--method inverse-fe``; printed: solver runs, wall time, the fitted taper against the record's,
 the fracture stress against the input law's with its standard error ((σ − σ_true)/se), and the
@@ -21,9 +22,10 @@ from functools import partial
 
 import numpy as np
 
+from flowcurve.cli.identification import solver_runs_text
 from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
-from flowcurve.identification.fe.synthetic import johnson_cook_flow, swift_flow, tension_record, voce_flow
-from flowcurve.identification.fe.tension import TensionModel, simulate_tension
+from flowcurve.identification.fe.synthetic import johnson_cook_flow, swift_flow, tension_case_model, tension_record, voce_flow
+from flowcurve.identification.fe.tension import simulate_tension
 from flowcurve.identification.hardening import fit_hardening
 
 CASES = {  # law, the record's taper
@@ -47,7 +49,7 @@ def main(argv=None):
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name in a.cases:
         flow, taper = CASES[name]
-        record = tension_record(simulate_tension(TensionModel.from_law(6.0, 30.0, 8.0, flow, nr=10, nz=40, imperfection=taper, increments=120)))
+        record = tension_record(simulate_tension(tension_case_model(flow, taper)))
         with tempfile.TemporaryDirectory() as tmp:
             saved = os.environ.get("FLOWCURVE_FE_CACHE")
             os.environ["FLOWCURVE_FE_CACHE"] = tmp
@@ -67,7 +69,7 @@ def main(argv=None):
         true_f = float(flow(eps_f))
         se = inv["fracture_true_stress_MPa_stderr"]
         z = (inv["fracture_true_stress_MPa"] - true_f) / se if se else float("nan")
-        print(f"| {name} ({100 * taper:.1f} %) | {inv['solver_runs']} | {wall:.0f} | {100 * inv['taper']:.2f} ± {100 * inv['taper_stderr']:.2f} % | "
+        print(f"| {name} ({100 * taper:.1f} %) | {solver_runs_text(inv, '')} | {wall:.0f} | {100 * inv['taper']:.2f} ± {100 * inv['taper_stderr']:.2f} % | "
               f"{inv['fracture_true_stress_MPa']:.1f} ± {se:.1f} | {true_f:.1f} | {z:+.2f} | {100 * curve_error(grid, fast_law(grid), flow):.2f} % | "
               f"{100 * curve_error(grid, tc['true_stress_MPa'], flow):.2f} % | {inv['force_rms_residual_pct']:.2f} | {inv['neck_radius_residual_mm']:+.4f} |", flush=True)
 

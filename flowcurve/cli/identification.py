@@ -266,18 +266,18 @@ def summary_lines(result: dict) -> list[str]:
                      f"{_fmt(inv['fracture_true_stress_MPa'], '.1f')} ± {_fmt(inv.get('fracture_true_stress_MPa_stderr'), '.1f')} MPa "
                      f"(closed-form neck corrections against it: {necks}), taper {_fmt(100.0 * taper if taper is not None else None, '.2f')} ± "
                      f"{_fmt(100.0 * inv['taper_stderr'] if inv.get('taper_stderr') is not None else None, '.2f')} %, "
-                     f"{_solver_runs(inv)}, {_fmt(inv['wall_s'], '.0f')} s, force residual rms {_fmt(inv['force_rms_residual_pct'], '.2f')} %, "
+                     f"{solver_runs_text(inv)}, {_fmt(inv['wall_s'], '.0f')} s, force residual rms {_fmt(inv['force_rms_residual_pct'], '.2f')} %, "
                      f"neck radius residual {_fmt(inv.get('neck_radius_residual_mm'), '+.4f')} mm")
     elif inv:
-        lines.append(f"  inverse FE: μ {_fmt(inv['mu'], '.4f')} ± {_fmt(inv['mu_stderr'], '.4f')}, {_solver_runs(inv)}, {_fmt(inv['wall_s'], '.0f')} s, "
+        lines.append(f"  inverse FE: μ {_fmt(inv['mu'], '.4f')} ± {_fmt(inv['mu_stderr'], '.4f')}, {solver_runs_text(inv)}, {_fmt(inv['wall_s'], '.0f')} s, "
                      f"force residual rms {_fmt(inv['force_rms_residual_pct'], '.2f')} %, dmax residual {_fmt(inv['dmax_residual_mm'], '+.4f')} mm")
     return lines
 
 
-def _solver_runs(inv: dict) -> str:
+def solver_runs_text(inv: dict, noun: str = " solver runs") -> str:
     """"27 solver runs", and how many of them did not converge (a result.json before the count: none said)."""
     failed = inv.get("failed_solver_runs") or 0
-    return f"{inv['solver_runs']} solver runs" + (f" ({failed} did not converge)" if failed else "")
+    return f"{inv['solver_runs']}{noun}" + (f" ({failed} did not converge)" if failed else "")
 
 
 def _check_out(out: Path) -> None:

@@ -17,7 +17,7 @@ import numpy as np
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.ccx import run_deck
-from flowcurve.identification.fe.upsetting import SECTOR, _lines, check_plastic_table, plastic_lines, plastic_table
+from flowcurve.identification.fe.upsetting import SECTOR, _lines, check_plastic_table, plastic_lines, plastic_table, static_step
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,9 @@ class TensionModel:
     nz: int = 30
     imperfection: float = 0.005
     increments: int = 100
+    # initial increment as a fraction of the step (0: 1/increments); ccx grows it while it converges easily, so a small
+    # one resolves the elastic line that a first increment of 1/increments steps over (records: the modulus read right)
+    first_increment: float = 0.0
     surface: bool = False  # also print the outer surface's nodes (the neck profile); the default deck is unchanged
 
     def __post_init__(self):
@@ -67,7 +70,6 @@ def tension_deck(m: TensionModel) -> str:
     axis = [ids[0, j] for j in range(nz2 + 1)]
     mid_plane = [ids[i, 0] for i in range(nr2 + 1)]
     top = [ids[i, nz2] for i in range(nr2 + 1)]
-    dt = 1.0 / m.increments
     eps, sig = m.eps_p, m.stress_MPa
     lines = ["*HEADING", f"flowcurve tension d0={m.d0_mm:g} l0={m.l0_mm:g} dl={m.elongation_mm:g}", "*NODE"]
     lines += [f"{k},{r:.9g},{z:.9g}" for k, (r, z) in enumerate(nodes, start=1)]
@@ -78,7 +80,7 @@ def tension_deck(m: TensionModel) -> str:
               *plastic_lines(eps, sig),
               "*SOLID SECTION,ELSET=SPEC,MATERIAL=SPECIMEN",
               "*BOUNDARY", "AXIS,1,1,0.", "MID,2,2,0.",
-              "*STEP,NLGEOM,INC=10000", "*STATIC", f"{dt:.9g},1.,{dt * 1e-3:.9g},{dt:.9g}",
+              "*STEP,NLGEOM,INC=10000", "*STATIC", static_step(m.increments, m.first_increment),
               "*BOUNDARY", f"TOP,2,2,{m.elongation_mm / 2.0:.9g}",
               "*NODE PRINT,NSET=TOP,TOTALS=ONLY", "RF", "*NODE PRINT,NSET=NECK", "U", "*END STEP"]
     if m.surface:  # the outer surface from the neck (z = 0) to the end, corner and mid-side nodes
