@@ -321,12 +321,10 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
     fe_fracture_se = fracture_stress_stderr(sol.covariance, sol.x, e_end - eps_a) if eps_f is not None else None
     necks = {m: {"stress_MPa": v["stress_MPa"], "vs_fe_pct": 100.0 * (v["stress_MPa"] / fe_fracture - 1.0)}
              for m, v in (res.get("neck_corrections") or {}).items() if isinstance(v, dict) and fe_fracture}
-    warnings = list(res.get("warnings", []))
-    if problems:
-        warnings.append("inverse FE: " + "; ".join(problems))
-    if warnings_law:
-        warnings.append(warnings_law)
-    warnings += sol.failed_runs_warnings("inverse FE (tension)") + sol.undetermined_warnings(list(names), "inverse FE (tension)")
+    # what is wrong with the fit itself (not with the law refitted to its curve, which has its own quality)
+    fit_warnings = (["inverse FE: " + "; ".join(problems)] if problems else []) + sol.failed_runs_warnings("inverse FE (tension)") \
+        + sol.undetermined_warnings(list(names), "inverse FE (tension)")
+    warnings = [*res.get("warnings", []), *fit_warnings, *([warnings_law] if warnings_law else [])]
     if dk is None:
         warnings.append("inverse FE: no post.dk_mm: only the force is fitted, not the neck diameter; the taper and the hardening "
                         "beyond Fm are then told apart by the force curve alone")
@@ -335,6 +333,8 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
     result["hardening_alternatives"] = {**res.get("hardening_alternatives", {}), "fast": res["hardening"]}
     result["hardening"] = {**refit.as_dict(), "method": "inverse_fe", "fitted_to": "the FE-consistent flow curve (measured to ε_a, CalculiX beyond)",
                            "strain_range": [0.002, e_end]}
+    if fit_warnings:  # a card from this curve must not read "good" (as compression's inverse)
+        result["hardening"]["quality"] = "poor"
     result["fracture_true_stress_MPa"] = fe_fracture if fe_fracture is not None else res.get("fracture_true_stress_MPa")
     result["warnings"] = warnings
     result["inverse_fe"] = {

@@ -50,7 +50,7 @@ def test_inverse_fe_tension_recovers_the_necking_range(tmp_path, capsys):
     assert 0 < inv["taper_stderr"] and abs(inv["taper"] - 0.004) < 3.0 * inv["taper_stderr"]
     # no law given: the FE-consistent curve is refitted in the one that follows it best, here the input's own
     hard = result["hardening"]
-    assert hard["law"] == "voce" and hard["method"] == "inverse_fe"
+    assert hard["law"] == "voce" and hard["method"] == "inverse_fe" and hard["quality"] == "good"
     assert (hard["sigma0_MPa"], hard["Q_MPa"], hard["b"]) == (pytest.approx(300.0, rel=0.02), pytest.approx(400.0, rel=0.02), pytest.approx(8.0, rel=0.05))
     # the FE fracture stress is compared with every closed-form neck correction
     assert set(inv["neck_corrections_vs_fe"]) == {"davidenkov", "bridgman", "mirone"}

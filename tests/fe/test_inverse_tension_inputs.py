@@ -147,3 +147,4 @@ def test_a_model_that_cannot_follow_the_record_is_said_so_not_returned_quietly(m
         assert f"does not determine {name} at the fit" in warnings
     assert result["inverse_fe"]["fracture_true_stress_MPa_stderr"] is None
     assert result["inverse_fe"]["failed_solver_runs"] == 0 and "did not converge" not in warnings  # every stand-in run returned
+    assert result["hardening"]["quality"] == "poor"  # the refitted law may follow the curve; the curve is not to be trusted
