@@ -152,7 +152,7 @@ def case_flow(case: dict):
 
 # the records' first increment, of the step: their elastic line resolved (ccx grows it while it converges easily); a first
 # increment of 1/increments stepped past yield — the tension records' first point at 0.067 mm against a yield at
-# 0.045–0.054 mm, and the fast method read E 135–165 GPa for 200 (194–202 with this one)
+# 0.045–0.054 mm, and the fast method read E 135–165 GPa for 200 (193–199 with this one)
 RECORD_FIRST_INCREMENT = 1.0 / 3000
 RECORD_INCREMENTS = (70, 80, 60)  # the first that runs to the end; the rest only where a run stops
 
