@@ -275,9 +275,11 @@ def summary_lines(result: dict) -> list[str]:
 
 
 def solver_runs_text(inv: dict, noun: str = " solver runs") -> str:
-    """"27 solver runs", and how many of them did not converge (a result.json before the count: none said)."""
-    failed = inv.get("failed_solver_runs") or 0
-    return f"{inv['solver_runs']}{noun}" + (f" ({failed} did not converge)" if failed else "")
+    """"27 solver runs", how many of them did not converge and how many converged only when run again
+    with a retry's settings (a result.json from before these counts: none said)."""
+    failed, retried = inv.get("failed_solver_runs") or 0, inv.get("retried_solver_runs") or 0
+    said = [f"{failed} did not converge"] * bool(failed) + [f"{retried} converged only when retried"] * bool(retried)
+    return f"{inv['solver_runs']}{noun}" + (f" ({', '.join(said)})" if said else "")
 
 
 def _check_out(out: Path) -> None:

@@ -89,6 +89,7 @@ class _Run:
     dface_unloaded_mm: float  # the original end face (the top rim node), sprung back like dmax
     wall_s: float
     cached: bool
+    retried: bool = False  # the model's own settings stopped and a retry's carried it
 
 
 def _run(problem: _Problem, x) -> _Run | None:
@@ -116,7 +117,7 @@ def _run(problem: _Problem, x) -> _Run | None:
     sigma_end = r.force_N[-1] / (math.pi * problem.d0**2 * problem.h0 / (4.0 * r.height_mm[-1]))
     springback = 1.0 - r.model.nu * sigma_end / problem.E
     return _Run(np.concatenate([[0.0], r.stroke_mm]), np.concatenate([[0.0], r.force_N]), float(r.dmax_mm[-1]) * springback,
-                float(r.dtop_mm[-1]) * springback, r.wall_s, r.cached)
+                float(r.dtop_mm[-1]) * springback, r.wall_s, r.cached, len(tried) > 1)
 
 
 POOR_FORCE_RMS_PCT = 1.5  # a force misfit above this: the model (law, μ) does not describe the record
@@ -271,7 +272,8 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         "inverse_fe": {
             "law": law_choice,
             "mu": mu, "mu_stderr": float(se[-1]), "mu_stderr_shape_alone": mu_se_shape, "force_residual_serial_correlation": rho,
-            "shape_sigma_mm": shape_sigma, "solver_runs": sol.runs, "failed_solver_runs": sol.failed_runs, "solver_s": round(sol.solver_s, 1),
+            "shape_sigma_mm": shape_sigma, "solver_runs": sol.runs, "failed_solver_runs": sol.failed_runs,
+            "retried_solver_runs": sol.retried_runs, "solver_s": round(sol.solver_s, 1),
             "wall_s": round(wall, 1), "force_rms_residual_pct": force_rms, "force_max_residual_pct": float(np.max(np.abs(r_force))),
             "dmax_residual_mm": d_res_mm, **({"dface_residual_mm": face_res_mm} if dface is not None else {}),
             "shape_measured": ["hk", "dmax"] + (["dface"] if dface is not None else []), "optimizer": sol.optimizer(),

@@ -123,6 +123,7 @@ class SolverFit:
     jac: np.ndarray | None = None  # the Jacobian at x (residuals × parameters)
     covariance: np.ndarray | None = None  # of x (NaN rows and columns for the undetermined)
     failed_runs: int = 0  # runs that did not converge (counted in runs), whose parameter sets the optimiser was steered from
+    retried_runs: int = 0  # runs that converged only when run again with other settings (an output's ``retried``)
 
     def stderr_from_rows(self, k: int, rows, row_sigma) -> float:
         """The standard error of parameter ``k`` that ``rows`` alone give, the other parameters
@@ -171,7 +172,7 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
 
     t0 = time.perf_counter()
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    runs = {"count": 0, "solver_s": 0.0, "failed": 0}
+    runs = {"count": 0, "solver_s": 0.0, "failed": 0, "retried": 0}
     memo: dict[tuple, np.ndarray] = {}
     blind: dict[tuple, list[int]] = {}  # at x: the Jacobian columns whose runs failed on both sides
 
@@ -183,6 +184,7 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
             for p, out in zip(todo, run_many(run, todo, workers=workers, scheduler=scheduler)):
                 runs["count"] += 1
                 runs["failed"] += out is None
+                runs["retried"] += bool(getattr(out, "retried", False))
                 if out is not None and not out.cached:
                     runs["solver_s"] += out.wall_s
                 memo[tuple(p)] = np.full(n_residuals, FAILED_RUN_RESIDUAL) if out is None else residuals_of(out)
@@ -236,4 +238,5 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     cov[:, list(undetermined)] = np.nan
     return SolverFit(x=sol.x, stderr=np.sqrt(np.diag(cov)), residuals=sol.fun, runs=runs["count"], solver_s=runs["solver_s"],
                      wall_s=time.perf_counter() - t0, status=int(sol.status), message=str(sol.message), nfev=int(sol.nfev),
-                     undetermined=undetermined, jac=np.asarray(sol.jac, float), covariance=cov, failed_runs=runs["failed"])
+                     undetermined=undetermined, jac=np.asarray(sol.jac, float), covariance=cov, failed_runs=runs["failed"],
+                     retried_runs=runs["retried"])
