@@ -68,3 +68,30 @@ def test_a_signal_aborts_the_heated_test_even_with_a_page_open(tmp_path, sig, co
     err = proc.stderr.read().decode()
     assert "Traceback" not in err, err
     assert proc.returncode == code
+
+
+def test_a_server_that_came_back_from_ctrl_c_still_ends_as_interrupted(monkeypatch):
+    """Once, in a CI rehearsal, the console ended a Ctrl-C with exit code 0 (uvicorn raises the SIGINT
+    it caught again, through asyncio's handler). Here uvicorn's run comes back from a SIGINT as if
+    that had been lost; the console must still end interrupted (130), the running test closed first."""
+    import uvicorn
+
+    from flowcurve.cli import main
+    from flowcurve.console import server
+
+    closed = []
+    console = type("Stub", (), {"close": lambda self: closed.append(True)})()
+    monkeypatch.setattr(server, "create_app", lambda c: object())
+
+    def run_and_miss(self, sockets=None):
+        self.handle_exit(signal.SIGINT, None)  # what the signal handler does; then the server stops and returns
+
+    monkeypatch.setattr(uvicorn.Server, "run", run_and_miss)
+    with pytest.raises(KeyboardInterrupt):
+        server.serve(console, "127.0.0.1", 8080)
+    assert closed == [True]
+
+    monkeypatch.setattr(server, "Console", lambda *a, **k: type("C", (), {"rig_name": "virtual rig", "close": lambda self: None,
+                                                                          "workspace": type("W", (), {"records": "r"})()})())
+    assert main(["console", "--out", "unused"]) == 130
+    server.exit_as_signalled([])  # a server stopped without a signal: nothing raised
