@@ -161,7 +161,8 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     """Minimise |residuals_of(run(x))|² over lo ≤ x ≤ hi from x0.
 
     ``run`` must be picklable (a module-level function or a ``functools.partial`` of one) and
-    return an object with ``wall_s`` and ``cached`` attributes, or None for a failed run. When
+    return an object with ``wall_s`` and ``cached`` attributes (and ``retried``, counted when true:
+    a run only a retry's settings carried), or None for a failed run. When
     the run at x0 fails, ``other_starts`` are tried in turn; with ``best_start`` they are all run at
     once (side by side) and the fit starts from the one that misses least. A Jacobian step whose run
     fails is taken the other way. ``row_sigma``: the residuals' known standard deviations, NaN where the
