@@ -16,12 +16,10 @@ other: completed, farther or shorter. A private temporary run cache, so the time
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -88,7 +86,9 @@ def main(argv=None) -> int:
                   + " ".join(f"{f:9.0f}" for f in r["force"]) + f" {r['dmax']:8.4f} {r['wall_s']:7.1f}   {ratio}")
 
     if a.stopped_every > 0:
-        table = json.loads((Path(__file__).resolve().parents[1] / "identification" / "fe" / "data" / "upsetting_table.json").read_text())
+        from flowcurve.identification.fe.table import PACKAGE_TABLE, table_provenance
+
+        table = table_provenance(PACKAGE_TABLE)
         stopped = table["incomplete_runs"][:: a.stopped_every]
         t0 = time.perf_counter()
         res = run_many(table_run, [(other, c) for c in stopped], workers=a.workers)
