@@ -74,7 +74,7 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     out = dict(zip(jobs, run_many(voce_run, jobs, workers=a.workers)))
     print(f"Voce record's specimen: {len(jobs)} runs in {time.perf_counter() - t0:.0f} s")
-    print(f"{'μ':>5s} {'mesh':>4s} {'inc':>4s} {'ccx':>9s} {'done':>5s} " + " ".join(f"{'F @' + str(e):>9s}" for e in STRAINS)
+    print(f"{'μ':>5s} {'mesh':>4s} {'inc':>4s} {'ccx':>9s} {'done':>5s} " + " ".join(f"{'F_N @' + str(e):>9s}" for e in STRAINS)
           + f" {'dmax mm':>8s} {'wall s':>7s}   other/first − 1 (force)")
     for s in settings:
         for exe in (first, other):
