@@ -18,6 +18,7 @@ from flowcurve.record.summary import GAUGE_KEY, record_summary
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.compression import identify_compression
 from flowcurve.identification.outcome import Identification
+from flowcurve.identification.assurance import attach as attach_assurance
 from flowcurve.identification.tension import identify_tension
 
 MIN_SAMPLES = 20
@@ -118,6 +119,7 @@ def identify(record: Record, **options) -> Identification:
             block[key] = value
     if ignored:
         warnings.append(f"option(s) not used by {record.test} identification: {', '.join(ignored)}")
+    attach_assurance(result, ident.curves, record)
     old = list(result.get("warnings") or [])
     result["warnings"] = old + [w for w in warnings if w not in old]
     return ident

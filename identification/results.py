@@ -97,6 +97,8 @@ class CompressionHardening:
 class TensionResult(_ResultMapping):
     """A tension identification: ISO 6892-1 results, true curve points, neck corrections, hardening."""
 
+    _optional = ("uncertainty",)
+
     test: str = "tension"
     E_MPa: float
     E_stderr_MPa: float | None  # None when E was not regressed (option or handbook)
@@ -125,6 +127,7 @@ class TensionResult(_ResultMapping):
     modulus_window_MPa: list[float]
     methods: dict
     warnings: list[str]
+    uncertainty: dict | None = None  # GUM budget per result (identification.assurance)
     record: dict = field(default_factory=dict)  # where the record came from (record.summary)
 
 
@@ -132,7 +135,7 @@ class TensionResult(_ResultMapping):
 class CompressionResult(_ResultMapping):
     """A compression identification: friction by every method, corrected curves, hardening."""
 
-    _optional = ("E_apparent_stderr_MPa", "modulus", "friction_mu_range")
+    _optional = ("E_apparent_stderr_MPa", "modulus", "friction_mu_range", "uncertainty")
 
     test: str = "compression"
     E_MPa: float | None
@@ -157,6 +160,7 @@ class CompressionResult(_ResultMapping):
     indicator: dict  # frame stiffness, K_l, shortening, spring-back, toe
     methods: dict
     warnings: list[str]
+    uncertainty: dict | None = None  # GUM budget per result (identification.assurance)
     record: dict = field(default_factory=dict)
     E_apparent_stderr_MPa: float | None = None  # only with the apparent modulus
     modulus: dict | None = None  # only with an elastic line

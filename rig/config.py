@@ -142,6 +142,21 @@ class FrameConfig:
 
 
 @dataclass(frozen=True)
+class InstrumentsConfig:
+    """The measuring instruments' classes, for the results' uncertainty budgets (written into each record)."""
+
+    force_class: float = 1.0  # ISO 7500-1 class of the force-measuring system
+    extensometer_class: float = 1.0  # ISO 9513 class of the extensometer
+    diameter_resolution_mm: float = 0.01  # resolution of the diameter measurement
+    length_resolution_mm: float = 0.01  # resolution of lengths and heights (L0, Lu, h0, hk)
+    crosshead_strain_error_pct: float = 2.0  # bound on a strain from crosshead travel (no extensometer)
+
+    def meta(self) -> dict[str, float]:
+        """The record metadata (``instruments.<key>``) the identification reads them from."""
+        return {f"instruments.{f.name}": getattr(self, f.name) for f in fields(self)}
+
+
+@dataclass(frozen=True)
 class RigConfig:
     """The whole rig; ``furnace`` is None on a rig without one; ``source`` is the file read."""
 
@@ -150,6 +165,7 @@ class RigConfig:
     furnace: FurnaceConfig | None
     frame: FrameConfig
     source: str = "<virtual>"
+    instruments: InstrumentsConfig = InstrumentsConfig()  # [instruments] is optional: the defaults
 
 
 _SERIAL_CHECKS = {
@@ -190,6 +206,13 @@ SCHEMA: dict[str, tuple[type, dict[str, tuple[type, Any]]]] = {
     "frame": (FrameConfig, {
         "stiffness_N_per_um": (float, _in(0.0, 1e6, lo_open=True)),
         "max_force_N": (float, _in(0.0, 1e8, lo_open=True)),
+    }),
+    "instruments": (InstrumentsConfig, {
+        "force_class": (float, _one_of((0.5, 1.0, 2.0, 3.0))),
+        "extensometer_class": (float, _one_of((0.2, 0.5, 1.0, 2.0))),
+        "diameter_resolution_mm": (float, _in(0.0, 1.0, lo_open=True)),
+        "length_resolution_mm": (float, _in(0.0, 1.0, lo_open=True)),
+        "crosshead_strain_error_pct": (float, _in(0.0, 50.0, lo_open=True)),
     }),
 }
 REQUIRED_SECTIONS = ("loadcell", "encoder", "frame")
@@ -246,7 +269,7 @@ def parse_config(data: dict, origin: str = "<config>") -> RigConfig:
             raise ConfigError(f"{origin}: [{name}]: missing section")
     sections = {name: _section(origin, name, data[name]) for name in data}
     config = RigConfig(sections["loadcell"], sections["encoder"], sections.get("furnace"),
-                       sections["frame"], origin)
+                       sections["frame"], origin, sections.get("instruments", InstrumentsConfig()))
     ports = [s.port for s in (config.loadcell, config.encoder, config.furnace)
              if s is not None and not s.port.startswith("loop://")]
     if len(set(ports)) != len(ports):
@@ -317,7 +340,7 @@ def _toml_value(v) -> str:
 def to_toml(config: RigConfig) -> str:
     """The configuration as a TOML document that :func:`load_config` reads back identically."""
     lines = [f"# flowcurve rig configuration (written from {config.source})"]
-    for name in ("loadcell", "encoder", "furnace", "frame"):
+    for name in ("loadcell", "encoder", "furnace", "frame", "instruments"):
         section = getattr(config, name)
         if section is None:
             continue

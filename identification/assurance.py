@@ -1,0 +1,238 @@
+"""What an accredited lab states beside each result: its uncertainty budget and the test's conformity.
+
+:func:`attach` fills ``result["uncertainty"]`` (one GUM budget per result, from
+:mod:`identification.uncertainty`, with the instruments it assumed) and
+``result["methods"]["conformity"]`` (testing rate and temperature, from
+:mod:`identification.conformity`) of a finished tension or compression identification. A
+budget whose inputs the result lacks is left out, never guessed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from flowcurve.identification import conformity as cf
+from flowcurve.identification import uncertainty as un
+
+FLOW_STRAINS = (0.05, 0.1, 0.2, 0.3, 0.5)  # compression flow stress budgets at these true plastic strains
+CONSTANTS = (("A_MPa", "MPa"), ("B_MPa", "MPa"), ("n", "1"), ("K_MPa", "MPa"), ("eps0", "1"), ("sigma0_MPa", "MPa"), ("Q_MPa", "MPa"), ("b", "1"))
+
+
+def instruments_from_meta(meta: Mapping[str, str]) -> dict:
+    """The instrument classes of a record (``instruments.<key>`` metadata) with the defaults for
+    the keys it lacks; ``source`` says which were defaults."""
+    inst: dict = {}
+    defaulted = []
+    for key, default in un.INSTRUMENT_DEFAULTS.items():
+        raw = meta.get(f"instruments.{key}")
+        try:
+            value = float(raw) if raw is not None and str(raw).strip() else None
+        except ValueError:
+            value = None
+        if value is None or not math.isfinite(value) or value <= 0:
+            value = default
+            defaulted.append(key)
+        inst[key] = value
+    if not defaulted:
+        inst["source"] = "record (instruments.*)"
+    elif len(defaulted) == len(un.INSTRUMENT_DEFAULTS):
+        inst["source"] = ("defaults: the record states no instrument classes (set [instruments] in the rig configuration, "
+                          "or --set instruments.force_class=… when identifying)")
+    else:
+        inst["source"] = f"record, defaults for {', '.join(defaulted)}"
+    return inst
+
+
+def _num(value) -> float | None:
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) else None
+
+
+def _block(result: Mapping, name: str) -> dict:
+    rec = result.get("record") or {}
+    block = rec.get(name) if isinstance(rec, Mapping) else None
+    return block if isinstance(block, Mapping) else {}
+
+
+def plastic_slope_MPa(curve, E_MPa: float, at: float = un.OFFSET, half_width: float = 0.001) -> float | None:
+    """θ = dσ/de_p of an engineering curve at plastic strain ``at`` (least-squares slope over ±half_width before Fm)."""
+    if curve is None or "engineering_strain" not in curve.columns or "engineering_stress_MPa" not in curve.columns:
+        return None
+    e = curve["engineering_strain"].to_numpy(dtype=float)
+    s = curve["engineering_stress_MPa"].to_numpy(dtype=float)
+    i_m = int(np.nanargmax(s))
+    ep = e[: i_m + 1] - s[: i_m + 1] / E_MPa
+    sel = (ep >= at - half_width) & (ep <= at + half_width)
+    if sel.sum() < 3 or np.ptp(ep[sel]) <= 0:
+        return None
+    return float(np.polyfit(ep[sel], s[: i_m + 1][sel], 1)[0])
+
+
+def _hardening_slope(hard: Mapping, at: float) -> float | None:
+    A, B, n = (_num(hard.get(k)) for k in ("A_MPa", "B_MPa", "n"))
+    if hard.get("law") == "johnson_cook" and None not in (B, n):
+        return B * n * at ** (n - 1.0)  # d/dε (A + B·εⁿ)
+    return None
+
+
+def _constants(hard: Mapping, stress_rel_u: float) -> dict:
+    out = {}
+    for key, unit in CONSTANTS:
+        value = _num(hard.get(key))
+        if value is None:
+            continue
+        b = un.constant_budget(value, _num(hard.get(f"{key}_stderr")), stress_rel_u, unit)
+        if b is not None:
+            out[key] = b
+    return out
+
+
+def _strain_rel_u(result: Mapping, inst: Mapping) -> tuple[float, str]:
+    methods = result.get("methods") or {}
+    if methods.get("strain_source") == "extensometer":
+        return un.extensometer_scale_rel_u(inst["extensometer_class"]), f"extensometer, ISO 9513 class {inst['extensometer_class']:g}"
+    # a crosshead strain: compliance and toe corrections within ±crosshead_strain_error_pct; the scale
+    # pinned to the measured Lu − L0 (K_l) adds that measurement's own uncertainty
+    spec, post = _block(result, "specimen"), _block(result, "post")
+    l0, lu = _num(spec.get("l0_mm")), _num(post.get("lu_mm"))
+    shape = un.rectangular(inst["crosshead_strain_error_pct"] / 100.0)
+    basis = f"crosshead travel, ±{inst['crosshead_strain_error_pct']:g} % assumed"
+    if methods.get("scale_factor_Kl") is not None and l0 and lu and lu != l0:
+        return (math.hypot(shape, un.measured_length_scale_rel_u(l0, lu, inst["length_resolution_mm"])),
+                basis + f", scaled to the measured Lu − L0 at {inst['length_resolution_mm']:g} mm")
+    return shape, basis
+
+
+def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict:
+    """The budgets of a tension result: E, Rp0.2, Rm, Ag, A, Z and the hardening constants."""
+    out: dict = {}
+    spec, post = _block(result, "specimen"), _block(result, "post")
+    d0 = _num(spec.get("d0_mm"))
+    E = _num(result.get("E_MPa"))
+    Rm, Rp = _num(result.get("Rm_MPa")), _num(result.get("Rp02_MPa"))
+    if d0 is None or E is None:
+        return out
+    strain_u, strain_basis = _strain_rel_u(result, inst)
+    out["strain_scale"] = {"u_rel": strain_u, "basis": strain_basis}
+    stderr = _num(result.get("E_stderr_MPa"))
+    E_measured = stderr is not None
+    if E_measured:  # a force or strain scale error moves E with the stresses and strains: only the regression is E's own
+        out["E_MPa"] = un.modulus_budget(E, d0, inst, strain_rel_u=strain_u, stderr_MPa=stderr)
+        u_E = stderr
+    else:
+        u_E = E * un.rectangular(un.HANDBOOK_E_BOUND)
+        out["E_MPa"] = {"value": E, "unit": "MPa", "given": True, "u": u_E, "U": un.K_COVERAGE * u_E, "k": un.K_COVERAGE, "components": [],
+                        "note": f"given, not measured: ±{100 * un.HANDBOOK_E_BOUND:g} % assumed"}
+    if Rm is not None:
+        out["Rm_MPa"] = un.strength_budget(Rm, d0, inst)
+    if Rp is not None:
+        theta = plastic_slope_MPa(curves.get("engineering"), E) or _hardening_slope(result.get("hardening") or {}, un.OFFSET)
+        if theta is not None:
+            out["Rp02_MPa"] = un.proof_strength_budget(Rp, d0, inst, plastic_slope_MPa=theta, strain_rel_u=strain_u,
+                                                       E_MPa=E, u_E_MPa=u_E, E_measured=E_measured)
+    Ag = _num(result.get("Ag_pct"))
+    if Ag is not None and Rm is not None:
+        e_m = Ag / 100.0 + Rm / E
+        gauge = _num((result.get("methods") or {}).get("strain_length_mm"))
+        # measured E: the scales cancel in Rm/E and scale the plastic extension e_m − Rm/E; given E: e_m, E and Rm apart
+        scaled = Ag / 100.0 if E_measured else e_m
+        if (result.get("methods") or {}).get("strain_source") == "extensometer" and gauge:
+            cls = inst["extensometer_class"]
+            u_em = math.hypot(un.extension_u_mm(scaled * gauge, cls) / gauge, scaled * un.rectangular(cls / 100.0))
+        else:
+            u_em = scaled * strain_u
+        out["Ag_pct"] = un.uniform_elongation_budget(Ag, Rm, E, strain_at_Fm_u=u_em, u_E_MPa=u_E,
+                                                     u_Rm_MPa=None if E_measured else out["Rm_MPa"]["u"])
+    A = _num(result.get("A_pct"))
+    l0, lu = _num(spec.get("l0_mm")), _num(post.get("lu_mm"))
+    method = str(result.get("A_method") or "")
+    if A is not None and l0 and lu and "lu_mm" in method:
+        out["A_pct"] = un.elongation_from_lengths_budget(l0, lu, inst["length_resolution_mm"])
+    elif A is not None and "extensometer" in method:
+        gauge = _num((result.get("methods") or {}).get("strain_length_mm")) or _num(spec.get("extensometer_gauge_mm")) or l0
+        if gauge:
+            out["A_pct"] = un.elongation_from_extension_budget(A, gauge, inst["extensometer_class"])
+    Z = _num(result.get("Z_pct"))
+    du = _num(post.get("dk_mm")) or _num(post.get("du_mm"))
+    if du is None and _num(post.get("sk_mm2")):
+        du = math.sqrt(4.0 * post["sk_mm2"] / math.pi)
+    if Z is not None and du:
+        out["Z_pct"] = un.reduction_of_area_budget(d0, du, inst["diameter_resolution_mm"])
+    stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.resolution(inst["diameter_resolution_mm"]) / d0)
+    out["hardening"] = _constants(result.get("hardening") or {}, stress_rel_u)
+    return out
+
+
+def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict:
+    """The budgets of a compression result: μ, the flow stress at :data:`FLOW_STRAINS`, Rp0.2, constants."""
+    out: dict = {}
+    spec, post = _block(result, "specimen"), _block(result, "post")
+    d0, h0, hk = _num(spec.get("d0_mm")), _num(spec.get("h0_mm")), _num(post.get("hk_mm"))
+    mu = _num(result.get("friction_mu"))
+    others = {k: v for k, v in (result.get("friction") or {}).items() if k != result.get("friction_method")}
+    mu_b = un.friction_budget(mu, result.get("friction_mu_range"), others=others) if mu is not None else None
+    if mu_b is not None:
+        out["friction_mu"] = mu_b
+    if d0 is None:
+        return out
+    Rp = _num(result.get("Rp02_MPa"))
+    if Rp is not None:
+        out["Rp02_MPa"] = un.strength_budget(Rp, d0, inst, note="force and d0 only (mean pressure at 0.2 % plastic strain)")
+    curve = curves.get(f"true_{result.get('friction_correction')}")
+    if curve is not None and h0 and hk and h0 > hk and mu is not None:
+        eps = curve["true_plastic_strain"].to_numpy(dtype=float)
+        sig = curve["true_stress_MPa"].to_numpy(dtype=float)
+        u_mu = mu_b["u"] if mu_b else 0.0
+        flow = {}
+        for at in FLOW_STRAINS:
+            if eps.size and eps.min() <= at <= eps.max():
+                flow[f"{at:g}"] = un.flow_stress_budget(float(np.interp(at, eps, sig)), at, d0, h0, hk, inst, mu=mu, u_mu=u_mu)
+        if flow:
+            out["flow_stress_MPa"] = flow
+    stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.resolution(inst["diameter_resolution_mm"]) / d0)
+    out["hardening"] = _constants(result.get("hardening") or {}, stress_rel_u)
+    return out
+
+
+def conformity(result: Mapping, data) -> dict:
+    """Testing rate (tension: ISO 6892-1 A2/B) and temperature (ISO 6892-1 room / ISO 6892-2 heated)."""
+    rec = result.get("record") or {}
+    spec = _block(result, "specimen")
+    out: dict = {}
+    temps = data["temperature_C"].to_numpy(dtype=float) if data is not None and "temperature_C" in data.columns else None
+    out["temperature"] = cf.temperature(_num(rec.get("nominal_temperature_C")), temps)
+    speed = _num(rec.get("crosshead_speed_mm_per_s"))
+    if result.get("test") != "tension":
+        rate = _num(rec.get("strain_rate_per_s"))
+        out["testing_rate"] = {"conforms": None, "strain_rate_per_s": rate,
+                               "findings": ["ISO 6892-1 rates apply to tension; the compression strain rate is stated, not checked"]}
+        return out
+    length = _num(spec.get("parallel_length_mm"))
+    basis = "parallel length Lc"
+    if length is None:
+        length, basis = _num(spec.get("l0_mm")), "gauge length L0 (no parallel length Lc in the record)"
+    if speed is None or not length:
+        out["testing_rate"] = {"conforms": None, "findings": ["no crosshead speed or specimen length: the testing rate cannot be checked"]}
+        return out
+    stress_rate = None
+    d0 = _num(spec.get("d0_mm"))
+    window = result.get("modulus_window_MPa") or (result.get("modulus") or {}).get("window_MPa")
+    if data is not None and d0 and window and "force_N" in data.columns:
+        stress = data["force_N"].to_numpy(dtype=float) / (math.pi * d0 ** 2 / 4.0)
+        stress_rate = cf.elastic_stress_rate(data["time_s"].to_numpy(dtype=float), stress, window)
+    out["testing_rate"] = cf.testing_rate(speed / length, stress_rate_MPa_per_s=stress_rate, E_MPa=_num(result.get("E_MPa")))
+    out["testing_rate"]["findings"].insert(0, f"ė_Lc = crosshead {speed:g} mm/s ÷ {basis} {length:g} mm")
+    return out
+
+
+def attach(result, curves: Mapping, record) -> None:
+    """Fill ``result['uncertainty']`` and ``result['methods']['conformity']`` (tension or compression)."""
+    inst = instruments_from_meta(record.meta)
+    test = result.get("test")
+    budgets = (tension_uncertainty if test == "tension" else compression_uncertainty)(result, curves, inst)
+    result["uncertainty"] = {"instruments": inst, **budgets}
+    methods = result.get("methods")
+    if isinstance(methods, dict):
+        methods["conformity"] = conformity(result, record.data)

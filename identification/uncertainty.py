@@ -1,0 +1,274 @@
+"""Measurement uncertainty of the identified results (GUM, JCGM 100:2008), per result.
+
+Every result gets a budget: its input quantities, each with a standard uncertainty ``u``, a
+sensitivity coefficient ``c`` (∂result/∂input) and a contribution ``|c|·u``; the combined
+standard uncertainty is the root sum of squares of the contributions (GUM (10), inputs
+uncorrelated) and the expanded uncertainty ``U = k·u_c`` with k = 2 (about 95 %).
+
+The inputs come from the instruments' classes — force per ISO 7500-1 class, extensometer per
+ISO 9513 class, dimensions from the resolution of the measuring tool — read from the record's
+``instruments.*`` metadata (written from the rig configuration's ``[instruments]``), or the
+defaults of :data:`INSTRUMENT_DEFAULTS` with a note saying so; and from the fits' own
+statistics (standard errors). A class ``c`` is a bound ±c % on the relative indication error
+and is taken as rectangular (u = c %/√3); a resolution ``r`` as rectangular of width r
+(u = r/√12). docs/methods.md ("Uncertainty of the results") states every model.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+K_COVERAGE = 2.0  # expanded uncertainty U = k·u_c, k = 2 (≈ 95 % for a normal output)
+
+# The defaults when a record does not state its instruments (the same values as
+# rig.config.InstrumentsConfig; a test keeps them equal).
+INSTRUMENT_DEFAULTS = {
+    "force_class": 1.0,  # ISO 7500-1 class of the force-measuring system, %
+    "extensometer_class": 1.0,  # ISO 9513 class of the extensometer
+    "diameter_resolution_mm": 0.01,  # resolution of the diameter measurement (micrometer)
+    "length_resolution_mm": 0.01,  # resolution of lengths and heights (L0, Lu, h0, hk)
+    "crosshead_strain_error_pct": 2.0,  # bound on a strain from crosshead travel (no extensometer)
+}
+# ISO 9513 Table 2: per class, the bound on the relative extension error (%) and its absolute floor (µm)
+EXTENSOMETER_LIMITS = {0.2: (0.2, 0.6), 0.5: (0.5, 1.5), 1.0: (1.0, 3.0), 2.0: (2.0, 6.0)}
+HANDBOOK_E_BOUND = 0.05  # a handbook E (not measured) is taken as within ±5 %
+OFFSET = 0.002  # the 0.2 % offset of Rp0.2
+
+
+def rectangular(half_width: float) -> float:
+    """Standard uncertainty of a quantity known to lie within ±half_width: a/√3 (GUM 4.3.7)."""
+    return abs(half_width) / math.sqrt(3.0)
+
+
+def resolution(step: float) -> float:
+    """Standard uncertainty of a reading with resolution ``step``: step/√12 (GUM F.2.2.1)."""
+    return abs(step) / math.sqrt(12.0)
+
+
+@dataclass(frozen=True)
+class Component:
+    """One input of a budget: its value, standard uncertainty u and sensitivity c = ∂y/∂x."""
+
+    name: str
+    value: float
+    unit: str
+    u: float
+    sensitivity: float
+    basis: str
+
+    @property
+    def contribution(self) -> float:
+        """|c|·u, in the result's unit."""
+        return abs(self.sensitivity * self.u)
+
+    def as_dict(self) -> dict:
+        return {"name": self.name, "value": self.value, "unit": self.unit, "u": self.u, "sensitivity": self.sensitivity,
+                "contribution": self.contribution, "basis": self.basis}
+
+
+def combined(components: Sequence[Component]) -> float:
+    """u_c = √Σ(c_i·u_i)² (GUM (10), uncorrelated inputs)."""
+    return math.sqrt(sum(c.contribution ** 2 for c in components))
+
+
+def budget(value: float, unit: str, components: Sequence[Component], *, note: str = "", k: float = K_COVERAGE) -> dict:
+    """A result's budget as written to result.json: value, u, U = k·u, k and the components."""
+    u = combined(components)
+    out = {"value": value, "unit": unit, "u": u, "U": k * u, "k": k,
+           "components": [c.as_dict() for c in components]}
+    if note:
+        out["note"] = note
+    return out
+
+
+def force_rel_u(force_class: float) -> float:
+    """Relative standard uncertainty of a force from its ISO 7500-1 class: (class %)/√3."""
+    return rectangular(force_class / 100.0)
+
+
+def extension_u_mm(extension_mm: float, extensometer_class: float) -> float:
+    """Standard uncertainty of an extension read by an ISO 9513 extensometer of this class: the
+    larger of the relative bound and the absolute floor, rectangular."""
+    rel_pct, floor_um = EXTENSOMETER_LIMITS.get(float(extensometer_class), (extensometer_class, 3.0 * extensometer_class))
+    return rectangular(max(rel_pct / 100.0 * abs(extension_mm), floor_um / 1000.0))
+
+
+def extensometer_scale_rel_u(extensometer_class: float) -> float:
+    """Relative standard uncertainty of strain = ΔL/Le from an ISO 9513 class: the extension and
+    the gauge length Le each within ±class % (rectangular), combined."""
+    return math.hypot(rectangular(extensometer_class / 100.0), rectangular(extensometer_class / 100.0))
+
+
+def measured_length_scale_rel_u(l0_mm: float, lu_mm: float, length_resolution_mm: float) -> float:
+    """Relative standard uncertainty of a crosshead strain scaled to the measured Lu − L0 (K_l):
+    both lengths read with ``length_resolution_mm``."""
+    return math.sqrt(2.0) * resolution(length_resolution_mm) / abs(lu_mm - l0_mm)
+
+
+# ---- budgets of the tension results (ISO 6892-1) -------------------------------------------------
+
+def _area_mm2(d0_mm: float) -> float:
+    return math.pi * d0_mm ** 2 / 4.0  # S0 = π·d0²/4
+
+
+def _force_component(force_N: float, force_class: float, per_N: float, name: str = "force") -> Component:
+    return Component(f"{name} F (ISO 7500-1 class {force_class:g})", force_N, "N", force_N * force_rel_u(force_class), per_N,
+                     f"±{force_class:g} % of reading, rectangular")
+
+
+def _diameter_component(d0_mm: float, res_mm: float, sensitivity: float, name: str = "diameter d0") -> Component:
+    return Component(name, d0_mm, "mm", resolution(res_mm), sensitivity, f"resolution {res_mm:g} mm, rectangular")
+
+
+def strength_budget(strength_MPa: float, d0_mm: float, inst: Mapping, *, extra: Sequence[Component] = (), note: str = "") -> dict:
+    """R = F/S0, S0 = π·d0²/4 (Rm, and the force part of Rp0.2): ∂R/∂F = 1/S0, ∂R/∂d0 = −2R/d0."""
+    s0 = _area_mm2(d0_mm)
+    comps = [_force_component(strength_MPa * s0, inst["force_class"], 1.0 / s0),
+             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * strength_MPa / d0_mm), *extra]
+    return budget(strength_MPa, "MPa", comps, note=note)
+
+
+def proof_strength_budget(Rp_MPa: float, d0_mm: float, inst: Mapping, *, plastic_slope_MPa: float, strain_rel_u: float,
+                          E_MPa: float, u_E_MPa: float, E_measured: bool) -> dict:
+    """Rp0.2: the force and d0 as for Rm, plus the strain scale and the slope E of the offset line.
+
+    θ = dσ/de_p at Rp0.2. A strain scale error δ moves the intersection by −θ·0.002·δ when E is
+    regressed on the same strain (the elastic line scales with it), by −θ·(0.002 + Rp/E)·δ when
+    E is given; an error of E moves it by θ·Rp/E²·ΔE.
+    """
+    lever = OFFSET if E_measured else OFFSET + Rp_MPa / E_MPa
+    extra = [Component("strain scale", 1.0, "1", strain_rel_u, -plastic_slope_MPa * lever,
+                       "relative; extensometer class or crosshead scale"),
+             Component("E of the offset line" + (" (regression)" if E_measured else " (given)"), E_MPa, "MPa", u_E_MPa,
+                       plastic_slope_MPa * Rp_MPa / E_MPa ** 2,
+                       "standard error of the elastic line (its scale errors are in the terms above)" if E_measured
+                       else f"given, ±{100 * HANDBOOK_E_BOUND:g} % rectangular")]
+    return strength_budget(Rp_MPa, d0_mm, inst, extra=extra, note=f"plastic slope at Rp0.2 θ = {plastic_slope_MPa:.4g} MPa")
+
+
+def modulus_budget(E_MPa: float, d0_mm: float, inst: Mapping, *, strain_rel_u: float, stderr_MPa: float | None) -> dict:
+    """E = slope of σ = F/S0 against e: relative force scale, d0 (−2E/d0), strain scale (−E), regression."""
+    comps = [Component(f"force scale (ISO 7500-1 class {inst['force_class']:g})", 1.0, "1", force_rel_u(inst["force_class"]), E_MPa,
+                       "relative, rectangular"),
+             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * E_MPa / d0_mm),
+             Component("strain scale", 1.0, "1", strain_rel_u, -E_MPa, "relative; extensometer class or crosshead scale")]
+    if stderr_MPa is not None:
+        comps.append(Component("regression of the elastic line", E_MPa, "MPa", stderr_MPa, 1.0, "standard error of the slope"))
+    return budget(E_MPa, "MPa", comps)
+
+
+def uniform_elongation_budget(Ag_pct: float, Rm_MPa: float, E_MPa: float, *, strain_at_Fm_u: float, u_E_MPa: float,
+                              u_Rm_MPa: float | None) -> dict:
+    """Ag = 100·(e_m − Rm/E): ∂/∂e_m = 100, ∂/∂E = 100·Rm/E², ∂/∂Rm = −100/E (Rm left out, ``None``,
+    when E was measured on the same force and strain: their scales cancel in Rm/E)."""
+    e_m = Ag_pct / 100.0 + Rm_MPa / E_MPa
+    comps = [Component("strain at maximum force e_m", e_m, "1", strain_at_Fm_u, 100.0, "strain measurement"),
+             Component("E (elastic part removed)", E_MPa, "MPa", u_E_MPa, 100.0 * Rm_MPa / E_MPa ** 2, "E's own uncertainty")]
+    if u_Rm_MPa is not None:
+        comps.append(Component("Rm", Rm_MPa, "MPa", u_Rm_MPa, -100.0 / E_MPa, "budget of Rm"))
+    return budget(Ag_pct, "%", comps)
+
+
+def elongation_from_lengths_budget(l0_mm: float, lu_mm: float, length_resolution_mm: float) -> dict:
+    """A = 100·(Lu − L0)/L0 (3.8): ∂A/∂Lu = 100/L0, ∂A/∂L0 = −100·Lu/L0²."""
+    A = 100.0 * (lu_mm - l0_mm) / l0_mm
+    basis = f"resolution {length_resolution_mm:g} mm, rectangular"
+    comps = [Component("gauge length after fracture Lu", lu_mm, "mm", resolution(length_resolution_mm), 100.0 / l0_mm, basis),
+             Component("original gauge length L0", l0_mm, "mm", resolution(length_resolution_mm), -100.0 * lu_mm / l0_mm ** 2, basis)]
+    return budget(A, "%", comps)
+
+
+def elongation_from_extension_budget(A_pct: float, gauge_mm: float, extensometer_class: float) -> dict:
+    """A = 100·ΔL/Le read by the extensometer: the extension (ISO 9513 bound) and Le (±class %)."""
+    extension = A_pct / 100.0 * gauge_mm
+    comps = [Component(f"extension ΔL (ISO 9513 class {extensometer_class:g})", extension, "mm",
+                       extension_u_mm(extension, extensometer_class), 100.0 / gauge_mm, "larger of ±class % and the absolute floor, rectangular"),
+             Component("extensometer gauge length Le", gauge_mm, "mm", gauge_mm * rectangular(extensometer_class / 100.0),
+                       -A_pct / gauge_mm, f"±{extensometer_class:g} %, rectangular")]
+    return budget(A_pct, "%", comps)
+
+
+def reduction_of_area_budget(d0_mm: float, du_mm: float, diameter_resolution_mm: float) -> dict:
+    """Z = 100·(1 − du²/d0²): ∂Z/∂du = −200·du/d0², ∂Z/∂d0 = 200·du²/d0³."""
+    Z = 100.0 * (1.0 - (du_mm / d0_mm) ** 2)
+    comps = [_diameter_component(du_mm, diameter_resolution_mm, -200.0 * du_mm / d0_mm ** 2, "smallest diameter after fracture du"),
+             _diameter_component(d0_mm, diameter_resolution_mm, 200.0 * du_mm ** 2 / d0_mm ** 3)]
+    return budget(Z, "%", comps)
+
+
+# ---- compression ------------------------------------------------------------------------------
+
+def friction_budget(mu: float, mu_range: Sequence[float] | None, *, others: Mapping[str, float] | None = None) -> dict | None:
+    """μ: its [lo, hi] bounds (the friction method's resolution and model share) as rectangular;
+    a note when other friction methods read μ outside μ ± U (the evidence disagrees)."""
+    if not mu_range or len(mu_range) != 2 or mu_range[0] is None or mu_range[1] is None:
+        return None
+    lo, hi = float(mu_range[0]), float(mu_range[1])
+    comps = [Component("friction method's bounds on μ", mu, "1", (hi - lo) / math.sqrt(12.0), 1.0,
+                       f"[{lo:.4g}, {hi:.4g}], rectangular")]
+    out = budget(mu, "1", comps)
+    outside = {k: v for k, v in (others or {}).items() if v is not None and abs(v - mu) > out["U"]}
+    if outside:
+        out["note"] = ("other friction methods read μ outside μ ± U: "
+                       + ", ".join(f"{k} {v:.3f}" for k, v in outside.items()) + " — the methods disagree")
+        out["methods_disagree"] = True
+    return out
+
+
+def flow_stress_budget(sigma_MPa: float, eps: float, d0_mm: float, h0_mm: float, hk_mm: float, inst: Mapping, *,
+                       mu: float, u_mu: float) -> dict:
+    """Compression flow stress σ at true strain ε: σ = F·h/(S0·h0) corrected for friction.
+
+    With h = h0 − Δh = h0·e^−ε: ∂σ/∂F = h/(S0·h0), ∂σ/∂d0 = −2σ/d0, ∂σ/∂h0 = σ·Δh/(h0·h),
+    ∂σ/∂Δh = −σ/h, where Δh is scaled to the measured h0 − hk (K_l), so u(Δh) = Δh·u(h0 − hk)/(h0 − hk);
+    μ with Siebel's sensitivity ∂σ/∂μ = −σ·(d/3h)/(1 + μ·d/3h), d = d0·√(h0/h).
+    """
+    h = h0_mm * math.exp(-eps)
+    dh = h0_mm - h
+    s0 = _area_mm2(d0_mm)
+    force = sigma_MPa * s0 * h0_mm / h
+    siebel = d0_mm * math.sqrt(h0_mm / h) / (3.0 * h)
+    res = inst["length_resolution_mm"]
+    scale_u = dh * math.sqrt(2.0) * resolution(res) / abs(h0_mm - hk_mm)  # shortening scaled to h0 − hk (K_l)
+    comps = [_force_component(force, inst["force_class"], h / (s0 * h0_mm)),
+             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * sigma_MPa / d0_mm),
+             Component("initial height h0", h0_mm, "mm", resolution(res), sigma_MPa * dh / (h0_mm * h), f"resolution {res:g} mm, rectangular"),
+             Component("shortening Δh (scaled to h0 − hk)", dh, "mm", scale_u, -sigma_MPa / h, f"h0 and hk at {res:g} mm"),
+             Component("friction μ", mu, "1", u_mu, -sigma_MPa * siebel / (1.0 + mu * siebel), "budget of μ; Siebel's sensitivity")]
+    return budget(sigma_MPa, "MPa", comps, note=f"at true plastic strain {eps:g}")
+
+
+def constant_budget(value: float, stderr: float | None, stress_rel_u: float, unit: str) -> dict | None:
+    """A fitted constant: the fit's standard error and, for a stress (MPa), the stress scale."""
+    if stderr is None or not math.isfinite(stderr):
+        return None
+    comps = [Component("fit (standard error)", value, unit, stderr, 1.0, "least squares")]
+    if unit == "MPa":
+        comps.append(Component("stress scale (force class, d0)", 1.0, "1", stress_rel_u, value, "relative"))
+    return budget(value, unit, comps)
+
+
+# ---- Monte Carlo propagation (GUM Supplement 1) -------------------------------------------------
+
+def monte_carlo(model: Callable[..., np.ndarray], inputs: Mapping[str, tuple[float, float, str]], *, n: int = 200_000,
+                seed: int = 1) -> tuple[float, float, tuple[float, float]]:
+    """Propagate distributions through ``model(**samples)`` (JCGM 101:2008): inputs name →
+    (value, standard uncertainty, 'normal' | 'rectangular'). Returns (mean, standard deviation,
+    the probabilistically symmetric 95 % coverage interval)."""
+    rng = np.random.default_rng(seed)
+    draws = {}
+    for name, (value, u, kind) in inputs.items():
+        if kind == "rectangular":
+            half = u * math.sqrt(3.0)
+            draws[name] = rng.uniform(value - half, value + half, n)
+        elif kind == "normal":
+            draws[name] = rng.normal(value, u, n)
+        else:
+            raise ValueError(f"{name}: distribution must be normal or rectangular, not {kind!r}")
+    y = np.asarray(model(**draws), dtype=float)
+    lo, hi = np.quantile(y, [0.025, 0.975])
+    return float(y.mean()), float(y.std(ddof=1)), (float(lo), float(hi))
