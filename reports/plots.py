@@ -30,17 +30,27 @@ UNIT_LABELS = {
     "mm": "mm", "kN": "kN", "N": "N", "MPa": "MPa", "GPa": "GPa", "s": "s", "pct": "%",
     "C": "°C", "mm2": "mm²", "per_s": "1/s", "um": "µm",
 }
-DIMENSIONLESS = ("strain", "ratio", "mu", "factor")
 MAX_POINTS = 2000  # points drawn per line; longer curves are thinned evenly
 
 
 def axis_label(column: str) -> str:
-    """``'true_stress_MPa'`` → ``'true stress (MPa)'``; strains are marked dimensionless."""
+    """``'true_stress_MPa'`` → ``'true stress, MPa'`` (the report's style); dimensionless names bare."""
     for suffix in sorted(UNIT_LABELS, key=len, reverse=True):
         if column.endswith("_" + suffix):
-            return f"{column[: -len(suffix) - 1].replace('_', ' ')} ({UNIT_LABELS[suffix]})"
-    label = column.replace("_", " ")
-    return f"{label} (–)" if any(word in column for word in DIMENSIONLESS) else label
+            return f"{column[: -len(suffix) - 1].replace('_', ' ')}, {UNIT_LABELS[suffix]}"
+    return column.replace("_", " ")
+
+
+LAW_NAMES = {"johnson_cook": "Johnson–Cook", "swift": "Swift", "voce": "Voce"}
+CORRECTION_NAMES = {"fe_table": "CalculiX force-factor table", "k_sigma": "K_σ/K_ε factors", "siebel": "Siebel",
+                    "slab": "slab method"}
+NECK_NAMES = {"davidenkov": "Davidenkov", "bridgman": "Bridgman", "mirone": "Mirone"}
+
+
+def words(name: str) -> str:
+    """A curve's code name in words for a legend (``true_fe_table`` → ``CalculiX force-factor table``)."""
+    key = name.removeprefix("true_")
+    return CORRECTION_NAMES.get(key) or LAW_NAMES.get(key) or key.replace("_", " ")
 
 
 def _thin(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -61,10 +71,10 @@ def _column(df: pd.DataFrame, patterns: tuple[str, ...], exclude: tuple[str, ...
 def _force_kN(df: pd.DataFrame) -> tuple[np.ndarray, str] | None:
     """The force of a diagram in kN (converted from N where needed)."""
     if "force_kN" in df.columns:
-        return df["force_kN"].to_numpy(dtype=float), "force (kN)"
+        return df["force_kN"].to_numpy(dtype=float), "force, kN"
     name = _column(df, (r"force_N$",))
     if name is not None:
-        return df[name].to_numpy(dtype=float) / 1e3, "force (kN)"
+        return df[name].to_numpy(dtype=float) / 1e3, "force, kN"
     return None
 
 
@@ -87,7 +97,8 @@ def draw_diagram(ident: Identification, path: Path) -> None:
     """Raw and corrected indicator diagram, force (kN) against displacement (mm)."""
     fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
     try:
-        for name, style in (("raw_diagram", dict(color="0.55", lw=1.0)), ("corrected_diagram", dict(color="C0", lw=1.4))):
+        for name, style in (("raw_diagram", dict(color="0.55", lw=1.0, label="as recorded (crosshead)")),
+                            ("corrected_diagram", dict(color="C0", lw=1.4, label="corrected (frame compliance, toe)"))):
             df = ident.curves.get(name)
             if df is None or df.empty:
                 continue
@@ -95,9 +106,9 @@ def draw_diagram(ident: Identification, path: Path) -> None:
             if disp is None or force is None:
                 continue
             x, y = _thin(df[disp].to_numpy(dtype=float), force[0])
-            ax.plot(x, y, label=f"{name.replace('_', ' ')}: {axis_label(disp).split(' (')[0]}", **style)
+            ax.plot(x, y, **style)
             ax.set_ylabel(force[1])
-        ax.set_xlabel("displacement (mm)")
+        ax.set_xlabel("displacement, mm")
         ax.set_title(_title(ident, "indicator diagram"))
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best")
@@ -111,42 +122,86 @@ def _plot(ax, df: pd.DataFrame, x: str, y: str, **style) -> None:
     ax.plot(xs, ys, **style)
 
 
+def _selected_name(ident: Identification) -> str | None:
+    """The true curve the result stands on: ``true`` (tension) or ``true_<friction correction>``."""
+    correction = ident.result.get("friction_correction")
+    if correction and f"true_{correction}" in ident.curves:
+        return f"true_{correction}"
+    return "true" if "true" in ident.curves else None
+
+
+def _fitted_range(ident: Identification) -> tuple[float, float] | None:
+    """The plastic strain range of the measured points the law was fitted to (a tension fit's
+    uniform range, without the single fracture point)."""
+    h = ident.result.get("hardening") or {}
+    r = h.get("fit_range") or h.get("strain_range")
+    if isinstance(r, (list, tuple)) and len(r) == 2 and all(isinstance(v, (int, float)) for v in r):
+        return float(r[0]), float(r[1])
+    return None
+
+
+def _draw_fit(ax, ident: Identification, fit: pd.DataFrame) -> None:
+    """The hardening fit: solid over the fitted range, dashed and labelled where it is extrapolated."""
+    y = _column(fit, (r"_MPa$",))
+    x = fit["true_plastic_strain"].to_numpy(dtype=float)
+    f = fit[y].to_numpy(dtype=float)
+    rng = _fitted_range(ident)
+    lo, hi = rng if rng is not None else (-np.inf, np.inf)
+    inside = (x >= lo - 1e-12) & (x <= hi + 1e-12)
+    beyond = x > hi + 1e-12  # not drawn below the fitted range (the elastic–plastic transition)
+    ax.plot(np.where(inside, x, np.nan), np.where(inside, f, np.nan), color="k", lw=1.0, zorder=4, label=_fit_label(ident))
+    if beyond.any():
+        through = (ident.result.get("hardening") or {}).get("fracture_point") == "included"
+        what = (f"fit beyond the measured range (εp > {hi:.3g}), through the fracture point only" if through
+                else f"fit extrapolated beyond the fitted range (εp {lo:.3g}–{hi:.3g})")
+        ax.plot(np.where(beyond, x, np.nan), np.where(beyond, f, np.nan), color="k", lw=1.0, ls="--", zorder=4, label=what)
+
+
 def draw_stress_strain(ident: Identification, path: Path) -> None:
-    """Left: engineering and true curves against total strain. Right: true stress against
-    true plastic strain with the hardening fit (and the neck-corrected fracture point)."""
+    """Left: engineering and true curves against total strain. Right: the selected true curve
+    against true plastic strain, drawn over the hardening fit (solid where fitted, dashed where
+    extrapolated), the other corrections thin, and the neck-corrected fracture point."""
     curves = ident.curves
     total = [n for n in ("engineering", "true") if n in curves and _stress_pair(curves[n])]
-    fig, axes = plt.subplots(1, 2 if total else 1, figsize=(12 if total else 7, 4.5), squeeze=False, layout="constrained")
+    fig, axes = plt.subplots(1, 2 if total else 1, figsize=(10 if total else 7, 4.5), squeeze=False, layout="constrained")
     try:
         if total:
             ax = axes[0][0]
             for i, name in enumerate(total):
                 x, y = _stress_pair(curves[name])
-                _plot(ax, curves[name], x, y, lw=1.3, color=f"C{i}", label=f"{name} ({axis_label(x).split(' (')[0]})")
-            ax.set_xlabel("strain (–)")
-            ax.set_ylabel("stress (MPa)")
+                _plot(ax, curves[name], x, y, lw=1.3, color=f"C{i}", label=f"{name} stress against {name} strain")
+            ax.set_xlabel("strain")
+            ax.set_ylabel("stress, MPa")
             ax.set_title("engineering and true curves")
             ax.grid(True, alpha=0.3)
             ax.legend(loc="best")
         ax = axes[0][-1]
-        plastic = [n for n in ("true", *sorted(n for n in curves if n.startswith("true_"))) if n in curves]
-        for i, name in enumerate(plastic):
+        selected = _selected_name(ident)
+        others = [n for n in sorted(curves) if n.startswith("true_") and n != selected]
+        for name in others:
             df = curves[name]
-            y = _column(df, (r"stress.*_MPa$",))
-            if "true_plastic_strain" in df.columns and y:
-                _plot(ax, df, "true_plastic_strain", y, lw=1.3, color=f"C{i + 1}", label=name.replace("_", " "))
+            if "true_plastic_strain" in df.columns and _column(df, (r"stress.*_MPa$",)):
+                _plot(ax, df, "true_plastic_strain", _column(df, (r"stress.*_MPa$",)), lw=0.8, alpha=0.7,
+                      label=f"other correction: {words(name)}")
         fit = curves.get("fit")
         if fit is not None and "true_plastic_strain" in fit.columns:
-            _plot(ax, fit, "true_plastic_strain", _column(fit, (r"_MPa$",)), color="k", ls="--", lw=1.2, label=_fit_label(ident))
+            _draw_fit(ax, ident, fit)
+        if selected is not None and "true_plastic_strain" in curves[selected].columns:
+            df = curves[selected]
+            how = f" ({words(selected)})" if selected != "true" else ""
+            _plot(ax, df, "true_plastic_strain", _column(df, (r"stress.*_MPa$",)), lw=3.0, color="C3", alpha=0.55, zorder=3,
+                  label=f"selected true curve{how}")
         point = curves.get("fracture_point")
         if point is not None and "true_plastic_strain" in point.columns:
-            ax.plot(point["true_plastic_strain"], point[_column(point, (r"_MPa$",))], "rs", label="fracture (neck-corrected)")
+            neck = NECK_NAMES.get(str((ident.result.get("methods") or {}).get("neck_correction")), "")
+            ax.plot(point["true_plastic_strain"], point[_column(point, (r"_MPa$",))], "s", color="C2", zorder=5,
+                    label=f"fracture, neck-corrected{' (' + neck + ')' if neck else ''}")
         ax.set_xlabel(axis_label("true_plastic_strain"))
         ax.set_ylabel(axis_label("true_stress_MPa"))
         ax.set_title("flow curve and hardening fit")
         ax.grid(True, alpha=0.3)
-        ax.legend(loc="best")
-        fig.suptitle(_title(ident, "stress-strain curves"))
+        ax.legend(loc="best", fontsize="small")
+        fig.suptitle(_title(ident, "stress–strain curves"))
         fig.savefig(path, dpi=110)
     finally:
         plt.close(fig)
@@ -155,22 +210,30 @@ def draw_stress_strain(ident: Identification, path: Path) -> None:
 def draw_corrections(ident: Identification, path: Path) -> None:
     """The true curve of every friction correction, one panel each, same axes, fit overlaid."""
     names = sorted(n for n in ident.curves if n.startswith("true_") and _stress_pair(ident.curves[n]))
-    fig, axes = plt.subplots(1, max(1, len(names)), figsize=(3.6 * max(1, len(names)), 4), sharey=True, squeeze=False, layout="constrained")
+    cols = min(2, max(1, len(names)))  # two panels a row: legible at the report's page width
+    rows = -(-max(1, len(names)) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(5 * cols, 3.6 * rows), sharex=True, sharey=True, squeeze=False, layout="constrained")
     try:
         fit = ident.curves.get("fit")
-        for ax, name in zip(axes[0], names):
+        selected = _selected_name(ident)
+        for ax in axes.flat[len(names):]:
+            ax.set_visible(False)
+        for ax, name in zip(axes.flat, names):
             df = ident.curves[name]
             xc, yc = _stress_pair(df)
             x, y = _thin(df[xc].to_numpy(dtype=float), df[yc].to_numpy(dtype=float))
-            ax.plot(x, y, lw=1.3, label=name.removeprefix("true_").replace("_", " "))
+            ax.plot(x, y, lw=1.8, color="C3" if name == selected else "C0", zorder=3,
+                    label="selected true curve" if name == selected else "true curve")
             if fit is not None and _stress_pair(fit) is not None:
                 fx, fy = _stress_pair(fit)
-                ax.plot(fit[fx], fit[fy], "k--", lw=1.0, label="fit")
-            ax.set_xlabel(axis_label(xc))
-            ax.set_title(name.removeprefix("true_").replace("_", " "))
+                ax.plot(fit[fx], fit[fy], "k--", lw=0.9, label=f"{_law_name(ident)} fit (of the selected curve)")
+            ax.set_title(words(name) + (" (selected)" if name == selected else ""), fontsize="medium")
             ax.grid(True, alpha=0.3)
             ax.legend(loc="lower right", fontsize="small")
-        axes[0][0].set_ylabel("true stress (MPa)")
+        for ax in axes[-1]:
+            ax.set_xlabel(axis_label("true_plastic_strain"))
+        for ax in axes[:, 0]:
+            ax.set_ylabel(axis_label("true_stress_MPa"))
         fig.suptitle(_title(ident, "true curves by friction correction"))
         fig.savefig(path, dpi=110)
     finally:
@@ -186,12 +249,16 @@ def _title(ident: Identification, what: str) -> str:
     return f"{what} — {', '.join(parts)}" if parts else what
 
 
+def _law_name(ident: Identification) -> str:
+    law = str((ident.result.get("hardening") or {}).get("law", ""))
+    return LAW_NAMES.get(law, law.replace("_", " ") or "hardening")
+
+
 def _fit_label(ident: Identification) -> str:
     h = ident.result.get("hardening") or {}
-    law = h.get("law", "fit")
     if all(isinstance(h.get(k), (int, float)) for k in ("A_MPa", "B_MPa", "n")):
-        return f"{law}: A={h['A_MPa']:.0f} MPa, B={h['B_MPa']:.0f} MPa, n={h['n']:.3f}"
-    return f"{law} fit"
+        return f"{_law_name(ident)} fit: A = {h['A_MPa']:.0f} MPa, B = {h['B_MPa']:.0f} MPa, n = {h['n']:.3f}"
+    return f"{_law_name(ident)} fit"
 
 
 def add_plots(ident: Identification) -> Identification:

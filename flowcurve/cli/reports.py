@@ -60,15 +60,21 @@ def register(subparsers) -> None:
 
     r = subparsers.add_parser(
         "report",
-        help="HTML report of a test series (specimens, results, curves, fit, card)",
+        help="test report of a series as PDF and HTML (results ± U, conformity, curves, fit, card)",
         description=(
-            "One self-contained HTML document for a test series: the specimens and results of "
-            "the 'flowcurve identify' result folders under DIR, the series fit (fit.json under DIR) "
-            "with its plots, and the LS-DYNA card. What a lab hands to a customer."
+            "The test report a lab sends its customer, as report.pdf and report.html: the lab header, "
+            "the standard and method designation (ISO 6892-1), the specimens, the results of the "
+            "'flowcurve identify' result folders under DIR rounded as ISO 6892-1 §22 prescribes with "
+            "their expanded uncertainty U (k = 2), the conformity of testing rate and temperature, the "
+            "uncertainty budgets, the figures, the series fit (fit.json under DIR) and a link to the "
+            "LS-DYNA card written into cards/ beside the report."
         ),
     )
     r.add_argument("dir", metavar="DIR", help="folder holding the result folders and the fit folder")
-    r.add_argument("-o", "--output", metavar="FILE", help="HTML file to write (default: DIR/report.html)")
+    r.add_argument("-o", "--output", metavar="FILE", help="HTML file to write (default: DIR/report.html); the PDF goes beside it")
+    r.add_argument("--lab", metavar="LAB.toml", help="lab header: [lab] name, address, accreditation, report_number, customer, "
+                   "approved_by (default: a generic header, said so in the report)")
+    r.add_argument("--no-pdf", action="store_true", help="write the HTML only")
     r.add_argument("--units", "-u", default=DEFAULT_UNIT_SYSTEM, choices=sorted(UNIT_SYSTEMS), help="unit system of the card")
     r.add_argument("--title", metavar="TEXT", help="report title")
     for option, dest, metavar in (("--E", "E_MPa", "MPa"), ("--poisson", "poisson", "NU"), ("--density", "density_kg_per_m3", "KG_PER_M3"),
@@ -104,8 +110,10 @@ def run_card(args) -> int:
 
 
 def run_report(args) -> int:
+    from flowcurve.reports.lab import load_lab
     from flowcurve.reports.report import write_report
 
-    out = write_report(args.dir, args.output, units=args.units, title=args.title, **overrides(args))
-    print(f"report written to {out}", file=sys.stderr)
+    written = write_report(args.dir, args.output, units=args.units, title=args.title, lab=load_lab(args.lab),
+                           pdf=not args.no_pdf, **overrides(args))
+    print(f"report written to {', '.join(map(str, written))}", file=sys.stderr)
     return 0

@@ -1,9 +1,10 @@
-"""``flowcurve report``: a self-contained HTML document of a synthetic series."""
+"""``flowcurve report``: the test report (HTML and PDF) of a synthetic series and of a real record."""
 
 import base64
 import html
 import json
 import re
+from pathlib import Path
 
 import matplotlib
 
@@ -15,6 +16,7 @@ import pytest  # noqa: E402
 
 from flowcurve.cli import main  # noqa: E402
 from flowcurve.reports.report import ReportError, build_report  # noqa: E402
+from flowcurve.reports.rounding import format_step, format_uncertainty, round_step, value_with_U  # noqa: E402
 
 from .conftest import jc_MPa, make_fit  # noqa: E402
 
@@ -48,51 +50,105 @@ def make_series(root, fit="synthetic"):
 
 
 def images(text):
-    return re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', text)
+    return re.findall(r"src='data:image/png;base64,([A-Za-z0-9+/=]+)'", text)
 
 
-def test_report_holds_specimens_results_constants_plots_and_card(tmp_path, capsys):
+def test_report_holds_specimens_results_constants_plots_and_a_linked_card(tmp_path, capsys):
     root = make_series(tmp_path / "series")
-    out = tmp_path / "report.html"
+    out = tmp_path / "out" / "report.html"
+    out.parent.mkdir()
     assert main(["report", str(root), "-o", str(out), "--density", "7820"]) == 0
     text = out.read_text(encoding="utf-8")
     for name, _, _ in SPECIMENS:
         assert text.count(name) >= 2  # in the specimens and the results tables
-    assert "12Kh18N12M3TL" in text and "/lab/C_T400_r0.01.csv" in text
-    for constant in ("105", "1392", "0.642", "0.01", "0.517"):
-        assert f"<td>{constant}</td>" in text
-    assert "<td>2.1</td>" in text  # the standard error of A
+    assert "12Kh18N12M3TL" in text
+    assert "C_T400_r0.01.csv" in text and "/lab/" not in text  # the record's file name, not its absolute path
+    assert str(tmp_path) not in text
+    # the fit's constants rounded, with U = 2 × standard error beside them
+    assert "<td class='num'>105 ± 4.2</td>" in text and "<td class='num'>1392 ± 70</td>" in text
+    assert "<td class='num'>0.642 ± 0.020</td>" in text
     # self-contained: every image is inline, and a real PNG
-    assert not re.search(r'src="(?!data:)', text)
+    assert not re.search(r"src='(?!data:)", text)
     pngs = images(text)
     assert len(pngs) == len(SPECIMENS)
     assert all(base64.b64decode(p).startswith(b"\x89PNG") for p in pngs)
-    # the card is there, complete, and readable by the independent LS-DYNA reader
-    card = html.unescape(re.search(r"<pre class='card'>(.*?)</pre>", text, re.S).group(1))
+    # the card is linked, not pasted, and readable by the independent LS-DYNA reader
+    assert "<pre" not in text and "*KEYWORD" not in text
+    href = re.search(r"<a href='(cards/[^']+\.k)'>", text).group(1)
+    card = (out.parent / href).read_text(encoding="utf-8")
     dyna = pytest.importorskip("ansys.dyna.core")
     deck = dyna.Deck()
     deck.loads(card)
     jc = [k for k in deck.keywords if type(k).__name__ == "MatJohnsonCook"][0]
     assert jc.a == pytest.approx(105.0) and jc.ro == pytest.approx(7.82e-9)
-    assert "user's risk" in text
+    assert "user&#x27;s risk" in text
+    pdf = out.with_suffix(".pdf").read_bytes()
+    assert pdf.startswith(b"%PDF") and len(re.findall(rb"/Type /Page\b", pdf)) >= 2
+    assert "report.pdf" in capsys.readouterr().err
 
 
 def test_report_without_a_constant_still_written_and_says_why(tmp_path):
     root = make_series(tmp_path / "series")
     text = build_report(root)  # the synthetic fit.json has no density
-    assert "No card in this report" in text and "--density" in text
-    assert "<h2>Specimens</h2>" in text
+    assert "LS-DYNA card not written" in text and "--density" in text
+    assert "<h2>Specimens and test conditions</h2>" in text
+    # the synthetic results carry no budgets: the report says so instead of showing values as exact
+    assert "no uncertainty budget in result.json" in text
 
 
 def test_report_of_a_real_series_fit(tmp_path):
     """End to end with the series engineer's 'flowcurve fit' writing fit.json and its plots."""
     root = make_series(tmp_path / "series", fit="real")
-    text = build_report(root, units="mm-ms-kg-kN-GPa", density_kg_per_m3=7820.0, poisson=0.25, specific_heat_J_per_kgK=462.0)
+    text = build_report(root, units="mm-ms-kg-kN-GPa", density_kg_per_m3=7820.0, poisson=0.25, specific_heat_J_per_kgK=462.0,
+                        cards_dir=tmp_path / "cards", link_base=tmp_path)
     fit = json.loads((root / "fit" / "fit.json").read_text())
     assert fit["A_MPa"] == pytest.approx(105.0, rel=1e-3)  # the law the series was made from
-    assert f"<td>{fit['A_MPa']:.6g}</td>" in text and f"<td>{fit['m']:.6g}</td>" in text
+    assert f"<td class='num'>{format_step(fit['A_MPa'], 1.0)} ± {format_uncertainty(2 * fit['A_MPa_stderr'])}</td>" in text
     assert len(images(text)) > len(SPECIMENS)  # the fit's plots too
-    assert "*MAT_JOHNSON_COOK" in text and "mm-ms-kg-kN-GPa" in text
+    card = next((tmp_path / "cards").glob("*.k")).read_text()
+    assert "*MAT_JOHNSON_COOK" in card and "mm-ms-kg-kN-GPa" in text
+
+
+def test_report_of_a_real_record_rounds_and_states_U_and_conformity(tmp_path):
+    """46NT71 (INSTRON, extensometer): §22 rounding, U beside each value, E measured, method B."""
+    rec = Path(__file__).resolve().parents[2] / "examples" / "data" / "46NT71.csv"
+    assert main(["identify", str(rec), "--out", str(tmp_path / "series"), "--no-plots"]) == 0
+    result = json.loads((tmp_path / "series" / "46NT71" / "result.json").read_text())
+    lab = tmp_path / "lab.toml"
+    lab.write_text('[lab]\nname = "Prüflabor Nord"\naccreditation = "ISO/IEC 17025, D-PL-00000-01-00"\nreport_number = "2026-0147"\n')
+    assert main(["report", str(tmp_path / "series"), "--lab", str(lab)]) == 0
+    text = (tmp_path / "series" / "report.html").read_text(encoding="utf-8")
+    unc = result["uncertainty"]
+    for key, step in (("Rp02_MPa", 1.0), ("Rm_MPa", 1.0), ("Ag_pct", 0.5), ("A_pct", 0.5), ("Z_pct", 1.0)):
+        assert f"<td class='num'>{value_with_U(result[key], unc[key]['U'], step)}</td>" in text, key
+    assert "<td class='num'>1132 ± 14</td>" in text and "<td class='num'>14.5 ± " in text  # 1132.36 MPa, 14.60 %
+    assert "measured (extensometer)" in text
+    assert "ISO 6892-1:2019 B39" in text and "conforms" in text
+    assert "Prüflabor Nord" in text and "2026-0147" in text and "Lab header: defaults" not in text
+    assert "46NT71.csv" in text and str(rec.parent) not in text
+
+
+@pytest.mark.parametrize("value, step, text", [(1132.358, 1.0, "1132"), (1132.5, 1.0, "1132"), (1133.5, 1.0, "1134"),
+                                               (14.6028, 0.5, "14.5"), (14.75, 0.5, "15.0"), (14.25, 0.5, "14.0"),
+                                               (55.4178, 1.0, "55"), (0.35, 0.1, "0.4"), (0.45, 0.1, "0.4")])
+def test_iso_6892_1_rounding_ties_go_to_the_even_multiple(value, step, text):
+    assert format_step(value, step) == text
+    assert round_step(value, step) == pytest.approx(float(text))
+
+
+@pytest.mark.parametrize("U, text", [(13.337, "14"), (0.2385, "0.24"), (0.0105, "0.011"), (4.0, "4.0"), (100.0, "100"),
+                                     (0.02, "0.020")])
+def test_expanded_uncertainty_two_significant_digits_rounded_up(U, text):
+    assert format_uncertainty(U) == text
+
+
+def test_lab_file_with_an_unknown_key_is_a_one_line_error(tmp_path, capsys):
+    root = make_series(tmp_path / "series")
+    lab = tmp_path / "lab.toml"
+    lab.write_text('[lab]\nnmae = "typo"\n')
+    assert main(["report", str(root), "--lab", str(lab)]) == 2
+    err = capsys.readouterr().err
+    assert "lab.toml: [lab] nmae: unknown key" in err and "Traceback" not in err
 
 
 def test_empty_folder_is_a_one_line_error(tmp_path, capsys):

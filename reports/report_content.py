@@ -1,0 +1,355 @@
+"""What a series test report says, as blocks both renderers share (:mod:`.report` HTML, :mod:`.report_pdf` PDF).
+
+Built from a folder holding ``flowcurve identify`` result folders (``result.json`` with its
+``uncertainty`` and ``methods.conformity``, PNG plots) and optionally a ``flowcurve fit``
+folder (``fit.json``): the lab header, the standard and method designation, the specimen and
+test table, the results rounded as ISO 6892-1 §22 prescribes each with its expanded
+uncertainty U (k = 2), the conformity of testing rate and temperature, the uncertainty
+budgets, the figures, the series fit and links to the material cards written beside the
+report. Every name in it is relative: file names, never the paths of the machine that made it.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from flowcurve import __version__
+from flowcurve.errors import FlowcurveError
+from flowcurve.identification.outcome import read_json_object
+from flowcurve.reports.lab import LabHeader
+from flowcurve.reports.rounding import ISO_6892_1_RULES, STEPS, format_step, format_uncertainty, value_with_U
+
+
+class ReportError(FlowcurveError):
+    """A report folder that holds nothing to report, or files that cannot be read."""
+
+
+@dataclass
+class Heading:
+    text: str
+    level: int = 2
+
+
+@dataclass
+class Para:
+    text: str
+    kind: str = ""  # "", "warn" or "note"
+
+
+@dataclass
+class Facts:
+    rows: list[tuple[str, str]]
+
+
+@dataclass
+class Table:
+    columns: list[str]
+    rows: list[list[str]]
+    caption: str = ""
+
+
+@dataclass
+class Figure:
+    path: Path
+    caption: str
+
+
+@dataclass
+class Link:
+    text: str
+    href: str  # relative to the report file
+
+
+@dataclass
+class Report:
+    title: str
+    lab: LabHeader
+    blocks: list = field(default_factory=list)
+
+    def add(self, *blocks) -> None:
+        self.blocks.extend(blocks)
+
+
+PLOT_CAPTIONS = {"diagram": "indicator diagram: force against displacement, as recorded and corrected",
+                 "stress_strain": "stress–strain curves; the selected true curve with its hardening fit",
+                 "corrections": "true curves by friction correction"}
+LAW_NAMES = {"johnson_cook": "Johnson–Cook", "swift": "Swift", "voce": "Voce"}
+FRICTION_METHODS = {"fe_table": "CalculiX upsetting table", "bulge_regression": "bulge regression",
+                    "ebrahimi_najafizadeh": "Ebrahimi–Najafizadeh"}
+FLOW_SHOWN = ("0.1", "0.2", "0.3")  # compression flow stress columns (true plastic strain)
+
+
+# ---- reading --------------------------------------------------------------------------------
+
+def _read_json(path: Path) -> dict:
+    return read_json_object(path, ReportError)
+
+
+def find_results(root: Path) -> list[tuple[str, Path, dict]]:
+    """(name, folder, result.json) of every identify result folder under ``root``."""
+    return [(p.parent.name, p.parent, _read_json(p)) for p in sorted(root.rglob("result.json"))]
+
+
+def find_fit(root: Path) -> Path | None:
+    """The series fit under ``root`` (the shallowest ``fit.json``)."""
+    fits = sorted(root.rglob("fit.json"), key=lambda p: (len(p.parts), str(p)))
+    return fits[0] if fits else None
+
+
+def _rec(result: dict) -> dict:
+    block = result.get("record")
+    return block if isinstance(block, dict) else {}
+
+
+def _sub(result: dict, name: str) -> dict:
+    block = _rec(result).get(name)
+    return block if isinstance(block, dict) else {}
+
+
+def _spec(result: dict, key: str):
+    value = _sub(result, "specimen").get(key)
+    return value if value is not None else _rec(result).get(f"specimen.{key}")
+
+
+def _num(value) -> float | None:
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) else None
+
+
+def _g(value, digits: int = 3) -> str:
+    v = _num(value)
+    return "–" if v is None else f"{v:.{digits}g}"
+
+
+def _unc(result: dict) -> dict:
+    u = result.get("uncertainty")
+    return u if isinstance(u, dict) else {}
+
+
+def _U(result: dict, key: str) -> float | None:
+    b = _unc(result).get(key)
+    return _num(b.get("U")) if isinstance(b, dict) and not b.get("given") else None
+
+
+def _with_U(result: dict, key: str, step_key: str | None = None) -> str:
+    return value_with_U(_num(result.get(key)), _U(result, key), STEPS.get(step_key or key))
+
+
+def relative_name(path) -> str:
+    """A record's name for the report: its file name, never the absolute path."""
+    return Path(str(path)).name if path else "–"
+
+
+# ---- E and its source -----------------------------------------------------------------------
+
+def modulus_source(result: dict) -> str:
+    """given (handbook/option), measured (extensometer) or apparent (crosshead, compression)."""
+    if result.get("test") == "compression":
+        src = str(result.get("E_source") or "")
+        return "apparent (initial slope)" if src.startswith("apparent") else ("–" if src in ("", "none") else "given (handbook)")
+    if result.get("E_stderr_MPa") is None:
+        return "given (handbook)"
+    if (result.get("methods") or {}).get("strain_source") == "extensometer":
+        return "measured (extensometer)"
+    return "apparent (crosshead)"
+
+
+def modulus_cell(result: dict) -> str:
+    E = _num(result.get("E_MPa"))
+    if E is None:
+        return "–"
+    source = modulus_source(result)
+    U = _U(result, "E_MPa") if source.startswith("measured") else None
+    return value_with_U(E / 1000.0, U / 1000.0 if U else None, STEPS["E_GPa"])
+
+
+# ---- sections -------------------------------------------------------------------------------
+
+def header(report: Report, root: Path, results: list, today: str) -> None:
+    lab = report.lab
+    rows = lab.rows()
+    if not lab.report_number:
+        rows.append(("report number", f"{root.name}-{today}"))
+    rows += [("date of report", today), ("test series", f"{root.name} ({len(results)} specimen(s))"),
+             ("evaluated with", f"flowcurve {__version__}")]
+    report.add(Facts(rows))
+    if lab.source.startswith("defaults"):
+        report.add(Para("Lab header: defaults (give 'flowcurve report --lab lab.toml' with the laboratory's name, "
+                        "accreditation and report number).", "note"))
+
+
+def designations(results: list) -> list[tuple[str, str]]:
+    rows = []
+    for name, _, r in results:
+        conf = (r.get("methods") or {}).get("conformity") or {}
+        rate = conf.get("testing_rate") or {}
+        if r.get("test") == "tension":
+            text = rate.get("designation") or "ISO 6892-1:2019 (testing rate not evaluated)"
+            heated = (conf.get("temperature") or {}).get("standard")
+            if heated and heated != rate.get("standard"):
+                text += f"; temperature: {heated}"
+        else:
+            text = "compression test (upsetting); no ISO 6892-1 designation"
+        rows.append((name, text))
+    return rows
+
+
+def specimen_table(results: list) -> Table:
+    cols = ["specimen", "test", "material", "d0, mm", "L0 / h0, mm", "Lc, mm", "temperature, °C", "crosshead, mm/s",
+            "strain rate, 1/s", "record"]
+    rows = []
+    for name, _, r in results:
+        rec = _rec(r)
+        length = _spec(r, "l0_mm") if _spec(r, "l0_mm") is not None else _spec(r, "h0_mm")
+        rows.append([name, str(r.get("test", "–")), str(rec.get("material") or "–"), format_step(_num(_spec(r, "d0_mm")), 0.001),
+                     format_step(_num(length), 0.01), format_step(_num(_spec(r, "parallel_length_mm")), 0.01),
+                     format_step(_num(rec.get("nominal_temperature_C")), 1.0), _g(rec.get("crosshead_speed_mm_per_s")),
+                     _g(rec.get("strain_rate_per_s")), relative_name(rec.get("path"))])
+    return Table(cols, rows)
+
+
+def tension_table(results: list) -> Table | None:
+    rows = [[n, modulus_cell(r), modulus_source(r), _with_U(r, "Rp02_MPa"), _with_U(r, "Rm_MPa"), _with_U(r, "Ag_pct"),
+             _with_U(r, "A_pct"), _with_U(r, "Z_pct")] for n, _, r in results if r.get("test") == "tension"]
+    if not rows:
+        return None
+    return Table(["specimen", "E, GPa", "E from", "Rp0.2, MPa", "Rm, MPa", "Ag, %", "A, %", "Z, %"], rows,
+                 "tension (ISO 6892-1): value ± U (k = 2)")
+
+
+def compression_table(results: list) -> Table | None:
+    comp = [(n, r) for n, _, r in results if r.get("test") == "compression"]
+    if not comp:
+        return None
+    rows = []
+    for n, r in comp:
+        flow = _unc(r).get("flow_stress_MPa") or {}
+        cells = [value_with_U(_num((flow.get(e) or {}).get("value")), _num((flow.get(e) or {}).get("U")), 1.0) for e in FLOW_SHOWN]
+        rows.append([n, modulus_cell(r), modulus_source(r), _with_U(r, "Rp02_MPa"), _with_U(r, "friction_mu"), *cells,
+                     FRICTION_METHODS.get(str(r.get("friction_method")), str(r.get("friction_method", "–")).replace("_", " "))])
+    return Table(["specimen", "E, GPa", "E from", "Rp0.2, MPa", "friction μ", *[f"σ at εp {e}, MPa" for e in FLOW_SHOWN],
+                  "friction method"], rows, "compression: value ± U (k = 2); σ is the selected true curve")
+
+
+def hardening_table(results: list) -> Table:
+    rows = []
+    for n, _, r in results:
+        h = r.get("hardening") or {}
+        hu = _unc(r).get("hardening") or {}
+
+        def cell(key, h=h, hu=hu):
+            return value_with_U(_num(h.get(key)), _num((hu.get(key) or {}).get("U")), STEPS.get(key))
+        rng = h.get("strain_range") or h.get("fit_range") or [None, None]
+        rows.append([n, LAW_NAMES.get(h.get("law"), str(h.get("law", "–"))), cell("A_MPa"), cell("B_MPa"), cell("n"),
+                     f"{format_step(_num(rng[0]), 0.001)} – {format_step(_num(rng[1]), 0.001)}",
+                     f"{format_step(_num(h.get('fit_error_pct')), 0.1)} / {format_step(_num(h.get('rms_error_pct')), 0.1)}",
+                     str(h.get("quality", "–"))])
+    return Table(["specimen", "law", "A, MPa", "B, MPa", "n", "fitted εp range", "max / rms error, %", "quality"], rows,
+                 "hardening law σ = A + B·εpⁿ fitted to each selected true curve: value ± U (k = 2; fit statistics and stress scale)")
+
+
+def _verdict(block: dict) -> str:
+    c = block.get("conforms")
+    return "conforms" if c is True else ("does not conform" if c is False else "not stated")
+
+
+def conformity_table(results: list) -> Table:
+    rows = []
+    for n, _, r in results:
+        conf = (r.get("methods") or {}).get("conformity") or {}
+        rate, temp = conf.get("testing_rate") or {}, conf.get("temperature") or {}
+        rows.append([n, f"{_verdict(rate)}: " + "; ".join(rate.get("findings") or ["not evaluated"]),
+                     f"{_verdict(temp)}: " + "; ".join(temp.get("findings") or ["not evaluated"])])
+    return Table(["specimen", "testing rate (ISO 6892-1 §10)", "temperature (ISO 6892-1 §10 / ISO 6892-2)"], rows)
+
+
+BUDGET_NAMES = {"E_MPa": "E, MPa", "Rp02_MPa": "Rp0.2, MPa", "Rm_MPa": "Rm, MPa", "Ag_pct": "Ag, %", "A_pct": "A, %",
+                "Z_pct": "Z, %", "friction_mu": "friction μ"}
+
+
+def budget_tables(name: str, result: dict) -> list:
+    """One table per specimen: each result's components, then u_c and U."""
+    unc = _unc(result)
+    budgets = [(BUDGET_NAMES[k], unc[k]) for k in BUDGET_NAMES if isinstance(unc.get(k), dict) and unc[k].get("components")]
+    budgets += [(f"σ at εp {e}, MPa", b) for e, b in (unc.get("flow_stress_MPa") or {}).items()]
+    budgets += [(f"{k.replace('_MPa', ', MPa')} (hardening)", b) for k, b in (unc.get("hardening") or {}).items()]
+    if not budgets:
+        return [Para(f"{name}: no uncertainty budget in result.json (identified before budgets existed: identify again).", "warn")]
+    rows = []
+    for label, b in budgets:
+        for i, c in enumerate(b["components"]):
+            unit = f" {c['unit']}" if c["unit"] != "1" else ""
+            rows.append([label if i == 0 else "", c["name"], f"{_g(c['value'], 5)}{unit}", _g(c["u"]), _g(c["sensitivity"]),
+                         _g(c["contribution"])])
+        rows.append(["", "combined u_c; expanded U (k = 2)", f"{_g(b['value'], 5)}", _g(b["u"]), "", f"U = {format_uncertainty(b['U'])}"])
+    inst = unc.get("instruments") or {}
+    facts = (f"{name}: force ISO 7500-1 class {inst.get('force_class', '–')}, extensometer ISO 9513 class "
+             f"{inst.get('extensometer_class', '–')}, diameters at {inst.get('diameter_resolution_mm', '–')} mm, lengths at "
+             f"{inst.get('length_resolution_mm', '–')} mm; source: {inst.get('source', '–')}")
+    strain = unc.get("strain_scale") or {}
+    if strain:
+        facts += f". Strain: {strain.get('basis')}, relative u {_g(strain.get('u_rel'))}"
+    notes = [f"{label}: {b['note']}" for label, b in budgets if b.get("note")]
+    return [Heading(f"Uncertainty budget — {name}", 3), Para(facts, "note"),
+            Table(["result", "input", "value", "u (standard)", "sensitivity c", "contribution |c|·u"], rows),
+            *([Para("; ".join(notes), "note")] if notes else [])]
+
+
+def figures(name: str, folder: Path) -> list:
+    return [Figure(p, f"{name}: {PLOT_CAPTIONS.get(p.stem, p.stem.replace('_', ' '))}") for p in sorted(folder.glob("*.png"))]
+
+
+def specimen_warnings(results: list) -> list:
+    out = []
+    for n, _, r in results:
+        for w in r.get("warnings") or []:
+            out.append(Para(f"{n}: {w}", "warn"))
+    return out
+
+
+def standards_text() -> str:
+    rules = "; ".join(f"{what} to {step}" for what, step in ISO_6892_1_RULES)
+    return (f"Results are rounded as ISO 6892-1:2019 §22 prescribes: {rules}; other quantities to the steps the "
+            "documentation lists. U is the expanded uncertainty (GUM, k = 2, about 95 % coverage) from the instruments' "
+            "classes and the fits' statistics, given with two significant digits rounded up. E 'given' is a handbook "
+            "value, not measured: it carries no U.")
+
+
+def build_content(root, *, lab: LabHeader | None = None, title: str | None = None, fit_blocks=None) -> Report:
+    """The report of the series under ``root``. ``fit_blocks(fit_path, fit, material)`` adds the series fit's blocks."""
+    root = Path(root)
+    if not root.is_dir():
+        raise ReportError(f"{root}: no such folder")
+    fit_path = find_fit(root)
+    results = [(n, folder, r) for n, folder, r in find_results(root) if fit_path is None or fit_path.parent not in folder.parents]
+    if not results and fit_path is None:
+        raise ReportError(f"{root}: no result folders (result.json) and no fit.json to report")
+    materials = Counter(str(_rec(r).get("material")) for _, _, r in results if _rec(r).get("material"))
+    material = materials.most_common(1)[0][0] if materials else None
+    report = Report(title or f"Test report{': ' + material if material else ''}", lab or LabHeader())
+    today = _dt.date.today().isoformat()
+    header(report, root, results, today)
+    if results:
+        report.add(Heading("Standard and method"), Facts(designations(results)), Para(standards_text(), "note"))
+        report.add(Heading("Specimens and test conditions"), specimen_table(results))
+        report.add(Heading("Results"))
+        report.add(*[t for t in (tension_table(results), compression_table(results)) if t is not None])
+        report.add(hardening_table(results), *specimen_warnings(results))
+        report.add(Heading("Conformity of the test conditions"), conformity_table(results))
+        report.add(Heading("Figures"))
+        for n, folder, _ in results:
+            report.add(*figures(n, folder))
+    if fit_path is not None and fit_blocks is not None:
+        report.add(*fit_blocks(fit_path, _read_json(fit_path), material))
+    elif fit_path is None:
+        report.add(Heading("Johnson–Cook fit of the series"),
+                   Para("No series fit in this folder ('flowcurve fit' on the result folders writes one); the hardening "
+                        "laws above are per specimen.", "note"))
+    if results:
+        report.add(Heading("Uncertainty budgets"))
+        for n, _, r in results:
+            report.add(*budget_tables(n, r))
+    return report
