@@ -11,7 +11,7 @@ ISO 9513 class, dimensions from the resolution of the measuring tool — read fr
 defaults of :data:`INSTRUMENT_DEFAULTS` with a note saying so; and from the fits' own
 statistics (standard errors). A class ``c`` is a bound ±c % on the relative indication error
 and is taken as rectangular (u = c %/√3); a resolution ``r`` as rectangular of width r
-(u = r/√12). docs/methods.md ("Uncertainty of the results") states every model.
+(u = r/√12). docs/test-report.md states every model.
 """
 
 from __future__ import annotations
