@@ -152,8 +152,8 @@ def _draw_fit(ax, ident: Identification, fit: pd.DataFrame) -> None:
     ax.plot(np.where(inside, x, np.nan), np.where(inside, f, np.nan), color="k", lw=1.0, zorder=4, label=_fit_label(ident))
     if beyond.any():
         through = (ident.result.get("hardening") or {}).get("fracture_point") == "included"
-        what = (f"fit beyond the measured range (εp > {hi:.3g}), through the fracture point only" if through
-                else f"fit extrapolated beyond the fitted range (εp {lo:.3g}–{hi:.3g})")
+        what = (f"fit beyond the measured εp {hi:.3g}, to the fracture point" if through
+                else f"fit extrapolated beyond the fitted εp {lo:.3g}–{hi:.3g}")
         ax.plot(np.where(beyond, x, np.nan), np.where(beyond, f, np.nan), color="k", lw=1.0, ls="--", zorder=4, label=what)
 
 
@@ -163,13 +163,14 @@ def draw_stress_strain(ident: Identification, path: Path) -> None:
     extrapolated), the other corrections thin, and the neck-corrected fracture point."""
     curves = ident.curves
     total = [n for n in ("engineering", "true") if n in curves and _stress_pair(curves[n])]
-    fig, axes = plt.subplots(1, 2 if total else 1, figsize=(10 if total else 7, 4.5), squeeze=False, layout="constrained")
+    fig, axes = plt.subplots(1, 2 if total else 1, figsize=(10 if total else 7, 4.5), squeeze=False, layout="constrained",
+                             width_ratios=[1, 1.4] if total else None)
     try:
         if total:
             ax = axes[0][0]
             for i, name in enumerate(total):
                 x, y = _stress_pair(curves[name])
-                _plot(ax, curves[name], x, y, lw=1.3, color=f"C{i}", label=f"{name} stress against {name} strain")
+                _plot(ax, curves[name], x, y, lw=1.3, color=f"C{i}", label=f"{name} curve")
             ax.set_xlabel("strain")
             ax.set_ylabel("stress, MPa")
             ax.set_title("engineering and true curves")
@@ -200,7 +201,7 @@ def draw_stress_strain(ident: Identification, path: Path) -> None:
         ax.set_ylabel(axis_label("true_stress_MPa"))
         ax.set_title("flow curve and hardening fit")
         ax.grid(True, alpha=0.3)
-        ax.legend(loc="best", fontsize="small")
+        ax.legend(loc="lower right", fontsize="small")
         fig.suptitle(_title(ident, "stress–strain curves"))
         fig.savefig(path, dpi=110)
     finally:

@@ -120,8 +120,14 @@ def _num(value) -> float | None:
 
 
 def _g(value, digits: int = 3) -> str:
+    """``digits`` significant digits, without an exponent between 10⁻⁴ and 10⁷ (226090, not 2.2609e+05)."""
     v = _num(value)
-    return "–" if v is None else f"{v:.{digits}g}"
+    if v is None:
+        return "–"
+    if v == 0 or not 1e-4 <= abs(v) < 1e7:
+        return f"{v:.{digits}g}"
+    decimals = max(0, digits - 1 - math.floor(math.log10(abs(v))))
+    return f"{round(v, decimals):.{decimals}f}"
 
 
 def _unc(result: dict) -> dict:
@@ -284,7 +290,7 @@ def budget_tables(name: str, result: dict) -> list:
             unit = f" {c['unit']}" if c["unit"] != "1" else ""
             rows.append([label if i == 0 else "", c["name"], f"{_g(c['value'], 5)}{unit}", _g(c["u"]), _g(c["sensitivity"]),
                          _g(c["contribution"])])
-        rows.append(["", "combined u_c; expanded U (k = 2)", f"{_g(b['value'], 5)}", _g(b["u"]), "", f"U = {format_uncertainty(b['U'])}"])
+        rows.append(["", "combined u_c, U (k = 2)", f"{_g(b['value'], 5)}", _g(b["u"]), "", f"U = {format_uncertainty(b['U'])}"])
     inst = unc.get("instruments") or {}
     facts = (f"{name}: force ISO 7500-1 class {inst.get('force_class', '–')}, extensometer ISO 9513 class "
              f"{inst.get('extensometer_class', '–')}, diameters at {inst.get('diameter_resolution_mm', '–')} mm, lengths at "

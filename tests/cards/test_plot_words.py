@@ -46,7 +46,7 @@ def test_a_fit_drawn_past_its_range_is_dashed_and_labelled(drawn, tmp_path):
     draw_stress_strain(_compression(0.8, (0.05, 0.6)), tmp_path / "s.png")
     texts, lines = drawn[0]
     dashed = [(label, x) for label, style, x in lines if style == "--"]
-    assert len(dashed) == 1 and "extrapolated beyond the fitted range" in dashed[0][0]
+    assert len(dashed) == 1 and "extrapolated beyond the fitted εp 0.05–0.6" in dashed[0][0]
     beyond = dashed[0][1][np.isfinite(dashed[0][1])]
     assert beyond.min() > 0.6 and beyond.max() == pytest.approx(0.8)
     solid = next(x for label, style, x in lines if label.startswith("Johnson–Cook fit"))
