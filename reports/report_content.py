@@ -217,12 +217,22 @@ def specimen_table(results: list) -> Table:
     return Table(cols, rows)
 
 
+def remarks(result: dict) -> str:
+    """What the reader must know before using the row: a poor fit, the number of warnings."""
+    out = []
+    if (result.get("hardening") or {}).get("quality") == "poor":
+        out.append("poor hardening fit")
+    if result.get("warnings"):
+        out.append(f"{len(result['warnings'])} warning(s) below")
+    return "; ".join(out) or "–"
+
+
 def tension_table(results: list) -> Table | None:
     rows = [[n, modulus_cell(r), modulus_source(r), _with_U(r, "Rp02_MPa"), _with_U(r, "Rm_MPa"), _with_U(r, "Ag_pct"),
-             _with_U(r, "A_pct"), _with_U(r, "Z_pct")] for n, _, r in results if r.get("test") == "tension"]
+             _with_U(r, "A_pct"), _with_U(r, "Z_pct"), remarks(r)] for n, _, r in results if r.get("test") == "tension"]
     if not rows:
         return None
-    return Table(["specimen", "E, GPa", "E from", "Rp0.2, MPa", "Rm, MPa", "Ag, %", "A, %", "Z, %"], rows,
+    return Table(["specimen", "E, GPa", "E from", "Rp0.2, MPa", "Rm, MPa", "Ag, %", "A, %", "Z, %", "remarks"], rows,
                  "tension (ISO 6892-1): value ± U (k = 2)")
 
 
@@ -235,9 +245,10 @@ def compression_table(results: list) -> Table | None:
         flow = _unc(r).get("flow_stress_MPa") or {}
         cells = [value_with_U(_num((flow.get(e) or {}).get("value")), _num((flow.get(e) or {}).get("U")), 1.0) for e in FLOW_SHOWN]
         rows.append([n, modulus_cell(r), modulus_source(r), _with_U(r, "Rp02_MPa"), _with_U(r, "friction_mu"), *cells,
-                     FRICTION_METHODS.get(str(r.get("friction_method")), str(r.get("friction_method", "–")).replace("_", " "))])
+                     FRICTION_METHODS.get(str(r.get("friction_method")), str(r.get("friction_method", "–")).replace("_", " ")),
+                     remarks(r)])
     return Table(["specimen", "E, GPa", "E from", "Rp0.2, MPa", "friction μ", *[f"σ at εp {e}, MPa" for e in FLOW_SHOWN],
-                  "friction method"], rows, "compression: value ± U (k = 2); σ is the selected true curve")
+                  "friction method", "remarks"], rows, "compression: value ± U (k = 2); σ is the selected true curve")
 
 
 def hardening_table(results: list) -> Table:
@@ -343,7 +354,12 @@ def build_content(root, *, lab: LabHeader | None = None, title: str | None = Non
         report.add(Heading("Specimens and test conditions"), specimen_table(results))
         report.add(Heading("Results"))
         report.add(*[t for t in (tension_table(results), compression_table(results)) if t is not None])
-        report.add(hardening_table(results), *specimen_warnings(results))
+        report.add(hardening_table(results))
+        warnings = specimen_warnings(results)
+        if warnings:
+            report.add(Heading("Warnings", 3), *warnings,
+                       Para("U covers the instruments and the fits' statistics, not the identification's own errors that "
+                            "these warnings point at.", "note"))
         report.add(Heading("Conformity of the test conditions"), conformity_table(results))
         report.add(Heading("Figures"))
         for n, folder, _ in results:
