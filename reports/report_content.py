@@ -130,6 +130,12 @@ def _g(value, digits: int = 3) -> str:
     return f"{round(v, decimals):.{decimals}f}"
 
 
+def _short(value) -> str:
+    """Three significant digits, trailing zeros dropped (0.05, 0.00167)."""
+    v = _num(value)
+    return "–" if v is None else f"{v:.3g}"
+
+
 def _unc(result: dict) -> dict:
     u = result.get("uncertainty")
     return u if isinstance(u, dict) else {}
@@ -212,8 +218,8 @@ def specimen_table(results: list) -> Table:
         length = _spec(r, "l0_mm") if _spec(r, "l0_mm") is not None else _spec(r, "h0_mm")
         rows.append([name, str(r.get("test", "–")), str(rec.get("material") or "–"), format_step(_num(_spec(r, "d0_mm")), 0.001),
                      format_step(_num(length), 0.01), format_step(_num(_spec(r, "parallel_length_mm")), 0.01),
-                     format_step(_num(rec.get("nominal_temperature_C")), 1.0), _g(rec.get("crosshead_speed_mm_per_s")),
-                     _g(rec.get("strain_rate_per_s")), relative_name(rec.get("path"))])
+                     format_step(_num(rec.get("nominal_temperature_C")), 1.0), _short(rec.get("crosshead_speed_mm_per_s")),
+                     _short(rec.get("strain_rate_per_s")), relative_name(rec.get("path"))])
     return Table(cols, rows)
 
 
@@ -319,12 +325,15 @@ def figures(name: str, folder: Path) -> list:
     return [Figure(p, f"{name}: {PLOT_CAPTIONS.get(p.stem, p.stem.replace('_', ' '))}") for p in sorted(folder.glob("*.png"))]
 
 
+def in_words(text: str) -> str:
+    """A warning from the identification with its code names in words (johnson_cook → Johnson–Cook)."""
+    for code, word in {**LAW_NAMES, **FRICTION_METHODS}.items():
+        text = text.replace(code, word)
+    return text
+
+
 def specimen_warnings(results: list) -> list:
-    out = []
-    for n, _, r in results:
-        for w in r.get("warnings") or []:
-            out.append(Para(f"{n}: {w}", "warn"))
-    return out
+    return [Para(f"{n}: {in_words(str(w))}", "warn") for n, _, r in results for w in r.get("warnings") or []]
 
 
 def standards_text() -> str:

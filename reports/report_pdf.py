@@ -91,12 +91,19 @@ class _Layout:
         budget = _chars(TEXT_W, size) - 2 * ncol
         natural = [max([len(str(c)) for c in ([columns[i]] if columns else [])] + [len(str(r[i])) for r in rows if i < len(r)] + [3])
                    for i in range(ncol)]
+        # narrow the widest columns first, but not below their longest word (no word broken while others have room)
+        cells = [[columns[i]] if columns else [] for i in range(ncol)]
+        for r in rows:
+            for i in range(min(ncol, len(r))):
+                cells[i].append(str(r[i]))
+        floor = [min(16, max([len(w) for c in col for w in c.split()] + [3])) for col in cells]
         widths = list(natural)
         while sum(widths) > budget:
-            i = max(range(ncol), key=lambda k: widths[k])
-            widths[i] = max(6, int(widths[i] * 0.85))
-            if all(w == 6 for w in widths):
+            shrinkable = [k for k in range(ncol) if widths[k] > floor[k]]
+            if not shrinkable:
                 break
+            i = max(shrinkable, key=lambda k: widths[k])
+            widths[i] = max(floor[i], int(widths[i] * 0.85))
         scale = TEXT_W / sum(w + 2 for w in widths)
         col_w = [(w + 2) * scale for w in widths]
         line = _line_h(size)
