@@ -25,24 +25,28 @@ def instruments_from_meta(meta: Mapping[str, str]) -> dict:
     """The instrument classes of a record (``instruments.<key>`` metadata) with the defaults for
     the keys it lacks; ``source`` says which were defaults."""
     inst: dict = {}
-    defaulted = []
+    defaulted, unreadable = [], []
     for key, default in un.INSTRUMENT_DEFAULTS.items():
         raw = meta.get(f"instruments.{key}")
         try:
             value = float(raw) if raw is not None and str(raw).strip() else None
         except ValueError:
-            value = None
+            value = math.nan
         if value is None or not math.isfinite(value) or value <= 0:
+            if value is not None:
+                unreadable.append(f"{key} {raw!r}")
             value = default
             defaulted.append(key)
         inst[key] = value
     if not defaulted:
         inst["source"] = "record (instruments.*)"
-    elif len(defaulted) == len(un.INSTRUMENT_DEFAULTS):
+    elif len(defaulted) == len(un.INSTRUMENT_DEFAULTS) and not unreadable:
         inst["source"] = ("defaults: the record states no instrument classes (set [instruments] in the rig configuration, "
                           "or --set instruments.force_class=… when identifying)")
     else:
         inst["source"] = f"record, defaults for {', '.join(defaulted)}"
+    if unreadable:
+        inst["source"] += f"; not a positive number, default used: {', '.join(unreadable)}"
     return inst
 
 
@@ -171,7 +175,8 @@ def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> 
     spec, post = _block(result, "specimen"), _block(result, "post")
     d0, h0, hk = _num(spec.get("d0_mm")), _num(spec.get("h0_mm")), _num(post.get("hk_mm"))
     mu = _num(result.get("friction_mu"))
-    others = {k: v for k, v in (result.get("friction") or {}).items() if k != result.get("friction_method")}
+    friction = result.get("friction")
+    others = {k: _num(v) for k, v in friction.items() if k != result.get("friction_method")} if isinstance(friction, Mapping) else {}
     mu_b = un.friction_budget(mu, result.get("friction_mu_range"), others=others) if mu is not None else None
     if mu_b is not None:
         out["friction_mu"] = mu_b

@@ -87,3 +87,34 @@ def test_instrument_classes_from_the_record_are_used(tmp_path):
     unc = json.loads((tmp_path / "46NT71" / "result.json").read_text())["uncertainty"]
     assert unc["instruments"]["force_class"] == 0.5 and "defaults for" in unc["instruments"]["source"]
     assert unc["Rm_MPa"]["components"][0]["name"] == "force F (ISO 7500-1 class 0.5)"
+
+
+class _Record:
+    def __init__(self, meta, data=None):
+        self.meta, self.data = meta, data
+
+
+@pytest.mark.parametrize("result", [
+    {"test": "tension"},
+    {"test": "tension", "E_MPa": None, "record": {"specimen": {"d0_mm": 6.0}}, "methods": {}},
+    {"test": "tension", "E_MPa": 2e5, "Rm_MPa": 400.0, "Rp02_MPa": 300.0, "A_pct": 20.0, "A_method": "extensometer",
+     "record": {"specimen": {"d0_mm": 6.0}, "post": {}}, "methods": {"strain_source": "crosshead"}, "hardening": {"law": "voce"}},
+    {"test": "compression", "friction_mu": 0.1, "friction_mu_range": [None, 0.2], "friction": "fe_table", "methods": {}},
+    {"test": "compression", "friction_mu": 0.1, "friction_mu_range": [0.08, 0.12], "friction": {"siebel": None},
+     "record": {"specimen": {"d0_mm": 6.0, "h0_mm": 7.0}, "post": {"hk_mm": 8.0}}, "methods": {}},
+])
+def test_attach_leaves_out_what_it_cannot_compute_and_never_raises(result):
+    """Results with missing or odd inputs: the budgets that can be computed, no guessed ones, no error."""
+    from flowcurve.identification.assurance import attach
+
+    attach(result, {}, _Record({"instruments.force_class": "not a number"}))
+    unc = result["uncertainty"]
+    assert unc["instruments"]["force_class"] == 1.0
+    assert "not a positive number, default used: force_class 'not a number'" in unc["instruments"]["source"]
+    for key, budget in unc.items():
+        if isinstance(budget, dict) and "U" in budget:
+            assert math.isfinite(budget["U"]) and budget["U"] >= 0, key
+    if result["test"] == "tension" and "Rp02_MPa" in result and "engineering" not in result:
+        assert "Rp02_MPa" not in unc  # no curve and no Johnson–Cook law: no plastic slope, so no Rp0.2 budget
+    if "methods" in result:
+        assert "conformity" in result["methods"]
