@@ -127,7 +127,8 @@ def _g(value, digits: int = 3) -> str:
     if v == 0 or not 1e-4 <= abs(v) < 1e7:
         return f"{v:.{digits}g}"
     decimals = max(0, digits - 1 - math.floor(math.log10(abs(v))))
-    return f"{round(v, decimals):.{decimals}f}"
+    text = f"{round(v, decimals):.{decimals}f}"
+    return text.rstrip("0").rstrip(".") if "." in text else text
 
 
 def _short(value) -> str:
@@ -315,7 +316,7 @@ def budget_tables(name: str, result: dict) -> list:
     strain = unc.get("strain_scale") or {}
     if strain:
         facts += f". Strain: {strain.get('basis')}, relative u {_g(strain.get('u_rel'))}"
-    notes = [f"{label}: {b['note']}" for label, b in budgets if b.get("note")]
+    notes = [f"{label}: {b['note']}" for label, b in budgets if b.get("note") and not b["note"].startswith("at true plastic strain")]
     return [Heading(f"Uncertainty budget — {name}", 3), Para(facts, "note"),
             Table(["result", "input", "value", "u (standard)", "sensitivity c", "contribution |c|·u"], rows),
             *([Para("; ".join(notes), "note")] if notes else [])]
