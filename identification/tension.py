@@ -28,7 +28,7 @@ from flowcurve.identification.results import TensionHardening, TensionResult
 
 logger = logging.getLogger(__name__)
 
-TRUE_STRESS_FORMS = ("gost_3_6", "constant_volume")
+TRUE_STRESS_FORMS = ("constant_volume", "gost_3_6")  # the default first; the seed's (3.6) for comparison
 HARDENING_METHODS = ("least_squares", "three_point")
 MODULUS_REFERENCES = ("Rp02", "Rm")
 FIT_POINTS = 30  # the uniform range is resampled to this many points, evenly in εp
@@ -667,7 +667,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
                      crosshead_length_mm: float | None = None, toe: bool = True, scale: bool = True,
                      modulus_window: tuple[float, float] | None = None, modulus_reference: str = "Rp02",
                      modulus_window_MPa: tuple[float, float] | None = None,
-                     E_MPa: float | None = None, poisson: float = 0.3, true_stress: str = "gost_3_6",
+                     E_MPa: float | None = None, poisson: float = 0.3, true_stress: str = "constant_volume",
                      neck: str = "davidenkov", law: str = "johnson_cook", hardening: str = "least_squares",
                      fracture_weight: float | None = None, fit_range: tuple[float, float] | None = None,
                      fracture_point: str = "auto") -> Identification:
@@ -684,7 +684,9 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         has one. A line whose E is not resolved (standard error over 10 %) gives way to the
         handbook E with a warning, and without one is an error. The window in MPa and
         ``modulus.source`` are reported. E_MPa fixes the modulus.
-    true_stress: "gost_3_6" (the corrected (3.6), with ν = ``poisson``) or "constant_volume".
+    true_stress: "constant_volume" (default, σ_e·(1 + e)) or "gost_3_6" (the seed's corrected
+        (3.6), with ν = ``poisson``: it linearises the area and reads high at large strain,
+        docs/methods.md §3.2; kept for comparison).
     neck: the neck correction used for the fracture point (all are reported).
     law, hardening: the hardening law and method of the main fit; the others are reported.
     fracture_weight: weight of the fracture point in the least squares (default √N, so that

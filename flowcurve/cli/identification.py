@@ -110,7 +110,7 @@ def register(subparsers) -> None:
     m.add_argument("--neck-correction", choices=_choices("flowcurve.identification.necking", "METHODS") or ("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
     m.add_argument("--hardening", choices=tuple(HARDENING_CHOICES), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
     add_modulus_option(m, "strips elastic strain with it (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
-    m.add_argument("--true-stress", choices=("gost_3_6", "constant_volume"), help="true stress in the uniform part of a tension test: the corrected (3.6) with bulk modulus (default) or σ·(1 + e) at constant volume")
+    m.add_argument("--true-stress", choices=("constant_volume", "gost_3_6"), help="true stress in the uniform part of a tension test: σ·(1 + e) at constant volume (default) or the seed's corrected (3.6) with bulk modulus, for comparison (it reads up to ~7 %% high at e = 0.4)")
     m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n; with --method inverse-fe on compression the law "
                    "that best fits the fast curve)")
     m.add_argument("--modulus-window", type=_pair, metavar="LO,HI", help="stress window of the elastic-modulus regression: MPa (e.g. 50,300), or fractions of Rm when both are ≤ 1 (e.g. 0.1,0.4); default: the widest linear stretch of the first loading, chosen automatically (all of it when it has few samples)")
