@@ -21,6 +21,7 @@ from flowcurve.identification.johnson_cook import (CONVENTIONS, EQUATION, homolo
                                                   log_rate_ratio)
 from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
 from flowcurve.identification.damage import DamageFit, FracturePoint, fit_damage
+from flowcurve.identification.elastic_modulus import series_modulus
 from flowcurve.identification.series_members import MAX_POINTS, SeriesMember
 
 PARAMS = ("A", "B", "n", "C", "m")
@@ -410,10 +411,7 @@ class SeriesFit:
         mus = [m.friction_mu for m in ms if m.test == "compression" and m.friction_mu is not None]
         out["friction_mu"] = float(np.mean(mus)) if mus else None
         out["friction_mu_records"] = len(mus)
-        Es = [m.E_MPa for m in ms if m.E_MPa is not None]
-        out["E_MPa"] = float(np.mean(Es)) if Es else None
-        out["E_MPa_source"] = ("mean of the records' E_MPa (apparent modulus of the indicator diagram unless an extensometer was used)"
-                               if Es else None)
+        out.update(series_modulus([(m.name, m.E_material_MPa, m.E_source) for m in ms]))  # given, handbook or measured; never apparent
         nus = [m.poisson_ratio for m in ms if m.poisson_ratio is not None]
         out["poisson_ratio"] = float(np.mean(nus)) if nus else None
         out["shape_uncertainty"] = self.shape_uncertainty

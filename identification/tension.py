@@ -19,6 +19,7 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
+from flowcurve.identification.elastic_modulus import material_modulus, tension_E_source
 from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, HardeningFit, fit_hardening, three_point_fit
 from flowcurve.identification.indicator import FEW_SAMPLES, ModulusFit, auto_modulus, reread_if_stepped, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
 from flowcurve.identification.necking import METHODS as NECK_METHODS
@@ -609,10 +610,14 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
             toe: bool, true_stress: str, poisson: float, neck: str, law: str, hardening: str) -> TensionResult:
     """The typed result (result.json) of a tension identification."""
     E, mod, yp, main = line.E, line.mod, iso.yp, hard.main
+    E_source = tension_E_source(mod.source, inp.src["source"])  # the E handed on, by the rule of elastic_modulus
+    E_material, E_material_source = material_modulus(E if E_source == "given" else None, inp.record.positive("material.E_MPa"),
+                                                     mod.E_MPa if inp.src["source"] == "extensometer" and _resolved(mod) else None)
     return TensionResult(
         E_MPa=E,
         E_stderr_MPa=mod.E_stderr_MPa if E == mod.E_MPa else None,
-        modulus={**mod.as_dict(), "E_MPa": E, "E_regressed_MPa": mod.E_MPa},
+        modulus={**mod.as_dict(), "E_MPa": E, "E_regressed_MPa": mod.E_MPa, "E_source": E_source,
+                 "E_material_MPa": E_material, "E_material_source": E_material_source},
         Rp02_MPa=line.Rp02,
         yield_point=yp is not None,  # ISO 6892-1: with a yield point ReH/ReL are the yield strengths
         ReH_MPa=yp["ReH_MPa"] if yp else None,

@@ -200,7 +200,8 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
             def progress(runs, elapsed):
                 print(f"  inverse FE: {runs} solver runs, {elapsed:.0f} s", file=sys.stderr, flush=True)
 
-            ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, scheduler=scheduler, progress=progress)
+            ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, scheduler=scheduler, progress=progress,
+                                        E_MPa=options.get("E_MPa"))
         else:
             ident = identify(record, **options)
     caught_lines = [f"{'numerical warning' if issubclass(w.category, RuntimeWarning) else w.category.__name__}: {w.message}" for w in caught]
@@ -238,7 +239,14 @@ def _fmt(value, spec: str = ".4g") -> str:
 def summary_lines(result: dict) -> list[str]:
     """A short table of one result: strength figures, hardening constants, friction."""
     h = result.get("hardening") or {}
-    strength = f"  E {_fmt(result.get('E_MPa'), '.0f')} MPa   Rp0.2 {_fmt(result.get('Rp02_MPa'), '.1f')} MPa"
+    from flowcurve.identification.elastic_modulus import result_E_source, result_material_E
+
+    E_source = result_E_source(result)  # apparent: the diagram's slope, never handed to a card or an FE model
+    E_note = E_source + (": the diagram's slope, not the material's E" if E_source == "apparent" else "")
+    E_material, material_source = result_material_E(result)
+    if material_source != E_source and E_material is not None:
+        E_note += f"; the material's E {_fmt(E_material, '.0f')} MPa is {material_source}"
+    strength = f"  E {_fmt(result.get('E_MPa'), '.0f')} MPa ({E_note})   Rp0.2 {_fmt(result.get('Rp02_MPa'), '.1f')} MPa"
     if result.get("test") != "compression":  # Rm, Ag, A, Z are tension results
         strength += (f"   Rm {_fmt(result.get('Rm_MPa'), '.1f')} MPa   Ag {_fmt(result.get('Ag_pct'), '.2f')} %   "
                      f"A {_fmt(result.get('A_pct'), '.2f')} %   Z {_fmt(result.get('Z_pct'), '.1f')} %")
