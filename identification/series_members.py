@@ -48,6 +48,7 @@ class SeriesMember:
     poisson_ratio: float | None = None
     material: str | None = None
     fracture: FracturePoint | None = None  # the test's fracture (tension with a section after fracture)
+    identified_law: dict | None = None  # result.json's hardening: the law 'flowcurve identify' fitted and its strain range
 
     def __post_init__(self):
         where = self.source if self.source != "<memory>" else self.name
@@ -168,7 +169,7 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
                         strain_rate_source="data" if _number(result.get("E_MPa")) else "data (total strain: no E_MPa)",
                         temperature_source=t_source,
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
-                        E_material_MPa=E_material, E_source=E_source,
+                        E_material_MPa=E_material, E_source=E_source, identified_law=_law_of(result),
                         poisson_ratio=_number(result.get("poisson_ratio")), material=record.meta.get("material"),
                         fracture=fracture_point_from_result(dict(result, test=record.test), record.meta, rate, temperature,
                                                             record.source))
@@ -230,10 +231,16 @@ def member_from_result(folder: str | Path) -> SeriesMember:
                         strain_rate_per_s=rate, temperature_C=temperature, source=str(folder), kind="result",
                         test=test, strain_rate_source=rate_source, temperature_source="nominal",
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
-                        E_material_MPa=E_material, E_source=E_source,
+                        E_material_MPa=E_material, E_source=E_source, identified_law=_law_of(result),
                         poisson_ratio=_number(result.get("poisson_ratio")), material=block.get("material"),
                         fracture=fracture_point_from_result(dict(result, test=test), _flat_specimen(block), rate,
                                                             temperature, str(folder)))
+
+
+def _law_of(result: dict) -> dict | None:
+    """result.json's hardening block (a dict), or None."""
+    law = result.get("hardening")
+    return dict(law) if isinstance(law, dict) else None
 
 
 def _flat_specimen(block: dict) -> dict:

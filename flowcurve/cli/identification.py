@@ -236,6 +236,18 @@ def _fmt(value, spec: str = ".4g") -> str:
     return "—"
 
 
+def _law_range_text(h: dict) -> str:
+    """Where the law was fitted: εp lo–hi, and the fracture point when it lies beyond the uniform range
+    (why 'flowcurve fit' on the same record, which has the uniform range only, gives another law)."""
+    span, uniform = h.get("strain_range"), h.get("fit_range")
+    if not (isinstance(span, list) and len(span) == 2):
+        return ""
+    text = f"; over εp {_fmt(span[0], '.3g')}–{_fmt(span[1], '.3g')}"
+    if h.get("fracture_point") == "included" and isinstance(uniform, list) and len(uniform) == 2:
+        text += f" (uniform range to {_fmt(uniform[1], '.3g')} + the fracture point)"
+    return text
+
+
 def summary_lines(result: dict) -> list[str]:
     """A short table of one result: strength figures, hardening constants, friction."""
     h = result.get("hardening") or {}
@@ -258,7 +270,7 @@ def summary_lines(result: dict) -> list[str]:
         consts = "   ".join(f"{k.removesuffix('_MPa')} {_fmt(h[k])}{' MPa' if k.endswith('_MPa') else ''}"
                            for k in ("A_MPa", "B_MPa", "n", "K_MPa", "eps0", "sigma0_MPa", "Q_MPa", "b") if k in h)
         lines.append(f"  hardening {h.get('law', '?')} ({h.get('method', '?')}): {consts}   fit error {_fmt(h.get('fit_error_pct'), '.2f')} %"
-                     + (f", quality {h['quality']}" if h.get("quality") else ""))
+                     + (f", quality {h['quality']}" if h.get("quality") else "") + _law_range_text(h))
     if result.get("test") == "compression":
         methods = result.get("friction") or {}
         extra = "   ".join(f"{k} {_fmt(v, '.3f')}" for k, v in methods.items() if isinstance(v, (int, float)))
