@@ -60,7 +60,7 @@ def result_E_source(result: dict) -> str:
             return modulus["E_source"]
         return tension_E_source(str(modulus.get("source", "")), str((result.get("methods") or {}).get("strain_source", "")))
     if "E_source" in result:  # compression
-        return COMPRESSION_SOURCES.get(str(result["E_source"]), "apparent")
+        return COMPRESSION_SOURCES.get(str(result["E_source"]).split(" ")[0], "apparent")  # "record (material.E_MPa)"
     return "stated"
 
 
@@ -88,7 +88,8 @@ def series_modulus(moduli: list[tuple[str, float | None, str]]) -> dict:
         values = [(name, E) for name, E, source in moduli if source == cls and _finite(E) is not None]
         if values:
             mean = sum(E for _, E in values) / len(values)
-            spread = f", {min(E for _, E in values):.0f}–{max(E for _, E in values):.0f} MPa" if len(values) > 1 else ""
+            low, high = min(E for _, E in values), max(E for _, E in values)
+            spread = f", {low:.0f}–{high:.0f} MPa" if high > low else ""
             return {"E_MPa": mean, "E_MPa_source": f"{SOURCE_TEXT[cls]}: mean of {len(values)} record(s){spread}"}
     apparent = {name: E for name, E, source in moduli if source == "apparent" and _finite(E) is not None}
     text = ("undetermined: " + (f"the records' moduli are apparent ({min(apparent.values()):.0f}–{max(apparent.values()):.0f} MPa, "

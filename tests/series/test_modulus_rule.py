@@ -91,3 +91,9 @@ def test_an_fe_model_never_takes_an_apparent_slope(syn):
     del rec.meta["material.E_MPa"]
     measured = {"E_MPa": 198_000.0, "modulus": {"source": "most linear stretch", "E_source": "measured"}}
     assert modulus_for_model(rec, measured) == (198_000.0, "measured")
+
+
+@pytest.mark.parametrize("written, cls", [("option", "given"), ("record (material.E_MPa)", "handbook"), ("apparent", "apparent"),
+                                          ("none", "none")])
+def test_compression_results_E_source_as_compression_writes_it(written, cls):
+    assert result_E_source({"test": "compression", "E_MPa": 200_000.0, "E_source": written}) == cls
