@@ -132,6 +132,7 @@ class CardData:
     friction_mu: float | None = None
     E_MPa: float | None = None
     E_source: str | None = None  # where E came from (fit.json E_MPa_source, or "given (--E)")
+    given: dict[str, float] = field(default_factory=dict)  # constants given on the command line (option → value)
     poisson: float | None = None
     density_kg_per_m3: float | None = None
     specific_heat_J_per_kgK: float | None = None
@@ -294,6 +295,8 @@ def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
             continue
         if name == "E_MPa":
             data.E_source = "given (--E)"
+        if name in CONSTANTS or name == "friction_mu":
+            data.given[CONSTANTS[name][1] if name in CONSTANTS else "--friction"] = float(value)
         if not hasattr(data, name):
             raise CardError(f"unknown card constant {name!r}")
         setattr(data, name, float(value) if isinstance(value, (int, float)) else value)
@@ -356,9 +359,12 @@ def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_not
                      "compression is its negative); identified on triaxiality "
                      + (f"{tri[0]:.3g} to {tri[1]:.3g}" if tri else "not stated in the fit file"))
     if card.friction_mu is not None:
-        lines.append(f"friction coefficient mu = {card.friction_mu:.4g} (specimen-platen, identified from barrelling)")
+        lines.append(f"friction coefficient mu = {card.friction_mu:.4g} "
+                     + ("(given: --friction)" if "--friction" in card.given else "(specimen-platen, identified from barrelling)"))
     if card.E_MPa is not None:
         lines.append(f"elastic modulus E = {card.E_MPa:.6g} MPa: {card.E_source or 'source not stated in the fit file'}")
+    if card.given:
+        lines.append("given on the command line, not identified: " + ", ".join(f"{k} {v:g}" for k, v in card.given.items()))
     return lines
 
 

@@ -58,6 +58,8 @@ def test_crosshead_records_card_asks_for_E_then_carries_exactly_the_given_one(tm
     text = (tmp_path / "m.inp").read_text()
     assert _elastic(text) == 196500.0
     assert "** elastic modulus E = 196500 MPa: given (--E)" in text
+    comments = " ".join(line[2:].strip() for line in text.splitlines() if line.startswith("**"))
+    assert "given on the command line, not identified: --E 196500, --poisson 0.3, --density 7850, --cp 470" in comments
 
 
 def test_a_handbook_E_in_the_records_reaches_the_card_and_says_so(tmp_path, syn, capsys):
