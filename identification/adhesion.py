@@ -221,7 +221,7 @@ class _Series:
 
 
 def _series(table: AdhesionTable, *, mu_d: float | None, flow_stress_MPa: float | None, contact_model: str,
-            asperity_radius_um: float | None, bearing_exponent: float) -> _Series:
+            asperity_radius_um: float | None, bearing_exponent: float, mu_d_source: str | None = None) -> _Series:
     d = table.data
     n = len(d)
     flow = d["flow_stress_MPa"].to_numpy(dtype=float) if "flow_stress_MPa" in d else np.full(n, np.nan)
@@ -234,7 +234,7 @@ def _series(table: AdhesionTable, *, mu_d: float | None, flow_stress_MPa: float 
         if not (0.0 <= mu_d < 1.0):
             raise IdentificationError(f"--mu-d must be in [0, 1), got {mu_d:g}")
         s.mu_d = np.full(n, float(mu_d))
-        s.mu_d_source = "given (--mu-d)"
+        s.mu_d_source = mu_d_source or "given (--mu-d)"
         return s
     rp = d["sphere_Rp_um"].to_numpy(dtype=float) if "sphere_Rp_um" in d else np.full(n, np.nan)
     tm = d["sphere_tm"].to_numpy(dtype=float) if "sphere_tm" in d else np.full(n, np.nan)
@@ -351,7 +351,7 @@ PARAM_KEYS = {"tau0": "tau0_MPa", "beta0": "beta0", "k_b": "k_b_per_C", "theta_k
 def fit_simple(table: AdhesionTable, *, mu_d: float | None = None, contact_model: str = "none",
                flow_stress_MPa: float | None = None, hot_from_C: float = HOT_FROM_C, weights: str = "relative",
                asperity_radius_um: float | None = None, bearing_exponent: float = 2.0,
-               accuracy: tuple[float, float] | None = None) -> FrictionFit:
+               accuracy: tuple[float, float] | None = None, mu_d_source: str | None = None) -> FrictionFit:
     """# (3.35)–(3.37) with (2.25): τ_adh = K_r·((32/(9π))·τ0 + β(T)·σ_nr) against the tests' τ_n − μ_d·σ̄_n.
 
     contact_model ``"none"`` is the seed's: σ_nr = σ̄_n = N_z/(π r²). ``"bowden_tabor"`` needs the
@@ -359,12 +359,13 @@ def fit_simple(table: AdhesionTable, *, mu_d: float | None = None, contact_model
     (residuals divided by the measured τ_adh, for errors proportional to the reading) or
     ``"absolute"`` (the plain sum of squares of the seed). accuracy: (relative scatter of M_z,
     scatter of r in µm) of the instrument — each residual is then divided by its effective
-    standard deviation (:func:`_weighted_fit`) instead.
+    standard deviation (:func:`_weighted_fit`) instead. mu_d_source: how a given ``mu_d`` is
+    described (default "given (--mu-d)"; a demo's default says so).
     """
     import lmfit
 
     s = _series(table, mu_d=mu_d, flow_stress_MPa=flow_stress_MPa, contact_model=contact_model,
-                asperity_radius_um=asperity_radius_um, bearing_exponent=bearing_exponent)
+                asperity_radius_um=asperity_radius_um, bearing_exponent=bearing_exponent, mu_d_source=mu_d_source)
     if contact_model != "none" and not np.all(np.isfinite(s.flow_stress_MPa)):
         raise IdentificationError(f"the {contact_model} contact model needs the flow stress of every test (flow_stress_MPa column or --flow-stress)")
     hot, hot_temps = _split_hot(s, hot_from_C)
@@ -416,7 +417,8 @@ def fit_simple(table: AdhesionTable, *, mu_d: float | None = None, contact_model
 def fit_refined(table: AdhesionTable, *, mu_d: float | None = None, contact_model: str = "bowden_tabor",
                 flow_stress_MPa: float | None = None, hot_from_C: float = HOT_FROM_C, weights: str = "relative",
                 asperity_radius_um: float | None = None, bearing_exponent: float = 2.0,
-                sigma_S_start_MPa: float | None = None, accuracy: tuple[float, float] | None = None) -> FrictionFit:
+                sigma_S_start_MPa: float | None = None, accuracy: tuple[float, float] | None = None,
+                mu_d_source: str | None = None) -> FrictionFit:
     """# (3.38)–(3.44): τ0, β0, σ_S (and k_b, θ_k) by least squares of every test's moment.
 
     Tests whose flow stress is known (``flow_stress_MPa`` column, or ``flow_stress_MPa``) use it;
@@ -429,7 +431,7 @@ def fit_refined(table: AdhesionTable, *, mu_d: float | None = None, contact_mode
     if contact_model not in CONTACT_RATIO_MODELS:
         raise IdentificationError(f"unknown contact-area model {contact_model!r} (use: {', '.join(CONTACT_RATIO_MODELS)})")
     s = _series(table, mu_d=mu_d, flow_stress_MPa=flow_stress_MPa, contact_model=contact_model,
-                asperity_radius_um=asperity_radius_um, bearing_exponent=bearing_exponent)
+                asperity_radius_um=asperity_radius_um, bearing_exponent=bearing_exponent, mu_d_source=mu_d_source)
     hot, hot_temps = _split_hot(s, hot_from_C)
     p = s.pressure_MPa
     known = np.isfinite(s.flow_stress_MPa)
@@ -537,6 +539,15 @@ def _test_rows(s: _Series, pressure, sigma_nr, used, *, measured, predicted, nam
     return rows
 
 
+UNDETERMINED_WHY = {"sigma_S_MPa": " (the tested moments hardly depend on it: the real contact is nearly full over the tested "
+                                   "pressures; give flow_stress_MPa, or test where the contact is partial); not used in cards"}
+
+
+def undetermined_values(values: dict, stderr: dict) -> list[str]:
+    """The fitted values smaller than their own standard error, |v| < se: not determined by the tests."""
+    return [key for key, v in values.items() if v is not None and stderr.get(key) is not None and abs(v) < stderr[key]]
+
+
 def _make_fit(method: str, result, s: _Series, plan, hot_source: str, contact_model: str, tests, *, sigma_S) -> FrictionFit:
     import lmfit
 
@@ -559,6 +570,11 @@ def _make_fit(method: str, result, s: _Series, plan, hot_source: str, contact_mo
     covered["temperature_C"] = [float(s.temperature_C[used].min()), float(s.temperature_C[used].max())]
     fit = FrictionFit(method=method, values=values, stderr=stderr, correlations=_correlations(pars, keys), sources=sources,
                       tests=tests, contact_model=contact_model, covered=covered, report=lmfit.fit_report(result))
+    fit.extra["undetermined"] = undetermined_values(values, stderr)
+    for key in fit.extra["undetermined"]:
+        sources[key] = "UNDETERMINED (smaller than its own standard error); " + sources.get(key, "fitted")
+        fit.warnings.append(f"{key} = {values[key]:.4g} ± {stderr[key]:.2g} is smaller than its own uncertainty: "
+                            f"these tests do not determine it{UNDETERMINED_WHY.get(key, '')}")
     fit.extra["tests_used"] = int(used.sum())
     fit.extra["rms_residual_pct"] = float(np.sqrt(np.mean([t["residual_pct"] ** 2 for t in tests if t["used"]])))
     return fit

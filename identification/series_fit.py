@@ -21,6 +21,7 @@ from flowcurve.identification.johnson_cook import (CONVENTIONS, EQUATION, homolo
                                                   log_rate_ratio)
 from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
 from flowcurve.identification.damage import DamageFit, FracturePoint, fit_damage
+from flowcurve.identification.elastic_modulus import series_modulus
 from flowcurve.identification.series_members import MAX_POINTS, SeriesMember
 
 PARAMS = ("A", "B", "n", "C", "m")
@@ -398,7 +399,8 @@ class SeriesFit:
                            "temperature_C": m.temperature_C, "temperature_source": m.temperature_source,
                            "strain_rate_per_s": m.strain_rate_per_s, "strain_rate_source": m.strain_rate_source,
                            "plastic_strain": [float(m.plastic_strain[0]), float(m.plastic_strain[-1])],
-                           "points": int(m.fit_points(self.max_points)[0].size), **self.fit.record_errors[m.name]} for m in ms]
+                           "points": int(m.fit_points(self.max_points)[0].size), **self.fit.record_errors[m.name],
+                           **({"identify_law": identify_law_range(m)} if m.identified_law else {})} for m in ms]
         out["curves"] = [{"temperature_C": c.temperature_C, "strain_rate_per_s": c.strain_rate_per_s,
                           "file": f"curves/{c.filename}", "records": c.records,
                           "plastic_strain": [float(c.table.iloc[0, 0]), float(c.table.iloc[-1, 0])],
@@ -410,10 +412,7 @@ class SeriesFit:
         mus = [m.friction_mu for m in ms if m.test == "compression" and m.friction_mu is not None]
         out["friction_mu"] = float(np.mean(mus)) if mus else None
         out["friction_mu_records"] = len(mus)
-        Es = [m.E_MPa for m in ms if m.E_MPa is not None]
-        out["E_MPa"] = float(np.mean(Es)) if Es else None
-        out["E_MPa_source"] = ("mean of the records' E_MPa (apparent modulus of the indicator diagram unless an extensometer was used)"
-                               if Es else None)
+        out.update(series_modulus([(m.name, m.E_material_MPa, m.E_source) for m in ms]))  # given, handbook or measured; never apparent
         nus = [m.poisson_ratio for m in ms if m.poisson_ratio is not None]
         out["poisson_ratio"] = float(np.mean(nus)) if nus else None
         out["shape_uncertainty"] = self.shape_uncertainty
@@ -464,10 +463,41 @@ def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_s
                         f"a {shape_error_pct:g} % shape error of the curves moves "
                         + ", ".join(f"{p} by up to {v:.2g} %" for p, v in loose.items())
                         + "; the fitted law is better determined than these constants (fit.json shape_uncertainty)")
+    warnings += [law["why_different"] for law in map(identify_law_range, members) if law and "why_different" in law]
     damage = _fit_damage(members, list(fracture_points), ref, warnings)
     return SeriesFit(method=method, fit=chosen, global_fit=glob, stepwise_fit=stepwise, stepwise_note=note,
                      members=members, curves=condition_curves(members, max_points), warnings=warnings,
                      max_points=max_points, damage=damage, shape_uncertainty=band)
+
+
+LAW_CONSTANTS = ("A_MPa", "B_MPa", "n", "K_MPa", "eps0", "sigma0_MPa", "Q_MPa", "b")
+RANGE_SLACK = 1.05  # identify's law reaching this much further than the fit's points is another strain range
+
+
+def identify_law_range(member: SeriesMember) -> dict | None:
+    """What 'flowcurve identify' fitted for this member (fit.json records[].identify_law): its law,
+    constants and strain range beside this fit's, and why they differ when they do (a plain reason:
+    identify adds the neck-corrected fracture point; a series fit has the true curve only)."""
+    law = member.identified_law
+    if not law or not isinstance(law.get("strain_range"), list) or len(law["strain_range"]) != 2:
+        return None
+    own = [float(member.plastic_strain[0]), float(member.plastic_strain[-1])]
+    theirs = [float(v) for v in law["strain_range"]]
+    out = {"law": law.get("law"), **{k: law[k] for k in LAW_CONSTANTS if isinstance(law.get(k), (int, float))},
+           "plastic_strain": theirs, "fit_plastic_strain": own}
+    if theirs[1] <= RANGE_SLACK * own[1]:
+        return out
+    uniform = law.get("fit_range")
+    fracture = law.get("fracture_point") == "included"
+    consts = ", ".join(f"{k.removesuffix('_MPa')} {law[k]:.4g}" for k in LAW_CONSTANTS if isinstance(law.get(k), (int, float)))
+    how = (f"the uniform range to εp {uniform[1]:.3g} and the neck-corrected fracture point at εp {theirs[1]:.3g}"
+           if fracture and isinstance(uniform, list) else f"εp {theirs[0]:.3g}–{theirs[1]:.3g}")
+    out["why_different"] = (
+        f"{member.name}: 'flowcurve identify' fitted its {law.get('law', 'law')} ({consts}) over εp {theirs[0]:.3g}–{theirs[1]:.3g} "
+        f"({how}); this fit has the record's true curve only, εp {own[0]:.3g}–{own[1]:.3g} (up to maximum force), so the two "
+        f"laws follow the same points to εp {own[1]:.3g} and part beyond it, where identify's rests on the measured fracture "
+        "point and this one on extrapolation")
+    return out
 
 
 def shape_uncertainty(members: Sequence[SeriesMember], ref: Reference, fit: JohnsonCookFit, *,

@@ -21,6 +21,7 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
 from flowcurve.identification.damage import FracturePoint, fracture_point_from_result
+from flowcurve.identification.elastic_modulus import result_material_E
 
 PLASTIC_START = 0.002  # εp where the plastic range starts (the 0.2 % offset)
 MAX_POINTS = 60  # points per record in a fit, so that every record weighs the same
@@ -42,9 +43,12 @@ class SeriesMember:
     temperature_source: str = "given"
     friction_mu: float | None = None
     E_MPa: float | None = None
+    E_material_MPa: float | None = None  # the E the test hands on, and its class (identification.elastic_modulus):
+    E_source: str = "none"  # given / handbook / measured, or apparent / none (then E_material_MPa is the apparent slope)
     poisson_ratio: float | None = None
     material: str | None = None
     fracture: FracturePoint | None = None  # the test's fracture (tension with a section after fracture)
+    identified_law: dict | None = None  # result.json's hardening: the law 'flowcurve identify' fitted and its strain range
 
     def __post_init__(self):
         where = self.source if self.source != "<memory>" else self.name
@@ -159,11 +163,13 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
         if temperature is None:
             raise RecordError(record.source, "the test temperature is unknown: add '# nominal_temperature_C: <value>' to the header or a temperature_C column")
     eps, sig = plastic_part(ident.true_curve[TRUE_CURVE_COLUMNS[0]], ident.true_curve[TRUE_CURVE_COLUMNS[1]])
+    E_material, E_source = result_material_E(result)
     return SeriesMember(name=record.name, plastic_strain=eps, stress_MPa=sig, strain_rate_per_s=rate,
                         temperature_C=temperature, source=record.source, kind="record", test=record.test,
                         strain_rate_source="data" if _number(result.get("E_MPa")) else "data (total strain: no E_MPa)",
                         temperature_source=t_source,
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
+                        E_material_MPa=E_material, E_source=E_source, identified_law=_law_of(result),
                         poisson_ratio=_number(result.get("poisson_ratio")), material=record.meta.get("material"),
                         fracture=fracture_point_from_result(dict(result, test=record.test), record.meta, rate, temperature,
                                                             record.source))
@@ -220,13 +226,21 @@ def member_from_result(folder: str | Path) -> SeriesMember:
     except ValueError:
         raise RecordError(curve_path, "the curve holds cells that are not numbers") from None
     eps, sig = plastic_part(eps, sig)
+    E_material, E_source = result_material_E(result)
     return SeriesMember(name=str(block.get("name") or folder.name), plastic_strain=eps, stress_MPa=sig,
                         strain_rate_per_s=rate, temperature_C=temperature, source=str(folder), kind="result",
                         test=test, strain_rate_source=rate_source, temperature_source="nominal",
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
+                        E_material_MPa=E_material, E_source=E_source, identified_law=_law_of(result),
                         poisson_ratio=_number(result.get("poisson_ratio")), material=block.get("material"),
                         fracture=fracture_point_from_result(dict(result, test=test), _flat_specimen(block), rate,
                                                             temperature, str(folder)))
+
+
+def _law_of(result: dict) -> dict | None:
+    """result.json's hardening block (a dict), or None."""
+    law = result.get("hardening")
+    return dict(law) if isinstance(law, dict) else None
 
 
 def _flat_specimen(block: dict) -> dict:

@@ -19,6 +19,7 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
+from flowcurve.identification.elastic_modulus import material_modulus, tension_E_source
 from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, HardeningFit, fit_hardening, three_point_fit
 from flowcurve.identification.indicator import FEW_SAMPLES, ModulusFit, auto_modulus, reread_if_stepped, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
 from flowcurve.identification.necking import METHODS as NECK_METHODS
@@ -28,7 +29,7 @@ from flowcurve.identification.results import TensionHardening, TensionResult
 
 logger = logging.getLogger(__name__)
 
-TRUE_STRESS_FORMS = ("gost_3_6", "constant_volume")
+TRUE_STRESS_FORMS = ("constant_volume", "gost_3_6")  # the default first; the seed's (3.6) for comparison
 HARDENING_METHODS = ("least_squares", "three_point")
 MODULUS_REFERENCES = ("Rp02", "Rm")
 FIT_POINTS = 30  # the uniform range is resampled to this many points, evenly in εp
@@ -609,10 +610,14 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
             toe: bool, true_stress: str, poisson: float, neck: str, law: str, hardening: str) -> TensionResult:
     """The typed result (result.json) of a tension identification."""
     E, mod, yp, main = line.E, line.mod, iso.yp, hard.main
+    E_source = tension_E_source(mod.source, inp.src["source"])  # the E handed on, by the rule of elastic_modulus
+    E_material, E_material_source = material_modulus(E if E_source == "given" else None, inp.record.positive("material.E_MPa"),
+                                                     mod.E_MPa if inp.src["source"] == "extensometer" and _resolved(mod) else None)
     return TensionResult(
         E_MPa=E,
         E_stderr_MPa=mod.E_stderr_MPa if E == mod.E_MPa else None,
-        modulus={**mod.as_dict(), "E_MPa": E, "E_regressed_MPa": mod.E_MPa},
+        modulus={**mod.as_dict(), "E_MPa": E, "E_regressed_MPa": mod.E_MPa, "E_source": E_source,
+                 "E_material_MPa": E_material, "E_material_source": E_material_source},
         Rp02_MPa=line.Rp02,
         yield_point=yp is not None,  # ISO 6892-1: with a yield point ReH/ReL are the yield strengths
         ReH_MPa=yp["ReH_MPa"] if yp else None,
@@ -667,7 +672,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
                      crosshead_length_mm: float | None = None, toe: bool = True, scale: bool = True,
                      modulus_window: tuple[float, float] | None = None, modulus_reference: str = "Rp02",
                      modulus_window_MPa: tuple[float, float] | None = None,
-                     E_MPa: float | None = None, poisson: float = 0.3, true_stress: str = "gost_3_6",
+                     E_MPa: float | None = None, poisson: float = 0.3, true_stress: str = "constant_volume",
                      neck: str = "davidenkov", law: str = "johnson_cook", hardening: str = "least_squares",
                      fracture_weight: float | None = None, fit_range: tuple[float, float] | None = None,
                      fracture_point: str = "auto") -> Identification:
@@ -684,7 +689,9 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         has one. A line whose E is not resolved (standard error over 10 %) gives way to the
         handbook E with a warning, and without one is an error. The window in MPa and
         ``modulus.source`` are reported. E_MPa fixes the modulus.
-    true_stress: "gost_3_6" (the corrected (3.6), with ν = ``poisson``) or "constant_volume".
+    true_stress: "constant_volume" (default, σ_e·(1 + e)) or "gost_3_6" (the seed's corrected
+        (3.6), with ν = ``poisson``: it linearises the area and reads high at large strain,
+        docs/methods.md §3.2; kept for comparison).
     neck: the neck correction used for the fracture point (all are reported).
     law, hardening: the hardening law and method of the main fit; the others are reported.
     fracture_weight: weight of the fracture point in the least squares (default √N, so that

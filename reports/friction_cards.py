@@ -84,13 +84,14 @@ def _range_lines(law: dict, pressures, temperatures, units: UnitSystem) -> list[
         err = law.get(f"{key}_stderr")
         return "" if not isinstance(err, (int, float)) else " +/- " + fmt.format(err)
 
-    sigma_S = law.get("sigma_S_MPa")
+    sigma_S = law.get("sigma_S_MPa") if "sigma_S_MPa" not in law.get("undetermined", ()) else None  # not a limit to write
     return [
         f"flowcurve {__version__}: friction law (2.25) from {law.get('tests_used', '?')} adhesiometer tests, method {law.get('method')}",
         "tau = tau0 + (beta0 - k_b*max(0, T - theta_k))*p + mu_d*p, mu = tau/p; full contact (K_r = 1, real pressure = p)",
         f"tau0 = {law['tau0_MPa']:.6g}{se('tau0_MPa')} MPa, beta0 = {law['beta0']:.6g}{se('beta0')}, "
         f"k_b = {law['k_b_per_C']:.4g}{se('k_b_per_C')} 1/C, theta_k = {law['theta_k_C']:.5g}{se('theta_k_C', '{:.3g}')} C, "
-        f"mu_d = {law['mu_d']:.4g}" + (f", sigma_S = {sigma_S:.5g} MPa" if isinstance(sigma_S, (int, float)) else ""),
+        f"mu_d = {law['mu_d']:.4g} ({law.get('mu_d_source', 'source not stated')})"
+        + (f", sigma_S = {sigma_S:.5g} MPa" if isinstance(sigma_S, (int, float)) else ""),
         f"hot constants: {law.get('hot_constants_source', 'not stated')}",
         f"unit system {units.name}: pressure and stress in {units.stress_name}, temperature in C",
         (f"identified on nominal mean pressure {p_cov[0]:.4g}..{p_cov[1]:.4g} MPa and temperature {t_cov[0]:.4g}..{t_cov[1]:.4g} C"
@@ -152,7 +153,7 @@ def lsdyna_friction_card(law: dict, units: UnitSystem, *, at_pressure_MPa: float
     if p_star <= 0:
         raise FrictionCardError(f"--at-pressure must be > 0 MPa, got {p_star:g}")
     mu_star = float(friction_coefficient(law, p_star, T_star))
-    sigma_S = law.get("sigma_S_MPa")
+    sigma_S = law.get("sigma_S_MPa") if "sigma_S_MPa" not in law.get("undetermined", ()) else None  # not a limit to write
     vc = units.to_system(sigma_S / math.sqrt(3.0) * 1e6, "stress") if isinstance(sigma_S, (int, float)) else 0.0
     out = ["*KEYWORD"]
     out += _comment(_range_lines(law, pressures, temperatures, units), "$ ")

@@ -91,7 +91,7 @@ def _fit(table, args) -> FrictionFit:
     accuracy = None
     if args.moment_accuracy is not None or args.radius_accuracy is not None:
         accuracy = (args.moment_accuracy or 0.0, args.radius_accuracy or 0.0)
-    return fit_friction(table, args.method, mu_d=args.mu_d, contact_model=model, flow_stress_MPa=args.flow_stress,
+    return fit_friction(table, args.method, mu_d=args.mu_d, mu_d_source=getattr(args, "mu_d_source", None), contact_model=model, flow_stress_MPa=args.flow_stress,
                         hot_from_C=args.hot_from, weights=args.weights, asperity_radius_um=args.asperity_radius,
                         bearing_exponent=args.bearing_exponent, accuracy=accuracy)
 
@@ -124,7 +124,7 @@ def run_demo(args) -> int:
           f"k_b = {t.k_b_per_C:.4g} 1/C, theta_k = {t.theta_k_C:g} C, mu_d = {t.mu_d:g}, "
           f"sigma_S(20 C) = {device.surface_flow_stress_MPa(20.0):.1f} MPa")
     if args.mu_d is None:
-        args.mu_d = t.mu_d
+        args.mu_d, args.mu_d_source = t.mu_d, "default: the virtual adhesiometer's own (not given, not measured; set it with --mu-d)"
     args.records, args.column = [str(table_path)], []
     return run(args)
 
@@ -206,7 +206,8 @@ def summary(fit: FrictionFit, path: Path) -> str:
     def pm(key, unit="", fmt="{:.4g}"):
         if v[key] is None:
             return "not identified"
-        return fmt.format(v[key]) + (f" ± {se[key]:.2g}" if se.get(key) else "") + unit
+        flag = " (UNDETERMINED: smaller than its own uncertainty)" if key in fit.extra.get("undetermined", ()) else ""
+        return fmt.format(v[key]) + (f" ± {se[key]:.2g}" if se.get(key) else "") + unit + flag
 
     p, T = fit.covered["nominal_mean_pressure_MPa"], fit.covered["temperature_C"]
     lines = [f"friction law (2.25), {fit.method} fit over {fit.extra['tests_used']} tests "

@@ -110,7 +110,7 @@ def register(subparsers) -> None:
     m.add_argument("--neck-correction", choices=_choices("flowcurve.identification.necking", "METHODS") or ("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
     m.add_argument("--hardening", choices=tuple(HARDENING_CHOICES), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
     add_modulus_option(m, "strips elastic strain with it (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
-    m.add_argument("--true-stress", choices=("gost_3_6", "constant_volume"), help="true stress in the uniform part of a tension test: the corrected (3.6) with bulk modulus (default) or σ·(1 + e) at constant volume")
+    m.add_argument("--true-stress", choices=("constant_volume", "gost_3_6"), help="true stress in the uniform part of a tension test: σ·(1 + e) at constant volume (default) or the seed's corrected (3.6) with bulk modulus, for comparison (it reads up to ~7 %% high at e = 0.4)")
     m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n; with --method inverse-fe on compression the law "
                    "that best fits the fast curve)")
     m.add_argument("--modulus-window", type=_pair, metavar="LO,HI", help="stress window of the elastic-modulus regression: MPa (e.g. 50,300), or fractions of Rm when both are ≤ 1 (e.g. 0.1,0.4); default: the widest linear stretch of the first loading, chosen automatically (all of it when it has few samples)")
@@ -200,7 +200,8 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
             def progress(runs, elapsed):
                 print(f"  inverse FE: {runs} solver runs, {elapsed:.0f} s", file=sys.stderr, flush=True)
 
-            ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, scheduler=scheduler, progress=progress)
+            ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, scheduler=scheduler, progress=progress,
+                                        E_MPa=options.get("E_MPa"))
         else:
             ident = identify(record, **options)
     caught_lines = [f"{'numerical warning' if issubclass(w.category, RuntimeWarning) else w.category.__name__}: {w.message}" for w in caught]
@@ -235,10 +236,29 @@ def _fmt(value, spec: str = ".4g") -> str:
     return "—"
 
 
+def _law_range_text(h: dict) -> str:
+    """Where the law was fitted: εp lo–hi, and the fracture point when it lies beyond the uniform range
+    (why 'flowcurve fit' on the same record, which has the uniform range only, gives another law)."""
+    span, uniform = h.get("strain_range"), h.get("fit_range")
+    if not (isinstance(span, list) and len(span) == 2):
+        return ""
+    text = f"; over εp {_fmt(span[0], '.3g')}–{_fmt(span[1], '.3g')}"
+    if h.get("fracture_point") == "included" and isinstance(uniform, list) and len(uniform) == 2:
+        text += f" (uniform range to {_fmt(uniform[1], '.3g')} + the fracture point)"
+    return text
+
+
 def summary_lines(result: dict) -> list[str]:
     """A short table of one result: strength figures, hardening constants, friction."""
     h = result.get("hardening") or {}
-    strength = f"  E {_fmt(result.get('E_MPa'), '.0f')} MPa   Rp0.2 {_fmt(result.get('Rp02_MPa'), '.1f')} MPa"
+    from flowcurve.identification.elastic_modulus import result_E_source, result_material_E
+
+    E_source = result_E_source(result)  # apparent: the diagram's slope, never handed to a card or an FE model
+    E_note = E_source + (": the diagram's slope, not the material's E" if E_source == "apparent" else "")
+    E_material, material_source = result_material_E(result)
+    if material_source != E_source and E_material is not None:
+        E_note += f"; the material's E {_fmt(E_material, '.0f')} MPa is {material_source}"
+    strength = f"  E {_fmt(result.get('E_MPa'), '.0f')} MPa ({E_note})   Rp0.2 {_fmt(result.get('Rp02_MPa'), '.1f')} MPa"
     if result.get("test") != "compression":  # Rm, Ag, A, Z are tension results
         strength += (f"   Rm {_fmt(result.get('Rm_MPa'), '.1f')} MPa   Ag {_fmt(result.get('Ag_pct'), '.2f')} %   "
                      f"A {_fmt(result.get('A_pct'), '.2f')} %   Z {_fmt(result.get('Z_pct'), '.1f')} %")
@@ -250,7 +270,7 @@ def summary_lines(result: dict) -> list[str]:
         consts = "   ".join(f"{k.removesuffix('_MPa')} {_fmt(h[k])}{' MPa' if k.endswith('_MPa') else ''}"
                            for k in ("A_MPa", "B_MPa", "n", "K_MPa", "eps0", "sigma0_MPa", "Q_MPa", "b") if k in h)
         lines.append(f"  hardening {h.get('law', '?')} ({h.get('method', '?')}): {consts}   fit error {_fmt(h.get('fit_error_pct'), '.2f')} %"
-                     + (f", quality {h['quality']}" if h.get("quality") else ""))
+                     + (f", quality {h['quality']}" if h.get("quality") else "") + _law_range_text(h))
     if result.get("test") == "compression":
         methods = result.get("friction") or {}
         extra = "   ".join(f"{k} {_fmt(v, '.3f')}" for k, v in methods.items() if isinstance(v, (int, float)))

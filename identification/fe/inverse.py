@@ -42,6 +42,7 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.elastic_modulus import modulus_for_model
 from flowcurve.identification.fe.solver_fit import fit_with_solver, serial_correlation
 from flowcurve.identification.friction import bulge_half_width, face_half_width, nominal_diameter
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
@@ -159,11 +160,12 @@ def best_law_for(true_curve: pd.DataFrame) -> tuple[str, dict[str, float]]:
 
 
 def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None, scheduler=None, increments: int = 50,
-                        max_runs: int = 150, progress=None) -> Identification:
+                        max_runs: int = 150, progress=None, E_MPa: float | None = None) -> Identification:
     """Fit ``law`` and μ to the record's force–stroke and dmax with CalculiX in the loop (a tension
     record: the hardening beyond Fm, :func:`.inverse_tension.identify_inverse_fe_tension`).
     ``law="auto"``: the law that best fits the fast identification's curve (:func:`best_law_for`);
-    on tension, the law that best fits the FE-consistent curve."""
+    on tension, the law that best fits the FE-consistent curve. The model's E: ``E_MPa`` (given),
+    else material.E_MPa, else an extensometer's; never an apparent slope (an error asking for --E)."""
     from flowcurve.identification.fe.verify import record_force_stroke
 
     if law not in LAWS and law != "auto":
@@ -172,7 +174,8 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
 
         return identify_inverse_fe_tension(record, workers=workers, scheduler=scheduler, progress=progress,
-                                           law="johnson_cook" if law == "auto" else law, refit_law=None if law == "auto" else law)
+                                           law="johnson_cook" if law == "auto" else law, refit_law=None if law == "auto" else law,
+                                           **({"E_MPa": E_MPa} if E_MPa is not None else {}))
     if record.test != "compression":
         raise IdentificationError(f"{record.source}: --method inverse-fe needs a compression or tension record (this is {record.test!r})")
     t0 = time.perf_counter()
@@ -183,7 +186,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     if dmax is None:
         raise IdentificationError(f"{record.source}: --method inverse-fe needs the bulge diameter 'post.dmax_mm'")
     dface = record.positive("post.dface_mm")  # optional: near sticking it tells μ where dmax cannot (§4a.2)
-    E = record.positive("material.E_MPa") or fast.result.get("E_MPa") or 200_000.0
+    E, E_source = modulus_for_model(record, fast.result, E_MPa, what="the inverse FE model")  # never an apparent slope
     law_choice = {"given": law}
     if law == "auto":
         law, rms = best_law_for(fast.true_curve)
@@ -278,7 +281,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
             "dmax_residual_mm": d_res_mm, **({"dface_residual_mm": face_res_mm} if dface is not None else {}),
             "shape_measured": ["hk", "dmax"] + (["dface"] if dface is not None else []), "optimizer": sol.optimizer(),
             "warm_start": {"mu": mu0, **{k: float(v) for k, v in zip(law_info.keys, p0)}},
-            "model": {"increments": increments, "E_MPa": float(E), "h_end_mm": problem.h_end, "force_points": FORCE_POINTS,
+            "model": {"increments": increments, "E_MPa": float(E), "E_source": E_source, "h_end_mm": problem.h_end, "force_points": FORCE_POINTS,
                       "force_sigma_pct": FORCE_SIGMA_PCT, "from_strain": FROM_STRAIN},
         },
     })

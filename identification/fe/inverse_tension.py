@@ -39,6 +39,7 @@ from functools import partial
 import numpy as np
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.elastic_modulus import modulus_for_model
 from flowcurve.identification.fe.solver_fit import fit_with_solver, serial_correlation
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS
 from flowcurve.identification.outcome import Identification
@@ -230,7 +231,7 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
     dk = record.positive("post.dk_mm")
     d0 = record.positive("specimen.d0_mm", required=True)
     l0 = float(res["methods"]["strain_length_mm"])
-    E = record.positive("material.E_MPa") or res.get("E_MPa") or 200_000.0
+    E, E_source = modulus_for_model(record, res, tension_options.get("E_MPa"), what="the inverse FE model")  # never an apparent slope
 
     # the measured range: the record's true curve up to ε_a, averaged onto UNIFORM_ROWS rows
     uni = fast.curves["true"]
@@ -350,7 +351,7 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
         "neck_radius_residual_mm": neck_res_mm,
         "law_rms_error_pct": law_rms, "optimizer": sol.optimizer(),
         "warm_starts": {k: {"H_MPa": float(v[0]), "beta": float(v[1]), "c": float(v[2]), "taper": float(v[3])} for k, v in starts.items()},
-        "model": {"elements": "CAX8R 8x30 quarter model", "increments": increments, "E_MPa": float(E), "l0_mm": l0,
+        "model": {"elements": "CAX8R 8x30 quarter model", "increments": increments, "E_MPa": float(E), "E_source": E_source, "l0_mm": l0,
                   "elongation_mm": problem.elongation, "force_points": n_force, "force_sigma_pct": FORCE_SIGMA_PCT,
                   "neck_radius_sigma_mm": neck_sigma, "uniform_fraction": UNIFORM_FRACTION},
     }

@@ -29,14 +29,28 @@ def _common(data: CardData, units: UnitSystem, name: str) -> list[str]:
     return out
 
 
+# Abaqus writes the Johnson-Cook failure strain in the pressure-deviatoric stress ratio p/q (p the pressure stress,
+# positive in compression; q the Mises stress): [d1 + d2·exp(d3·p/q)]·[1 + d4·ln(rate*)]·(1 + d5·T^), and p/q = −η
+# with η = σ_m/σ_eq of Johnson & Cook (1985), whose exp(D3·η) this is only with d3 = −D3 (docs/methods.md §5)
+ABAQUS_D_SIGN = {"D1": 1.0, "D2": 1.0, "D3": -1.0, "D4": 1.0, "D5": 1.0}
+ABAQUS_DAMAGE_CONVENTION = ("damage (*DAMAGE INITIATION, JOHNSON COOK): Abaqus' eps_D = [d1 + d2*exp(d3*p/q)]*[1 + d4*ln(rate/rate0)]"
+                            "*(1 + d5*T^), p/q the pressure-deviatoric stress ratio (p > 0 in compression) = -triaxiality; "
+                            "hence d3 = -D3 of Johnson & Cook (1985), whose D3 multiplies sigma_m/sigma_eq (positive in tension)")
+
+
+def abaqus_damage_constants(fracture: dict[str, float]) -> list[float]:
+    """d1..d5 as Abaqus reads them from the identified Johnson-Cook (1985) D1..D5: d3 = −D3."""
+    return [ABAQUS_D_SIGN[k] * fracture[k] for k in DAMAGE_KEYS]
+
+
 def damage_lines(data: CardData, units: UnitSystem, options: CardOptions) -> list[str]:
-    """*DAMAGE INITIATION, CRITERION=JOHNSON COOK (d1..d5, melting and transition temperature,
-    reference strain rate, per the Abaqus keyword reference) and the user's *DAMAGE EVOLUTION."""
+    """*DAMAGE INITIATION, CRITERION=JOHNSON COOK (d1..d5 with d3 = −D3, melting and transition
+    temperature, reference strain rate, per the Abaqus keyword reference) and the user's *DAMAGE EVOLUTION."""
     if not data.fracture:
         return []
     eps0 = units.to_system(data.ref_strain_rate_per_s, "strain_rate")
     out = ["*DAMAGE INITIATION, CRITERION=JOHNSON COOK",
-           ", ".join(number(v) for v in [data.fracture[k] for k in DAMAGE_KEYS]
+           ", ".join(number(v) for v in abaqus_damage_constants(data.fracture)
                      + [data.require("melt_temperature_C"), data.ref_temperature_C, eps0])]
     if options.damage_displacement_mm is None:
         out.append(comment_block(["No *DAMAGE EVOLUTION given (--damage-displacement): Abaqus evaluates the criterion "
@@ -60,7 +74,8 @@ def abaqus_card(data: CardData, units: UnitSystem, options: CardOptions) -> str:
     rate_text = ", ".join(sorted({f"{c.strain_rate_per_s:.3g}" for c in tables}))
     time_unit = units.name.split("-")[1]
     out = [comment_block(header_lines(data, units, "Abaqus", f"temperatures in C, strain rates per {time_unit}", options)
-                         + (["damage: triaxiality -p/q, positive in tension, as Abaqus'"] if data.fracture else []),
+                         + ([ABAQUS_DAMAGE_CONVENTION, f"d3 = {number(-data.fracture['D3'])} written for the identified "
+                                                            f"D3 = {number(data.fracture['D3'])}"] if data.fracture else []),
                          "** ").rstrip("\n")]
     out += ["**", f"** {base}_JC: Johnson-Cook; transition temperature = reference temperature."]
     out += _common(data, units, f"{base}_JC")

@@ -83,6 +83,9 @@ class CardOptions:
             raise CardError(f"--damage-displacement must be > 0 mm, got {self.damage_displacement_mm:g}")
 
 
+# fit.json's E before the one rule for E (issue 32): a mean with apparent crosshead slopes in it, never put on a card
+OLD_APPARENT_MEAN = "mean of the records' E_MPa (apparent"
+
 # Constants a card may need: attribute → (fit.json key, command-line option, what it is).
 CONSTANTS = {
     "E_MPa": ("E_MPa", "--E", "Young's modulus in MPa"),
@@ -128,6 +131,8 @@ class CardData:
     material: str = "material"
     friction_mu: float | None = None
     E_MPa: float | None = None
+    E_source: str | None = None  # where E came from (fit.json E_MPa_source, or "given (--E)")
+    given: dict[str, float] = field(default_factory=dict)  # constants given on the command line (option → value)
     poisson: float | None = None
     density_kg_per_m3: float | None = None
     specific_heat_J_per_kgK: float | None = None
@@ -160,6 +165,9 @@ class CardData:
         value = getattr(self, name)
         if value is None:
             key, option, what = CONSTANTS[name]
+            if name == "E_MPa" and self.E_source:  # the fit file says why it has none (apparent moduli only)
+                raise CardError(f"{self.source_path}: the card needs the material's {what}: give it with {option} "
+                                f"(the fit file's E is {self.E_source})")
             raise CardError(f"{self.source_path}: the card needs the {what}: give it with {option} or as '{key}' in the fit file")
         return value
 
@@ -266,6 +274,7 @@ def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
         material=str(fit.get("material", "material")),
         friction_mu=_number(fit, "friction_mu", path),
         E_MPa=_number(fit, "E_MPa", path, positive=True),
+        E_source=str(fit["E_MPa_source"]) if fit.get("E_MPa_source") else None,
         poisson=_number(fit, "poisson_ratio", path),
         density_kg_per_m3=_number(fit, "density_kg_per_m3", path, positive=True),
         specific_heat_J_per_kgK=_number(fit, "specific_heat_J_per_kgK", path, positive=True),
@@ -279,9 +288,15 @@ def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
         curves=_curves(fit, path),
         source_path=str(path),
     )
+    if data.E_MPa is not None and (data.E_source or "").startswith(OLD_APPARENT_MEAN):  # a fit.json from before issue 32
+        data.E_MPa, data.E_source = None, f"{data.E_MPa:.4g} MPa, a mean over apparent moduli (crosshead slopes), not the material's"
     for name, value in overrides.items():
         if value is None:
             continue
+        if name == "E_MPa":
+            data.E_source = "given (--E)"
+        if name in CONSTANTS or name == "friction_mu":
+            data.given[CONSTANTS[name][1] if name in CONSTANTS else "--friction"] = float(value)
         if not hasattr(data, name):
             raise CardError(f"unknown card constant {name!r}")
         setattr(data, name, float(value) if isinstance(value, (int, float)) else value)
@@ -344,7 +359,12 @@ def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_not
                      "compression is its negative); identified on triaxiality "
                      + (f"{tri[0]:.3g} to {tri[1]:.3g}" if tri else "not stated in the fit file"))
     if card.friction_mu is not None:
-        lines.append(f"friction coefficient mu = {card.friction_mu:.4g} (specimen-platen, identified from barrelling)")
+        lines.append(f"friction coefficient mu = {card.friction_mu:.4g} "
+                     + ("(given: --friction)" if "--friction" in card.given else "(specimen-platen, identified from barrelling)"))
+    if card.E_MPa is not None:
+        lines.append(f"elastic modulus E = {card.E_MPa:.6g} MPa: {card.E_source or 'source not stated in the fit file'}")
+    if card.given:
+        lines.append("given on the command line, not identified: " + ", ".join(f"{k} {v:g}" for k, v in card.given.items()))
     return lines
 
 

@@ -93,3 +93,21 @@ def test_friction_demo_runs(tmp_path, capsys):
     assert "virtual adhesiometer: 24 tests" in out and "tau0 =" in out
     assert (tmp_path / "demo" / "friction_abaqus.inp").exists()
     assert len(list((tmp_path / "demo" / "traces").glob("*.csv"))) == 24
+    # mu_d was not given: the demo's default says so, on screen, in friction.json and in the card
+    data = json.loads((tmp_path / "demo" / "friction.json").read_text())
+    assert data["mu_d_source"].startswith("default") and "given (--mu-d)" not in out
+    assert "mu_d = 0.02 (default" in out
+    assert "default: the virtual" in (tmp_path / "demo" / "friction_abaqus.inp").read_text()
+
+
+def test_friction_demo_refined_flags_the_undetermined_sigma_S(tmp_path, capsys):
+    """The demo's tests have full contact: σ_S = 0.63 ± 3.6 MPa came out with no word; now flagged on screen, in
+    friction.json, and kept out of the LS-DYNA card's friction stress limit."""
+    out_dir = tmp_path / "demo"
+    assert main(["friction-demo", "--method", "refined", "--out", str(out_dir), "--card", "lsdyna"]) == 0
+    out = capsys.readouterr().out
+    line = next(x for x in out.splitlines() if "sigma_S =" in x)
+    assert "UNDETERMINED" in line
+    data = json.loads((out_dir / "friction.json").read_text())
+    assert abs(data["sigma_S_MPa"]) < data["sigma_S_MPa_stderr"] and data["undetermined"] == ["sigma_S_MPa"]
+    assert "VC = 0 (sigma_S not identified" in (out_dir / "friction_lsdyna.k").read_text()

@@ -61,6 +61,25 @@ def test_refined_fit_recovers_the_surface_flow_stress(make_table):
     _check(result, ("tau0_MPa", "beta0"), "refined bowden_tabor")
 
 
+def test_refined_fit_on_full_contact_flags_sigma_S_undetermined(make_table):
+    """Full real contact (K_r = 1 in the virtual tests): the moments hardly depend on σ_S, the fit returns a value
+    smaller than its own standard error, and it is flagged, not reported as a surface flow stress (issue 32)."""
+    table, _ = make_table(contact="full", moment_noise_rel=0.005, radius_noise_um=0.5)
+    result = fit_refined(table, mu_d=TRUTH.mu_d)
+    S, se = result.values["sigma_S_MPa"], result.stderr["sigma_S_MPa"]
+    assert abs(S) < se
+    assert result.extra["undetermined"] == ["sigma_S_MPa"]
+    assert result.sources["sigma_S_MPa"].startswith("UNDETERMINED")
+    assert any("sigma_S_MPa" in w and "smaller than its own uncertainty" in w for w in result.warnings)
+    _check(result, ("tau0_MPa", "beta0"), "refined on full contact")  # the determined ones stand
+
+
+def test_a_determined_sigma_S_is_not_flagged(make_table):
+    table, _ = make_table(contact="bowden_tabor", moment_noise_rel=0.002, radius_noise_um=0.2)
+    result = fit_refined(table, mu_d=TRUTH.mu_d)
+    assert result.extra["undetermined"] == [] and not any("uncertainty" in w for w in result.warnings)
+
+
 def test_refined_fit_with_hot_tests_of_known_flow_stress(make_table):
     """Hot tests carrying their flow stress (seed 3.2.3: a known σ_S removes a degree of freedom)."""
     table, device = make_table(contact="bowden_tabor", moment_noise_rel=0.002, radius_noise_um=0.2, hot=True,

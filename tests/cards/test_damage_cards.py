@@ -2,7 +2,11 @@
 ansys-dyna-core, Abaqus by the keyword reference's data-line order, OpenRadioss by the CARD
 formats of its fail_johnson.cfg."""
 
+import math
+
 import pytest
+
+from flowcurve.identification.damage import fracture_strain
 
 from flowcurve.reports.cards import load_card_data, write_card
 
@@ -36,7 +40,7 @@ def test_abaqus_damage_initiation_and_the_users_evolution(fit_file, displacement
         assert opts == {"CRITERION": "JOHNSON COOK"}
         # keyword reference: d1, d2, d3, d4, d5, melting temperature, transition temperature, reference strain rate
         d1, d2, d3, d4, d5, t_melt, t_trans, eps0 = floats(rows)[0]
-        assert (d1, d2, d3, d4, d5) == tuple(STEEL45.values())
+        assert (d1, d2, d3, d4, d5) == (STEEL45["D1"], STEEL45["D2"], -STEEL45["D3"], STEEL45["D4"], STEEL45["D5"])
         assert (t_melt, t_trans, eps0) == (LAW["T_melt"], LAW["T_ref"], LAW["rate0"])
         following = blocks[i + 1] if i + 1 < len(blocks) else None
         if displacement is None:
@@ -45,7 +49,26 @@ def test_abaqus_damage_initiation_and_the_users_evolution(fit_file, displacement
             assert following[0] == "DAMAGE EVOLUTION"
             assert following[1] == {"TYPE": "DISPLACEMENT", "SOFTENING": "LINEAR"}
             assert floats(following[2])[0, 0] == pytest.approx(5e-5)  # 0.05 mm in m
-    assert "-p/q" in text and ("output only" in text) == (displacement is None)
+    assert "p/q" in text and "d3 = -D3" in text and ("output only" in text) == (displacement is None)
+
+
+def abaqus_failure_strain(d1, d2, d3, p_over_q):
+    """Abaqus' Johnson-Cook failure strain at the reference rate and temperature, as its manual writes it:
+    d1 + d2·exp(d3·p/q), p the pressure stress (positive in compression), q the Mises stress."""
+    return d1 + d2 * math.exp(d3 * p_over_q)
+
+
+@pytest.mark.parametrize("eta", [1 / 3, 0.6])
+def test_abaqus_cards_own_formula_gives_the_fitted_locus(fit_file, eta):
+    """Parse the card back and evaluate Abaqus' formula with its d1-d3 at triaxiality η (p/q = −η): the fitted
+    locus D1 + D2·exp(D3·η) of steel 45 (D3 = −0.17, the fracture strain falling with η), both η of the card's range.
+    Copied unchanged, d3 = −0.17 gave 1.38 at η = 1/3 against 1.23 and a strain rising with η (issue 32)."""
+    text = write_card(load_card_data(damage_fit(fit_file)), "abaqus", "mm-s-t-N-MPa")
+    key, _, rows = next(b for b in read_inp(text) if b[0] == "DAMAGE INITIATION")
+    d1, d2, d3 = floats(rows)[0][:3]
+    locus = fracture_strain(eta, 0.0, 0.0, **STEEL45)
+    assert abaqus_failure_strain(d1, d2, d3, -eta) == pytest.approx(locus, rel=1e-9)
+    assert abaqus_failure_strain(d1, d2, d3, -0.6) < abaqus_failure_strain(d1, d2, d3, -1 / 3)  # falls with η, as the fit
 
 
 @pytest.mark.parametrize("version", ["2025", "2023"])

@@ -12,6 +12,10 @@ import flowcurve.identification.fe.inverse as inverse
 from flowcurve.identification.fe.solver_fit import SolverFit
 from flowcurve.identification.outcome import to_jsonable
 
+# the modulus the seed-like record was made with (conftest's E_HANDBOOK_MPa); it carries no material.E_MPa and the FE
+# model takes no default E (issue 32: it used 200 GPa silently)
+RECORD_E_MPa = 194_000.0
+
 
 def test_an_untold_mu_is_null_with_a_warning(monkeypatch, seed_like_record):
     record, truth = seed_like_record
@@ -23,7 +27,7 @@ def test_an_untold_mu_is_null_with_a_warning(monkeypatch, seed_like_record):
                          status=2, message="ftol", nfev=3, undetermined=(len(x0) - 1,))
 
     monkeypatch.setattr(inverse, "fit_with_solver", outcome)
-    result = inverse.identify_inverse_fe(record, law="johnson_cook").result
+    result = inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
     assert any("does not determine μ" in w for w in result["warnings"])
     assert result["hardening"]["quality"] == "poor"
     written = to_jsonable(result)
@@ -38,7 +42,7 @@ def test_a_told_mu_has_no_such_warning(monkeypatch, seed_like_record):
                          wall_s=1.0, status=2, message="ftol", nfev=3)
 
     monkeypatch.setattr(inverse, "fit_with_solver", outcome)
-    result = inverse.identify_inverse_fe(record, law="johnson_cook").result
+    result = inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
     assert not any("does not determine" in w for w in result.get("warnings", []))
     assert to_jsonable(result)["inverse_fe"]["mu_stderr"] == 0.01
 
@@ -71,7 +75,7 @@ def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_al
                              message="ftol", nfev=3, jac=jac)
 
         monkeypatch.setattr(inverse, "fit_with_solver", outcome)
-        result = inverse.identify_inverse_fe(record, law="johnson_cook").result
+        result = inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
         inv = result["inverse_fe"]
         assert asked["correlated"] is True
         assert inv["mu_stderr"] == mu_se
@@ -92,7 +96,7 @@ def test_a_fit_whose_runs_failed_often_says_so_in_the_result_and_the_summary(mon
                          wall_s=1.0, status=2, message="ftol", nfev=3, failed_runs=67)
 
     monkeypatch.setattr(inverse, "fit_with_solver", outcome)
-    result = inverse.identify_inverse_fe(record, law="johnson_cook").result
+    result = inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
     assert result["inverse_fe"]["failed_solver_runs"] == 67
     assert any("67 of 121 solver runs did not converge" in w for w in result["warnings"])
     assert result["hardening"]["quality"] == "poor"
