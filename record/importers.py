@@ -317,6 +317,8 @@ def decode_text(path: str | os.PathLike) -> Text:
         warnings.append(f"not UTF-8 (line {line}): read as Windows-1252 ('ANSI') text")
     if "\x00" in text:
         raise RecordError(path, f"holds NUL characters after decoding as {encoding}: a binary file, not text")
+    if "\r" in text:  # CR LF (Windows) and CR alone (old Mac-style exports) end lines as LF does
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
     head = text.split("\n", HEAD_LINES)[:HEAD_LINES]
     return Text(text=text, encoding=encoding, warnings=warnings, head=[line.rstrip("\r") for line in head])
 
@@ -331,8 +333,15 @@ def _found_columns_hint(lines: list[str]) -> str:
 
 
 def split_cells(line: str, delim: str) -> list[str]:
-    """The cells of one line, quotes removed (as Bluehill writes them) and trimmed."""
-    return [c.strip().strip('"').strip() for c in next(csv.reader([line], delimiter=delim))] if line else []
+    """The cells of one line, quotes removed (as Bluehill writes them) and trimmed; a line the csv
+    module refuses (a cell over its 131 072-character limit) is split at every delimiter."""
+    if not line:
+        return []
+    try:
+        cells = next(csv.reader([line], delimiter=delim))
+    except csv.Error:
+        cells = line.split(delim)
+    return [c.strip().strip('"').strip() for c in cells]
 
 
 # -- INSTRON export ------------------------------------------------------------------------
