@@ -84,7 +84,7 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | No
     """Upper and lower yield strength and the yield point extension (ISO 6892-1 3.10.2, 3.7.4).
 
     ReH: the maximum stress before the first drop of more than 1 % (and 3 noise standard
-    deviations) — searched before the maximum force (over the whole record when, with
+    deviations) that lasts two samples — searched before the maximum force (over the whole record when, with
     ``E_MPa``, the maximum force lies within 0.5 % plastic extension: the record ends on the
     plateau). ReL: the lowest stress on the yield plateau,
     the initial transient (from ReH to the local maximum after the first minimum) disregarded
@@ -104,7 +104,8 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | No
     head = s[: i_m + 1]
     run = np.maximum.accumulate(head)
     threshold = np.maximum(YIELD_DROP * run, 3.0 * noise_MPa)
-    drops = np.nonzero((run - head > threshold) & (run > start_MPa))[0]
+    below = (run - head > threshold) & (run > start_MPa)
+    drops = np.nonzero(below[:-1] & below[1:])[0]  # a drop that lasts: a lone low sample is a bad frame, not yield
     if drops.size == 0:
         return None
     j = int(drops[0])

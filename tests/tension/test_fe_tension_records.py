@@ -81,3 +81,25 @@ def test_calculix_records_identify_within_2_percent(name, tmp_path):
                   f"{100 * got['law_error']:.2f} | {100 * auto['law_error']:.2f} ({auto['fracture_point']}) | {got['E_MPa']:.0f} |")
             assert got["yield_point"] is False and auto["yield_point"] is False
             assert got["curve_error"] < TOLERANCE and got["law_error"] < TOLERANCE, (path.name, got)
+
+
+@pytest.mark.parametrize("sample, change_N", [(60, 20_000.0), (60, None), (400, 20_000.0), (400, -20_000.0), (2400, None), (3600, 20_000.0)])
+def test_a_single_bad_load_cell_frame(sample, change_N, tmp_path):
+    """One corrupt frame (+20 kN, −20 kN, or 0 N: None) on the vendored record: before, an
+    IndexError (0 N, −20 kN: a "yield point" whose plateau fell to zero) or a confident wrong
+    answer (+20 kN taken as Fm); now the frame is left out with a warning naming it and the
+    results are those of the clean record."""
+    from flowcurve.record.format import read_record
+
+    record = read_record(VENDORED)
+    force = record.data["force_N"].to_numpy(copy=True)
+    force[sample] = 0.0 if change_N is None else force[sample] + change_N
+    record.data["force_N"] = force
+    path = write_record(tmp_path / "bad-frame.csv", record)
+    got = identify_against_law(path, "voce", tmp_path / "out")
+    clean = json.loads((identify_against_law(VENDORED, "voce", tmp_path / "clean") and (tmp_path / "clean" / VENDORED.stem / "result.json")).read_text())
+    result = json.loads((tmp_path / "out" / "bad-frame" / "result.json").read_text())
+    assert any(f"sample {sample + 1} (" in w and "corrupt load-cell frame" in w for w in result["warnings"])
+    for key in ("Rm_MPa", "Rp02_MPa", "E_MPa", "Ag_pct"):
+        assert result[key] == pytest.approx(clean[key], rel=1e-3), key
+    assert got["yield_point"] is False and got["law_error"] < TOLERANCE

@@ -75,3 +75,24 @@ def test_tension_record_with_a_hold_before_the_motion(synthetic):
     assert result["yield_point"] is False and result["ReH_MPa"] is None
     assert result["Rp02_MPa"] == pytest.approx(plain["Rp02_MPa"], rel=0.01)
     assert math.isfinite(result["hardening"]["fit_error_pct"])
+
+
+def test_a_lone_low_sample_is_no_yield_point():
+    """One bad load-cell frame (half the force) on a continuous curve: before, a "yield point"
+    with ReL at the bad frame (or an IndexError when it read zero or less)."""
+    e, s = continuous_curve()
+    for value in (0.5, 0.0, -1.0):
+        bad = s.copy()
+        bad[400] = value * s[400]
+        assert iso6892.yield_point(e, bad, noise_MPa=0.5, E_MPa=E, start_MPa=150.0) is None, value
+
+
+def test_isolated_force_spikes_finds_lone_frames_not_a_fracture():
+    from flowcurve.identification.tension import isolated_force_spikes
+
+    rng = np.random.default_rng(2)
+    force = np.concatenate([np.linspace(0.0, 14_000.0, 300), np.full(200, 14_000.0), np.zeros(5)]) + rng.normal(0.0, 15.0, 505)
+    assert isolated_force_spikes(force).size == 0  # the break (a drop that stays) is kept
+    bad = force.copy()
+    bad[[100, 350]] = [force[100] + 20_000.0, 0.0]
+    assert isolated_force_spikes(bad).tolist() == [100, 350]
