@@ -92,7 +92,8 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | No
     to Fm still within the plateau band (ReL + half the drop, at most 2 % of ReL, at least 3
     noise deviations), in % of the gauge length. None when the curve has no yield point.
     ``start_MPa``: ReH lies above it (give the top of the fitted elastic line: a dip below it is
-    noise at zero force or in the toe, not yield). A search on to the record's end stops at the
+    noise at zero force or in the toe, not yield); with ``E_MPa``, ReH lies within 0.5 % plastic
+    extension (a later drop is a relaxation in a pause). A search on to the record's end stops at the
     fracture; a stress that falls to zero after the maximum is no plateau (None).
     Returns ReH_MPa, ReL_MPa, Ae_pct and the sample indices of ReH and of the plateau end.
     """
@@ -105,6 +106,9 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | No
     run = np.maximum.accumulate(head)
     threshold = np.maximum(YIELD_DROP * run, 3.0 * noise_MPa)
     below = (run - head > threshold) & (run > start_MPa)
+    if E_MPa is not None:  # ReH ends the elastic line: a drop from a maximum beyond 0.5 % plastic extension is a relaxation (a pause), not yield
+        at_max = np.maximum.accumulate(np.where(head >= run, np.arange(head.size), 0))
+        below &= 100.0 * (e[at_max] - run / E_MPa) <= MAX_YIELD_POINT_EXTENSION_PCT
     drops = np.nonzero(below[:-1] & below[1:])[0]  # a drop that lasts: a lone low sample is a bad frame, not yield
     if drops.size == 0:
         return None

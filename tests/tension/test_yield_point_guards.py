@@ -96,3 +96,14 @@ def test_isolated_force_spikes_finds_lone_frames_not_a_fracture():
     bad = force.copy()
     bad[[100, 350]] = [force[100] + 20_000.0, 0.0]
     assert isolated_force_spikes(bad).tolist() == [100, 350]
+
+
+def test_a_relaxation_in_a_pause_is_no_yield_point():
+    """The crosshead pauses for a few samples late in the hardening and the force relaxes by 3 %
+    (seen on a 300 °C virtual test through the ptys): no upper yield point there."""
+    e, s = continuous_curve()
+    k = int(np.searchsorted(e, 0.05))
+    s = s.copy()
+    s[k: k + 12] -= 0.03 * s[k] * np.concatenate([np.linspace(0.3, 1.0, 6), np.linspace(1.0, 0.2, 6)])
+    e[k: k + 6] = e[k]  # the pause: the crosshead holds while the force relaxes
+    assert iso6892.yield_point(e, s, noise_MPa=0.1, E_MPa=E, start_MPa=150.0) is None
