@@ -143,7 +143,7 @@ class Record:
         try:
             value = float(str(raw).strip())
         except ValueError:
-            raise RecordError(self.source, f"metadata '{key}' is not a number: {raw!r}") from None
+            raise RecordError(self.source, f"metadata '{key}' is not a number: {shown(raw)}") from None
         if not math.isfinite(value):
             raise RecordError(self.source, f"metadata '{key}' is not finite: {raw!r}")
         if abs(value) > MAX_MAGNITUDE:
@@ -276,6 +276,14 @@ def parse_record_bytes(raw: bytes, source: str = "<memory>") -> Record:
 
 
 _NON_SPACE = re.compile(rb"\S")
+SHOWN_CHARACTERS = 60
+
+
+def shown(text: str, limit: int = SHOWN_CHARACTERS) -> str:
+    """``text`` quoted for a one-line message, cut to ``limit`` characters (a junk cell can be 100 000)."""
+    return repr(text) if len(text) <= limit else f"{text[:limit]!r}… ({len(text)} characters)"
+
+
 _TEMPERATURE = re.compile(r"(-?\d+(?:\.\d+)?)\s*°?C\b")
 
 
@@ -327,7 +335,7 @@ def _extract_events(comments: list[bytes], source: str) -> list[Event]:
             try:
                 events.append(Event(float(t), name, txt))
             except ValueError:
-                raise RecordError(source, f"event time is not a number: {t!r} ('{line.strip()}')") from None
+                raise RecordError(source, f"event time is not a number: {shown(t)} ({shown(line.strip())})") from None
     return events
 
 
@@ -373,7 +381,7 @@ def _raise_bad_cell(body: bytes, columns: list[str], source: str, names_line: in
             try:
                 float(cell)
             except ValueError:
-                raise RecordError(source, f"not a number: {cell.strip()!r}", line=line_no, column=name) from None
+                raise RecordError(source, f"not a number: {shown(cell.strip())}", line=line_no, column=name) from None
     raise RecordError(source, "the samples cannot be parsed as numbers")
 
 

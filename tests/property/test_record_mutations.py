@@ -93,6 +93,7 @@ def identify_outcome(path, args, out) -> str:
     errors = [line for line in stderr.splitlines() if line.startswith("flowcurve: error:")]
     assert code == 2 and len(errors) == 1, (code, stderr)
     assert str(path) in errors[0], errors[0]  # the message names the file
+    assert len(errors[0]) < len(str(path)) + 600, errors[0]  # a line to read, not a junk cell echoed whole
     return "clean error"
 
 
