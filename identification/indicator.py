@@ -124,6 +124,8 @@ def reread_if_stepped(time_s, reading) -> tuple[np.ndarray, float | None]:
     if ok.size < 3 or stepped_fraction(x[ok]) <= STEPPED_FRACTION:
         return x, None
     steps = np.abs(np.diff(x[ok]))
+    if not np.any(steps > 0):
+        return x, None  # a reading that never changes (a dead channel): no counts to read between
     step = float(np.min(steps[steps > 0]))
     counts = steps[steps > 0] / step
     if np.mean(np.abs(counts - np.round(counts)) < 0.01) < 0.99:  # changes that are not whole counts: not an encoder

@@ -80,28 +80,36 @@ YIELD_DROP = 0.01
 MAX_YIELD_POINT_EXTENSION_PCT = 0.5  # a force maximum this early is the onset of yield, not of necking
 
 
-def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | None = None) -> dict | None:
+def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | None = None, start_MPa: float = 0.0) -> dict | None:
     """Upper and lower yield strength and the yield point extension (ISO 6892-1 3.10.2, 3.7.4).
 
     ReH: the maximum stress before the first drop of more than 1 % (and 3 noise standard
-    deviations) — searched before the maximum force (over the whole record when, with
+    deviations) that lasts two samples — searched before the maximum force (over the whole record when, with
     ``E_MPa``, the maximum force lies within 0.5 % plastic extension: the record ends on the
     plateau). ReL: the lowest stress on the yield plateau,
     the initial transient (from ReH to the local maximum after the first minimum) disregarded
     unless nothing else is left. Ae: the extension from ReH to the start of uniform work hardening — the last sample up
     to Fm still within the plateau band (ReL + half the drop, at most 2 % of ReL, at least 3
     noise deviations), in % of the gauge length. None when the curve has no yield point.
+    ``start_MPa``: ReH lies above it (give the top of the fitted elastic line: a dip below it is
+    noise at zero force or in the toe, not yield); with ``E_MPa``, ReH lies within 0.5 % plastic
+    extension (a later drop is a relaxation in a pause). A search on to the record's end stops at the
+    fracture; a stress that falls to zero after the maximum is no plateau (None).
     Returns ReH_MPa, ReL_MPa, Ae_pct and the sample indices of ReH and of the plateau end.
     """
     e = np.asarray(strain, dtype=float)
     s = np.asarray(stress_MPa, dtype=float)
     i_m = int(np.nanargmax(s))
     if E_MPa is not None and i_m + 1 < s.size and 100.0 * (e[i_m] - s[i_m] / E_MPa) <= MAX_YIELD_POINT_EXTENSION_PCT:
-        i_m = s.size - 1  # the largest force at the onset of yield: an upper yield point, the record may end on the plateau
+        i_m = fracture_index(s)  # the largest force at the onset of yield: an upper yield point, the record may end on the plateau
     head = s[: i_m + 1]
     run = np.maximum.accumulate(head)
     threshold = np.maximum(YIELD_DROP * run, 3.0 * noise_MPa)
-    drops = np.nonzero(run - head > threshold)[0]
+    below = (run - head > threshold) & (run > start_MPa)
+    if E_MPa is not None:  # ReH ends the elastic line: a drop from a maximum beyond 0.5 % plastic extension is a relaxation (a pause), not yield
+        at_max = np.maximum.accumulate(np.where(head >= run, np.arange(head.size), 0))
+        below &= 100.0 * (e[at_max] - run / E_MPa) <= MAX_YIELD_POINT_EXTENSION_PCT
+    drops = np.nonzero(below[:-1] & below[1:])[0]  # a drop that lasts: a lone low sample is a bad frame, not yield
     if drops.size == 0:
         return None
     j = int(drops[0])
@@ -120,6 +128,8 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | No
     transient_end = first_min + int(falling[0]) if falling.size else first_min
     band_of = lambda low: low + float(np.clip(0.5 * (reh - low), 3.0 * noise_MPa, 0.02 * low))  # noqa: E731
     level = float(np.min(after))
+    if not level > 0:
+        return None  # the stress falls to zero (unloaded, broken): no Lüders plateau
     top = band_of(level)
     within = np.nonzero(after <= top)[0]
     end = int(within[-1])  # the last sample on the plateau

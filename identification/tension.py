@@ -304,6 +304,24 @@ def _check_options(*, true_stress, neck, hardening, modulus_reference, fracture_
     return fit_range, fractions, window_fixed_MPa
 
 
+SPIKE_NOISE_FACTOR, SPIKE_FRACTION = 12.0, 0.25  # a lone force sample this far (× noise σ, × peak force) from its agreeing neighbours is corrupt: farther than an upper yield point stands
+
+
+def isolated_force_spikes(force_N) -> np.ndarray:
+    """Indices of lone corrupt force samples: unlike both neighbours, which agree with each other
+    (no specimen's force jumps and comes back within one sample; a fracture does not come back).
+    |F_k − (F_k−1 + F_k+1)/2| > max(12 σ, 25 % of the peak of the 3-sample median) and
+    |F_k+1 − F_k−1| < a quarter of that; σ from second differences (robust)."""
+    f = np.asarray(force_N, dtype=float)
+    if f.size < 5:
+        return np.zeros(0, dtype=int)
+    deviation = np.abs(f[1:-1] - 0.5 * (f[:-2] + f[2:]))
+    gap = np.abs(f[2:] - f[:-2])
+    peak = float(np.max(np.abs(np.median(np.stack([f[:-2], f[1:-1], f[2:]]), axis=0))))
+    threshold = max(SPIKE_NOISE_FACTOR * _stress_noise_MPa(f), SPIKE_FRACTION * peak)
+    return np.flatnonzero((deviation > threshold) & (gap < 0.25 * deviation)) + 1
+
+
 def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, crosshead_length_mm, scale: bool) -> _Inputs:
     """Geometry, force and engineering stress, and the strain source of a tension record."""
     warnings: list[str] = []
@@ -314,6 +332,11 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
     ok = np.isfinite(force)
     if not ok.all():
         warnings.append(f"{int((~ok).sum())} samples without a force value were left out")
+    spikes = np.flatnonzero(ok)[isolated_force_spikes(force[ok])]
+    if spikes.size:
+        ok[spikes] = False
+        warnings.append(f"{spikes.size} force sample(s) unlike both neighbours (a corrupt load-cell frame) left out: "
+                        + ", ".join(f"sample {k + 1} ({force[k]:.6g} N)" for k in spikes[:5]) + (" …" if spikes.size > 5 else ""))
     data = record.data[ok].reset_index(drop=True)
     force = force[ok]
     sub = Record(meta=record.meta, data=data, source=record.source)
@@ -462,7 +485,7 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     """ISO 6892-1 results after Rp0.2: yield point (ReH, ReL, Ae), Ag, A and Z."""
     record, force, strain, eng_stress, E = inp.record, inp.force, line.strain, inp.eng_stress, line.E
     warnings: list[str] = []
-    yp = iso6892.yield_point(strain, eng_stress, noise_MPa=line.noise_MPa, E_MPa=E)
+    yp = iso6892.yield_point(strain, eng_stress, noise_MPa=line.noise_MPa, E_MPa=E, start_MPa=line.window_MPa[1])
     if yp is not None:
         warnings.append(f"the curve has a yield point (ReH {yp['ReH_MPa']:.1f} MPa, ReL {yp['ReL_MPa']:.1f} MPa, Ae {yp['Ae_pct']:.2f} %): "
                         "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")

@@ -143,7 +143,7 @@ class Record:
         try:
             value = float(str(raw).strip())
         except ValueError:
-            raise RecordError(self.source, f"metadata '{key}' is not a number: {raw!r}") from None
+            raise RecordError(self.source, f"metadata '{key}' is not a number: {shown(raw)}") from None
         if not math.isfinite(value):
             raise RecordError(self.source, f"metadata '{key}' is not finite: {raw!r}")
         if abs(value) > MAX_MAGNITUDE:
@@ -214,6 +214,8 @@ def parse_record_bytes(raw: bytes, source: str = "<memory>") -> Record:
     (no decode, no copy into a str): reading costs about what ``pandas.read_csv`` costs."""
     if raw.startswith(b"\xef\xbb\xbf"):
         raw = raw[3:]
+    if raw.count(b"\r") != raw.count(b"\r\n"):  # lines ended by CR alone (a foreign converter): as LF
+        raw = raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
     if _NON_SPACE.search(raw) is None:
         raise RecordError(source, "the file is empty")
     meta: dict[str, str] = {}
@@ -267,13 +269,39 @@ def parse_record_bytes(raw: bytes, source: str = "<memory>") -> Record:
     events = _extract_events(comments, source)
     data = _parse_samples(raw, start, stop, comments, columns, source, names_line)
     if data.empty:
-        raise RecordError(source, "the record has no samples (header only)", line=names_line)
+        raise RecordError(source, no_samples_message(meta, events), line=names_line)
     if truncated:
         warnings.append(f"the record was cut short (status '{meta.get('status', '?')}'); run 'flowcurve recover' to complete its header")
     return Record(meta=meta, data=data, source=source, events=events, truncated=truncated, warnings=warnings)
 
 
 _NON_SPACE = re.compile(rb"\S")
+SHOWN_CHARACTERS = 60
+
+
+def shown(text: str, limit: int = SHOWN_CHARACTERS) -> str:
+    """``text`` quoted for a one-line message, cut to ``limit`` characters (a junk cell can be 100 000)."""
+    return repr(text) if len(text) <= limit else f"{text[:limit]!r}… ({len(text)} characters)"
+
+
+_TEMPERATURE = re.compile(r"(-?\d+(?:\.\d+)?)\s*°?C\b")
+
+
+def no_samples_message(meta: Mapping[str, str], events: Sequence[Event]) -> str:
+    """Why a record holds no samples, from its events: it ended during heating (at the last
+    temperature an event gives, else the set-point is named), after the soak, or before loading."""
+    names = [e.name for e in events]
+    how = meta.get("stop_reason") or meta.get("abort_reason") or ("the record was cut short" if meta.get("status") == STATUS_RECORDING else "")
+    when = f"{how} after {events[-1].time_s:g} s" if events and how else how
+    temps = [float(m.group(1)) for e in events if e.name != "heater_on" for m in [_TEMPERATURE.search(e.text)] if m]
+    if "heater_on" in names and "soak_reached" not in names:
+        setpoint = next((e.text for e in events if e.name == "heater_on"), "")
+        at = f" at {temps[-1]:g} °C" if temps else ""
+        known = f"{setpoint.replace(' C', ' °C')}" + ("" if temps else "; the temperature it reached is not in the record")
+        detail = "; ".join(x for x in (known, when) if x)
+        return f"the test ended during heating{at} ({detail}), no samples: nothing to identify"
+    phase = f"after the soak at {temps[-1]:g} °C" if "soak_reached" in names and temps else "before loading"
+    return f"the test ended {phase}{f' ({when})' if when else ''}, no samples: nothing to identify" if events else "the record has no samples (header only)"
 
 
 def _decode_line(line: bytes, source: str, line_no: int) -> str:
@@ -307,7 +335,7 @@ def _extract_events(comments: list[bytes], source: str) -> list[Event]:
             try:
                 events.append(Event(float(t), name, txt))
             except ValueError:
-                raise RecordError(source, f"event time is not a number: {t!r} ('{line.strip()}')") from None
+                raise RecordError(source, f"event time is not a number: {shown(t)} ({shown(line.strip())})") from None
     return events
 
 
@@ -353,7 +381,7 @@ def _raise_bad_cell(body: bytes, columns: list[str], source: str, names_line: in
             try:
                 float(cell)
             except ValueError:
-                raise RecordError(source, f"not a number: {cell.strip()!r}", line=line_no, column=name) from None
+                raise RecordError(source, f"not a number: {shown(cell.strip())}", line=line_no, column=name) from None
     raise RecordError(source, "the samples cannot be parsed as numbers")
 
 

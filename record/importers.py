@@ -39,7 +39,7 @@ if TYPE_CHECKING:  # pandas is imported where columns are read, so `flowcurve --
 
 import numpy as np
 
-from flowcurve.record.format import MAX_MAGNITUDE, Record, is_native, read_record
+from flowcurve.record.format import MAX_MAGNITUDE, Record, is_native, read_record, shown
 from flowcurve.errors import MissingValueError, RecordError
 
 # -- units ---------------------------------------------------------------------------------
@@ -144,7 +144,7 @@ def unit_conversion(unit: str, quantity: str | None = None, *, source: str = "<o
         entry = lowered.get(key.lower())
     if entry is None:
         known = sorted({k for k, v in UNITS.items() if quantity is None or v[0] == quantity} - {""})
-        raise UnitError(source, f"unknown unit {unit!r} (known{' ' + quantity if quantity else ''} units: {', '.join(known)})", column=column)
+        raise UnitError(source, f"unknown unit {shown(unit)} (known{' ' + quantity if quantity else ''} units: {', '.join(known)})", column=column)
     if quantity is not None and entry[0] != quantity:
         raise UnitError(source, f"unit {unit!r} measures {entry[0]}, not {quantity}", column=column)
     return entry[1], entry[2]
@@ -317,6 +317,8 @@ def decode_text(path: str | os.PathLike) -> Text:
         warnings.append(f"not UTF-8 (line {line}): read as Windows-1252 ('ANSI') text")
     if "\x00" in text:
         raise RecordError(path, f"holds NUL characters after decoding as {encoding}: a binary file, not text")
+    if "\r" in text:  # CR LF (Windows) and CR alone (old Mac-style exports) end lines as LF does
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
     head = text.split("\n", HEAD_LINES)[:HEAD_LINES]
     return Text(text=text, encoding=encoding, warnings=warnings, head=[line.rstrip("\r") for line in head])
 
@@ -331,8 +333,15 @@ def _found_columns_hint(lines: list[str]) -> str:
 
 
 def split_cells(line: str, delim: str) -> list[str]:
-    """The cells of one line, quotes removed (as Bluehill writes them) and trimmed."""
-    return [c.strip().strip('"').strip() for c in next(csv.reader([line], delimiter=delim))] if line else []
+    """The cells of one line, quotes removed (as Bluehill writes them) and trimmed; a line the csv
+    module refuses (a cell over its 131 072-character limit) is split at every delimiter."""
+    if not line:
+        return []
+    try:
+        cells = next(csv.reader([line], delimiter=delim))
+    except csv.Error:
+        cells = line.split(delim)
+    return [c.strip().strip('"').strip() for c in cells]
 
 
 # -- INSTRON export ------------------------------------------------------------------------
@@ -444,7 +453,7 @@ def _header_number(value: str, source: str, line: int, key: str) -> float:
     try:
         number = float(value.replace(",", "."))
     except ValueError:
-        raise RecordError(source, f"'{key}' is not a number: {value!r}", line=line) from None
+        raise RecordError(source, f"'{key}' is not a number: {shown(value)}", line=line) from None
     if not math.isfinite(number) or abs(number) > MAX_MAGNITUDE:
         raise RecordError(source, f"'{key}' = {value!r} is not a measurement (infinite, not a number or beyond {MAX_MAGNITUDE:g})", line=line)
     return number
@@ -778,7 +787,7 @@ def _raise_bad_cell(source: str, text: Text, sep: str, decimal: str, thousands: 
             if cell == "":
                 continue
             if not is_number(cell, decimal, thousands) or (decimal == "." and not thousands and "," in cell):
-                raise RecordError(source, f"not a number: {cell!r}", line=line_no, column=col.label)
+                raise RecordError(source, f"not a number: {shown(cell)}", line=line_no, column=col.label)
     raise RecordError(source, "the samples cannot be parsed as numbers")
 
 
