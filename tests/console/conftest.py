@@ -32,10 +32,10 @@ def served_console(tmp_path):
 
     from flowcurve.console.server import Console, create_app
 
-    console = Console(tmp_path / "out", time_scale=BROWSER_TIME_SCALE)
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
+    console = Console(tmp_path / "out", time_scale=BROWSER_TIME_SCALE, port=port)
     server = uvicorn.Server(uvicorn.Config(create_app(console), host="127.0.0.1", port=port, log_level="warning", lifespan="on"))
     thread = threading.Thread(target=server.run, name="console-under-test", daemon=True)
     thread.start()
