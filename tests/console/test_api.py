@@ -88,14 +88,20 @@ def test_one_test_at_a_time_and_stop_gives_a_complete_record(tmp_path):
     assert client.post("/api/stop", json={}, headers=JSON).json() == {"stopping": False}
 
 
-def test_abort_marks_the_record_aborted(tmp_path):
-    console, client = _client(tmp_path, time_scale=5.0)
+def start_then_abort(console: Console, client: TestClient, while_running=lambda: None) -> None:
+    """A tension test started, aborted after ten samples (``while_running()`` first), ended."""
     assert client.post("/api/start", json={"test": "tension"}, headers=JSON).status_code == 200
     end = time.monotonic() + 30
     while console.runner.current.view.samples < 10 and time.monotonic() < end:
         time.sleep(0.05)
+    while_running()
     assert client.post("/api/abort", json={}, headers=JSON).json() == {"aborting": True}
     _wait(console)
+
+
+def test_abort_marks_the_record_aborted(tmp_path):
+    console, client = _client(tmp_path, time_scale=5.0)
+    start_then_abort(console, client)
     rec = read_record(console.runner.current.record)
     assert rec.meta["status"] == "aborted"
     assert "abort button" in rec.meta["abort_reason"]

@@ -19,6 +19,7 @@ still measured against a rig that would show a change. The figures are printed a
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import time
@@ -222,36 +223,45 @@ def _model_time_rig(monkeypatch, clock: ModelClock) -> None:
                                                                        compression_response="slab", tension_response="bridgman"))
 
 
-@pytest.fixture(scope="module")
-def heating(tmp_path_factory):
-    """A console whose test is heating, its model clock held still."""
+@contextlib.contextmanager
+def _console_with(tmp_path_factory, form: dict, ready):
+    """A console on a model-time rig with a test of ``form`` started; ``ready(run, clock)`` waits for it."""
     with pytest.MonkeyPatch.context() as mp:
         clock = ModelClock()
         _model_time_rig(mp, clock)
-        fuzzed = FuzzedConsole(tmp_path_factory.mktemp("heating"), clock)
-        run = fuzzed.console.runner.start(validate({"test": "compression", "temperature": "300", "soak": "600"}, virtual=True, time_scale=1.0))
-        end = time.monotonic() + 60
-        while not (run.view.state == "heating" and run.heater_source is not None and run.heater_source.relay_on) and time.monotonic() < end:
-            time.sleep(0.005)
-        clock.auto = False
-        assert run.running and run.view.state == "heating", run.view.status()
-        time.sleep(0.5)  # a thread between two waits reaches its next one
+        fuzzed = FuzzedConsole(tmp_path_factory.mktemp("fuzz"), clock)
+        run = fuzzed.console.runner.start(validate(form, virtual=True, time_scale=1.0))
+        ready(run, clock)
         yield fuzzed
         fuzzed.close()
+
+
+def _heating_then_frozen(run, clock: ModelClock) -> None:
+    end = time.monotonic() + 60
+    while not (run.view.state == "heating" and run.heater_source is not None and run.heater_source.relay_on) and time.monotonic() < end:
+        time.sleep(0.005)
+    clock.auto = False
+    assert run.running and run.view.state == "heating", run.view.status()
+    time.sleep(0.5)  # a thread between two waits reaches its next one
+
+
+def _completed(run, clock: ModelClock) -> None:
+    run.thread.join(120)
+    assert run.outcome is not None and run.outcome.status == "complete", run.summary()
+
+
+@pytest.fixture(scope="module")
+def heating(tmp_path_factory):
+    """A console whose test is heating, its model clock held still."""
+    with _console_with(tmp_path_factory, {"test": "compression", "temperature": "300", "soak": "600"}, _heating_then_frozen) as fuzzed:
+        yield fuzzed
 
 
 @pytest.fixture(scope="module")
 def completed(tmp_path_factory):
     """A console whose last test ran to its end (a short compression at room temperature)."""
-    with pytest.MonkeyPatch.context() as mp:
-        clock = ModelClock()
-        _model_time_rig(mp, clock)
-        fuzzed = FuzzedConsole(tmp_path_factory.mktemp("completed"), clock)
-        run = fuzzed.console.runner.start(validate({"test": "compression", "target": "0.5", "specimen_id": "fuzz"}, virtual=True, time_scale=1.0))
-        run.thread.join(120)
-        assert run.outcome is not None and run.outcome.status == "complete", run.summary()
+    with _console_with(tmp_path_factory, {"test": "compression", "target": "0.5", "specimen_id": "fuzz"}, _completed) as fuzzed:
         yield fuzzed
-        fuzzed.close()
 
 
 def fuzz(examples: int):

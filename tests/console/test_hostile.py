@@ -19,6 +19,8 @@ with warnings.catch_warnings():  # starlette's note about its test client's HTTP
 from flowcurve.cli import main as cli_main  # noqa: E402
 from flowcurve.console.server import Console, create_app  # noqa: E402
 
+from .test_api import start_then_abort  # noqa: E402
+
 JSON = {"Content-Type": "application/json"}
 BASE_URL = "http://127.0.0.1:8080"
 FOREIGN = {"Host": "evil.example:8080", "Origin": "http://evil.example:8080"}  # a page whose name resolves to 127.0.0.1
@@ -33,14 +35,8 @@ def _files(tmp_path: Path) -> list[Path]:
     return sorted(p for p in tmp_path.rglob("*") if p.is_file())
 
 
-def _wait_ended(console: Console, timeout_s: float = 60.0) -> None:
-    end = time.monotonic() + timeout_s
-    while time.monotonic() < end:
-        run = console.runner.current
-        if run is not None and not run.running and run.view.state in ("done", "fault"):
-            return
-        time.sleep(0.05)
-    raise AssertionError("the test did not end")
+def assert_still_running_refuses(client: TestClient) -> None:
+    assert client.post("/api/post", json={"post.lu_mm": "52"}, headers=JSON).status_code == 409
 
 
 # 1. DNS rebinding -----------------------------------------------------------------------------------
@@ -191,13 +187,7 @@ def test_the_token_is_compared_in_constant_time(tmp_path, monkeypatch):
 # 6. post-test values only for a completed test ---------------------------------------------------------------
 def test_finding6_post_test_values_for_an_aborted_test_are_refused(tmp_path):
     console, client = _client(tmp_path, time_scale=5.0)
-    assert client.post("/api/start", json={"test": "tension"}, headers=JSON).status_code == 200
-    end = time.monotonic() + 30
-    while console.runner.current.view.samples < 10 and time.monotonic() < end:
-        time.sleep(0.05)
-    assert client.post("/api/post", json={"post.lu_mm": "52"}, headers=JSON).status_code == 409  # still running
-    assert client.post("/api/abort", json={}, headers=JSON).json() == {"aborting": True}
-    _wait_ended(console)
+    start_then_abort(console, client, while_running=lambda: assert_still_running_refuses(client))
     run = console.runner.current
     assert run.outcome.status == "aborted"
     before = {p: p.read_bytes() for p in _files(tmp_path)}
