@@ -147,7 +147,7 @@ class GuardMiddleware:
         if origin is not None and not hosts.allows_origin(origin):
             raise Refused(f"refused: a request from {origin!r}, not from this console's page", 403)
         length = request.headers.get("content-length")
-        if length is not None and (not length.isdigit() or int(length) > MAX_BODY_BYTES):
+        if length is not None and (not (length.isascii() and length.isdigit()) or int(length) > MAX_BODY_BYTES):
             raise Refused(f"the request is larger than {MAX_BODY_BYTES} bytes", 413)
         if request.method == "POST":
             if request.headers.get("content-type", "").split(";")[0].strip().lower() != "application/json":

@@ -9,6 +9,11 @@ in-process). Two rigs are fuzzed:
 * **completed** — a test that ran to its end (so ``/api/post`` gets past its 409), fuzzed with
   bodies that are always wrong somewhere (a right one would identify the record: seconds each).
 
+Most requests go through the test client (httpx, in-process); some are written by hand and sent
+over a socket to the heating console served by uvicorn (latin-1 bytes in headers, which httpx
+would not send, no Host or two, chunked bodies). A bare test client also fuzzes a console with
+a token (logins, wrong tokens into the 429 limit).
+
 For every request: no answer ≥ 500, and a refused one (≥ 400) — or any GET — leaves the rig's
 state (test, state, readings, samples, stop and abort flags, post values, result, heater relay,
 model time) and the --out folder (every file's name, size and mtime) as they were. An accepted
@@ -22,6 +27,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import json
+import socket
 import time
 import warnings
 from collections import Counter
@@ -44,13 +50,14 @@ from flowcurve.console.request_guard import MAX_BODY_BYTES, MAX_TEXT_CHARS, NAME
 from flowcurve.console.server import FIT_FIELDS, LOGIN_FIELDS, POST_FIELDS, START_FIELDS, Console, create_app  # noqa: E402
 from flowcurve.console.setup_form import validate  # noqa: E402
 
-from .conftest import ARTIFACTS  # noqa: E402
+from .conftest import ARTIFACTS, free_port, serving  # noqa: E402
 
-PORT = 8080
+PORT = free_port()  # the fuzzed consoles' port: in their allowlist, and the real server's for the raw requests
 GOOD_HOSTS = (f"127.0.0.1:{PORT}", f"localhost:{PORT}", f"[::1]:{PORT}")
-FOREIGN_HOSTS = ("evil.example:8080", f"127.0.0.1:{PORT + 1}", "localhost", f"127.0.0.1:{PORT}.evil.example", f"evil@127.0.0.1:{PORT}",
-                 "", " ", "[::1]", "[::2]:8080", "127.0.0.1:0", "127.0.0.1:99999", "127.0.0.1:-1", "localhost:80 80", "ö.example:8080".encode("latin-1"))
-FOREIGN_ORIGINS = ("http://evil.example:8080", "null", f"http://127.0.0.1:{PORT + 1}", f"file://127.0.0.1:{PORT}", f"http://127.0.0.1:{PORT}/x",
+FOREIGN_HOSTS = (f"evil.example:{PORT}", f"127.0.0.1:{PORT + 1}", "localhost", f"127.0.0.1:{PORT}.evil.example", f"evil@127.0.0.1:{PORT}",
+                 "", " ", "[::1]", "[::2]:8080", "127.0.0.1:0", "127.0.0.1:99999", "127.0.0.1:-1", "localhost:80 80", f"ö.example:{PORT}".encode("latin-1"),
+                 "127.0.0.1:²".encode("latin-1"), f"[::1]:{PORT}²".encode("latin-1"))
+FOREIGN_ORIGINS = (f"http://evil.example:{PORT}", "null", f"http://127.0.0.1:{PORT + 1}", f"file://127.0.0.1:{PORT}", f"http://127.0.0.1:{PORT}/x",
                    "http://", "127.0.0.1:8080", f"ws://localhost:{PORT}")
 CONTENT_TYPES = ("application/json", "application/json; charset=utf-8", "APPLICATION/JSON", "text/plain",
                  "application/x-www-form-urlencoded", "multipart/form-data; boundary=x", "", "application/json-seq")
@@ -64,7 +71,8 @@ ENDPOINTS = {
 CHANGING = ("/api/stop", "/api/abort", "/api/post")  # what an accepted request may change
 STATS: Counter = Counter()
 
-header_text = st.text(st.characters(min_codepoint=32, max_codepoint=126), max_size=60)
+url_text = st.text(st.characters(min_codepoint=33, max_codepoint=126), max_size=60)
+header_text = st.text(st.characters(min_codepoint=32, max_codepoint=255, exclude_characters="\x7f"), max_size=60).map(lambda t: t.encode("latin-1"))
 long_text = st.integers(MAX_TEXT_CHARS + 1, 3000).map(lambda n: "x" * n)
 hostile_values = st.one_of(
     st.booleans(), st.lists(st.integers(), max_size=3), st.dictionaries(st.text(max_size=5), st.integers(), max_size=2),
@@ -136,9 +144,9 @@ def _headers(draw, token: str | None) -> dict:
         out["Origin"] = origin
     out["Content-Type"] = draw(st.one_of(st.sampled_from(CONTENT_TYPES[:1] * 4), st.sampled_from(CONTENT_TYPES), header_text))
     if token is not None:
-        given = draw(st.one_of(st.just(token), st.just(token), st.none(), header_text))
+        given = draw(st.one_of(st.just(token.encode()), st.just(token.encode()), st.none(), header_text))
         if given is not None:
-            out[draw(st.sampled_from(["X-Flowcurve-Token", "Cookie"]))] = given if draw(st.booleans()) else f"flowcurve_token={given}"
+            out[draw(st.sampled_from(["X-Flowcurve-Token", "Cookie"]))] = given if draw(st.booleans()) else b"flowcurve_token=" + given
     for name in draw(st.lists(st.sampled_from(["X-Forwarded-Host", "Forwarded", "X-Real-IP", "Referer", "Accept", "Cookie"]), max_size=2, unique=True)):
         out.setdefault(name, draw(header_text))
     return out
@@ -152,10 +160,39 @@ def requests(draw, paths, token=None, hostile_only=False, record_names=()):
     url = path
     if path == "/files/":
         url += draw(st.one_of(st.sampled_from(record_names or ["records/x.csv"]), st.sampled_from(
-            ["../../etc/passwd", "%2e%2e/%2e%2e/etc/passwd", "records/..%2f..%2fsecret", "records/%00.csv", "records"]), header_text))
+            ["../../etc/passwd", "%2e%2e/%2e%2e/etc/passwd", "records/..%2f..%2fsecret", "records/%00.csv", "records"]), url_text))
     elif path == "/static/console.js":
         url = draw(st.sampled_from(["/static/console.js", "/static/../server.py", "/static/%2e%2e/server.py", "/static/index.html"]))
     return method, url, draw(headers(token)), draw(bodies(path, hostile_only))
+
+
+def _head_value(value) -> bytes:
+    return value if isinstance(value, bytes) else value.encode("latin-1")
+
+
+@st.composite
+def raw_requests(draw, paths, record_names=()):
+    """(method, head, body) written by hand: odd bytes in headers, no Host or two, chunked bodies —
+    what a client library would not send, to the console served by uvicorn."""
+    method, url, hdrs, (body, chunked) = draw(requests(paths, record_names=record_names))
+    lines = [f"{method} {url} HTTP/1.1".encode("latin-1", "replace")]
+    hosts = draw(st.sampled_from(["as drawn"] * 4 + ["none", "two"]))  # no Host, or two: refused by uvicorn (h11) itself
+    if hosts == "as drawn":
+        lines.append(b"Host: " + _head_value(hdrs["Host"]))
+    elif hosts != "none":
+        pair = [f"127.0.0.1:{PORT}".encode(), _head_value(draw(st.sampled_from(FOREIGN_HOSTS)))]
+        lines += [b"Host: " + h for h in pair]
+    lines += [name.encode() + b": " + _head_value(value) for name, value in hdrs.items() if name != "Host"]
+    if len(body) > MAX_BODY_BYTES:  # announced, not sent: the answer must not wait for it
+        lines.append(f"Content-Length: {len(body)}".encode())
+        body = b""
+    elif chunked:
+        lines.append(b"Transfer-Encoding: chunked")
+        body = b"".join(f"{len(part):x}\r\n".encode() + part + b"\r\n" for part in (body[:7], body[7:]) if part) + b"0\r\n\r\n"
+    else:
+        lines.append(f"Content-Length: {len(body)}".encode())
+    lines.append(b"Connection: close")
+    return method, url, b"\r\n".join(lines) + b"\r\n\r\n", body
 
 
 class FuzzedConsole:
@@ -187,25 +224,52 @@ class FuzzedConsole:
         return rig, files
 
     def send(self, method: str, url: str, hdrs: dict, body: tuple[bytes, bool], *, group: str, accepted_may_change: bool) -> int:
+        """One request through the test client (httpx); checked as :meth:`_checked` says."""
         content, chunked = body
+
+        def request() -> tuple[int, str]:
+            r = self.client.request(method, url, headers=hdrs, content=iter([content]) if chunked else (content or None))
+            return r.status_code, r.text[:300]
+
+        return self._checked(method, url, request, group, accepted_may_change, what=(hdrs, content[:200]))
+
+    def send_raw(self, method: str, url: str, head: bytes, body: bytes, *, group: str) -> int:
+        """One hand-written request over a socket to the console served by uvicorn."""
+
+        def request() -> tuple[int, str]:
+            with socket.create_connection(("127.0.0.1", PORT), timeout=30) as sock:
+                sock.sendall(head + body)
+                answer = b""
+                while b"\r\n" not in answer:
+                    chunk = sock.recv(4096)
+                    if not chunk:
+                        break
+                    answer += chunk
+            return int(answer.split(b" ", 2)[1]), answer[:300].decode("latin-1")
+
+        return self._checked(method, url, request, group, accepted_may_change=url in CHANGING, what=(head[:300], body[:200]))
+
+    def _checked(self, method: str, url: str, request, group: str, accepted_may_change: bool, what) -> int:
+        """``request()`` → (status, text): no answer >= 500; the console unchanged unless accepted
+        by an endpoint that may change it."""
         before = self.state()
         if url == "/api/events":
             self.console.closing.set()  # the stream sends its greeting and ends (else a GET or HEAD would never return)
         try:
-            r = self.client.request(method, url, headers=hdrs, content=iter([content]) if chunked else (content or None))
+            status, text = request()
         finally:
             self.console.closing.clear()
         STATS["requests"] += 1
-        STATS[f"{r.status_code // 100}xx"] += 1
+        STATS[f"{status // 100}xx"] += 1
         STATS[f"{group} requests"] += 1
-        assert r.status_code < 500, (method, url, hdrs, content[:200], r.status_code, r.text[:300])
+        assert status < 500, (method, url, what, status, text)
         after = self.state()
         if after != before:
-            if r.status_code >= 400 or method == "GET" or not accepted_may_change:
+            if status >= 400 or method == "GET" or not accepted_may_change:
                 STATS["state changes from refused or read-only requests"] += 1
-                raise AssertionError(f"{method} {url} answered {r.status_code} and changed the console: {before} → {after}")
+                raise AssertionError(f"{method} {url} answered {status} and changed the console: {before} → {after}")
             STATS["state changes from accepted requests"] += 1
-        return r.status_code
+        return status
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -225,15 +289,17 @@ def _model_time_rig(monkeypatch, clock: ModelClock) -> None:
 
 
 @contextlib.contextmanager
-def _console_with(tmp_path_factory, form: dict, ready):
-    """A console on a model-time rig with a test of ``form`` started; ``ready(run, clock)`` waits for it."""
+def _console_with(tmp_path_factory, form: dict, ready, served: bool = False):
+    """A console on a model-time rig with a test of ``form`` started; ``ready(run, clock)`` waits for
+    it; ``served``: on PORT over a socket too (raw requests)."""
     with pytest.MonkeyPatch.context() as mp:
         clock = ModelClock()
         _model_time_rig(mp, clock)
         fuzzed = FuzzedConsole(tmp_path_factory.mktemp("fuzz"), clock)
         run = fuzzed.console.runner.start(validate(form, virtual=True, time_scale=1.0))
         ready(run, clock)
-        yield fuzzed
+        with serving(fuzzed.client.app, PORT, lifespan="off", log_level="error") if served else contextlib.nullcontext():
+            yield fuzzed
         fuzzed.close()
 
 
@@ -254,7 +320,8 @@ def _completed(run, clock: ModelClock) -> None:
 @pytest.fixture(scope="module")
 def heating(tmp_path_factory):
     """A console whose test is heating, its model clock held still."""
-    with _console_with(tmp_path_factory, {"test": "compression", "temperature": "300", "soak": "600"}, _heating_then_frozen) as fuzzed:
+    with _console_with(tmp_path_factory, {"test": "compression", "temperature": "300", "soak": "600"}, _heating_then_frozen,
+                       served=True) as fuzzed:
         yield fuzzed
 
 
@@ -269,7 +336,7 @@ def fuzz(examples: int):
     return settings(max_examples=examples, deadline=None, database=None, suppress_health_check=list(HealthCheck))
 GROUPS = {  # group → (paths, examples): 13 endpoints on the heating rig, the POSTs again on the completed one
     "start": (["/api/start"], 260), "post": (["/api/post"], 160), "fit": (["/api/fit"], 160), "login": (["/api/login"], 120),
-    "stop+abort": (["/api/stop", "/api/abort"], 200), "reads": ([p for p, (m, _f) in ENDPOINTS.items() if m == "GET"], 450),
+    "stop+abort": (["/api/stop", "/api/abort"], 200), "reads": ([p for p, (m, _f) in ENDPOINTS.items() if m == "GET"], 350),
 }
 
 
@@ -294,7 +361,7 @@ def test_fuzz_a_heating_rig(heating, group):
     assert STATS[f"heating {group} requests"] - before >= examples
 
 
-@pytest.mark.parametrize("paths, examples", [(["/api/post"], 200), (["/api/start", "/api/fit", "/api/stop", "/api/abort"], 200),
+@pytest.mark.parametrize("paths, examples", [(["/api/post"], 150), (["/api/start", "/api/fit", "/api/stop", "/api/abort"], 200),
                                              (["/files/", "/api/records", "/api/status"], 100)], ids=["post", "start+fit+stop+abort", "reads"])
 def test_fuzz_a_completed_test(completed, paths, examples):
     record = completed.console.runner.current.record
@@ -329,3 +396,25 @@ def test_fuzz_a_console_with_a_token(tmp_path):
     fuzzed.close()
     assert fuzzed.console.runner.current is None and not fuzzed.out.exists()
     assert STATS["token requests"] >= 200
+
+
+@pytest.mark.parametrize("group, paths, examples", [("raw posts", ["/api/start", "/api/stop", "/api/abort", "/api/login", "/api/post"], 200),
+                                                    ("raw reads", [p for p, (m, _f) in ENDPOINTS.items() if m == "GET"], 150)])
+def test_fuzz_a_heating_rig_over_a_socket(heating, group, paths, examples):
+    """Requests a client library would not send (latin-1 bytes in headers, no Host or two, chunked
+    bodies) to the heating console served by uvicorn."""
+    names = (f"records/{heating.console.runner.current.record.name}",)
+
+    @fuzz(examples)
+    @given(raw_requests(paths, record_names=names))
+    def one(request):
+        method, url, head, body = request
+        status = heating.send_raw(method, url, head, body, group=f"heating {group}")
+        run = heating.console.runner.current
+        if status < 300 and url in ("/api/stop", "/api/abort"):
+            run.stop_reason = run.abort_reason = None
+        assert run.running and not (status < 300 and url == "/api/start"), "a test started on a running rig"
+
+    before = STATS[f"heating {group} requests"]
+    one()
+    assert STATS[f"heating {group} requests"] - before >= examples

@@ -218,13 +218,13 @@ def _dump(value) -> str:
 
 # over a real socket (uvicorn) -----------------------------------------------------------------------------
 def _raw(url: str, head: str, body: bytes = b"", timeout_s: float = 10.0) -> int:
-    """Send a hand-written request; the status code of the answer."""
+    """Send a hand-written request (its head as latin-1 bytes, as HTTP allows); the answer's status code."""
     import socket
     from urllib.parse import urlsplit
 
     parts = urlsplit(url)
     with socket.create_connection((parts.hostname, parts.port), timeout=timeout_s) as sock:
-        sock.sendall(head.replace("\n", "\r\n").encode() + b"\r\n" + body)
+        sock.sendall(head.replace("\n", "\r\n").encode("latin-1") + b"\r\n" + body)
         answer = sock.recv(4096)
     return int(answer.split(b" ", 2)[1])
 
@@ -233,6 +233,7 @@ def test_a_served_console_refuses_a_foreign_host_and_a_200_MB_body_before_readin
     port = served_console.url.rstrip("/").rsplit(":", 1)[1]
     assert _raw(served_console.url, f"GET /api/status HTTP/1.1\nHost: evil.example:{port}\n") == 403
     assert _raw(served_console.url, f"GET /api/status HTTP/1.1\nHost: 127.0.0.1:{port}\n") == 200
+    assert _raw(served_console.url, "GET /api/status HTTP/1.1\nHost: 127.0.0.1:\u00b2\n") == 403  # a digit to str.isdigit, not to int()
     # a 200 MB body announced, 1 kB of it sent: the answer comes without the console waiting for the rest
     head = (f"POST /api/start HTTP/1.1\nHost: 127.0.0.1:{port}\nContent-Type: application/json\n"
             f"Content-Length: {200 * 1024 * 1024}\n")
