@@ -133,6 +133,10 @@ class GuardMiddleware:
             response = _error(str(exc), exc.status, **({"token_required": True} if exc.status in (401, 429) else {}))
             if isinstance(exc, _TooMany):
                 response.headers["Retry-After"] = str(exc.retry_after)
+            if exc.status in (401, 429) and TOKEN_COOKIE in Request(scope).cookies:
+                # a stale cookie (the console restarted with a new token) is sent once, not by every poll
+                # of the page into the limit: the operator's login stays open
+                response.delete_cookie(TOKEN_COOKIE, httponly=True, samesite="strict")
             return await response(scope, receive, send)
         return await self.app(scope, receive, send)
 

@@ -172,6 +172,18 @@ def test_finding5_wrong_logins_are_limited_to_5_a_minute_per_client(tmp_path):
     assert client.get("/api/status").status_code == 200
 
 
+def test_a_stale_cookie_does_not_lock_the_operator_out(tmp_path):
+    """The console restarted with a new token: the page's old cookie is refused once and cleared,
+    so the page's polls do not run into the limit before the operator logs in."""
+    _console, client = _client(tmp_path, token="new-t0ken")
+    client.cookies.set("flowcurve_token", "old-t0ken", domain="127.0.0.1")  # as a login there set it
+    answers = [client.get("/api/status").status_code for _ in range(20)]
+    assert answers == [401] * 20
+    assert "flowcurve_token" not in client.cookies
+    assert client.post("/api/login", json={"token": "new-t0ken"}, headers=JSON).status_code == 200
+    assert client.get("/api/status").status_code == 200
+
+
 def test_the_token_is_compared_in_constant_time(tmp_path, monkeypatch):
     import hmac
 
