@@ -130,9 +130,7 @@ class GuardMiddleware:
         try:
             receive = await self._check(scope, receive)
         except Refused as exc:
-            response = _error(str(exc), exc.status, **({"token_required": True} if exc.status in (401, 429) else {}))
-            if isinstance(exc, _TooMany):
-                response.headers["Retry-After"] = str(exc.retry_after)
+            response = _refusal(exc)
             if exc.status in (401, 429) and TOKEN_COOKIE in Request(scope).cookies:
                 # a stale cookie (the console restarted with a new token) is sent once, not by every poll
                 # of the page into the limit: the operator's login stays open
@@ -172,6 +170,14 @@ class _TooMany(Refused):
     def __init__(self, retry_after_s: float):
         super().__init__(f"too many wrong tokens from this client: try again in {math.ceil(retry_after_s)} s", 429)
         self.retry_after = math.ceil(retry_after_s)
+
+
+def _refusal(exc: Refused) -> JSONResponse:
+    """The answer to a refused request: its status and reason (a token's refusal says so)."""
+    response = _error(str(exc), exc.status, **({"token_required": True} if exc.status in (401, 429) else {}))
+    if isinstance(exc, _TooMany):
+        response.headers["Retry-After"] = str(exc.retry_after)
+    return response
 
 
 def _client(scope) -> str:
@@ -236,12 +242,8 @@ def create_app(console: Console) -> Starlette:
         given = str(data.get("token") or "")
         try:
             _check_token(console, _client(request.scope), given)
-        except _TooMany as exc:
-            response = _error(str(exc), 429, token_required=True)
-            response.headers["Retry-After"] = str(exc.retry_after)
-            return response
         except Refused as exc:
-            return _error(str(exc), 401, token_required=bool(console.token))
+            return _refusal(exc)
         response = _json({"ok": True})
         response.set_cookie(TOKEN_COOKIE, given, httponly=True, samesite="strict")
         return response
@@ -279,10 +281,7 @@ def create_app(console: Console) -> Starlette:
         return _json({"aborting": runner.abort()})
 
     async def post(request: Request) -> Response:
-        try:
-            data = await _body(request, POST_FIELDS)
-        except FormError as exc:
-            return _error(str(exc), 400, fields=exc.errors)
+        data = await _body(request, POST_FIELDS)
         run = runner.current
         if run is None or run.running or getattr(run.outcome, "status", None) != "complete" or not run.record.exists():
             return _error("no completed test to annotate (post-test values go with a test that ran to its end)", 409)
