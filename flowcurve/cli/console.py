@@ -30,7 +30,9 @@ def register(subparsers) -> None:
     p.add_argument("--out", type=Path, default=Path("console"), help="folder for records, results, fits and cards (default ./console)")
     p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1, this computer only; any other needs a token)")
     p.add_argument("--port", type=int, default=8080, help="port (default 8080)")
-    p.add_argument("--token", help="access token the page asks for (default: a random one when --host is not the loopback)")
+    p.add_argument("--token", help="access token the page asks for (default: a random one when --host is not 127.0.0.1, where it may not be empty)")
+    p.add_argument("--allow-host", action="append", default=[], metavar="NAME",
+                   help="a further name or address the page may be opened by (a LAN name), besides localhost, 127.0.0.1, [::1] and --host; repeatable")
     p.add_argument("--time-scale", type=float, default=None, metavar="X", help="virtual rig: model seconds per wall second (default 15, as 'run')")
     p.set_defaults(func=cmd_console)
 
@@ -39,7 +41,8 @@ def cmd_console(args) -> int:
     try:
         import uvicorn  # noqa: F401  (the server's)
 
-        from flowcurve.console.server import LOOPBACK_HOSTS, Console, serve
+        from flowcurve.console.request_guard import MAX_TEXT_CHARS, split_host
+        from flowcurve.console.server import DEFAULT_HOST, Console, serve
     except ImportError as exc:
         raise FlowcurveError(f"the console needs the 'console' extra: pip install 'flowcurve[console]' ({exc.name} is missing)") from None
     if not 0 < args.port < 65536:
@@ -51,11 +54,20 @@ def cmd_console(args) -> int:
         from flowcurve.rig.config import load_config
 
         config = load_config(args.config)
+    for name in args.allow_host:
+        parts = split_host(f"[{name}]" if name.count(":") > 1 and not name.startswith("[") else name)  # a bare IPv6 address too
+        if parts is None or parts[1] is not None:
+            raise FlowcurveError(f"--allow-host: not a host name or address (without a port): {name!r}")
     token = args.token
-    if token is None and args.host not in LOOPBACK_HOSTS:
-        token = secrets.token_urlsafe(18)
+    if args.host != DEFAULT_HOST:
+        if token is not None and not token.strip():
+            raise FlowcurveError(f"--host {args.host} needs a non-empty --token (or none: a random one is made); only --host {DEFAULT_HOST} may serve without one")
+        token = token or secrets.token_urlsafe(18)
+    if token is not None and len(token) > MAX_TEXT_CHARS:
+        raise FlowcurveError(f"--token: at most {MAX_TEXT_CHARS} characters")
     console = Console(args.out, config=config, time_scale=args.time_scale, token=token,
-                      rig_name=f"rig {args.config}" if args.config else "virtual rig")
+                      rig_name=f"rig {args.config}" if args.config else "virtual rig",
+                      host=args.host, port=args.port, allow_hosts=args.allow_host)
     where = f"http://{'[' + args.host + ']' if ':' in args.host else args.host}:{args.port}/"
     print(f"flowcurve console on {where} — {console.rig_name}, records in {console.workspace.records}", file=sys.stderr)
     if token:

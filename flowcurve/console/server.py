@@ -11,11 +11,15 @@ Endpoints (JSON unless said):
 * ``GET /api/records``; ``POST /api/fit`` (selected records → fit → card);
 * ``GET /files/<path>`` a file under ``--out`` (read only); ``POST /api/login`` the token.
 
-Security: with a token (required when listening on anything but the loopback) every
-``/api`` and ``/files`` request needs it, as the ``X-Flowcurve-Token`` header or the cookie
-the login sets. Every POST must be ``application/json`` from the page's own origin (so
-another web site the operator has open cannot drive the rig), and names files only by
-bare names checked against ``--out`` (:mod:`flowcurve.console.workspace`).
+Security (:mod:`flowcurve.console.request_guard`): every request must name this console as
+its Host (loopback names on its port, ``--host``, ``--allow-host``) and, when it sends an
+Origin, come from one of those too (403 otherwise: another web site the operator has open,
+even under a name that resolves to 127.0.0.1, cannot drive the rig). With a token (required
+for any ``--host`` but the default) every ``/api`` and ``/files`` request needs it, as the
+``X-Flowcurve-Token`` header or the cookie the login sets; wrong tokens are limited per client
+(429). Every POST is ``application/json`` of at most 1 MiB (413), a JSON object of typed
+fields (400), and names files only by bare names checked against ``--out``
+(:mod:`flowcurve.console.workspace`). A refused request changes nothing.
 """
 
 from __future__ import annotations
@@ -38,8 +42,10 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS
+from flowcurve.console.request_guard import (MAX_BODY_BYTES, NAMES, NUMBER, TEXT, FailedLogins, HostAllowlist, Refused,
+                                             check_fields, read_json_object)
 from flowcurve.console.runner import SHUTDOWN_SIGNAME, BusyError, TestRunner
-from flowcurve.console.setup_form import FormError, post_values, validate
+from flowcurve.console.setup_form import NUMERIC_FIELDS, TEXT_FIELDS, FormError, post_values, validate
 from flowcurve.console.workspace import PathError, Workspace, inside
 from flowcurve.errors import FlowcurveError
 
@@ -52,17 +58,28 @@ EVENT_PERIOD_S = 0.05  # at most 20 updates a second per page
 KEEPALIVE_S = 10.0
 WAKE_S = 0.5  # an idle stream looks at least this often whether the console is closing
 GRACEFUL_SHUTDOWN_S = 5.0  # then uvicorn closes connections that are still open
-LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
+DEFAULT_HOST = "127.0.0.1"  # any other --host needs a token
+# each POST endpoint's fields and their types (request_guard.check_fields)
+START_FIELDS = {"test": TEXT, **{k: NUMBER for k in NUMERIC_FIELDS}, **{k: TEXT for k in TEXT_FIELDS}}
+POST_FIELDS = {k: NUMBER for keys in POST_KEYS.values() for k in keys}
+FIT_FIELDS = {"records": NAMES, **{k: NUMBER for k in ("melt_temp", "fix_C", "fix_m", "ref_rate", "ref_temp", "poisson", "density", "cp", "E_MPa")},
+              **{k: TEXT for k in ("method", "format", "units")}}
+LOGIN_FIELDS = {"token": TEXT}
 
 
 class Console:
     """Everything one console process serves: the rig's runner and the --out folder."""
 
-    def __init__(self, out: Path, *, config=None, time_scale: float | None = None, token: str | None = None, rig_name: str = "", virtual_setup=None, open_rig=None):
+    def __init__(self, out: Path, *, config=None, time_scale: float | None = None, token: str | None = None, rig_name: str = "", virtual_setup=None, open_rig=None,
+                 host: str = DEFAULT_HOST, port: int | None = None, allow_hosts=()):
+        """``host``, ``port`` and ``allow_hosts`` make the Host allowlist (``port`` None: the
+        loopback names on any port, for a console embedded in a test or a benchmark)."""
         self.workspace = Workspace(out)
         self.runner = TestRunner(self.workspace.records, config=config, virtual_setup=virtual_setup, open_rig=open_rig)
         self.time_scale = time_scale
         self.token = token
+        self.hosts = HostAllowlist([host, *allow_hosts], port)
+        self.failed_logins = FailedLogins()
         self.rig_name = rig_name or ("virtual rig" if config is None else "configured rig")
         self.closing = threading.Event()  # set when the process is asked to stop: pages' streams end
 
@@ -100,7 +117,8 @@ def _error(message: str, status: int = 400, **extra) -> JSONResponse:
 
 
 class GuardMiddleware:
-    """Token (when set) on /api and /files; POSTs only as JSON from the page's own origin."""
+    """Before routing: Host and Origin on the allowlist, POSTs as JSON of at most 1 MiB (read here
+    and handed on), the token (when set) on /api and /files with wrong ones limited per client."""
 
     def __init__(self, app, console: Console):
         self.app = app
@@ -109,33 +127,103 @@ class GuardMiddleware:
     async def __call__(self, scope, receive, send):
         if scope["type"] != "http":
             return await self.app(scope, receive, send)
-        request = Request(scope)
-        path = scope["path"]
-        refusal = None
-        if request.method == "POST":
-            origin = request.headers.get("origin")
-            host = request.headers.get("host", "")
-            if origin is not None and origin.split("://", 1)[-1] != host:
-                refusal = _error(f"refused: a request from {origin} to {host}", 403)
-            elif request.headers.get("content-type", "").split(";")[0].strip() != "application/json":
-                refusal = _error("refused: send JSON (application/json)", 415)
-        guarded = path.startswith("/api/") and path != "/api/login" or path.startswith("/files/")
-        if refusal is None and guarded and self.console.token:
-            given = request.headers.get(TOKEN_HEADER) or request.cookies.get(TOKEN_COOKIE) or ""
-            if not hmac.compare_digest(given.encode(), self.console.token.encode()):
-                refusal = _error("token required", 401, token_required=True)
-        if refusal is not None:
-            return await refusal(scope, receive, send)
+        try:
+            receive = await self._check(scope, receive)
+        except Refused as exc:
+            response = _refusal(exc)
+            if exc.status in (401, 429) and TOKEN_COOKIE in Request(scope).cookies:
+                # a stale cookie (the console restarted with a new token) is sent once, not by every poll
+                # of the page into the limit: the operator's login stays open
+                response.delete_cookie(TOKEN_COOKIE, httponly=True, samesite="strict")
+            return await response(scope, receive, send)
         return await self.app(scope, receive, send)
 
+    async def _check(self, scope, receive):
+        """The request's ``receive`` (its body replayed once read), or :class:`Refused`."""
+        request = Request(scope)
+        hosts = self.console.hosts
+        host = request.headers.get("host")
+        if not hosts.allows_host(host):
+            raise Refused(f"refused: this console does not answer to the Host {host!r} (flowcurve console --allow-host NAME)", 403)
+        origin = request.headers.get("origin")
+        if origin is not None and not hosts.allows_origin(origin):
+            raise Refused(f"refused: a request from {origin!r}, not from this console's page", 403)
+        length = request.headers.get("content-length")
+        if length is not None and (not (length.isascii() and length.isdigit()) or int(length) > MAX_BODY_BYTES):
+            raise Refused(f"the request is larger than {MAX_BODY_BYTES} bytes", 413)
+        if request.method == "POST":
+            if request.headers.get("content-type", "").split(";")[0].strip().lower() != "application/json":
+                raise Refused("refused: send JSON (application/json)", 415)
+            receive = await _read_body(receive)
+        path = scope["path"]
+        guarded = path.startswith("/api/") and path != "/api/login" or path.startswith("/files/")
+        if guarded and self.console.token:
+            given = request.headers.get(TOKEN_HEADER) or request.cookies.get(TOKEN_COOKIE) or ""
+            if given:  # a token given is a guess when wrong: counted as a failed login
+                _check_token(self.console, _client(scope), given)
+            else:
+                raise Refused("token required", 401)
+        return receive
 
-async def _body(request: Request) -> dict:
-    try:
-        data = await request.json()
-    except (ValueError, UnicodeDecodeError):
-        raise FlowcurveError("the request is not valid JSON") from None
-    if not isinstance(data, dict):
-        raise FlowcurveError("the request must be a JSON object")
+
+class _TooMany(Refused):
+    def __init__(self, retry_after_s: float):
+        super().__init__(f"too many wrong tokens from this client: try again in {math.ceil(retry_after_s)} s", 429)
+        self.retry_after = math.ceil(retry_after_s)
+
+
+def _refusal(exc: Refused) -> JSONResponse:
+    """The answer to a refused request: its status and reason (a token's refusal says so)."""
+    response = _error(str(exc), exc.status, **({"token_required": True} if exc.status in (401, 429) else {}))
+    if isinstance(exc, _TooMany):
+        response.headers["Retry-After"] = str(exc.retry_after)
+    return response
+
+
+def _client(scope) -> str:
+    client = scope.get("client")
+    return client[0] if client else "unknown"
+
+
+def _check_token(console: Console, client: str, given: str) -> None:
+    """The token, compared in constant time; a wrong one counts against ``client`` (then 429)."""
+    limiter = console.failed_logins
+    wait = limiter.retry_after_s(client)
+    if wait > 0:
+        raise _TooMany(wait)
+    if not console.token or not hmac.compare_digest(given.encode("utf-8", "surrogatepass"), console.token.encode("utf-8", "surrogatepass")):
+        if console.token:
+            limiter.failed(client)
+        raise Refused("wrong token" if console.token else "this console has no token", 401)
+    limiter.succeeded(client)
+
+
+async def _read_body(receive):
+    """Read the whole body (refused past MAX_BODY_BYTES, without reading on) and give a
+    ``receive`` that hands it to the application once, then listens as before."""
+    chunks, size = [], 0
+    while True:
+        message = await receive()
+        if message["type"] == "http.disconnect":
+            raise Refused("the client went away", 400)
+        size += len(message.get("body", b""))
+        if size > MAX_BODY_BYTES:
+            raise Refused(f"the request is larger than {MAX_BODY_BYTES} bytes", 413)
+        chunks.append(message.get("body", b""))
+        if not message.get("more_body", False):
+            break
+    replay = [{"type": "http.request", "body": b"".join(chunks), "more_body": False}]
+
+    async def replayed():
+        return replay.pop() if replay else await receive()
+
+    return replayed
+
+
+async def _body(request: Request, schema: dict[str, str]) -> dict:
+    """The request's JSON object with its fields checked against ``schema`` (Refused / FormError)."""
+    data = read_json_object(await request.body())
+    check_fields(data, schema)
     return data
 
 
@@ -150,10 +238,12 @@ def create_app(console: Console) -> Starlette:
                       "token_required": bool(console.token), "post": POST_KEYS, "prompts": POST_PROMPTS})
 
     async def login(request: Request) -> Response:
-        data = await _body(request)
+        data = await _body(request, LOGIN_FIELDS)
         given = str(data.get("token") or "")
-        if not console.token or not hmac.compare_digest(given.encode(), console.token.encode()):
-            return _error("wrong token", 401, token_required=bool(console.token))
+        try:
+            _check_token(console, _client(request.scope), given)
+        except Refused as exc:
+            return _refusal(exc)
         response = _json({"ok": True})
         response.set_cookie(TOKEN_COOKIE, given, httponly=True, samesite="strict")
         return response
@@ -163,8 +253,8 @@ def create_app(console: Console) -> Starlette:
         return _json({"status": run.view.status() if run else {"state": "idle", "heater": "off"}, "test": console.test_summary()})
 
     async def start(request: Request) -> Response:
-        data = await _body(request)
         try:
+            data = await _body(request, START_FIELDS)
             setup = validate(data, virtual=runner.virtual, time_scale=console.time_scale)
             run = runner.start(setup, {k: v for k, v in data.items() if isinstance(v, (str, int, float))})
         except FormError as exc:
@@ -183,16 +273,18 @@ def create_app(console: Console) -> Starlette:
         return _json({"test": console.test_summary()})
 
     async def stop(request: Request) -> Response:
+        await _body(request, {})
         return _json({"stopping": runner.stop()})
 
     async def abort(request: Request) -> Response:
+        await _body(request, {})
         return _json({"aborting": runner.abort()})
 
     async def post(request: Request) -> Response:
-        data = await _body(request)
+        data = await _body(request, POST_FIELDS)
         run = runner.current
-        if run is None or run.running or run.outcome is None or not run.record.exists():
-            return _error("no finished test to annotate", 409)
+        if run is None or run.running or getattr(run.outcome, "status", None) != "complete" or not run.record.exists():
+            return _error("no completed test to annotate (post-test values go with a test that ran to its end)", 409)
         from flowcurve.record.format import amend_record
 
         try:
@@ -213,7 +305,7 @@ def create_app(console: Console) -> Starlette:
         return _json({"records": await asyncio.to_thread(workspace.list_records)})
 
     async def fit(request: Request) -> Response:
-        data = await _body(request)
+        data = await _body(request, FIT_FIELDS)
         names = data.get("records") or []
         if not isinstance(names, list):
             return _error("records: give a list of record names")
@@ -262,7 +354,9 @@ def create_app(console: Console) -> Starlette:
     ]
 
     async def flowcurve_error(request: Request, exc: FlowcurveError) -> Response:
-        return _error(str(exc))
+        if isinstance(exc, FormError):
+            return _error(str(exc), 400, fields=exc.errors)
+        return _error(str(exc), getattr(exc, "status", 400))
 
     return Starlette(routes=routes, middleware=[Middleware(GuardMiddleware, console=console)], lifespan=lifespan,
                      exception_handlers={FlowcurveError: flowcurve_error})

@@ -5,6 +5,7 @@ Screenshots go to ``$FLOWCURVE_ARTIFACTS`` or ``tests/console/artifacts/`` (git-
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import socket
@@ -25,28 +26,40 @@ class ServedConsole:
         self.console, self.server, self.thread, self.url = console, server, thread, url
 
 
-@pytest.fixture
-def served_console(tmp_path):
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextlib.contextmanager
+def serving(app, port: int, lifespan: str = "on", log_level: str = "warning"):
+    """``app`` served by uvicorn on 127.0.0.1:``port`` in a thread, until the block ends."""
     pytest.importorskip("uvicorn", reason="uvicorn is not installed (pip install -e .[test])")
     import uvicorn
 
-    from flowcurve.console.server import Console, create_app
-
-    console = Console(tmp_path / "out", time_scale=BROWSER_TIME_SCALE)
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    server = uvicorn.Server(uvicorn.Config(create_app(console), host="127.0.0.1", port=port, log_level="warning", lifespan="on"))
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level=log_level, lifespan=lifespan))
     thread = threading.Thread(target=server.run, name="console-under-test", daemon=True)
     thread.start()
     end = time.monotonic() + 20
     while not server.started and time.monotonic() < end:
         time.sleep(0.05)
     assert server.started, "the console did not start"
-    yield ServedConsole(console, server, thread, f"http://127.0.0.1:{port}/")
+    yield server, thread
     server.should_exit = True
     thread.join(30)
     assert not thread.is_alive()
+
+
+@pytest.fixture
+def served_console(tmp_path):
+    pytest.importorskip("uvicorn", reason="uvicorn is not installed (pip install -e .[test])")
+    from flowcurve.console.server import Console, create_app
+
+    port = free_port()
+    console = Console(tmp_path / "out", time_scale=BROWSER_TIME_SCALE, port=port)
+    with serving(create_app(console), port) as (server, thread):
+        yield ServedConsole(console, server, thread, f"http://127.0.0.1:{port}/")
 
 
 @pytest.fixture

@@ -21,11 +21,12 @@ from flowcurve.console.server import Console, create_app  # noqa: E402
 from flowcurve.record.format import read_record  # noqa: E402
 
 JSON = {"Content-Type": "application/json"}
+BASE_URL = "http://127.0.0.1:8080"  # a name the console answers to (TestClient's own "testserver" is refused)
 
 
 def _client(tmp_path: Path, **kw) -> tuple[Console, TestClient]:
     console = Console(tmp_path / "out", time_scale=kw.pop("time_scale", 60.0), **kw)
-    return console, TestClient(create_app(console))
+    return console, TestClient(create_app(console), base_url=BASE_URL)
 
 
 def _wait(console: Console, states=("done", "fault"), timeout_s: float = 60.0) -> None:
@@ -87,14 +88,20 @@ def test_one_test_at_a_time_and_stop_gives_a_complete_record(tmp_path):
     assert client.post("/api/stop", json={}, headers=JSON).json() == {"stopping": False}
 
 
-def test_abort_marks_the_record_aborted(tmp_path):
-    console, client = _client(tmp_path, time_scale=5.0)
+def start_then_abort(console: Console, client: TestClient, while_running=lambda: None) -> None:
+    """A tension test started, aborted after ten samples (``while_running()`` first), ended."""
     assert client.post("/api/start", json={"test": "tension"}, headers=JSON).status_code == 200
     end = time.monotonic() + 30
     while console.runner.current.view.samples < 10 and time.monotonic() < end:
         time.sleep(0.05)
+    while_running()
     assert client.post("/api/abort", json={}, headers=JSON).json() == {"aborting": True}
     _wait(console)
+
+
+def test_abort_marks_the_record_aborted(tmp_path):
+    console, client = _client(tmp_path, time_scale=5.0)
+    start_then_abort(console, client)
     rec = read_record(console.runner.current.record)
     assert rec.meta["status"] == "aborted"
     assert "abort button" in rec.meta["abort_reason"]
@@ -102,7 +109,7 @@ def test_abort_marks_the_record_aborted(tmp_path):
 
 def test_shutting_the_console_down_mid_heating_switches_the_heater_off_and_closes_the_record(tmp_path):
     console = Console(tmp_path / "out", time_scale=20.0)
-    with TestClient(create_app(console)) as client:  # the context runs the app's lifespan (shutdown)
+    with TestClient(create_app(console), base_url=BASE_URL) as client:  # the context runs the app's lifespan (shutdown)
         r = client.post("/api/start", json={"test": "compression", "temperature": "300", "soak": "600"}, headers=JSON)
         assert r.status_code == 200, r.text
         run = console.runner.current
@@ -167,7 +174,7 @@ def test_a_token_guards_the_api_and_the_files_and_the_login_sets_it(tmp_path):
     assert client.post("/api/login", json={"token": "wrong"}, headers=JSON).status_code == 401
     assert client.post("/api/login", json={"token": "s3cret"}, headers=JSON).status_code == 200
     assert client.get("/api/status").status_code == 200  # the cookie now
-    assert TestClient(client.app).get("/api/status", headers={"X-Flowcurve-Token": "s3cret"}).status_code == 200
+    assert TestClient(client.app, base_url=BASE_URL).get("/api/status", headers={"X-Flowcurve-Token": "s3cret"}).status_code == 200
 
 
 def test_console_listening_beyond_the_loopback_makes_a_token(monkeypatch, tmp_path, capsys):
