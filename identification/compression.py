@@ -34,7 +34,7 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
 from flowcurve.identification.hardening import HardeningFit, fit_hardening
-from flowcurve.identification.indicator import (ModulusFit, auto_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
+from flowcurve.identification.indicator import (DEFAULT_MODULUS_METHOD, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
                                                 reread_if_stepped, yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
@@ -42,6 +42,7 @@ from flowcurve.identification.tension import check_fit_range, true_plastic_strai
 
 UNLOADING_BAND = (0.1, 0.9)  # the part of the unloading (× the largest force) the spring-back is read on
 MIN_UNLOADING_SAMPLES = 10
+SDAR_REACH = 2.0  # SDAR reads the loading up to this many times the force rate's yield estimate
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
 LOADED_FRACTION = 0.05  # samples above this fraction of the peak force belong to the test
 MAX_FIT_POINTS = 600  # the hardening fit uses at most this many points, evenly spread in strain
@@ -172,17 +173,21 @@ def _offset_onset_MPa(strain0, stress0, line: ModulusFit, offset: float = YIELD_
 
 
 def elastic_line(t, specimen_mm, force_N, *, area0_mm2: float, h0_mm: float, window_MPa=None, window=None,
-                 modulus_reference: str = "Rp02") -> tuple[ModulusFit, float]:
+                 modulus_reference: str = "Rp02", method: str = DEFAULT_MODULUS_METHOD) -> tuple[ModulusFit, float]:
     """The elastic line of the first loading and the toe it reveals (§2.3, ISO 6892-1 toe).
 
     Strain regressed on stress over the widest linear window (:func:`auto_modulus`, iterated
     on the 0.2 % offset yield from a first estimate off the force rate), or over ``window_MPa``
     (MPa) / ``window`` (fractions of the yield estimate, or of the largest stress with
     ``modulus_reference`` "Rm"). Returns the line in (specimen displacement/h0, P/S0) and the
-    toe offset (mm): where the line meets zero force."""
+    toe offset (mm): where the line meets zero force. ``method`` "sdar": the line SDAR finds
+    (ASTM E3076-18) on the loading up to twice the force rate's yield estimate."""
     strain0 = np.asarray(specimen_mm, dtype=float) / h0_mm
     stress0 = np.asarray(force_N, dtype=float) / area0_mm2
-    if window_MPa is not None:
+    if window_MPa is None and window is None and method != DEFAULT_MODULUS_METHOD:
+        line = elastic_modulus(method, strain0, stress0, 0.0, upto_MPa=SDAR_REACH * yield_onset_from_rate(t, force_N) / area0_mm2,
+                               strain_on_stress=True)
+    elif window_MPa is not None:
         line = fit_modulus(strain0, stress0, tuple(window_MPa), strain_on_stress=True)
         line.source = "given window (MPa)"
     else:
@@ -342,14 +347,14 @@ def _inputs(record: Record, frame_stiffness_N_per_um: float | None) -> _Diagram:
 
 
 def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_window_MPa, modulus_window,
-                  modulus_reference: str, toe: bool) -> _Line:
+                  modulus_reference: str, toe: bool, modulus_method: str = DEFAULT_MODULUS_METHOD) -> _Line:
     """The elastic line and the toe: the linear part extended to zero force (ISO 6892-1)."""
     warnings: list[str] = []
     area0 = math.pi * geo["d0"] ** 2 / 4.0
     specimen = diagram.specimen
     try:
         line, toe_mm = elastic_line(diagram.t, specimen, diagram.force, area0_mm2=area0, h0_mm=geo["h0"], window_MPa=modulus_window_MPa,
-                                    window=modulus_window, modulus_reference=modulus_reference)
+                                    window=modulus_window, modulus_reference=modulus_reference, method=modulus_method)
     except IdentificationError as exc:
         line, toe_mm = None, 0.0
         warnings.append(f"no elastic line ({exc}): the toe is not compensated; "
@@ -557,6 +562,7 @@ def identify_compression(
     modulus_reference: str = "Rp02",
     toe: bool = True,
     fit_range: tuple[float, float] | None = None,
+    modulus_method: str = DEFAULT_MODULUS_METHOD,
 ) -> Identification:
     """Identify a compression record: friction, friction-corrected true curves and hardening.
 
@@ -567,7 +573,8 @@ def identify_compression(
     record's ``rig.frame_stiffness_N_per_um``), ``modulus_window_MPa`` / ``modulus_window``
     (fractions of the yield stress, or of the largest stress with ``modulus_reference`` "Rm";
     default: the widest linear stretch, :func:`elastic_line`), ``toe`` (compensate a soft
-    start, default on), ``fit_range`` (LO, HI true plastic strain of the hardening fit).
+    start, default on), ``fit_range`` (LO, HI true plastic strain of the hardening fit),
+    ``modulus_method`` ("window" or "sdar", see :func:`elastic_line`).
     """
     _check_options(friction_correction, E_MPa)
     E_MPa, E_source = _handbook_modulus(record, E_MPa)
@@ -575,7 +582,7 @@ def identify_compression(
     _friction_all(geo, friction_method, [])  # friction first: it needs only the post-test measurements, and bad ones should stop early
     diagram = _inputs(record, frame_stiffness_N_per_um)
     line = _elastic_line(diagram, geo, E_MPa=E_MPa, modulus_window_MPa=modulus_window_MPa, modulus_window=modulus_window,
-                         modulus_reference=modulus_reference, toe=toe)
+                         modulus_reference=modulus_reference, toe=toe, modulus_method=modulus_method)
     nominal = _nominal_curve(diagram, geo, line.specimen, E_MPa)
     yld = _modulus_and_yield(nominal, line.line, E_MPa, E_source)
     friction = _friction_correction(geo, nominal, friction_method, yld.E_used)

@@ -192,11 +192,15 @@ class ModulusFit:
     n_points: int
     window_MPa: tuple[float, float]
     source: str = "given window"
+    quality: dict | None = None  # SDAR's data and fit quality metrics (ASTM E3076-18), when it found the line
 
     def as_dict(self) -> dict:
         """The result's ``modulus`` block (keys with units)."""
-        return {"E_MPa": self.E_MPa, "E_stderr_MPa": self.E_stderr_MPa, "r2": self.r2, "n_points": self.n_points,
-                "window_MPa": list(self.window_MPa), "source": self.source}
+        out = {"E_MPa": self.E_MPa, "E_stderr_MPa": self.E_stderr_MPa, "r2": self.r2, "n_points": self.n_points,
+               "window_MPa": list(self.window_MPa), "source": self.source}
+        if self.quality is not None:
+            out["quality"] = self.quality
+        return out
 
 
 # the automatic window: lower edges and the smallest span, fractions of the reference stress
@@ -354,6 +358,51 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
     return ModulusFit(slope, se, intercept, r2, count, (float(window[0]), float(window[1])),
                       source=f"all {count} samples of the elastic line (too few for a window"
                              + ("; two samples: uncertainty from the force noise only" if count == 2 else "") + ")")
+
+
+MODULUS_METHODS = ("window", "sdar")
+DEFAULT_MODULUS_METHOD = "window"
+
+
+def sdar_modulus(strain, stress_MPa, *, upto_MPa: float | None = None, strain_on_stress: bool = False, noise_MPa: float = 0.0,
+                 strain_noise: float = 0.0) -> ModulusFit:
+    """The modulus over the linear region SDAR finds (ASTM E3076-18, :mod:`identification.sdar`)
+    on the first loading up to its largest stress, or up to ``upto_MPa`` for a curve that keeps
+    rising (compression). The window's stress range, the regression over it (strain on stress
+    with ``strain_on_stress``, see :func:`auto_modulus`) and SDAR's quality metrics; a failed
+    metric is named in ``source``."""
+    from flowcurve.identification.sdar import sdar
+
+    e = np.asarray(strain, dtype=float)
+    s = np.asarray(stress_MPa, dtype=float)
+    top = float(np.nanmax(s)) if upto_MPa is None else min(float(upto_MPa), float(np.nanmax(s)))
+    end = int(np.argmax(s >= top))
+    fit = sdar(e[: end + 1], s[: end + 1])
+    idx = fit.indices
+    slope, intercept, se, r2 = _line_stats(e[idx], s[idx], strain_on_stress)
+    if not slope > 0:
+        raise IdentificationError(f"SDAR: the stress does not rise with strain over its linear region ({idx.size} samples): no modulus")
+    sxx = float(np.sum((e[idx] - e[idx].mean()) ** 2))
+    from_noise = math.sqrt(noise_MPa**2 + (slope * strain_noise) ** 2) / math.sqrt(sxx) if sxx > 0 else float("inf")
+    se = max(se, from_noise) if np.isfinite(se) else from_noise
+    window = (float(np.min(s[idx])), float(np.max(s[idx])))
+    failed = fit.failed_checks()
+    return ModulusFit(slope, se, intercept, r2, int(idx.size), window,
+                      source=f"SDAR (ASTM E3076-18) {window[0]:.4g}–{window[1]:.4g} MPa, {idx.size} samples"
+                             + (f"; failed quality checks: {', '.join(failed)}" if failed else "; all quality checks passed"),
+                      quality={k: dict(v) for k, v in fit.quality.items()})
+
+
+def elastic_modulus(method: str, strain, stress_MPa, reference_MPa: float, *, upto_MPa: float | None = None, strain_on_stress: bool = False,
+                    noise_MPa: float = 0.0, strain_noise: float = 0.0) -> ModulusFit:
+    """The modulus of the first loading by ``method``: "window" (:func:`auto_modulus`, the widest
+    linear stretch below ``reference_MPa``) or "sdar" (:func:`sdar_modulus`)."""
+    if method == "sdar":
+        return sdar_modulus(strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                            strain_noise=strain_noise)
+    if method != "window":
+        raise IdentificationError(f"unknown modulus method {method!r} (choose from {', '.join(MODULUS_METHODS)})")
+    return auto_modulus(strain, stress_MPa, reference_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa, strain_noise=strain_noise)
 
 
 def fit_modulus(strain, stress_MPa, window_MPa: tuple[float, float], *, min_points: int = 5,
