@@ -34,7 +34,7 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
 from flowcurve.identification.hardening import HardeningFit, fit_hardening
-from flowcurve.identification.indicator import (DEFAULT_MODULUS_METHOD, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
+from flowcurve.identification.indicator import (DEFAULT_MODULUS_METHOD, SDAR_REACH, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
                                                 reread_if_stepped, yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
@@ -42,7 +42,6 @@ from flowcurve.identification.tension import check_fit_range, true_plastic_strai
 
 UNLOADING_BAND = (0.1, 0.9)  # the part of the unloading (× the largest force) the spring-back is read on
 MIN_UNLOADING_SAMPLES = 10
-SDAR_REACH = 2.0  # SDAR reads the loading up to this many times the force rate's yield estimate
 YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
 LOADED_FRACTION = 0.05  # samples above this fraction of the peak force belong to the test
 MAX_FIT_POINTS = 600  # the hardening fit uses at most this many points, evenly spread in strain

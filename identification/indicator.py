@@ -213,6 +213,7 @@ FEW_POINTS_TOP = 0.90  # with few samples, all of them up to this fraction of th
 MIN_LINE_POINTS = 5  # a window with fewer samples is not a candidate of the automatic choice
 MIN_FEW_POINTS = 2  # with fewer samples on the whole elastic line there is no modulus
 FEW_SAMPLES = 10  # an elastic line with fewer samples is used whole, not searched for a window
+SDAR_REACH = 2.0  # SDAR reads the first loading up to this many times the reference (yield) stress
 
 
 def _slope_stats(n, sx, sy, vxx, vxy, vyy, strain_on_stress: bool) -> tuple[float, float, float]:
@@ -268,6 +269,18 @@ def yield_onset_from_rate(time_s, force_N, levels: int = 400) -> float:
     return float(level[peak + int(below[0])]) if below.size else float(level[-1])
 
 
+CURVED_CHECK_POINTS = 20  # windows with this many samples are also checked for curvature at their ends
+
+
+def _curved(x: np.ndarray, y: np.ndarray) -> bool:
+    """The residuals of the window's line trend in its first or last quarter by more than 5 % of
+    its slope (the curvature check of ASTM E3076-18 §6.7, :func:`identification.sdar.curvature_metrics`)."""
+    from flowcurve.identification.sdar import curvature_metrics
+
+    slope, intercept = np.polyfit(x, y, 1)
+    return not curvature_metrics(x, y, float(slope), float(intercept))["curvature"]["passed"]
+
+
 def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: bool = False, noise_MPa: float = 0.0,
                  strain_noise: float = 0.0) -> ModulusFit:
     """The modulus over the most linear stretch of the first loading (in the manner of
@@ -275,11 +288,13 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
 
     Candidate windows run from lo to hi × ``reference_MPa`` (the yield stress, iterated by the
     caller), lo in AUTO_WINDOW_LOWS, hi − lo ≥ 0.25, hi ≤ 0.8; each gets a regression line. The
-    widest window whose line is linear (R² ≥ 0.9995, the Annex G quality criterion) wins, so
-    noise is averaged over as much of the line as stays straight; a toe or early yielding bends
-    the windows that reach into it below that R² (§2.3). When no window is that linear (a
-    crosshead curve with seating grips), the conventional 0.10–0.80 × the yield stress is used
-    and ``source`` says so.
+    widest window whose line is linear (R² ≥ 0.9995, the Annex G quality criterion, and with 20
+    samples or more no residual trend at either end, the curvature check of ASTM E3076-18) wins,
+    so noise is averaged over as much of the line as stays straight; a toe or early yielding bends
+    the windows that reach into it (§2.3). When no window is that linear (a crosshead curve whose
+    seating lasts past 0.4 × the yield stress), the linear region SDAR finds
+    (:func:`sdar_modulus`) when it passes its fit quality checks, else the conventional
+    0.10–0.80 × the yield stress; ``source`` says which.
 
     noise_MPa: the stress noise (standard deviation); with few samples the standard error of E
     is at least what that noise and the strain noise (e.g. an encoder quantum q: q/√12) give,
@@ -326,6 +341,8 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
             if r2 < AUTO_WINDOW_R2:
                 best_r2 = max(best_r2, r2)
                 continue
+            if n >= CURVED_CHECK_POINTS and _curved(xs[i:j], ys[i:j]):
+                continue  # straight by R², yet its residuals trend at an end: a toe or the knee bends it
             score = (-(hi - lo), se / slope)  # the widest linear window; of equal ones, the surest slope
             if best is None or score < best[0]:
                 best = (score, slope, intercept, se, r2, int(n), (lo * reference_MPa, hi * reference_MPa))
@@ -333,7 +350,15 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
         _, slope, intercept, se, r2, n, window = best
         return ModulusFit(slope, se, intercept, r2, n, (float(window[0]), float(window[1])),
                           source=f"automatic window {window[0] / reference_MPa:.2f}–{window[1] / reference_MPa:.2f} × {reference_MPa:.4g} MPa (widest linear stretch, R² ≥ {AUTO_WINDOW_R2})")
-    if np.isfinite(best_r2):  # enough samples, but no stretch is straight: the conventional window
+    if np.isfinite(best_r2):  # enough samples, but no stretch is straight: SDAR's linear region, else the conventional window
+        try:
+            by_sdar = sdar_modulus(e, s, upto_MPa=SDAR_REACH * reference_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                                   strain_noise=strain_noise)
+        except IdentificationError:
+            by_sdar = None
+        if by_sdar is not None and by_sdar.quality["curvature"]["passed"] and by_sdar.quality["fit_range"]["passed"]:
+            by_sdar.source = f"no stretch below {AUTO_WINDOW_TOP:g} × {reference_MPa:.4g} MPa is linear (best R² {best_r2:.5f}): {by_sdar.source}"
+            return by_sdar
         lo, hi = CONVENTIONAL_WINDOW
         sel = (s1 >= lo * reference_MPa) & (s1 <= hi * reference_MPa)
         if sel.sum() >= MIN_LINE_POINTS:

@@ -12,7 +12,9 @@ Residuals, ASTM E3076-18; NIST Technical Note 2050; Graham & Adler, J. Test. Eva
    tangency point the offset is raised by 5 % of the largest y and the search repeated (§6.6).
 4. Fit quality (§6.7, §6.8): the residuals in the first and last quarter of the window must not
    trend by more than 5 % of the slope (curvature), and the window must span ≥ 40 % of the
-   normalized y range.
+   normalized y range. Where the least-residual window fails them (a stretch of a curved toe can
+   be straighter than a short elastic line), the next windows by residual (the best of each
+   start) are screened and the first that passes is taken; ``rank`` says how far down it was.
 """
 
 from __future__ import annotations
@@ -37,6 +39,8 @@ CROWDED_BIN = 0.25  # a resolution bin holding more than this share of the sampl
 CURVATURE_LIMIT = 0.05  # residual slope in the outer quarters, a fraction of the slope
 MIN_QUARTER_POINTS = 5
 MIN_FIT_RANGE = 0.4  # normalized y range of the window
+MIN_SLOPE_OVER_SECANT = 0.5  # a window flatter than half the secant to its top lies past yield (hardening slopes are a few % of E)
+MAX_SCREENED = 200  # windows (best of each start, by residual) screened for fit quality
 
 
 @dataclass
@@ -50,6 +54,7 @@ class SdarFit:
     normalized_residual: float
     offset_raises: int
     quality: dict = field(default_factory=dict)
+    rank: int = 0  # 0: the least residual window; k: the k-th next, the better ones failing the fit quality checks
 
     @property
     def passed(self) -> bool:
@@ -118,15 +123,15 @@ def resolution_metrics(xn: np.ndarray, yn: np.ndarray) -> dict:
     return out
 
 
-def best_window(xn: np.ndarray, yn: np.ndarray) -> tuple[int, int, float]:
-    """(first, last, 1 − R²) of the contiguous window of at least max(20 %, 10) points with the
-    least normalized residual (§6.6), all windows regressed from cumulative sums."""
+def ranked_windows(xn: np.ndarray, yn: np.ndarray) -> list[tuple[float, int, int]]:
+    """(1 − R², first, last) of the best contiguous window of at least max(20 %, 10) points from
+    each start (§6.6), least normalized residual first; all windows regressed from cumulative sums."""
     n = xn.size
     n_min = max(int(math.floor(MIN_WINDOW_FRACTION * n)), MIN_WINDOW_POINTS)
     if n < n_min:
         raise IdentificationError(f"SDAR: only {n} samples up to the tangency point; the linear region needs at least {MIN_WINDOW_POINTS}")
     c = [np.concatenate([[0.0], np.cumsum(v)]) for v in (np.ones(n), xn, yn, xn * xn, xn * yn, yn * yn)]
-    best = (0, n - 1, np.inf)
+    out = []
     for i in range(0, n - n_min + 1):
         j = np.arange(i + n_min, n + 1)  # exclusive ends
         k, sx, sy, sxx, sxy, syy = (cj[j] - cj[i] for cj in c)
@@ -134,11 +139,11 @@ def best_window(xn: np.ndarray, yn: np.ndarray) -> tuple[int, int, float]:
         with np.errstate(divide="ignore", invalid="ignore"):
             res = np.where((vxx > 0) & (vyy > 0), 1.0 - vxy * vxy / (vxx * vyy), np.inf)
         m = int(np.argmin(res))
-        if res[m] < best[2]:
-            best = (i, int(j[m]) - 1, float(res[m]))
-    if not np.isfinite(best[2]):
+        if np.isfinite(res[m]):
+            out.append((float(res[m]), i, int(j[m]) - 1))
+    if not out:
         raise IdentificationError("SDAR: no window of the record varies in both x and y")
-    return best
+    return sorted(out)
 
 
 def curvature_metrics(xn: np.ndarray, yn: np.ndarray, slope: float, intercept: float) -> dict:
@@ -183,15 +188,28 @@ def sdar(x, y) -> SdarFit:
             raise IdentificationError("SDAR: the tangency point is not up and to the right of the start")
         keep = np.flatnonzero((ys <= y_t) & (xs <= x_t))
         xn, yn = xs[keep] / x_t, ys[keep] / y_t
-        i, j, resid = best_window(xn, yn)
-        if j < keep.size - 1:
+        ranked = ranked_windows(xn, yn)
+        if ranked[0][2] < keep.size - 1:
             break
     else:
         raise IdentificationError("SDAR: the linear region runs up to the tangency point however high the offset is raised: no end of the linear part")
+    # the least residual window; when its fit quality fails (a stretch of a curved toe can look
+    # straighter than a short line), the next best window from another start that passes
+    chosen, fit_quality = None, None
+    for rank, (resid, i, j) in enumerate(ranked[:MAX_SCREENED]):
+        m_n, b_n = np.polyfit(xn[i: j + 1], yn[i: j + 1], 1)
+        q = curvature_metrics(xn[i: j + 1], yn[i: j + 1], float(m_n), float(b_n))
+        if chosen is None or (q["curvature"]["passed"] and q["fit_range"]["passed"] and j < keep.size - 1):
+            chosen, fit_quality, screened = (resid, i, j), q, rank
+            if q["curvature"]["passed"] and q["fit_range"]["passed"]:
+                break
+    resid, i, j = chosen
     window = keep[i: j + 1]
-    m_n, b_n = np.polyfit(xn[i: j + 1], yn[i: j + 1], 1)
-    quality = {"noise": noise_metrics(xn, yn), "resolution": resolution_metrics(xn, yn),
-               **curvature_metrics(xn[i: j + 1], yn[i: j + 1], float(m_n), float(b_n))}
+    m_n = np.polyfit(xn[i: j + 1], yn[i: j + 1], 1)[0]
+    if xn[j] > 0 and m_n < MIN_SLOPE_OVER_SECANT * yn[j] / xn[j]:
+        raise IdentificationError(f"SDAR: its linear region ({j - i + 1} samples) is flatter than the secant from the start to its top: a stretch "
+                                  "past yield, not the elastic line, which has too few samples (sample faster or give the modulus)")
+    quality = {"noise": noise_metrics(xn, yn), "resolution": resolution_metrics(xn, yn), **fit_quality}
     slope, intercept = np.polyfit(x0[ok][window], y0[ok][window], 1)
     return SdarFit(slope=float(slope), intercept=float(intercept), indices=ok[window], normalized_residual=resid,
-                   offset_raises=raises, quality=quality)
+                   offset_raises=raises, quality=quality, rank=screened)
