@@ -183,7 +183,7 @@ def elastic_line(t, specimen_mm, force_N, *, area0_mm2: float, h0_mm: float, win
     (ASTM E3076-18) on the loading up to twice the force rate's yield estimate."""
     strain0 = np.asarray(specimen_mm, dtype=float) / h0_mm
     stress0 = np.asarray(force_N, dtype=float) / area0_mm2
-    if window_MPa is None and window is None and method != DEFAULT_MODULUS_METHOD:
+    if window_MPa is None and window is None and method == "sdar":
         line = elastic_modulus(method, strain0, stress0, 0.0, upto_MPa=SDAR_REACH * yield_onset_from_rate(t, force_N) / area0_mm2,
                                strain_on_stress=True)
     elif window_MPa is not None:
@@ -573,7 +573,7 @@ def identify_compression(
     (fractions of the yield stress, or of the largest stress with ``modulus_reference`` "Rm";
     default: the widest linear stretch, :func:`elastic_line`), ``toe`` (compensate a soft
     start, default on), ``fit_range`` (LO, HI true plastic strain of the hardening fit),
-    ``modulus_method`` ("window" or "sdar", see :func:`elastic_line`).
+    ``modulus_method`` ("window", "sdar", or "auto": the window, see :func:`elastic_line`).
     """
     _check_options(friction_correction, E_MPa)
     E_MPa, E_source = _handbook_modulus(record, E_MPa)

@@ -385,8 +385,8 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
                              + ("; two samples: uncertainty from the force noise only" if count == 2 else "") + ")")
 
 
-MODULUS_METHODS = ("window", "sdar")
-DEFAULT_MODULUS_METHOD = "window"
+MODULUS_METHODS = ("auto", "window", "sdar")
+DEFAULT_MODULUS_METHOD = "auto"  # SDAR on a crosshead (it leaves a seating toe out), the window on an extensometer: bench/modulus_methods.py
 
 
 def sdar_modulus(strain, stress_MPa, *, upto_MPa: float | None = None, strain_on_stress: bool = False, noise_MPa: float = 0.0,
@@ -419,9 +419,21 @@ def sdar_modulus(strain, stress_MPa, *, upto_MPa: float | None = None, strain_on
 
 
 def elastic_modulus(method: str, strain, stress_MPa, reference_MPa: float, *, upto_MPa: float | None = None, strain_on_stress: bool = False,
-                    noise_MPa: float = 0.0, strain_noise: float = 0.0) -> ModulusFit:
+                    noise_MPa: float = 0.0, strain_noise: float = 0.0, crosshead: bool = False) -> ModulusFit:
     """The modulus of the first loading by ``method``: "window" (:func:`auto_modulus`, the widest
-    linear stretch below ``reference_MPa``) or "sdar" (:func:`sdar_modulus`)."""
+    linear stretch below ``reference_MPa``), "sdar" (:func:`sdar_modulus`), or "auto": on a
+    ``crosshead`` strain SDAR's line when it passes its fit quality checks, else (and on an
+    extensometer) the window."""
+    if method == "auto":
+        if crosshead:
+            try:
+                fit = sdar_modulus(strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                                   strain_noise=strain_noise)
+                if fit.quality["curvature"]["passed"] and fit.quality["fit_range"]["passed"]:
+                    return fit
+            except IdentificationError:
+                pass
+        method = "window"
     if method == "sdar":
         return sdar_modulus(strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
                             strain_noise=strain_noise)

@@ -358,7 +358,8 @@ def _first_guesses(inp: _Inputs, automatic: bool) -> list[float]:
 
 
 def _modulus_window(step: int, ref: float, first_guesses: list[float], strain0, eng_stress, *, fractions, window_fixed_MPa,
-                    modulus_reference: str, noise_MPa: float, strain_noise: float, method: str = DEFAULT_MODULUS_METHOD):
+                    modulus_reference: str, noise_MPa: float, strain_noise: float, method: str = DEFAULT_MODULUS_METHOD,
+                    crosshead: bool = False):
     """The stress window of the elastic line at one step: given (MPa, or × the reference stress) or
     the most linear stretch; returns (window_MPa, line_points, how, auto fit or None, reference)."""
     if window_fixed_MPa is not None:
@@ -366,14 +367,14 @@ def _modulus_window(step: int, ref: float, first_guesses: list[float], strain0, 
     if fractions is not None:
         return (fractions[0] * ref, fractions[1] * ref), 5, f"given window {fractions[0]:g}–{fractions[1]:g} × {modulus_reference}", None, ref
     try:
-        auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise)  # the window is the same before toe and scaling
+        auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise, crosshead=crosshead)  # the window is the same before toe and scaling
     except IdentificationError:
         if step > 0 or not first_guesses:
             raise
         while True:  # a sparse elastic line may hold too few samples below the first guess
             ref = first_guesses.pop(0)
             try:
-                auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise)
+                auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise, crosshead=crosshead)
                 break
             except IdentificationError:
                 if not first_guesses:
@@ -416,7 +417,8 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         try:
             window_MPa, line_points, how, auto, ref = _modulus_window(
                 step, ref, first_guesses, disp0 / length, eng_stress, fractions=fractions, window_fixed_MPa=window_fixed_MPa,
-                modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise, method=modulus_method)
+                modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise, method=modulus_method,
+                crosshead=src["source"] != "extensometer")
         except IdentificationError:
             if unresolved is None:
                 raise
@@ -685,7 +687,8 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         has one. A line whose E is not resolved (standard error over 10 %) gives way to the
         handbook E with a warning, and without one is an error. The window in MPa and
         ``modulus.source`` are reported. E_MPa fixes the modulus. modulus_method: "window" (that
-        automatic window) or "sdar" (ASTM E3076-18, :func:`identification.indicator.sdar_modulus`).
+        automatic window), "sdar" (ASTM E3076-18, :func:`identification.indicator.sdar_modulus`) or
+        "auto" (default: SDAR on the crosshead, the window on an extensometer).
     true_stress: "gost_3_6" (the corrected (3.6), with ν = ``poisson``) or "constant_volume".
     neck: the neck correction used for the fracture point (all are reported).
     law, hardening: the hardening law and method of the main fit; the others are reported.
