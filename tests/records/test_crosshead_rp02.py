@@ -10,8 +10,9 @@ reaches 0.2 % plastic extension") and read up to −37 % on E where the seating 
 
 from __future__ import annotations
 
-import importlib.util
+import runpy
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -22,10 +23,7 @@ BENCH = Path(__file__).resolve().parents[2] / "bench" / "modulus_methods.py"
 
 @pytest.fixture(scope="module")
 def bench():
-    spec = importlib.util.spec_from_file_location("modulus_methods", BENCH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return SimpleNamespace(**runpy.run_path(str(BENCH)))  # the bench's record generators
 
 
 def _line(rec, method):
