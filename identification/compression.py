@@ -34,7 +34,7 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
 from flowcurve.identification.hardening import HardeningFit, fit_hardening
-from flowcurve.identification.indicator import (ModulusFit, auto_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
+from flowcurve.identification.indicator import (DEFAULT_MODULUS_METHOD, FEW_POINTS_TOP, SDAR_REACH, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
                                                 reread_if_stepped, yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
@@ -172,17 +172,21 @@ def _offset_onset_MPa(strain0, stress0, line: ModulusFit, offset: float = YIELD_
 
 
 def elastic_line(t, specimen_mm, force_N, *, area0_mm2: float, h0_mm: float, window_MPa=None, window=None,
-                 modulus_reference: str = "Rp02") -> tuple[ModulusFit, float]:
+                 modulus_reference: str = "Rp02", method: str = DEFAULT_MODULUS_METHOD) -> tuple[ModulusFit, float]:
     """The elastic line of the first loading and the toe it reveals (§2.3, ISO 6892-1 toe).
 
     Strain regressed on stress over the widest linear window (:func:`auto_modulus`, iterated
     on the 0.2 % offset yield from a first estimate off the force rate), or over ``window_MPa``
     (MPa) / ``window`` (fractions of the yield estimate, or of the largest stress with
     ``modulus_reference`` "Rm"). Returns the line in (specimen displacement/h0, P/S0) and the
-    toe offset (mm): where the line meets zero force."""
+    toe offset (mm): where the line meets zero force. ``method`` "sdar": the line SDAR finds
+    (ASTM E3076-18) on the loading up to twice the force rate's yield estimate."""
     strain0 = np.asarray(specimen_mm, dtype=float) / h0_mm
     stress0 = np.asarray(force_N, dtype=float) / area0_mm2
-    if window_MPa is not None:
+    if window_MPa is None and window is None and method == "sdar":
+        line = elastic_modulus(method, strain0, stress0, 0.0, upto_MPa=SDAR_REACH * yield_onset_from_rate(t, force_N) / area0_mm2,
+                               strain_on_stress=True)
+    elif window_MPa is not None:
         line = fit_modulus(strain0, stress0, tuple(window_MPa), strain_on_stress=True)
         line.source = "given window (MPa)"
     else:
@@ -341,22 +345,87 @@ def _inputs(record: Record, frame_stiffness_N_per_um: float | None) -> _Diagram:
     return _Diagram(t=t, force=force, travel=travel, specimen=specimen, stiffness=stiffness, warnings=warnings, step_mm=step, springback=springback)
 
 
+MIN_LINE_SLOPE_FRACTION = 0.2  # a regressed line flatter than this part of the handbook E reaches past yield
+MIN_APPARENT_E_MPa = 20_000.0  # an apparent modulus (frame compliance removed) below this is no metal's elastic line
+
+
+def _yield_estimate_MPa(diagram: _Diagram, area0_mm2: float) -> float | None:
+    """The force rate's estimate of the yield stress (:func:`yield_onset_from_rate`), None without one."""
+    try:
+        return yield_onset_from_rate(diagram.t, diagram.force) / area0_mm2
+    except IdentificationError:
+        return None
+
+
+def toe_on_flattest_offsets(specimen_mm, force_N, *, E_MPa: float, area0_mm2: float, h0_mm: float, upto_MPa: float,
+                            run: int = 3) -> tuple[float, tuple[float, float]]:
+    """The toe (mm) of an elastic line of known slope E from a few coarse samples: the offset
+    Δl − h0·σ/E grows while the toe closes, stays put on the elastic line and grows again past
+    yield, so the line is the run of ``run`` consecutive samples of the first loading (up to
+    ``upto_MPa``) whose offsets spread least; returns their median offset and their stress range."""
+    stress = np.asarray(force_N, dtype=float) / area0_mm2
+    disp = np.asarray(specimen_mm, dtype=float)
+    top = int(np.argmax(stress >= upto_MPa)) if np.any(stress >= upto_MPa) else stress.size
+    on = np.flatnonzero(stress[:top] > 0.02 * upto_MPa)
+    if on.size < run:
+        raise IdentificationError(f"only {on.size} samples of the first loading below {upto_MPa:.4g} MPa: no elastic line to place")
+    offset = disp[on] - h0_mm * stress[on] / E_MPa  # Δl = Δl0 + h0·σ/E on the line
+    runs = np.lib.stride_tricks.sliding_window_view(offset, run)
+    k = int(np.argmin(np.ptp(runs, axis=1)))
+    return float(np.median(runs[k])), (float(stress[on[k]]), float(stress[on[k + run - 1]]))
+
+
+def _line_of_known_slope(diagram: _Diagram, area0_mm2: float, h0_mm: float, E_MPa: float) -> tuple[ModulusFit, float] | None:
+    """(line, toe mm) when the line's own slope cannot be regressed (a few samples, an encoder count
+    longer than the line, a toe that lasts into it) but E is known: slope E placed on the flattest
+    offsets of the first loading up to 0.9 × the force rate's yield estimate
+    (:func:`toe_on_flattest_offsets`; less than one count of a stepped crosshead is no toe); None
+    without such samples."""
+    ref = _yield_estimate_MPa(diagram, area0_mm2)
+    if ref is None:
+        return None
+    try:
+        toe_mm, window = toe_on_flattest_offsets(diagram.specimen, diagram.force, E_MPa=E_MPa, area0_mm2=area0_mm2, h0_mm=h0_mm,
+                                                 upto_MPa=FEW_POINTS_TOP * ref)
+    except IdentificationError:
+        return None
+    if diagram.step_mm is not None and abs(toe_mm) < diagram.step_mm:
+        toe_mm = 0.0  # less than one count of a stepped crosshead: not told from the count's rounding
+    line = ModulusFit(E_MPa, float("nan"), -E_MPa * toe_mm / h0_mm, float("nan"), 3, window,
+                      source=f"handbook E = {E_MPa:g} MPa placed on the flattest offsets of the first loading ({window[0]:.4g}–{window[1]:.4g} MPa; "
+                             "too few or too coarse samples for a slope of their own)")
+    return line, toe_mm
+
+
 def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_window_MPa, modulus_window,
-                  modulus_reference: str, toe: bool) -> _Line:
+                  modulus_reference: str, toe: bool, modulus_method: str = DEFAULT_MODULUS_METHOD) -> _Line:
     """The elastic line and the toe: the linear part extended to zero force (ISO 6892-1)."""
     warnings: list[str] = []
     area0 = math.pi * geo["d0"] ** 2 / 4.0
     specimen = diagram.specimen
     try:
         line, toe_mm = elastic_line(diagram.t, specimen, diagram.force, area0_mm2=area0, h0_mm=geo["h0"], window_MPa=modulus_window_MPa,
-                                    window=modulus_window, modulus_reference=modulus_reference)
+                                    window=modulus_window, modulus_reference=modulus_reference, method=modulus_method)
     except IdentificationError as exc:
-        line, toe_mm = None, 0.0
-        warnings.append(f"no elastic line ({exc}): the toe is not compensated; "
-                        + (f"the handbook E = {E_MPa:g} MPa strips the elastic strain" if E_MPa is not None
-                           else "no modulus, so the elastic strain is not removed and there is no Rp0.2 — give E_MPa"))
-    if line is not None and E_MPa is not None:
-        toe_mm = toe_on_known_modulus(specimen, diagram.force, line.window_MPa, E_MPa=E_MPa, area0_mm2=area0, h0_mm=geo["h0"])
+        known = None if E_MPa is None else _line_of_known_slope(diagram, area0, geo["h0"], E_MPa)
+        line, toe_mm = known if known is not None else (None, 0.0)
+        if line is None:
+            warnings.append(f"no elastic line ({exc}): the toe is not compensated; "
+                            + (f"the handbook E = {E_MPa:g} MPa strips the elastic strain" if E_MPa is not None
+                               else "no modulus, so the elastic strain is not removed and there is no Rp0.2 — give E_MPa"))
+    else:
+        onset = _yield_estimate_MPa(diagram, area0)
+        if E_MPa is not None and onset is not None and (line.window_MPa[0] > onset or line.E_MPa < MIN_LINE_SLOPE_FRACTION * E_MPa):
+            known = _line_of_known_slope(diagram, area0, geo["h0"], E_MPa)
+            warnings.append(f"the line regressed on the first loading ({line.E_MPa:.4g} MPa over {line.window_MPa[0]:.4g}–{line.window_MPa[1]:.4g} MPa) "
+                            f"starts above the force rate's yield estimate {onset:.4g} MPa or is flatter than {MIN_LINE_SLOPE_FRACTION:g} × E: not the elastic line; "
+                            + (f"the handbook E = {E_MPa:g} MPa is placed on the first loading instead" if known is not None else "the toe is not compensated"))
+            line, toe_mm = known if known is not None else (None, 0.0)
+        elif E_MPa is not None:
+            toe_mm = toe_on_known_modulus(specimen, diagram.force, line.window_MPa, E_MPa=E_MPa, area0_mm2=area0, h0_mm=geo["h0"])
+        elif line.E_MPa < MIN_APPARENT_E_MPa:
+            warnings.append(f"apparent modulus {line.E_MPa:.4g} MPa over {line.window_MPa[0]:.4g}–{line.window_MPa[1]:.4g} MPa is far below any metal's: "
+                            "the line found may be a toe or a stretch past yield, and Rp0.2 with it — give the handbook E (--E or material.E_MPa)")
     if line is not None and toe:
         on_line = line if E_MPa is None else replace(line, E_MPa=E_MPa)  # the toe replaced by the line the offset was read on
         specimen = compensate_toe_line(specimen, diagram.force, on_line, toe_mm, area0_mm2=area0, h0_mm=geo["h0"])
@@ -557,6 +626,7 @@ def identify_compression(
     modulus_reference: str = "Rp02",
     toe: bool = True,
     fit_range: tuple[float, float] | None = None,
+    modulus_method: str = DEFAULT_MODULUS_METHOD,
 ) -> Identification:
     """Identify a compression record: friction, friction-corrected true curves and hardening.
 
@@ -567,7 +637,8 @@ def identify_compression(
     record's ``rig.frame_stiffness_N_per_um``), ``modulus_window_MPa`` / ``modulus_window``
     (fractions of the yield stress, or of the largest stress with ``modulus_reference`` "Rm";
     default: the widest linear stretch, :func:`elastic_line`), ``toe`` (compensate a soft
-    start, default on), ``fit_range`` (LO, HI true plastic strain of the hardening fit).
+    start, default on), ``fit_range`` (LO, HI true plastic strain of the hardening fit),
+    ``modulus_method`` ("window", "sdar", or "auto": the window, see :func:`elastic_line`).
     """
     _check_options(friction_correction, E_MPa)
     E_MPa, E_source = _handbook_modulus(record, E_MPa)
@@ -575,7 +646,7 @@ def identify_compression(
     _friction_all(geo, friction_method, [])  # friction first: it needs only the post-test measurements, and bad ones should stop early
     diagram = _inputs(record, frame_stiffness_N_per_um)
     line = _elastic_line(diagram, geo, E_MPa=E_MPa, modulus_window_MPa=modulus_window_MPa, modulus_window=modulus_window,
-                         modulus_reference=modulus_reference, toe=toe)
+                         modulus_reference=modulus_reference, toe=toe, modulus_method=modulus_method)
     nominal = _nominal_curve(diagram, geo, line.specimen, E_MPa)
     yld = _modulus_and_yield(nominal, line.line, E_MPa, E_source)
     friction = _friction_correction(geo, nominal, friction_method, yld.E_used)

@@ -36,9 +36,10 @@ DISPATCH = {"tension": identify_tension, "compression": identify_compression}
 OPTIONS = {
     "tension": frozenset({"use_extensometer", "frame_stiffness_N_per_um", "crosshead_length_mm", "toe", "scale",
                           "modulus_window", "modulus_window_MPa", "modulus_reference", "E_MPa", "poisson",
-                          "true_stress", "neck", "law", "hardening", "fracture_weight", "fit_range", "fracture_point"}),
+                          "true_stress", "neck", "law", "hardening", "fracture_weight", "fit_range", "fracture_point",
+                          "modulus_method"}),
     "compression": frozenset({"friction_method", "friction_correction", "law", "E_MPa", "frame_stiffness_N_per_um",
-                              "modulus_window", "modulus_window_MPa", "modulus_reference", "toe", "fit_range"}),
+                              "modulus_window", "modulus_window_MPa", "modulus_reference", "toe", "fit_range", "modulus_method"}),
 }
 
 

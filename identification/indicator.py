@@ -194,11 +194,15 @@ class ModulusFit:
     n_points: int
     window_MPa: tuple[float, float]
     source: str = "given window"
+    quality: dict | None = None  # SDAR's data and fit quality metrics (ASTM E3076-18), when it found the line
 
     def as_dict(self) -> dict:
         """The result's ``modulus`` block (keys with units)."""
-        return {"E_MPa": self.E_MPa, "E_stderr_MPa": self.E_stderr_MPa, "r2": self.r2, "n_points": self.n_points,
-                "window_MPa": list(self.window_MPa), "source": self.source}
+        out = {"E_MPa": self.E_MPa, "E_stderr_MPa": self.E_stderr_MPa, "r2": self.r2, "n_points": self.n_points,
+               "window_MPa": list(self.window_MPa), "source": self.source}
+        if self.quality is not None:
+            out["quality"] = self.quality
+        return out
 
 
 # the automatic window: lower edges and the smallest span, fractions of the reference stress
@@ -211,6 +215,7 @@ FEW_POINTS_TOP = 0.90  # with few samples, all of them up to this fraction of th
 MIN_LINE_POINTS = 5  # a window with fewer samples is not a candidate of the automatic choice
 MIN_FEW_POINTS = 2  # with fewer samples on the whole elastic line there is no modulus
 FEW_SAMPLES = 10  # an elastic line with fewer samples is used whole, not searched for a window
+SDAR_REACH = 2.0  # SDAR reads the first loading up to this many times the reference (yield) stress
 
 
 def _slope_stats(n, sx, sy, vxx, vxy, vyy, strain_on_stress: bool) -> tuple[float, float, float]:
@@ -266,6 +271,18 @@ def yield_onset_from_rate(time_s, force_N, levels: int = 400) -> float:
     return float(level[peak + int(below[0])]) if below.size else float(level[-1])
 
 
+CURVED_CHECK_POINTS = 20  # windows with this many samples are also checked for curvature at their ends
+
+
+def _curved(x: np.ndarray, y: np.ndarray) -> bool:
+    """The residuals of the window's line trend in its first or last quarter by more than 5 % of
+    its slope (the curvature check of ASTM E3076-18 §6.7, :func:`identification.sdar.curvature_metrics`)."""
+    from flowcurve.identification.sdar import curvature_metrics
+
+    slope, intercept = np.polyfit(x, y, 1)
+    return not curvature_metrics(x, y, float(slope), float(intercept))["curvature"]["passed"]
+
+
 def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: bool = False, noise_MPa: float = 0.0,
                  strain_noise: float = 0.0) -> ModulusFit:
     """The modulus over the most linear stretch of the first loading (in the manner of
@@ -273,11 +290,13 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
 
     Candidate windows run from lo to hi × ``reference_MPa`` (the yield stress, iterated by the
     caller), lo in AUTO_WINDOW_LOWS, hi − lo ≥ 0.25, hi ≤ 0.8; each gets a regression line. The
-    widest window whose line is linear (R² ≥ 0.9995, the Annex G quality criterion) wins, so
-    noise is averaged over as much of the line as stays straight; a toe or early yielding bends
-    the windows that reach into it below that R² (§2.3). When no window is that linear (a
-    crosshead curve with seating grips), the conventional 0.10–0.80 × the yield stress is used
-    and ``source`` says so.
+    widest window whose line is linear (R² ≥ 0.9995, the Annex G quality criterion, and with 20
+    samples or more no residual trend at either end, the curvature check of ASTM E3076-18) wins,
+    so noise is averaged over as much of the line as stays straight; a toe or early yielding bends
+    the windows that reach into it (§2.3). When no window is that linear (a crosshead curve whose
+    seating lasts past 0.4 × the yield stress), the linear region SDAR finds
+    (:func:`sdar_modulus`) when it passes its fit quality checks, else the conventional
+    0.10–0.80 × the yield stress; ``source`` says which.
 
     noise_MPa: the stress noise (standard deviation); with few samples the standard error of E
     is at least what that noise and the strain noise (e.g. an encoder quantum q: q/√12) give,
@@ -324,6 +343,8 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
             if r2 < AUTO_WINDOW_R2:
                 best_r2 = max(best_r2, r2)
                 continue
+            if n >= CURVED_CHECK_POINTS and _curved(xs[i:j], ys[i:j]):
+                continue  # straight by R², yet its residuals trend at an end: a toe or the knee bends it
             score = (-(hi - lo), se / slope)  # the widest linear window; of equal ones, the surest slope
             if best is None or score < best[0]:
                 best = (score, slope, intercept, se, r2, int(n), (lo * reference_MPa, hi * reference_MPa))
@@ -331,7 +352,15 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
         _, slope, intercept, se, r2, n, window = best
         return ModulusFit(slope, se, intercept, r2, n, (float(window[0]), float(window[1])),
                           source=f"automatic window {window[0] / reference_MPa:.2f}–{window[1] / reference_MPa:.2f} × {reference_MPa:.4g} MPa (widest linear stretch, R² ≥ {AUTO_WINDOW_R2})")
-    if np.isfinite(best_r2):  # enough samples, but no stretch is straight: the conventional window
+    if np.isfinite(best_r2):  # enough samples, but no stretch is straight: SDAR's linear region, else the conventional window
+        try:
+            by_sdar = sdar_modulus(e, s, upto_MPa=SDAR_REACH * reference_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                                   strain_noise=strain_noise)
+        except IdentificationError:
+            by_sdar = None
+        if by_sdar is not None and by_sdar.quality["curvature"]["passed"] and by_sdar.quality["fit_range"]["passed"]:
+            by_sdar.source = f"no stretch below {AUTO_WINDOW_TOP:g} × {reference_MPa:.4g} MPa is linear (best R² {best_r2:.5f}): {by_sdar.source}"
+            return by_sdar
         lo, hi = CONVENTIONAL_WINDOW
         sel = (s1 >= lo * reference_MPa) & (s1 <= hi * reference_MPa)
         if sel.sum() >= MIN_LINE_POINTS:
@@ -356,6 +385,63 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
     return ModulusFit(slope, se, intercept, r2, count, (float(window[0]), float(window[1])),
                       source=f"all {count} samples of the elastic line (too few for a window"
                              + ("; two samples: uncertainty from the force noise only" if count == 2 else "") + ")")
+
+
+MODULUS_METHODS = ("auto", "window", "sdar")
+DEFAULT_MODULUS_METHOD = "auto"  # SDAR on a crosshead (it leaves a seating toe out), the window on an extensometer: bench/modulus_methods.py
+
+
+def sdar_modulus(strain, stress_MPa, *, upto_MPa: float | None = None, strain_on_stress: bool = False, noise_MPa: float = 0.0,
+                 strain_noise: float = 0.0) -> ModulusFit:
+    """The modulus over the linear region SDAR finds (ASTM E3076-18, :mod:`identification.sdar`)
+    on the first loading up to its largest stress, or up to ``upto_MPa`` for a curve that keeps
+    rising (compression). The window's stress range, the regression over it (strain on stress
+    with ``strain_on_stress``, see :func:`auto_modulus`) and SDAR's quality metrics; a failed
+    metric is named in ``source``."""
+    from flowcurve.identification.sdar import sdar
+
+    e = np.asarray(strain, dtype=float)
+    s = np.asarray(stress_MPa, dtype=float)
+    top = float(np.nanmax(s)) if upto_MPa is None else min(float(upto_MPa), float(np.nanmax(s)))
+    end = int(np.argmax(s >= top))
+    fit = sdar(e[: end + 1], s[: end + 1])
+    idx = fit.indices
+    slope, intercept, se, r2 = _line_stats(e[idx], s[idx], strain_on_stress)
+    if not slope > 0:
+        raise IdentificationError(f"SDAR: the stress does not rise with strain over its linear region ({idx.size} samples): no modulus")
+    sxx = float(np.sum((e[idx] - e[idx].mean()) ** 2))
+    from_noise = math.sqrt(noise_MPa**2 + (slope * strain_noise) ** 2) / math.sqrt(sxx) if sxx > 0 else float("inf")
+    se = max(se, from_noise) if np.isfinite(se) else from_noise
+    window = (float(np.min(s[idx])), float(np.max(s[idx])))
+    failed = fit.failed_checks()
+    return ModulusFit(slope, se, intercept, r2, int(idx.size), window,
+                      source=f"SDAR (ASTM E3076-18) {window[0]:.4g}–{window[1]:.4g} MPa, {idx.size} samples"
+                             + (f"; failed quality checks: {', '.join(failed)}" if failed else "; all quality checks passed"),
+                      quality={k: dict(v) for k, v in fit.quality.items()})
+
+
+def elastic_modulus(method: str, strain, stress_MPa, reference_MPa: float, *, upto_MPa: float | None = None, strain_on_stress: bool = False,
+                    noise_MPa: float = 0.0, strain_noise: float = 0.0, crosshead: bool = False) -> ModulusFit:
+    """The modulus of the first loading by ``method``: "window" (:func:`auto_modulus`, the widest
+    linear stretch below ``reference_MPa``), "sdar" (:func:`sdar_modulus`), or "auto": on a
+    ``crosshead`` strain SDAR's line when it passes its fit quality checks, else (and on an
+    extensometer) the window."""
+    if method == "auto":
+        if crosshead:
+            try:
+                fit = sdar_modulus(strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                                   strain_noise=strain_noise)
+                if fit.quality["curvature"]["passed"] and fit.quality["fit_range"]["passed"]:
+                    return fit
+            except IdentificationError:
+                pass
+        method = "window"
+    if method == "sdar":
+        return sdar_modulus(strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                            strain_noise=strain_noise)
+    if method != "window":
+        raise IdentificationError(f"unknown modulus method {method!r} (choose from {', '.join(MODULUS_METHODS)})")
+    return auto_modulus(strain, stress_MPa, reference_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa, strain_noise=strain_noise)
 
 
 def fit_modulus(strain, stress_MPa, window_MPa: tuple[float, float], *, min_points: int = 5,

@@ -163,12 +163,14 @@ class JohnsonCookFit:
 
 
 def _stack(members: Sequence[SeriesMember], ref: Reference, max_points: int):
-    """All fit points: εp, σ, clamped ln ε̇*, clamped T*, and each point's member index."""
+    """All fit points: εp, σ, clamped ln ε̇* (each point's own rate when the member has them), clamped T*,
+    and each point's member index."""
     cols = [[], [], [], [], []]
     for i, m in enumerate(members):
         eps, sig = m.fit_points(max_points)
-        lr, ts = ref.reduced(m)
-        for col, values in zip(cols, (eps, sig, np.full(eps.size, lr), np.full(eps.size, ts), np.full(eps.size, i))):
+        _, ts = ref.reduced(m)
+        lr = log_rate_ratio(m.rates_at(eps), ref.strain_rate_per_s)
+        for col, values in zip(cols, (eps, sig, lr, np.full(eps.size, ts), np.full(eps.size, i))):
             col.append(values)
     eps, sig, lr, ts, idx = (np.concatenate(c) for c in cols)
     return eps, sig, lr, ts, idx.astype(int)
@@ -179,7 +181,7 @@ def _errors(fit: JohnsonCookFit, members: Sequence[SeriesMember], max_points: in
     all_rel = []
     for m in members:
         eps, sig = m.fit_points(max_points)
-        rel = fit(eps, m.strain_rate_per_s, m.temperature_C) / sig - 1.0
+        rel = fit(eps, m.rates_at(eps), m.temperature_C) / sig - 1.0
         all_rel.append(rel)
         fit.record_errors[m.name] = {"fit_error_pct": float(100 * np.max(np.abs(rel))),
                                      "rms_error_pct": float(100 * np.sqrt(np.mean(rel**2)))}
@@ -253,7 +255,8 @@ def fit_stepwise(members: Sequence[SeriesMember], ref: Reference, *, fixed: dict
     """The classic stepwise identification: A, B, n, then C, then m.
 
     1. A, B, n: :func:`identification.hardening.fit_hardening` on the records at the reference
-       condition (T within 5 °C of T_r or below it, ε̇ ≤ 1.25·ε̇0);
+       condition (T within 5 °C of T_r or below it, ε̇ ≤ 1.25·ε̇0); with each point's own rate
+       their stresses are brought to ε̇0 with C of step 2 and steps 1–2 repeated (3 rounds);
     2. C: records at the reference temperature, A, B, n fixed;
     3. m: records above the reference temperature, A, B, n, C fixed.
     Each step's uncertainties are conditional on the constants of the previous steps.
@@ -266,27 +269,30 @@ def fit_stepwise(members: Sequence[SeriesMember], ref: Reference, *, fixed: dict
         raise IdentificationError(
             f"stepwise fit needs records at the reference condition ({ref.temperature_C:g} °C, "
             f"{ref.strain_rate_per_s:g} 1/s); none is within {REF_TEMPERATURE_TOL_C:g} °C and a factor {REF_RATE_FACTOR:g} of the rate")
-    pts = [m.fit_points(max_points) for m in at_ref]
-    hf = fit_hardening(np.concatenate([p[0] for p in pts]), np.concatenate([p[1] for p in pts]), "johnson_cook")
-    A, B, n = hf.params["A"], hf.params["B"], hf.params["n"]
-    stderr: dict[str, float | None] = {p: hf.stderr.get(p) for p in ("A", "B", "n")}
-    reports = ["[[Step 1: A, B, n at the reference condition]]", hf.report]
-
     def points(group):
         eps, sig, lr, ts, _ = _stack(group, ref, max_points)
         return eps, sig, lr, ts
 
-    if "C" in fixed:
-        C, stderr["C"] = fixed["C"], None
-    else:
-        faster = [m for m in at_ref_t if ref.reduced(m)[0] > DISTINCT_LOG_RATE]
-        if not faster:
-            raise IdentificationError(
-                f"stepwise fit: no record at the reference temperature ({ref.temperature_C:g} °C) above the reference rate "
-                f"{ref.strain_rate_per_s:g} 1/s, so step 2 cannot give C; use the global fit or fix C (--fix-C VALUE)")
-        C, stderr["C"], rep = _fit_one("C", lambda c, e, lr, ts: johnson_cook_reduced(e, lr, 0.0, A, B, n, c, 1.0),
-                                       points(at_ref_t), 0.01, "reference-temperature records")
-        reports += ["[[Step 2: C at the reference temperature]]", rep]
+    # step 1 on the reference records' stresses brought to the reference rate with C (none at first); when the records carry
+    # each point's own rate (it drifts within a record: ε̇ = v/h in compression), steps 1 and 2 are repeated with the C found
+    ref_eps, ref_sig, ref_lr, _ = points(at_ref)
+    C = fixed.get("C", 0.0)
+    for _ in range(3 if any(m.point_rates_per_s is not None for m in at_ref) else 1):
+        hf = fit_hardening(ref_eps, ref_sig / (1.0 + C * ref_lr), "johnson_cook")
+        A, B, n = hf.params["A"], hf.params["B"], hf.params["n"]
+        stderr: dict[str, float | None] = {p: hf.stderr.get(p) for p in ("A", "B", "n")}
+        reports = ["[[Step 1: A, B, n at the reference condition]]", hf.report]
+        if "C" in fixed:
+            C, stderr["C"] = fixed["C"], None
+        else:
+            faster = [m for m in at_ref_t if ref.reduced(m)[0] > DISTINCT_LOG_RATE]
+            if not faster:
+                raise IdentificationError(
+                    f"stepwise fit: no record at the reference temperature ({ref.temperature_C:g} °C) above the reference rate "
+                    f"{ref.strain_rate_per_s:g} 1/s, so step 2 cannot give C; use the global fit or fix C (--fix-C VALUE)")
+            C, stderr["C"], rep = _fit_one("C", lambda c, e, lr, ts: johnson_cook_reduced(e, lr, 0.0, A, B, n, c, 1.0),
+                                           points(at_ref_t), 0.01, "reference-temperature records")
+            reports += ["[[Step 2: C at the reference temperature]]", rep]
     if "m" in fixed:
         m_, stderr["m"] = fixed["m"], None
     else:

@@ -49,6 +49,7 @@ class SeriesMember:
     material: str | None = None
     fracture: FracturePoint | None = None  # the test's fracture (tension with a section after fracture)
     identified_law: dict | None = None  # result.json's hardening: the law 'flowcurve identify' fitted and its strain range
+    point_rates_per_s: np.ndarray | None = None  # each curve point's own plastic strain rate (1/s), when the record gives it
 
     def __post_init__(self):
         where = self.source if self.source != "<memory>" else self.name
@@ -56,10 +57,14 @@ class SeriesMember:
         sig = np.asarray(self.stress_MPa, dtype=float).ravel()
         if eps.shape != sig.shape:
             raise RecordError(where, f"true curve: {eps.size} strains but {sig.size} stresses")
-        ok = np.isfinite(eps) & np.isfinite(sig)
+        rates = None if self.point_rates_per_s is None else np.asarray(self.point_rates_per_s, dtype=float).ravel()
+        if rates is not None and rates.shape != eps.shape:
+            raise RecordError(where, f"true curve: {eps.size} strains but {rates.size} point strain rates")
+        ok = np.isfinite(eps) & np.isfinite(sig) & (np.isfinite(rates) & (rates > 0) if rates is not None else True)
         eps, sig = eps[ok], sig[ok]
         order = np.argsort(eps, kind="stable")
         eps, sig = eps[order], sig[order]
+        self.point_rates_per_s = None if rates is None else rates[ok][order]
         if eps.size < 4 or np.ptp(eps) <= 0:
             raise RecordError(where, f"true curve has {eps.size} usable points; a series fit needs at least 4 over a strain range")
         if np.min(eps) < 0 or np.min(sig) <= 0:
@@ -82,6 +87,14 @@ class SeriesMember:
         grid = np.linspace(eps[0], eps[-1], max_points)
         return grid, np.interp(grid, eps, sig)
 
+    def rates_at(self, eps_p) -> np.ndarray:
+        """The strain rate (1/s) at plastic strains ``eps_p``: each point's own (interpolated in ln ε̇)
+        when the member has them, else the record's one rate."""
+        eps_p = np.asarray(eps_p, dtype=float)
+        if self.point_rates_per_s is None:
+            return np.full(eps_p.shape, self.strain_rate_per_s)
+        return np.exp(np.interp(eps_p, self.plastic_strain, np.log(self.point_rates_per_s)))
+
 
 def strain_rate_from_record(record: Record, E_MPa: float | None, plastic_start: float = PLASTIC_START) -> tuple[float, np.ndarray]:
     """Plastic strain rate (1/s) of a record from its data, and the plastic-range sample mask.
@@ -92,6 +105,26 @@ def strain_rate_from_record(record: Record, E_MPa: float | None, plastic_start: 
     the first sample with εp ≥ ``plastic_start`` to the force maximum (tension) or the end of
     loading (compression). Without a modulus (``E_MPa`` None) the total strain stands for εp.
     """
+    t, eps_p = _plastic_strain_history(record, E_MPa)
+    force = np.abs(record.column("force_N"))
+    d = np.abs(record.column("crosshead_mm") - record.column("crosshead_mm")[0])
+    end = int(np.nanargmax(force)) if record.test == "tension" else int(np.nanargmax(d))
+    mask = np.zeros(t.size, dtype=bool)
+    mask[: end + 1] = True
+    mask &= np.isfinite(eps_p) & np.isfinite(t)
+    started = np.maximum.accumulate(np.where(mask, eps_p, -np.inf)) >= plastic_start
+    mask &= started
+    if mask.sum() < 3 or np.ptp(t[mask]) <= 0:
+        raise IdentificationError(f"{record.source}: fewer than 3 samples in the plastic range (εp ≥ {plastic_start:g}); the strain rate cannot be computed from the data")
+    slope = float(np.polyfit(t[mask], eps_p[mask], 1)[0])
+    if not slope > 0:
+        raise IdentificationError(f"{record.source}: the plastic strain does not grow with time ({slope:.3g} 1/s); check the time_s and crosshead_mm columns")
+    return slope, mask
+
+
+def _plastic_strain_history(record: Record, E_MPa: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """(time s, true plastic strain) of every sample: extensometer (tension) or crosshead (frame
+    compliance removed when the record states the stiffness), εp = ε − σ/E (ε without a modulus)."""
     test = record.test
     t = record.column("time_s")
     force = np.abs(record.column("force_N"))
@@ -111,28 +144,42 @@ def strain_rate_from_record(record: Record, E_MPa: float | None, plastic_start: 
     if test == "tension":
         eps = np.log1p(d / length)  # (3.2)
         sigma = force / area0 * np.exp(eps)  # volume constancy: F0/F = l/l0
-        end = int(np.nanargmax(force))
     else:
         eps = -np.log(np.clip(1.0 - d / length, 1e-9, None))  # (3.31)
         sigma = force / area0 * np.exp(-eps)  # (3.30) S = F0·h0/h
-        end = int(np.nanargmax(d))
     if E_MPa is not None and math.isfinite(E_MPa) and E_MPa > 0:
         from flowcurve.identification.tension import true_plastic_strain
 
-        eps_p = true_plastic_strain(eps, sigma, E_MPa)  # (3.7)
-    else:
-        eps_p = eps  # no modulus: the total strain's rate (the elastic part is small past yield)
-    mask = np.zeros(t.size, dtype=bool)
-    mask[: end + 1] = True
-    mask &= np.isfinite(eps_p) & np.isfinite(t)
-    started = np.maximum.accumulate(np.where(mask, eps_p, -np.inf)) >= plastic_start
-    mask &= started
-    if mask.sum() < 3 or np.ptp(t[mask]) <= 0:
-        raise IdentificationError(f"{record.source}: fewer than 3 samples in the plastic range (εp ≥ {plastic_start:g}); the strain rate cannot be computed from the data")
-    slope = float(np.polyfit(t[mask], eps_p[mask], 1)[0])
-    if not slope > 0:
-        raise IdentificationError(f"{record.source}: the plastic strain does not grow with time ({slope:.3g} 1/s); check the time_s and crosshead_mm columns")
-    return slope, mask
+        return t, true_plastic_strain(eps, sigma, E_MPa)  # (3.7)
+    return t, eps  # no modulus: the total strain's rate (the elastic part is small past yield)
+
+
+RATE_WINDOW_STRAIN = 0.02  # the local plastic strain rate is the slope of εp(t) over this much plastic strain (at least 5 samples)
+
+
+def point_strain_rates(record: Record, E_MPa: float | None, plastic_strain) -> np.ndarray:
+    """Each plastic strain's own strain rate (1/s) from the record's time and specimen height
+    (or length): the least-squares slope of εp(t) (as in :func:`strain_rate_from_record`) over
+    the samples within ±½·0.02 plastic strain of it (at least 5), read at ``plastic_strain``.
+    At constant crosshead speed a compression specimen's ε̇ = v/h doubles by ε = 0.7."""
+    slope, mask = strain_rate_from_record(record, E_MPa)
+    t, eps_p = _plastic_strain_history(record, E_MPa)
+    idx = np.flatnonzero(mask)
+    t, e = t[idx], np.maximum.accumulate(eps_p[idx])  # εp never runs back in a monotonic test
+    half = 0.5 * RATE_WINDOW_STRAIN
+    lo = np.searchsorted(e, e - half, side="left")
+    hi = np.searchsorted(e, e + half, side="right")
+    rates = np.empty(e.size)
+    for k in range(e.size):
+        a, b = int(lo[k]), int(hi[k])
+        if b - a < 5:  # too coarse for the strain window: the 5 nearest samples
+            a = max(0, min(k - 2, e.size - 5))
+            b = min(e.size, a + 5)
+        tt, ee = t[a:b], e[a:b]
+        rates[k] = np.polyfit(tt, ee, 1)[0] if np.ptp(tt) > 0 and np.ptp(ee) > 0 else slope
+    rates = np.where(rates > 0, rates, slope)
+    _, first = np.unique(e, return_index=True)
+    return np.exp(np.interp(np.asarray(plastic_strain, dtype=float), e[first], np.log(rates[first])))
 
 
 def plastic_part(plastic_strain, stress_MPa, plastic_start: float = PLASTIC_START) -> tuple[np.ndarray, np.ndarray]:
@@ -147,7 +194,8 @@ def plastic_part(plastic_strain, stress_MPa, plastic_start: float = PLASTIC_STAR
 def member_from_record(record: Record, **identify_options) -> SeriesMember:
     """Identify a record (tension or compression) and make it a series member.
 
-    Strain rate from the data (:func:`strain_rate_from_record`); temperature the mean of the
+    Strain rate from the data (:func:`strain_rate_from_record`, and each point's own,
+    :func:`point_strain_rates`); temperature the mean of the
     ``temperature_C`` column over the plastic range, else ``nominal_temperature_C``.
     """
     from flowcurve.identification.identify import identify
@@ -164,7 +212,8 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
             raise RecordError(record.source, "the test temperature is unknown: add '# nominal_temperature_C: <value>' to the header or a temperature_C column")
     eps, sig = plastic_part(ident.true_curve[TRUE_CURVE_COLUMNS[0]], ident.true_curve[TRUE_CURVE_COLUMNS[1]])
     E_material, E_source = result_material_E(result)
-    return SeriesMember(name=record.name, plastic_strain=eps, stress_MPa=sig, strain_rate_per_s=rate,
+    point_rates = point_strain_rates(record, result.get("E_MPa"), eps) if eps.size else None
+    return SeriesMember(name=record.name, plastic_strain=eps, stress_MPa=sig, strain_rate_per_s=rate, point_rates_per_s=point_rates,
                         temperature_C=temperature, source=record.source, kind="record", test=record.test,
                         strain_rate_source="data" if _number(result.get("E_MPa")) else "data (total strain: no E_MPa)",
                         temperature_source=t_source,

@@ -21,7 +21,7 @@ from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
 from flowcurve.identification.elastic_modulus import material_modulus, tension_E_source
 from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, HardeningFit, fit_hardening, three_point_fit
-from flowcurve.identification.indicator import FEW_SAMPLES, ModulusFit, auto_modulus, reread_if_stepped, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
+from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_SAMPLES, ModulusFit, elastic_modulus, reread_if_stepped, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
 from flowcurve.identification.necking import METHODS as NECK_METHODS
 from flowcurve.identification.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
@@ -382,7 +382,8 @@ def _first_guesses(inp: _Inputs, automatic: bool) -> list[float]:
 
 
 def _modulus_window(step: int, ref: float, first_guesses: list[float], strain0, eng_stress, *, fractions, window_fixed_MPa,
-                    modulus_reference: str, noise_MPa: float, strain_noise: float):
+                    modulus_reference: str, noise_MPa: float, strain_noise: float, method: str = DEFAULT_MODULUS_METHOD,
+                    crosshead: bool = False):
     """The stress window of the elastic line at one step: given (MPa, or × the reference stress) or
     the most linear stretch; returns (window_MPa, line_points, how, auto fit or None, reference)."""
     if window_fixed_MPa is not None:
@@ -390,14 +391,14 @@ def _modulus_window(step: int, ref: float, first_guesses: list[float], strain0, 
     if fractions is not None:
         return (fractions[0] * ref, fractions[1] * ref), 5, f"given window {fractions[0]:g}–{fractions[1]:g} × {modulus_reference}", None, ref
     try:
-        auto = auto_modulus(strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise)  # the window is the same before toe and scaling
+        auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise, crosshead=crosshead)  # the window is the same before toe and scaling
     except IdentificationError:
         if step > 0 or not first_guesses:
             raise
         while True:  # a sparse elastic line may hold too few samples below the first guess
             ref = first_guesses.pop(0)
             try:
-                auto = auto_modulus(strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise)
+                auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise, crosshead=crosshead)
                 break
             except IdentificationError:
                 if not first_guesses:
@@ -423,7 +424,7 @@ def _chosen_modulus(mod: ModulusFit, E_MPa: float | None, handbook_E: float | No
 
 
 def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_reference: str, E_MPa: float | None,
-                  toe: bool, scale: bool) -> _ElasticLine:
+                  toe: bool, scale: bool, modulus_method: str = DEFAULT_MODULUS_METHOD) -> _ElasticLine:
     """E, the toe and Rp0.2, which depend on each other through the window: iterated to a fixed point."""
     record, force, eng_stress, i_m, length, src = inp.record, inp.force, inp.eng_stress, inp.i_m, inp.length, inp.src
     automatic = fractions is None and window_fixed_MPa is None
@@ -440,7 +441,8 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         try:
             window_MPa, line_points, how, auto, ref = _modulus_window(
                 step, ref, first_guesses, disp0 / length, eng_stress, fractions=fractions, window_fixed_MPa=window_fixed_MPa,
-                modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise)
+                modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise, method=modulus_method,
+                crosshead=src["source"] != "extensometer")
         except IdentificationError:
             if unresolved is None:
                 raise
@@ -454,6 +456,7 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         mod = fit_modulus(strain, eng_stress, window_MPa, min_points=line_points)
         mod.source = how
         if auto is not None:
+            mod.quality = auto.quality
             mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
         E = _chosen_modulus(mod, E_MPa, handbook_E, given_window=not automatic)
         if unresolved is None and handbook_E is not None and E == mod.E_MPa and not _resolved(mod):
@@ -698,7 +701,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
                      E_MPa: float | None = None, poisson: float = 0.3, true_stress: str = "constant_volume",
                      neck: str = "davidenkov", law: str = "johnson_cook", hardening: str = "least_squares",
                      fracture_weight: float | None = None, fit_range: tuple[float, float] | None = None,
-                     fracture_point: str = "auto") -> Identification:
+                     fracture_point: str = "auto", modulus_method: str = DEFAULT_MODULUS_METHOD) -> Identification:
     """Identify a tension record: ISO 6892-1 results, true curve, fracture point, hardening law.
 
     use_extensometer: None = use the extensometer channel when the record has one.
@@ -711,7 +714,9 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         its samples when there are few — then the handbook ``material.E_MPa`` when the record
         has one. A line whose E is not resolved (standard error over 10 %) gives way to the
         handbook E with a warning, and without one is an error. The window in MPa and
-        ``modulus.source`` are reported. E_MPa fixes the modulus.
+        ``modulus.source`` are reported. E_MPa fixes the modulus. modulus_method: "window" (that
+        automatic window), "sdar" (ASTM E3076-18, :func:`identification.indicator.sdar_modulus`) or
+        "auto" (default: SDAR on the crosshead, the window on an extensometer).
     true_stress: "constant_volume" (default, σ_e·(1 + e)) or "gost_3_6" (the seed's corrected
         (3.6), with ν = ``poisson``: it linearises the area and reads high at large strain,
         docs/methods.md §3.2; kept for comparison).
@@ -731,7 +736,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     inp = _inputs(record, use_extensometer=use_extensometer, frame_stiffness_N_per_um=frame_stiffness_N_per_um,
                   crosshead_length_mm=crosshead_length_mm, scale=scale)
     line = _elastic_line(inp, fractions=fractions, window_fixed_MPa=window_fixed_MPa, modulus_reference=modulus_reference,
-                         E_MPa=E_MPa, toe=toe, scale=scale)
+                         E_MPa=E_MPa, toe=toe, scale=scale, modulus_method=modulus_method)
     iso = _iso_results(inp, line)
     true = _true_curve(inp, line, true_stress, poisson)
     fracture, neck_warnings = _neck_correction(inp, iso, true)

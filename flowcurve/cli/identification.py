@@ -114,6 +114,7 @@ def register(subparsers) -> None:
     m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n; with --method inverse-fe on compression the law "
                    "that best fits the fast curve)")
     m.add_argument("--modulus-window", type=_pair, metavar="LO,HI", help="stress window of the elastic-modulus regression: MPa (e.g. 50,300), or fractions of Rm when both are ≤ 1 (e.g. 0.1,0.4); default: the widest linear stretch of the first loading, chosen automatically (all of it when it has few samples)")
+    m.add_argument("--modulus-method", choices=("auto", "window", "sdar"), help="how the elastic line is found when no --modulus-window is given: window (the widest linear stretch), sdar (ASTM E3076-18, slope determination by analysis of residuals, with its quality metrics) or auto (default: sdar on a crosshead-only tension record, else window)")
     m.add_argument("--fit-range", type=_pair, metavar="LO,HI", help="true plastic strain range of the hardening fit, e.g. 0.01,0.15 (default: from 0.2 %% offset, past a yield plateau, to the end of the uniform range)")
     m.add_argument("--fracture-point", choices=("auto", "include", "exclude"), help="the neck-corrected fracture point in the least-squares hardening fit (tension): include, exclude, or auto (default: included unless it costs the uniform range more than 2 %% max error); both variants are reported")
     m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default fe_table: the CalculiX table; all are reported)")
@@ -169,6 +170,7 @@ def _options_from_args(args) -> dict:
         "E_MPa": None if args.E_MPa is None else measurement("E", args.E_MPa),
         "true_stress": args.true_stress,
         **_modulus_window_options(args.modulus_window),
+        "modulus_method": args.modulus_method,
         "fit_range": args.fit_range,
         "fracture_point": args.fracture_point,
         "method": getattr(args, "method", "fast"),
