@@ -488,7 +488,7 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     """ISO 6892-1 results after Rp0.2: yield point (ReH, ReL, Ae), Ag, A and Z."""
     record, force, strain, eng_stress, E = inp.record, inp.force, line.strain, inp.eng_stress, line.E
     warnings: list[str] = []
-    yp = iso6892.yield_point(strain, eng_stress, noise_MPa=line.noise_MPa, E_MPa=E, start_MPa=line.window_MPa[1])
+    yp = iso6892.yield_point(strain, eng_stress, noise_MPa=line.noise_MPa, E_MPa=E, start_MPa=line.window_MPa[0])
     if yp is not None:
         warnings.append(f"the curve has a yield point (ReH {yp['ReH_MPa']:.1f} MPa, ReL {yp['ReL_MPa']:.1f} MPa, Ae {yp['Ae_pct']:.2f} %): "
                         "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")

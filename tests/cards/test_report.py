@@ -124,7 +124,10 @@ def test_report_of_a_real_record_rounds_and_states_U_and_conformity(tmp_path):
     assert "<td class='num'>1132 ± 14</td>" in text and "<td class='num'>14.5 ± " in text  # 1132.36 MPa, 14.60 %
     assert "measured (extensometer)" in text
     assert "<td>1 warning(s) below</td>" in text and "taken as 23 °C" in text  # the row points at its warning
-    assert "ISO 6892-1:2019 B39" in text and "conforms" in text
+    rate = result["methods"]["conformity"]["testing_rate"]
+    assert 30 <= rate["stress_rate_MPa_per_s"] <= 50  # the elastic stress rate of this record (39–41 MPa/s by the modulus window)
+    assert rate["designation"] == f"ISO 6892-1:2019 B{rate['stress_rate_MPa_per_s']:.0f}"
+    assert rate["designation"] in text and "conforms" in text
     assert "Prüflabor Nord" in text and "2026-0147" in text and "Lab header: defaults" not in text
     assert "46NT71.csv" in text and str(rec.parent) not in text
 
