@@ -308,6 +308,8 @@ def create_app(console: Console) -> Starlette:
             return _error("records: give a list of record names")
         try:
             result = await asyncio.to_thread(workspace.fit_and_card, [str(n) for n in names], data)
+        except FormError as exc:  # every input the fit and card lack, each beside its field
+            return _error(exc.errors.get("fit", str(exc)), 400, fields=exc.errors)
         except FlowcurveError as exc:
             return _error(str(exc))
         return _json(result)

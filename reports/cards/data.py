@@ -95,6 +95,14 @@ CONSTANTS = {
 }
 
 
+class MissingConstant(CardError):
+    """A constant the card needs and was not given; ``name`` is its CardData attribute."""
+
+    def __init__(self, name: str, message: str):
+        super().__init__(message)
+        self.name = name
+
+
 @dataclass
 class FlowCurve:
     """One tabulated flow curve σ(εp) at a temperature and strain rate (lab units)."""
@@ -160,7 +168,7 @@ class CardData:
         value = getattr(self, name)
         if value is None:
             key, option, what = CONSTANTS[name]
-            raise CardError(f"{self.source_path}: the card needs the {what}: give it with {option} or as '{key}' in the fit file")
+            raise MissingConstant(name, f"{self.source_path}: the card needs the {what}: give it with {option} or as '{key}' in the fit file")
         return value
 
     # -- what the card is valid for --------------------------------------------------------

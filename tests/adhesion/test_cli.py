@@ -93,3 +93,11 @@ def test_friction_demo_runs(tmp_path, capsys):
     assert "virtual adhesiometer: 24 tests" in out and "tau0 =" in out
     assert (tmp_path / "demo" / "friction_abaqus.inp").exists()
     assert len(list((tmp_path / "demo" / "traces").glob("*.csv"))) == 24
+
+
+def test_friction_without_out_writes_to_the_default_folder(make_table, tmp_path, monkeypatch):
+    """Like fit and friction-demo, friction needs no --out: it writes ./friction (it used to refuse)."""
+    table, _ = make_table(contact="full", moment_noise_rel=0.002, radius_noise_um=0.2)
+    monkeypatch.chdir(tmp_path)
+    assert main(["friction", table.sources[0], "--mu-d", str(TRUTH.mu_d)]) == 0
+    assert (tmp_path / "friction" / "friction.json").is_file()

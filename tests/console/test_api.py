@@ -185,3 +185,47 @@ def test_console_listening_beyond_the_loopback_makes_a_token(monkeypatch, tmp_pa
     assert "access token" in err and seen == {"host": "0.0.0.0", "port": 8099}
     assert cli_main(["console", "--out", str(tmp_path)]) == 0
     assert "access token" not in capsys.readouterr().err
+
+
+def _identified_records(out: Path, temperatures_C=(300.0,), rates_per_s=(1.0, 1.0)) -> list[str]:
+    """Records in OUT/records with their result folders written by hand in the documented format
+    (result.json, true_curve.csv): a power law at each (temperature, rate), no modulus."""
+    import json
+
+    import numpy as np
+
+    names = []
+    for i, (T, rate) in enumerate((T, r) for T in temperatures_C for r in rates_per_s):
+        name = f"t{i}.csv"
+        (out / "records").mkdir(parents=True, exist_ok=True)
+        (out / "records" / name).write_text("# flowcurve-record: 1\n")
+        folder = out / "results" / f"t{i}"
+        folder.mkdir(parents=True)
+        block = {"path": name, "name": f"t{i}", "test": "tension", "material": "steel", "nominal_temperature_C": T,
+                 "strain_rate_per_s": rate, "crosshead_speed_mm_per_s": rate * 30.0, "specimen": {"d0_mm": 6.0, "l0_mm": 30.0}}
+        (folder / "result.json").write_text(json.dumps({"test": "tension", "E_MPa": None, "record": block}))
+        eps = np.linspace(0.002, 0.3, 40)
+        rows = "\n".join(f"{e:.6g},{300 + 500 * e ** 0.3 + i:.6g}" for e in eps)
+        (folder / "true_curve.csv").write_text("true_plastic_strain,true_stress_MPa\n" + rows + "\n")
+        names.append(name)
+    return names
+
+
+def test_fit_with_nothing_optional_names_every_missing_input_beside_its_field_and_writes_nothing(tmp_path):
+    """The page's fit and card asked for one input per refused attempt (Poisson's ratio, then density,
+    then specific heat; melting temperature, then m) and left a fits/fit-* folder each time."""
+    _console, client = _client(tmp_path)
+    names = _identified_records(tmp_path / "out")
+    r = client.post("/api/fit", json={"records": names, "format": "lsdyna"}, headers=JSON)
+    assert r.status_code == 400, r.text
+    body = r.json()
+    assert set(body["fields"]) == {"melt_temp", "fix_C", "fix_m", "E_MPa", "poisson", "density", "cp", "fit"}
+    for label in ("Melting temperature, °C", "fix C", "fix m", "E, MPa", "Poisson's ratio", "Density, kg/m³", "Specific heat, J/(kg K)"):
+        assert label in body["error"], label
+    assert "need 7 input(s)" in body["error"]
+    assert not (tmp_path / "out" / "fits").exists() or not list((tmp_path / "out" / "fits").iterdir())
+    # everything given: the fit and the card are written in one fits/fit-* folder
+    r = client.post("/api/fit", json={"records": names, "format": "lsdyna", "melt_temp": "1450", "fix_C": "0.01", "fix_m": "1",
+                                      "E_MPa": "200000", "poisson": "0.3", "density": "7850", "cp": "460"}, headers=JSON)
+    assert r.status_code == 200, r.text
+    assert len(list((tmp_path / "out" / "fits").iterdir())) == 1

@@ -247,7 +247,7 @@ async function runFit(ev) {
   showFieldErrors(form, {});
   $("#fit-result").innerHTML = `<p class="hint">fitting…</p>`;
   const { ok, data } = await api("/api/fit", { records: names, ...formValues(form) });
-  if (!ok) { showFieldErrors(form, { fit: data.error }); $("#fit-result").innerHTML = ""; return; }
+  if (!ok) { showFieldErrors(form, { ...(data.fields || {}), fit: data.error }); $("#fit-result").innerHTML = ""; return; }
   const imgs = data.plots.map((u) => `<img src="${esc(u)}" alt="">`).join("");
   $("#fit-result").innerHTML = `<p><a id="card-link" href="${esc(data.card)}?download" download="${esc(data.card_name)}">download ${esc(data.card_name)}</a> · <a href="${esc(data.fit)}" target="_blank">fit.json</a></p><pre>${esc(data.summary)}</pre><div class="result-plots">${imgs}</div>`;
 }
