@@ -105,6 +105,7 @@ class TestRunner:
         self._lock = threading.Lock()
         self._next_id = 1
         self.current: TestRun | None = None
+        self._before: TestRun | None = None  # the test shown before the current one was started
 
     @property
     def virtual(self) -> bool:
@@ -120,10 +121,18 @@ class TestRunner:
             run.view.heater = lambda: self._heater_on(run)
             run.form = {str(k): str(v) for k, v in (form or {}).items()}
             self._next_id += 1
+            self._before = self.current
             run.thread = threading.Thread(target=self._run, args=(run,), name=f"flowcurve-console-test-{run.test_id}", daemon=False)
             self.current = run
             run.thread.start()
             return run
+
+    def discard(self, run: TestRun) -> None:
+        """Forget a test the procedure refused before it began (nothing recorded): the pages
+        show the test before it again, not a fault and a record name for a test that never ran."""
+        with self._lock:
+            if self.current is run and not run.running and not run.record.exists():
+                self.current = self._before
 
     def _control_period_s(self) -> float:
         from flowcurve.rig.config import FurnaceConfig

@@ -65,6 +65,7 @@ POST_FIELDS = {k: NUMBER for keys in POST_KEYS.values() for k in keys}
 FIT_FIELDS = {"records": NAMES, **{k: NUMBER for k in ("melt_temp", "fix_C", "fix_m", "ref_rate", "ref_temp", "poisson", "density", "cp", "E_MPa")},
               **{k: TEXT for k in ("method", "format", "units")}}
 LOGIN_FIELDS = {"token": TEXT}
+IDLE_STATUS = {"state": "idle", "heater": "off"}
 
 
 class Console:
@@ -244,12 +245,12 @@ def create_app(console: Console) -> Starlette:
 
     async def status(request: Request) -> Response:
         run = runner.current
-        return _json({"status": run.view.status() if run else {"state": "idle", "heater": "off"}, "test": console.test_summary()})
+        return _json({"status": run.view.status() if run else IDLE_STATUS, "test": console.test_summary()})
 
     async def start(request: Request) -> Response:
         try:
             data = await _body(request, START_FIELDS)
-            setup = validate(data, virtual=runner.virtual, time_scale=console.time_scale)
+            setup = validate(data, virtual=runner.virtual, time_scale=console.time_scale, config=runner.config)
             run = runner.start(setup, {k: v for k, v in data.items() if isinstance(v, (str, int, float))})
         except FormError as exc:
             return _error(str(exc), 400, fields=exc.errors)
@@ -261,9 +262,11 @@ def create_app(console: Console) -> Starlette:
                 break
             await asyncio.sleep(0.05)
         if not run.running and run.error and run.outcome is None:
-            from flowcurve.console.setup_form import field_of
+            from flowcurve.console.setup_form import field_of, labelled
 
-            return _error(run.error, 400, fields={field_of(run.error): run.error})
+            runner.discard(run)
+            field = field_of(run.error)
+            return _error(run.error, 400, fields={field: labelled(field, run.error)})
         return _json({"test": console.test_summary()})
 
     async def stop(request: Request) -> Response:
@@ -402,8 +405,8 @@ async def _event_stream(console: Console, request: Request):
                 points, cursor = run.view.points_since(cursor)
                 if points["fd"]["x"] or points["tt"]["x"] or points["fd"]["reset"] or points["tt"]["reset"]:
                     yield _sse("points", points)
-            elif last_status is None:
-                last_status = {"state": "idle", "heater": "off"}
+            elif last_status != IDLE_STATUS:  # none yet, or a test refused before it began was forgotten
+                last_status = IDLE_STATUS
                 yield _sse("status", last_status)
             sent_at = loop.time()
             while not changed.is_set() and not console.closing.is_set() and console.runner.current is listening_to:

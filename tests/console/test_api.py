@@ -53,19 +53,77 @@ def test_bad_values_are_refused_with_the_run_commands_words_beside_each_field(tm
     assert r.status_code == 400
     fields = r.json()["fields"]
     assert set(fields) == {"d0", "speed", "target"}
-    # the same value given to `flowcurve run` is refused with the same message
-    assert fields["d0"] == _cli_error(["run", "compression", "--quiet", "--d0", "-2", "--out", str(tmp_path / "x.csv")], capsys)
-    assert fields["target"] == _cli_error(["run", "compression", "--quiet", "--target", "0", "--out", str(tmp_path / "y.csv")], capsys)
-    assert "not a number" in fields["speed"]
+    # the same value given to `flowcurve run` is refused with the same message, the field named as the form labels it
+    assert fields["d0"] == _cli_error(["run", "compression", "--quiet", "--d0", "-2", "--out", str(tmp_path / "x.csv")], capsys).replace("--d0", "d0, mm")
+    assert fields["target"] == _cli_error(["run", "compression", "--quiet", "--target", "0", "--out", str(tmp_path / "y.csv")], capsys).replace("--target", "Target, mm")
+    assert fields["d0"].startswith("d0, mm must be more than 0 and at most 30 mm")
+    assert "not a number" in fields["speed"] and fields["speed"].startswith("Speed, mm/s")
     assert not (tmp_path / "out" / "records").exists() or not list((tmp_path / "out" / "records").iterdir())
 
 
-def test_a_set_point_the_furnace_refuses_goes_back_to_the_temperature_field(tmp_path):
-    _console, client = _client(tmp_path)
+def test_a_set_point_the_furnace_refuses_goes_back_to_the_temperature_field_and_starts_nothing(tmp_path):
+    """It used to start a test that failed at once: a red FAULT and a record name for a test that never ran."""
+    console, client = _client(tmp_path)
     r = client.post("/api/start", json={"test": "compression", "temperature": "5000"}, headers=JSON)
     assert r.status_code == 400
-    assert "temperature" in r.json()["fields"]
-    assert "not below the configured maximum" in r.json()["fields"]["temperature"]
+    assert set(r.json()["fields"]) == {"temperature"}
+    assert r.json()["fields"]["temperature"].startswith("Temperature, °C must be above 20 C")
+    assert "below 900 C (the furnace's [furnace] max_temperature_C), got 5000" in r.json()["fields"]["temperature"]
+    assert console.runner.current is None
+    assert client.get("/api/status").json() == {"status": {"state": "idle", "heater": "off"}, "test": None}
+    assert not (tmp_path / "out" / "records").exists() or not list((tmp_path / "out" / "records").iterdir())
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("temperature", "-300", "Temperature, °C must be above 20 C (room; leave it out for a test at room temperature) and below 900 C"),
+    ("temperature", "20", "Temperature, °C must be above 20 C"),
+    ("temperature", "900", "and below 900 C"),
+    ("speed", "1e9", "Speed, mm/s must be between 0.001 and 2 mm/s (the machine's speed range"),
+    ("speed", "0.0001", "Speed, mm/s must be between 0.001 and 2 mm/s"),
+    ("target", "1e12", "Target, mm must be more than 0 and at most 250 mm (the crosshead travel, [frame] travel_mm)"),
+    ("force_limit", "2e5", "Force limit, N must be more than 0 and at most 100000 N (the machine's capacity"),
+    ("d0", "31", "d0, mm must be more than 0 and at most 30 mm (the largest diameter the grips and platens take"),
+    ("h0", "1e12", "h0, mm must be more than 0 and at most 200 mm"),
+    ("soak", "1e12", "Soak, s must be more than 0 and at most 86400 s"),
+])
+def test_values_outside_the_rigs_ranges_are_refused_beside_their_field(tmp_path, field, value, words):
+    """-300 °C, 1e9 mm/s and a 1e12 mm target were accepted (every field's limit was 1e12)."""
+    console, client = _client(tmp_path)
+    r = client.post("/api/start", json={"test": "compression", field: value}, headers=JSON)
+    assert r.status_code == 400, r.text
+    assert set(r.json()["fields"]) == {field}
+    from flowcurve.console.setup_form import LABELS
+
+    message = r.json()["fields"][field]
+    assert message.startswith(f"{LABELS[field]} must be") and words in message, message
+    assert console.runner.current is None
+
+
+def test_a_configured_rigs_ranges_are_its_own_on_the_page_and_for_run(tmp_path, capsys):
+    """The ranges come from the rig configuration: the same values are refused by the form and by run."""
+    from flowcurve.console.setup_form import FormError, validate
+    from flowcurve.rig.config import to_toml, virtual_config
+
+    config = virtual_config({"loadcell": "/dev/null-a", "encoder": "/dev/null-b", "furnace": "/dev/null-c"}, max_temperature_C=500.0,
+                            frame_min_speed_mm_per_s=0.01, frame_max_speed_mm_per_s=0.5, frame_travel_mm=40.0,
+                            frame_max_specimen_diameter_mm=12.0, frame_max_specimen_length_mm=50.0)
+    form = {"test": "tension", "temperature": "600", "speed": "0.6", "target": "41", "d0": "12.5", "l0": "60"}
+    with pytest.raises(FormError) as refused:
+        validate(form, virtual=False, time_scale=None, config=config)
+    fields = refused.value.errors
+    assert set(fields) == {"temperature", "speed", "target", "d0", "l0"}
+    assert "below 500 C" in fields["temperature"] and "between 0.01 and 0.5 mm/s" in fields["speed"]
+    assert "at most 40 mm" in fields["target"] and "at most 12 mm" in fields["d0"] and "at most 50 mm" in fields["l0"]
+    path = tmp_path / "rig.toml"
+    path.write_text(to_toml(config))
+    err = _cli_error(["run", "tension", "--quiet", "--config", str(path), "--temperature", "600", "--speed", "0.6", "--target", "41",
+                      "--d0", "12.5", "--l0", "60", "--out", str(tmp_path / "r.csv")], capsys)
+    for field, option in (("temperature", "--temperature"), ("speed", "--speed"), ("target", "--target"), ("d0", "--d0"), ("l0", "--l0")):
+        from flowcurve.console.setup_form import LABELS
+
+        assert fields[field].replace(LABELS[field], option) in err, (option, err)  # run's words, the option for the label
+    ok = validate({**form, "temperature": "450", "speed": "0.4", "target": "39", "d0": "6", "l0": "30"}, virtual=False, time_scale=None, config=config)
+    assert ok.spec.temperature_C == 450.0 and ok.spec.speed_mm_per_s == 0.4
 
 
 def test_one_test_at_a_time_and_stop_gives_a_complete_record(tmp_path):

@@ -79,7 +79,7 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
     fill(driver, {**SETUP, "d0": "-3"})
     driver.find_element(By.ID, "btn-start").click()
     error = wait_for(lambda: text(driver, '#setup .field-error[data-for="d0"]'), what="the d0 error")
-    assert error == "--d0 must be a positive number of at most 1e+12, got -3.0"
+    assert error == "d0, mm must be more than 0 and at most 30 mm (the largest diameter the grips and platens take, [frame] max_specimen_diameter_mm), got -3"
     assert "invalid" in driver.find_element(By.ID, "f-d0").get_attribute("class")
     assert served_console.console.runner.current is None
     shot(driver, "2-bad-input")

@@ -133,7 +133,7 @@ function showStatus(s) {
 function showTest(t) {
   const isNew = !currentTest || !t || currentTest.test_id !== t.test_id;
   currentTest = t;
-  if (!t) return;
+  if (!t) { $("#record-name").textContent = ""; $("#post-panel").hidden = true; return; }  // no test (one refused before it began is forgotten)
   if (isNew && t.running && t.setup) {  // another page started it: show what it was set up with
     const form = $("#setup");
     for (const [name, value] of Object.entries(t.setup)) if (form.elements[name]) form.elements[name].value = value;
