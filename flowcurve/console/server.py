@@ -58,6 +58,7 @@ EVENT_PERIOD_S = 0.05  # at most 20 updates a second per page
 KEEPALIVE_S = 10.0
 WAKE_S = 0.5  # an idle stream looks at least this often whether the console is closing
 GRACEFUL_SHUTDOWN_S = 5.0  # then uvicorn closes connections that are still open
+FINAL_STATE_WAIT_S = 3.0  # a stream waits this long for an aborted test's final state before it closes
 DEFAULT_HOST = "127.0.0.1"  # any other --host needs a token
 # each POST endpoint's fields and their types (request_guard.check_fields)
 START_FIELDS = {"test": TEXT, **{k: NUMBER for k in NUMERIC_FIELDS}, **{k: TEXT for k in TEXT_FIELDS}}
@@ -417,9 +418,25 @@ async def _event_stream(console: Console, request: Request):
                         sent_at = loop.time()
                         yield b": keep-alive\n\n"
             await asyncio.sleep(max(0.0, sent_at + EVENT_PERIOD_S - loop.time()))  # at most one update per period
+        if console.closing.is_set():
+            async for chunk in _last_words(console):
+                yield chunk
     finally:
         if forget:
             forget()
+
+
+async def _last_words(console: Console):
+    """The console is shutting down: the aborted test's final state and outcome (once its thread has
+    switched the heater off and closed the record, within FINAL_STATE_WAIT_S), then ``closing`` — so
+    a page's last word is not "recording" from a console that is gone."""
+    run = console.runner.current
+    if run is not None:
+        await asyncio.to_thread(run.ended.wait, FINAL_STATE_WAIT_S)
+        yield _sse("test", console.test_summary())
+        yield _sse("status", run.view.status())
+    yield _sse("closing", {"message": "the console has shut down: a running test was aborted (heater off, record closed); "
+                                      "start it again (flowcurve console) and reload this page"})
 
 
 def serve(console: Console, host: str, port: int) -> None:

@@ -29,7 +29,7 @@ def _client(tmp_path: Path, **kw) -> tuple[Console, TestClient]:
     return console, TestClient(create_app(console), base_url=BASE_URL)
 
 
-def _wait(console: Console, states=("done", "fault"), timeout_s: float = 60.0) -> None:
+def _wait(console: Console, states=("complete", "aborted", "failed"), timeout_s: float = 60.0) -> None:
     end = time.monotonic() + timeout_s
     while time.monotonic() < end:
         run = console.runner.current
@@ -144,6 +144,9 @@ def test_one_test_at_a_time_and_stop_gives_a_complete_record(tmp_path):
     assert rec.meta["specimen.id"] == "C-a"
     assert ("stop", "operator stop (console)") in [(e.name, e.text) for e in rec.events]
     assert client.post("/api/stop", json={}, headers=JSON).json() == {"stopping": False}
+    # every recorded row is a point of the live plot (the rows taken in the tick of a stop were lost: 1832 of 1841)
+    assert len(run.view.force_displacement.x) == run.outcome.samples == len(rec.data)
+    assert run.view.status()["state"] == "complete"
 
 
 def test_abort_marks_the_record_aborted(tmp_path):
@@ -157,6 +160,7 @@ def test_abort_marks_the_record_aborted(tmp_path):
     rec = read_record(console.runner.current.record)
     assert rec.meta["status"] == "aborted"
     assert "abort button" in rec.meta["abort_reason"]
+    assert console.runner.current.view.status()["state"] == "aborted"  # not "done": its own word
 
 
 def test_shutting_the_console_down_mid_heating_switches_the_heater_off_and_closes_the_record(tmp_path):

@@ -37,7 +37,7 @@ def _wait_ended(console: Console, timeout_s: float = 60.0) -> None:
     end = time.monotonic() + timeout_s
     while time.monotonic() < end:
         run = console.runner.current
-        if run is not None and not run.running and run.view.state in ("done", "fault"):
+        if run is not None and not run.running and run.view.state in ("complete", "aborted", "failed"):
             return
         time.sleep(0.05)
     raise AssertionError("the test did not end")
