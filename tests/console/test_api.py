@@ -19,6 +19,7 @@ with warnings.catch_warnings():  # starlette's note about its test client's HTTP
 from flowcurve.cli import main as cli_main  # noqa: E402
 from flowcurve.console.server import Console, create_app  # noqa: E402
 from flowcurve.record.format import read_record  # noqa: E402
+from tests.console.conftest import identified_records  # noqa: E402
 
 JSON = {"Content-Type": "application/json"}
 BASE_URL = "http://127.0.0.1:8080"  # a name the console answers to (TestClient's own "testserver" is refused)
@@ -249,35 +250,11 @@ def test_console_listening_beyond_the_loopback_makes_a_token(monkeypatch, tmp_pa
     assert "access token" not in capsys.readouterr().err
 
 
-def _identified_records(out: Path, temperatures_C=(300.0,), rates_per_s=(1.0, 1.0)) -> list[str]:
-    """Records in OUT/records with their result folders written by hand in the documented format
-    (result.json, true_curve.csv): a power law at each (temperature, rate), no modulus."""
-    import json
-
-    import numpy as np
-
-    names = []
-    for i, (T, rate) in enumerate((T, r) for T in temperatures_C for r in rates_per_s):
-        name = f"t{i}.csv"
-        (out / "records").mkdir(parents=True, exist_ok=True)
-        (out / "records" / name).write_text("# flowcurve-record: 1\n")
-        folder = out / "results" / f"t{i}"
-        folder.mkdir(parents=True)
-        block = {"path": name, "name": f"t{i}", "test": "tension", "material": "steel", "nominal_temperature_C": T,
-                 "strain_rate_per_s": rate, "crosshead_speed_mm_per_s": rate * 30.0, "specimen": {"d0_mm": 6.0, "l0_mm": 30.0}}
-        (folder / "result.json").write_text(json.dumps({"test": "tension", "E_MPa": None, "record": block}))
-        eps = np.linspace(0.002, 0.3, 40)
-        rows = "\n".join(f"{e:.6g},{300 + 500 * e ** 0.3 + i:.6g}" for e in eps)
-        (folder / "true_curve.csv").write_text("true_plastic_strain,true_stress_MPa\n" + rows + "\n")
-        names.append(name)
-    return names
-
-
 def test_fit_with_nothing_optional_names_every_missing_input_beside_its_field_and_writes_nothing(tmp_path):
     """The page's fit and card asked for one input per refused attempt (Poisson's ratio, then density,
     then specific heat; melting temperature, then m) and left a fits/fit-* folder each time."""
     _console, client = _client(tmp_path)
-    names = _identified_records(tmp_path / "out")
+    names = identified_records(tmp_path / "out")
     r = client.post("/api/fit", json={"records": names, "format": "lsdyna"}, headers=JSON)
     assert r.status_code == 400, r.text
     body = r.json()

@@ -14,7 +14,7 @@ import pytest
 
 from flowcurve.cli import main as cli_main
 from flowcurve.record.format import read_record
-from tests.console.conftest import BROWSER_TIME_SCALE
+from tests.console.conftest import BROWSER_TIME_SCALE, identified_records
 
 By = pytest.importorskip("selenium.webdriver.common.by", reason="selenium is not installed (pip install -e .[test])").By
 
@@ -372,3 +372,66 @@ def test_a_console_that_shuts_down_leaves_the_page_disabled_and_saying_what_to_d
     wait_for(lambda: "no connection" in text(driver, "#stale"), timeout_s=10, what="the readings marked stale")
     assert read_record(run.record).meta["status"] == "aborted"
     shot(driver, "1-connection-lost")
+
+
+def test_values_outside_the_rig_and_a_fit_with_nothing_given_are_named_at_once_beside_their_fields(served_console, browser_factory, shot):
+    """-300 °C, 1e9 mm/s and a 1e12 mm target were accepted; the fit form asked for one missing input per attempt."""
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    fill(driver, {**SETUP, "temperature": "-300", "speed": "1e9", "target": "1e12"})
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: text(driver, '#setup .field-error[data-for="target"]'), what="the range errors")
+    assert text(driver, '#setup .field-error[data-for="temperature"]').startswith("Temperature, °C must be above 20 C (room")
+    assert text(driver, '#setup .field-error[data-for="speed"]').startswith("Speed, mm/s must be between 0.001 and 2 mm/s")
+    assert text(driver, '#setup .field-error[data-for="target"]').startswith("Target, mm must be more than 0 and at most 250 mm")
+    assert served_console.console.runner.current is None and text(driver, "#state") == "IDLE" and text(driver, "#record-name") == ""
+    shot(driver, "1-out-of-range")
+
+    # two identified records at one temperature and one rate, nothing typed in the fit form
+    names = identified_records(served_console.console.workspace.root)
+    driver.find_element(By.ID, "btn-refresh").click()
+    for name in names:
+        box = f'#records input[value="{name}"]'
+        wait_for(lambda: driver.find_element(By.CSS_SELECTOR, box).click() or driver.find_element(By.CSS_SELECTOR, box).is_selected(), what=f"{name} selected")
+    driver.find_element(By.ID, "btn-fit").click()
+    summary = wait_for(lambda: text(driver, '#fit .field-error[data-for="fit"]'), timeout_s=60, what="the fit's refusal")
+    assert "need 7 input(s) not given" in summary, summary
+    for field in ("melt_temp", "fix_C", "fix_m", "E_MPa", "poisson", "density", "cp"):
+        assert text(driver, f'#fit .field-error[data-for="{field}"]').startswith("needed"), field
+        assert "invalid" in driver.find_element(By.CSS_SELECTOR, f'#fit [name="{field}"]').get_attribute("class"), field
+    assert not (served_console.console.workspace.fits.exists() and list(served_console.console.workspace.fits.iterdir()))
+    shot(driver, "2-fit-missing-inputs")
+
+
+def test_a_killed_console_leaves_the_page_disabled_and_saying_what_to_do(browser_factory, shot, tmp_path):
+    """The console killed outright (no last word): the page kept a blue RECORDING badge with Stop and Abort enabled."""
+    import signal
+    import socket
+    import subprocess
+    import sys
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "console", "--out", str(tmp_path / "out"), "--port", str(port),
+                             "--time-scale", str(BROWSER_TIME_SCALE)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        url = f"http://127.0.0.1:{port}/"
+        wait_for(lambda: urllib.request.urlopen(url + "api/info", timeout=1).read(), what="the console to answer")
+        driver = browser_factory()
+        open_console(driver, url)
+        fill(driver, {**SETUP, "specimen_id": "C-killed", "speed": "0.01"})
+        driver.find_element(By.ID, "btn-start").click()
+        wait_for(lambda: fd_points(driver) > 5, what="recording", driver=driver)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(30)
+        wait_for(lambda: text(driver, "#state").lower() == "connection lost", timeout_s=15, what="the lost connection shown", driver=driver)
+        for button in ("btn-start", "btn-stop", "btn-abort"):
+            assert driver.find_element(By.ID, button).get_attribute("disabled") is not None, button
+        assert "start it again (flowcurve console) and reload this page" in text(driver, "#message")
+        wait_for(lambda: "no connection" in text(driver, "#stale"), timeout_s=10, what="the readings marked stale")
+        shot(driver, "1-killed")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
