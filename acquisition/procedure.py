@@ -406,6 +406,7 @@ class Procedure:
                 rows = sampler.take_rows()
                 if rows.size:
                     self.writer.append_rows(rows)
+                    self._unshown_rows.append(rows)  # until a snapshot carries them (a stop, fault or q ends the loop first)
                     if not moving and np.any(np.abs(rows[:, 2] - rows[0, 2]) > 0.02):
                         moving = True
                         self._event("start", "crosshead motion detected")
@@ -413,8 +414,7 @@ class Procedure:
                     curve_f.append(rows[::10, 1])
                     reason = stop_reason(rows, state, crit)
                     if reason:
-                        self._unshown_rows.append(rows)  # the done snapshot carries them to live plots
-                        return reason
+                        return reason  # the done snapshot carries the rows to live plots
                 fault = sampler.fault or sampler.check_silence()
                 if fault is not None:
                     self._event("fault", str(fault))
@@ -442,6 +442,7 @@ class Procedure:
                     curve_N=np.concatenate(curve_f) if curve_f else None,
                     rows=rows if rows.size else None,
                 ))
+                self._unshown_rows.clear()
                 self.timebase.sleep(self.tick_s)
 
     def _stop_motion(self) -> None:

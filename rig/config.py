@@ -139,6 +139,12 @@ class FurnaceConfig(SerialConfig):
 class FrameConfig:
     stiffness_N_per_um: float = 136.0
     max_force_N: float = 100_000.0
+    # what the machine can do and take: a test asking for more is refused before it starts
+    min_speed_mm_per_s: float = 0.001
+    max_speed_mm_per_s: float = 2.0
+    travel_mm: float = 250.0
+    max_specimen_diameter_mm: float = 30.0
+    max_specimen_length_mm: float = 200.0
 
 
 @dataclass(frozen=True)
@@ -206,6 +212,11 @@ SCHEMA: dict[str, tuple[type, dict[str, tuple[type, Any]]]] = {
     "frame": (FrameConfig, {
         "stiffness_N_per_um": (float, _in(0.0, 1e6, lo_open=True)),
         "max_force_N": (float, _in(0.0, 1e8, lo_open=True)),
+        "min_speed_mm_per_s": (float, _in(0.0, 1000.0, lo_open=True)),
+        "max_speed_mm_per_s": (float, _in(0.0, 1000.0, lo_open=True)),
+        "travel_mm": (float, _in(0.0, 10_000.0, lo_open=True)),
+        "max_specimen_diameter_mm": (float, _in(0.0, 1000.0, lo_open=True)),
+        "max_specimen_length_mm": (float, _in(0.0, 10_000.0, lo_open=True)),
     }),
     "instruments": (InstrumentsConfig, {
         "force_class": (float, _one_of((0.5, 1.0, 2.0, 3.0))),
@@ -251,6 +262,8 @@ def _section(origin: str, name: str, table: Any):
         values[key] = _value(where, key, value, *checks[key])
     if "port" in checks and "port" not in values:
         raise ConfigError(f"{where} port: missing (a device path, e.g. /dev/ttyUSB0, or a pyserial URL)")
+    if name == "frame" and values.get("min_speed_mm_per_s", FrameConfig.min_speed_mm_per_s) > values.get("max_speed_mm_per_s", FrameConfig.max_speed_mm_per_s):
+        raise ConfigError(f"{where} min_speed_mm_per_s: must not be above max_speed_mm_per_s")
     if name == "loadcell":
         given = [k for k in ("nominal_load_N", "calibration_N_per_count") if k in values]
         if len(given) != 1:

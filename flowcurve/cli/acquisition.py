@@ -103,6 +103,52 @@ def _positive(name: str, value: float | None) -> None:
         measurement(name, value)
 
 
+ROOM_TEMPERATURE_C = 20.0  # the record's nominal temperature without a set-point: a furnace heats above it
+MAX_SOAK_S = 86_400.0  # a day
+RANGE_OPTIONS = {"temperature": "--temperature", "soak": "--soak", "speed": "--speed", "target": "--target",
+                 "force_limit": "--force-limit", "d0": "--d0", "l0": "--l0", "h0": "--h0"}
+
+
+def out_of_range(args, config=None) -> dict[str, str]:
+    """What is wrong with each given value (``args`` dest → text after the option's name) that the
+    rig cannot do or take: the [frame] speed range, travel, largest specimen and capacity, the
+    furnace's range. ``config`` None: the virtual rig, which has the configuration's defaults."""
+    from flowcurve.rig.config import FrameConfig, FurnaceConfig
+
+    frame = config.frame if config is not None else FrameConfig()
+    furnace = config.furnace if config is not None else FurnaceConfig(port="virtual")
+    longest = (0.0, frame.max_specimen_length_mm, "mm", "the longest specimen that fits, [frame] max_specimen_length_mm")
+    limits = {  # dest → (low, high, unit, where the high end comes from); a low of 0 is checked as > 0 elsewhere
+        "speed": (frame.min_speed_mm_per_s, frame.max_speed_mm_per_s, "mm/s", "the machine's speed range, [frame] min_speed_mm_per_s and max_speed_mm_per_s"),
+        "target": (0.0, frame.travel_mm, "mm", "the crosshead travel, [frame] travel_mm"),
+        "force_limit": (0.0, frame.max_force_N, "N", "the machine's capacity, [frame] max_force_N"),
+        "d0": (0.0, frame.max_specimen_diameter_mm, "mm", "the largest diameter the grips and platens take, [frame] max_specimen_diameter_mm"),
+        "l0": longest, "h0": longest,
+        "soak": (0.0, MAX_SOAK_S, "s", "a day"),
+    }
+    problems = {}
+    for dest, (lo, hi, unit, why) in limits.items():
+        value = getattr(args, dest, None)
+        if value is None or not math.isfinite(value) or (lo <= value <= hi and value > 0):
+            continue
+        span = f"between {lo:g} and {hi:g} {unit}" if lo > 0 else f"more than 0 and at most {hi:g} {unit}"
+        problems[dest] = f"must be {span} ({why}), got {value:g}"
+    temperature = getattr(args, "temperature", None)
+    if temperature is not None and furnace is None:
+        problems["temperature"] = f"this rig has no furnace: leave it out for a test at room temperature, got {temperature:g}"
+    elif temperature is not None and not ROOM_TEMPERATURE_C < temperature < furnace.max_temperature_C:
+        problems["temperature"] = (f"must be above {ROOM_TEMPERATURE_C:g} C (room; leave it out for a test at room temperature) and below "
+                                   f"{furnace.max_temperature_C:g} C (the furnace's [furnace] max_temperature_C), got {temperature:g}")
+    return problems
+
+
+def check_ranges(args, config=None) -> None:
+    """``run``'s one-line error naming each option outside the rig's ranges (:func:`out_of_range`)."""
+    problems = out_of_range(args, config)
+    if problems:
+        raise FlowcurveError("; ".join(f"{RANGE_OPTIONS[dest]} {text}" for dest, text in problems.items()))
+
+
 def _interactive(args) -> bool:
     return not args.quiet and sys.stdin.isatty()
 
@@ -185,12 +231,13 @@ def cmd_run(args) -> int:
     return _run_virtual(args, view, out_path)
 
 
-def configured_spec(args) -> tuple[TestSpec, float]:
+def configured_spec(args, config=None) -> tuple[TestSpec, float]:
     """A test on the configured rig as ``run`` sets it up: (spec, time scale)."""
     scale = 1.0 if args.time_scale is None else args.time_scale
     _positive("time-scale", scale)
     if args.speed is None:
         args.speed = 0.01
+    check_ranges(args, config)
     return build_spec(args), scale
 
 
@@ -199,7 +246,7 @@ def _run_configured(args, view: LiveView, out_path: Path) -> int:
     from flowcurve.rig.config import load_config
 
     config = load_config(args.config)
-    spec, scale = configured_spec(args)
+    spec, scale = configured_spec(args, config)
     with DriverRig(config, time_scale=scale, stream=not args.poll) as rig:
         proc = Procedure(rig, spec, out_path, view=view, interactive=_interactive(args))
         return report_outcome(proc.run(), view)
@@ -223,6 +270,7 @@ def virtual_spec(args, view: LiveView) -> tuple[TestSpec, str, float]:
     base = Specimen.tension() if args.test == "tension" else Specimen.compression()
     geometry = {"d0_mm": base.d0_mm, "l0_mm" if args.test == "tension" else "h0_mm": base.length0_mm}
     args.material = args.material or name
+    check_ranges(args)
     return build_spec(args, geometry), name, scale
 
 

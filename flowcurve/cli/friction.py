@@ -34,7 +34,7 @@ def register(subparsers) -> None:
         ),
     )
     p.add_argument("records", nargs="+", metavar="RECORD", help="adhesion tables (flowcurve-adhesion CSV, or any CSV with --column)")
-    p.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    p.add_argument("--out", default="friction", metavar="DIR", help="output folder (default: ./friction)")
     _fit_options(p)
     p.add_argument("--column", action="append", default=[], metavar="QUANTITY=COLUMN[:UNIT]",
                    help="for a foreign CSV: which column holds which quantity, e.g. normal_force=Fz:kN moment=Mz:N*mm "

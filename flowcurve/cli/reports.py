@@ -98,9 +98,50 @@ CARD_OPTIONS = ("curves", "max_rows", "strain_rate_per_s", "temperature_C", "ext
                 "id_offset", "radioss_version", "fcut_hz", "erosion_strain", "damage_displacement_mm")
 
 
+# stand-ins for constants a card lacks, only to find every other one it lacks too (never written)
+_STAND_INS = {"E_MPa": 2.0e5, "poisson": 0.3, "density_kg_per_m3": 7850.0, "specific_heat_J_per_kgK": 460.0,
+              "conductivity_W_per_mK": 40.0, "expansion_per_K": 1.2e-5}
+
+
+def missing_constants(data, fmt: str, units: str, options: dict) -> list[str]:
+    """Every constant (CardData attribute) the card in ``fmt`` needs and ``data`` lacks, in the
+    order the card asks for them: the card is made on a copy, a stand-in filling each gap found."""
+    import copy
+
+    from flowcurve.reports.cards.data import MissingConstant
+
+    probe, missing = copy.copy(data), []
+    while True:
+        try:
+            write_card(probe, fmt, units, **options)
+            return missing
+        except MissingConstant as exc:
+            if exc.name in missing:  # a stand-in the card refuses: name what was found so far
+                return missing
+            missing.append(exc.name)
+            stand_in = probe.ref_temperature_C + 1000.0 if exc.name == "melt_temperature_C" else _STAND_INS[exc.name]
+            setattr(probe, exc.name, stand_in)
+
+
+def missing_text(names: list[str], labels: dict[str, str] | None = None) -> str:
+    """'Poisson's ratio (--poisson), density in kg/m3 (--density)': each constant as
+    ``labels`` names it (the console's form), else with the option that gives it."""
+    from flowcurve.reports.cards.data import CONSTANTS
+
+    labels = labels or {}
+    return ", ".join(labels.get(n) or f"{CONSTANTS[n][2]} ({CONSTANTS[n][1]})" for n in names)
+
+
 def run_card(args) -> int:
+    from flowcurve.reports.cards.fields import CardError
+
     data = load_card_data(args.fit, **overrides(args))
-    text = write_card(data, args.format, args.units, **{k: getattr(args, k) for k in CARD_OPTIONS})
+    options = {k: getattr(args, k) for k in CARD_OPTIONS}
+    missing = missing_constants(data, args.format, args.units, options)
+    if missing:
+        raise CardError(f"{args.fit}: the {args.format} card needs {len(missing)} value(s) not in the fit file: "
+                        f"{missing_text(missing)}; give them as options or as keys in the fit file")
+    text = write_card(data, args.format, args.units, **options)
     if args.output:
         Path(args.output).write_text(text, encoding="utf-8")
         print(f"{args.format} card ({args.units}) written to {args.output}", file=sys.stderr)

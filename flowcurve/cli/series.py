@@ -64,6 +64,12 @@ def run(args) -> int:
 
     members = load_members(args.inputs, **({"E_MPa": args.E_MPa} if args.E_MPa is not None else {}))
     fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
+    missing = missing_inputs(members, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
+                             melt_temperature_C=args.melt_temp, fixed=fixed)
+    if missing:
+        from flowcurve.errors import IdentificationError
+
+        raise IdentificationError(missing_message(missing))
     extra = read_fracture_points(args.fracture_points) if args.fracture_points else ()
     series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
                         melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points, fracture_points=extra,
@@ -74,6 +80,50 @@ def run(args) -> int:
         print(f"flowcurve: error: the fit is poor (max error {series.fit.fit_error_pct:.3g} % > 10 %); {out} is marked poor (--strict)", file=sys.stderr)
         return 2
     return 0
+
+
+# each input the fit may lack: (option, what it is, why the fit needs it)
+FIT_INPUTS = {
+    "melt_temp": ("--melt-temp", "melting temperature, °C", "T* = (T - T_ref)/(T_melt - T_ref) needs it"),
+    "fix_C": ("--fix-C", "C", "the series has one strain rate as the model sees it: fix C, or add records at other rates"),
+    "fix_m": ("--fix-m", "m", "the series has one temperature as the model sees it: fix m, or add records at other temperatures"),
+}
+
+
+def missing_inputs(members, *, ref_strain_rate_per_s=None, ref_temperature_C=None, melt_temperature_C=None,
+                   fixed=None) -> list[str]:
+    """Every input (a key of FIT_INPUTS) the fit of ``members`` lacks, found at once: the melting
+    temperature when not given, and C or m when the series cannot identify it and it is not fixed."""
+    from flowcurve.errors import IdentificationError
+    from flowcurve.identification.series import BOUNDS, check_identifiable, make_reference
+
+    fixed, missing = dict(fixed or {}), []
+    melt = melt_temperature_C
+    if melt is None:
+        missing.append("melt_temp")
+        # a stand-in above every record, only to see which of C and m the series can give
+        melt = max([m.temperature_C for m in members] + [ref_temperature_C or 0.0]) + 1000.0
+    try:
+        ref = make_reference(members, ref_strain_rate_per_s=ref_strain_rate_per_s, ref_temperature_C=ref_temperature_C,
+                             melt_temperature_C=melt)
+    except IdentificationError:
+        return missing  # the fit's own checks name what is wrong with the given values
+    for name, other in (("C", "m"), ("m", "C")):
+        if name in fixed:
+            continue
+        try:
+            check_identifiable(members, ref, {other: BOUNDS[other][0]})  # the other one fixed: this one alone is checked
+        except IdentificationError:
+            missing.append(f"fix_{name}")
+    return missing
+
+
+def missing_message(missing: list[str], labels: dict[str, str] | None = None) -> str:
+    """One line naming every input the fit lacks, as ``labels`` name them (the console's form)
+    or by option."""
+    labels = labels or {}
+    parts = [f"{labels.get(k) or FIT_INPUTS[k][1] + ' (' + FIT_INPUTS[k][0] + ')'}: {FIT_INPUTS[k][2]}" for k in missing]
+    return f"the fit needs {len(missing)} input(s) not given: " + "; ".join(parts)
 
 
 def _safe(name: str) -> str:

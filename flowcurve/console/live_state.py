@@ -20,7 +20,10 @@ from typing import Callable
 
 import numpy as np
 
-ENDED_STATES = ("done", "fault")  # set by the console's runner only, once the test's outcome is known
+# set by the console's runner only, once the test's outcome is known: each its own word (and colour on the page)
+COMPLETE_STATE, ABORTED_STATE, FAILED_STATE = "complete", "aborted", "failed"
+ENDED_STATES = (COMPLETE_STATE, ABORTED_STATE, FAILED_STATE)
+PROCEDURE_ENDED = ("done", "fault")  # the procedure's own last snapshot: shown as "stopping" until the runner's state
 STOPPING_STATE = "stopping"  # the procedure has ended, the runner is releasing the rig and taking the outcome
 MAX_POINTS = 20_000  # per plot, before thinning
 COLUMN_FORCE, COLUMN_CROSSHEAD = 1, 2  # record rows: time_s, force_N, crosshead_mm[, temperature_C]
@@ -82,11 +85,13 @@ class ConsoleView:
         self.force_displacement = PlotBuffer()
         self.temperature_time = PlotBuffer()
         self.last_sample_epoch_s: float | None = None  # wall time (epoch) the newest plotted sample was stamped
+        self.readings_wall_s = time.monotonic()  # when the procedure last showed readings (their age goes to the page)
         self._listeners: set[Callable[[], None]] = set()
 
     # the procedure's side --------------------------------------------------------------------
     def _heater_state(self, ended: bool) -> bool | None:
-        """The relay now; while the test runs, on if it was on within the controller's window."""
+        """The relay now; while the test runs, on if it was on within the controller's window, and
+        on throughout "heating" (the controller is driving it up; between its pulses the relay rests)."""
         now_on = self.heater()
         if now_on is None:
             return None
@@ -95,14 +100,14 @@ class ConsoleView:
             self._heater_on_wall_s = now
         if ended:
             return now_on
-        return now_on or (self._heater_on_wall_s is not None and now - self._heater_on_wall_s < self.heater_window_s)
+        return now_on or self.state == "heating" or (self._heater_on_wall_s is not None and now - self._heater_on_wall_s < self.heater_window_s)
 
     def show(self, s, force: bool = False) -> None:
         self._heater_state(ended=False)  # catch the short on-pulses between the pages' looks
         with self.lock:
             # the procedure's "done" comes before the rig is released and its outcome returned:
-            # the page hears "done" (or "fault") from the runner, with the outcome (runner._end)
-            self.state = STOPPING_STATE if s.state in ENDED_STATES else s.state
+            # the page hears "complete", "aborted" or "failed" from the runner, with the outcome (runner._end)
+            self.state = STOPPING_STATE if s.state in PROCEDURE_ENDED else s.state
             self.message = s.message
             self.progress = s.progress
             self.samples = max(self.samples, int(s.samples or 0))
@@ -112,6 +117,8 @@ class ConsoleView:
             }
             if s.state in ("done", "tare"):  # these snapshots carry no readings: the last ones stay on show
                 readings = {**self.readings, "time_s": readings["time_s"]}
+            else:
+                self.readings_wall_s = time.monotonic()
             self.readings = readings
             rows = getattr(s, "rows", None)
             if rows is not None and len(rows):
@@ -164,6 +171,10 @@ class ConsoleView:
                 "progress": self.progress,
                 "messages": list(self.messages[-5:]),
                 **self.readings,
+                # wall seconds since the readings were taken: the page marks them stale once they stop
+                # updating (after the test, the rig is released and nothing reads the furnace any more)
+                "readings_age_s": round(time.monotonic() - self.readings_wall_s, 2),
+                "time_scale": self.time_scale,
             }
 
     def points_since(self, cursor: dict | None) -> tuple[dict, dict]:

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from flowcurve.acquisition.safety import Interrupted
-from flowcurve.console.live_state import ConsoleView
+from flowcurve.console.live_state import ABORTED_STATE, COMPLETE_STATE, FAILED_STATE, ConsoleView
 from flowcurve.console.setup_form import TestSetup
 from flowcurve.errors import FlowcurveError
 
@@ -29,8 +29,10 @@ log = logging.getLogger(__name__)
 OPERATOR_STOP = "operator stop (console)"
 ABORT_SIGNAME = "the console's abort button"  # the record says "stopped by the console's abort button"
 SHUTDOWN_SIGNAME = "the console shutting down"
-FAULT_STATE = "fault"
 HEATER_WINDOW_PERIODS = 1.5  # the heater shows "on" while its relay was on within this many control periods
+# ... and at least this many wall seconds: the pages look 20 times a second, and at a time scale of 60 a
+# 2 s control period is 33 ms, so a relay pulsing through the heat-up read "off" in 4 of 8 looks
+HEATER_WINDOW_MIN_S = 1.0
 
 
 class BusyError(FlowcurveError):
@@ -105,6 +107,7 @@ class TestRunner:
         self._lock = threading.Lock()
         self._next_id = 1
         self.current: TestRun | None = None
+        self._before: TestRun | None = None  # the test shown before the current one was started
 
     @property
     def virtual(self) -> bool:
@@ -115,15 +118,23 @@ class TestRunner:
             if self.current is not None and self.current.running:
                 raise BusyError(f"a test is running on this rig already ({self.current.record.name}); stop it first")
             self.records_dir.mkdir(parents=True, exist_ok=True)
-            view = ConsoleView(self._next_id, time_scale=setup.time_scale, heater_window_s=HEATER_WINDOW_PERIODS * self._control_period_s() / setup.time_scale)
+            view = ConsoleView(self._next_id, time_scale=setup.time_scale, heater_window_s=max(HEATER_WINDOW_MIN_S, HEATER_WINDOW_PERIODS * self._control_period_s() / setup.time_scale))
             run = TestRun(self._next_id, setup, self.records_dir / record_name(setup), view)
             run.view.heater = lambda: self._heater_on(run)
             run.form = {str(k): str(v) for k, v in (form or {}).items()}
             self._next_id += 1
+            self._before = self.current
             run.thread = threading.Thread(target=self._run, args=(run,), name=f"flowcurve-console-test-{run.test_id}", daemon=False)
             self.current = run
             run.thread.start()
             return run
+
+    def discard(self, run: TestRun) -> None:
+        """Forget a test the procedure refused before it began (nothing recorded): the pages
+        show the test before it again, not a fault and a record name for a test that never ran."""
+        with self._lock:
+            if self.current is run and not run.running and not run.record.exists():
+                self.current = self._before
 
     def _control_period_s(self) -> float:
         from flowcurve.rig.config import FurnaceConfig
@@ -213,8 +224,10 @@ class TestRunner:
     def _end(run: TestRun) -> None:
         """Outcome, post and error final → ``ended`` → the view's last state (which wakes the pages).
 
-        In this order, so that a page told "done" or "fault" finds the test's outcome beside it;
-        the procedure's own "done" shows as "stopping" until then (the rig is still being released).
+        In this order, so that a page told the test ended finds its outcome beside it; the
+        procedure's own "done" shows as "stopping" until then (the rig is still being released).
+        The last state is "complete", "aborted" (stopped before its end, the record kept) or
+        "failed" (a fault, or a test that could not start), each its own word on the page.
         """
         o = run.outcome
         if o is not None:
@@ -223,6 +236,6 @@ class TestRunner:
                 run.error = str(o.error)
         run.ended.set()
         if run.error:
-            run.view.set_state(FAULT_STATE, f"{run.error} (the record keeps everything up to the fault)" if o is not None else run.error)
+            run.view.set_state(FAILED_STATE, f"{run.error} (the record keeps everything up to the fault)" if o is not None else run.error)
         else:
-            run.view.set_state("done", f"{o.status}: {o.reason}")
+            run.view.set_state(COMPLETE_STATE if o.status == "complete" else ABORTED_STATE, f"{o.status}: {o.reason}")

@@ -58,6 +58,7 @@ EVENT_PERIOD_S = 0.05  # at most 20 updates a second per page
 KEEPALIVE_S = 10.0
 WAKE_S = 0.5  # an idle stream looks at least this often whether the console is closing
 GRACEFUL_SHUTDOWN_S = 5.0  # then uvicorn closes connections that are still open
+FINAL_STATE_WAIT_S = 3.0  # a stream waits this long for an aborted test's final state before it closes
 DEFAULT_HOST = "127.0.0.1"  # any other --host needs a token
 # each POST endpoint's fields and their types (request_guard.check_fields)
 START_FIELDS = {"test": TEXT, **{k: NUMBER for k in NUMERIC_FIELDS}, **{k: TEXT for k in TEXT_FIELDS}}
@@ -65,6 +66,7 @@ POST_FIELDS = {k: NUMBER for keys in POST_KEYS.values() for k in keys}
 FIT_FIELDS = {"records": NAMES, **{k: NUMBER for k in ("melt_temp", "fix_C", "fix_m", "ref_rate", "ref_temp", "poisson", "density", "cp", "E_MPa")},
               **{k: TEXT for k in ("method", "format", "units")}}
 LOGIN_FIELDS = {"token": TEXT}
+IDLE_STATUS = {"state": "idle", "heater": "off"}
 
 
 class Console:
@@ -250,12 +252,12 @@ def create_app(console: Console) -> Starlette:
 
     async def status(request: Request) -> Response:
         run = runner.current
-        return _json({"status": run.view.status() if run else {"state": "idle", "heater": "off"}, "test": console.test_summary()})
+        return _json({"status": run.view.status() if run else IDLE_STATUS, "test": console.test_summary()})
 
     async def start(request: Request) -> Response:
         try:
             data = await _body(request, START_FIELDS)
-            setup = validate(data, virtual=runner.virtual, time_scale=console.time_scale)
+            setup = validate(data, virtual=runner.virtual, time_scale=console.time_scale, config=runner.config)
             run = runner.start(setup, {k: v for k, v in data.items() if isinstance(v, (str, int, float))})
         except FormError as exc:
             return _error(str(exc), 400, fields=exc.errors)
@@ -267,9 +269,11 @@ def create_app(console: Console) -> Starlette:
                 break
             await asyncio.sleep(0.05)
         if not run.running and run.error and run.outcome is None:
-            from flowcurve.console.setup_form import field_of
+            from flowcurve.console.setup_form import field_of, labelled
 
-            return _error(run.error, 400, fields={field_of(run.error): run.error})
+            runner.discard(run)
+            field = field_of(run.error)
+            return _error(run.error, 400, fields={field: labelled(field, run.error)})
         return _json({"test": console.test_summary()})
 
     async def stop(request: Request) -> Response:
@@ -311,6 +315,8 @@ def create_app(console: Console) -> Starlette:
             return _error("records: give a list of record names")
         try:
             result = await asyncio.to_thread(workspace.fit_and_card, [str(n) for n in names], data)
+        except FormError as exc:  # every input the fit and card lack, each beside its field
+            return _error(exc.errors.get("fit", str(exc)), 400, fields=exc.errors)
         except FlowcurveError as exc:
             return _error(str(exc))
         return _json(result)
@@ -403,8 +409,8 @@ async def _event_stream(console: Console, request: Request):
                 points, cursor = run.view.points_since(cursor)
                 if points["fd"]["x"] or points["tt"]["x"] or points["fd"]["reset"] or points["tt"]["reset"]:
                     yield _sse("points", points)
-            elif last_status is None:
-                last_status = {"state": "idle", "heater": "off"}
+            elif last_status != IDLE_STATUS:  # none yet, or a test refused before it began was forgotten
+                last_status = IDLE_STATUS
                 yield _sse("status", last_status)
             sent_at = loop.time()
             while not changed.is_set() and not console.closing.is_set() and console.runner.current is listening_to:
@@ -415,9 +421,25 @@ async def _event_stream(console: Console, request: Request):
                         sent_at = loop.time()
                         yield b": keep-alive\n\n"
             await asyncio.sleep(max(0.0, sent_at + EVENT_PERIOD_S - loop.time()))  # at most one update per period
+        if console.closing.is_set():
+            async for chunk in _last_words(console):
+                yield chunk
     finally:
         if forget:
             forget()
+
+
+async def _last_words(console: Console):
+    """The console is shutting down: the aborted test's final state and outcome (once its thread has
+    switched the heater off and closed the record, within FINAL_STATE_WAIT_S), then ``closing`` — so
+    a page's last word is not "recording" from a console that is gone."""
+    run = console.runner.current
+    if run is not None:
+        await asyncio.to_thread(run.ended.wait, FINAL_STATE_WAIT_S)
+        yield _sse("test", console.test_summary())
+        yield _sse("status", run.view.status())
+    yield _sse("closing", {"message": "the console has shut down: a running test was aborted (heater off, record closed); "
+                                      "start it again (flowcurve console) and reload this page"})
 
 
 def serve(console: Console, host: str, port: int) -> None:

@@ -28,6 +28,9 @@ NUMERIC_FIELDS = {
     "force_limit": ("--force-limit", "N"),
 }
 TEXT_FIELDS = ("material", "operator", "specimen_id")
+# each field as the form labels it (static/index.html): an error beside a field names it so
+LABELS = {"E_MPa": "Handbook E, MPa", "d0": "d0, mm", "l0": "l0, mm", "h0": "h0, mm", "temperature": "Temperature, °C",
+          "soak": "Soak, s", "speed": "Speed, mm/s", "target": "Target, mm", "force_limit": "Force limit, N"}
 SOAK_DEFAULT_S = 60.0  # run's --soak default
 
 
@@ -92,10 +95,18 @@ def field_of(message: str) -> str:
     return "form"
 
 
-def validate(form: dict, *, virtual: bool, time_scale: float | None) -> TestSetup:
-    """Check the form as ``run`` checks its options; a :class:`FormError` lists every bad field."""
+def labelled(field: str, message: str) -> str:
+    """``run``'s message with the field's option (``--d0 …``) named as the form labels it."""
+    if field in LABELS:
+        return re.sub(rf"(?<![\w-]){re.escape(NUMERIC_FIELDS[field][0])}(?![\w-])", LABELS[field], message, count=1)
+    return message
+
+
+def validate(form: dict, *, virtual: bool, time_scale: float | None, config=None) -> TestSetup:
+    """Check the form as ``run`` checks its options, the rig's ranges included (``config``, None
+    on the virtual rig); a :class:`FormError` lists every bad field, each named by its label."""
     from flowcurve.acquisition.live import LiveView
-    from flowcurve.cli.acquisition import _positive, configured_spec, virtual_spec
+    from flowcurve.cli.acquisition import _positive, configured_spec, out_of_range, virtual_spec
 
     errors: dict[str, str] = {}
     args = run_namespace(form, errors)
@@ -108,17 +119,20 @@ def validate(form: dict, *, virtual: bool, time_scale: float | None) -> TestSetu
             errors[field] = str(exc)
     if args.E_MPa is not None and not args.E_MPa > 0 and "E_MPa" not in errors:
         errors["E_MPa"] = f"--E must be a positive number, got {args.E_MPa:g}"
+    for field, text in out_of_range(args, None if virtual else config).items():
+        errors[field] = f"{NUMERIC_FIELDS[field][0]} {text}"  # the range says more than "a positive number"
     if errors:
-        raise FormError(errors)
+        raise FormError({field: labelled(field, message) for field, message in errors.items()})
     args.time_scale = time_scale
     try:
         if virtual:
             spec, material, scale = virtual_spec(args, LiveView(quiet=True))
         else:
-            (spec, scale), material = configured_spec(args), None
+            (spec, scale), material = configured_spec(args, config), None
         spec.check()
     except FlowcurveError as exc:
-        raise FormError({field_of(str(exc)): str(exc)}) from None
+        field = field_of(str(exc))
+        raise FormError({field: labelled(field, str(exc))}) from None
     return TestSetup(spec, material, scale)
 
 

@@ -133,7 +133,11 @@ class Workspace:
     # series fit and card ----------------------------------------------------------------------
     def fit_and_card(self, names: list[str], options: dict) -> dict:
         """``flowcurve fit`` on the named records (their result folders when identified), then
-        ``flowcurve card``: both with the command line's own parsers and functions."""
+        ``flowcurve card``: both with the command line's own parsers and functions. Every input
+        the two lack is named at once (a FormError by field) before anything is written, and a
+        fit or card that fails leaves no folder behind."""
+        import shutil
+
         from flowcurve.cli import build_parser
         from flowcurve.cli.reports import run_card
         from flowcurve.cli.series import summary, write_fit
@@ -155,25 +159,63 @@ class Workspace:
         if options.get("method"):
             argv += ["--method", str(options["method"])]
         args = _parse(build_parser(), argv)
-        members = load_members(args.inputs)
-        fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
-        series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
-                            melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points,
-                            shape_error_pct=args.shape_error)
-        fit_json = write_fit(series, out)
-        text = summary(series, fit_json)
         fmt = str(options.get("format") or "lsdyna")
         units = str(options.get("units") or "").strip()
         card = out / f"card-{bare_name(fmt, 'format')}.{_CARD_SUFFIX.get(fmt, 'txt')}"
-        card_argv = ["card", str(fit_json), "--format", fmt, "-o", str(card)] + (["--units", units] if units else [])
-        for key, option in (("poisson", "--poisson"), ("density", "--density"), ("cp", "--cp"), ("E_MPa", "--E")):
+        card_argv = ["card", "fit.json", "--format", fmt, "-o", str(card)] + (["--units", units] if units else [])
+        for key, option in CARD_FIELDS.items():
             value = str(options.get(key) or "").strip()
             if value:
                 card_argv += [option, value]
-        run_card(_parse(build_parser(), card_argv))
+        card_args = _parse(build_parser(), card_argv)
+        members = load_members(args.inputs)
+        fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
+        _check_complete(members, args, card_args, fixed)
+        try:
+            series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
+                                melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points,
+                                shape_error_pct=args.shape_error)
+            fit_json = write_fit(series, out)
+            card_args.fit = str(fit_json)
+            run_card(card_args)
+        except BaseException:
+            shutil.rmtree(out, ignore_errors=True)  # a refused fit or card leaves no fits/fit-* folder
+            raise
+        text = summary(series, fit_json)
         plots = sorted((out / "plots").glob("*.png"))
         return {"summary": text, "fit": self.url(fit_json), "card": self.url(card), "card_name": card.name,
                 "plots": [self.url(p) for p in plots], "folder": self.url(out)}
+
+
+# the fit form's card fields → card option; and how the form labels every input it may lack
+CARD_FIELDS = {"poisson": "--poisson", "density": "--density", "cp": "--cp", "E_MPa": "--E"}
+FIT_LABELS = {"melt_temp": "Melting temperature, °C", "fix_C": "fix C", "fix_m": "fix m", "poisson": "Poisson's ratio",
+              "density": "Density, kg/m³", "cp": "Specific heat, J/(kg K)", "E_MPa": "E, MPa"}
+FIELD_OF_CONSTANT = {"melt_temperature_C": "melt_temp", "poisson": "poisson", "density_kg_per_m3": "density",
+                     "specific_heat_J_per_kgK": "cp", "E_MPa": "E_MPa"}
+
+
+def _check_complete(members, args, card_args, fixed) -> None:
+    """Every input the fit and the card lack, by form field, in one FormError (nothing written)."""
+    from flowcurve.cli.reports import CARD_OPTIONS, missing_constants, overrides
+    from flowcurve.cli.series import FIT_INPUTS, missing_inputs
+    from flowcurve.console.setup_form import FormError
+    from flowcurve.reports.cards.data import CONSTANTS, card_data_from_fit
+
+    missing = {k: f"needed: {FIT_INPUTS[k][2]}" for k in missing_inputs(
+        members, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp, melt_temperature_C=args.melt_temp, fixed=fixed)}
+    # the card's constants as fit.json will carry them (the records' mean E and Poisson's ratio), the law a stand-in
+    Es = [m.E_MPa for m in members if m.E_MPa is not None]
+    nus = [m.poisson_ratio for m in members if m.poisson_ratio is not None]
+    provisional = {"A_MPa": 1.0, "B_MPa": 1.0, "n": 0.5, "melt_temperature_C": args.melt_temp,
+                   "E_MPa": sum(Es) / len(Es) if Es else None, "poisson_ratio": sum(nus) / len(nus) if nus else None}
+    data = card_data_from_fit(provisional, "fit.json", **overrides(card_args))
+    card_options = {k: getattr(card_args, k) for k in CARD_OPTIONS}
+    for name in missing_constants(data, card_args.format, card_args.units, card_options):
+        missing.setdefault(FIELD_OF_CONSTANT[name], f"needed: the {card_args.format} card needs the {CONSTANTS[name][2]}")
+    if missing:
+        listed = ", ".join(FIT_LABELS[k] for k in missing)
+        raise FormError({**missing, "fit": f"the fit and card need {len(missing)} input(s) not given: {listed}"})
 
 
 _CARD_SUFFIX = {"lsdyna": "k", "abaqus": "inp", "radioss": "rad", "calculix": "inp"}

@@ -98,6 +98,14 @@ CONSTANTS = {
 }
 
 
+class MissingConstant(CardError):
+    """A constant the card needs and was not given; ``name`` is its CardData attribute."""
+
+    def __init__(self, name: str, message: str):
+        super().__init__(message)
+        self.name = name
+
+
 @dataclass
 class FlowCurve:
     """One tabulated flow curve σ(εp) at a temperature and strain rate (lab units)."""
@@ -166,9 +174,9 @@ class CardData:
         if value is None:
             key, option, what = CONSTANTS[name]
             if name == "E_MPa" and self.E_source:  # the fit file says why it has none (apparent moduli only)
-                raise CardError(f"{self.source_path}: the card needs the material's {what}: give it with {option} "
+                raise MissingConstant(name, f"{self.source_path}: the card needs the material's {what}: give it with {option} "
                                 f"(the fit file's E is {self.E_source})")
-            raise CardError(f"{self.source_path}: the card needs the {what}: give it with {option} or as '{key}' in the fit file")
+            raise MissingConstant(name, f"{self.source_path}: the card needs the {what}: give it with {option} or as '{key}' in the fit file")
         return value
 
     # -- what the card is valid for --------------------------------------------------------

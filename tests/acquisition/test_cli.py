@@ -104,9 +104,9 @@ def test_run_virtual_compression_from_the_command_line(tmp_path, capsys, mode, v
 
 @pytest.mark.parametrize("args,message", [
     (["run", "tension", "--config", "/nonexistent/rig.toml", "--quiet", "--d0", "6", "--l0", "30"], "rig.toml"),
-    (["run", "tension", "--quiet", "--d0", "-6"], "--d0 must be a positive number"),
+    (["run", "tension", "--quiet", "--d0", "-6"], "--d0 must be more than 0 and at most 30 mm"),
     (["run", "tension", "--quiet", "--time-scale", "0"], "--time-scale must be a positive number"),
-    (["run", "tension", "--quiet", "--temperature", "5000"], "is not below the configured maximum"),
+    (["run", "tension", "--quiet", "--temperature", "5000"], "below 900 C (the furnace's [furnace] max_temperature_C), got 5000"),
     (["run", "tension", "--quiet", "--post", "post.lu_mm=x"], "must be a number"),
 ])
 def test_run_bad_input_is_one_line(tmp_path, capsys, args, message):

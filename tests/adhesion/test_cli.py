@@ -111,3 +111,11 @@ def test_friction_demo_refined_flags_the_undetermined_sigma_S(tmp_path, capsys):
     data = json.loads((out_dir / "friction.json").read_text())
     assert abs(data["sigma_S_MPa"]) < data["sigma_S_MPa_stderr"] and data["undetermined"] == ["sigma_S_MPa"]
     assert "VC = 0 (sigma_S not identified" in (out_dir / "friction_lsdyna.k").read_text()
+
+
+def test_friction_without_out_writes_to_the_default_folder(make_table, tmp_path, monkeypatch):
+    """Like fit and friction-demo, friction needs no --out: it writes ./friction (it used to refuse)."""
+    table, _ = make_table(contact="full", moment_noise_rel=0.002, radius_noise_um=0.2)
+    monkeypatch.chdir(tmp_path)
+    assert main(["friction", table.sources[0], "--mu-d", str(TRUTH.mu_d)]) == 0
+    assert (tmp_path / "friction" / "friction.json").is_file()

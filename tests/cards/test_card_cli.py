@@ -38,6 +38,24 @@ def test_missing_constant_is_one_line_naming_the_option(fit_file, capsys, missin
     assert err.startswith("flowcurve: error:") and option in err and "\n" not in err
 
 
+@pytest.mark.parametrize("fmt, options", [
+    ("lsdyna", ("--E", "--poisson", "--density", "--cp", "--melt-temp")),
+    ("abaqus", ("--E", "--poisson", "--density", "--melt-temp")),
+    ("radioss", ("--E", "--poisson", "--density", "--cp", "--melt-temp")),
+])
+def test_card_with_nothing_optional_names_every_missing_constant_at_once(fit_file, tmp_path, capsys, fmt, options):
+    """A fit file without the elastic and thermal constants: one message lists every one the card
+    needs (they were asked for one refused run at a time), and no card file is written."""
+    path = fit_file(E_MPa=None, poisson_ratio=None, density_kg_per_m3=None, specific_heat_J_per_kgK=None, melt_temperature_C=None)
+    out = tmp_path / "card.txt"
+    assert main(["card", str(path), "-f", fmt, "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and f"needs {len(options)} value(s)" in err, err
+    for option in options:
+        assert f"({option})" in err, (option, err)
+    assert "Poisson's ratio" in err and not out.exists()
+
+
 def test_bad_fit_files_are_one_line_errors(tmp_path, capsys):
     bad = tmp_path / "fit.json"
     bad.write_text("{\"A_MPa\": 100,\n oops}")

@@ -104,3 +104,27 @@ def shot(request):
         return path
 
     return save
+
+
+def identified_records(out: Path, temperatures_C=(300.0,), rates_per_s=(1.0, 1.0)) -> list[str]:
+    """Records in OUT/records with their result folders written by hand in the documented format
+    (result.json, true_curve.csv): a power law at each (temperature, rate), no modulus."""
+    import json
+
+    import numpy as np
+
+    names = []
+    for i, (T, rate) in enumerate((T, r) for T in temperatures_C for r in rates_per_s):
+        name = f"t{i}.csv"
+        (out / "records").mkdir(parents=True, exist_ok=True)
+        (out / "records" / name).write_text("# flowcurve-record: 1\n")
+        folder = out / "results" / f"t{i}"
+        folder.mkdir(parents=True)
+        block = {"path": name, "name": f"t{i}", "test": "tension", "material": "steel", "nominal_temperature_C": T,
+                 "strain_rate_per_s": rate, "crosshead_speed_mm_per_s": rate * 30.0, "specimen": {"d0_mm": 6.0, "l0_mm": 30.0}}
+        (folder / "result.json").write_text(json.dumps({"test": "tension", "E_MPa": None, "record": block}))
+        eps = np.linspace(0.002, 0.3, 40)
+        rows = "\n".join(f"{e:.6g},{300 + 500 * e ** 0.3 + i:.6g}" for e in eps)
+        (folder / "true_curve.csv").write_text("true_plastic_strain,true_stress_MPa\n" + rows + "\n")
+        names.append(name)
+    return names

@@ -19,6 +19,7 @@ with warnings.catch_warnings():  # starlette's note about its test client's HTTP
 from flowcurve.cli import main as cli_main  # noqa: E402
 from flowcurve.console.server import Console, create_app  # noqa: E402
 from flowcurve.record.format import read_record  # noqa: E402
+from tests.console.conftest import identified_records  # noqa: E402
 
 JSON = {"Content-Type": "application/json"}
 BASE_URL = "http://127.0.0.1:8080"  # a name the console answers to (TestClient's own "testserver" is refused)
@@ -29,7 +30,7 @@ def _client(tmp_path: Path, **kw) -> tuple[Console, TestClient]:
     return console, TestClient(create_app(console), base_url=BASE_URL)
 
 
-def _wait(console: Console, states=("done", "fault"), timeout_s: float = 60.0) -> None:
+def _wait(console: Console, states=("complete", "aborted", "failed"), timeout_s: float = 60.0) -> None:
     end = time.monotonic() + timeout_s
     while time.monotonic() < end:
         run = console.runner.current
@@ -53,19 +54,77 @@ def test_bad_values_are_refused_with_the_run_commands_words_beside_each_field(tm
     assert r.status_code == 400
     fields = r.json()["fields"]
     assert set(fields) == {"d0", "speed", "target"}
-    # the same value given to `flowcurve run` is refused with the same message
-    assert fields["d0"] == _cli_error(["run", "compression", "--quiet", "--d0", "-2", "--out", str(tmp_path / "x.csv")], capsys)
-    assert fields["target"] == _cli_error(["run", "compression", "--quiet", "--target", "0", "--out", str(tmp_path / "y.csv")], capsys)
-    assert "not a number" in fields["speed"]
+    # the same value given to `flowcurve run` is refused with the same message, the field named as the form labels it
+    assert fields["d0"] == _cli_error(["run", "compression", "--quiet", "--d0", "-2", "--out", str(tmp_path / "x.csv")], capsys).replace("--d0", "d0, mm")
+    assert fields["target"] == _cli_error(["run", "compression", "--quiet", "--target", "0", "--out", str(tmp_path / "y.csv")], capsys).replace("--target", "Target, mm")
+    assert fields["d0"].startswith("d0, mm must be more than 0 and at most 30 mm")
+    assert "not a number" in fields["speed"] and fields["speed"].startswith("Speed, mm/s")
     assert not (tmp_path / "out" / "records").exists() or not list((tmp_path / "out" / "records").iterdir())
 
 
-def test_a_set_point_the_furnace_refuses_goes_back_to_the_temperature_field(tmp_path):
-    _console, client = _client(tmp_path)
+def test_a_set_point_the_furnace_refuses_goes_back_to_the_temperature_field_and_starts_nothing(tmp_path):
+    """It used to start a test that failed at once: a red FAULT and a record name for a test that never ran."""
+    console, client = _client(tmp_path)
     r = client.post("/api/start", json={"test": "compression", "temperature": "5000"}, headers=JSON)
     assert r.status_code == 400
-    assert "temperature" in r.json()["fields"]
-    assert "not below the configured maximum" in r.json()["fields"]["temperature"]
+    assert set(r.json()["fields"]) == {"temperature"}
+    assert r.json()["fields"]["temperature"].startswith("Temperature, °C must be above 20 C")
+    assert "below 900 C (the furnace's [furnace] max_temperature_C), got 5000" in r.json()["fields"]["temperature"]
+    assert console.runner.current is None
+    assert client.get("/api/status").json() == {"status": {"state": "idle", "heater": "off"}, "test": None}
+    assert not (tmp_path / "out" / "records").exists() or not list((tmp_path / "out" / "records").iterdir())
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("temperature", "-300", "Temperature, °C must be above 20 C (room; leave it out for a test at room temperature) and below 900 C"),
+    ("temperature", "20", "Temperature, °C must be above 20 C"),
+    ("temperature", "900", "and below 900 C"),
+    ("speed", "1e9", "Speed, mm/s must be between 0.001 and 2 mm/s (the machine's speed range"),
+    ("speed", "0.0001", "Speed, mm/s must be between 0.001 and 2 mm/s"),
+    ("target", "1e12", "Target, mm must be more than 0 and at most 250 mm (the crosshead travel, [frame] travel_mm)"),
+    ("force_limit", "2e5", "Force limit, N must be more than 0 and at most 100000 N (the machine's capacity"),
+    ("d0", "31", "d0, mm must be more than 0 and at most 30 mm (the largest diameter the grips and platens take"),
+    ("h0", "1e12", "h0, mm must be more than 0 and at most 200 mm"),
+    ("soak", "1e12", "Soak, s must be more than 0 and at most 86400 s"),
+])
+def test_values_outside_the_rigs_ranges_are_refused_beside_their_field(tmp_path, field, value, words):
+    """-300 °C, 1e9 mm/s and a 1e12 mm target were accepted (every field's limit was 1e12)."""
+    console, client = _client(tmp_path)
+    r = client.post("/api/start", json={"test": "compression", field: value}, headers=JSON)
+    assert r.status_code == 400, r.text
+    assert set(r.json()["fields"]) == {field}
+    from flowcurve.console.setup_form import LABELS
+
+    message = r.json()["fields"][field]
+    assert message.startswith(f"{LABELS[field]} must be") and words in message, message
+    assert console.runner.current is None
+
+
+def test_a_configured_rigs_ranges_are_its_own_on_the_page_and_for_run(tmp_path, capsys):
+    """The ranges come from the rig configuration: the same values are refused by the form and by run."""
+    from flowcurve.console.setup_form import FormError, validate
+    from flowcurve.rig.config import to_toml, virtual_config
+
+    config = virtual_config({"loadcell": "/dev/null-a", "encoder": "/dev/null-b", "furnace": "/dev/null-c"}, max_temperature_C=500.0,
+                            frame_min_speed_mm_per_s=0.01, frame_max_speed_mm_per_s=0.5, frame_travel_mm=40.0,
+                            frame_max_specimen_diameter_mm=12.0, frame_max_specimen_length_mm=50.0)
+    form = {"test": "tension", "temperature": "600", "speed": "0.6", "target": "41", "d0": "12.5", "l0": "60"}
+    with pytest.raises(FormError) as refused:
+        validate(form, virtual=False, time_scale=None, config=config)
+    fields = refused.value.errors
+    assert set(fields) == {"temperature", "speed", "target", "d0", "l0"}
+    assert "below 500 C" in fields["temperature"] and "between 0.01 and 0.5 mm/s" in fields["speed"]
+    assert "at most 40 mm" in fields["target"] and "at most 12 mm" in fields["d0"] and "at most 50 mm" in fields["l0"]
+    path = tmp_path / "rig.toml"
+    path.write_text(to_toml(config))
+    err = _cli_error(["run", "tension", "--quiet", "--config", str(path), "--temperature", "600", "--speed", "0.6", "--target", "41",
+                      "--d0", "12.5", "--l0", "60", "--out", str(tmp_path / "r.csv")], capsys)
+    for field, option in (("temperature", "--temperature"), ("speed", "--speed"), ("target", "--target"), ("d0", "--d0"), ("l0", "--l0")):
+        from flowcurve.console.setup_form import LABELS
+
+        assert fields[field].replace(LABELS[field], option) in err, (option, err)  # run's words, the option for the label
+    ok = validate({**form, "temperature": "450", "speed": "0.4", "target": "39", "d0": "6", "l0": "30"}, virtual=False, time_scale=None, config=config)
+    assert ok.spec.temperature_C == 450.0 and ok.spec.speed_mm_per_s == 0.4
 
 
 def test_one_test_at_a_time_and_stop_gives_a_complete_record(tmp_path):
@@ -86,6 +145,9 @@ def test_one_test_at_a_time_and_stop_gives_a_complete_record(tmp_path):
     assert rec.meta["specimen.id"] == "C-a"
     assert ("stop", "operator stop (console)") in [(e.name, e.text) for e in rec.events]
     assert client.post("/api/stop", json={}, headers=JSON).json() == {"stopping": False}
+    # every recorded row is a point of the live plot (the rows taken in the tick of a stop were lost: 1832 of 1841)
+    assert len(run.view.force_displacement.x) == run.outcome.samples == len(rec.data)
+    assert run.view.status()["state"] == "complete"
 
 
 def start_then_abort(console: Console, client: TestClient, while_running=lambda: None) -> None:
@@ -105,6 +167,7 @@ def test_abort_marks_the_record_aborted(tmp_path):
     rec = read_record(console.runner.current.record)
     assert rec.meta["status"] == "aborted"
     assert "abort button" in rec.meta["abort_reason"]
+    assert console.runner.current.view.status()["state"] == "aborted"  # not "done": its own word
 
 
 def test_shutting_the_console_down_mid_heating_switches_the_heater_off_and_closes_the_record(tmp_path):
@@ -191,3 +254,23 @@ def test_console_listening_beyond_the_loopback_makes_a_token(monkeypatch, tmp_pa
     assert "access token" in err and seen == {"host": "0.0.0.0", "port": 8099}
     assert cli_main(["console", "--out", str(tmp_path)]) == 0
     assert "access token" not in capsys.readouterr().err
+
+
+def test_fit_with_nothing_optional_names_every_missing_input_beside_its_field_and_writes_nothing(tmp_path):
+    """The page's fit and card asked for one input per refused attempt (Poisson's ratio, then density,
+    then specific heat; melting temperature, then m) and left a fits/fit-* folder each time."""
+    _console, client = _client(tmp_path)
+    names = identified_records(tmp_path / "out")
+    r = client.post("/api/fit", json={"records": names, "format": "lsdyna"}, headers=JSON)
+    assert r.status_code == 400, r.text
+    body = r.json()
+    assert set(body["fields"]) == {"melt_temp", "fix_C", "fix_m", "E_MPa", "poisson", "density", "cp", "fit"}
+    for label in ("Melting temperature, °C", "fix C", "fix m", "E, MPa", "Poisson's ratio", "Density, kg/m³", "Specific heat, J/(kg K)"):
+        assert label in body["error"], label
+    assert "need 7 input(s)" in body["error"]
+    assert not (tmp_path / "out" / "fits").exists() or not list((tmp_path / "out" / "fits").iterdir())
+    # everything given: the fit and the card are written in one fits/fit-* folder
+    r = client.post("/api/fit", json={"records": names, "format": "lsdyna", "melt_temp": "1450", "fix_C": "0.01", "fix_m": "1",
+                                      "E_MPa": "200000", "poisson": "0.3", "density": "7850", "cp": "460"}, headers=JSON)
+    assert r.status_code == 200, r.text
+    assert len(list((tmp_path / "out" / "fits").iterdir())) == 1

@@ -14,7 +14,7 @@ import pytest
 
 from flowcurve.cli import main as cli_main
 from flowcurve.record.format import read_record
-from tests.console.conftest import BROWSER_TIME_SCALE
+from tests.console.conftest import BROWSER_TIME_SCALE, identified_records
 
 By = pytest.importorskip("selenium.webdriver.common.by", reason="selenium is not installed (pip install -e .[test])").By
 
@@ -73,13 +73,17 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
     open_console(driver, served_console.url)
     assert text(driver, "#state") == "IDLE"  # CSS upper-cases the badge
     assert text(driver, "#heater") == "OFF"
+    assert f"time ×{BROWSER_TIME_SCALE:g}" in text(driver, "#time-scale")  # the virtual rig's time scale is shown
+    # placeholders cannot be taken for entered values: each in parentheses ("steel45", "room", "60" looked entered)
+    holders = [el.get_attribute("placeholder") for el in driver.find_elements(By.CSS_SELECTOR, "input[placeholder]")]
+    assert holders and all(h.startswith("(") and h.endswith(")") for h in holders), holders
     shot(driver, "1-idle")
 
     # a bad value: refused beside its field with run's words, nothing started
     fill(driver, {**SETUP, "d0": "-3"})
     driver.find_element(By.ID, "btn-start").click()
     error = wait_for(lambda: text(driver, '#setup .field-error[data-for="d0"]'), what="the d0 error")
-    assert error == "--d0 must be a positive number of at most 1e+12, got -3.0"
+    assert error == "d0, mm must be more than 0 and at most 30 mm (the largest diameter the grips and platens take, [frame] max_specimen_diameter_mm), got -3"
     assert "invalid" in driver.find_element(By.ID, "f-d0").get_attribute("class")
     assert served_console.console.runner.current is None
     shot(driver, "2-bad-input")
@@ -97,9 +101,15 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
     shot(driver, "3-recording")
 
     driver.find_element(By.ID, "btn-stop").click()
-    wait_for(lambda: text(driver, "#state").lower() == "done", what="done")
+    assert text(driver, "#message").startswith("Stop asked")  # Stop says what it asked for at once
+    wait_for(lambda: text(driver, "#state").lower() == "complete", what="complete")
+    assert "state-complete" in driver.find_element(By.ID, "state").get_attribute("class")
     outcome = wait_for(lambda: text(driver, "#outcome"), what="the outcome")
     assert "complete — operator stop (console)" in outcome
+    # every recorded sample is a point of the live plot (1832 points for 1841 samples before)
+    run = served_console.console.runner.current
+    wait_for(lambda: fd_points(driver) == run.outcome.samples, timeout_s=10, what=f"{run.outcome.samples} plot points (page has {fd_points(driver)})")
+    assert int(text(driver, "#fd-count")) == run.outcome.samples == len(read_record(run.record).data)
     shot(driver, "4-stopped")
 
     # post-test measurements: the virtual rig's own measurement of the stopped specimen, typed in
@@ -110,7 +120,8 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
     fill(driver, typed)
     driver.find_element(By.ID, "btn-post").click()
     figures = wait_for(lambda: _result_or_error(driver), timeout_s=120, what="the identified result", driver=driver)
-    assert "friction_mu" in figures and "JC A_MPa" in figures
+    assert "friction coefficient μ" in figures and "Johnson–Cook A, MPa" in figures
+    assert "_MPa" not in figures and "friction_mu" not in figures  # words and units, not raw keys
     links = [a.get_attribute("href") for a in driver.find_elements(By.CSS_SELECTOR, "#result a")]
     assert any(h.endswith("/result.json") for h in links)
     shot(driver, "5-result")
@@ -133,7 +144,7 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
 
     # the records list: select it, fit, download the card
     driver.find_element(By.ID, "btn-refresh").click()
-    wait_for(lambda: "JC A_MPa" in text(driver, "#records tbody"), what="the record and its result in the list")
+    wait_for(lambda: "Johnson–Cook A, MPa" in text(driver, "#records tbody"), what="the record and its result in the list")
     box = f'#records input[value="{run.record.name}"]'
     wait_for(lambda: driver.find_element(By.CSS_SELECTOR, box).click() or driver.find_element(By.CSS_SELECTOR, box).is_selected(), what="the record selected")
     fill(driver, {"melt_temp": "1450", "fix_C": "0.01", "fix_m": "1", "poisson": "0.3", "density": "7850", "cp": "460", "format": "lsdyna"})
@@ -153,11 +164,10 @@ def _result_or_error(driver) -> str:
 
 
 def shown_figures(driver) -> dict[str, float]:
-    """The identified figures as the page shows them (four significant digits)."""
+    """The identified figures as the page shows them (four significant digits), by result.json key."""
     out = {}
     for div in driver.find_elements(By.CSS_SELECTOR, "#result-figures div"):
-        name, value = div.find_element(By.TAG_NAME, "span").text, div.find_element(By.TAG_NAME, "b").text
-        out[name] = float(value)
+        out[div.get_attribute("data-key")] = float(div.find_element(By.TAG_NAME, "b").text)
     return out
 
 
@@ -170,7 +180,7 @@ def test_a_tension_test_to_fracture_then_the_post_test_form_gives_the_result(ser
     wait_for(lambda: text(driver, "#state").lower() == "recording", what="recording", driver=driver)
     wait_for(lambda: fd_points(driver) > 20, what="the live plot", driver=driver)
     shot(driver, "1-recording")
-    wait_for(lambda: text(driver, "#state").lower() == "done", timeout_s=180, what="the fracture", driver=driver)
+    wait_for(lambda: text(driver, "#state").lower() == "complete", timeout_s=180, what="the fracture", driver=driver)
     outcome = wait_for(lambda: text(driver, "#outcome"), what="the outcome", driver=driver)
     assert "complete — fracture" in outcome
 
@@ -186,7 +196,7 @@ def test_a_tension_test_to_fracture_then_the_post_test_form_gives_the_result(ser
     fill(driver, typed)
     shot(driver, "2-post-form")
     driver.find_element(By.ID, "btn-post").click()
-    wait_for(lambda: "JC A_MPa" in text(driver, "#result-figures"), timeout_s=120, what="the identified result", driver=driver)
+    wait_for(lambda: "Johnson–Cook A, MPa" in text(driver, "#result-figures"), timeout_s=120, what="the identified result", driver=driver)
     shot(driver, "3-result")
 
     # the record keeps what was typed; the result follows from it in closed form
@@ -240,7 +250,7 @@ def test_reload_close_and_a_second_page_during_a_test(served_console, browser_fa
     seen = fd_points(second)
     wait_for(lambda: fd_points(second) > seen, what="the second page still updating")
     second.find_element(By.ID, "btn-stop").click()
-    wait_for(lambda: text(second, "#state").lower() == "done", what="done on the second page")
+    wait_for(lambda: text(second, "#state").lower() == "complete", what="complete on the second page")
     shot(second, "3-stopped-from-second-page")
     rec = read_record(run.record)
     assert rec.meta["status"] == "complete" and rec.meta["specimen.id"] == "C-reload"
@@ -260,9 +270,15 @@ def test_heating_shows_the_heater_on_and_an_abort_switches_it_off(served_console
     run = served_console.console.runner.current  # (the controller switches the relay on and off: the badge follows it)
     driver.find_element(By.ID, "btn-abort").click()
     driver.switch_to.alert.accept()
-    wait_for(lambda: text(driver, "#state").lower() == "done", what="done after the abort")
+    wait_for(lambda: text(driver, "#state").lower() == "aborted", what="aborted after the abort")  # an abort is not "done"
+    assert "state-aborted" in driver.find_element(By.ID, "state").get_attribute("class")
+    assert "aborted" in driver.find_element(By.ID, "message").get_attribute("class")
     assert text(driver, "#heater") == "OFF" and run.heater_source.relay_on is False
     assert "aborted" in text(driver, "#message")
+    # nothing reads the furnace after the test: its last temperature is marked stale, not shown as live
+    note = wait_for(lambda: text(driver, "#stale"), timeout_s=10, what="the readings marked stale")
+    assert "as of the end of the test" in note and "may still be hot" in note, note
+    assert "stale" in driver.find_element(By.CSS_SELECTOR, ".readings").get_attribute("class")
     shot(driver, "2-aborted")
     assert "# status: aborted\n" in run.record.read_text()
 
@@ -276,12 +292,13 @@ def test_a_device_fault_is_named_as_run_names_it(served_console, browser_factory
     driver.find_element(By.ID, "btn-start").click()
     wait_for(lambda: fd_points(driver) > 20, what="recording")
     rigs[0].inject("encoder", "unplug")
-    wait_for(lambda: text(driver, "#state").lower() == "fault", what="the fault state")
+    wait_for(lambda: text(driver, "#state").lower() == "failed", what="the failed state")
     run = served_console.console.runner.current
     # run prints "flowcurve: error: <the error> (the record keeps everything up to the fault)"
     assert text(driver, "#message") == f"{run.outcome.error} (the record keeps everything up to the fault)"
     assert "crosshead encoder" in text(driver, "#message")
-    assert "fault" in driver.find_element(By.ID, "message").get_attribute("class")
+    assert "failed" in driver.find_element(By.ID, "message").get_attribute("class")
+    assert "state-failed" in driver.find_element(By.ID, "state").get_attribute("class")
     shot(driver, "1-fault")
     rec = read_record(run.record)
     assert rec.meta["status"] == "aborted" and len(rec.data) > 0
@@ -305,3 +322,116 @@ def test_a_console_with_a_token_asks_for_it_before_showing_anything(served_conso
     wait_for(lambda: driver.execute_script("return window.fcStats.events") >= 1, what="the live stream")
     assert "virtual rig" in text(driver, "#rig")
     shot(driver, "2-token-accepted")
+
+
+def test_the_heater_badge_and_heating_progress_at_time_scale_60(served_console, browser_factory, shot):
+    """The heater badge read "off" in 4 of 8 polls while the furnace heated at time scale 60 (its relay
+    pulses within a 33 ms wall period); the heating progress and the time scale were not shown."""
+    served_console.console.time_scale = 60.0
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    fill(driver, {**SETUP, "specimen_id": "C-heat60", "temperature": "300", "soak": "30"})
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: text(driver, "#state").lower() == "heating", what="heating", driver=driver)
+    seen, progress = [], []
+    while text(driver, "#state").lower() == "heating" and len(seen) < 24:
+        seen.append(text(driver, "#heater"))
+        progress.append(float(driver.find_element(By.ID, "heat-progress").get_attribute("value")))
+        if len(seen) == 6:
+            shot(driver, "1-heating-progress")
+        time.sleep(0.25)
+    assert len(seen) >= 8, f"only {len(seen)} polls while heating"
+    assert seen == ["ON"] * len(seen), seen
+    assert progress[-1] > progress[0] and 0 <= min(progress) and max(progress) <= 1
+    assert "heating to 300 °C" in text(driver, "#heat-progress-text") or text(driver, "#state").lower() != "heating"
+    assert "time ×60" in text(driver, "#time-scale")
+    served_console.console.runner.abort()
+    wait_for(lambda: text(driver, "#state").lower() == "aborted", what="aborted")
+
+
+def test_a_console_that_shuts_down_leaves_the_page_disabled_and_saying_what_to_do(served_console, browser_factory, shot):
+    """After the console was killed the page kept a blue RECORDING badge with Stop and Abort enabled."""
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    fill(driver, {**SETUP, "specimen_id": "C-lost", "speed": "0.01"})
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: fd_points(driver) > 5, what="recording", driver=driver)
+    assert driver.find_element(By.ID, "btn-stop").get_attribute("disabled") is None
+    run = served_console.console.runner.current
+    served_console.console.close()  # what SIGTERM or Ctrl-C does: abort the test, end the streams
+    served_console.server.should_exit = True
+    served_console.thread.join(30)
+    assert not served_console.thread.is_alive()
+    wait_for(lambda: text(driver, "#state").lower() == "connection lost", timeout_s=15, what="the lost connection shown", driver=driver)
+    for button in ("btn-start", "btn-stop", "btn-abort"):
+        assert driver.find_element(By.ID, button).get_attribute("disabled") is not None, button
+    message = text(driver, "#message")
+    assert "start it again (flowcurve console) and reload this page" in message, message
+    assert "off until it is back" in message
+    assert text(driver, "#heater") == "UNKNOWN"
+    wait_for(lambda: "no connection" in text(driver, "#stale"), timeout_s=10, what="the readings marked stale")
+    assert read_record(run.record).meta["status"] == "aborted"
+    shot(driver, "1-connection-lost")
+
+
+def test_values_outside_the_rig_and_a_fit_with_nothing_given_are_named_at_once_beside_their_fields(served_console, browser_factory, shot):
+    """-300 °C, 1e9 mm/s and a 1e12 mm target were accepted; the fit form asked for one missing input per attempt."""
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    fill(driver, {**SETUP, "temperature": "-300", "speed": "1e9", "target": "1e12"})
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: text(driver, '#setup .field-error[data-for="target"]'), what="the range errors")
+    assert text(driver, '#setup .field-error[data-for="temperature"]').startswith("Temperature, °C must be above 20 C (room")
+    assert text(driver, '#setup .field-error[data-for="speed"]').startswith("Speed, mm/s must be between 0.001 and 2 mm/s")
+    assert text(driver, '#setup .field-error[data-for="target"]').startswith("Target, mm must be more than 0 and at most 250 mm")
+    assert served_console.console.runner.current is None and text(driver, "#state") == "IDLE" and text(driver, "#record-name") == ""
+    shot(driver, "1-out-of-range")
+
+    # two identified records at one temperature and one rate, nothing typed in the fit form
+    names = identified_records(served_console.console.workspace.root)
+    driver.find_element(By.ID, "btn-refresh").click()
+    for name in names:
+        box = f'#records input[value="{name}"]'
+        wait_for(lambda: driver.find_element(By.CSS_SELECTOR, box).click() or driver.find_element(By.CSS_SELECTOR, box).is_selected(), what=f"{name} selected")
+    driver.find_element(By.ID, "btn-fit").click()
+    summary = wait_for(lambda: text(driver, '#fit .field-error[data-for="fit"]'), timeout_s=60, what="the fit's refusal")
+    assert "need 7 input(s) not given" in summary, summary
+    for field in ("melt_temp", "fix_C", "fix_m", "E_MPa", "poisson", "density", "cp"):
+        assert text(driver, f'#fit .field-error[data-for="{field}"]').startswith("needed"), field
+        assert "invalid" in driver.find_element(By.CSS_SELECTOR, f'#fit [name="{field}"]').get_attribute("class"), field
+    assert not (served_console.console.workspace.fits.exists() and list(served_console.console.workspace.fits.iterdir()))
+    shot(driver, "2-fit-missing-inputs")
+
+
+def test_a_killed_console_leaves_the_page_disabled_and_saying_what_to_do(browser_factory, shot, tmp_path):
+    """The console killed outright (no last word): the page kept a blue RECORDING badge with Stop and Abort enabled."""
+    import signal
+    import socket
+    import subprocess
+    import sys
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "console", "--out", str(tmp_path / "out"), "--port", str(port),
+                             "--time-scale", str(BROWSER_TIME_SCALE)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        url = f"http://127.0.0.1:{port}/"
+        wait_for(lambda: urllib.request.urlopen(url + "api/info", timeout=1).read(), what="the console to answer")
+        driver = browser_factory()
+        open_console(driver, url)
+        fill(driver, {**SETUP, "specimen_id": "C-killed", "speed": "0.01"})
+        driver.find_element(By.ID, "btn-start").click()
+        wait_for(lambda: fd_points(driver) > 5, what="recording", driver=driver)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(30)
+        wait_for(lambda: text(driver, "#state").lower() == "connection lost", timeout_s=15, what="the lost connection shown", driver=driver)
+        for button in ("btn-start", "btn-stop", "btn-abort"):
+            assert driver.find_element(By.ID, button).get_attribute("disabled") is not None, button
+        assert "start it again (flowcurve console) and reload this page" in text(driver, "#message")
+        wait_for(lambda: "no connection" in text(driver, "#stale"), timeout_s=10, what="the readings marked stale")
+        shot(driver, "1-killed")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()

@@ -114,9 +114,9 @@ def test_a_page_told_the_test_ended_has_the_outcome_with_it_however_slow_the_end
     assert not run.thread.is_alive()
     assert before_outcome.reached.is_set() and after_final_state.reached.is_set()
     assert not before_outcome.overran, "the page was not shown the procedure's end while the outcome was pending"
-    assert "recording" in states and final["state"] == "done"
-    # what the page had been sent when it was told "done": the finished test and its outcome
-    assert test_shown is not None and test_shown["running"] is False, f"'done' sent while the test still showed as running: {test_shown}"
+    assert "recording" in states and final["state"] == "complete"
+    # what the page had been sent when it was told "complete": the finished test and its outcome
+    assert test_shown is not None and test_shown["running"] is False, f"'complete' sent while the test still showed as running: {test_shown}"
     assert (test_shown["status"], test_shown["reason"]) == ("complete", OPERATOR_STOP), test_shown
     assert final["message"] == f"complete: {OPERATOR_STOP}"
     assert test_shown["samples"] == run.outcome.samples > 20

@@ -217,7 +217,7 @@ class FuzzedConsole:
         files = {str(p.relative_to(self.out)): (p.stat().st_size, p.stat().st_mtime_ns) for p in sorted(self.out.rglob("*"))}
         if run is None:
             return None, files
-        status = {k: v for k, v in run.view.status().items() if k != "heater"}  # the heater: the relay itself, below
+        status = {k: v for k, v in run.view.status().items() if k not in ("heater", "readings_age_s")}  # the heater: the relay itself, below; the age: the clock
         source = run.heater_source
         rig = (run.test_id, run.running, status, run.stop_reason, run.abort_reason, dict(run.post), json.dumps(run.result, default=str),
                getattr(run.outcome, "status", None), getattr(source, "relay_on", None), self.clock.now())

@@ -63,8 +63,20 @@ def test_done_keeps_the_last_readings_and_the_heater_shows_the_relay_once_ended(
     assert view.status()["heater"] == "on"  # within the controller's window while the test runs
     view.show(Snapshot("done", time_s=6.0, samples=10))
     assert view.status()["state"] == "stopping"  # the procedure's end: "done" comes from the runner, with the outcome
-    view.set_state("done")
+    view.set_state("complete")
     status = view.status()
     assert status["heater"] == "off"  # ended: the relay itself
     assert (status["force_N"], status["crosshead_mm"], status["time_s"]) == (1234.0, 0.5, 6.0)
     assert ConsoleView(2).status()["heater"] == "none"  # no furnace
+
+
+def test_the_heater_shows_on_throughout_heating_even_between_the_relays_pulses():
+    """At time scale 60 the relay pulses within 33 ms: the badge read "off" in 4 of 8 looks while heating."""
+    relay = {"on": False}
+    view = ConsoleView(1, heater=lambda: relay["on"], heater_window_s=0.0)
+    view.show(Snapshot("heating", time_s=1.0, temperature_C=25.0, progress=0.02))
+    assert view.status()["heater"] == "on"  # the controller is driving it, the relay between pulses
+    view.show(Snapshot("soaking", time_s=2.0, temperature_C=300.0, progress=1.0))
+    assert view.status()["heater"] == "off"  # holding: the relay itself (within its window)
+    view.set_state("aborted")
+    assert view.status()["heater"] == "off"

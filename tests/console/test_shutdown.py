@@ -42,20 +42,23 @@ def test_a_signal_aborts_the_heated_test_even_with_a_page_open(tmp_path, sig, co
         started = _post(base + "/api/start", {"test": "compression", "temperature": "300", "soak": "600"})
         record = out / "records" / started["test"]["record"]
         stream = urllib.request.urlopen(base + "/api/events", timeout=60)  # a page listening
-        heater_seen = []
+        heater_seen, heard = [], []
 
         def listen():
             for line in stream:
+                heard.append(line.decode().strip())
                 if line.startswith(b"data:") and b'"heater":"on"' in line:
                     heater_seen.append(True)
 
-        threading.Thread(target=listen, daemon=True).start()
+        listener = threading.Thread(target=listen, daemon=True)
+        listener.start()
         end = time.monotonic() + 30
         while not heater_seen and time.monotonic() < end:
             time.sleep(0.05)
         assert heater_seen, "the page never saw the heater on"
         proc.send_signal(sig)
         proc.wait(60)  # a bound for a hung process, not a speed check
+        listener.join(10)
     finally:
         if proc.poll() is None:
             proc.kill()
@@ -65,6 +68,12 @@ def test_a_signal_aborts_the_heated_test_even_with_a_page_open(tmp_path, sig, co
     assert "# abort_reason: stopped by the console shutting down\n" in text
     events = [line.split()[3] for line in text.splitlines() if line.startswith("# event:")]
     assert events == ["heater_on", "heater_off", "stop"]
+    # the page's last word is the test's final state and the console closing, not "recording" (or "heating")
+    events = [(heard[i][len("event: "):], json.loads(heard[i + 1][len("data: "):])) for i in range(len(heard) - 1)
+              if heard[i].startswith("event: ") and heard[i + 1].startswith("data: ")]
+    statuses = [data for name, data in events if name == "status"]
+    assert statuses[-1]["state"] == "aborted" and statuses[-1]["heater"] == "off", statuses[-1]
+    assert events[-1][0] == "closing" and "start it again" in events[-1][1]["message"]
     err = proc.stderr.read().decode()
     assert "Traceback" not in err, err
     assert proc.returncode == code

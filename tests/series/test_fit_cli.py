@@ -80,9 +80,9 @@ def test_friction_mean_of_compression_records_and_fixed_m(tmp_path, syn, capsys)
 
 
 @pytest.mark.parametrize("case,pattern", [
-    ("one_temperature", r"m cannot be identified"),
+    ("one_temperature", r"m \(--fix-m\): the series has one temperature"),
     ("no_temperature", r"result\.json: record\.nominal_temperature_C is missing"),
-    ("no_melt", r"melting temperature is needed"),
+    ("no_melt", r"melting temperature, °C \(--melt-temp\)"),
     ("missing_path", r"nothing_here: no such file or folder"),
     ("empty_folder", r"without result\.json"),
 ])
@@ -110,6 +110,25 @@ def test_bad_input_is_one_line_naming_the_problem(tmp_path, syn, capsys, case, p
     assert re.search(pattern, lines[0]), lines[0]
     if case == "no_temperature":
         assert syn.members()[3].name in lines[0]  # names the record
+
+
+def test_fit_with_nothing_optional_names_every_missing_input_at_once(tmp_path, syn, capsys):
+    """A series at one temperature and one rate, no option given: the melting temperature, C and m
+    in one message (they were asked for one refused run at a time), and no output folder."""
+    root = tmp_path / "results"
+    for m in syn.members(temperatures=(300.0,), rates=(1.0,)):
+        syn.write_result_folder(root / m.name, m)
+    out = tmp_path / "fit"
+    code, _, err = _run(["fit", str(root), "--out", str(out)], capsys)
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "needs 3 input(s)" in lines[0], err
+    for option in ("--melt-temp", "--fix-C", "--fix-m"):
+        assert option in lines[0]
+    assert not out.exists()
+    # with the melting temperature and C given, m alone is named
+    code, _, err = _run(["fit", str(root), "--out", str(out), "--melt-temp", "1519.85", "--fix-C", "0.014"], capsys)
+    assert code == 2 and "needs 1 input(s)" in err and "--fix-m" in err and "--fix-C" not in err and not out.exists()
 
 
 def test_unreadable_true_curve_names_the_file(tmp_path, syn):

@@ -3,12 +3,29 @@
 
 const $ = (sel) => document.querySelector(sel);
 const RUNNING = new Set(["starting", "heating", "soaking", "tare", "waiting", "recording", "stopping"]);
+const ENDED = new Set(["complete", "aborted", "failed"]);  // each its own word and colour
+const STALE_S = 2;  // readings older than this (wall seconds) are marked stale
+// result figures: key → [words, unit, factor] (the page never shows a raw key)
+const FIGURES = {
+  E_MPa: ["E", "GPa", 1e-3], Rp02_MPa: ["Rp0.2", "MPa", 1], Rm_MPa: ["Rm", "MPa", 1],
+  A_pct: ["elongation after fracture A", "%", 1], Z_pct: ["reduction of area Z", "%", 1],
+  fracture_true_strain: ["true strain at fracture", "", 1], friction_mu: ["friction coefficient μ", "", 1],
+  final_true_strain: ["final true strain", "", 1], max_force_N: ["maximum force", "kN", 1e-3],
+  "JC A_MPa": ["Johnson–Cook A", "MPa", 1], "JC B_MPa": ["Johnson–Cook B", "MPa", 1], "JC n": ["Johnson–Cook n", "", 1],
+  "JC fit_error_pct": ["Johnson–Cook fit error (max)", "%", 1],
+};
+function figureLabel(k) { const f = FIGURES[k]; return f ? f[0] + (f[1] ? `, ${f[1]}` : "") : k.replace(/_/g, " "); }
+function figureValue(k, v) { const f = FIGURES[k]; return typeof v === "number" && f ? v * f[2] : v; }
 const stats = { fdPoints: 0, ttPoints: 0, draws: 0, fdDraws: 0, events: 0, latencies_ms: [] };  // read by the browser tests and the bench
 window.fcStats = stats;
 let info = null;
 let currentTest = null;
 let lastState = "idle";
 let postShownFor = null;
+let connected = false;
+let requestNote = "";  // what Stop or Abort asked for, shown until the test ends
+let lastStatus = { state: "idle" };
+let statusAt = 0;  // performance.now() when lastStatus arrived
 
 function num(v) {
   if (typeof v !== "number") return String(v ?? "");
@@ -19,7 +36,8 @@ function esc(s) { return String(s ?? "").replace(/[&<>"']/g, (c) => ({ "&": "&am
 
 async function api(path, body) {
   const opts = body === undefined ? {} : { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) };
-  const resp = await fetch(path, opts);
+  let resp;
+  try { resp = await fetch(path, opts); } catch (e) { return { ok: false, status: 0, data: { error: "the console does not answer (connection lost)" } }; }
   let data = {};
   try { data = await resp.json(); } catch (e) { data = { error: `${resp.status} ${resp.statusText}` }; }
   if (resp.status === 401 && data.token_required) { askToken(); }
@@ -106,6 +124,9 @@ function clearPlots() {
 
 // -- live state ------------------------------------------------------------------------------
 function showStatus(s) {
+  connected = true;
+  lastStatus = s;
+  statusAt = performance.now();
   const state = s.state || "idle";
   const badge = $("#state");
   badge.textContent = state;
@@ -113,27 +134,84 @@ function showStatus(s) {
   const heater = $("#heater");
   heater.textContent = s.heater || "off";
   heater.className = `badge heater-${s.heater || "off"}`;
+  showScale(s.time_scale);
+  showProgress(s);
   $("#r-time").textContent = fmt(s.time_s, 1);
   $("#r-force").textContent = s.force_N === null || s.force_N === undefined ? "—" : fmt(s.force_N / 1000, 3);
   $("#r-cross").textContent = fmt(s.crosshead_mm, 3);
   $("#r-temp").textContent = fmt(s.temperature_C, 1);
   $("#r-samples").textContent = s.samples ?? 0;
   const msg = $("#message");
-  msg.textContent = s.message || (s.messages && s.messages.length ? s.messages[s.messages.length - 1] : "");
-  msg.className = state === "fault" ? "message fault" : "message";
-  const running = RUNNING.has(state);
-  $("#btn-start").disabled = running;
-  $("#btn-stop").disabled = !running;
-  $("#btn-abort").disabled = !running;
-  for (const el of document.querySelectorAll("#setup input, #setup select")) el.disabled = running;
-  if (lastState !== state && (state === "done" || state === "fault")) loadRecords();
+  if (!RUNNING.has(state)) requestNote = "";
+  msg.textContent = s.message || requestNote || (s.messages && s.messages.length ? s.messages[s.messages.length - 1] : "");
+  msg.className = ENDED.has(state) ? `message ${state}` : "message";
+  setControls(RUNNING.has(state));
+  if (lastState !== state && ENDED.has(state)) loadRecords();
   lastState = state;
+  showStale();
+}
+
+function setControls(running) {
+  $("#btn-start").disabled = running || !connected;
+  $("#btn-stop").disabled = !running || !connected;
+  $("#btn-abort").disabled = !running || !connected;
+  for (const el of document.querySelectorAll("#setup input, #setup select")) el.disabled = running || !connected;
+}
+
+// the readings' age: as the server said when it sent them, plus the time since
+function readingsAge() { return (lastStatus.readings_age_s ?? 0) + (performance.now() - statusAt) / 1000; }
+
+function showStale() {
+  const el = $("#stale");
+  const hasReadings = !["idle", "starting"].includes(lastStatus.state) && lastStatus.time_s !== undefined;
+  const age = readingsAge();
+  const stale = hasReadings && (!connected || age > STALE_S);
+  document.querySelector(".readings").classList.toggle("stale", stale);
+  if (!stale) { el.textContent = ""; return; }
+  const heated = currentTest && currentTest.setup && String(currentTest.setup.temperature || "").trim() !== "";
+  const hot = typeof lastStatus.temperature_C === "number" && (lastStatus.temperature_C > 50 || heated);
+  const why = !connected ? "not updated: no connection to the console" :
+    ENDED.has(lastStatus.state) ? "as of the end of the test: nothing reads the rig now" : "not updated";
+  el.textContent = `readings stale — ${why} (read ${fmt(age, 0)} s ago)` +
+    (hot ? `; the furnace was heated (last ${fmt(lastStatus.temperature_C, 0)} °C) and may still be hot` : "");
+}
+
+function showScale(scale) {
+  const el = $("#time-scale");
+  const x = scale ?? (info && info.time_scale);
+  el.textContent = !x || x === 1 ? "real time" : `time ×${num(x)}: 1 s here is ${num(x)} s of test time`;
+  el.className = !x || x === 1 ? "dim" : "scale";
+}
+
+function showProgress(s) {
+  const box = $("#progress-box");
+  const heating = s.state === "heating" && typeof s.progress === "number";
+  box.hidden = !heating;
+  if (!heating) return;
+  $("#heat-progress").value = s.progress;
+  const target = currentTest && currentTest.setup ? currentTest.setup.temperature : "";
+  $("#heat-progress-text").textContent = `heating${target ? ` to ${target} °C` : ""}: ${fmt(100 * s.progress, 0)} % of the way` +
+    (typeof s.temperature_C === "number" ? ` (now ${fmt(s.temperature_C, 1)} °C)` : "");
+}
+
+function connectionLost(message) {
+  connected = false;
+  const badge = $("#state");
+  badge.textContent = "connection lost";
+  badge.className = "badge state-lost";
+  $("#heater").textContent = "unknown";
+  $("#heater").className = "badge heater-none";
+  $("#message").textContent = message || "Connection to the console lost: Start, Stop and Abort are off until it is back (retrying). " +
+    "If the console was stopped, start it again (flowcurve console) and reload this page; the machine's own emergency stop works without it.";
+  $("#message").className = "message lost";
+  setControls(RUNNING.has(lastStatus.state));
+  showStale();
 }
 
 function showTest(t) {
   const isNew = !currentTest || !t || currentTest.test_id !== t.test_id;
   currentTest = t;
-  if (!t) return;
+  if (!t) { $("#record-name").textContent = ""; $("#post-panel").hidden = true; return; }  // no test (one refused before it began is forgotten)
   if (isNew && t.running && t.setup) {  // another page started it: show what it was set up with
     const form = $("#setup");
     for (const [name, value] of Object.entries(t.setup)) if (form.elements[name]) form.elements[name].value = value;
@@ -160,7 +238,7 @@ function showResult(r) {
   const el = $("#result");
   if (!r) { el.innerHTML = ""; return; }
   if (r.error) { el.innerHTML = `<p class="error" id="result-error">identification: ${esc(r.error)}</p>`; return; }
-  const figures = Object.entries(r.figures || {}).map(([k, v]) => `<div><span class="dim">${esc(k)}</span> <b>${esc(num(v))}</b></div>`).join("");
+  const figures = Object.entries(r.figures || {}).map(([k, v]) => `<div data-key="${esc(k)}"><span class="dim">${esc(figureLabel(k))}</span> <b>${esc(num(figureValue(k, v)))}</b></div>`).join("");
   const files = (r.files || []).map((f) => `<a href="${esc(f.url)}" target="_blank">${esc(f.name)}</a>`).join(" · ");
   const warnings = (r.warnings || []).map((w) => `<li>${esc(w)}</li>`).join("");
   const imgs = (r.plots || []).map((u) => `<a href="${esc(u)}" target="_blank"><img src="${esc(u)}?v=${Date.now()}" alt="${esc(u.split("/").pop())}"></a>`).join("");
@@ -168,8 +246,12 @@ function showResult(r) {
     (warnings ? `<ul class="hint">${warnings}</ul>` : "") + `<p>files: ${files}</p><div class="result-plots">${imgs}</div>`;
 }
 
+let source = null;
+
 function connect() {
+  if (source) source.close();
   const es = new EventSource("/api/events");
+  source = es;
   es.addEventListener("status", (e) => { stats.events += 1; const s = JSON.parse(e.data); showStatus(s); showTail(s); });
   es.addEventListener("test", (e) => {
     const t = JSON.parse(e.data);
@@ -177,7 +259,15 @@ function connect() {
     showTest(t);
   });
   es.addEventListener("points", (e) => { stats.events += 1; addPoints(JSON.parse(e.data)); });
-  es.onerror = () => { $("#message").textContent = "connection to the console lost; retrying…"; };
+  es.addEventListener("closing", (e) => {  // the console is shutting down: its last word, then try again later
+    connectionLost(`${JSON.parse(e.data).message}. Start, Stop and Abort are off until it is back.`);
+    es.close();
+    setTimeout(connect, 3000);
+  });
+  es.onerror = () => {
+    if (connected) connectionLost();
+    if (es.readyState === EventSource.CLOSED) setTimeout(connect, 3000);
+  };
 }
 
 // -- forms -----------------------------------------------------------------------------------
@@ -232,7 +322,7 @@ async function loadRecords() {
     const res = r.result;
     let resText = "—";
     if (res && res.error) resText = `<span class="error">${esc(res.error)}</span>`;
-    else if (res) resText = Object.entries(res.figures).filter(([k]) => /JC|friction|Rm|E_MPa/.test(k)).map(([k, v]) => `${esc(k)} ${esc(num(v))}`).join(", ") + ` <a href="${esc(res.folder)}/result.json" target="_blank">result</a>`;
+    else if (res) resText = Object.entries(res.figures).filter(([k]) => /JC [ABn]|friction|Rm|E_MPa/.test(k)).map(([k, v]) => `${esc(figureLabel(k))} ${esc(num(figureValue(k, v)))}`).join("; ") + ` <a href="${esc(res.folder)}/result.json" target="_blank">result</a>`;
     return `<tr><td><input type="checkbox" name="rec" value="${esc(r.name)}" aria-label="select ${esc(r.name)}"></td>` +
       `<td><a href="${esc(r.url)}" target="_blank">${esc(r.name)}</a></td><td>${esc(r.test)}</td><td>${esc(r.material)}</td>` +
       `<td>${esc(r.specimen_id)}</td><td>${esc(r.status)}${r.error ? ` <span class="error">${esc(r.error)}</span>` : ""}</td><td>${resText}</td></tr>`;
@@ -247,9 +337,19 @@ async function runFit(ev) {
   showFieldErrors(form, {});
   $("#fit-result").innerHTML = `<p class="hint">fitting…</p>`;
   const { ok, data } = await api("/api/fit", { records: names, ...formValues(form) });
-  if (!ok) { showFieldErrors(form, { fit: data.error }); $("#fit-result").innerHTML = ""; return; }
+  if (!ok) { showFieldErrors(form, { ...(data.fields || {}), fit: data.error }); $("#fit-result").innerHTML = ""; return; }
   const imgs = data.plots.map((u) => `<img src="${esc(u)}" alt="">`).join("");
   $("#fit-result").innerHTML = `<p><a id="card-link" href="${esc(data.card)}?download" download="${esc(data.card_name)}">download ${esc(data.card_name)}</a> · <a href="${esc(data.fit)}" target="_blank">fit.json</a></p><pre>${esc(data.summary)}</pre><div class="result-plots">${imgs}</div>`;
+}
+
+// Stop and Abort say what they asked for, and when the console did not get it
+async function request(what, asked) {
+  const msg = $("#message");
+  msg.textContent = requestNote = asked;
+  msg.className = "message";
+  const { ok, data } = await api(`/api/${what}`, {});
+  if (!ok) { msg.textContent = requestNote = `${what} NOT delivered: ${data.error} — use the machine's own stop`; msg.className = "message fault"; }
+  else if (!data.stopping && !data.aborting) { msg.textContent = `${what}: no test is running`; }
 }
 
 function setTestType() {
@@ -280,6 +380,7 @@ async function boot() {
     if (!probe.ok) return;
   }
   $("#rig").textContent = `— ${info.rig}`;
+  showScale(info.time_scale);
   $("#out").textContent = info.out;
   $("#setup-hint").textContent = info.virtual ? "Virtual rig: empty geometry and speed take the virtual specimen's and run's defaults." : "";
   connect();
@@ -293,8 +394,9 @@ window.addEventListener("DOMContentLoaded", () => {
   $("#post").addEventListener("submit", submitPost);
   $("#fit").addEventListener("submit", runFit);
   $("#f-test").addEventListener("change", setTestType);
-  $("#btn-stop").addEventListener("click", () => api("/api/stop", {}));
-  $("#btn-abort").addEventListener("click", () => { if (confirm("Abort the test? The record is kept and marked aborted.")) api("/api/abort", {}); });
+  $("#btn-stop").addEventListener("click", () => request("stop", "Stop asked: recording ends at the next reading and the record is kept, complete."));
+  $("#btn-abort").addEventListener("click", () => { if (confirm("Abort the test? The record is kept and marked aborted.")) request("abort", "Abort asked: the heater goes off and the test ends at once; the record is kept, marked aborted."); });
+  setInterval(showStale, 500);
   $("#btn-refresh").addEventListener("click", loadRecords);
   $("#token-form").addEventListener("submit", sendToken);
   setTestType();
