@@ -55,12 +55,12 @@ def result_E_source(result: dict) -> str:
     if _finite(result.get("E_MPa")) is None:
         return "none"
     modulus = result.get("modulus")
-    if isinstance(modulus, dict):  # tension
-        if modulus.get("E_source") in SOURCE_TEXT:
-            return modulus["E_source"]
-        return tension_E_source(str(modulus.get("source", "")), str((result.get("methods") or {}).get("strain_source", "")))
-    if "E_source" in result:  # compression
+    if isinstance(modulus, dict) and modulus.get("E_source") in SOURCE_TEXT:  # tension
+        return modulus["E_source"]
+    if "E_source" in result:  # compression (its modulus block, when there is one, is the line's fit)
         return COMPRESSION_SOURCES.get(str(result["E_source"]).split(" ")[0], "apparent")  # "record (material.E_MPa)"
+    if isinstance(modulus, dict):  # tension written before modulus.E_source
+        return tension_E_source(str(modulus.get("source", "")), str((result.get("methods") or {}).get("strain_source", "")))
     return "stated"
 
 

@@ -139,8 +139,9 @@ def run_card(args) -> int:
     options = {k: getattr(args, k) for k in CARD_OPTIONS}
     missing = missing_constants(data, args.format, args.units, options)
     if missing:
+        why_no_E = f" (the fit file's E is {data.E_source})" if "E_MPa" in missing and getattr(data, "E_source", None) else ""
         raise CardError(f"{args.fit}: the {args.format} card needs {len(missing)} value(s) not in the fit file: "
-                        f"{missing_text(missing)}; give them as options or as keys in the fit file")
+                        f"{missing_text(missing)}; give them as options or as keys in the fit file{why_no_E}")
     text = write_card(data, args.format, args.units, **options)
     if args.output:
         Path(args.output).write_text(text, encoding="utf-8")

@@ -99,3 +99,12 @@ def test_an_fe_model_never_takes_an_apparent_slope(syn):
                                           ("none", "none")])
 def test_compression_results_E_source_as_compression_writes_it(written, cls):
     assert result_E_source({"test": "compression", "E_MPa": 200_000.0, "E_source": written}) == cls
+
+
+def test_a_compression_result_with_a_modulus_block_keeps_its_E_source():
+    """Compression results carry a ``modulus`` block (the line's fit and its quality) beside ``E_source``:
+    the handbook E of ``run --E`` was read as a tension's apparent slope and every console card asked for --E."""
+    line = {"E_MPa": 200000.0, "source": "record (material.E_MPa)", "E_line_MPa": 206290.0}
+    assert result_E_source({"E_MPa": 200000.0, "E_source": "record (material.E_MPa)", "modulus": line}) == "handbook"
+    assert result_E_source({"E_MPa": 200000.0, "E_source": "option (--E)", "modulus": line}) == "given"
+    assert result_E_source({"E_MPa": 180000.0, "E_source": "apparent (crosshead slope)", "modulus": line}) == "apparent"
