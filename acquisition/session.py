@@ -212,7 +212,7 @@ class VirtualRun:
     tension_response: str = "fe"  # the virtual rig's tension neck (rig.virtual.responses.TENSION_RESPONSES)
 
 
-def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty", stop_requested=None, compression_response: str = "fe", tension_response: str = "fe") -> VirtualRun:
+def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty", stop_requested=None, compression_response: str = "fe", tension_response: str = "fe", faults: tuple = ()) -> VirtualRun:
     """Run ``spec`` on a virtual rig in this process through the real drivers.
 
     The devices sit on ptys in real time by default; ``link="inprocess"`` with a
@@ -225,6 +225,8 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
     virtual rig's compression physics ("fe" CalculiX runs, or "slab" with the seed's (3.18)) and
     ``tension_response`` its neck ("fe" CalculiX necking runs, or "bridgman" with Le Roy's a/R);
     the record's header says which (``virtual.compression_response`` / ``virtual.tension_response``).
+    ``faults``: :class:`rig.virtual.fault_spec.FaultSpec` drills scheduled on the rig (``--fault``),
+    listed in the header as ``virtual.faults``.
     """
     from flowcurve.acquisition.procedure import Procedure
     from flowcurve.rig.config import virtual_config
@@ -239,6 +241,10 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
         spec.extra_meta.setdefault(f"virtual.{spec.test}_response", response)
         spec.extra_meta.setdefault("material.E_MPa", repr(float(vr.model.material.E_MPa)))  # the handbook values an operator would enter
         spec.extra_meta.setdefault("material.nu", repr(float(vr.model.material.nu)))
+        if faults:
+            spec.extra_meta.setdefault("virtual.faults", " ".join(f.describe() for f in faults))
+        for fault in faults:
+            vr.schedule(fault)
         if rig_setup is not None:
             rig_setup(vr)
         config = virtual_config(**{**vr.config_kwargs(), **(config_overrides or {})})

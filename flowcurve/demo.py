@@ -204,7 +204,7 @@ def summary_lines(run, ident, folder: Path) -> list[str]:
 
 
 def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_scale: float = DEMO_TIME_SCALE,
-             compression_response: str = "fe", tension_response: str = "fe") -> int:
+             compression_response: str = "fe", tension_response: str = "fe", faults: tuple = ()) -> int:
     out = Path(out)
     view = LiveView(quiet=quiet)
     t_start = time.monotonic()
@@ -213,13 +213,13 @@ def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_
     for spec in demo_specs(material):
         record_path = out / "records" / f"{spec.test}.csv"
         t0 = time.monotonic()
-        run = run_virtual_test(spec, record_path, material=material, time_scale=time_scale, view=view,
+        run = run_virtual_test(spec, record_path, material=material, time_scale=time_scale, view=view, faults=faults,
                                compression_response=compression_response, tension_response=tension_response)
         o = run.outcome
         print(f"\n{spec.test}: recorded {o.samples} samples ({o.duration_s:.0f} s of test in {time.monotonic() - t0:.1f} s) → {o.path}; {o.reason}")
         if o.status != "complete":
             print(f"  the test did not complete ({o.reason}); not identified")
-            return 1
+            return o.error.exit_code if o.error is not None else 1
         ident, folder = identify_and_write(o.path, out / "results")
         print("\n".join(summary_lines(run, ident, folder)))
         if spec.test == "compression":

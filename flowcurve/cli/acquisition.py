@@ -44,6 +44,7 @@ def register(subparsers) -> None:
     run.add_argument("--time-scale", type=float, default=None, metavar="X", help="virtual rig: model seconds per wall second (in this process: default 15; with --config: what 'flowcurve rig virtual --time-scale' runs at)")
     run.add_argument("--poll", action="store_true", help="poll the load cell (MSV?) instead of streaming (MSV?0)")
     add_virtual_response_options(run, " (the virtual rig in this process only; recorded in the header)")
+    add_fault_option(run, " (the virtual rig in this process; with --config give it to 'flowcurve rig virtual')")
     run.set_defaults(func=cmd_run)
 
     demo = subparsers.add_parser("demo", help="a virtual tension and compression test, recorded and identified", description="Run a virtual tension test and a virtual compression test (time-scaled), identify both, and compare with the virtual material's true constants.")
@@ -51,6 +52,7 @@ def register(subparsers) -> None:
     demo.add_argument("--material", default=DEFAULT_VIRTUAL_MATERIAL, help="virtual material (default steel45)")
     demo.add_argument("--quiet", action="store_true", help="only the summary")
     add_virtual_response_options(demo, " (recorded in the header)")
+    add_fault_option(demo, " (in both tests)")
     demo.set_defaults(func=cmd_demo)
 
     rec = subparsers.add_parser("recover", help="complete the header of a record cut short (power cut, kill -9)")
@@ -70,6 +72,21 @@ def add_virtual_response_options(parser, note: str = "") -> None:
     """``--compression-response fe|slab`` and ``--tension-response fe|bridgman``: the virtual rig's physics."""
     parser.add_argument("--compression-response", choices=COMPRESSION_RESPONSES, help=COMPRESSION_HELP + note)
     parser.add_argument("--tension-response", choices=TENSION_RESPONSES, help=TENSION_HELP + note)
+
+
+def add_fault_option(parser, note: str = "") -> None:
+    """``--fault DEVICE:KIND[:VALUE][@SECONDS]`` (repeatable): a fault drill on the virtual rig."""
+    from flowcurve.rig.virtual.fault_spec import help_text  # pure and light
+
+    parser.add_argument("--fault", action="append", default=[], metavar="DEVICE:KIND[:VALUE][@SECONDS]",
+                        help=help_text().replace("%", "%%") + note)
+
+
+def virtual_faults(args) -> tuple:
+    """The parsed ``--fault`` options (ConfigError naming a malformed one)."""
+    from flowcurve.rig.virtual.fault_spec import parse_faults
+
+    return parse_faults(getattr(args, "fault", None))
 
 
 def virtual_responses(args) -> dict[str, str]:
@@ -178,6 +195,7 @@ def cmd_run(args) -> int:
     out_path = args.out or default_out(args.test)
     if args.config is not None:
         given = [f"--{k.replace('_', '-')}" for k in ("compression_response", "tension_response") if getattr(args, k) is not None]
+        given += ["--fault"] if args.fault else []
         if given:
             raise FlowcurveError(f"{' and '.join(given)}: the virtual rig in this process only; with --config the rig is the "
                                  "configured one (for 'flowcurve rig virtual' give the option there)")
@@ -216,10 +234,10 @@ def virtual_spec(args, view: LiveView) -> tuple[TestSpec, str, float]:
         args.speed = 0.05
     name = args.material or DEFAULT_VIRTUAL_MATERIAL
     try:
-        get_material(name)
-    except FlowcurveError:
-        view.say(f"(virtual rig: no virtual material '{name}', using {DEFAULT_VIRTUAL_MATERIAL})")
-        name = DEFAULT_VIRTUAL_MATERIAL
+        name = get_material(name).name  # the virtual specimen is made of what the record will say
+    except FlowcurveError as exc:
+        raise FlowcurveError(f"--material: {str(exc).split(': ', 1)[-1]} — the virtual rig makes its specimen of the "
+                             "material the record names") from None
     base = Specimen.tension() if args.test == "tension" else Specimen.compression()
     geometry = {"d0_mm": base.d0_mm, "l0_mm" if args.test == "tension" else "h0_mm": base.length0_mm}
     args.material = args.material or name
@@ -229,9 +247,10 @@ def virtual_spec(args, view: LiveView) -> tuple[TestSpec, str, float]:
 def _run_virtual(args, view: LiveView, out_path: Path) -> int:
     from flowcurve.acquisition.session import run_virtual_test
 
+    faults = virtual_faults(args)
     spec, name, scale = virtual_spec(args, view)
     run = run_virtual_test(spec, out_path, material=name, time_scale=scale, view=view, interactive=_interactive(args), stream=not args.poll,
-                           **virtual_responses(args))
+                           faults=faults, **virtual_responses(args))
     return report_outcome(run.outcome, view)
 
 
@@ -262,4 +281,4 @@ def cmd_annotate(args) -> int:
 def cmd_demo(args) -> int:
     from flowcurve.demo import run_demo
 
-    return run_demo(args.out, material=args.material, quiet=args.quiet, **virtual_responses(args))
+    return run_demo(args.out, material=args.material, quiet=args.quiet, faults=virtual_faults(args), **virtual_responses(args))

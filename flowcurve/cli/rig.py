@@ -19,7 +19,7 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from flowcurve.cli.acquisition import add_virtual_response_options, virtual_responses
+from flowcurve.cli.acquisition import add_fault_option, add_virtual_response_options, virtual_faults, virtual_responses
 from flowcurve.errors import DeviceError, FlowcurveError
 from flowcurve.rig.config import RigConfig, load_config, to_toml
 
@@ -55,6 +55,7 @@ def register(subparsers) -> None:
                          help="model seconds per wall-clock second (default 1)")
     virtual.add_argument("--checksum", action="store_true", help="DCON checksums on")
     add_virtual_response_options(virtual)
+    add_fault_option(virtual)
     virtual.add_argument("--motor-start-after", type=float, default=None, metavar="S",
                          help="start the virtual crosshead motor S wall-clock seconds after launch (for "
                               "scripts); interactively, press Enter here to start and stop it, as the "
@@ -216,14 +217,19 @@ def run_virtual(args) -> int:
     if not (args.time_scale > 0 and math.isfinite(args.time_scale)):
         raise FlowcurveError(f"--time-scale must be a positive number, got {args.time_scale}")
     responses = virtual_responses(args)
+    faults = virtual_faults(args)
     with VirtualRig(args.material, test=args.test, temperature_C=args.temperature,
                     time_scale=args.time_scale, checksum=args.checksum, **responses) as rig:
         path = args.config
         if path is None:
             path = Path(tempfile.mkdtemp(prefix="flowcurve-virtual-rig-")) / "flowcurve.rig.toml"
         path.write_text(to_toml(rig.config()))
+        for fault in faults:
+            rig.schedule(fault)
         for name, port in rig.ports.items():
             print(f"{name:9s} {port}")
+        for fault in faults:
+            print(f"fault: {fault.describe()} " + ("from now" if fault.at_s is None else "after the crosshead starts"))
         print(f"{args.test} response: {responses[args.test + '_response']}")
         print(f"configuration: {path}")
         print(f"try: flowcurve rig check --config {path}")

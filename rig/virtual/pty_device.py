@@ -115,7 +115,7 @@ class PtyDevice:
 
     def _write(self, data: bytes) -> None:
         if self.link == "inprocess":
-            if self._host is not None and not self.unplugged:
+            if self._host is not None and not self.lost:
                 self._host.deliver(data, INPROCESS_BUFFER_BYTES)
             return
         if self._master < 0:
@@ -155,7 +155,7 @@ class PtyDevice:
         if self.link == "inprocess":
             with self._lock:
                 self.unplugged = True
-                self._cancel_timer()
+                self._reschedule()  # the module's own timing (a watchdog) goes on unplugged
             return
         self.wake()
         if self._started:
@@ -204,7 +204,7 @@ class PtyDevice:
     @property
     def lost(self) -> bool:
         """The port is gone for the host (unplugged or closed)."""
-        return self.unplugged or self._closed
+        return self.unplugged or self._closed or self.faults.unplug_requested
 
     def attach(self, host, byte_time_s: float = 0.0) -> None:
         """A host port opened this device (one at a time, like a serial port)."""
@@ -234,13 +234,13 @@ class PtyDevice:
         while self._delayed and self._delayed[0][0] <= now:
             self._write(heapq.heappop(self._delayed)[2])
         deadline = self.next_deadline()
-        if deadline is not None and deadline <= now and not self.lost:
+        if deadline is not None and deadline <= now and not self._closed:
             self.on_tick(now)  # as the pty thread does: a late tick catches up by itself
 
     def _on_timer(self) -> None:
         with self._lock:
             self._timer = None
-            if self.lost:
+            if self._closed:
                 return
             self._catch_up()
             self._reschedule()
@@ -252,7 +252,7 @@ class PtyDevice:
 
     def _reschedule(self) -> None:
         """One timer at the earliest of the periodic deadline and the delayed replies."""
-        if not self._started or self.lost:
+        if not self._started or self._closed:
             return
         due = [d for d in (self.next_deadline(),) if d is not None]
         if self._delayed:
@@ -272,6 +272,7 @@ class PtyDevice:
             if self.faults.unplug_requested:
                 self.unplugged = True
                 self._close_pty()
+                self._run_unplugged()
                 return
             now = time.monotonic()
             deadlines = [d for d in (self.next_deadline(),) if d is not None]
@@ -303,3 +304,18 @@ class PtyDevice:
             deadline = self.next_deadline()
             if deadline is not None and deadline <= now:
                 self.on_tick(now)
+
+    def _run_unplugged(self) -> None:
+        """The cable is out but the module is powered: its own timing (a watchdog) goes on."""
+        while not self._stop.is_set():
+            deadline = self.next_deadline()
+            now = time.monotonic()
+            if deadline is not None and deadline <= now:
+                self.on_tick(now)
+                continue
+            timeout = 0.5 if deadline is None else min(deadline - now, 0.5)
+            try:
+                if select.select([self._wake_r], [], [], max(0.0, timeout))[0]:
+                    os.read(self._wake_r, 4096)
+            except (OSError, ValueError):
+                return
