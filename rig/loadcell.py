@@ -71,6 +71,8 @@ class LoadCell:
         self.stream_silence_s = 1.0
         self.max_resyncs = 3  # stream restarts in a row before a garbled stream is an error
         self.stream_resyncs = 0  # restarts so far (for the record's warnings)
+        self.frames_lost = 0  # frames the restarts cost (the gap between good frames, in periods, − 1)
+        self._lost_since: float | None = None  # arrival of the last good frame before a restart
         self._resyncs_in_a_row = 0
         self._last_frame_t = 0.0
         self._last_sample_t = -math.inf
@@ -254,6 +256,9 @@ class LoadCell:
                 self._resync(exc)
                 continue
             self._resyncs_in_a_row = 0
+            if self._lost_since is not None and self.output_rate_per_s:
+                self.frames_lost += max(0, round((now - self._lost_since) * self.output_rate_per_s) - 1)
+                self._lost_since = None
             samples.append(self._to_sample(value, self._stream_time(now)))
             self._last_frame_t = now
         silent = self.transport.clock.now() - self._last_frame_t
@@ -263,6 +268,8 @@ class LoadCell:
 
     def _resync(self, exc: ProtocolError) -> None:
         self.stream_resyncs += 1
+        if self._lost_since is None:
+            self._lost_since = self._last_frame_t
         self._resyncs_in_a_row += 1
         logger.info("%s: garbled stream (%s), restarting it (%d in a row)", self.name, exc, self._resyncs_in_a_row)
         if self._resyncs_in_a_row > self.max_resyncs:

@@ -18,7 +18,7 @@ from flowcurve.acquisition.live import LiveView
 from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, Procedure, ProcedureError, StopCriteria, TestSpec
 from flowcurve.record.format import amend_record, read_record, recover_record
 from flowcurve.cli.specimen import add_geometry_options, add_modulus_option, check_specimen_options, measurement
-from flowcurve.errors import FlowcurveError, RecordError
+from flowcurve.errors import EXIT_COMPLETE, EXIT_DATA_LOST, EXIT_STOPPED, DeviceError, FlowcurveError, RecordError, SafetyError
 from flowcurve.rig.virtual.responses import COMPRESSION_HELP, COMPRESSION_RESPONSES, TENSION_HELP, TENSION_RESPONSES
 
 DEFAULT_VIRTUAL_MATERIAL = "steel45"
@@ -182,9 +182,29 @@ def report_outcome(out: Outcome, view: LiveView) -> int:
     elif out.status == "complete":
         print(f"no post-test measurements yet: flowcurve annotate {out.path} --set {POST_KEYS[read_record(out.path).test][0]}=...")
     if out.error is not None:
-        print(f"flowcurve: error: {out.error} (the record keeps everything up to the fault)", file=sys.stderr)
+        print(f"flowcurve: error: {out.error}{advice(out.error)} (the record keeps everything up to the fault"
+              f"{'; ' + out.losses if out.losses else ''})", file=sys.stderr)
         return out.error.exit_code
-    return 0 if out.status == "complete" else 130
+    if out.losses:
+        print(f"flowcurve: warning: {out.losses} — declared in the record's events (data_loss)", file=sys.stderr)
+        return EXIT_DATA_LOST if out.status == "complete" else EXIT_STOPPED
+    return EXIT_COMPLETE if out.status == "complete" else EXIT_STOPPED
+
+
+def advice(error: FlowcurveError) -> str:
+    """What to do about a device that failed a test (empty when the message says it already)."""
+    text = str(error)
+    if not isinstance(error, DeviceError) or " — " in text:
+        return ""
+    if "disappeared" in text or "Input/output error" in text:
+        return " — the port vanished: reconnect the cable or USB adapter, then 'flowcurve rig check'"
+    if "garbled" in text or "incomplete" in text:
+        return " — check the cable, baud rate and parity ('flowcurve rig check' probes them)"
+    if "no answer" in text or "no data" in text or "silent" in text:
+        return " — check the device's power and cable, then 'flowcurve rig check'"
+    if isinstance(error, SafetyError):
+        return " — the heater is off; let the furnace cool before opening it"
+    return " — 'flowcurve rig check' diagnoses the device"
 
 
 # -- commands ---------------------------------------------------------------------------------
