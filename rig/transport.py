@@ -40,6 +40,7 @@ from flowcurve.errors import DeviceError
 
 PORT_ERRORS = (OSError, serial.SerialException, TermiosError)  # what a vanished port raises
 from flowcurve.rig.codecs import dcon
+from flowcurve.rig.port_lock import PortLock
 
 logger = logging.getLogger(__name__)
 
@@ -80,6 +81,7 @@ class SerialTransport:
         self._opener = opener or serial.serial_for_url
         self._key = _owned_key(url, opener)
         self._port = None
+        self._lock_file = None  # rig.port_lock.PortLock while open
         self._pending = bytearray()  # bytes read past the end of the last frame
         self.clock: Clock = WALL  # the port's clock once open (see the module docstring)
         self._unanswered: tuple[float, int | None, bytes | None] | None = None  # (sent, length, terminator)
@@ -102,19 +104,42 @@ class SerialTransport:
             owner = _OWNERS.get(key) if key is not None else None
             if owner is not None and owner is not self:
                 raise DeviceError(self.name, f"port {self.url} is already open by '{owner.name}'")
+            lock = PortLock(self.url, self.name) if self._opener is serial.serial_for_url else None
+            if lock is not None:
+                lock.acquire()  # another process holding the port: PortBusyError naming it
             try:
                 # a short fixed read slice: deadlines are kept here, because changing a
                 # pyserial port's timeout re-configures the line (tcsetattr) every time
-                self._port = self._opener(self.url, timeout=READ_SLICE_S, **self.settings)
-            except (OSError, serial.SerialException, ValueError) as exc:
+                self._port = self._open_port()
+            except (OSError, serial.SerialException, ValueError, TermiosError) as exc:
+                if lock is not None:
+                    lock.release()
                 raise DeviceError(self.name, f"cannot open port {self.url}: {_reason(exc)}") from None
+            self._lock_file = lock
             self.clock = getattr(self._port, "clock", WALL)
             if key is not None:
                 _OWNERS[key] = self
         return self
 
+    def _open_port(self):
+        try:
+            return self._opener(self.url, timeout=READ_SLICE_S, **self.settings)
+        except TermiosError as exc:
+            # some kernels refuse (EINVAL) a pty's tcsetattr with parity that keeps the
+            # speed: open at another speed, then set the real one (a change, accepted)
+            if self._opener is not serial.serial_for_url or getattr(exc, "args", (None,))[0] != 22:
+                raise
+            hop = 1200 if self.settings["baudrate"] != 1200 else 2400
+            port = serial.serial_for_url(self.url, timeout=READ_SLICE_S, do_not_open=True, **{**self.settings, "baudrate": hop})
+            port.open()
+            port.baudrate = self.settings["baudrate"]
+            return port
+
     def close(self) -> None:
         port, self._port = self._port, None
+        lock, self._lock_file = self._lock_file, None
+        if lock is not None:
+            lock.release()
         with _OWNERS_LOCK:
             if self._key is not None and _OWNERS.get(self._key) is self:
                 del _OWNERS[self._key]

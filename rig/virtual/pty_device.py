@@ -26,6 +26,7 @@ import heapq
 import itertools
 import os
 import select
+import termios
 import threading
 import time
 import tty
@@ -35,6 +36,7 @@ from flowcurve.errors import ConfigError
 from flowcurve.rig.virtual.faults import WireFaults
 
 LINKS = ("pty", "inprocess")
+IDLE_S = 0.1  # the pty thread looks around at least this often (faults due, the line parked)
 INPROCESS_BUFFER_BYTES = 4096  # like a pty's: bytes the host does not read beyond it are lost
 _NAMES = itertools.count(1)
 
@@ -68,6 +70,7 @@ class PtyDevice:
         if link == "pty":
             self._master, self._slave = os.openpty()
             tty.setraw(self._slave)
+            self._park_line()
             self.port = os.ttyname(self._slave)
             os.set_blocking(self._master, False)
             self._wake_r, self._wake_w = os.pipe()
@@ -267,8 +270,22 @@ class PtyDevice:
             self._timer = self.clock.call_at(when, self._on_timer)
 
     # -- the pty thread ---------------------------------------------------------------
+    def _park_line(self) -> None:
+        """Keep the pty's line at 50 baud, a speed no host asks for: on some kernels a pty
+        refuses (EINVAL) a host's ``tcsetattr`` with parity that does not change the speed, so
+        a second host opening the port at the first one's settings failed (issue 29, defect
+        10). Parked, every host's open changes the speed and succeeds: one host after another."""
+        try:
+            attrs = termios.tcgetattr(self._slave)
+            if attrs[4] != termios.B50 or attrs[5] != termios.B50:
+                attrs[4] = attrs[5] = termios.B50
+                termios.tcsetattr(self._slave, termios.TCSANOW, attrs)
+        except (termios.error, OSError):
+            pass
+
     def _run(self) -> None:
         while not self._stop.is_set():
+            self._park_line()
             if self.faults.unplug_requested:
                 self.unplugged = True
                 self._close_pty()
@@ -278,7 +295,7 @@ class PtyDevice:
             deadlines = [d for d in (self.next_deadline(),) if d is not None]
             if self._delayed:
                 deadlines.append(self._delayed[0][0])
-            timeout = 0.5 if not deadlines else max(0.0, min(min(deadlines) - now, 0.5))
+            timeout = IDLE_S if not deadlines else max(0.0, min(min(deadlines) - now, IDLE_S))
             try:
                 ready, _, _ = select.select([self._master, self._wake_r], [], [], timeout)
             except (OSError, ValueError):
