@@ -308,8 +308,8 @@ class Procedure:
         except OSError as exc:
             self._writing = False
             self._storage_error = RecordWriteError(
-                f"{self.path}: cannot write the record any more ({_os_reason(exc)}) — the test was stopped; "
-                f"{self.writer.rows_written} samples are on disk. Free space, then 'flowcurve recover {self.path}'")
+                f"{self.path}: cannot write the record any more ({_os_reason(exc)}) — the test was stopped; what "
+                f"reached the disk is kept (up to {self.writer.rows_written} samples). Free space, then 'flowcurve recover {self.path}'")
             raise self._storage_error from None
 
     def _close(self, status: str, extra: dict) -> None:

@@ -18,7 +18,7 @@ from flowcurve.acquisition.live import LiveView
 from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, Procedure, ProcedureError, StopCriteria, TestSpec
 from flowcurve.record.format import amend_record, read_record, recover_record
 from flowcurve.cli.specimen import add_geometry_options, add_modulus_option, check_specimen_options, measurement
-from flowcurve.errors import EXIT_COMPLETE, EXIT_DATA_LOST, EXIT_STOPPED, DeviceError, FlowcurveError, RecordError, SafetyError
+from flowcurve.errors import EXIT_COMPLETE, EXIT_DATA_LOST, EXIT_STOPPED, DeviceError, FlowcurveError, RecordError, RecordWriteError, SafetyError
 from flowcurve.rig.virtual.responses import COMPRESSION_HELP, COMPRESSION_RESPONSES, TENSION_HELP, TENSION_RESPONSES
 
 DEFAULT_VIRTUAL_MATERIAL = "steel45"
@@ -279,7 +279,16 @@ def cmd_recover(args) -> int:
     if not before.truncated and before.meta.get("status") != "recording":
         print(f"{args.record}: complete already (status {before.meta.get('status', '?')}), nothing to recover")
         return 0
-    path, rec = recover_record(args.record)
+    try:
+        path, rec = recover_record(args.record)
+    except OSError as exc:  # a full disk (or a read-only one): the record is rewritten through a copy
+        import shutil
+
+        size = args.record.stat().st_size
+        free = shutil.disk_usage(args.record.parent.resolve()).free
+        raise RecordWriteError(f"{args.record}: cannot recover in place ({exc.strerror or exc}): it needs about "
+                               f"{size // 1024 + 1} KiB free next to the record ({free // 1024} KiB free) — free space, or "
+                               f"copy the record to another disk and run 'flowcurve recover' there; the record is unchanged") from None
     last = float(rec.data["time_s"].iloc[-1])
     print(f"{path}: recovered — {len(rec.data)} samples up to {last:.1f} s, {len(rec.events)} events; status {rec.meta['status']} ({rec.meta.get('abort_reason', '')})")
     return 0

@@ -245,11 +245,28 @@ def run_virtual(args) -> int:
     return 0
 
 
+def _report_rig(rig, seen: dict) -> None:
+    """Lines for what the virtual rig's operator would notice: a fault switching on, the furnace
+    module's watchdog timing out (with the heater relay's state: a stuck relay stays on)."""
+    for t, spec in rig.faults_applied[seen.setdefault("faults", 0):]:
+        print(f"fault on: {spec.describe()} (model time {t:.1f} s)", flush=True)
+    seen["faults"] = len(rig.faults_applied)
+    furnace = rig.devices["furnace"]
+    tripped = bool(furnace.watchdog_status & 0x04)
+    if tripped and not seen.get("tripped"):
+        relay = "ON (stuck)" if rig.model.furnace.relay_on else "off"
+        print(f"furnace module: host watchdog timed out (model time {rig.now():.1f} s) — heater output off, "
+              f"relay {relay}", flush=True)
+    seen["tripped"] = tripped
+
+
 def _serve_motor(rig, interactive: bool, start_after_s: float | None) -> None:
     """The operator's motor switch: Enter toggles the crosshead, or it starts after a delay."""
     started_at = time.monotonic()
     running = False
+    seen: dict = {}
     while True:
+        _report_rig(rig, seen)
         if start_after_s is not None and not running and time.monotonic() - started_at >= start_after_s:
             rig.start_crosshead()
             running, start_after_s = True, None
