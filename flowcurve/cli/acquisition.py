@@ -196,7 +196,7 @@ def advice(error: FlowcurveError) -> str:
     text = str(error)
     if not isinstance(error, DeviceError) or " — " in text:
         return ""
-    if "disappeared" in text or "Input/output error" in text:
+    if "disappeared" in text or "Input/output error" in text or "No such file" in text:
         return " — the port vanished: reconnect the cable or USB adapter, then 'flowcurve rig check'"
     if "garbled" in text or "incomplete" in text:
         return " — check the cable, baud rate and parity ('flowcurve rig check' probes them)"

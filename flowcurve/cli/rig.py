@@ -58,8 +58,8 @@ def register(subparsers) -> None:
     add_fault_option(virtual)
     virtual.add_argument("--motor-start-after", type=float, default=None, metavar="S",
                          help="start the virtual crosshead motor S wall-clock seconds after launch (for "
-                              "scripts); interactively, press Enter here to start and stop it, as the "
-                              "operator does at the real machine's motor switch")
+                              "scripts; 'kill -USR1 <pid>' toggles it too); interactively, press Enter here to "
+                              "start and stop it, as the operator does at the real machine's motor switch")
     virtual.set_defaults(func=run_virtual)
 
 
@@ -234,6 +234,7 @@ def run_virtual(args) -> int:
         print(f"configuration: {path}")
         print(f"try: flowcurve rig check --config {path}")
         previous = signal.signal(signal.SIGTERM, _stop_on_sigterm)  # kill/systemd: stop cleanly too
+        signal.signal(signal.SIGUSR1, _toggle_motor)  # scripts: 'kill -USR1 <pid>' is the motor switch
         interactive = sys.stdin is not None and sys.stdin.isatty()
         try:  # Ctrl-C may come as soon as the line below is out
             print("running; " + ("Enter starts/stops the crosshead motor, " if interactive else "") + "Ctrl-C stops", flush=True)
@@ -271,13 +272,25 @@ def _serve_motor(rig, interactive: bool, start_after_s: float | None) -> None:
             rig.start_crosshead()
             running, start_after_s = True, None
             print("crosshead motor started", flush=True)
-        if interactive and select.select([sys.stdin], [], [], 0.5)[0]:
+        if _MOTOR_TOGGLES:
+            _MOTOR_TOGGLES.pop()
+            (rig.stop_crosshead if running else rig.start_crosshead)()
+            running = not running
+            print(f"crosshead motor {'started' if running else 'stopped'}", flush=True)
+        elif interactive and select.select([sys.stdin], [], [], 0.5)[0]:
             sys.stdin.readline()
             (rig.stop_crosshead if running else rig.start_crosshead)()
             running = not running
             print(f"crosshead motor {'started' if running else 'stopped'}", flush=True)
         elif not interactive:
-            time.sleep(0.2)
+            time.sleep(0.05)
+
+
+_MOTOR_TOGGLES: list[int] = []
+
+
+def _toggle_motor(signum, frame):
+    _MOTOR_TOGGLES.append(signum)
 
 
 def _stop_on_sigterm(signum, frame):
