@@ -3,13 +3,14 @@
 A frame can be well formed and still wrong (AED frames carry no checksum; a counter can
 step). :class:`RateGuard` sits between a channel's reads and its stream:
 
-* a **rise** of ``|value|`` faster than ``max_rate`` per second (plus ``tolerance``) from the
-  last accepted sample is impossible (force: the machine loads at most at frame stiffness ×
-  crosshead speed; crosshead: it moves at most at its speed) — rejected;
-* with ``falls_freely`` (force), a **fall** of any size is physical (a fracture), but a fall
-  that the very next sample undoes by an impossible rise is a one-sample spike — rejected
-  (the guard holds each sample until the next arrives); without it (crosshead) a fall is
-  judged like a rise;
+* a **one-sample spike** — a sample further from both neighbours than ``max_rate`` × their
+  time apart (plus ``tolerance``) allows, while the neighbours agree — is rejected (the guard
+  holds each sample until the next arrives);
+* a lasting **rise** of ``|value|`` faster than ``max_rate`` per second (plus ``tolerance``, and
+  ``time_slack`` for uncertain stamps) from the last accepted sample is impossible (force: the
+  machine loads at most at frame stiffness × crosshead speed; crosshead: it moves at most at
+  its speed) — rejected; with ``falls_freely`` (force) a lasting **fall** of any size is
+  physical (a fracture), without it (crosshead) a fall is judged like a rise;
 * ``persist`` rejections in a row are no glitch but a broken channel: :class:`ImplausibleReadings`
   (a :class:`DeviceError`) stops the test.
 
@@ -43,45 +44,50 @@ class RateGuard:
         self._held: tuple[float, float] | None = None  # a fall waiting for the next sample
         self._in_a_row = 0
 
-    def limit(self, dt: float) -> float:
-        """The largest physical change of ``|value|`` in ``dt`` seconds (stamps as uncertain as ``time_slack``)."""
-        return self.max_rate * (max(dt, 0.0) + self.time_slack) + self.tolerance
+    def limit(self, dt: float, slack: bool = True) -> float:
+        """The largest physical change of ``|value|`` in ``dt`` seconds (with ``slack``: the time
+        stamps as uncertain as ``time_slack``)."""
+        return self.max_rate * (max(dt, 0.0) + (self.time_slack if slack else 0.0)) + self.tolerance
 
     def feed(self, samples: list[tuple[float, float]]) -> list[tuple[float, float]]:
-        """The samples that pass, in order (a held fall comes out with the next sample)."""
+        """The samples that pass, in order (each is judged when the next one arrives)."""
         out: list[tuple[float, float]] = []
         for t, v in samples:
             self._one(t, v, out)
         return out
 
     def flush(self) -> list[tuple[float, float]]:
-        """At the end: a held fall passes (nothing contradicts it)."""
+        """At the end: the held sample is judged against the last accepted one alone."""
         held, self._held = self._held, None
-        return [held] if held is not None else []
+        out: list[tuple[float, float]] = []
+        if held is not None:
+            self._judge(held, None, out)
+        return out
 
     def _one(self, t: float, v: float, out: list) -> None:
         if self._last is None:
             self._accept(t, v, out)
             return
-        t0, v0 = self._last
-        if self._held is not None:
-            th, vh = self._held
-            if abs(v) - abs(vh) > self.limit(t - th) and abs(abs(v) - abs(v0)) <= self.limit(t - t0):
-                self._held = None  # back where it was: the fall was a one-sample spike
-                self._reject(th, vh, f"fell {abs(v0) - abs(vh):.4g} {self.unit} for one sample")
-            else:
-                self._held = None
-                self._accept(th, vh, out)
-                t0, v0 = th, vh
-        change = abs(v) - abs(v0)
-        if change > self.limit(t - t0) or (not self.falls_freely and -change > self.limit(t - t0)):
-            self._reject(t, v, f"{'rose' if change > 0 else 'fell'} {abs(change):.4g} {self.unit} in {t - t0:.3g} s "
-                               f"(at most {self.limit(t - t0):.4g} possible)")
+        held, self._held = self._held, (t, v)
+        if held is not None:
+            self._judge(held, (t, v), out)
+
+    def _judge(self, c: tuple[float, float], n: tuple[float, float] | None, out: list) -> None:
+        (tp, vp), (tc, vc) = self._last, c
+        # a one-sample spike: far from both neighbours, which agree with each other
+        if n is not None:
+            tn, vn = n
+            if (abs(vc - vp) > self.limit(tc - tp, False) and abs(vn - vc) > self.limit(tn - tc, False)
+                    and abs(vn - vp) <= self.limit(tn - tp, False)):
+                self._reject(tc, vc, f"{'rose' if abs(vc) > abs(vp) else 'fell'} {abs(abs(vc) - abs(vp)):.4g} {self.unit} "
+                                     f"for one sample")
+                return
+        change = abs(vc) - abs(vp)
+        if change > self.limit(tc - tp) or (not self.falls_freely and -change > self.limit(tc - tp)):
+            self._reject(tc, vc, f"{'rose' if change > 0 else 'fell'} {abs(change):.4g} {self.unit} in {tc - tp:.3g} s "
+                                 f"(at most {self.limit(tc - tp):.4g} possible)")
             return
-        if self.falls_freely and -change > self.limit(t - t0):
-            self._held = (t, v)
-            return
-        self._accept(t, v, out)
+        self._accept(tc, vc, out)
 
     def _accept(self, t: float, v: float, out: list) -> None:
         self._last = (t, v)

@@ -40,6 +40,8 @@ SPEED_MARGIN = 2.0  # readings may change at up to this multiple of the declared
 FORCE_TOLERANCE_OF_CAPACITY = 0.01  # plus this fraction of the frame's capacity (noise, a jerk)
 CROSSHEAD_TOLERANCE_MM = 0.05
 STAMP_SLACK_S = 0.05  # host seconds two time stamps may be off by (thread scheduling)
+LOSS_NOISE_FRAMES = 5  # the load cell's lost frames are declared beyond this many ...
+LOSS_NOISE_FRACTION = 0.005  # ... and this fraction (a loaded PC's scheduling; the count is an estimate)
 WATCH_COOLING_S = 45.0  # test seconds the furnace is watched after an over-temperature
 HEAT_STEPS_PER_PERIOD = 4
 HEAT_MIN_TICK_S = 0.005  # host seconds
@@ -581,10 +583,11 @@ class Procedure:
     def _loss_summary(self) -> str:
         parts = []
         missing = getattr(self.rig, "frames_lost", 0)
-        if self._restarts_noted:
-            expected = (self.writer.rows_written if self.writer else 0) + missing
-            parts.append(f"load cell: {self._restarts_noted} stream restarts lost about {missing} of {expected} "
-                         f"force samples ({100.0 * missing / max(expected, 1):.1f} %)")
+        expected = (self.writer.rows_written if self.writer else 0) + missing
+        if self._restarts_noted or missing > max(LOSS_NOISE_FRAMES, LOSS_NOISE_FRACTION * expected):
+            restarts = f"{self._restarts_noted} stream restarts; " if self._restarts_noted else ""
+            parts.append(f"load cell: {restarts}{missing} of {expected} force samples lost "
+                         f"({100.0 * missing / max(expected, 1):.1f} %)")
         rejected = sum(self._rejected_noted.values())
         if rejected:
             parts.append(f"{rejected} readings rejected as corrupt")
@@ -593,10 +596,14 @@ class Procedure:
         return "; ".join(parts)
 
     def _loss_meta(self) -> dict[str, object]:
-        if not self._loss_summary():
-            return {}
-        return {"samples_missing": getattr(self.rig, "frames_lost", 0), "stream_restarts": self._restarts_noted,
-                "readings_rejected": sum(self._rejected_noted.values()), "data_loss": self._loss_summary()}
+        """Header keys: the load cell's lost samples whenever any (an estimate: below the noise
+        limit no data_loss event and no exit 5), and the whole summary when there is one."""
+        missing = getattr(self.rig, "frames_lost", 0)
+        meta: dict[str, object] = {"samples_missing": missing} if missing else {}
+        if self._loss_summary():
+            meta.update({"samples_missing": missing, "stream_restarts": self._restarts_noted,
+                         "readings_rejected": sum(self._rejected_noted.values()), "data_loss": self._loss_summary()})
+        return meta
 
     def _after_safety_stop(self, error: FlowcurveError | None) -> FlowcurveError | None:
         """After an over-temperature the heater is off, or must be: watch the furnace cool for a

@@ -22,7 +22,6 @@ from flowcurve.errors import ConfigError
 
 DEVICES = ("loadcell", "encoder", "furnace")
 ALL = DEVICES
-DCON = ("encoder", "furnace")
 
 # kind → (devices it applies to, what it does)
 KINDS: dict[str, tuple[tuple[str, ...], str]] = {
@@ -33,7 +32,7 @@ KINDS: dict[str, tuple[tuple[str, ...], str]] = {
     "unplug": (ALL, "the port vanishes (cable pulled)"),
     "corrupt": (ALL, "one well-formed reply carries a wrong value (+VALUE)"),
     "jump": (("encoder",), "the counter steps by VALUE mm and stays stepped"),
-    "wrong_address": (DCON, "replies come from address VALUE instead of the configured one"),
+    "wrong_address": (("furnace",), "replies come from address VALUE instead of the configured one"),
     "open_thermocouple": (("furnace",), "the thermocouple breaks (reading over range)"),
     "relay_stuck": (("furnace",), "the heater relay sticks on whatever the output says"),
 }
@@ -46,7 +45,7 @@ DEFAULT_VALUES: dict[str, dict[str, float]] = {
     "delay": {d: 0.5 for d in ALL},
     "corrupt": {"loadcell": 20000.0, "encoder": 50.0, "furnace": 200.0},
     "jump": {"encoder": 50.0},
-    "wrong_address": {d: 3.0 for d in DCON},
+    "wrong_address": {"furnace": 3.0},
 }
 VALUE_UNITS = {
     "drop": {d: "fraction of replies, 0..1" for d in ALL},
@@ -54,7 +53,7 @@ VALUE_UNITS = {
     "delay": {d: "s" for d in ALL},
     "corrupt": {"loadcell": "N", "encoder": "mm", "furnace": "C"},
     "jump": {"encoder": "mm"},
-    "wrong_address": {d: "address, 0..255" for d in DCON},
+    "wrong_address": {"furnace": "address, 0..255"},
 }
 
 _FORM = re.compile(r"^(?P<device>[a-z_]+):(?P<kind>[a-z_]+)(?::(?P<value>[^@]+))?(?:@(?P<at>.+))?$")
