@@ -39,6 +39,8 @@ MOTION_MM = 0.005  # the crosshead has moved once it is this far from where reco
 SPEED_MARGIN = 2.0  # readings may change at up to this multiple of the declared speed's rate
 FORCE_TOLERANCE_OF_CAPACITY = 0.01  # plus this fraction of the frame's capacity (noise, a jerk)
 CROSSHEAD_TOLERANCE_MM = 0.05
+FURNACE_MAX_RATE_C_PER_S = 10.0  # a furnace's thermocouple changes no faster than this ...
+FURNACE_TOLERANCE_C = 20.0  # ... plus this (noise, a draught)
 STAMP_SLACK_S = 0.05  # host seconds two time stamps may be off by (thread scheduling)
 LOSS_NOISE_FRAMES = 5  # the load cell's lost frames are declared beyond this many ...
 LOSS_NOISE_FRACTION = 0.005  # ... and this fraction (a loaded PC's scheduling; the count is an estimate)
@@ -373,6 +375,10 @@ class Procedure:
                     self._stop_motion()
                     if sampler is not None:
                         final = self._drop_unbracketed(sampler, sampler.finish())
+                        late = sampler.fault
+                        if error is None and isinstance(late, SafetyError):  # found while stopping: still told
+                            error = late
+                            self._event("fault", str(late))
                         self._unshown_rows.append(final)
                         try:
                             self._write_rows(final)
@@ -540,6 +546,10 @@ class Procedure:
             force.guard = RateGuard(force.device, max_rate=stiffness * speed, tolerance=FORCE_TOLERANCE_OF_CAPACITY * capacity,
                                     unit="N", falls_freely=True, advice="check the amplifier, its cable and the load cell",
                                     time_slack=max(slack, 2 * self.rig.loadcell_period_s * self.rig.time_scale))
+        temp = sampler.channels.get("temperature_C")
+        if temp is not None:
+            temp.guard = RateGuard(temp.device, max_rate=FURNACE_MAX_RATE_C_PER_S, tolerance=FURNACE_TOLERANCE_C, unit="C",
+                                   advice="check the thermocouple and its cable", time_slack=slack)
         cross = sampler.channels.get("crosshead_mm")
         if cross is not None:
             cross.guard = RateGuard(cross.device, max_rate=speed, tolerance=CROSSHEAD_TOLERANCE_MM, unit="mm",
@@ -606,12 +616,16 @@ class Procedure:
         return meta
 
     def _after_safety_stop(self, error: FlowcurveError | None) -> FlowcurveError | None:
-        """After an over-temperature the heater is off, or must be: watch the furnace cool for a
-        while; if it keeps heating, the relay is stuck (SafetyError, the operator cuts the power)."""
+        """After a heated test or an over-temperature the heater is off, or must be: watch the
+        furnace cool for a while; if it keeps heating, the relay is stuck (SafetyError, the
+        operator cuts the power) — nothing watches the furnace once the process has ended."""
         watch = getattr(self.rig, "watch_heater_off", None)
-        if not (isinstance(error, SafetyError) and "over-temperature" in str(error) and watch):
+        heated = self.spec.temperature_C is not None and not isinstance(error, SafetyError)
+        over = isinstance(error, SafetyError) and "over-temperature" in str(error)
+        if not (watch and (heated or over)):
             return error
-        self._alert(f"furnace: over-temperature — heater off; watching that it cools ({WATCH_COOLING_S:g} s test time)")
+        self._alert(f"furnace: {'over-temperature — ' if over else ''}heater off; watching that it cools "
+                    f"({WATCH_COOLING_S:g} s test time)")
         try:
             watch(WATCH_COOLING_S)
         except SafetyError as exc:

@@ -149,6 +149,15 @@ def error_line(run: Run) -> str:
     return lines[0]
 
 
+def assert_complete(run: Run):
+    """A test without a fault: exit 0 — or 5 when a loaded PC starved the virtual amplifier's
+    thread and it skipped frames, which the record then declares (never a corrupt reading)."""
+    assert run.code in (0, 5), (run.code, run.err)
+    assert run.record.meta["status"] == "complete" and not run.events("corrupt")
+    if run.code == 5:
+        assert "force samples lost" in run.record.meta["data_loss"]
+
+
 def assert_ended_cleanly(run: Run, code: int):
     """The common ending: the exit code, a record closed with a stop event, the heater off."""
     assert run.code == code, (run.code, run.out, run.err)
@@ -245,8 +254,8 @@ def test_13_a_stuck_relay_is_reported_and_the_operator_told_to_cut_the_power(tmp
 def test_11_heating_at_time_scale_200(tmp_path, env, rig_process):
     rig = rig_process(time_scale=200.0)
     run = run_test(tmp_path, env, rig, "--target", "0.3", "--temperature", "300", "--soak", "30", timeout=180)
-    assert run.code in (0, 5), run.err
-    assert run.events("soak_reached") and run.record.meta["status"] == "complete"
+    assert_complete(run)
+    assert run.events("soak_reached")
     temp = run.record.column("temperature_C")
     assert abs(np.nanmedian(temp) - 300) < 10
 
@@ -319,7 +328,7 @@ def test_9_a_second_run_on_the_same_ports_is_refused_naming_the_first(tmp_path, 
     finally:
         first.send_signal(signal.SIGINT)
         _, err = first.communicate(timeout=30)
-    assert first.returncode == 0 and "Traceback" not in err  # the first run was not disturbed
+    assert first.returncode in (0, 5) and "Traceback" not in err  # the first run was not disturbed
     assert read_record(first_rec).meta["status"] == "complete"
 
 
@@ -333,7 +342,7 @@ def test_10_rig_check_run_and_rig_check_again(tmp_path, env, rig_process):
             assert "Traceback" not in done.stderr
         else:
             run = run_test(tmp_path, env, rig, "--target", "0.05", test="compression")
-            assert run.code == 0 and run.record.meta["status"] == "complete", run.err
+            assert_complete(run)
             starts = run.events("start")
             assert starts and "motion detected" in starts[0]  # 'Also': motion start at 0.01 mm/s
 
@@ -344,7 +353,7 @@ def test_10_rig_check_run_and_rig_check_again(tmp_path, env, rig_process):
 def test_12_quiet_still_tells_the_operator_to_stop_the_motor(tmp_path, env, rig_process):
     rig = rig_process()
     run = run_test(tmp_path, env, rig, "--force-limit", "3000")
-    assert run.code == 0, run.err
+    assert_complete(run)
     assert "Stop the crosshead motor (force limit 3000 N reached)" in run.err
     start = [e for e in run.record.events if e.name == "start"]
     assert start and "motion detected" in start[0].text
