@@ -1,4 +1,6 @@
-"""The ``--fault DEVICE:KIND[:VALUE][@SECONDS]`` parser (pure), and each new kind seen on the wire."""
+"""The ``--fault DEVICE:KIND[:VALUE][@SECONDS]`` parser (pure), each new kind seen on the wire, and the
+virtual furnace module's host watchdog counting the model's time (as the real module would see the
+test) and going on with the cable pulled (issue 29: defect 6 and 'Also')."""
 
 import pytest
 import serial
@@ -108,3 +110,38 @@ def test_loadcell_corrupt_is_one_wellformed_frame_and_waits_for_motion(rig):
         assert force() > 19_000
         assert force() < 10_000  # once (the real load is ~2 kN by now)
         assert [s.describe() for _, s in rig.faults_applied] == ["loadcell:corrupt:20000@0.5"]
+
+
+# -- the virtual furnace module's watchdog: model time, and alive unplugged -----------------------
+
+@pytest.fixture
+def slow_rig(model_time_rig):
+    return model_time_rig("steel45", time_scale=20, seed=1)
+
+
+def arm_and_heat(p):
+    assert dcon(p, "~0150000") == b"!01\r"  # heater off at power-on and as the safe value
+    assert dcon(p, "~013164") == b"!01\r"  # watchdog on, 10.0 s
+    assert dcon(p, "@01DO01") == b"!01\r"
+
+
+def test_watchdog_trips_after_its_timeout_in_model_time(slow_rig):
+    with serial.serial_for_url(slow_rig.ports["furnace"], timeout=0.2) as p:
+        arm_and_heat(p)
+        t_armed = slow_rig.now()
+        while slow_rig.model.furnace.commanded_on and slow_rig.now() - t_armed < 60:
+            slow_rig.clock.sleep(0.01)
+        # 10 model seconds at scale 20 = 0.5 host s (before: 10 host s = 200 model s)
+        assert slow_rig.now() - t_armed == pytest.approx(10.0, abs=0.5)
+        assert dcon(p, "~010") == b"!0104\r"
+
+
+def test_watchdog_trips_with_the_cable_pulled(slow_rig):
+    with serial.serial_for_url(slow_rig.ports["furnace"], timeout=0.2) as p:
+        arm_and_heat(p)
+    t_pulled = slow_rig.now()
+    slow_rig.inject("furnace", "unplug")
+    slow_rig.clock.sleep(1.0)  # 20 model seconds
+    assert not slow_rig.model.furnace.commanded_on
+    assert slow_rig.devices["furnace"].watchdog_status & 0x04
+    assert slow_rig.now() - t_pulled >= 10.0
