@@ -37,7 +37,7 @@ WATCHDOG_TIMED_OUT = 0x04
 # the host's feeding gaps are host time: on a fast time scale the virtual watchdog waits at
 # least this long in host seconds (a loaded PC cannot promise shorter gaps), i.e. it counts
 # model time only while timeout / time_scale is longer than this
-WATCHDOG_HOST_FLOOR_S = 0.5
+WATCHDOG_HOST_FLOOR_S = 1.0
 TYPE_CODES = tuple(range(0x00, 0x07)) + tuple(range(0x0E, 0x17))  # mV/V ranges + thermocouples
 
 
