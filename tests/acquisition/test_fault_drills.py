@@ -310,8 +310,11 @@ def test_8_a_read_only_record_folder_is_an_error_before_the_test(tmp_path, env, 
 
 # -- defects 9, 10: who owns the ports ----------------------------------------------------------------
 
-def test_9_a_second_run_on_the_same_ports_is_refused_naming_the_first(tmp_path, env, rig_process):
+@pytest.mark.parametrize("parity", ["E", pytest.param("N", marks=pytest.mark.pty)])
+def test_9_a_second_run_on_the_same_ports_is_refused_naming_the_first(tmp_path, env, rig_process, parity):
     rig = rig_process()
+    text = rig.config.read_text()  # the load cell's line: E (a termios error before), N (nothing stopped it)
+    rig.config.write_text(text.replace('parity = "E"', f'parity = "{parity}"', 1))
     first_rec = tmp_path / "first.csv"
     first = subprocess.Popen(flowcurve("run", "tension", "--config", rig.config, "--quiet", "--out", first_rec, "--time-scale",
                                        rig.time_scale, "--material", "steel45", "--d0", D0, "--l0", L0),
@@ -352,6 +355,7 @@ def test_12_quiet_still_tells_the_operator_to_stop_the_motor(tmp_path, env, rig_
     run = run_test(tmp_path, env, rig, "--force-limit", "3000")
     assert_complete(run)
     assert "Stop the crosshead motor (force limit 3000 N reached)" in run.err
+    assert not any("watchdog timed out" in line for line in rig.lines)  # a clean stop feeds it until disarmed
     start = [e for e in run.record.events if e.name == "start"]
     assert start and "motion detected" in start[0].text
 
