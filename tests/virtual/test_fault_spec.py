@@ -145,3 +145,20 @@ def test_watchdog_trips_with_the_cable_pulled(slow_rig):
     assert not slow_rig.model.furnace.commanded_on
     assert slow_rig.devices["furnace"].watchdog_status & 0x04
     assert slow_rig.now() - t_pulled >= 25.5
+
+
+def test_a_late_reply_is_discarded_never_taken_for_the_next_command(rig):
+    """Issue 29, defect 3: replies 0.5 s late (time-out 0.2 s) — a retry used to take the first
+    command's stale reply as its own."""
+    from flowcurve.errors import DeviceError
+    from flowcurve.rig.encoder import CrossheadEncoder
+
+    with CrossheadEncoder(rig.ports["encoder"], timeout_s=0.2) as enc:
+        assert enc.read_counts() == 0
+        rig.inject("encoder", "delay", seconds=0.5)
+        with pytest.raises(DeviceError, match="late and was discarded"):
+            enc.read_counts()
+        assert enc.transport.late_replies >= 1
+        rig.clear("encoder")
+        rig.clock.sleep(1.0)
+        assert enc.read_counts() == 0  # in time again: answered
