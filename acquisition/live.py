@@ -136,6 +136,14 @@ class LiveView:
             self.stream.write(status_line(s) + "\n")
         self.stream.flush()
 
+    def alert(self, text: str) -> None:
+        """A line the operator must see whatever the view (safety: stop the motor, cut the
+        furnace's power): on the view's stream, or on stderr when quiet."""
+        stream = sys.stderr if self.quiet else self.stream
+        stream.write(text + "\n")
+        stream.flush()
+        self._drawn_lines = 0
+
     def say(self, text: str) -> None:
         """A message line that stays (instructions, results)."""
         if self.quiet:

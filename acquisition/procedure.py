@@ -29,11 +29,24 @@ import numpy as np
 
 from flowcurve.acquisition.live import LiveView, Snapshot
 from flowcurve.record.format import STATUS_ABORTED, STATUS_COMPLETE, RecordWriter, amend_record
+from flowcurve.acquisition.plausibility import RateGuard
 from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temperature
 from flowcurve.acquisition.sampler import Channel, Sampler
 from flowcurve.clock import WALL, Clock
-from flowcurve.errors import FlowcurveError
+from flowcurve.errors import FlowcurveError, RecordWriteError, SafetyError
 
+MOTION_MM = 0.005  # the crosshead has moved once it is this far from where recording began
+SPEED_MARGIN = 2.0  # readings may change at up to this multiple of the declared speed's rate
+FORCE_TOLERANCE_OF_CAPACITY = 0.01  # plus this fraction of the frame's capacity (noise, a jerk)
+CROSSHEAD_TOLERANCE_MM = 0.05
+FURNACE_MAX_RATE_C_PER_S = 10.0  # a furnace's thermocouple changes no faster than this ...
+FURNACE_TOLERANCE_C = 20.0  # ... plus this (noise, a draught)
+STAMP_SLACK_S = 0.05  # host seconds two time stamps may be off by (thread scheduling)
+LOSS_NOISE_FRAMES = 5  # the load cell's lost frames are declared beyond this many ...
+LOSS_NOISE_FRACTION = 0.005  # ... and this fraction (a loaded PC's scheduling; the count is an estimate)
+WATCH_COOLING_S = 45.0  # test seconds the furnace is watched after an over-temperature
+HEAT_STEPS_PER_PERIOD = 4
+HEAT_MIN_TICK_S = 0.005  # host seconds
 FORCE_LIMIT_OF_CAPACITY = 0.98  # default force limit: this fraction of the frame's capacity
 TEST_GEOMETRY = {"tension": ("d0_mm", "l0_mm"), "compression": ("d0_mm", "h0_mm")}
 POST_KEYS = {
@@ -205,6 +218,7 @@ class Outcome:
     max_force_N: float
     post: dict[str, float]
     error: FlowcurveError | None = None
+    losses: str = ""  # what the record declares lost or rejected ("" when nothing)
 
 
 class KeyWatcher:
@@ -269,6 +283,12 @@ class Procedure:
         self.writer: RecordWriter | None = None
         self._writing = False
         self._unshown_rows: list[np.ndarray] = []  # recorded rows no snapshot has carried yet (the last batch)
+        self._end_reason = ""
+        self._storage_error: RecordWriteError | None = None
+        self._dropped = 0
+        self._restarts_noted = 0
+        self._late_noted: dict[str, int] = {}
+        self._rejected_noted: dict[str, int] = {}
 
     # clock: test seconds since the procedure started (time-scaled on the virtual rig)
     def clock(self) -> float:
@@ -279,18 +299,48 @@ class Procedure:
 
     def _event(self, name: str, text: str = "") -> None:
         if self.writer is not None and self._writing:
-            self.writer.event(self.clock(), name, text)
+            self._storing(self.writer.event, self.clock(), name, text)
+
+    def _write_rows(self, rows: np.ndarray) -> None:
+        if self._writing:
+            self._storing(self.writer.append_rows, rows)
+
+    def _storing(self, write, *args) -> None:
+        """A write to the record; a full disk (or any OSError) stops the recording, once."""
+        try:
+            write(*args)
+        except OSError as exc:
+            self._writing = False
+            self._storage_error = RecordWriteError(
+                f"{self.path}: cannot write the record any more ({_os_reason(exc)}) — the test was stopped; what "
+                f"reached the disk is kept (up to {self.writer.rows_written} samples). Free space, then 'flowcurve recover {self.path}'")
+            raise self._storage_error from None
 
     def _close(self, status: str, extra: dict) -> None:
-        self._writing = False
-        self.writer.close(status, extra)
+        was_writing, self._writing = self._writing, False
+        if not was_writing and self._storage_error is not None:
+            try:  # the disk is full: let go of the file; recover completes the header later
+                self.writer._fh.close()
+            except OSError:
+                pass
+            return
+        try:
+            self.writer.close(status, extra)
+        except OSError as exc:
+            self._storage_error = self._storage_error or RecordWriteError(
+                f"{self.path}: cannot finish the record ({_os_reason(exc)}); {self.writer.rows_written} samples are "
+                f"on disk. Free space, then 'flowcurve recover {self.path}'")
 
     def run(self) -> Outcome:
         spec, rig = self.spec, self.rig
         self._t0 = self.timebase.now()
         rig.set_clock(self.clock)
         columns = ["time_s", "force_N", "crosshead_mm"] + (["temperature_C"] if rig.has_furnace else [])
-        self.writer = RecordWriter(self.path, spec.meta(rig), columns)
+        try:
+            self.writer = RecordWriter(self.path, spec.meta(rig), columns)
+        except OSError as exc:  # before anything moves or heats
+            raise RecordWriteError(f"{self.path}: cannot create the record ({_os_reason(exc)}) — the test was not "
+                                   "started; give --out a folder you can write to, with free space") from None
         self._writing = True
         status, reason, error = STATUS_COMPLETE, "", None
         state = StopState()
@@ -305,6 +355,7 @@ class Procedure:
                     rig.tare()
                     self._event("tare")
                     sampler = Sampler(rig.channels(self.clock, self.to_clock))
+                    self._guard(sampler)
                     if rig.has_furnace:  # keep holding the set-point (or just read), feed the watchdog
                         sampler.channels["temperature_C"].read = self._furnace_read()
                     sampler.start()
@@ -320,29 +371,52 @@ class Procedure:
                     if sampler is not None:  # the reading threads let go of the ports first
                         sampler.request_stop()
                     safety.switch_off(reason or "end of test")
+                    self._end_reason = reason
                     self._stop_motion()
                     if sampler is not None:
-                        final = sampler.finish()
-                        self.writer.append_rows(final)
+                        final = self._drop_unbracketed(sampler, sampler.finish())
+                        self._feed_watchdog()  # the furnace channel has stopped feeding it
+                        late = sampler.fault
+                        if error is None and isinstance(late, SafetyError):  # found while stopping: still told
+                            error = late
+                            self._event("fault", str(late))
                         self._unshown_rows.append(final)
-                    self._event("stop", reason)
+                        try:
+                            self._write_rows(final)
+                            self._note_losses(sampler, final=True)
+                        except RecordWriteError as exc:
+                            status, reason, error = STATUS_ABORTED, reason or str(exc), error or exc
+                    error = self._after_safety_stop(error)
+                    if error is not None and reason != str(error) and isinstance(error, SafetyError):
+                        reason = str(error)
+                    if not safety.off_confirmed and rig.has_furnace:
+                        self._alert(f"furnace: heater-off not confirmed — the furnace module's watchdog switches it off "
+                                    f"by itself; if the furnace keeps heating, switch off its mains power")
+                    try:
+                        self._event("stop", reason)
+                    except RecordWriteError:
+                        pass
         except BaseException as exc:  # anything unexpected: keep the record, mark it aborted
             self._close(STATUS_ABORTED, {"abort_reason": " ".join(f"{type(exc).__name__}: {exc}".split())})
             raise
-        extra = {"stop_reason": reason}
+        extra = {"stop_reason": reason, **self._loss_meta()}
         if status == STATUS_ABORTED:
             extra["abort_reason"] = reason
         samples = self.writer.rows_written
         self._close(status, extra)
+        self._feed_watchdog()
+        if self._storage_error is not None:
+            status, error = STATUS_ABORTED, error if isinstance(error, RecordWriteError) else self._storage_error
         post = {}
         if status == STATUS_COMPLETE:
             post = self._post_measurements()
             if post:
                 amend_record(self.path, post)
+            self._feed_watchdog()
         tail = [r for r in self._unshown_rows if r.size]
         self.view.show(Snapshot("done", time_s=self.clock(), samples=samples, message=reason,
                                 rows=np.concatenate(tail) if tail else None), force=True)
-        return Outcome(self.path, status, reason, samples, self.clock(), state.max_force_N, post, error)
+        return Outcome(self.path, status, reason, samples, self.clock(), state.max_force_N, post, error, self._loss_summary())
 
     # phases --------------------------------------------------------------------------------
     def _heat(self) -> None:
@@ -352,6 +426,10 @@ class Procedure:
         self._event("heater_on", f"set-point {setpoint:g} C")
         t_start = self.clock()
         steady_since = None
+        # at least HEAT_STEPS_PER_PERIOD control steps per heater period (test seconds), however
+        # fast the (virtual) rig's time runs; HEAT_MIN_TICK_S is what a host can keep up with
+        period = getattr(rig, "control_period_s", None)
+        tick = self.tick_s if not period else min(self.tick_s, max(HEAT_MIN_TICK_S, period / HEAT_STEPS_PER_PERIOD / rig.time_scale))
         while True:
             temp = check_temperature(rig.hold_temperature(setpoint), rig.max_temperature_C)
             rig.host_ok()
@@ -371,7 +449,7 @@ class Procedure:
             asked = self.stop_requested()
             if asked:  # before loading, a stop ends the test unloaded: aborted
                 raise Interrupted(asked)
-            self.timebase.sleep(self.tick_s)
+            self.timebase.sleep(tick)
 
     def _furnace_read(self) -> Callable[[], float]:
         setpoint, rig = self.spec.temperature_C, self.rig
@@ -397,6 +475,7 @@ class Procedure:
         if crit.force_limit_N is None and capacity:
             crit = replace(crit, force_limit_N=FORCE_LIMIT_OF_CAPACITY * capacity)
         moving = rig.can_drive
+        rest_mm = None  # the crosshead where recording began: motion is a move away from it
         curve_x: list[np.ndarray] = []
         curve_f: list[np.ndarray] = []
         rate_t, rate_n = self.clock(), 0
@@ -404,12 +483,16 @@ class Procedure:
         with KeyWatcher(self.interactive) as keys:
             while True:
                 rows = sampler.take_rows()
+                self._note_losses(sampler)
                 if rows.size:
-                    self.writer.append_rows(rows)
+                    self._write_rows(rows)
                     self._unshown_rows.append(rows)  # until a snapshot carries them (a stop, fault or q ends the loop first)
-                    if not moving and np.any(np.abs(rows[:, 2] - rows[0, 2]) > 0.02):
+                    rest_mm = float(rows[0, 2]) if rest_mm is None else rest_mm
+                    moved = np.flatnonzero(np.abs(rows[:, 2] - rest_mm) > MOTION_MM)
+                    if not moving and moved.size:
                         moving = True
-                        self._event("start", "crosshead motion detected")
+                        t_moved = float(rows[moved[0], 0])
+                        self._storing(self.writer.event, t_moved, "start", f"crosshead motion detected ({rows[moved[0], 2] - rest_mm:+.3f} mm)")
                     curve_x.append(rows[::10, 2])
                     curve_f.append(rows[::10, 1])
                     reason = stop_reason(rows, state, crit)
@@ -449,10 +532,123 @@ class Procedure:
         try:
             if self.rig.can_drive:
                 self.rig.stop_crosshead()
-            else:
-                self.view.say("Stop the crosshead motor.")
+            else:  # always, --quiet too: the motor is the operator's
+                self._alert(f"Stop the crosshead motor ({self._end_reason or 'end of test'}).")
         except Exception as exc:  # never let this hide the real end of the test
             self._event("fault", f"crosshead stop failed: {exc}")
+
+    # plausibility and losses ------------------------------------------------------------------
+    def _guard(self, sampler: Sampler) -> None:
+        """Readings no machine makes are rejected (acquisition.plausibility): force rises at most
+        at frame stiffness × speed, the crosshead moves at most at its speed (both × SPEED_MARGIN)."""
+        speed = self.spec.speed_mm_per_s * SPEED_MARGIN
+        capacity = getattr(self.rig, "max_force_N", None) or 100e3
+        stiffness = (self.rig.frame_stiffness_N_per_um or 0.0) * 1000.0  # N/mm
+        slack = STAMP_SLACK_S * self.rig.time_scale  # stamps are host times: jitter scales with the rig's time
+        force = sampler.channels.get("force_N")
+        if force is not None and stiffness > 0:
+            force.guard = RateGuard(force.device, max_rate=stiffness * speed, tolerance=FORCE_TOLERANCE_OF_CAPACITY * capacity,
+                                    unit="N", falls_freely=True, advice="check the amplifier, its cable and the load cell",
+                                    time_slack=max(slack, 2 * self.rig.loadcell_period_s * self.rig.time_scale))
+        temp = sampler.channels.get("temperature_C")
+        if temp is not None:
+            temp.guard = RateGuard(temp.device, max_rate=FURNACE_MAX_RATE_C_PER_S, tolerance=FURNACE_TOLERANCE_C, unit="C",
+                                   advice="check the thermocouple and its cable", time_slack=slack)
+        cross = sampler.channels.get("crosshead_mm")
+        if cross is not None:
+            cross.guard = RateGuard(cross.device, max_rate=speed, tolerance=CROSSHEAD_TOLERANCE_MM, unit="mm",
+                                    advice="the counter lost or gained counts: check the encoder and its cable", time_slack=slack)
+
+    def _note_losses(self, sampler: Sampler, final: bool = False) -> None:
+        """Events for what the channels rejected, the load cell's stream restarts and the late
+        replies discarded since the last call; at the end one ``data_loss`` summary."""
+        for ch in sampler.channels.values():
+            if ch.guard is None:
+                continue
+            done = self._rejected_noted.get(ch.device, 0)
+            for t, v, why in ch.guard.rejected[done:]:
+                self._event("corrupt", f"{ch.device}: reading {v:.6g} at {t:.3f} s rejected as corrupt: {why}")
+            self._rejected_noted[ch.device] = len(ch.guard.rejected)
+        restarts = getattr(self.rig, "stream_restarts", 0)
+        if restarts > self._restarts_noted:
+            self._event("stream_restart", f"load cell: garbled stream restarted ({restarts - self._restarts_noted} more, {restarts} so far; frames lost meanwhile)")
+            self._restarts_noted = restarts
+        for device, late in (getattr(self.rig, "late_replies", None) or {}).items():
+            if late > self._late_noted.get(device, 0):
+                self._event("late_reply", f"{device}: {late - self._late_noted.get(device, 0)} late replies discarded ({late} so far)")
+                self._late_noted[device] = late
+        if final and self._loss_summary():
+            self._event("data_loss", self._loss_summary())
+
+    def _drop_unbracketed(self, sampler: Sampler, rows: np.ndarray) -> np.ndarray:
+        """The last rows without their faulted channel's values: a held value is no reading."""
+        fault = sampler.fault
+        device = getattr(fault, "device", None)
+        for ch in list(sampler.channels.values())[1:]:
+            if ch.device == device and rows.size:
+                keep = rows[:, 0] <= ch.stream.last_time()
+                self._dropped += int(np.count_nonzero(~keep))
+                if not keep.all():
+                    self._event("dropped", f"{int(np.count_nonzero(~keep))} force samples after the {device}'s last "
+                                           f"reading ({ch.stream.last_time():.3f} s) left out")
+                return rows[keep]
+        return rows
+
+    def _loss_summary(self) -> str:
+        parts = []
+        missing = getattr(self.rig, "frames_lost", 0)
+        expected = (self.writer.rows_written if self.writer else 0) + missing
+        if self._restarts_noted or missing > max(LOSS_NOISE_FRAMES, LOSS_NOISE_FRACTION * expected):
+            restarts = f"{self._restarts_noted} stream restarts; " if self._restarts_noted else ""
+            parts.append(f"load cell: {restarts}{missing} of {expected} force samples lost "
+                         f"({100.0 * missing / max(expected, 1):.1f} %)")
+        rejected = sum(self._rejected_noted.values())
+        if rejected:
+            parts.append(f"{rejected} readings rejected as corrupt")
+        if self._dropped:
+            parts.append(f"{self._dropped} force samples after the fault left out")
+        return "; ".join(parts)
+
+    def _loss_meta(self) -> dict[str, object]:
+        """Header keys: the load cell's lost samples whenever any (an estimate: below the noise
+        limit no data_loss event and no exit 5), and the whole summary when there is one."""
+        missing = getattr(self.rig, "frames_lost", 0)
+        meta: dict[str, object] = {"samples_missing": missing} if missing else {}
+        if self._loss_summary():
+            meta.update({"samples_missing": missing, "stream_restarts": self._restarts_noted,
+                         "readings_rejected": sum(self._rejected_noted.values()), "data_loss": self._loss_summary()})
+        return meta
+
+    def _after_safety_stop(self, error: FlowcurveError | None) -> FlowcurveError | None:
+        """After a heated test or an over-temperature the heater is off, or must be: watch the
+        furnace cool for a while; if it keeps heating, the relay is stuck (SafetyError, the
+        operator cuts the power) — nothing watches the furnace once the process has ended."""
+        watch = getattr(self.rig, "watch_heater_off", None)
+        heated = self.spec.temperature_C is not None and not isinstance(error, SafetyError)
+        over = isinstance(error, SafetyError) and "over-temperature" in str(error)
+        if not (watch and (heated or over)):
+            return error
+        self._alert(f"furnace: {'over-temperature — ' if over else ''}heater off; watching that it cools "
+                    f"({WATCH_COOLING_S:g} s test time)")
+        try:
+            watch(WATCH_COOLING_S)
+        except SafetyError as exc:
+            self._event("fault", str(exc))
+            return exc
+        except FlowcurveError:
+            pass
+        return error
+
+    def _feed_watchdog(self) -> None:
+        """Until the rig disarms the furnace module's watchdog at close, keep it fed: a trip
+        after a clean stop is no fault (the heater is off) but reads like one."""
+        try:
+            self.rig.host_ok()
+        except (FlowcurveError, OSError):
+            pass
+
+    def _alert(self, text: str) -> None:
+        getattr(self.view, "alert", self.view.say)(text)
 
     def _post_measurements(self) -> dict[str, float]:
         keys = POST_KEYS[self.spec.test]
@@ -472,3 +668,7 @@ class Procedure:
                     except ValueError:
                         self.view.say(f"  not a number, skipped: {text!r}")
         return post
+
+
+def _os_reason(exc: OSError) -> str:
+    return exc.strerror or str(exc) if isinstance(exc, OSError) else str(exc)

@@ -27,6 +27,7 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
+from flowcurve.acquisition.plausibility import ImplausibleReadings
 from flowcurve.clock import WALL, Clock
 from flowcurve.errors import DeviceError, FlowcurveError, InternalError, SafetyError
 
@@ -134,6 +135,8 @@ class Channel(threading.Thread):
         self.silence_s = silence_s
         self.on_fault = on_fault
         self.stream = Stream(name)
+        self.guard = None  # an acquisition.plausibility.RateGuard: impossible readings rejected
+        self.last_error: str | None = None  # the last failed read (for a silence fault's message)
         self.reads = 0
         self.last_data_wall_s = timebase.now()
         self.error: str | None = None
@@ -156,6 +159,7 @@ class Channel(threading.Thread):
                 return
             except DEVICE_FAILURES as exc:  # count it, then give up
                 failures += 1
+                self.last_error = _one_line(exc)
                 logger.debug("%s: read %d failed: %s", self.device, failures, _one_line(exc))
                 if failures >= self.max_failures:
                     self._fault(f"{failures} reads in a row failed; last: {_one_line(exc)}", exc if isinstance(exc, DeviceError) else None)
@@ -168,7 +172,11 @@ class Channel(threading.Thread):
                                           f"(a bug in flowcurve, please report it; -vv shows the traceback)"))
                 return
             failures = 0
-            n = self._store(got, self.clock())
+            try:
+                n = self._store(got, self.clock())
+            except ImplausibleReadings as exc:  # readings no machine makes, again and again
+                self._fault(str(exc), exc)
+                return
             wall = tb.now()
             if n:
                 self.last_data_wall_s = wall
@@ -183,22 +191,28 @@ class Channel(threading.Thread):
                     tb.wait(self._stop_event, delay)
                 else:
                     next_due = tb.now()
+        if self.guard is not None and self.error is None:  # a fall held for its next sample passes
+            held = self.guard.flush()
+            self.stream.extend([p[0] for p in held], [p[1] for p in held])
 
     def _store(self, got, now: float) -> int:
+        """Stamp and keep what a read returned (through the guard); how many values came."""
         if got is None:
             return 0
         if np.isscalar(got):
-            self.stream.extend([now], [float(got)])
-            return 1
-        items = list(got)
-        if not items:
-            return 0
-        if isinstance(items[0], tuple):
-            self.stream.extend([p[0] for p in items], [float(p[1]) for p in items])
+            pairs = [(now, float(got))]
         else:
-            k = len(items)
-            self.stream.extend([now - (k - 1 - i) * self.spacing_s for i in range(k)], [float(v) for v in items])
-        return len(items)
+            items = list(got)
+            if not items:
+                return 0
+            if isinstance(items[0], tuple):
+                pairs = [(p[0], float(p[1])) for p in items]
+            else:
+                k = len(items)
+                pairs = [(now - (k - 1 - i) * self.spacing_s, float(v)) for i, v in enumerate(items)]
+        kept = self.guard.feed(pairs) if self.guard is not None else pairs
+        self.stream.extend([p[0] for p in kept], [p[1] for p in kept])
+        return len(pairs)
 
     def _fault(self, message: str, error: Exception | None = None) -> None:
         self.error = message
@@ -288,7 +302,8 @@ class Sampler:
         for ch in self.channels.values():
             now = ch.timebase.now()
             if ch.is_alive() and now - ch.last_data_wall_s > ch.silence_s:
-                self._on_fault(ch.device, f"no answer for {now - ch.last_data_wall_s:.1f} s")
+                last = f" (last: {ch.last_error})" if ch.last_error else ""
+                self._on_fault(ch.device, f"no answer for {now - ch.last_data_wall_s:.1f} s{last}")
         return self._fault
 
     def request_stop(self) -> None:

@@ -19,6 +19,7 @@ from flowcurve.acquisition.sampler import Channel, lower_envelope_stamps
 from flowcurve.clock import WALL, Clock
 from flowcurve.errors import DeviceError
 from flowcurve.rig.codecs import aed
+from flowcurve.rig.furnace import StuckRelayCheck
 
 logger = logging.getLogger(__name__)
 
@@ -29,6 +30,8 @@ SILENCE_TIMEOUTS = 10  # ... or this many of the device's reply time-outs, if lo
 ENCODER_PERIOD_S = 0.02  # host-time polling period of the encoder box
 FURNACE_PERIOD_S = 0.25  # of the furnace module (DCON replies take up to 0.3 s) ...
 FURNACE_MIN_PERIOD_S = 0.02  # ... shorter on a time-scaled virtual rig: 4 steps per control period
+FURNACE_VERIFY_S = 1.0  # host seconds between the furnace module's address checks (@AADI)
+STUCK_SETTLE_S = 30.0  # test seconds with the heater off before the furnace must not rise any more
 STREAM_BLOCK = 20  # load-cell frames per read call at most
 STREAM_PERIOD_MARGIN = 1.01  # stamps step 1 % longer than the nominal output period
 
@@ -55,6 +58,7 @@ class DriverRig:
         self.can_drive = virtual is not None
         self.has_furnace = config.furnace is not None
         self.max_temperature_C = config.furnace.max_temperature_C if self.has_furnace else float("inf")
+        self.control_period_s = config.furnace.control_period_s if self.has_furnace else None
         self.frame_stiffness_N_per_um = config.frame.stiffness_N_per_um
         self.max_force_N = config.frame.max_force_N
         rate = aed.ICR_RATES_PER_S[config.loadcell.rate_code]
@@ -63,6 +67,8 @@ class DriverRig:
         self.encoder = config.encoder.create()
         self.furnace = config.furnace.create() if self.has_furnace else None
         self._controller = None
+        self._stuck = None
+        self._verified_at = -float("inf")
         self._clock: Callable[[], float] = lambda: self.timebase.now() * self.time_scale
 
     # life cycle ------------------------------------------------------------------------------
@@ -146,6 +152,21 @@ class DriverRig:
             chans["temperature_C"] = Channel(self.furnace.name, self.read_temperature_C, clock, period_s=period, silence_s=self._silence_s(self.config.furnace), timebase=self.timebase)
         return chans
 
+    @property
+    def stream_restarts(self) -> int:
+        """How often the load cell's garbled stream was restarted (frames are lost each time)."""
+        return self.loadcell.stream_resyncs
+
+    @property
+    def frames_lost(self) -> int:
+        """Load-cell frames the stream restarts cost (estimated from the gaps they left)."""
+        return self.loadcell.frames_lost
+
+    @property
+    def late_replies(self) -> dict[str, int]:
+        """Replies discarded as stale (they came after their time-out), per device."""
+        return {dev.name: dev.transport.late_replies for dev in (self.loadcell, self.encoder, self.furnace) if dev is not None}
+
     @staticmethod
     def _silence_s(section) -> float:
         return max(SILENCE_MIN_S, SILENCE_TIMEOUTS * section.timeout_s)
@@ -158,7 +179,27 @@ class DriverRig:
 
     # furnace ---------------------------------------------------------------------------------
     def read_temperature_C(self) -> float:
-        return self.furnace.temperature_C()
+        """A reading; the heater relay must follow (a rise with the heater off for long: stuck),
+        and every FURNACE_VERIFY_S the module proves its address (``@AADI``: ``>`` data has none)."""
+        t = self.furnace.temperature_C()
+        if self._stuck is None:
+            self._stuck = StuckRelayCheck(self.furnace.name, settle_s=STUCK_SETTLE_S)
+        self._stuck.update(t, self._clock(), self.furnace.heater_is_on)
+        now = self.timebase.now()
+        if now - self._verified_at >= FURNACE_VERIFY_S:
+            self.furnace.digital_io()
+            self._verified_at = now
+        return t
+
+    def watch_heater_off(self, seconds: float) -> None:
+        """After a safety stop: read the furnace for ``seconds`` test seconds with the heater
+        off; SafetyError if it keeps heating (a stuck relay — the operator must cut the power)."""
+        check = StuckRelayCheck(self.furnace.name, settle_s=STUCK_SETTLE_S)
+        end = self._clock() + seconds
+        while self._clock() < end:
+            check.update(self.furnace.temperature_C(), self._clock(), False)
+            self.furnace.host_ok()
+            self.timebase.sleep(max(FURNACE_MIN_PERIOD_S, min(FURNACE_PERIOD_S, 1.0 / self.time_scale)))
 
     def hold_temperature(self, setpoint_C: float) -> float:
         """One step of the furnace's TemperatureController on the test clock; the reading."""
@@ -212,7 +253,7 @@ class VirtualRun:
     tension_response: str = "fe"  # the virtual rig's tension neck (rig.virtual.responses.TENSION_RESPONSES)
 
 
-def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty", stop_requested=None, compression_response: str = "fe", tension_response: str = "fe") -> VirtualRun:
+def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty", stop_requested=None, compression_response: str = "fe", tension_response: str = "fe", faults: tuple = ()) -> VirtualRun:
     """Run ``spec`` on a virtual rig in this process through the real drivers.
 
     The devices sit on ptys in real time by default; ``link="inprocess"`` with a
@@ -225,6 +266,8 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
     virtual rig's compression physics ("fe" CalculiX runs, or "slab" with the seed's (3.18)) and
     ``tension_response`` its neck ("fe" CalculiX necking runs, or "bridgman" with Le Roy's a/R);
     the record's header says which (``virtual.compression_response`` / ``virtual.tension_response``).
+    ``faults``: :class:`rig.virtual.fault_spec.FaultSpec` drills scheduled on the rig (``--fault``),
+    listed in the header as ``virtual.faults``.
     """
     from flowcurve.acquisition.procedure import Procedure
     from flowcurve.rig.config import virtual_config
@@ -239,6 +282,10 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
         spec.extra_meta.setdefault(f"virtual.{spec.test}_response", response)
         spec.extra_meta.setdefault("material.E_MPa", repr(float(vr.model.material.E_MPa)))  # the handbook values an operator would enter
         spec.extra_meta.setdefault("material.nu", repr(float(vr.model.material.nu)))
+        if faults:
+            spec.extra_meta.setdefault("virtual.faults", " ".join(f.describe() for f in faults))
+        for fault in faults:
+            vr.schedule(fault)
         if rig_setup is not None:
             rig_setup(vr)
         config = virtual_config(**{**vr.config_kwargs(), **(config_overrides or {})})

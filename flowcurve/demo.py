@@ -32,7 +32,7 @@ from flowcurve.acquisition.live import LiveView
 from flowcurve.acquisition.procedure import TestSpec
 from flowcurve.record.format import read_record
 from flowcurve.acquisition.session import run_virtual_test
-from flowcurve.errors import IdentificationError
+from flowcurve.errors import EXIT_DATA_LOST, IdentificationError
 from flowcurve.identification.hardening import johnson_cook_static
 
 DEMO_TIME_SCALE = 15.0  # the virtual load cell sends 100 values per wall second: enough
@@ -204,22 +204,26 @@ def summary_lines(run, ident, folder: Path) -> list[str]:
 
 
 def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_scale: float = DEMO_TIME_SCALE,
-             compression_response: str = "fe", tension_response: str = "fe") -> int:
+             compression_response: str = "fe", tension_response: str = "fe", faults: tuple = ()) -> int:
     out = Path(out)
     view = LiveView(quiet=quiet)
     t_start = time.monotonic()
     print(f"flowcurve demo — virtual rig ({material}; tension response {tension_response}, compression response "
           f"{compression_response}), real drivers over pseudo-terminals, time scale {time_scale:g}")
+    losses = []
     for spec in demo_specs(material):
         record_path = out / "records" / f"{spec.test}.csv"
         t0 = time.monotonic()
-        run = run_virtual_test(spec, record_path, material=material, time_scale=time_scale, view=view,
+        run = run_virtual_test(spec, record_path, material=material, time_scale=time_scale, view=view, faults=faults,
                                compression_response=compression_response, tension_response=tension_response)
         o = run.outcome
         print(f"\n{spec.test}: recorded {o.samples} samples ({o.duration_s:.0f} s of test in {time.monotonic() - t0:.1f} s) → {o.path}; {o.reason}")
         if o.status != "complete":
             print(f"  the test did not complete ({o.reason}); not identified")
-            return 1
+            return o.error.exit_code if o.error is not None else 1
+        if o.losses:
+            print(f"  data lost or rejected: {o.losses} (declared in the record's events)")
+            losses.append(o.losses)
         ident, folder = identify_and_write(o.path, out / "results")
         print("\n".join(summary_lines(run, ident, folder)))
         if spec.test == "compression":
@@ -228,4 +232,4 @@ def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_
             print("\n".join(neck_comparison_lines(neck_comparison(read_record(o.path), ident, run), run)))
     print(f"\ndone in {time.monotonic() - t_start:.1f} s. Next: flowcurve identify {out / 'records' / 'tension.csv'} --out results/; "
           f"'flowcurve run tension --help' for a test of your own.")
-    return 0
+    return EXIT_DATA_LOST if losses else 0

@@ -54,6 +54,8 @@ class DeviceError(FlowcurveError):
 class SafetyError(DeviceError):
     """Over-temperature, open thermocouple, stuck heater: the heating was stopped."""
 
+    exit_code = 4  # set apart from device faults (README "Exit codes")
+
 
 class InternalError(FlowcurveError):
     """A bug in flowcurve (a TypeError in a driver, say), not a device or input failure:
@@ -86,3 +88,21 @@ class MissingValueError(RecordError):
     def message_with(self, givers: list[str]) -> str:
         """The whole one-line message (file, line, column) naming ``givers`` (e.g. ``['give --d0']``)."""
         return str(self).removesuffix(self.explain()) + self.explain(givers)
+
+
+# -- how a test run ends: the exit codes of ``flowcurve run`` / ``demo`` (README "Exit codes") --
+EXIT_COMPLETE = 0  # complete; nothing lost beyond what the record format allows
+EXIT_DATA_LOST = 5  # complete, but samples were lost or rejected: the record's events declare how many
+EXIT_STOPPED = 130  # the operator (Ctrl-C, q, stop button) or the system (SIGTERM) stopped it
+
+class RecordWriteError(FlowcurveError):
+    """The record cannot be created or written (read-only folder, disk full): names the file
+    and what to do; a test that cannot be recorded is not started, or is stopped."""
+
+    exit_code = 6
+
+
+class PortBusyError(DeviceError):
+    """A serial port another process owns (its lock file names the holder)."""
+
+    exit_code = 7

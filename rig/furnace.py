@@ -109,6 +109,7 @@ class Furnace(DconDevice):
     def _write_outputs(self, outputs: int) -> None:
         # @AADOdd is idempotent: safe to repeat after a lost reply
         reply = self.query("@", dcon.digital_output_body(outputs))
+        self._from_this_module(reply, "'@AADO'")
         if reply.refused:
             if self._watchdog_tripped():
                 raise OutputsRefused(self.name, "outputs locked: the host watchdog timed out "
@@ -166,8 +167,21 @@ class Furnace(DconDevice):
         return self.query("$", "3", dcon.parse_analog)
 
     def digital_io(self) -> dict[str, int]:
-        """``@AADI`` → alarm state, digital outputs, digital inputs."""
-        return self.query("@", "DI", dcon.parse_digital_io, self.address)
+        """``@AADI`` → alarm state, digital outputs, digital inputs (the reply's address checked)."""
+        reply = self.query("@", "DI")
+        if len(reply.body) == 7 or reply.refused:
+            self._from_this_module(reply, "'@AADI'")
+        try:
+            return dcon.parse_digital_io(reply, self.address)
+        except ValueError as exc:
+            raise DeviceError(self.name, f"garbled answer to '@AADI': {exc}") from None
+
+    def _from_this_module(self, reply: dcon.Reply, what: str) -> None:
+        """A ``!AA``/``?AA`` reply must come from this module's address (DCON ``>`` data carries none)."""
+        if reply.lead in "!?" and reply.body and reply.body[:2].upper() != f"{self.address:02X}":  # (a bare '!' carries none)
+            raise DeviceError(self.name, f"reply to {what} from address {reply.body[:2]}, not "
+                                         f"{self.address:02X} — another module answers on this line, or [furnace] "
+                                         f"address is wrong ('flowcurve rig check' reads the module's address)")
 
     # -- host watchdog ----------------------------------------------------------------
     def arm_watchdog(self, timeout_s: float) -> None:
@@ -182,6 +196,38 @@ class Furnace(DconDevice):
         """Disable the host watchdog (after the heater is off)."""
         self.set_watchdog(False, 0.1)
         self.watchdog_armed = False
+
+
+STUCK_RELAY_ADVICE = "switch off the furnace's mains power now: software cannot switch this heater off"
+
+
+class StuckRelayCheck:
+    """A heater relay that does not switch off: with the heater off for longer than
+    ``settle_s`` (dead time and stored heat) the furnace can only cool, so a rise of more than
+    ``rise_C`` above the lowest reading since then means the heater still heats.
+
+    :meth:`update` (reading °C, time s, heater commanded on) raises :class:`SafetyError`.
+    """
+
+    def __init__(self, device: str = "furnace", *, settle_s: float = 30.0, rise_C: float = 5.0):
+        self.device = device
+        self.settle_s = float(settle_s)
+        self.rise_C = float(rise_C)
+        self._off_since: float | None = None
+        self._off_min_C = math.inf
+
+    def update(self, temperature_C: float, now: float, heater_on: bool) -> None:
+        if heater_on:
+            self._off_since = None
+            return
+        if self._off_since is None:
+            self._off_since, self._off_min_C = now, math.inf
+        if now - self._off_since < self.settle_s:
+            return
+        self._off_min_C = min(self._off_min_C, temperature_C)
+        if temperature_C - self._off_min_C > self.rise_C:
+            raise SafetyError(self.device, f"heater does not switch off (relay stuck?): {temperature_C - self._off_min_C:.1f} C "
+                                           f"rise with the heater off for {now - self._off_since:.0f} s — {STUCK_RELAY_ADVICE}")
 
 
 class TemperatureController:
@@ -224,8 +270,7 @@ class TemperatureController:
         self._history: deque[tuple[float, float]] = deque(maxlen=200_000)
         self.stuck_settle_s = stuck_settle_s
         self.stuck_rise_C = stuck_rise_C
-        self._off_since: float | None = None
-        self._off_min_C = math.inf
+        self._stuck = StuckRelayCheck(furnace.name, settle_s=stuck_settle_s, rise_C=stuck_rise_C)
 
     def step(self, now: float | None = None) -> dict[str, float | bool]:
         """Read the temperature, update ramp and duty, switch the heater; returns the state.
@@ -256,9 +301,12 @@ class TemperatureController:
             self._period_start = now
             self._update_duty(t)
             # time-proportioning: on for duty x period, plus what the last period owed
-            # (the loop's step size quantizes on-times; carrying the rest keeps the mean exact)
-            carry = min(self.period_s, max(-self.period_s, self._target_on_s - self._on_s))
-            self._target_on_s = max(0.0, self.duty * self.period_s + carry)
+            # (the loop's step size quantizes on-times; carrying the rest keeps the mean exact).
+            # A loop stepping slower than the period (a fast time-scaled rig) makes each step a
+            # period of its own: on for the whole step when the duty owed asks for over half
+            period = max(self.period_s, dt)
+            carry = min(period, max(-period, self._target_on_s - self._on_s))
+            self._target_on_s = max(0.0, self.duty * period + carry)
             self._on_s = 0.0
         want_on = self._target_on_s - self._on_s > 0.5 * dt
         if want_on != self.furnace.heater_is_on:
@@ -270,21 +318,7 @@ class TemperatureController:
                 "heater_on": self.furnace.heater_is_on}
 
     def _check_heater_follows(self, t: float, now: float) -> None:
-        # stuck relay: with the heater off for longer than the settling time, the furnace
-        # can only cool; a rise of more than stuck_rise_C above the lowest reading since
-        # then means the heater is still heating
-        if self.furnace.heater_is_on:
-            self._off_since = None
-            return
-        if self._off_since is None:
-            self._off_since, self._off_min_C = now, math.inf
-        if now - self._off_since < self.stuck_settle_s:
-            return
-        self._off_min_C = min(self._off_min_C, t)
-        if t - self._off_min_C > self.stuck_rise_C:
-            raise SafetyError(self.furnace.name, f"heater does not switch off (relay stuck?): "
-                                                 f"{t - self._off_min_C:.1f} C rise with the heater "
-                                                 f"off for {now - self._off_since:.0f} s; heater off")
+        self._stuck.update(t, now, self.furnace.heater_is_on)
 
     def _update_ramp(self, t: float, dt: float) -> None:
         # rate limit: the working set-point rises at most max_rate x dt from the start

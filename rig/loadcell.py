@@ -71,6 +71,9 @@ class LoadCell:
         self.stream_silence_s = 1.0
         self.max_resyncs = 3  # stream restarts in a row before a garbled stream is an error
         self.stream_resyncs = 0  # restarts so far (for the record's warnings)
+        self.frames_received = 0  # good stream frames since the first start_stream
+        self._first_arrival: float | None = None
+        self._last_arrival: float | None = None
         self._resyncs_in_a_row = 0
         self._last_frame_t = 0.0
         self._last_sample_t = -math.inf
@@ -254,12 +257,24 @@ class LoadCell:
                 self._resync(exc)
                 continue
             self._resyncs_in_a_row = 0
+            self.frames_received += 1
+            self._first_arrival = now if self._first_arrival is None else self._first_arrival
+            self._last_arrival = now
             samples.append(self._to_sample(value, self._stream_time(now)))
             self._last_frame_t = now
         silent = self.transport.clock.now() - self._last_frame_t
         if not samples and silent > self.stream_silence_s:
             raise DeviceError(self.name, f"stream ('MSV?0') silent for {silent:.1f} s")
         return samples
+
+    @property
+    def frames_lost(self) -> int:
+        """Frames the amplifier sent (its rate × the time between the first and the last good
+        frame) that did not arrive good: lost on the line, garbled, or skipped by restarts."""
+        if self._first_arrival is None or not self.output_rate_per_s:
+            return 0
+        sent = round((self._last_arrival - self._first_arrival) * self.output_rate_per_s) + 1
+        return max(0, sent - self.frames_received)
 
     def _resync(self, exc: ProtocolError) -> None:
         self.stream_resyncs += 1

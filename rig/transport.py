@@ -40,6 +40,7 @@ from flowcurve.errors import DeviceError
 
 PORT_ERRORS = (OSError, serial.SerialException, TermiosError)  # what a vanished port raises
 from flowcurve.rig.codecs import dcon
+from flowcurve.rig.port_lock import PortLock
 
 logger = logging.getLogger(__name__)
 
@@ -47,6 +48,10 @@ logger = logging.getLogger(__name__)
 _OWNERS: dict[str, "SerialTransport"] = {}
 _OWNERS_LOCK = threading.Lock()
 _UNSHARED_SCHEMES = ("loop://",)
+# A command whose reply did not come within its time-out may still be answered late: before
+# the next command the port waits for that reply up to this many time-outs after the command
+# was sent, and discards it, so that a late (stale) reply is never taken for the next one's
+LATE_REPLY_TIMEOUTS = 3
 READ_SLICE_S = 0.01  # the port's own read time-out; exchanges loop on their own deadline  # every loop:// open is a port of its own
 
 
@@ -76,8 +81,12 @@ class SerialTransport:
         self._opener = opener or serial.serial_for_url
         self._key = _owned_key(url, opener)
         self._port = None
+        self._lock_file = None  # rig.port_lock.PortLock while open
         self._pending = bytearray()  # bytes read past the end of the last frame
         self.clock: Clock = WALL  # the port's clock once open (see the module docstring)
+        self._unanswered: tuple[float, int | None, bytes | None] | None = None  # (sent, length, terminator)
+        self.late_replies = 0  # replies that came after their time-out, discarded
+        self.last_late_s: float | None = None  # how late the last of them was
 
     def with_line(self, *, baudrate: int, parity: str, timeout_s: float | None = None) -> "SerialTransport":
         """A new (closed) transport on the same port and opener with other line settings."""
@@ -95,19 +104,42 @@ class SerialTransport:
             owner = _OWNERS.get(key) if key is not None else None
             if owner is not None and owner is not self:
                 raise DeviceError(self.name, f"port {self.url} is already open by '{owner.name}'")
+            lock = PortLock(self.url, self.name) if self._opener is serial.serial_for_url else None
+            if lock is not None:
+                lock.acquire()  # another process holding the port: PortBusyError naming it
             try:
                 # a short fixed read slice: deadlines are kept here, because changing a
                 # pyserial port's timeout re-configures the line (tcsetattr) every time
-                self._port = self._opener(self.url, timeout=READ_SLICE_S, **self.settings)
-            except (OSError, serial.SerialException, ValueError) as exc:
+                self._port = self._open_port()
+            except (OSError, serial.SerialException, ValueError, TermiosError) as exc:
+                if lock is not None:
+                    lock.release()
                 raise DeviceError(self.name, f"cannot open port {self.url}: {_reason(exc)}") from None
+            self._lock_file = lock
             self.clock = getattr(self._port, "clock", WALL)
             if key is not None:
                 _OWNERS[key] = self
         return self
 
+    def _open_port(self):
+        try:
+            return self._opener(self.url, timeout=READ_SLICE_S, **self.settings)
+        except TermiosError as exc:
+            # some kernels refuse (EINVAL) a pty's tcsetattr with parity that keeps the
+            # speed: open at another speed, then set the real one (a change, accepted)
+            if self._opener is not serial.serial_for_url or getattr(exc, "args", (None,))[0] != 22:
+                raise
+            hop = 1200 if self.settings["baudrate"] != 1200 else 2400
+            port = serial.serial_for_url(self.url, timeout=READ_SLICE_S, do_not_open=True, **{**self.settings, "baudrate": hop})
+            port.open()
+            port.baudrate = self.settings["baudrate"]
+            return port
+
     def close(self) -> None:
         port, self._port = self._port, None
+        lock, self._lock_file = self._lock_file, None
+        if lock is not None:
+            lock.release()
         with _OWNERS_LOCK:
             if self._key is not None and _OWNERS.get(self._key) is self:
                 del _OWNERS[self._key]
@@ -245,10 +277,12 @@ class SerialTransport:
         with self._holding():
             for attempt in range(retries + 1):
                 last = attempt == retries
+                self._await_unanswered()
                 self.discard_input()
                 self.write(command)
                 if length is None and terminator is None:
                     return None
+                sent = self.clock.now()
                 try:
                     if length is not None:
                         raw = self.read_exactly(length, timeout, what=what)
@@ -256,14 +290,40 @@ class SerialTransport:
                         raw = self.read_until(terminator, timeout, what=what)
                     return parse(raw) if parse else raw
                 except DeviceError as exc:
+                    if "disappeared" not in str(exc):
+                        self._unanswered = (sent, length, terminator)
+                        if self.last_late_s is not None:
+                            exc = DeviceError(self.name, f"{str(exc).split(': ', 1)[-1]}; a reply came "
+                                                         f"{self.last_late_s:.2f} s late and was discarded "
+                                                         f"(stale replies are never taken) — line too slow for "
+                                                         f"timeout_s = {self.timeout_s:g}?")
                     if last or "disappeared" in str(exc):
-                        raise
+                        raise exc from None
                     logger.debug("%s: %s (attempt %d of %d), retrying", self.name, exc, attempt + 1, retries + 1)
                 except ValueError as exc:
                     if last:
                         raise DeviceError(self.name, f"garbled answer to {what}: {exc}") from None
                     logger.debug("%s: garbled answer to %s (attempt %d of %d), retrying", self.name, what, attempt + 1, retries + 1)
         raise AssertionError("unreachable")
+
+    def _await_unanswered(self) -> None:
+        """Wait for the late reply of an earlier command that timed out (up to
+        :data:`LATE_REPLY_TIMEOUTS` time-outs after it was sent) and discard it."""
+        if self._unanswered is None:
+            return
+        sent, length, terminator = self._unanswered
+        self._unanswered = None
+        horizon = sent + LATE_REPLY_TIMEOUTS * self.timeout_s
+        got = bytearray(self._pending)
+        self._pending.clear()
+        while self.clock.now() < horizon:
+            if (length is not None and len(got) >= length) or (length is None and terminator and terminator in got):
+                self.late_replies += 1
+                self.last_late_s = self.clock.now() - sent
+                logger.info("%s: a reply came %.2f s after its command (time-out %g s): discarded",
+                            self.name, self.last_late_s, self.timeout_s)
+                return
+            got += self._read_some(4096, horizon)
 
     def send(self, command: bytes) -> None:
         """Send a command that has no reply (``STP``, ``~**``, ``#**``, address selection)."""

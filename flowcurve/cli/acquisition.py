@@ -18,7 +18,7 @@ from flowcurve.acquisition.live import LiveView
 from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, Procedure, ProcedureError, StopCriteria, TestSpec
 from flowcurve.record.format import amend_record, read_record, recover_record
 from flowcurve.cli.specimen import add_geometry_options, add_modulus_option, check_specimen_options, measurement
-from flowcurve.errors import FlowcurveError, RecordError
+from flowcurve.errors import EXIT_COMPLETE, EXIT_DATA_LOST, EXIT_STOPPED, DeviceError, FlowcurveError, RecordError, RecordWriteError, SafetyError
 from flowcurve.rig.virtual.responses import COMPRESSION_HELP, COMPRESSION_RESPONSES, TENSION_HELP, TENSION_RESPONSES
 
 DEFAULT_VIRTUAL_MATERIAL = "steel45"
@@ -44,6 +44,7 @@ def register(subparsers) -> None:
     run.add_argument("--time-scale", type=float, default=None, metavar="X", help="virtual rig: model seconds per wall second (in this process: default 15; with --config: what 'flowcurve rig virtual --time-scale' runs at)")
     run.add_argument("--poll", action="store_true", help="poll the load cell (MSV?) instead of streaming (MSV?0)")
     add_virtual_response_options(run, " (the virtual rig in this process only; recorded in the header)")
+    add_fault_option(run, " (the virtual rig in this process; with --config give it to 'flowcurve rig virtual')")
     run.set_defaults(func=cmd_run)
 
     demo = subparsers.add_parser("demo", help="a virtual tension and compression test, recorded and identified", description="Run a virtual tension test and a virtual compression test (time-scaled), identify both, and compare with the virtual material's true constants.")
@@ -51,6 +52,7 @@ def register(subparsers) -> None:
     demo.add_argument("--material", default=DEFAULT_VIRTUAL_MATERIAL, help="virtual material (default steel45)")
     demo.add_argument("--quiet", action="store_true", help="only the summary")
     add_virtual_response_options(demo, " (recorded in the header)")
+    add_fault_option(demo, " (in both tests)")
     demo.set_defaults(func=cmd_demo)
 
     rec = subparsers.add_parser("recover", help="complete the header of a record cut short (power cut, kill -9)")
@@ -70,6 +72,21 @@ def add_virtual_response_options(parser, note: str = "") -> None:
     """``--compression-response fe|slab`` and ``--tension-response fe|bridgman``: the virtual rig's physics."""
     parser.add_argument("--compression-response", choices=COMPRESSION_RESPONSES, help=COMPRESSION_HELP + note)
     parser.add_argument("--tension-response", choices=TENSION_RESPONSES, help=TENSION_HELP + note)
+
+
+def add_fault_option(parser, note: str = "") -> None:
+    """``--fault DEVICE:KIND[:VALUE][@SECONDS]`` (repeatable): a fault drill on the virtual rig."""
+    from flowcurve.rig.virtual.fault_spec import help_text  # pure and light
+
+    parser.add_argument("--fault", action="append", default=[], metavar="DEVICE:KIND[:VALUE][@SECONDS]",
+                        help=help_text().replace("%", "%%") + note)
+
+
+def virtual_faults(args) -> tuple:
+    """The parsed ``--fault`` options (ConfigError naming a malformed one)."""
+    from flowcurve.rig.virtual.fault_spec import parse_faults
+
+    return parse_faults(getattr(args, "fault", None))
 
 
 def virtual_responses(args) -> dict[str, str]:
@@ -211,9 +228,29 @@ def report_outcome(out: Outcome, view: LiveView) -> int:
     elif out.status == "complete":
         print(f"no post-test measurements yet: flowcurve annotate {out.path} --set {POST_KEYS[read_record(out.path).test][0]}=...")
     if out.error is not None:
-        print(f"flowcurve: error: {out.error} (the record keeps everything up to the fault)", file=sys.stderr)
+        print(f"flowcurve: error: {out.error}{advice(out.error)} (the record keeps everything up to the fault"
+              f"{'; ' + out.losses if out.losses else ''})", file=sys.stderr)
         return out.error.exit_code
-    return 0 if out.status == "complete" else 130
+    if out.losses:
+        print(f"flowcurve: warning: {out.losses} — declared in the record's events (data_loss)", file=sys.stderr)
+        return EXIT_DATA_LOST if out.status == "complete" else EXIT_STOPPED
+    return EXIT_COMPLETE if out.status == "complete" else EXIT_STOPPED
+
+
+def advice(error: FlowcurveError) -> str:
+    """What to do about a device that failed a test (empty when the message says it already)."""
+    text = str(error)
+    if not isinstance(error, DeviceError) or " — " in text:
+        return ""
+    if "disappeared" in text or "Input/output error" in text or "No such file" in text:
+        return " — the port vanished: reconnect the cable or USB adapter, then 'flowcurve rig check'"
+    if "garbled" in text or "incomplete" in text:
+        return " — check the cable, baud rate and parity ('flowcurve rig check' probes them)"
+    if "no answer" in text or "no data" in text or "silent" in text:
+        return " — check the device's power and cable, then 'flowcurve rig check'"
+    if isinstance(error, SafetyError):
+        return " — the heater is off; let the furnace cool before opening it"
+    return " — 'flowcurve rig check' diagnoses the device"
 
 
 # -- commands ---------------------------------------------------------------------------------
@@ -224,6 +261,7 @@ def cmd_run(args) -> int:
     out_path = args.out or default_out(args.test)
     if args.config is not None:
         given = [f"--{k.replace('_', '-')}" for k in ("compression_response", "tension_response") if getattr(args, k) is not None]
+        given += ["--fault"] if args.fault else []
         if given:
             raise FlowcurveError(f"{' and '.join(given)}: the virtual rig in this process only; with --config the rig is the "
                                  "configured one (for 'flowcurve rig virtual' give the option there)")
@@ -263,10 +301,10 @@ def virtual_spec(args, view: LiveView) -> tuple[TestSpec, str, float]:
         args.speed = 0.05
     name = args.material or DEFAULT_VIRTUAL_MATERIAL
     try:
-        get_material(name)
-    except FlowcurveError:
-        view.say(f"(virtual rig: no virtual material '{name}', using {DEFAULT_VIRTUAL_MATERIAL})")
-        name = DEFAULT_VIRTUAL_MATERIAL
+        name = get_material(name).name  # the virtual specimen is made of what the record will say
+    except FlowcurveError as exc:
+        raise FlowcurveError(f"--material: {str(exc).split(': ', 1)[-1]} — the virtual rig makes its specimen of the "
+                             "material the record names") from None
     base = Specimen.tension() if args.test == "tension" else Specimen.compression()
     geometry = {"d0_mm": base.d0_mm, "l0_mm" if args.test == "tension" else "h0_mm": base.length0_mm}
     args.material = args.material or name
@@ -277,9 +315,10 @@ def virtual_spec(args, view: LiveView) -> tuple[TestSpec, str, float]:
 def _run_virtual(args, view: LiveView, out_path: Path) -> int:
     from flowcurve.acquisition.session import run_virtual_test
 
+    faults = virtual_faults(args)
     spec, name, scale = virtual_spec(args, view)
     run = run_virtual_test(spec, out_path, material=name, time_scale=scale, view=view, interactive=_interactive(args), stream=not args.poll,
-                           **virtual_responses(args))
+                           faults=faults, **virtual_responses(args))
     return report_outcome(run.outcome, view)
 
 
@@ -288,7 +327,16 @@ def cmd_recover(args) -> int:
     if not before.truncated and before.meta.get("status") != "recording":
         print(f"{args.record}: complete already (status {before.meta.get('status', '?')}), nothing to recover")
         return 0
-    path, rec = recover_record(args.record)
+    try:
+        path, rec = recover_record(args.record)
+    except OSError as exc:  # a full disk (or a read-only one): the record is rewritten through a copy
+        import shutil
+
+        size = args.record.stat().st_size
+        free = shutil.disk_usage(args.record.parent.resolve()).free
+        raise RecordWriteError(f"{args.record}: cannot recover in place ({exc.strerror or exc}): it needs about "
+                               f"{size // 1024 + 1} KiB free next to the record ({free // 1024} KiB free) — free space, or "
+                               f"copy the record to another disk and run 'flowcurve recover' there; the record is unchanged") from None
     last = float(rec.data["time_s"].iloc[-1])
     print(f"{path}: recovered — {len(rec.data)} samples up to {last:.1f} s, {len(rec.events)} events; status {rec.meta['status']} ({rec.meta.get('abort_reason', '')})")
     return 0
@@ -310,4 +358,4 @@ def cmd_annotate(args) -> int:
 def cmd_demo(args) -> int:
     from flowcurve.demo import run_demo
 
-    return run_demo(args.out, material=args.material, quiet=args.quiet, **virtual_responses(args))
+    return run_demo(args.out, material=args.material, quiet=args.quiet, faults=virtual_faults(args), **virtual_responses(args))

@@ -19,7 +19,7 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from flowcurve.cli.acquisition import add_virtual_response_options, virtual_responses
+from flowcurve.cli.acquisition import add_fault_option, add_virtual_response_options, virtual_faults, virtual_responses
 from flowcurve.errors import DeviceError, FlowcurveError
 from flowcurve.rig.config import RigConfig, load_config, to_toml
 
@@ -55,10 +55,11 @@ def register(subparsers) -> None:
                          help="model seconds per wall-clock second (default 1)")
     virtual.add_argument("--checksum", action="store_true", help="DCON checksums on")
     add_virtual_response_options(virtual)
+    add_fault_option(virtual)
     virtual.add_argument("--motor-start-after", type=float, default=None, metavar="S",
                          help="start the virtual crosshead motor S wall-clock seconds after launch (for "
-                              "scripts); interactively, press Enter here to start and stop it, as the "
-                              "operator does at the real machine's motor switch")
+                              "scripts; 'kill -USR1 <pid>' toggles it too); interactively, press Enter here to "
+                              "start and stop it, as the operator does at the real machine's motor switch")
     virtual.set_defaults(func=run_virtual)
 
 
@@ -216,18 +217,24 @@ def run_virtual(args) -> int:
     if not (args.time_scale > 0 and math.isfinite(args.time_scale)):
         raise FlowcurveError(f"--time-scale must be a positive number, got {args.time_scale}")
     responses = virtual_responses(args)
+    faults = virtual_faults(args)
     with VirtualRig(args.material, test=args.test, temperature_C=args.temperature,
                     time_scale=args.time_scale, checksum=args.checksum, **responses) as rig:
         path = args.config
         if path is None:
             path = Path(tempfile.mkdtemp(prefix="flowcurve-virtual-rig-")) / "flowcurve.rig.toml"
         path.write_text(to_toml(rig.config()))
+        for fault in faults:
+            rig.schedule(fault)
         for name, port in rig.ports.items():
             print(f"{name:9s} {port}")
+        for fault in faults:
+            print(f"fault: {fault.describe()} " + ("from now" if fault.at_s is None else "after the crosshead starts"))
         print(f"{args.test} response: {responses[args.test + '_response']}")
         print(f"configuration: {path}")
         print(f"try: flowcurve rig check --config {path}")
         previous = signal.signal(signal.SIGTERM, _stop_on_sigterm)  # kill/systemd: stop cleanly too
+        signal.signal(signal.SIGUSR1, _toggle_motor)  # scripts: 'kill -USR1 <pid>' is the motor switch
         interactive = sys.stdin is not None and sys.stdin.isatty()
         try:  # Ctrl-C may come as soon as the line below is out
             print("running; " + ("Enter starts/stops the crosshead motor, " if interactive else "") + "Ctrl-C stops", flush=True)
@@ -239,22 +246,51 @@ def run_virtual(args) -> int:
     return 0
 
 
+def _report_rig(rig, seen: dict) -> None:
+    """Lines for what the virtual rig's operator would notice: a fault switching on, the furnace
+    module's watchdog timing out (with the heater relay's state: a stuck relay stays on)."""
+    for t, spec in rig.faults_applied[seen.setdefault("faults", 0):]:
+        print(f"fault on: {spec.describe()} (model time {t:.1f} s)", flush=True)
+    seen["faults"] = len(rig.faults_applied)
+    furnace = rig.devices["furnace"]
+    tripped = bool(furnace.watchdog_status & 0x04)
+    if tripped and not seen.get("tripped"):
+        relay = "ON (stuck)" if rig.model.furnace.relay_on else "off"
+        print(f"furnace module: host watchdog timed out (model time {rig.now():.1f} s) — heater output off, "
+              f"relay {relay}", flush=True)
+    seen["tripped"] = tripped
+
+
 def _serve_motor(rig, interactive: bool, start_after_s: float | None) -> None:
     """The operator's motor switch: Enter toggles the crosshead, or it starts after a delay."""
     started_at = time.monotonic()
     running = False
+    seen: dict = {}
     while True:
+        _report_rig(rig, seen)
         if start_after_s is not None and not running and time.monotonic() - started_at >= start_after_s:
             rig.start_crosshead()
             running, start_after_s = True, None
             print("crosshead motor started", flush=True)
-        if interactive and select.select([sys.stdin], [], [], 0.5)[0]:
+        if _MOTOR_TOGGLES:
+            _MOTOR_TOGGLES.pop()
+            (rig.stop_crosshead if running else rig.start_crosshead)()
+            running = not running
+            print(f"crosshead motor {'started' if running else 'stopped'}", flush=True)
+        elif interactive and select.select([sys.stdin], [], [], 0.5)[0]:
             sys.stdin.readline()
             (rig.stop_crosshead if running else rig.start_crosshead)()
             running = not running
             print(f"crosshead motor {'started' if running else 'stopped'}", flush=True)
         elif not interactive:
-            time.sleep(0.2)
+            time.sleep(0.05)
+
+
+_MOTOR_TOGGLES: list[int] = []
+
+
+def _toggle_motor(signum, frame):
+    _MOTOR_TOGGLES.append(signum)
 
 
 def _stop_on_sigterm(signum, frame):

@@ -72,7 +72,13 @@ class AEDAmplifier(PtyDevice):
         self._held: bytes | None = None  # MSV? under S98, sent when selected
         self._filtered: float | None = None
         self._last_t: float | None = None
+        self._corrupt_N = 0.0
         self._power_on_stream()
+
+    def corrupt_next(self, delta_N: float) -> None:
+        """Fault 'corrupt': the next measured frame is off by ``delta_N`` (well-formed; AED
+        frames carry no checksum)."""
+        self._corrupt_N = float(delta_N)
 
     # -- values -----------------------------------------------------------------------
     def _power_on_stream(self) -> None:
@@ -92,7 +98,8 @@ class AEDAmplifier(PtyDevice):
     def measured_frame(self) -> bytes:
         """One measured value in the present COF format."""
         t, force, standstill = self.source()
-        gross = self._filter(t, force) / self.nominal_load_N  # in units of nominal load
+        corrupt, self._corrupt_N = self._corrupt_N, 0.0
+        gross = (self._filter(t, force) + corrupt) / self.nominal_load_N  # in units of nominal load
         status = STATUS_STANDSTILL if standstill else 0
         if abs(gross) > ADC_LIMIT:
             status |= STATUS_ADC_OVERFLOW

@@ -34,6 +34,10 @@ from flowcurve.rig.virtual.pty_device import PtyDevice
 FORMAT_BITS = 0x03
 CHECKSUM_BIT = 0x40
 WATCHDOG_TIMED_OUT = 0x04
+# the host's feeding gaps are host time: on a fast time scale the virtual watchdog waits at
+# least this long in host seconds (a loaded PC cannot promise shorter gaps), i.e. it counts
+# model time only while timeout / time_scale is longer than this
+WATCHDOG_HOST_FLOOR_S = 1.0
 TYPE_CODES = tuple(range(0x00, 0x07)) + tuple(range(0x0E, 0x17))  # mV/V ranges + thermocouples
 
 
@@ -51,6 +55,10 @@ class DconDevice(PtyDevice):
         self.watchdog_timeout_s = 0.0
         self.watchdog_status = 0
         self._last_host_ok = self.clock.now()
+        # model seconds per host second: the watchdog counts its time-out on the model's
+        # time, as the real module would see the test (VirtualRig sets it)
+        self.time_scale = 1.0
+        self.reply_address: int | None = None  # fault 'wrong_address': answer as this module
 
     # -- framing ----------------------------------------------------------------------
     def on_bytes(self, data: bytes) -> None:
@@ -90,6 +98,8 @@ class DconDevice(PtyDevice):
             self.reply(reply)
 
     def reply(self, text: str) -> None:
+        if self.reply_address is not None and text[:1] in "!?" and text[1:3] == self.aa:
+            text = f"{text[0]}{self.reply_address:02X}{text[3:]}"
         if self.checksum_on:
             text += dcon_checksum(text)
         self.send(text.encode("ascii") + b"\r")
@@ -133,14 +143,20 @@ class DconDevice(PtyDevice):
             return f"!{aa}"
         return None
 
+    @property
+    def watchdog_host_s(self) -> float:
+        """The watchdog's time-out in host seconds: its model-time time-out / time scale, but
+        not below :data:`WATCHDOG_HOST_FLOOR_S` (nor above the time-out itself)."""
+        return max(self.watchdog_timeout_s / self.time_scale, min(self.watchdog_timeout_s, WATCHDOG_HOST_FLOOR_S))
+
     def next_deadline(self) -> float | None:
         if self.watchdog_enabled and not self.watchdog_status & WATCHDOG_TIMED_OUT:
-            return self._last_host_ok + self.watchdog_timeout_s
+            return self._last_host_ok + self.watchdog_host_s
         return None
 
     def on_tick(self, now: float) -> None:
         if (self.watchdog_enabled and not self.watchdog_status & WATCHDOG_TIMED_OUT
-                and now - self._last_host_ok >= self.watchdog_timeout_s):
+                and now - self._last_host_ok >= self.watchdog_host_s):
             self.watchdog_status |= WATCHDOG_TIMED_OUT
             self.watchdog_tripped()
 
@@ -171,6 +187,11 @@ class I7011(DconDevice):
         self.power_on_do, self.safe_do = power_on_do, safe_do
         self.do = power_on_do & 0x03
         self.set_heater(bool(self.do & 1))
+        self._corrupt_C = 0.0
+
+    def corrupt_next(self, delta_C: float) -> None:
+        """Fault 'corrupt': the next reading is off by ``delta_C`` (a well-formed reply)."""
+        self._corrupt_C = float(delta_C)
 
     @property
     def format_byte(self) -> int:
@@ -200,7 +221,8 @@ class I7011(DconDevice):
     def command(self, lead: str, body: str) -> str | None:
         aa = self.aa
         if lead == "#" and body == "":
-            return ">" + self.reading_text(self.read_temperature())
+            corrupt, self._corrupt_C = self._corrupt_C, 0.0
+            return ">" + self.reading_text(self.read_temperature() + corrupt)
         if lead == "$":
             if body == "2":
                 return f"!{aa}{self.type_code:02X}{self.baud_code:02X}{self.format_byte:02X}"

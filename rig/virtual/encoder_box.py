@@ -28,6 +28,16 @@ class EncoderBox(DconDevice):
         self.read_counts = read_counts
         self._offset = initial_count - read_counts()
         self.latched = 0
+        self.counts_per_mm = 100.0  # the model's encoder resolution (VirtualRig sets it)
+        self._corrupt_counts = 0
+
+    def corrupt_next(self, delta_mm: float) -> None:
+        """Fault 'corrupt': the next ``#AAN`` reply is off by ``delta_mm`` (well-formed)."""
+        self._corrupt_counts = int(round(delta_mm * self.counts_per_mm))
+
+    def jump(self, delta_mm: float) -> None:
+        """Fault 'jump': the counter steps by ``delta_mm`` and stays stepped."""
+        self._offset += int(round(delta_mm * self.counts_per_mm))
 
     def count(self) -> int:
         """The 32-bit counter value now (0 … 2**32 − 1)."""
@@ -40,7 +50,8 @@ class EncoderBox(DconDevice):
     def command(self, lead: str, body: str) -> str | None:
         aa = self.aa
         if lead == "#" and body == "0":
-            return f">{self.count():08X}"
+            corrupt, self._corrupt_counts = self._corrupt_counts, 0
+            return f">{(self.count() + corrupt) & MASK32:08X}"
         if lead == "$":
             if body == "G0":
                 return f">{gray_code(self.count()):08X}"

@@ -26,6 +26,7 @@ import heapq
 import itertools
 import os
 import select
+import termios
 import threading
 import time
 import tty
@@ -35,6 +36,7 @@ from flowcurve.errors import ConfigError
 from flowcurve.rig.virtual.faults import WireFaults
 
 LINKS = ("pty", "inprocess")
+IDLE_S = 0.1  # the pty thread looks around at least this often (faults due, the line parked)
 INPROCESS_BUFFER_BYTES = 4096  # like a pty's: bytes the host does not read beyond it are lost
 _NAMES = itertools.count(1)
 
@@ -68,6 +70,7 @@ class PtyDevice:
         if link == "pty":
             self._master, self._slave = os.openpty()
             tty.setraw(self._slave)
+            self._park_line()
             self.port = os.ttyname(self._slave)
             os.set_blocking(self._master, False)
             self._wake_r, self._wake_w = os.pipe()
@@ -115,7 +118,7 @@ class PtyDevice:
 
     def _write(self, data: bytes) -> None:
         if self.link == "inprocess":
-            if self._host is not None and not self.unplugged:
+            if self._host is not None and not self.lost:
                 self._host.deliver(data, INPROCESS_BUFFER_BYTES)
             return
         if self._master < 0:
@@ -155,7 +158,7 @@ class PtyDevice:
         if self.link == "inprocess":
             with self._lock:
                 self.unplugged = True
-                self._cancel_timer()
+                self._reschedule()  # the module's own timing (a watchdog) goes on unplugged
             return
         self.wake()
         if self._started:
@@ -204,7 +207,7 @@ class PtyDevice:
     @property
     def lost(self) -> bool:
         """The port is gone for the host (unplugged or closed)."""
-        return self.unplugged or self._closed
+        return self.unplugged or self._closed or self.faults.unplug_requested
 
     def attach(self, host, byte_time_s: float = 0.0) -> None:
         """A host port opened this device (one at a time, like a serial port)."""
@@ -234,13 +237,13 @@ class PtyDevice:
         while self._delayed and self._delayed[0][0] <= now:
             self._write(heapq.heappop(self._delayed)[2])
         deadline = self.next_deadline()
-        if deadline is not None and deadline <= now and not self.lost:
+        if deadline is not None and deadline <= now and not self._closed:
             self.on_tick(now)  # as the pty thread does: a late tick catches up by itself
 
     def _on_timer(self) -> None:
         with self._lock:
             self._timer = None
-            if self.lost:
+            if self._closed:
                 return
             self._catch_up()
             self._reschedule()
@@ -252,7 +255,7 @@ class PtyDevice:
 
     def _reschedule(self) -> None:
         """One timer at the earliest of the periodic deadline and the delayed replies."""
-        if not self._started or self.lost:
+        if not self._started or self._closed:
             return
         due = [d for d in (self.next_deadline(),) if d is not None]
         if self._delayed:
@@ -267,17 +270,32 @@ class PtyDevice:
             self._timer = self.clock.call_at(when, self._on_timer)
 
     # -- the pty thread ---------------------------------------------------------------
+    def _park_line(self) -> None:
+        """Keep the pty's line at 50 baud, a speed no host asks for: on some kernels a pty
+        refuses (EINVAL) a host's ``tcsetattr`` with parity that does not change the speed, so
+        a second host opening the port at the first one's settings failed (issue 29, defect
+        10). Parked, every host's open changes the speed and succeeds: one host after another."""
+        try:
+            attrs = termios.tcgetattr(self._slave)
+            if attrs[4] != termios.B50 or attrs[5] != termios.B50:
+                attrs[4] = attrs[5] = termios.B50
+                termios.tcsetattr(self._slave, termios.TCSANOW, attrs)
+        except (termios.error, OSError):
+            pass
+
     def _run(self) -> None:
         while not self._stop.is_set():
+            self._park_line()
             if self.faults.unplug_requested:
                 self.unplugged = True
                 self._close_pty()
+                self._run_unplugged()
                 return
             now = time.monotonic()
             deadlines = [d for d in (self.next_deadline(),) if d is not None]
             if self._delayed:
                 deadlines.append(self._delayed[0][0])
-            timeout = 0.5 if not deadlines else max(0.0, min(min(deadlines) - now, 0.5))
+            timeout = IDLE_S if not deadlines else max(0.0, min(min(deadlines) - now, IDLE_S))
             try:
                 ready, _, _ = select.select([self._master, self._wake_r], [], [], timeout)
             except (OSError, ValueError):
@@ -303,3 +321,18 @@ class PtyDevice:
             deadline = self.next_deadline()
             if deadline is not None and deadline <= now:
                 self.on_tick(now)
+
+    def _run_unplugged(self) -> None:
+        """The cable is out but the module is powered: its own timing (a watchdog) goes on."""
+        while not self._stop.is_set():
+            deadline = self.next_deadline()
+            now = time.monotonic()
+            if deadline is not None and deadline <= now:
+                self.on_tick(now)
+                continue
+            timeout = 0.5 if deadline is None else min(deadline - now, 0.5)
+            try:
+                if select.select([self._wake_r], [], [], max(0.0, timeout))[0]:
+                    os.read(self._wake_r, 4096)
+            except (OSError, ValueError):
+                return

@@ -37,6 +37,7 @@ from flowcurve.rig.virtual.aed import AEDAmplifier
 from flowcurve.rig.virtual.dcon import I7011
 from flowcurve.rig.virtual.encoder_box import EncoderBox
 from flowcurve.rig.virtual.faults import MODEL_FAULTS, WIRE_FAULTS
+from flowcurve.rig.virtual.fault_spec import FaultSpec
 
 DEVICES = ("loadcell", "encoder", "furnace")
 
@@ -67,6 +68,9 @@ class VirtualRig:
         self.link = link
         self._t0 = clock.now()
         self._running = False
+        self._motion_start_s: float | None = None  # model time the crosshead first moved
+        self._scheduled: list[FaultSpec] = []  # --fault ...@SECONDS not yet due
+        self.faults_applied: list[tuple[float, FaultSpec]] = []  # (model time, spec), in order
         self.devices: dict = {}
         try:
             self.devices["loadcell"] = AEDAmplifier(self._loadcell_sample, nominal_load_N=nominal_load_N,
@@ -80,6 +84,9 @@ class VirtualRig:
         except BaseException:
             self.close()
             raise
+        self.devices["encoder"].counts_per_mm = self.model.counts_per_mm
+        for name in ("encoder", "furnace"):
+            self.devices[name].time_scale = self.time_scale  # the watchdogs count model time
 
     # -- clock and model access (called from the device threads) --------------------------
     def now(self) -> float:
@@ -87,10 +94,17 @@ class VirtualRig:
         return (self.clock.now() - self._t0) * self.time_scale
 
     def sync(self) -> RigModel:
-        """Advance the model to the present model time and return it (hold :attr:`lock`)."""
+        """Advance the model to the present model time and return it (hold :attr:`lock`);
+        scheduled faults that are due switch on."""
         with self._lock:
             self.model.advance_to(self.now())
+            if self._scheduled:
+                self._apply_due()
             return self.model
+
+    def since_motion_s(self) -> float | None:
+        """Model seconds since the crosshead first started (None: not yet)."""
+        return None if self._motion_start_s is None else self.model.time_s - self._motion_start_s
 
     @property
     def lock(self) -> threading.RLock:
@@ -142,11 +156,51 @@ class VirtualRig:
 
     def start_crosshead(self) -> None:
         with self._lock:
-            self.sync().start_crosshead()
+            m = self.sync()
+            m.start_crosshead()
+            if m.moving and self._motion_start_s is None:
+                self._motion_start_s = m.time_s
+                self._apply_due()
 
     def stop_crosshead(self) -> None:
         with self._lock:
             self.sync().stop_crosshead()
+
+    def schedule(self, spec: FaultSpec) -> None:
+        """A fault of ``--fault`` (:mod:`rig.virtual.fault_spec`): on now, or ``spec.at_s``
+        model seconds after the crosshead starts moving."""
+        self._device(spec.device)
+        with self._lock:
+            self._scheduled.append(spec)
+            if spec.at_s is None:
+                self._apply_due()
+
+    def _apply_due(self) -> None:
+        since = self.since_motion_s()
+        due = [f for f in self._scheduled if f.at_s is None or (since is not None and since >= f.at_s)]
+        self._scheduled = [f for f in self._scheduled if f not in due]
+        for spec in due:
+            self.faults_applied.append((self.model.time_s, spec))
+            self._switch_on(spec)
+
+    def _switch_on(self, spec: FaultSpec) -> None:
+        """Apply one due fault without waiting on any device thread (called under the rig lock)."""
+        dev, kind, value = self.devices[spec.device], spec.kind, spec.value
+        if kind == "corrupt":
+            dev.corrupt_next(value)
+        elif kind == "jump":
+            dev.jump(value)
+        elif kind == "wrong_address":
+            dev.reply_address = int(value)
+        elif kind == "open_thermocouple":
+            self.model.thermocouple_open = True
+        elif kind == "relay_stuck":
+            self.model.furnace.set_relay_stuck(True)
+        else:  # wire faults: the device's thread (or its next exchange) sees them
+            kw = {"fraction": value} if kind in ("drop", "garble") else {"seconds": value} if kind == "delay" else {}
+            dev.faults.inject(kind, **kw)
+            if dev.link == "pty":
+                dev.wake()  # (in-process the next exchange or timer looks at the faults)
 
     def inject(self, device: str, fault: str, **kw) -> None:
         """Switch a fault on: wire faults (``silence``, ``drop``, ``garble``, ``delay``,

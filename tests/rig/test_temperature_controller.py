@@ -145,7 +145,7 @@ def hold_over_the_serial_port(rig, setpoint, hold_s):
     then hold for ``hold_s`` model seconds; returns the true furnace temperatures of the hold."""
     cfg = rig.config()
     with cfg.furnace.create() as furnace:
-        furnace.arm_watchdog(2.0)  # host seconds: the steps below keep it fed
+        furnace.arm_watchdog(2.0)  # model seconds; a fast virtual rig's module waits at least 1 host s (dcon.WATCHDOG_HOST_FLOOR_S)
         ctl = cfg.furnace.controller(furnace, setpoint, clock=rig.now)
         give_up = rig.now() + 3600.0
         while not ctl.soaked(tolerance=2.0, hold_s=60.0):
