@@ -41,6 +41,9 @@ FRACTURE_POINT_SLACK_PCT = 2.0
 # the break, as Bluehill writes it, ends at 0.68–0.86 Fm on the 42CrMoS4 records); one ending
 # above it was stopped before fracture, unless it shows the break as a force drop
 FRACTURE_END_FORCE = 0.9
+# a record ending below this fraction of Fm went on past the break (the force fell to the
+# unloaded level); its break may be spread over several samples by the amplifier's filter
+BROKEN_END_FORCE = 0.2
 
 
 def true_stress_gost(eng_stress_MPa, log_strain, K_MPa: float):
@@ -124,11 +127,24 @@ def _increasing(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return x[keep], y[keep]
 
 
+def fracture_index(force_N) -> int:
+    """The last sample before fracture: :func:`iso6892.fracture_index`, except for a break the
+    load cell's low-pass filter spread over several samples — no single step above 20 % of Fm,
+    the record ending below BROKEN_END_FORCE × Fm —, where it is the sample before the largest
+    step after Fm: a first-order filter's first step after a sudden drop is its largest."""
+    force = np.asarray(force_N, dtype=float)
+    i_k = iso6892.fracture_index(force)
+    i_m = iso6892.max_force_index(force)
+    if i_k < force.size - 1 or force.size - i_m < 3 or not force[-1] <= BROKEN_END_FORCE * force[i_m]:
+        return i_k
+    return i_m + int(np.nanargmax(force[i_m:-1] - force[i_m + 1:]))
+
+
 def reaches_fracture(force_N: np.ndarray) -> bool:
     """Does the record reach fracture: a single-step drop of more than 20 % of Fm after Fm
     (the break), or a last force below FRACTURE_END_FORCE × Fm (a necked specimen, the
     record cut at the break)?"""
-    i_k = iso6892.fracture_index(force_N)
+    i_k = fracture_index(force_N)
     Fm = float(np.nanmax(force_N))
     return i_k < force_N.size - 1 or float(force_N[-1]) <= FRACTURE_END_FORCE * Fm
 
@@ -161,7 +177,7 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
     warnings: list[str] = []
     if has_ext and use_extensometer is not False:
         ext = record.column("extensometer_mm")
-        gaps = np.nonzero(~np.isfinite(ext[: iso6892.fracture_index(force) + 1]))[0]
+        gaps = np.nonzero(~np.isfinite(ext[: fracture_index(force) + 1]))[0]
         if gaps.size:
             message = f"the extensometer channel has no value from sample {gaps[0] + 1} on (removed before fracture?)"
             if not record.has("crosshead_mm"):
@@ -178,7 +194,7 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
     if not record.has("crosshead_mm"):
         raise RecordError(record.source, "the record has no crosshead column: its strain can only come from the extensometer (leave out --no-extensometer)", column="crosshead_mm")
     cross = record.column("crosshead_mm")
-    gaps = np.nonzero(~np.isfinite(cross[: iso6892.fracture_index(force) + 1]))[0]
+    gaps = np.nonzero(~np.isfinite(cross[: fracture_index(force) + 1]))[0]
     if gaps.size:
         raise RecordError(record.source, f"the crosshead channel has no value at sample {gaps[0] + 1} (of {gaps.size} before fracture); the strain cannot be followed through the gap", column="crosshead_mm")
     step = None
@@ -467,7 +483,7 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
                         "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")
     e_m = float(strain[inp.i_m])
     Ag = float(iso6892.plastic_extension_pct(e_m, inp.Rm, E))
-    i_k = iso6892.fracture_index(force)
+    i_k = fracture_index(force)
     if inp.lu is not None:
         A, A_method = iso6892.elongation_after_fracture_pct(inp.l0, inp.lu), "measured gauge length after fracture (post.lu_mm)"
     elif reaches_fracture(force):
@@ -549,12 +565,17 @@ def _fit_laws(grid, fit_sig, extra: list, three_points: list | None, fracture_po
     for name in ("johnson_cook", "swift", "voce"):
         try:
             pair = {"without": fit_hardening(grid, fit_sig, name)}
-            if extra:
-                pair["with"] = fit_hardening(grid, fit_sig, name, extra_points=extra)
         except IdentificationError as exc:
             warnings.append(f"least-squares {name} fit failed: {exc}")
         else:
+            if extra:  # a fracture point the law cannot pass through leaves the uniform range's fit
+                try:
+                    pair["with"] = fit_hardening(grid, fit_sig, name, extra_points=extra)
+                except IdentificationError as exc:
+                    warnings.append(f"least-squares {name} fit with the fracture point failed ({exc}); the uniform range alone is fitted")
             chosen, why = choose_fracture_variant(pair, grid, fit_sig, fracture_point)
+            if extra and "with" not in pair:
+                why = "excluded: the fit through the fracture point failed"
             fits[f"least_squares_{name}"] = pair[chosen]
             choices[name] = (chosen, why)
             variants.update({f"least_squares_{name}_{v}_fracture_point": f for v, f in pair.items()})
