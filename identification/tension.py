@@ -44,6 +44,8 @@ FRACTURE_END_FORCE = 0.9
 # a record ending below this fraction of Fm went on past the break (the force fell to the
 # unloaded level); its break may be spread over several samples by the amplifier's filter
 BROKEN_END_FORCE = 0.2
+# (3.6) against constant volume at Fm: a larger split is reported (≈ ε_u²/2: 2 % at ε_u 0.2)
+TRUE_STRESS_SPLIT_PCT = 2.0
 
 
 def true_stress_gost(eng_stress_MPa, log_strain, K_MPa: float):
@@ -519,6 +521,19 @@ def _true_curve(inp: _Inputs, line: _ElasticLine, true_stress: str, poisson: flo
                       curve=curve, sig_t_rp=sig_t_rp, eps_p_at_Rm=float(eps_p[i_m]))
 
 
+def _true_stress_warnings(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, true_stress: str) -> list[str]:
+    """(3.6)'s cross-section F0·(1 − ε + σ/(3K)) is first order in ε: at a large uniform strain
+    it reads the true stress high against constant volume (≈ ε²/2): say so past TRUE_STRESS_SPLIT_PCT."""
+    if true_stress != "gost_3_6":
+        return []
+    i_m = inp.i_m
+    split = 100.0 * (float(true.sig_t[i_m]) / float(true_stress_constant_volume(inp.eng_stress[i_m], line.strain[i_m])) - 1.0)
+    if not split > TRUE_STRESS_SPLIT_PCT:
+        return []
+    return [f"true stress (3.6) at Fm reads {split:.1f} % above constant volume σ_e·(1 + e): its cross-section is first order "
+            f"in the strain, and the uniform strain {true.eps_u:.3f} is beyond that; --true-stress constant_volume for such a material"]
+
+
 def _neck_correction(inp: _Inputs, iso: _IsoResults, true: _TrueCurve) -> tuple[dict, list[str]]:
     """The fracture point with every neck correction (empty without the area after fracture), and warnings."""
     if iso.su is None:
@@ -728,7 +743,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     fracture, neck_warnings = _neck_correction(inp, iso, true)
     hard = _hardening_fits(inp, iso, true, fracture, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
                            fit_range=fit_range, fracture_point=fracture_point)
-    warnings = inp.warnings + line.warnings + iso.warnings + neck_warnings + hard.warnings
+    warnings = inp.warnings + line.warnings + iso.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings + hard.warnings
     result = _result(inp, line, iso, true, fracture, hard, warnings, toe=toe, true_stress=true_stress, poisson=poisson,
                      neck=neck, law=law, hardening=hardening)
     return Identification(result=result, true_curve=true.curve, curves=_curves(inp, line, true, fracture, hard, neck))
