@@ -416,6 +416,23 @@ def _chosen_modulus(mod: ModulusFit, E_MPa: float | None, handbook_E: float | No
     return E
 
 
+def _line_without_samples(inp: _Inputs, E: float, why: str, *, scale: bool, noise_MPa: float) -> _ElasticLine:
+    """No elastic line in the record (too few samples before the yield): the given or handbook E
+    strips the elastic strain, the toe is not compensated (there is no line to find it on)."""
+    disp, scale_factor = inp.src["disp"], None
+    if inp.src["scalable"] and scale and inp.lu is not None:
+        disp, scale_factor = scale_to_measured(disp, inp.lu - inp.l0)  # (3.1) K_l = Δl_p / max Δl
+    strain = disp / inp.length
+    if np.nanmax(np.abs(strain)) > MAX_STRAIN:
+        raise IdentificationError(f"{inp.record.source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
+    mod = ModulusFit(math.nan, math.nan, math.nan, math.nan, 0, (0.0, 0.0), source=f"given or handbook E (no elastic line: {why})")
+    Rp02, _ = iso6892.offset_yield_strength(strain, inp.eng_stress, E, MIN_YIELD_OFFSET)
+    warnings = [f"no elastic line ({why}): the toe is not compensated and Rp0.2 and the start of the flow curve rest on "
+                f"the given E = {E:.4g} MPa alone"]
+    return _ElasticLine(E=E, mod=mod, Rp02=Rp02, window_MPa=(0.0, 0.0), disp=disp, strain=strain, toe_mm=0.0,
+                        scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings)
+
+
 def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_reference: str, E_MPa: float | None,
                   toe: bool, scale: bool) -> _ElasticLine:
     """E, the toe and Rp0.2, which depend on each other through the window: iterated to a fixed point."""
@@ -435,8 +452,10 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
             window_MPa, line_points, how, auto, ref = _modulus_window(
                 step, ref, first_guesses, disp0 / length, eng_stress, fractions=fractions, window_fixed_MPa=window_fixed_MPa,
                 modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise)
-        except IdentificationError:
+        except IdentificationError as exc:
             if unresolved is None:
+                if automatic and (E_MPa is not None or handbook_E is not None):  # no line to be found: the E given
+                    return _line_without_samples(inp, E_MPa if E_MPa is not None else handbook_E, str(exc), scale=scale, noise_MPa=noise_MPa)
                 raise
             break  # no line below the handbook E's Rp0.2 either: the last step's window and Rp0.2 stand
         disp = disp0
