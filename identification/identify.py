@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from flowcurve.record.format import Record
+from flowcurve.record.format import STATUS_ABORTED, Record
 from flowcurve.record.summary import GAUGE_KEY, record_summary
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.compression import identify_compression
@@ -108,6 +108,9 @@ def check_record(record: Record) -> list[str]:
     if not lo <= peak_MPa <= hi:
         raise RecordError(source, f"peak engineering stress {peak_MPa:.3g} MPa (force {np.max(np.abs(force)):.4g} N on d0 = {d0:g} mm) is outside {lo:g}–{hi:g} MPa; check units of force and diameter")
     warnings = list(record.warnings) + temperature_warnings(record)
+    if record.meta.get("status") == STATUS_ABORTED:  # a fault ended the test: the curve ends there, and may not be one test's
+        why = " ".join(str(record.meta.get("abort_reason") or "no reason recorded").split())
+        warnings.append(f"the test was aborted ({why}): the results cover the record up to the fault, a short and maybe disturbed part of the test")
     if record.truncated and not any("cut short" in w for w in warnings):
         warnings.append("the record was cut short; results cover only the samples recorded")
     return warnings

@@ -1,6 +1,6 @@
-"""A furnace that does not hold its set-point under load (a stuck relay heats the specimen by
-50 C during a 600 C compression on the virtual rig, issue 31's scenario matrix): the flow
-curve mixes temperatures, and the result says so."""
+"""What the record itself says about the test, in the result's warnings: a furnace that does not hold
+its set-point under load (a stuck relay heats the specimen by 50 C during a 600 C compression on
+the virtual rig, issue 31's scenario matrix: the flow curve mixes temperatures), a test a fault aborted."""
 
 import numpy as np
 import pytest
@@ -43,3 +43,13 @@ def test_no_temperature_column_or_nominal_is_no_warning():
     meta = {k: v for k, v in rec.meta.items() if k != "nominal_temperature_C"}
     assert temperature_warnings(Record(meta=meta, data=data, source="x.csv")) == []
     assert temperature_warnings(Record(meta={**meta, "nominal_temperature_C": "hot"}, data=data, source="x.csv")) == []
+
+
+def test_an_aborted_record_says_so_in_its_warnings():
+    # issue 31's scenario matrix: a record a fault cut at ε_p 0.03 identified as 'good' without a word
+    rec, _ = make_record()
+    meta = {**rec.meta, "status": "aborted", "abort_reason": "load cell: stream ('MSV?0') silent for 1.3 s"}
+    said = [w for w in identify(Record(meta=meta, data=rec.data, source="a.csv")).result["warnings"] if "test was aborted" in w]
+    assert said == ["the test was aborted (load cell: stream ('MSV?0') silent for 1.3 s): the results cover the record up to the "
+                    "fault, a short and maybe disturbed part of the test"]
+    assert not [w for w in identify(rec).result["warnings"] if "aborted" in w]
