@@ -9,6 +9,12 @@ from .matrix import Cell
 TRANSPARENT = ("drop", "garble", "delay")  # wire faults a driver rides out by retrying or restarting
 
 
+def _furnace_channel_period_s(cell: Cell) -> float:
+    """acquisition/session.py's furnace polling period (host s): a quarter control period (2 s) on
+    the time-scaled test clock, within FURNACE_MIN_PERIOD_S–FURNACE_PERIOD_S."""
+    return max(0.02, min(0.25, 2.0 / 4.0 / cell.time_scale))
+
+
 def _fault(cell: Cell, device: str | None, *kinds: str) -> bool:
     return (device is None or cell.fault.device == device) and cell.fault.kind in kinds
 
@@ -27,6 +33,11 @@ KNOWN: list[tuple[str, object]] = [
      lambda c: _fault(c, "furnace", "unplug")),
     ("issue 29 #13: a stuck heater relay is not detected within the test (the stuck-relay check needs 30 s)",
      lambda c: _fault(c, "furnace", "relay_stuck")),
+    ("new (the matrix): acquisition/session.py DriverRig.channels reuses the name `period` for the furnace channel "
+     "(line 145) after read_force's closure took it for the stream (line 120): the load-cell stamps step by the furnace "
+     "period, so below its rate the record's force is paired with the wrong crosshead (a 2 Hz stream on the real rig: "
+     "stamps 0.25 s apart, a 0.5 mm target overshot to ~1 mm; flow curves up to 112 % off)",
+     lambda c: 1.0 / c.rate_Hz > _furnace_channel_period_s(c) * 1.0001),
     ("issue 29 #11 class: at a time scale of 20 or more the furnace controller does not hold 850 C from a hot start "
      "(805 C at 20, 773 C at 50): the test ends before loading",
      lambda c: c.temperature_C >= 850.0 and c.time_scale >= 20.0),
