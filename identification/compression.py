@@ -209,17 +209,29 @@ def elastic_line(t, specimen_mm, force_N, *, area0_mm2: float, h0_mm: float, win
     return line, float(toe_mm)
 
 
-def toe_on_known_modulus(specimen_mm, force_N, window_MPa, *, E_MPa: float, area0_mm2: float, h0_mm: float) -> float:
-    """The toe (mm) of an elastic line of known slope E: the median offset Δl − h0·σ/E of the first
-    loading's samples in the window. A short specimen's line is a few µm long (7 mm at 100 MPa:
-    3.6 µm), too short to carry a slope of its own; its offset is read well with the slope given."""
+def toe_offsets(specimen_mm, force_N, window_MPa, *, E_MPa: float, area0_mm2: float, h0_mm: float) -> np.ndarray:
+    """The offsets Δl − h0·σ/E (mm) of the first loading's samples in the window: one value, the
+    toe, for samples on an elastic line of slope E."""
     stress = np.asarray(force_N, dtype=float) / area0_mm2
     disp = np.asarray(specimen_mm, dtype=float)
     top = int(np.argmax(stress >= window_MPa[1])) if np.any(stress >= window_MPa[1]) else stress.size
     on = np.flatnonzero(stress[:top] >= window_MPa[0])
     if on.size == 0:
         raise IdentificationError("no sample of the first loading in the elastic window")
-    return float(np.median(disp[on] - h0_mm * stress[on] / E_MPa))  # Δl = Δl0 + h0·σ/E
+    return disp[on] - h0_mm * stress[on] / E_MPa  # Δl = Δl0 + h0·σ/E
+
+
+def toe_spread_warning(offsets_mm: np.ndarray, window_MPa, *, E_MPa: float, h0_mm: float) -> str | None:
+    """A warning when the window's samples are not on one line of slope E: their offsets spread
+    wider than the line's own length h0·Δσ/E (a sparse record whose first loaded samples are
+    already plastic, a force lagging the travel). The strain zero is then uncertain by half the spread."""
+    spread = float(np.ptp(offsets_mm)) if offsets_mm.size else 0.0
+    span = h0_mm * (window_MPa[1] - window_MPa[0]) / E_MPa
+    if not spread > span:
+        return None
+    return (f"the strain zero is not resolved: the {offsets_mm.size} samples taken for the elastic line lie off one line of "
+            f"E = {E_MPa:.4g} MPa by {1000 * spread:.0f} µm (the line itself spans {1000 * span:.0f} µm), so the start of the "
+            f"flow curve is uncertain by ±{spread / 2 / h0_mm:.4f} in strain (sample faster near the yield)")
 
 
 def compensate_toe_line(specimen_mm, force_N, line: ModulusFit, toe_mm: float, *, area0_mm2: float, h0_mm: float) -> np.ndarray:
@@ -422,7 +434,9 @@ def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_
                             + (f"the handbook E = {E_MPa:g} MPa is placed on the first loading instead" if known is not None else "the toe is not compensated"))
             line, toe_mm = known if known is not None else (None, 0.0)
         elif E_MPa is not None:
-            toe_mm = toe_on_known_modulus(specimen, diagram.force, line.window_MPa, E_MPa=E_MPa, area0_mm2=area0, h0_mm=geo["h0"])
+            offsets = toe_offsets(specimen, diagram.force, line.window_MPa, E_MPa=E_MPa, area0_mm2=area0, h0_mm=geo["h0"])
+            toe_mm = float(np.median(offsets))  # the toe of a line of known slope E; its offsets' spread judged
+            warnings += [w for w in [toe_spread_warning(offsets, line.window_MPa, E_MPa=E_MPa, h0_mm=geo["h0"])] if w]
         elif line.E_MPa < MIN_APPARENT_E_MPa:
             warnings.append(f"apparent modulus {line.E_MPa:.4g} MPa over {line.window_MPa[0]:.4g}–{line.window_MPa[1]:.4g} MPa is far below any metal's: "
                             "the line found may be a toe or a stretch past yield, and Rp0.2 with it — give the handbook E (--E or material.E_MPa)")

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from flowcurve.record.format import Record
+from flowcurve.record.format import STATUS_ABORTED, Record
 from flowcurve.record.summary import GAUGE_KEY, record_summary
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.compression import identify_compression
@@ -27,6 +27,9 @@ MIN_RISE_IN_NOISE = 10.0
 NOISE_SAMPLES = 50_000  # differences used for the noise estimate (long records are thinned)
 # peak engineering stress outside this range means the force or diameter units are wrong
 PLAUSIBLE_STRESS_MPa = (2.0, 5000.0)
+# the recorded temperature while the specimen carries load may stray this far from the nominal
+TEMPERATURE_SPREAD_C = 10.0
+LOADED_FRACTION = 0.05  # "carries load": |force| above this fraction of its maximum
 
 DISPATCH = {"tension": identify_tension, "compression": identify_compression}
 # The options each test's identification takes, written out: an option in neither list is a
@@ -57,6 +60,30 @@ def force_noise_N(force_N: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(2.0))
 
 
+def temperature_warnings(record: Record) -> list[str]:
+    """The recorded temperature while the specimen carries load against the nominal one: a
+    flow curve is one temperature's only while the furnace holds it (a stuck relay, a lost
+    furnace heat it on). Empty without a temperature column or within TEMPERATURE_SPREAD_C."""
+    if not record.has("temperature_C") or not record.has("force_N"):
+        return []
+    force, temp = np.abs(record.column("force_N")), record.column("temperature_C")
+    loaded = np.isfinite(force) & np.isfinite(temp)
+    if not loaded.any():
+        return []
+    loaded &= force >= LOADED_FRACTION * np.max(force[loaded])
+    try:
+        nominal = record.number("nominal_temperature_C")
+    except RecordError:  # not a number: nothing to hold the recording against
+        return []
+    if not loaded.any() or nominal is None or not math.isfinite(nominal):
+        return []
+    lo, hi = float(np.min(temp[loaded])), float(np.max(temp[loaded]))
+    if max(nominal - lo, hi - nominal) <= TEMPERATURE_SPREAD_C:
+        return []
+    return [f"the recorded temperature under load ranges {lo:.0f}–{hi:.0f} C against the nominal {nominal:g} C: the flow "
+            f"curve mixes temperatures (did the furnace hold its set-point?) and is not the nominal temperature's"]
+
+
 def check_record(record: Record) -> list[str]:
     """The checks every identification needs; returns warnings, raises on unusable records."""
     test = record.test
@@ -82,7 +109,10 @@ def check_record(record: Record) -> list[str]:
     lo, hi = PLAUSIBLE_STRESS_MPa
     if not lo <= peak_MPa <= hi:
         raise RecordError(source, f"peak engineering stress {peak_MPa:.3g} MPa (force {np.max(np.abs(force)):.4g} N on d0 = {d0:g} mm) is outside {lo:g}–{hi:g} MPa; check units of force and diameter")
-    warnings = list(record.warnings)
+    warnings = list(record.warnings) + temperature_warnings(record)
+    if record.meta.get("status") == STATUS_ABORTED:  # a fault ended the test: the curve ends there, and may not be one test's
+        why = " ".join(str(record.meta.get("abort_reason") or "no reason recorded").split())
+        warnings.append(f"the test was aborted ({why}): the results cover the record up to the fault, a short and maybe disturbed part of the test")
     if record.truncated and not any("cut short" in w for w in warnings):
         warnings.append("the record was cut short; results cover only the samples recorded")
     return warnings

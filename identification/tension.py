@@ -42,6 +42,11 @@ FRACTURE_POINT_SLACK_PCT = 2.0
 # the break, as Bluehill writes it, ends at 0.68–0.86 Fm on the 42CrMoS4 records); one ending
 # above it was stopped before fracture, unless it shows the break as a force drop
 FRACTURE_END_FORCE = 0.9
+# a record ending below this fraction of Fm went on past the break (the force fell to the
+# unloaded level); its break may be spread over several samples by the amplifier's filter
+BROKEN_END_FORCE = 0.2
+# (3.6) against constant volume at Fm: a larger split is reported (≈ ε_u²/2: 2 % at ε_u 0.2)
+TRUE_STRESS_SPLIT_PCT = 2.0
 
 
 def true_stress_gost(eng_stress_MPa, log_strain, K_MPa: float):
@@ -125,11 +130,24 @@ def _increasing(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return x[keep], y[keep]
 
 
+def fracture_index(force_N) -> int:
+    """The last sample before fracture: :func:`iso6892.fracture_index`, except for a break the
+    load cell's low-pass filter spread over several samples — no single step above 20 % of Fm,
+    the record ending below BROKEN_END_FORCE × Fm —, where it is the sample before the largest
+    step after Fm: a first-order filter's first step after a sudden drop is its largest."""
+    force = np.asarray(force_N, dtype=float)
+    i_k = iso6892.fracture_index(force)
+    i_m = iso6892.max_force_index(force)
+    if i_k < force.size - 1 or force.size - i_m < 3 or not force[-1] <= BROKEN_END_FORCE * force[i_m]:
+        return i_k
+    return i_m + int(np.nanargmax(force[i_m:-1] - force[i_m + 1:]))
+
+
 def reaches_fracture(force_N: np.ndarray) -> bool:
     """Does the record reach fracture: a single-step drop of more than 20 % of Fm after Fm
     (the break), or a last force below FRACTURE_END_FORCE × Fm (a necked specimen, the
     record cut at the break)?"""
-    i_k = iso6892.fracture_index(force_N)
+    i_k = fracture_index(force_N)
     Fm = float(np.nanmax(force_N))
     return i_k < force_N.size - 1 or float(force_N[-1]) <= FRACTURE_END_FORCE * Fm
 
@@ -162,7 +180,7 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
     warnings: list[str] = []
     if has_ext and use_extensometer is not False:
         ext = record.column("extensometer_mm")
-        gaps = np.nonzero(~np.isfinite(ext[: iso6892.fracture_index(force) + 1]))[0]
+        gaps = np.nonzero(~np.isfinite(ext[: fracture_index(force) + 1]))[0]
         if gaps.size:
             message = f"the extensometer channel has no value from sample {gaps[0] + 1} on (removed before fracture?)"
             if not record.has("crosshead_mm"):
@@ -179,7 +197,7 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
     if not record.has("crosshead_mm"):
         raise RecordError(record.source, "the record has no crosshead column: its strain can only come from the extensometer (leave out --no-extensometer)", column="crosshead_mm")
     cross = record.column("crosshead_mm")
-    gaps = np.nonzero(~np.isfinite(cross[: iso6892.fracture_index(force) + 1]))[0]
+    gaps = np.nonzero(~np.isfinite(cross[: fracture_index(force) + 1]))[0]
     if gaps.size:
         raise RecordError(record.source, f"the crosshead channel has no value at sample {gaps[0] + 1} (of {gaps.size} before fracture); the strain cannot be followed through the gap", column="crosshead_mm")
     step = None
@@ -423,6 +441,23 @@ def _chosen_modulus(mod: ModulusFit, E_MPa: float | None, handbook_E: float | No
     return E
 
 
+def _line_without_samples(inp: _Inputs, E: float, why: str, *, scale: bool, noise_MPa: float) -> _ElasticLine:
+    """No elastic line in the record (too few samples before the yield): the given or handbook E
+    strips the elastic strain, the toe is not compensated (there is no line to find it on)."""
+    disp, scale_factor = inp.src["disp"], None
+    if inp.src["scalable"] and scale and inp.lu is not None:
+        disp, scale_factor = scale_to_measured(disp, inp.lu - inp.l0)  # (3.1) K_l = Δl_p / max Δl
+    strain = disp / inp.length
+    if np.nanmax(np.abs(strain)) > MAX_STRAIN:
+        raise IdentificationError(f"{inp.record.source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
+    mod = ModulusFit(math.nan, math.nan, math.nan, math.nan, 0, (0.0, 0.0), source=f"given or handbook E (no elastic line: {why})")
+    Rp02, _ = iso6892.offset_yield_strength(strain, inp.eng_stress, E, MIN_YIELD_OFFSET)
+    warnings = [f"no elastic line ({why}): the toe is not compensated and Rp0.2 and the start of the flow curve rest on "
+                f"the given E = {E:.4g} MPa alone"]
+    return _ElasticLine(E=E, mod=mod, Rp02=Rp02, window_MPa=(0.0, 0.0), disp=disp, strain=strain, toe_mm=0.0,
+                        scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings)
+
+
 def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_reference: str, E_MPa: float | None,
                   toe: bool, scale: bool, modulus_method: str = DEFAULT_MODULUS_METHOD) -> _ElasticLine:
     """E, the toe and Rp0.2, which depend on each other through the window: iterated to a fixed point."""
@@ -443,8 +478,10 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
                 step, ref, first_guesses, disp0 / length, eng_stress, fractions=fractions, window_fixed_MPa=window_fixed_MPa,
                 modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise, method=modulus_method,
                 crosshead=src["source"] != "extensometer")
-        except IdentificationError:
+        except IdentificationError as exc:
             if unresolved is None:
+                if automatic and (E_MPa is not None or handbook_E is not None):  # no line to be found: the E given
+                    return _line_without_samples(inp, E_MPa if E_MPa is not None else handbook_E, str(exc), scale=scale, noise_MPa=noise_MPa)
                 raise
             break  # no line below the handbook E's Rp0.2 either: the last step's window and Rp0.2 stand
         disp = disp0
@@ -494,7 +531,7 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
                         "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")
     e_m = float(strain[inp.i_m])
     Ag = float(iso6892.plastic_extension_pct(e_m, inp.Rm, E))
-    i_k = iso6892.fracture_index(force)
+    i_k = fracture_index(force)
     if inp.lu is not None:
         A, A_method = iso6892.elongation_after_fracture_pct(inp.l0, inp.lu), "measured gauge length after fracture (post.lu_mm)"
     elif reaches_fracture(force):
@@ -528,6 +565,19 @@ def _true_curve(inp: _Inputs, line: _ElasticLine, true_stress: str, poisson: flo
     sig_t_rp = float(np.interp(MIN_YIELD_OFFSET, ep_u, sig_u)) if ep_u[-1] > MIN_YIELD_OFFSET else None
     return _TrueCurve(log_strain=log_strain, sig_t=sig_t, eps_p=eps_p, eps_u=float(log_strain[i_m]), ep_u=ep_u, sig_u=sig_u,
                       curve=curve, sig_t_rp=sig_t_rp, eps_p_at_Rm=float(eps_p[i_m]))
+
+
+def _true_stress_warnings(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, true_stress: str) -> list[str]:
+    """(3.6)'s cross-section F0·(1 − ε + σ/(3K)) is first order in ε: at a large uniform strain
+    it reads the true stress high against constant volume (≈ ε²/2): say so past TRUE_STRESS_SPLIT_PCT."""
+    if true_stress != "gost_3_6":
+        return []
+    i_m = inp.i_m
+    split = 100.0 * (float(true.sig_t[i_m]) / float(true_stress_constant_volume(inp.eng_stress[i_m], line.strain[i_m])) - 1.0)
+    if not split > TRUE_STRESS_SPLIT_PCT:
+        return []
+    return [f"true stress (3.6) at Fm reads {split:.1f} % above constant volume σ_e·(1 + e): its cross-section is first order "
+            f"in the strain, and the uniform strain {true.eps_u:.3f} is beyond that; --true-stress constant_volume for such a material"]
 
 
 def _neck_correction(inp: _Inputs, iso: _IsoResults, true: _TrueCurve) -> tuple[dict, list[str]]:
@@ -576,12 +626,17 @@ def _fit_laws(grid, fit_sig, extra: list, three_points: list | None, fracture_po
     for name in ("johnson_cook", "swift", "voce"):
         try:
             pair = {"without": fit_hardening(grid, fit_sig, name)}
-            if extra:
-                pair["with"] = fit_hardening(grid, fit_sig, name, extra_points=extra)
         except IdentificationError as exc:
             warnings.append(f"least-squares {name} fit failed: {exc}")
         else:
+            if extra:  # a fracture point the law cannot pass through leaves the uniform range's fit
+                try:
+                    pair["with"] = fit_hardening(grid, fit_sig, name, extra_points=extra)
+                except IdentificationError as exc:
+                    warnings.append(f"least-squares {name} fit with the fracture point failed ({exc}); the uniform range alone is fitted")
             chosen, why = choose_fracture_variant(pair, grid, fit_sig, fracture_point)
+            if extra and "with" not in pair:
+                why = "excluded: the fit through the fracture point failed"
             fits[f"least_squares_{name}"] = pair[chosen]
             choices[name] = (chosen, why)
             variants.update({f"least_squares_{name}_{v}_fracture_point": f for v, f in pair.items()})
@@ -742,7 +797,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     fracture, neck_warnings = _neck_correction(inp, iso, true)
     hard = _hardening_fits(inp, iso, true, fracture, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
                            fit_range=fit_range, fracture_point=fracture_point)
-    warnings = inp.warnings + line.warnings + iso.warnings + neck_warnings + hard.warnings
+    warnings = inp.warnings + line.warnings + iso.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings + hard.warnings
     result = _result(inp, line, iso, true, fracture, hard, warnings, toe=toe, true_stress=true_stress, poisson=poisson,
                      neck=neck, law=law, hardening=hardening)
     return Identification(result=result, true_curve=true.curve, curves=_curves(inp, line, true, fracture, hard, neck))

@@ -1,0 +1,483 @@
+"""The scenario matrix of the whole chain (issue 31): axes, fault table, one cell run from
+``flowcurve run`` to ``flowcurve identify`` in-process on model time, and its invariants.
+
+A cell is test type × temperature × crosshead speed × load-cell rate × virtual material ×
+fault. It runs the product's own entry points (``flowcurve.cli.main``) with the virtual rig
+in this process on a :class:`flowcurve.clock.ModelClock`: the bench around the command line
+(:func:`run_cell`) only puts the rig on the model clock, sets the load-cell rate through the
+rig configuration (``loadcell_rate_code``), starts the furnace at the set-point and injects
+the fault — what an operator cannot do from the command line yet.
+
+**Time.** The virtual devices keep their rates in host time (the AED streams ``ICR`` values
+per host second; the encoder is polled 50 times per host second), and the rig's model runs
+``time_scale`` model seconds per host second. Every cell runs at
+``time_scale = SAMPLING_SPEED_MM_PER_S / speed``, so the record holds ``rate / 1 mm/s`` samples
+per millimetre of crosshead at every speed — what the real rig would give at 1 mm/s, sparser
+than any speed of the matrix: a 2 Hz cell is a tension test of about ten samples. This keeps
+every cell to a few host seconds; the physics (strain rate v/l0, temperature) is the speed's
+own. A heated cell runs at most at :data:`HEATED_MAX_TIME_SCALE` (issue 29 #11: beyond it the
+furnace controller's minimum on-time does not fit its 2 s control period and the furnace cools
+off the set-point), so its record is denser. Compression stops at the operator's target
+:data:`COMPRESSION_TARGET_MM`.
+
+**Furnace.** The furnace starts at the set-point (a furnace already hot from the previous
+specimen) and the soak is short (:data:`SOAK_S`): heating from room temperature at 30 °C/min
+would cost each cell half an hour of model time at ``time_scale`` 1, and the heating phase has
+tests of its own (tests/acquisition/test_faults.py).
+
+**Faults** (:data:`FAULTS`): one line per kind and device; a new kind is one more line. Each is
+injected :func:`fault_time_s` model seconds after the crosshead starts (1 mm of crosshead, the
+plastic range of every specimen here).
+
+**Invariants** (:func:`violations`): no internal error in ``run`` or ``identify``; every fault
+that was injected named (its device) in the record's events and in what the operator saw;
+heater off at the end; samples lost ≤ what the events declare; the identified flow curve within
+3 % of the virtual material over the measured range it reports (the hardening's ``fit_range``),
+or a warning/quality mark that says why not, or a clean one-line refusal.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import io
+import itertools
+import json
+import math
+import os
+import random
+import re
+import subprocess
+import threading
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+TESTS = ("tension", "compression")
+TEMPERATURES_C = (20.0, 300.0, 600.0, 850.0)
+SPEEDS_MM_PER_S = (0.005, 0.05, 0.5)
+RATES_HZ = (2.0, 12.0, 50.0, 100.0)  # the AED's ICR rates (rig/codecs/aed.py ICR_RATES_PER_S)
+MAX_TEMPERATURE_C = 900.0  # the rig configuration's furnace max_temperature_C: every set-point below it
+SAMPLING_SPEED_MM_PER_S = 1.0  # see "Time" above
+HEATED_MAX_TIME_SCALE = 50.0  # issue 29 #11: faster, the furnace controller cannot hold 850 C (its on-time rule)
+COMPRESSION_TARGET_MM = 3.0  # the operator's target: ε ≈ 0.6 on the 6.98 mm specimen, short of the stroke limit
+SOAK_S = 5.0
+FAULT_AT_MM = 1.0  # the fault comes this much crosshead travel after the start
+CURVE_TOLERANCE_PCT = 3.0
+LOSS_SLACK_FRAMES = 2  # a frame on the wire at each end of the record's span
+DEFAULT_CELLS = 40
+FALLBACK_SEED = 31
+
+# warnings that do not say why a flow curve is off (what is missing past fracture, alternatives that failed)
+NOT_ABOUT_THE_CURVE = re.compile(r"without a fracture: A is not reported|no post\.dk_mm or post\.sk_mm2|"
+                                 r"three-point \w+ fit failed|has a yield point")
+
+DEVICE_NAMES = {"loadcell": "load cell", "encoder": "crosshead encoder", "furnace": "furnace"}
+
+
+def materials() -> tuple[str, ...]:
+    from flowcurve.rig.virtual.materials import MATERIALS
+
+    return tuple(MATERIALS)
+
+
+@dataclass(frozen=True)
+class Fault:
+    """One row of the fault table: ``DEVICE:KIND[:VALUE]`` as ``--fault`` spells it."""
+
+    device: str
+    kind: str
+    value: float | None = None
+    args: tuple[tuple[str, float], ...] = ()  # keyword arguments of VirtualRig.inject
+
+    @property
+    def label(self) -> str:
+        return "none" if not self.device else ":".join([self.device, self.kind] + ([f"{self.value:g}"] if self.value is not None else []))
+
+
+NO_FAULT = Fault("", "none")
+
+# The fault axis: every kind of rig/virtual/faults.py on every device it applies to.
+FAULTS: tuple[Fault, ...] = (
+    NO_FAULT,
+    Fault("loadcell", "silence"),
+    Fault("loadcell", "drop", 0.05, (("fraction", 0.05),)),
+    Fault("loadcell", "garble", 0.05, (("fraction", 0.05),)),
+    Fault("loadcell", "delay", 0.5, (("seconds", 0.5),)),
+    Fault("loadcell", "unplug"),
+    Fault("encoder", "silence"),
+    Fault("encoder", "drop", 0.05, (("fraction", 0.05),)),
+    Fault("encoder", "garble", 0.05, (("fraction", 0.05),)),
+    Fault("encoder", "delay", 0.5, (("seconds", 0.5),)),
+    Fault("encoder", "unplug"),
+    Fault("furnace", "silence"),
+    Fault("furnace", "drop", 0.05, (("fraction", 0.05),)),
+    Fault("furnace", "garble", 0.05, (("fraction", 0.05),)),
+    Fault("furnace", "delay", 0.5, (("seconds", 0.5),)),
+    Fault("furnace", "unplug"),
+    Fault("furnace", "open_thermocouple"),
+    Fault("furnace", "relay_stuck"),
+)
+
+
+@dataclass(frozen=True)
+class Cell:
+    test: str
+    temperature_C: float
+    speed_mm_per_s: float
+    rate_Hz: float
+    material: str
+    fault: Fault
+
+    @property
+    def id(self) -> str:
+        return (f"{self.test}-{self.temperature_C:g}C-{self.speed_mm_per_s:g}mmps-{self.rate_Hz:g}Hz-"
+                f"{self.material}-{self.fault.label}")
+
+    @property
+    def time_scale(self) -> float:
+        scale = SAMPLING_SPEED_MM_PER_S / self.speed_mm_per_s
+        return min(scale, HEATED_MAX_TIME_SCALE) if self.temperature_C > 20.0 else scale
+
+    @property
+    def rate_code(self) -> int:
+        from flowcurve.rig.codecs.aed import ICR_RATES_PER_S
+
+        return ICR_RATES_PER_S.index(self.rate_Hz)
+
+
+def all_cells() -> list[Cell]:
+    """The whole matrix, in a fixed order."""
+    return [Cell(*axes) for axes in itertools.product(TESTS, TEMPERATURES_C, SPEEDS_MM_PER_S, RATES_HZ, materials(), FAULTS)]
+
+
+def matrix_seed() -> int:
+    """``FLOWCURVE_MATRIX_SEED`` if set; else the checkout's commit hash (fixed per commit);
+    else :data:`FALLBACK_SEED` (no git)."""
+    given = os.environ.get("FLOWCURVE_MATRIX_SEED", "").strip()
+    if given:
+        return int(given, 0)
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent, capture_output=True, text=True,
+                              timeout=10, check=True).stdout.strip()
+        return int(head[:12], 16)
+    except (OSError, subprocess.SubprocessError, ValueError):
+        return FALLBACK_SEED
+
+
+def default_selection(cells: list[Cell], seed: int, n: int = DEFAULT_CELLS) -> list[Cell]:
+    """``n`` cells drawn with ``seed``, every value of every axis present at least once
+    (a fault-free cell included): the first cells cycle through each axis, the rest are random."""
+    rng = random.Random(seed)
+    axes = [TESTS, TEMPERATURES_C, SPEEDS_MM_PER_S, RATES_HZ, materials(), FAULTS]
+    longest = max(len(a) for a in axes)
+    shuffled = [rng.sample(list(a), len(a)) for a in axes]
+    chosen = [Cell(*(s[i % len(s)] for s in shuffled)) for i in range(longest)]
+    rest = [c for c in cells if c not in chosen]
+    chosen += rng.sample(rest, max(0, n - len(chosen)))
+    return chosen
+
+
+def cells_from_env() -> list[str] | None:
+    """``FLOWCURVE_MATRIX_CELLS=id,id`` re-runs exactly those cells."""
+    text = os.environ.get("FLOWCURVE_MATRIX_CELLS", "").strip()
+    return [c.strip() for c in text.split(",") if c.strip()] or None
+
+
+def fault_time_s(cell: Cell) -> float:
+    """Model seconds after the crosshead start at which the fault is injected."""
+    return FAULT_AT_MM / cell.speed_mm_per_s
+
+
+# -- one cell ---------------------------------------------------------------------------------
+
+
+@dataclass
+class CellRun:
+    """What one cell produced: exit codes, captured output, the record, the truth."""
+
+    cell: Cell
+    run_code: int | None = None
+    run_out: str = ""
+    run_err: str = ""
+    run_exception: str | None = None  # a traceback escaping `flowcurve run`
+    identify_code: int | None = None
+    identify_out: str = ""
+    identify_err: str = ""
+    identify_exception: str | None = None
+    record_path: Path | None = None
+    result: dict | None = None
+    virtual_run: object = None  # acquisition.session.VirtualRun
+    injected_at_s: float | None = None  # model time of the injection, None if the test ended first
+    frames_sent_at: list = field(default_factory=list)  # host times of the stream frames that left the amplifier intact
+    procedure_t0: float | None = None  # host time of the procedure's test clock zero
+    heater_do: int | None = None  # the furnace module's digital outputs at the end
+    relay_on: bool | None = None
+    notes: list[str] = field(default_factory=list)
+    run_wall_s: float = 0.0
+    identify_wall_s: float = 0.0
+
+
+def _capture(argv: list[str]) -> tuple[int | None, str, str, str | None]:
+    from flowcurve.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    code, exc = None, None
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(argv)
+        except SystemExit as e:  # argparse
+            code = e.code if isinstance(e.code, int) else 2
+        except BaseException:  # an internal error: the traceback an operator would see
+            exc = traceback.format_exc()
+    return code, out.getvalue(), err.getvalue(), exc
+
+
+def run_cell(cell: Cell, workdir: Path) -> CellRun:
+    """Run ``flowcurve run`` and ``flowcurve identify`` for ``cell`` in this process."""
+    import flowcurve.acquisition.session as session
+    from flowcurve.clock import ModelClock
+
+    workdir.mkdir(parents=True, exist_ok=True)
+    out = CellRun(cell, record_path=workdir / f"{cell.test}.csv")
+    clock = ModelClock()
+    done = threading.Event()
+    heated = cell.temperature_C > 20.0
+
+    rigs = []
+
+    def setup(vr):
+        rigs.append(vr)
+        _count_frames_sent(vr.devices["loadcell"], out.frames_sent_at)
+        if cell.fault is NO_FAULT or not cell.fault.device:
+            return
+        start = vr.start_crosshead
+
+        def start_and_arm():
+            start()
+            injector = threading.Thread(target=inject, args=(vr,), daemon=True, name="matrix-fault")
+            clock.enlist(injector)
+            injector.start()
+
+        vr.start_crosshead = start_and_arm
+
+    def inject(vr):
+        if clock.wait(done, fault_time_s(cell) / cell.time_scale):
+            return  # the test ended first
+        try:
+            vr.inject(cell.fault.device, cell.fault.kind, **dict(cell.fault.args))
+            out.injected_at_s = vr.now()
+        except Exception as exc:  # noqa: BLE001 - the bench's own failure, reported as a note
+            out.notes.append(f"injection failed: {type(exc).__name__}: {exc}")
+
+    real = session.run_virtual_test
+    set_clock = session.DriverRig.set_clock
+
+    def set_and_note_clock(rig, test_clock):
+        out.procedure_t0 = test_clock.__self__._t0  # the Procedure's bound clock: time_s = (host − t0)·scale
+        set_clock(rig, test_clock)
+
+    def on_the_bench(*args, **kwargs):
+        overrides = {"loadcell_rate_code": cell.rate_code, "furnace_max_temperature_C": MAX_TEMPERATURE_C}
+        try:
+            run = real(*args, clock=clock, link="inprocess", rig_setup=setup, config_overrides=overrides,
+                       initial_temperature_C=cell.temperature_C if heated else None, **kwargs)
+        finally:
+            done.set()
+            clock.notify()
+        out.virtual_run = run
+        return run
+
+    argv = ["run", cell.test, "--quiet", "--time-scale", f"{cell.time_scale:g}", "--out", str(out.record_path),
+            "--material", cell.material, "--speed", f"{cell.speed_mm_per_s:g}", "--operator", "matrix",
+            "--specimen-id", cell.id]
+    if cell.test == "compression":
+        argv += ["--target", f"{COMPRESSION_TARGET_MM:g}"]
+    if heated:
+        argv += ["--temperature", f"{cell.temperature_C:g}", "--soak", f"{SOAK_S:g}"]
+    session.run_virtual_test = on_the_bench
+    session.DriverRig.set_clock = set_and_note_clock
+    t0 = time.monotonic()
+    try:
+        out.run_code, out.run_out, out.run_err, out.run_exception = _capture(argv)
+    finally:
+        session.run_virtual_test = real
+        session.DriverRig.set_clock = set_clock
+        done.set()
+        out.run_wall_s = time.monotonic() - t0
+    vr = rigs[0] if rigs else None
+    if vr is not None:  # the virtual furnace module's outputs and the relay, as the test left them
+        out.heater_do, out.relay_on = vr.devices["furnace"].do, vr.model.furnace.relay_on
+    if out.record_path.exists():
+        os.environ["FLOWCURVE_DEBUG"] = "1"  # an internal error raises here instead of one line
+        try:
+            res_dir = workdir / "results"
+            out.identify_code, out.identify_out, out.identify_err, out.identify_exception = _capture(
+                ["identify", str(out.record_path), "--out", str(res_dir), "--no-plots"])
+        finally:
+            del os.environ["FLOWCURVE_DEBUG"]
+            out.identify_wall_s = time.monotonic() - t0 - out.run_wall_s
+        result_json = res_dir / out.record_path.stem / "result.json"
+        if out.identify_code == 0 and result_json.exists():
+            out.result = json.loads(result_json.read_text())
+    return out
+
+
+def _count_frames_sent(aed, times: list) -> None:
+    """Note the host time of every stream frame the virtual amplifier sends that its wire
+    faults let through intact (a dropped or garbled frame is lost to the host)."""
+    on_tick, apply = aed.on_tick, aed.faults.apply
+    ticking = []
+
+    def counting_tick(now):
+        ticking.append(now)
+        try:
+            on_tick(now)
+        finally:
+            ticking.clear()
+
+    def counting_apply(reply):
+        sent = apply(reply)
+        if ticking and sent is not None and len(sent) == len(reply):
+            times.append(ticking[0])
+        return sent
+
+    aed.on_tick, aed.faults.apply = counting_tick, counting_apply
+
+
+# -- invariants -------------------------------------------------------------------------------
+
+
+def declared_loss(events) -> int:
+    """Samples the record's events say were lost: the integers before 'sample(s)'/'frame(s)'
+    in events that speak of losing, dropping or missing them."""
+    total = 0
+    for e in events:
+        text = f"{e.name} {e.text}"
+        if re.search(r"lost|dropp|missing|discard|skipp", text, re.I):
+            total += sum(int(n) for n in re.findall(r"(\d+)\s+(?:\w+\s+)?(?:samples?|frames?|values?)", text))
+    return total
+
+
+def frames_sent_within(r: CellRun, rec) -> int | None:
+    """Intact stream frames the amplifier sent between the record's first and last row (host
+    time); None when the record has no rows or the test clock's zero is unknown."""
+    if r.procedure_t0 is None or rec.data.empty:
+        return None
+    t = rec.data["time_s"].to_numpy()
+    lo, hi = (r.procedure_t0 + t[0] / r.cell.time_scale, r.procedure_t0 + t[-1] / r.cell.time_scale)
+    sent = np.asarray(r.frames_sent_at)
+    return int(np.count_nonzero((sent >= lo - 1e-9) & (sent <= hi + 1e-9)))
+
+
+def curve_deviation_pct(result: dict, cell_run: CellRun) -> tuple[float, tuple[float, float]] | None:
+    """Max |σ_fit/σ_true − 1| in % over the hardening's measured range (``fit_range``, else
+    ``strain_range``); None when the result has no static Johnson-Cook-like law to compare."""
+    from flowcurve.identification.hardening import johnson_cook_static
+
+    hard = result.get("hardening") or {}
+    rng = hard.get("fit_range") or hard.get("strain_range")
+    run = cell_run.virtual_run
+    if not rng or run is None or not {"A_MPa", "B_MPa", "n"} <= set(hard):
+        return None
+    lo, hi = max(float(rng[0]), 0.002), float(rng[1])
+    if not hi > lo:
+        return None
+    eps = np.linspace(lo, hi, 200)
+    fitted = johnson_cook_static(eps, hard["A_MPa"], hard["B_MPa"], hard["n"])
+    truth = run.material.flow_stress(eps, run.strain_rate_per_s, run.temperature_C)
+    return float(100.0 * np.max(np.abs(fitted / truth - 1.0))), (lo, hi)
+
+
+def violations(r: CellRun) -> list[tuple[str, str]]:
+    """The invariants this cell breaks: [(class, detail)] — empty when it passes."""
+    from flowcurve.errors import RecordError
+    from flowcurve.record.format import read_record
+
+    bad: list[tuple[str, str]] = []
+    cell = r.cell
+    if r.run_exception:
+        bad.append(("internal error in run", _last_line(r.run_exception)))
+    if "internal error" in r.run_err:
+        bad.append(("internal error in run", _first(r.run_err, "internal error")))
+    if r.identify_exception:
+        bad.append(("internal error in identify", _last_line(r.identify_exception)))
+    if "internal error" in r.identify_err:
+        bad.append(("internal error in identify", _first(r.identify_err, "internal error")))
+    if r.notes:
+        bad.append(("bench", "; ".join(r.notes)))
+    if r.record_path is None or not r.record_path.exists():
+        bad.append(("no record", r.run_err.strip()[-200:]))
+        return bad
+    try:
+        rec = read_record(r.record_path)
+    except RecordError as exc:
+        if "no samples" in str(exc):  # the test ended before loading: the cause is what the operator was told
+            bad.append(("the test ended before loading", _first(r.run_err, "error") or str(exc)))
+        else:
+            bad.append(("record unreadable", f"{type(exc).__name__}: {exc}"))
+        return bad
+    if r.heater_do not in (0, None):
+        bad.append(("heater on at the end", f"furnace DO {r.heater_do}"))
+    if r.relay_on and cell.fault.kind != "relay_stuck":
+        bad.append(("heater on at the end", "furnace relay on"))
+    seen_by_operator = r.run_out + r.run_err
+    if r.injected_at_s is not None:
+        name = DEVICE_NAMES[cell.fault.device]
+        texts = " ".join(f"{e.name} {e.text}" for e in rec.events) + " " + " ".join(
+            str(rec.meta.get(k, "")) for k in ("abort_reason", "stop_reason"))
+        if name not in texts:
+            bad.append(("fault not in the record's events", f"{cell.fault.label} at {r.injected_at_s:.1f} s; "
+                        f"status {rec.meta.get('status')}, stop: {rec.meta.get('stop_reason', '')[:80]}"))
+        if name not in seen_by_operator:
+            bad.append(("fault not shown to the operator", f"{cell.fault.label}: {_last_line(r.run_out)[:100]}"))
+    rows = len(rec.data)
+    sent = frames_sent_within(r, rec)
+    declared = declared_loss(rec.events)
+    if sent is not None and sent - rows > declared + LOSS_SLACK_FRAMES:
+        bad.append(("samples lost beyond what the events declare",
+                    f"{sent} frames sent within the record's span, {rows} rows, {declared} declared lost"))
+    bad += _curve_violations(r, rec)
+    return bad
+
+
+def _curve_violations(r: CellRun, rec) -> list[tuple[str, str]]:
+    if r.identify_code not in (0, None) and not r.identify_exception:
+        err_lines = [l for l in r.identify_err.splitlines() if l.startswith("flowcurve: error:")]
+        if not err_lines:
+            return [("identify failed without a one-line error", r.identify_err.strip()[-200:])]
+        if (rec.meta.get("status") == "complete" and r.cell.fault is NO_FAULT and r.cell.rate_Hz >= 50
+                and "sample faster" not in err_lines[0]):  # a record too sparse for a modulus may be refused, saying so
+            return [("a clean record refused", err_lines[0][:200])]
+        return []
+    if r.result is None:
+        return []
+    found = curve_deviation_pct(r.result, r)
+    if found is None:
+        return [("no hardening law to compare", str((r.result.get("hardening") or {}).get("law")))]
+    dev, (lo, hi) = found
+    if dev <= CURVE_TOLERANCE_PCT:
+        return []
+    hard = r.result.get("hardening") or {}
+    excuses = [w for w in (r.result.get("warnings") or []) + (hard.get("warnings") or []) if not NOT_ABOUT_THE_CURVE.search(w)]
+    flagged = hard.get("quality") not in (None, "good") or bool(excuses)
+    if flagged:
+        return []
+    return [("flow curve off without a warning", f"{dev:.1f} % over εp {lo:.3f}…{hi:.3f}, quality {hard.get('quality')}, "
+             f"status {rec.meta.get('status')}")]
+
+
+def _last_line(text: str) -> str:
+    lines = [l for l in (text or "").strip().splitlines() if l.strip()]
+    return lines[-1].strip() if lines else ""
+
+
+def _first(text: str, word: str) -> str:
+    return next((l for l in text.splitlines() if word in l), "")[:200]
+
+
+def cell_hash(cell: Cell) -> str:
+    return hashlib.sha1(cell.id.encode()).hexdigest()[:8]
