@@ -36,14 +36,19 @@ def test_a_sparse_virtual_record_says_its_strain_zero_is_unresolved(tmp_path):
     run = run_virtual_test(spec, tmp_path / "c.csv", material="12Kh18N10T", time_scale=2.0, clock=ModelClock(), link="inprocess",
                            config_overrides={"loadcell_rate_code": 3})  # 12 values/s
     res = identify(read_record(run.outcome.path)).result
-    said = [w for w in res["warnings"] if "strain zero is not resolved" in w]
+    # the first loaded samples are already plastic: either the line regressed on them is refused and the
+    # handbook E is placed instead (the curve's start is then right), or the strain zero's uncertainty is stated
+    said = [w for w in res["warnings"] if "strain zero is not resolved" in w or "not the elastic line" in w]
     assert len(said) == 1
-    uncertainty = float(said[0].split("±")[1].split(" ")[0])
-    # the curve's start is off by about what a strain shift of that size makes (JC slope), not more
     curve = identify(read_record(run.outcome.path)).true_curve
     eps, sig = curve["true_plastic_strain"].to_numpy(), curve["true_stress_MPa"].to_numpy()
     truth = run.material.flow_stress(eps, run.strain_rate_per_s, run.temperature_C)
-    shifted = run.material.flow_stress(eps + 1.5 * uncertainty, run.strain_rate_per_s, run.temperature_C)
-    assert np.all(sig <= shifted * 1.02)
+    if "strain zero is not resolved" in said[0]:
+        uncertainty = float(said[0].split("±")[1].split(" ")[0])
+        # the curve's start is off by about what a strain shift of that size makes (JC slope), not more
+        shifted = run.material.flow_stress(eps + 1.5 * uncertainty, run.strain_rate_per_s, run.temperature_C)
+        assert np.all(sig <= shifted * 1.02)
+    else:
+        assert np.max(np.abs(sig / truth - 1)) < 0.03  # the start unbiased too
     late = eps >= 0.1
     assert np.max(np.abs(sig[late] / truth[late] - 1)) < 0.03
