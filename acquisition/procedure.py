@@ -282,6 +282,7 @@ class Procedure:
         self._t0 = 0.0
         self.writer: RecordWriter | None = None
         self._writing = False
+        self._retried_noted: dict[str, int] = {}  # exchanges retried per device, as the record's events last said
         self._unshown_rows: list[np.ndarray] = []  # recorded rows no snapshot has carried yet (the last batch)
         self._end_reason = ""
         self._storage_error: RecordWriteError | None = None
@@ -577,8 +578,17 @@ class Procedure:
             if late > self._late_noted.get(device, 0):
                 self._event("late_reply", f"{device}: {late - self._late_noted.get(device, 0)} late replies discarded ({late} so far)")
                 self._late_noted[device] = late
-        if final and self._loss_summary():
-            self._event("data_loss", self._loss_summary())
+        for device, retried in (getattr(self.rig, "retried_exchanges", None) or {}).items():
+            if retried > self._retried_noted.get(device, 0):
+                self._event("retry", f"{device}: {retried - self._retried_noted.get(device, 0)} exchanges retried after a silent "
+                                     f"or garbled reply ({retried} so far; the readings were taken on the retry)")
+                self._retried_noted[device] = retried
+        if final:
+            for device, retried in self._retried_noted.items():
+                self._alert(f"{device}: {retried} exchanges had to be retried (silent or garbled replies; nothing lost) — "
+                            f"check its cable and connector if this recurs")
+            if self._loss_summary():
+                self._event("data_loss", self._loss_summary())
 
     def _drop_unbracketed(self, sampler: Sampler, rows: np.ndarray) -> np.ndarray:
         """The last rows without their faulted channel's values: a held value is no reading."""

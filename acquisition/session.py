@@ -148,8 +148,8 @@ class DriverRig:
         }
         if self.furnace is not None:
             per_control = self.config.furnace.control_period_s / 4.0 / self.time_scale
-            period = max(FURNACE_MIN_PERIOD_S, min(FURNACE_PERIOD_S, per_control))
-            chans["temperature_C"] = Channel(self.furnace.name, self.read_temperature_C, clock, period_s=period, silence_s=self._silence_s(self.config.furnace), timebase=self.timebase)
+            furnace_period = max(FURNACE_MIN_PERIOD_S, min(FURNACE_PERIOD_S, per_control))  # not `period`: read_force's closure holds that name
+            chans["temperature_C"] = Channel(self.furnace.name, self.read_temperature_C, clock, period_s=furnace_period, silence_s=self._silence_s(self.config.furnace), timebase=self.timebase)
         return chans
 
     @property
@@ -166,6 +166,11 @@ class DriverRig:
     def late_replies(self) -> dict[str, int]:
         """Replies discarded as stale (they came after their time-out), per device."""
         return {dev.name: dev.transport.late_replies for dev in (self.loadcell, self.encoder, self.furnace) if dev is not None}
+
+    @property
+    def retried_exchanges(self) -> dict[str, int]:
+        """Exchanges repeated after a silent or garbled reply (the reading was then taken), per device."""
+        return {dev.name: dev.transport.retried_exchanges for dev in (self.loadcell, self.encoder, self.furnace) if dev is not None}
 
     @staticmethod
     def _silence_s(section) -> float:

@@ -91,11 +91,12 @@ class HardeningFit:
     strain_range: tuple[float, float] = (float("nan"), float("nan"))
     report: str = ""
     warnings: list[str] = field(default_factory=list)
+    doubt: str = ""  # evidence outside the fit that the curve is not to be trusted (then "poor")
 
     @property
     def quality(self) -> str:
-        """"good", or "poor" when the largest relative error exceeds 10 %."""
-        return "poor" if not self.fit_error_pct <= POOR_FIT_PCT else "good"
+        """"good", or "poor" when the largest relative error exceeds 10 % or ``doubt`` is set."""
+        return "poor" if self.doubt or not self.fit_error_pct <= POOR_FIT_PCT else "good"
 
     def __call__(self, eps_p):
         """Flow stress (MPa) of the identified law at true plastic strain ``eps_p``."""

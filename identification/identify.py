@@ -84,6 +84,29 @@ def temperature_warnings(record: Record) -> list[str]:
             f"curve mixes temperatures (did the furnace hold its set-point?) and is not the nominal temperature's"]
 
 
+# record events in which the acquisition declares a rig fault (docs/record-format.md)
+FAULT_EVENTS = ("data_loss", "corrupt", "stream_restart", "late_reply", "retry", "dropped")
+POOR_LOSS_FRACTION = 0.05  # samples lost beyond this share of the test mark the hardening poor
+
+
+def fault_warnings(record: Record) -> tuple[list[str], bool]:
+    """The rig faults a record declares (its fault events), as one warning per kind, and whether
+    they make the curve doubtful: more than :data:`POOR_LOSS_FRACTION` of the samples lost, or a
+    reading rejected as corrupt (the gap it leaves is bridged)."""
+    seen: dict[str, list[str]] = {}
+    for event in record.events:
+        if event.name in FAULT_EVENTS:
+            seen.setdefault(event.name, []).append(" ".join(str(event.text).split()))
+    missing = record.meta.get("samples_missing")
+    try:
+        lost = float(missing) / (len(record.data) + float(missing)) if missing not in (None, "") else 0.0
+    except (TypeError, ValueError, ZeroDivisionError):
+        lost = 0.0
+    warnings = [f"the record declares rig faults ({name}, {len(texts)}×): {texts[-1][:200]} — the curve may carry them"
+                for name, texts in seen.items()]
+    return warnings, lost > POOR_LOSS_FRACTION or "corrupt" in seen
+
+
 def check_record(record: Record) -> list[str]:
     """The checks every identification needs; returns warnings, raises on unusable records."""
     test = record.test
@@ -150,6 +173,12 @@ def identify(record: Record, **options) -> Identification:
             block[key] = value
     if ignored:
         warnings.append(f"option(s) not used by {record.test} identification: {', '.join(ignored)}")
+    declared, doubtful = fault_warnings(record)
+    warnings += declared
+    fit = getattr(getattr(result, "hardening", None), "fit", None)  # the main fit (result["hardening"] is its copy)
+    if doubtful and fit is not None and fit.quality == "good":
+        fit.doubt = "the record declares lost or corrupt samples"
+        fit.warnings.append("marked poor: the record declares lost or corrupt samples (see the warnings)")
     attach_assurance(result, ident.curves, record)
     old = list(result.get("warnings") or [])
     result["warnings"] = old + [w for w in warnings if w not in old]

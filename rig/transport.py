@@ -86,6 +86,7 @@ class SerialTransport:
         self.clock: Clock = WALL  # the port's clock once open (see the module docstring)
         self._unanswered: tuple[float, int | None, bytes | None] | None = None  # (sent, length, terminator)
         self.late_replies = 0  # replies that came after their time-out, discarded
+        self.retried_exchanges = 0  # exchanges repeated after a silent or garbled reply (nothing lost)
         self.last_late_s: float | None = None  # how late the last of them was
 
     def with_line(self, *, baudrate: int, parity: str, timeout_s: float | None = None) -> "SerialTransport":
@@ -299,10 +300,12 @@ class SerialTransport:
                                                          f"timeout_s = {self.timeout_s:g}?")
                     if last or "disappeared" in str(exc):
                         raise exc from None
+                    self.retried_exchanges += 1
                     logger.debug("%s: %s (attempt %d of %d), retrying", self.name, exc, attempt + 1, retries + 1)
                 except ValueError as exc:
                     if last:
                         raise DeviceError(self.name, f"garbled answer to {what}: {exc}") from None
+                    self.retried_exchanges += 1
                     logger.debug("%s: garbled answer to %s (attempt %d of %d), retrying", self.name, what, attempt + 1, retries + 1)
         raise AssertionError("unreachable")
 

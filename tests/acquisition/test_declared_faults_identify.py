@@ -1,0 +1,39 @@
+"""A fault the rig declared in the record reaches identify's warnings (issue 31's must-show):
+``run tension --fault loadcell:garble:0.05`` loses frames to stream restarts; the record names the
+loss in its events and ``identify`` repeats it and marks the hardening poor past 5 % lost."""
+
+from __future__ import annotations
+
+import json
+
+from flowcurve.cli import main
+from flowcurve.identification.identify import fault_warnings
+from flowcurve.record.format import read_record
+
+
+def test_a_garbled_load_cell_is_named_in_the_record_and_in_identify(tmp_path, capsys):
+    record = tmp_path / "t.csv"
+    code = main(["run", "tension", "--quiet", "--out", str(record), "--time-scale", "100", "--speed", "0.1",
+                 "--fault", "loadcell:garble:0.05"])
+    assert code in (0, 5)  # 5: the run declares lost samples
+    rec = read_record(record)
+    names = [e.name for e in rec.events]
+    assert "stream_restart" in names
+    warnings, doubtful = fault_warnings(rec)
+    assert any("stream_restart" in w for w in warnings)
+    assert main(["identify", str(record), "--out", str(tmp_path / "res"), "--no-plots"]) == 0
+    result = json.loads((tmp_path / "res" / "t" / "result.json").read_text())
+    said = [w for w in result["warnings"] if "declares rig faults" in w]
+    assert said and any("load cell" in w for w in said)
+    lost = float(rec.meta.get("samples_missing") or 0) / (len(rec.data) + float(rec.meta.get("samples_missing") or 0))
+    assert doubtful == (lost > 0.05)
+    if doubtful:
+        assert result["hardening"]["quality"] == "poor"
+
+
+def test_a_clean_record_declares_nothing(tmp_path):
+    record = tmp_path / "c.csv"
+    assert main(["run", "compression", "--quiet", "--out", str(record), "--time-scale", "100", "--speed", "0.1"]) in (0, 5)
+    rec = read_record(record)
+    if not any(e.name in ("data_loss", "stream_restart", "retry", "late_reply", "corrupt", "dropped") for e in rec.events):
+        assert fault_warnings(rec) == ([], False)
