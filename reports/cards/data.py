@@ -17,7 +17,7 @@ from flowcurve.identification.outcome import read_json_object
 from flowcurve.reports.cards.fields import CardError
 from flowcurve.reports.units import UnitSystem
 
-MAX_TABLE_ROWS = 100  # CALCULIX.md: tables over ~150 rows gave stresses ~8 % too low
+MAX_TABLE_ROWS = 100  # docs/calculix.md: tables over ~150 rows gave stresses ~8 % too low
 DAMAGE_KEYS = ("D1", "D2", "D3", "D4", "D5")
 
 
