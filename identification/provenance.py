@@ -83,6 +83,17 @@ def result_record_sha256(folder: str | Path) -> str | None:
     return block.get("record_sha256") if isinstance(block, dict) else None
 
 
+def member_record_sha256(kind: str, source: str) -> str | None:
+    """The record checksum of a series member: its file's (a record) or the one its result
+    folder carries (a result of ``flowcurve identify``); None when neither says."""
+    if kind == "record":
+        try:
+            return file_sha256(source)
+        except OSError:
+            return None
+    return result_record_sha256(source) if kind == "result" else None
+
+
 def comment_lines(block: object, what: str) -> list[str]:
     """The provenance of ``what`` (e.g. "fit file") as comment lines for a card; none when the
     file carries no block (written before provenance)."""
@@ -92,7 +103,9 @@ def comment_lines(block: object, what: str) -> list[str]:
     records = ([f"{value or 'not recorded'} {name}" for name, value in sha.items()] if isinstance(sha, dict)
                else [str(sha or "not recorded")])  # the 64 hex digits first: a comment line holds them whole
     options = json.dumps(block.get("options") or {}, sort_keys=True, ensure_ascii=True)
-    lines = [f"provenance of the {what}: flowcurve {block.get('flowcurve_version', '?')}, {block.get('date_utc', 'date not recorded')}"
+    code = str(block.get("code_sha256") or "")[:12]
+    lines = [f"provenance of the {what}: flowcurve {block.get('flowcurve_version', '?')}" + (f" (code {code})" if code else "")
+             + f", {block.get('date_utc', 'date not recorded')}"
              + (f", solver {block['ccx_version']}" if block.get("ccx_version") else ""),
              f"options: {options}"]
     return lines + [f"sha256 {r}" for r in records]
