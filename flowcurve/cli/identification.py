@@ -403,11 +403,24 @@ def _outcomes(tasks: list[dict], jobs: int, scheduler: str | None):
             return
         from flowcurve.identification.fe.pool import run_many
 
+        if scheduler is None:
+            preload_identification(plots=any(task["plots"] for task in tasks))
         yield from run_many(identify_task, tasks, workers=jobs, scheduler=scheduler,
                             progress=(lambda done, _total, _elapsed: bar.update(done)) if bar else (lambda *_: None))
     finally:
         if bar:
             bar.close()
+
+
+def preload_identification(plots: bool = False) -> None:
+    """Import the identification and the libraries it imports on first use (lmfit alone takes
+    3-5 s) before worker processes are forked: they inherit them instead of each importing them."""
+    import lmfit  # noqa: F401
+
+    import flowcurve.identification.identify  # noqa: F401
+
+    if plots:
+        import flowcurve.reports.plots  # noqa: F401
 
 
 def identify_task(task: dict) -> dict:

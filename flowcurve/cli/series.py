@@ -86,6 +86,10 @@ def load_members_in_parallel(inputs, identify_options: dict, jobs: int = 1, sche
     if jobs < 1:
         raise FlowcurveError(f"--jobs must be ≥ 1, got {jobs}")
     bar = ProgressBar(len(inputs), "inputs") if len(inputs) > 1 else None
+    if jobs > 1 and scheduler is None:
+        from flowcurve.cli.identification import preload_identification
+
+        preload_identification()
     try:
         outcomes = run_many(_members_of, [(str(p), identify_options) for p in inputs], workers=jobs, scheduler=scheduler,
                             progress=(lambda done, _total, _elapsed: bar.update(done)) if bar else (lambda *_: None))
