@@ -206,9 +206,8 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
     warnings, so it is written to result.json and shown in one line under the record.
     """
     from flowcurve.identification.identify import identify
-    from flowcurve.record.importers import load_record
-
     from flowcurve.identification.provenance import file_sha256, provenance
+    from flowcurve.record.importers import load_record
 
     given = given_options(options, meta, columns)
     options = dict(options)
