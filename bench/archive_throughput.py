@@ -6,8 +6,9 @@ The 40 records: 36 real tension tests of the 42CrMoS4 set (tests/data, CC BY 4.0
 of the virtual-rig compression record of examples/data, each copy with its specimen id varied
 (so its bytes, and its checksum, differ). Each run is the command line a lab would type, in a
 fresh process, into an empty output folder; the times include the process start. The load
-average before and after each run is printed: on a machine shared with other work the figures
-move with it.
+average before and after each run and the cores the run got (its CPU time over its wall time)
+are printed: on a machine shared with other work the figures move with them — when the other
+work already fills the cores, a second job gets no second core.
 
 Run: python bench/archive_throughput.py [--records 40] [--no-plots]   (~3-6 min on 2 cores)
 """
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -46,15 +48,21 @@ def make_records(folder: Path, n: int) -> list[str]:
     return paths
 
 
-def timed_identify(records: list[str], out: Path, extra: list[str]) -> tuple[float, str]:
-    """Wall time of one `flowcurve identify` run and its last output line."""
+def _children_cpu_s() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def timed_identify(records: list[str], out: Path, extra: list[str]) -> tuple[float, float, str]:
+    """Wall time, CPU time (the command and the worker processes it waited for; not a Dask
+    cluster's workers) of one `flowcurve identify` run, and its last output line."""
     command = [sys.executable, "-m", "flowcurve", "identify", *records, "--out", str(out), *extra]
-    t0 = time.perf_counter()
+    cpu0, t0 = _children_cpu_s(), time.perf_counter()
     done = subprocess.run(command, capture_output=True, text=True, env={**os.environ, "MPLBACKEND": "Agg"})
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, _children_cpu_s() - cpu0
     if done.returncode != 0:
         raise SystemExit(f"identify failed ({done.returncode}):\n{done.stderr[-2000:]}")
-    return wall, done.stdout.strip().splitlines()[-1]
+    return wall, cpu, done.stdout.strip().splitlines()[-1]
 
 
 def main() -> None:
@@ -71,8 +79,8 @@ def main() -> None:
 
         def run(label: str, out: str, extra: list[str]) -> float:
             load = os.getloadavg()[0]
-            wall, last = timed_identify(records, tmp / out, [*plots, *extra])
-            rows.append((label, wall, load, os.getloadavg()[0], last))
+            wall, cpu, last = timed_identify(records, tmp / out, [*plots, *extra])
+            rows.append((label, wall, cpu, load, os.getloadavg()[0], last))
             print(f"  {label}: {wall:.1f} s ({last})", flush=True)
             return wall
 
@@ -85,10 +93,11 @@ def main() -> None:
         again = run("--jobs 1 again (all current)", "jobs1", ["--jobs", "1"])
 
     print()
-    print(f"| run | wall, s | records per minute | vs --jobs 1 | load average before / after |")
-    print("|---|---|---|---|---|")
-    for label, wall, before, after, _ in rows:
-        print(f"| {label} | {wall:.1f} | {60.0 * len(records) / wall:.0f} | {first / wall:.2f}x | {before:.1f} / {after:.1f} |")
+    print("| run | wall, s | records per minute | vs --jobs 1 | CPU, s | cores used (CPU / wall) | load average before / after |")
+    print("|---|---|---|---|---|---|---|")
+    for label, wall, cpu, before, after, _ in rows:
+        cpu_text = "(workers not counted) | " if label.startswith("Dask") else f"{cpu:.1f} | {cpu / wall:.2f}"
+        print(f"| {label} | {wall:.1f} | {60.0 * len(records) / wall:.0f} | {first / wall:.2f}x | {cpu_text} | {before:.1f} / {after:.1f} |")
     print(f"\nthe same command again: {again:.1f} s, {100.0 * again / first:.0f} % of the first run (target < 20 %)")
 
 
