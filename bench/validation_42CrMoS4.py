@@ -1,6 +1,6 @@
 """Validation of the tension identification against the 42CrMoS4 lab's published values.
 
-All 67 INSTRON exports of shared/validation/42CrMoS4/original_data/ are read through
+All 67 INSTRON exports of tests/data/42CrMoS4/original_data/ (CC BY 4.0, in the repository) are read through
 flowcurve.record.importers.load_record and identified twice:
 
 * extensometer path (the lab's own route): E, Rp0.2, Rm, Ag, A, Z against the header values;
@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import sys
 import time
-import os
 from pathlib import Path
 
 import numpy as np
@@ -27,9 +26,8 @@ from flowcurve.record.importers import load_record
 from flowcurve.identification.indicator import frame_stiffness_from_known_modulus
 from flowcurve.identification.tension import identify_tension
 
-# the project's shared/ folder stands beside the checkout (FLOWCURVE_SHARED overrides)
-SHARED = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[2] / "shared")
-DATA = SHARED / "validation" / "42CrMoS4" / "original_data"
+# the validation set travels with the repository (tests/data/42CrMoS4: its README and LICENSE)
+DATA = Path(__file__).resolve().parents[1] / "tests" / "data" / "42CrMoS4" / "original_data"
 HANDBOOK_E_MPa = 210_000.0  # steel, for the one-off frame calibration of the crosshead path
 
 # quantity → (result key, published key, kind of deviation, acceptance limit of the brief)

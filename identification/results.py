@@ -97,7 +97,7 @@ class CompressionHardening:
 class TensionResult(_ResultMapping):
     """A tension identification: ISO 6892-1 results, true curve points, neck corrections, hardening."""
 
-    _optional = ("uncertainty",)
+    _optional = ("uncertainty", "provenance")
 
     test: str = "tension"
     E_MPa: float
@@ -129,13 +129,14 @@ class TensionResult(_ResultMapping):
     warnings: list[str]
     uncertainty: dict | None = None  # GUM budget per result (identification.assurance)
     record: dict = field(default_factory=dict)  # where the record came from (record.summary)
+    provenance: dict | None = None  # version, record_sha256, options, date (identification.provenance); set by the writer
 
 
 @dataclass(kw_only=True)
 class CompressionResult(_ResultMapping):
     """A compression identification: friction by every method, corrected curves, hardening."""
 
-    _optional = ("E_apparent_stderr_MPa", "modulus", "friction_mu_range", "uncertainty")
+    _optional = ("E_apparent_stderr_MPa", "modulus", "friction_mu_range", "uncertainty", "provenance")
 
     test: str = "compression"
     E_MPa: float | None
@@ -164,3 +165,4 @@ class CompressionResult(_ResultMapping):
     record: dict = field(default_factory=dict)
     E_apparent_stderr_MPa: float | None = None  # only with the apparent modulus
     modulus: dict | None = None  # only with an elastic line
+    provenance: dict | None = None  # version, record_sha256, options, date (identification.provenance); set by the writer

@@ -30,6 +30,7 @@ import textwrap
 import numpy as np
 
 from flowcurve import __version__
+from flowcurve.identification.provenance import comment_lines
 from flowcurve.errors import FlowcurveError
 from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS, UnitSystem
 
@@ -98,6 +99,7 @@ def _range_lines(law: dict, pressures, temperatures, units: UnitSystem) -> list[
          if p_cov and t_cov else "identified range not stated in friction.json"),
         f"tabulated for pressure {pressures[0]:.4g}..{pressures[-1]:.4g} MPa, temperature {temperatures[0]:.4g}..{temperatures[-1]:.4g} C; "
         "outside it the solver holds the end values (extrapolation is not identified)",
+        *comment_lines(law.get("provenance"), "friction fit"),
     ]
 
 

@@ -192,7 +192,7 @@ class LoadCell:
     def recover_line(self, bauds=aed.BAUD_RATES, parities=("E", "N")) -> dict[str, str]:
         """Bring an amplifier left at an unknown baud rate back to this driver's line settings.
 
-        PROTOCOLS.md: send ``;S98;BDR<rate>,<parity>;`` at each rate in turn (``S98``
+        docs/protocols.md: send ``;S98;BDR<rate>,<parity>;`` at each rate in turn (``S98``
         addresses every unit, so a wrong address does not matter either), then select this
         unit (``S<address>``) at the wanted rate and ask ``IDN?``. Returns the identity.
         """

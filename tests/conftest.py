@@ -1,7 +1,7 @@
 """Suite-wide rules.
 
-Tests that need the real validation records in ``shared/`` (beside the checkout, or
-``FLOWCURVE_SHARED``), the CalculiX solver, Chromium or a package of the test extra skip with
+The real validation records are in the repository (``tests/data/``). Tests that need the
+CalculiX solver, Chromium or a package of the test extra skip with
 a reason ("… is not installed", "validation data …") on a developer's machine that lacks
 them; in CI (``CI`` set, not "false"/"0") such a skip is a failure, a whole file skipped at
 import included, so a missing folder, solver or browser can never turn checks silently off.

@@ -37,3 +37,26 @@ def test_no_citation_of_the_methods_file_outside_the_repository():
     bad = [f"{p.relative_to(ROOT)}" for p in _sources() if p.name != "test_docs.py"
            and re.search(r"(?<![/\w])METHODS\.md", p.read_text(encoding="utf-8"))]
     assert not bad, "cite docs/methods.md instead of METHODS.md: " + ", ".join(bad)
+
+
+OUTSIDE_FILES = {"CALCULIX.md": "docs/calculix.md", "PROTOCOLS.md": "docs/protocols.md"}
+
+
+def test_no_citation_of_the_other_reference_files_outside_the_repository():
+    bad = [f"{p.relative_to(ROOT)}: {name} (cite {inside})" for p in _sources() if p.name != "test_docs.py"
+           for name, inside in OUTSIDE_FILES.items() if re.search(rf"(?<![/\w]){re.escape(name)}", p.read_text(encoding="utf-8"))]
+    assert not bad, "citations of files outside the repository: " + ", ".join(bad)
+
+
+def test_nothing_reads_the_shared_folder_beside_the_checkout():
+    """The validation records are in tests/data/ (a fresh clone with nothing beside it runs every test)."""
+    pattern = re.compile(r"FLOWCURVE_SHARED|shared/validation|/work/shared|\"shared\"")
+    bad = [f"{p.relative_to(ROOT)}:{n}" for p in _sources() if p.name != "test_docs.py"
+           for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1) if pattern.search(line)]
+    assert not bad, "paths outside the repository: " + ", ".join(bad)
+
+
+def test_every_cited_docs_file_exists():
+    missing = sorted({f"{p.relative_to(ROOT)}: {cited}" for p in [*_sources(), ROOT / "README.md"]
+                      for cited in re.findall(r"docs/[\w.-]+\.md", p.read_text(encoding="utf-8")) if not (ROOT / cited).exists()})
+    assert not missing, "cited docs files missing: " + ", ".join(missing)

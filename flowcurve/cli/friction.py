@@ -100,8 +100,9 @@ def run(args) -> int:
     columns = dict(parse_adhesion_column_option(text) for text in args.column)
     table = read_adhesion_tables(args.records, columns=columns or None)
     fit = _fit(table, args)
+    given = {k: v for k, v in vars(args).items() if k not in ("command", "func", "records", "out", "verbose", "log_level") and v is not None}
     path = write_friction(fit, table, args.out, cards=args.card, units=args.units,
-                          at_pressure_MPa=args.at_pressure, at_temperature_C=args.at_temperature)
+                          at_pressure_MPa=args.at_pressure, at_temperature_C=args.at_temperature, options=given)
     print(summary(fit, path))
     return 0
 
@@ -130,15 +131,19 @@ def run_demo(args) -> int:
 
 
 def write_friction(fit: FrictionFit, table, outdir, *, cards=(), units: str = DEFAULT_UNIT_SYSTEM,
-                   at_pressure_MPa=None, at_temperature_C=None) -> Path:
-    """friction.json, tests.csv, plots/*.png and the requested cards in ``outdir``."""
+                   at_pressure_MPa=None, at_temperature_C=None, options: dict | None = None) -> Path:
+    """friction.json, tests.csv, plots/*.png and the requested cards in ``outdir``; friction.json
+    and the cards carry the provenance (each table's SHA-256, the options as given)."""
     import pandas as pd
+
+    from flowcurve.identification.provenance import file_sha256, provenance
 
     outdir = Path(outdir)
     (outdir / "plots").mkdir(parents=True, exist_ok=True)
     data = fit.as_dict()
     data["material"] = table.material or None
     data["records"] = list(table.sources)
+    data["provenance"] = provenance({source: file_sha256(source) for source in table.sources}, options or {})
     data["plots"] = _plots(fit, outdir / "plots")
     data["cards"] = {}
     for fmt in dict.fromkeys(cards):

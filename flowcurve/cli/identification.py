@@ -51,9 +51,15 @@ examples:
       --le; each specimen's d0, l0, lu, dk ... come from a table with a 'file' column
   flowcurve identify C1.csv --friction-correction siebel --hardening three-point
 
+  flowcurve identify archive/*.csv --jobs 2 --no-plots
+      an archive: two records at a time, a progress bar on standard error; run it again and
+      the records whose result.json is current are skipped
+
 Options override what a record's header says. Each record gets DIR/<record name>/ with
-result.json, true_curve.csv and PNG plots. With several records, one that fails is reported
-in one line and the others are still identified; the exit code is then non-zero.
+result.json (its 'provenance': flowcurve version, the record's SHA-256, the options, the
+date), true_curve.csv and PNG plots; DIR/summary.csv tables all results. With several
+records, one that fails is reported in one line and the others are still identified; the
+exit code is then non-zero.
 """
 
 
@@ -90,6 +96,10 @@ def register(subparsers) -> None:
                         "columns d0, l0, h0, le, lu, dk, du, hk, dmax, smax, dface, neck_radius, speed, temperature, test, material, "
                         "each with its unit in the name ('d0 (mm)', 'd0_mm') or in a units row")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG plots (faster for long series)")
+    b = p.add_argument_group("many records (an archive)")
+    b.add_argument("--jobs", type=int, default=1, metavar="N", help="identify N records side by side in separate processes (default 1)")
+    b.add_argument("--force", action="store_true", help="identify every record again, even one whose result.json is current "
+                   "(same flowcurve version and code, record SHA-256 and options; such a record is skipped by default)")
     g = p.add_argument_group("specimen and test (override the record's header)")
     g.add_argument("--test", choices=("tension", "compression"), help="kind of test, for files that do not say")
     add_geometry_options(g)
@@ -120,7 +130,8 @@ def register(subparsers) -> None:
     m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default fe_table: the CalculiX table; all are reported)")
     m.add_argument("--method", choices=("fast", "inverse-fe"), default="fast", help="fast (default; compression: FE tables, no solver at identification time) or inverse-fe (CalculiX in the loop: compression, the hardening law and μ fitted to the force-stroke curve and dmax; tension, the hardening beyond Fm fitted to the force-elongation curve and the neck diameter dk)")
     m.add_argument("--workers", type=int, metavar="N", help="inverse-fe: solver runs side by side (default: the cores)")
-    m.add_argument("--scheduler", metavar="ADDRESS", help="inverse-fe: send the solver runs to this Dask distributed scheduler (needs the 'fe' extra)")
+    m.add_argument("--scheduler", metavar="ADDRESS", help="send the records as tasks to this Dask distributed scheduler (needs the 'fe' extra); "
+                   "inverse-fe solver runs stay with their record's task (--workers)")
     m.add_argument("--friction-correction", choices=_choices("flowcurve.identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default fe_table: the CalculiX force factor; all are computed)")
     p.set_defaults(func=run)
 
@@ -175,21 +186,34 @@ def _options_from_args(args) -> dict:
         "fracture_point": args.fracture_point,
         "method": getattr(args, "method", "fast"),
         "workers": getattr(args, "workers", None),
-        "scheduler": getattr(args, "scheduler", None),
     }
 
 
-def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool = True):
+def given_options(options: dict, meta: dict, columns) -> dict:
+    """The options as given that decide a record's result (result.json's provenance.options):
+    the identification options set, the metadata given (options, --set, --specimens row) and
+    the --column mapping; not --workers/--jobs/--scheduler, which change only the speed."""
+    given = {k: v for k, v in options.items() if v is not None and k != "workers"}
+    return {**given, **({"metadata": dict(meta)} if meta else {}), **({"columns": dict(columns)} if columns else {})}
+
+
+def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool = True, record_sha256: str | None = None):
     """Load, identify and write one record; returns (identification, result folder).
+
+    result.json carries a ``provenance`` block (:mod:`identification.provenance`): the record
+    file's SHA-256 (``record_sha256`` when the caller has it), the options as given, the date,
+    and ccx's version when the inverse FE ran the solver.
 
     A numerical warning (numpy's RuntimeWarning) is not printed raw: it joins the result's
     warnings, so it is written to result.json and shown in one line under the record.
     """
     from flowcurve.identification.identify import identify
+    from flowcurve.identification.provenance import file_sha256, provenance
     from flowcurve.record.importers import load_record
 
+    given = given_options(options, meta, columns)
     options = dict(options)
-    method, workers, scheduler = options.pop("method", "fast"), options.pop("workers", None), options.pop("scheduler", None)
+    method, workers = options.pop("method", "fast"), options.pop("workers", None)
     raise_runtime = _runtime_warnings_raise()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -202,7 +226,7 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
             def progress(runs, elapsed):
                 print(f"  inverse FE: {runs} solver runs, {elapsed:.0f} s", file=sys.stderr, flush=True)
 
-            ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, scheduler=scheduler, progress=progress,
+            ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, progress=progress,
                                         E_MPa=options.get("E_MPa"))
         else:
             ident = identify(record, **options)
@@ -210,6 +234,12 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
     if caught_lines:
         old = ident.result.setdefault("warnings", [])
         old.extend(m for m in dict.fromkeys(caught_lines) if m not in old)
+    solver = None
+    if method == "inverse-fe":
+        from flowcurve.identification.fe.ccx import ccx_version
+
+        solver = ccx_version()
+    ident.result["provenance"] = provenance(record_sha256 or file_sha256(path), given, ccx_version=solver)
     if plots:
         from flowcurve.reports.plots import add_plots
 
@@ -358,30 +388,157 @@ def run(args) -> int:
         _check_table_against_options(table, meta)
         for row in table.unused(args.records):
             print(f"flowcurve: warning: {table.source}, line {row.line}: '{row.file}' names none of the records given", file=sys.stderr)
-    failed = 0
-    for path in args.records:
-        try:
-            ident, folder = identify_file(path, columns=columns, meta=_record_meta(path, meta, table), options=options, out=out, plots=not args.no_plots)
-        except FlowcurveError as exc:
-            failed += 1
-            message = exc.message_with(_givers(exc.keys, table)) if isinstance(exc, MissingValueError) else str(exc)
-            message = message if str(path) in message else f"{path}: {message}"  # always name the file
-            print(f"flowcurve: error: {message}", file=sys.stderr)
-            continue
-        except Exception as exc:  # a bug, not bad input: one line per record, the others still run
-            if os.environ.get("FLOWCURVE_DEBUG"):
-                raise
-            failed += 1
-            logger.debug("internal error on %s", path, exc_info=exc)
-            print(f"flowcurve: internal error on {path}: {type(exc).__name__}: {exc} (-vv or FLOWCURVE_DEBUG=1 shows the traceback; please report it)", file=sys.stderr)
-            continue
-        result = ident.result
-        print(f"{path}: {result.get('test', '?')} → {folder}")
-        for line in summary_lines(result):
-            print(line)
-        for warning in result.get("warnings") or []:
-            print(f"  warning: {warning}")
+    if args.jobs < 1:
+        raise FlowcurveError(f"--jobs must be ≥ 1, got {args.jobs}")
+    tasks = [{"path": path, "columns": columns, "meta": meta, "options": options, "out": str(out),
+              "plots": not args.no_plots, "resume": not args.force, "table": table} for path in args.records]
+    outcomes = []
+    for outcome in _outcomes(tasks, args.jobs, args.scheduler):
+        outcomes.append(outcome)
+        _print_outcome(outcome)
+    summary = write_summary_table(outcomes, out)
+    failed = sum(o["status"] == "failed" for o in outcomes)
+    skipped = sum(o["status"] == "skipped" for o in outcomes)
+    if len(outcomes) > 1:
+        print(f"{len(outcomes) - failed - skipped} identified, {skipped} skipped (current), {failed} failed; all results in {summary}")
     if failed:
         print(f"flowcurve: {failed} of {len(args.records)} record(s) failed", file=sys.stderr)
         return 2
     return 0
+
+
+def _outcomes(tasks: list[dict], jobs: int, scheduler: str | None):
+    """The outcome of every task (:func:`identify_task`) in the tasks' order: one after another
+    here, or side by side in ``jobs`` processes or as tasks on the Dask ``scheduler``; a
+    progress bar on standard error when there are several."""
+    from flowcurve.cli.progress import ProgressBar
+
+    bar = ProgressBar(len(tasks)) if len(tasks) > 1 else None
+    try:
+        if scheduler is None and jobs == 1:
+            for done, task in enumerate(tasks, start=1):
+                outcome = identify_task(task)
+                if bar:
+                    bar.update(done)
+                yield outcome
+            return
+        from flowcurve.identification.fe.pool import run_many
+
+        if scheduler is None:
+            preload_identification(plots=any(task["plots"] for task in tasks))
+        yield from run_many(identify_task, tasks, workers=jobs, scheduler=scheduler,
+                            progress=(lambda done, _total, _elapsed: bar.update(done)) if bar else (lambda *_: None))
+    finally:
+        if bar:
+            bar.close()
+
+
+def preload_identification(plots: bool = False) -> None:
+    """Import the identification and the libraries it imports on first use (lmfit alone takes
+    3-5 s) before worker processes are forked: they inherit them instead of each importing them."""
+    import lmfit  # noqa: F401
+
+    import flowcurve.identification.identify  # noqa: F401
+
+    if plots:
+        import flowcurve.reports.plots  # noqa: F401
+
+
+def identify_task(task: dict) -> dict:
+    """One record of a batch, in this process, a worker process or a Dask worker: skipped when
+    its result.json is current (:func:`identification.provenance.same_run`), else identified and
+    written. Returns a picklable outcome (path, folder, status identified/skipped/failed, the
+    result as JSON, the one-line error); bad input never raises."""
+    from flowcurve.identification.outcome import to_jsonable
+    from flowcurve.identification.provenance import file_sha256
+
+    path, out = task["path"], Path(task["out"])
+    outcome = {"path": str(path), "folder": str(out / Path(path).stem), "status": "failed", "result": None, "error": None}
+    try:
+        sha = file_sha256(path)
+    except OSError:
+        sha = None  # load_record names what is wrong with the file
+    try:
+        meta = _record_meta(path, task["meta"], task["table"])
+        if sha and task["resume"]:
+            current = _current_result(Path(outcome["folder"]), sha, given_options(task["options"], meta, task["columns"]))
+            if current is not None:
+                return {**outcome, "status": "skipped", "result": current}
+        ident, folder = identify_file(path, columns=task["columns"], meta=meta, options=task["options"], out=out,
+                                      plots=task["plots"], record_sha256=sha)
+    except FlowcurveError as exc:
+        message = exc.message_with(_givers(exc.keys, task["table"])) if isinstance(exc, MissingValueError) else str(exc)
+        return {**outcome, "error": message if str(path) in message else f"{path}: {message}"}  # always name the file
+    except Exception as exc:  # a bug, not bad input: one line per record, the others still run
+        if os.environ.get("FLOWCURVE_DEBUG"):
+            raise
+        logger.debug("internal error on %s", path, exc_info=exc)
+        return {**outcome, "error": f"internal error on {path}: {type(exc).__name__}: {exc} (-vv or FLOWCURVE_DEBUG=1 shows the "
+                                    "traceback; please report it)"}
+    return {**outcome, "folder": str(folder), "status": "identified", "result": to_jsonable(ident.result)}
+
+
+def _current_result(folder: Path, record_sha256: str, given: dict) -> dict | None:
+    """result.json of ``folder`` when it was made by this flowcurve from the same record bytes
+    with the same options (and its true curve is there), else None."""
+    import json
+
+    from flowcurve.identification.provenance import same_run
+
+    try:
+        result = json.loads((folder / "result.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(result, dict) or not (folder / "true_curve.csv").exists():
+        return None
+    return result if same_run(result.get("provenance"), record_sha256, given) else None
+
+
+def _print_outcome(outcome: dict) -> None:
+    path, result = outcome["path"], outcome["result"]
+    if outcome["status"] == "failed":
+        prefix = "flowcurve: " if outcome["error"].startswith("internal error") else "flowcurve: error: "
+        print(prefix + outcome["error"], file=sys.stderr)
+        return
+    if outcome["status"] == "skipped":
+        print(f"{path}: skipped, {outcome['folder']}/result.json is current (same flowcurve version and code, record SHA-256 and options)")
+        return
+    print(f"{path}: {result.get('test', '?')} → {outcome['folder']}")
+    for line in summary_lines(result):
+        print(line)
+    for warning in result.get("warnings") or []:
+        print(f"  warning: {warning}")
+
+
+# the summary table: column (unit in its name) → where it is in result.json
+SUMMARY_COLUMNS = {
+    "test": ("test",), "E_MPa": ("E_MPa",), "Rp02_MPa": ("Rp02_MPa",), "ReH_MPa": ("ReH_MPa",), "ReL_MPa": ("ReL_MPa",),
+    "Rm_MPa": ("Rm_MPa",), "Ag_pct": ("Ag_pct",), "A_pct": ("A_pct",), "Z_pct": ("Z_pct",),
+    "fracture_true_stress_MPa": ("fracture_true_stress_MPa",), "friction_mu": ("friction_mu",),
+    "friction_method": ("friction_method",), "hardening_law": ("hardening", "law"), "hardening_method": ("hardening", "method"),
+    **{f"hardening_{k}": ("hardening", k) for k in ("A_MPa", "B_MPa", "n", "K_MPa", "eps0", "sigma0_MPa", "Q_MPa", "b",
+                                                   "fit_error_pct", "quality")},
+    "warnings": ("warnings",), "record_sha256": ("provenance", "record_sha256"),
+    "flowcurve_version": ("provenance", "flowcurve_version"), "identified_utc": ("provenance", "date_utc"),
+}
+
+
+def write_summary_table(outcomes: list[dict], out: Path) -> Path:
+    """DIR/summary.csv: one row per record (identified, skipped as current, or failed with its
+    error), the main results with units in the column names."""
+    import csv
+
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "summary.csv"
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        writer = csv.writer(f, lineterminator="\n")
+        writer.writerow(["record", "status", *SUMMARY_COLUMNS, "folder", "error"])
+        for o in outcomes:
+            values = []
+            for keys in SUMMARY_COLUMNS.values():
+                value = o["result"] or {}
+                for key in keys:
+                    value = value.get(key) if isinstance(value, dict) else None
+                values.append(" | ".join(value) if isinstance(value, list) else "" if value is None else value)
+            writer.writerow([o["path"], o["status"], *values, o["folder"] if o["status"] != "failed" else "", o["error"] or ""])
+    return path

@@ -55,14 +55,63 @@ def register(subparsers) -> None:
                    help="fracture points measured elsewhere for the Johnson-Cook fracture constants D1-D5 (columns triaxiality "
                         "[sigma_m/sigma_eq, positive in tension], strain_rate_per_s, temperature_C, fracture_strain); "
                         "added to the fractures of the series' tension records")
+    p.add_argument("--jobs", type=int, default=1, metavar="N", help="identify N records side by side in separate processes (default 1)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="identify the records as tasks on this Dask distributed scheduler (needs the 'fe' extra)")
     p.set_defaults(func=run)
+
+
+# options that change only where and how fast the fit runs, not fit.json's numbers
+NOT_RESULT_OPTIONS = {"command", "func", "inputs", "out", "jobs", "scheduler", "verbose", "log_level"}
+
+
+def _members_of(item: tuple[str, dict]):
+    """The series members of one input (a worker's task): ("ok", members) or ("error", message)
+    — a FlowcurveError's own arguments do not survive pickling, its message does."""
+    from flowcurve.errors import FlowcurveError
+    from flowcurve.identification.series import load_members
+
+    try:
+        return "ok", load_members([item[0]], **item[1])
+    except FlowcurveError as exc:
+        return "error", str(exc)
+
+
+def load_members_in_parallel(inputs, identify_options: dict, jobs: int = 1, scheduler: str | None = None):
+    """load_members over the inputs, ``jobs`` at a time or as Dask tasks, with a progress bar on
+    standard error; the first input that fails (in the inputs' order) is the error."""
+    from flowcurve.cli.progress import ProgressBar
+    from flowcurve.errors import FlowcurveError, IdentificationError
+    from flowcurve.identification.fe.pool import run_many
+
+    if jobs < 1:
+        raise FlowcurveError(f"--jobs must be ≥ 1, got {jobs}")
+    bar = ProgressBar(len(inputs), "inputs") if len(inputs) > 1 else None
+    if jobs > 1 and scheduler is None:
+        from flowcurve.cli.identification import preload_identification
+
+        preload_identification()
+    try:
+        outcomes = run_many(_members_of, [(str(p), identify_options) for p in inputs], workers=jobs, scheduler=scheduler,
+                            progress=(lambda done, _total, _elapsed: bar.update(done)) if bar else (lambda *_: None))
+    finally:
+        if bar:
+            bar.close()
+    errors = [message for status, message in outcomes if status == "error"]
+    if errors:
+        raise FlowcurveError(errors[0])
+    members = [m for _, found in outcomes for m in found]
+    names = [m.name for m in members]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise IdentificationError(f"two series members have the same name {', '.join(dup)}; rename one (names label the per-record errors and plots)")
+    return members
 
 
 def run(args) -> int:
     from flowcurve.identification.damage import read_fracture_points
-    from flowcurve.identification.series import fit_series, load_members
+    from flowcurve.identification.series import fit_series
 
-    members = load_members(args.inputs, **({"E_MPa": args.E_MPa} if args.E_MPa is not None else {}))
+    members = load_members_in_parallel(args.inputs, {"E_MPa": args.E_MPa} if args.E_MPa is not None else {}, args.jobs, args.scheduler)
     fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
     missing = missing_inputs(members, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
                              melt_temperature_C=args.melt_temp, fixed=fixed)
@@ -74,7 +123,7 @@ def run(args) -> int:
     series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
                         melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points, fracture_points=extra,
                         shape_error_pct=args.shape_error)
-    out = write_fit(series, args.out)
+    out = write_fit(series, args.out, options={k: v for k, v in vars(args).items() if k not in NOT_RESULT_OPTIONS and v is not None})
     print(summary(series, out))
     if series.quality == "poor" and args.strict:
         print(f"flowcurve: error: the fit is poor (max error {series.fit.fit_error_pct:.3g} % > 10 %); {out} is marked poor (--strict)", file=sys.stderr)
@@ -130,8 +179,13 @@ def _safe(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]+", "_", name) or "record"
 
 
-def write_fit(series: SeriesFit, outdir: str | Path) -> Path:
-    """Write fit.json, curves/*.csv and plots/*.png into ``outdir``; returns the fit.json path."""
+def write_fit(series: SeriesFit, outdir: str | Path, options: dict | None = None) -> Path:
+    """Write fit.json, curves/*.csv and plots/*.png into ``outdir``; returns the fit.json path.
+
+    fit.json's ``provenance`` (identification.provenance) names every record's SHA-256 and the
+    ``options`` as given."""
+    from flowcurve.identification.provenance import member_record_sha256, provenance
+
     outdir = Path(outdir)
     (outdir / "curves").mkdir(parents=True, exist_ok=True)
     (outdir / "plots").mkdir(parents=True, exist_ok=True)
@@ -143,6 +197,7 @@ def write_fit(series: SeriesFit, outdir: str | Path) -> Path:
     for rec in data["records"]:
         rec["curve"] = curve_of.get(rec["name"])
         rec["plot"] = plots.get(rec["name"])
+    data["provenance"] = provenance({m.name: member_record_sha256(m.kind, m.source) for m in series.members}, options or {})
     path = outdir / "fit.json"
     path.write_text(json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n", encoding="utf-8")
     return path

@@ -1,7 +1,7 @@
 """Run a CalculiX deck and read its ``.dat`` prints; results cached by the deck's hash.
 
 Each run gets its own temporary folder and ``OMP_NUM_THREADS=1`` (two one-thread jobs side by
-side beat one two-thread job, CALCULIX.md). A run counts as failed when ccx exits non-zero,
+side beat one two-thread job, docs/calculix.md). A run counts as failed when ccx exits non-zero,
 prints ``*ERROR`` (it can exit 0 after one), or when the last printed step time is below 1.0
 (unconverged: too many cutbacks). One ``*ERROR`` does not fail a run that printed its converged
 state at step time 1 (:func:`reached_the_end`): with cutbacks, ccx's summed time can end 10⁻⁶

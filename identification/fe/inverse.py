@@ -5,7 +5,7 @@ The frame-corrected force–stroke curve of the record (the fast identification'
 end face's diameter dface (``post.dface_mm``: near sticking it still tells μ) are fitted by the
 upsetting model (:mod:`.upsetting`) run to the record's shortening (so the final height hk is
 met by construction; the FE diameters are taken after the elastic spring-back d·(1 − ν·σ/E),
-the unloading run itself can fail with friction, CALCULIX.md): scipy ``least_squares`` over the
+the unloading run itself can fail with friction, docs/calculix.md): scipy ``least_squares`` over the
 hardening constants and μ, warm-started from the fast (``fe_table``) identification. A run that
 stops is run again with the table's softer stick slope; a fit that leaves a force or shape
 misfit, or μ on a bound, says so in ``warnings`` (hardening quality "poor"). The Jacobian's
@@ -52,7 +52,7 @@ from flowcurve.identification.outcome import Identification
 log = logging.getLogger(__name__)
 
 FORCE_POINTS = 30
-# a force point's σ in the fit: the model's own force error, ±1 % where the side folds over (CALCULIX.md), its mesh 0.4 %
+# a force point's σ in the fit: the model's own force error, ±1 % where the side folds over (docs/calculix.md), its mesh 0.4 %
 FORCE_SIGMA_PCT = 1.0
 FROM_STRAIN = 0.02
 MU_BOUNDS = (0.0, 0.35)

@@ -7,7 +7,7 @@ whole history; the table samples it on a strain grid:
 
 * ``force_factor`` F/(σ_f(ε_p)·A) with A = π·d0²·h0/(4h) (volume constancy) and
   ε_p = ε − σ/E, divided by the same ratio of the μ = 0 run (the mesh's own deficit of
-  0.3–0.6 %, CALCULIX.md, cancels; the μ = 0 row is exactly 1);
+  0.3–0.6 %, docs/calculix.md, cancels; the μ = 0 row is exactly 1);
 * ``bulge`` ΔR/h = (d_max − d_n)/(2h) (3.29), d_n = d0·√(h0/h) (3.28);
 * ``face_d_over_dn`` the diameter of the original end face (the top rim node) over d_n: near
   sticking it still moves with μ where the bulge has stopped;

@@ -7,7 +7,7 @@ compliance gives it), a seating toe (a soft contact in series that closes ``toe_
 reaches ``toe_force_N``), the frame compliance (crosshead = specimen + toe + F/C), 10 µm encoder
 steps, force noise and an elastic unloading branch. The post-test measurements are taken
 after elastic spring-back: hk = h·(1 + σ/E), dmax = d_max·(1 − ν·σ/E) with σ = F/A at the end
-(the unloading run itself can fail with friction, CALCULIX.md; the spring-back moves hk by
+(the unloading run itself can fail with friction, docs/calculix.md; the spring-back moves hk by
 ~0.01 mm and dmax by a few µm).
 """
 

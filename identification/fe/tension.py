@@ -1,4 +1,4 @@
-"""Tension with necking in CalculiX: CAX8R quarter model (CALCULIX.md, "Tension with necking").
+"""Tension with necking in CalculiX: CAX8R quarter model (docs/calculix.md, "Tension with necking").
 
 Axis and mid-length symmetry; the gauge radius carries a small cosine imperfection
 r(z) = R·(1 − δ·cos(π·z/l0)) (δ = ``imperfection``, deepest at mid-length) so the neck forms

@@ -1,6 +1,6 @@
 """Axisymmetric upsetting (compression between flat platens with Coulomb friction) in CalculiX.
 
-Half model (symmetry at mid-height) of a cylinder d0 × h0 (CALCULIX.md, "Upsetting"):
+Half model (symmetry at mid-height) of a cylinder d0 × h0 (docs/calculix.md, "Upsetting"):
 
 * specimen: CAX4R, an O-grid — a structured core [0, R − t] × [0, H − t] and a boundary layer
   of ``layers`` elements and thickness t wrapped around its top and side, the layer split
@@ -30,10 +30,10 @@ import numpy as np
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.ccx import CcxOutput, run_deck
 
-SECTOR = 180.0  # CAX reaction totals are for a 2° sector (CALCULIX.md)
-PLASTIC_ROWS = 70  # *PLASTIC tables over ~150 rows read ~8 % low at small strain (CALCULIX.md)
+SECTOR = 180.0  # CAX reaction totals are for a 2° sector (docs/calculix.md)
+PLASTIC_ROWS = 70  # *PLASTIC tables over ~150 rows read ~8 % low at small strain (docs/calculix.md)
 CARBIDE_E_MPa, CARBIDE_NU = 560_000.0, 0.22
-CONTACT_SLOPE_MPa_per_mm = 1.0e8  # 1e7 left a force deficit up to 1.1 % (CALCULIX.md)
+CONTACT_SLOPE_MPa_per_mm = 1.0e8  # 1e7 left a force deficit up to 1.1 % (docs/calculix.md)
 STICK_SLOPE_MPa_per_mm = 1.0e7
 # What the default mesh (24 core elements) leaves uncertain in the final shape: against 30 elements, on the six FE
 # validation cases at ε 0.3–0.7, the bulge ΔR moved by up to 3.5 % (steel 45 at μ 0.25, h0/d0 1; ≤ 1.6 % on the
@@ -55,7 +55,7 @@ def check_plastic_table(eps_p, stress_MPa, what: str) -> None:
     if len(eps_p) != len(stress_MPa) or len(eps_p) < 2 or eps_p[0] != 0.0:
         raise IdentificationError(f"{what}: the plastic table needs ≥ 2 rows, the first at zero plastic strain")
     if len(eps_p) > 150:
-        raise IdentificationError(f"{what}: {len(eps_p)} plastic rows; keep the table to ~100 rows (over ~150 ccx reads stresses low, CALCULIX.md)")
+        raise IdentificationError(f"{what}: {len(eps_p)} plastic rows; keep the table to ~100 rows (over ~150 ccx reads stresses low, docs/calculix.md)")
 
 
 @dataclass(frozen=True)
@@ -231,7 +231,7 @@ def upsetting_deck(m: UpsettingModel) -> str:
               "*MATERIAL,NAME=CARBIDE", "*ELASTIC", f"{CARBIDE_E_MPa:.9g},{CARBIDE_NU}",
               "*SOLID SECTION,ELSET=SPEC,MATERIAL=SPECIMEN", "*SOLID SECTION,ELSET=PLAT,MATERIAL=CARBIDE",
               "*SURFACE INTERACTION,NAME=SI", "*SURFACE BEHAVIOR,PRESSURE-OVERCLOSURE=LINEAR", f"{CONTACT_SLOPE_MPa_per_mm:.3g},1.0"]
-    if m.mu > 0:  # μ = 0: no *FRICTION at all (CALCULIX.md)
+    if m.mu > 0:  # μ = 0: no *FRICTION at all (docs/calculix.md)
         lines += ["*FRICTION", f"{m.mu:.9g},{m.stick_slope_MPa_per_mm:.3g}"]
     lines += ["*CONTACT PAIR,INTERACTION=SI,TYPE=SURFACE TO SURFACE", "SSLAVE,SMASTER",
               "*BOUNDARY", "AXIS,1,1,0.", "BOT,2,2,0.",

@@ -81,7 +81,7 @@ def curve_from_card(text: str, source: str = "card") -> FlowCurveSource:
     sig, eps = table[:, 0], table[:, 1]
     if eps[0] != 0.0 or np.any(np.diff(eps) <= 0):
         raise IdentificationError(f"{source}: *PLASTIC strains must start at 0 and increase")
-    if eps.size > 100:  # keep ccx's table short (CALCULIX.md)
+    if eps.size > 100:  # keep ccx's table short (docs/calculix.md)
         grid = np.concatenate([[0.0], np.geomspace(max(eps[1], 1e-5), eps[-1], PLASTIC_ROWS)])
         sig, eps = np.interp(grid, eps, sig), grid
     return FlowCurveSource(eps, sig, E, None, f"{source}: *PLASTIC, {eps.size} rows")

@@ -1,7 +1,7 @@
 """CalculiX (ccx 2.20) material card: tabular *PLASTIC with temperatures.
 
 CalculiX 2.20 misreads ``*PLASTIC, HARDENING=JOHNSON COOK`` silently and ignores
-``*RATE DEPENDENT`` (CALCULIX.md), so the card carries the flow curve as a table: one block per
+``*RATE DEPENDENT`` (docs/calculix.md), so the card carries the flow curve as a table: one block per
 temperature, each starting at zero plastic strain, at most ~100 rows (longer tables gave
 stresses ~8 % low). Temperatures in C; the model must set
 ``*INITIAL CONDITIONS, TYPE=TEMPERATURE`` or CalculiX silently uses the lowest curve.
@@ -53,7 +53,7 @@ def calculix_card(data: CardData, units: UnitSystem, options: CardOptions) -> st
         f"** to {options.extend_to:g} (the fitted law beyond the last measured point).",
         "** Johnson-Cook's own keyword is misread silently by ccx 2.20: this table is the correct form.",
         "** Set *INITIAL CONDITIONS, TYPE=TEMPERATURE in the model, or ccx uses the lowest-temperature curve.",
-        *(["** D1-D5 not written: Johnson-Cook damage cards exist only from ccx 2.23 (CALCULIX.md)."] if data.fracture else []),
+        *(["** D1-D5 not written: Johnson-Cook damage cards exist only from ccx 2.23 (docs/calculix.md)."] if data.fracture else []),
         f"*MATERIAL, NAME={material_name(data)}",
         "*ELASTIC",
         f"{number(E)}, {number(nu)}",

@@ -14,10 +14,11 @@ import numpy as np
 from flowcurve import __version__
 from flowcurve.identification.johnson_cook import johnson_cook
 from flowcurve.identification.outcome import read_json_object
+from flowcurve.identification.provenance import comment_lines
 from flowcurve.reports.cards.fields import CardError
 from flowcurve.reports.units import UnitSystem
 
-MAX_TABLE_ROWS = 100  # CALCULIX.md: tables over ~150 rows gave stresses ~8 % too low
+MAX_TABLE_ROWS = 100  # docs/calculix.md: tables over ~150 rows gave stresses ~8 % too low
 DAMAGE_KEYS = ("D1", "D2", "D3", "D4", "D5")
 
 
@@ -153,6 +154,7 @@ class CardData:
     warnings: list[str] = field(default_factory=list)
     curves: list[FlowCurve] = field(default_factory=list)
     source_path: str = "<memory>"
+    provenance: dict | None = None  # fit.json's: versions, every record's SHA-256, options, date
 
     # -- the law ---------------------------------------------------------------------------
     def flow_stress_MPa(self, eps_p, strain_rate_per_s=None, temperature_C=None):
@@ -295,6 +297,7 @@ def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
         warnings=[str(w) for w in fit.get("warnings") or []],
         curves=_curves(fit, path),
         source_path=str(path),
+        provenance=fit.get("provenance") if isinstance(fit.get("provenance"), dict) else None,
     )
     if data.E_MPa is not None and (data.E_source or "").startswith(OLD_APPARENT_MEAN):  # a fit.json from before issue 32
         data.E_MPa, data.E_source = None, f"{data.E_MPa:.4g} MPa, a mean over apparent moduli (crosshead slopes), not the material's"
@@ -340,6 +343,7 @@ def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_not
         f"fit file: {card.source_path}",
         f"identification method: {card.method}",
         "source records: " + (", ".join(card.sources) if card.sources else "not stated in the fit file"),
+        *comment_lines(card.provenance, "fit file"),
         f"unit system: {units.name} (length {units.name.split('-')[0]}, time {units.name.split('-')[1]}, "
         f"mass {units.name.split('-')[2]}, force {units.force_name}, stress {units.stress_name}); {temperature_note}",
         f"Johnson-Cook (lab units): A = {pm('A_MPa', card.A_MPa)} MPa, B = {pm('B_MPa', card.B_MPa)} MPa, "

@@ -1,6 +1,6 @@
 """HBM AED command set (AD103/AD104/AD105/FIT amplifiers): commands, replies, measured values.
 
-Facts from PROTOCOLS.md: commands are ASCII ending with ``;``; a bare ``;`` clears the
+Facts from docs/protocols.md: commands are ASCII ending with ``;``; a bare ``;`` clears the
 device's input buffer, so every command is sent as ``;CMD;``. Settings answer ``0\\r\\n``
 (accepted) or ``?\\r\\n`` (refused). ``MSV?`` answers in the output format chosen by ``COF``:
 

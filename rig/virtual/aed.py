@@ -1,4 +1,4 @@
-"""Virtual HBM AED load-cell amplifier (AD103/AD104 class) on a pty — PROTOCOLS.md.
+"""Virtual HBM AED load-cell amplifier (AD103/AD104 class) on a pty — docs/protocols.md.
 
 Behaviour implemented (command names are case-insensitive, end with ``;`` or LF):
 

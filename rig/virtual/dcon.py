@@ -1,5 +1,5 @@
 """Virtual DCON modules on a pty: the framing and host watchdog shared by the ICP DAS family
-(:class:`DconDevice`) and the I-7011-class furnace module (:class:`I7011`) — PROTOCOLS.md.
+(:class:`DconDevice`) and the I-7011-class furnace module (:class:`I7011`) — docs/protocols.md.
 
 Framing: ``<lead><AA hex><command>[CS]\\r``; replies ``>`` data, ``!`` acknowledged, ``?``
 refused, then ``[CS]\\r``. With checksums on, CS = sum of the characters before CR mod 256
@@ -12,7 +12,7 @@ quiet longer than the time-out the module sets its outputs to the safe value of
 ``~AA5PPSS``, sets status 04 (``~AA0`` → ``!AA04``) and refuses output commands (``?AA``)
 until ``~AA1`` clears the status. The watchdog runs on the device's clock (real time on a pty).
 
-I-7011 replies chosen where PROTOCOLS.md leaves the format open, after the I-7011 manual:
+I-7011 replies chosen where docs/protocols.md leaves the format open, after the I-7011 manual:
 ``#AA`` → ``>+0025.12`` (engineering, ``+dddd.dd``), ``>+001.84`` (% of FSR), ``>0046`` (hex,
 two's complement of full scale); ``+9999`` / ``7FFF`` over range or open thermocouple;
 ``$AA3`` → ``>+0025.0`` (cold junction); ``$AAB`` → ``!AAS``; ``$AAF`` → ``!AAA2.0``;

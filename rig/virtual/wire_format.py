@@ -1,11 +1,11 @@
 """How the virtual devices put their replies on the wire, written from the manuals' tables.
 
 The drivers decode with :mod:`flowcurve.rig.codecs`; the virtual devices encode with this
-module, written again from the manuals' facts in the project's PROTOCOLS.md (HBM AED, ICP DAS DCON) and
+module, written again from the manuals' facts in docs/protocols.md (HBM AED, ICP DAS DCON) and
 docs/encoder-protocol.md without looking at — or importing — the drivers' code. A mistake
 made on one side then shows as a failing test instead of cancelling out on both.
 
-AED ``COF`` output formats (PROTOCOLS.md, "Output format COF" and "Scaling"):
+AED ``COF`` output formats (docs/protocols.md, "Output format COF" and "Scaling"):
 
 =====  ===================================  ==============  ==========
 COF    bytes before CR LF                   byte order      nominal

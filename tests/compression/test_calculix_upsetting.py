@@ -1,7 +1,7 @@
 """CalculiX upsetting runs as an independent check of the friction corrections.
 
 Half model (symmetry at mid-height) of a d0 = 6, h0 = 7 mm cylinder compressed to 4.2 mm,
-the product's O-grid model (:mod:`flowcurve.identification.fe.upsetting`, CALCULIX.md
+the product's O-grid model (:mod:`flowcurve.identification.fe.upsetting`, docs/calculix.md
 "Upsetting").
 
 Two runs, μ = 0 and μ = 0.1 (~2 s each, side by side). The μ = 0 run measures the mesh's own

@@ -1,7 +1,7 @@
 """The CalculiX runner and the upsetting/tension decks against closed forms.
 
 μ = 0 upsetting stays a homogeneous cylinder: the force is σ_f(ε_p)·A(h) with A = π d0² h0/(4h)
-and ε_p = ln(h0/h) − σ/E (CALCULIX.md: the O-grid model is within 0.3–0.6 % of it), and the
+and ε_p = ln(h0/h) − σ/E (docs/calculix.md: the O-grid model is within 0.3–0.6 % of it), and the
 outer diameter is d0·√(h0/h) (volume constancy). A deck ccx rejects, or a run that stops
 before the end of the step, must raise a one-line SolverError even when ccx exits 0.
 """

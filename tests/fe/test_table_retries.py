@@ -94,7 +94,7 @@ def test_retry_stopped_tries_only_the_new_settings_and_replaces_what_got_farther
 def test_the_softer_stick_slope_gives_the_same_run_where_both_finish(tmp_path, monkeypatch):
     """μ 0.3, h0/d0 1 to ε 0.9 (the side folded onto the platen): force within 0.1 % at most
     strains (median) and dmax within 1 µm (measured: 0.02 % away from fold-over events, 0.5 µm);
-    while a side node folds over, the model's own 1–2 % sawtooth (CALCULIX.md) comes a little
+    while a side node folds over, the model's own 1–2 % sawtooth (docs/calculix.md) comes a little
     earlier or later, so there the force may differ up to 1.5 % (measured 1.1 % near ε 0.8).
     A stick slope of 1e5 already moved dmax by 1.6 µm."""
     from flowcurve.identification.fe.upsetting import simulate_upsetting

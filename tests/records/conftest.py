@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -11,13 +10,12 @@ import pytest
 
 from flowcurve.record.format import Record, write_record
 
-INSTRON_FILE = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[3] / "shared") / "validation/42CrMoS4/original_data/46NT71.csv"
+# the 42CrMoS4 validation set is part of the repository (tests/data/42CrMoS4, CC BY 4.0)
+INSTRON_FILE = Path(__file__).resolve().parents[1] / "data" / "42CrMoS4" / "original_data" / "46NT71.csv"
 
 
 @pytest.fixture
 def instron_file() -> Path:
-    if not INSTRON_FILE.exists():
-        pytest.skip("42CrMoS4 validation data not present")
     return INSTRON_FILE
 
 

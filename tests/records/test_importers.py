@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
 import numpy as np
@@ -14,9 +13,8 @@ from flowcurve.record.format import Record, write_record
 from flowcurve.errors import RecordError
 from flowcurve.record.importers import load_record, parse_column_option, to_native, unit_conversion
 
-INSTRON_DIR = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[3] / "shared") / "validation/42CrMoS4/original_data"
+INSTRON_DIR = Path(__file__).resolve().parents[1] / "data" / "42CrMoS4" / "original_data"  # in the repository, CC BY 4.0
 INSTRON_FILE = INSTRON_DIR / "46NT71.csv"
-needs_instron = pytest.mark.skipif(not INSTRON_FILE.exists(), reason="42CrMoS4 validation data not present")
 
 
 def _native(tmp_path: Path, n: int = 50) -> tuple[Path, Record]:
@@ -71,7 +69,6 @@ def test_native_round_trip_and_meta_override(tmp_path):
 # -- INSTRON ---------------------------------------------------------------------------------
 
 
-@needs_instron
 def test_instron_export_mapped_and_converted():
     rec = load_record(INSTRON_FILE)
     assert rec.test == "tension"

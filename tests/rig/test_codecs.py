@@ -1,4 +1,4 @@
-"""Codec tests on the manuals' own examples (PROTOCOLS.md, docs/encoder-protocol.md)."""
+"""Codec tests on the manuals' own examples (docs/protocols.md, docs/encoder-protocol.md)."""
 
 import math
 import random

@@ -1,4 +1,4 @@
-"""LoadCell driver through command/reply pairs (the AED command set of PROTOCOLS.md)."""
+"""LoadCell driver through command/reply pairs (the AED command set of docs/protocols.md)."""
 
 import pytest
 

@@ -1,5 +1,6 @@
 """The series built from records: strain rate from the data, then 'flowcurve fit' on native records."""
 
+import hashlib
 import json
 
 import numpy as np
@@ -49,9 +50,12 @@ def test_fit_command_on_native_records(tmp_path, syn, capsys):
             paths.append(write_record(tmp_path / f"{name}.csv", rec))
             truth[name] = (law_rate, T)
     out = tmp_path / "fit"
-    code = main(["fit", *map(str, paths), "--out", str(out), "--ref-temp", "24.85", "--melt-temp", "1519.85"])
+    code = main(["fit", *map(str, paths), "--out", str(out), "--ref-temp", "24.85", "--melt-temp", "1519.85", "--jobs", "2"])
     assert code == 0, capsys.readouterr().err
     d = json.loads((out / "fit.json").read_text())
+    # provenance: every record's SHA-256 (as sha256sum prints it) and the options as given, not --jobs
+    assert d["provenance"]["record_sha256"] == {p.stem: hashlib.sha256(p.read_bytes()).hexdigest() for p in paths}
+    assert d["provenance"]["options"]["melt_temp"] == 1519.85 and "jobs" not in d["provenance"]["options"]
     assert d["ref_strain_rate_source"] == "lowest in the series"
     assert d["ref_strain_rate_per_s"] == pytest.approx(0.95 * ref_rate, rel=0.03)  # measured, not nominal
     assert all(r["kind"] == "record" and r["strain_rate_source"] == "data" and r["temperature_source"] == "data"
@@ -92,6 +96,8 @@ def test_fit_command_on_the_result_folders_of_identify(tmp_path, syn, capsys):
     d = json.loads((out / "fit.json").read_text())
     assert sorted(r["name"] for r in d["records"]) == sorted(p.stem for p in paths)
     assert all(r["kind"] == "result" and r["temperature_source"] == "nominal" for r in d["records"])
+    # the records' checksums pass through their result folders
+    assert d["provenance"]["record_sha256"] == {p.stem: hashlib.sha256(p.read_bytes()).hexdigest() for p in paths}
     # identify's record block holds the nominal rate: crosshead speed / l0
     assert sorted(r["strain_rate_per_s"] for r in d["records"]) == pytest.approx([1e-3, 1e-3, 0.1, 0.1])
     assert d["ref_strain_rate_per_s"] == pytest.approx(1e-3)

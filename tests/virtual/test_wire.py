@@ -1,4 +1,4 @@
-"""Plain pyserial scripts following PROTOCOLS.md and docs/encoder-protocol.md — no project
+"""Plain pyserial scripts following docs/protocols.md and docs/encoder-protocol.md — no project
 code on the host side — talk to each virtual device, opened in-process (``virtual://``,
 pyserial's ``serial_for_url``) on model time, or on its pty in real time (``-m pty``)."""
 
@@ -143,7 +143,7 @@ def test_dcon_furnace_module_plain_script(device_link):
 def test_dcon_checksum_mode(device_link):
     dev = I7011(lambda: 25.12, lambda on: None, address=0x01, checksum_on=True, **device_link).start()
     with serial.serial_for_url(dev.port, 9600, timeout=0.3) as p:
-        assert cs("$012") == "B7"  # PROTOCOLS.md example
+        assert cs("$012") == "B7"  # docs/protocols.md example
         p.write(b"$012B7\r")
         reply = p.read_until(b"\r")[:-1].decode()
         assert reply[:-2] == "!010F0640" and reply[-2:] == cs(reply[:-2])

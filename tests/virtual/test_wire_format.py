@@ -12,12 +12,12 @@ from flowcurve.rig.virtual import wire_format
 
 
 def test_dcon_checksum_manual_example():
-    assert wire_format.dcon_checksum("$012") == "B7"  # PROTOCOLS.md: $012 → $012B7
+    assert wire_format.dcon_checksum("$012") == "B7"  # docs/protocols.md: $012 → $012B7
 
 
 @pytest.mark.parametrize("cof, length", [(0, 6), (2, 4), (3, 10), (9, 17), (32, 4), (34, 2)])
 def test_aed_frame_lengths_from_the_manual(cof, length):
-    # PROTOCOLS.md: COF0 6 bytes, COF2 4, COF3 10, COF9 17; +32 drops the CR LF
+    # docs/protocols.md: COF0 6 bytes, COF2 4, COF3 10, COF9 17; +32 drops the CR LF
     assert len(wire_format.aed_frame(cof, -12345, status=9, address=31)) == length
 
 
@@ -67,4 +67,4 @@ def test_dcon_checksum_and_gray_code_agree_with_the_drivers():
         assert wire_format.dcon_checksum(text) == driver_dcon.checksum(text)
     for count in (0, 1, 2, 3, 0x7FFFFFFF, 0x80000000, 0xFFFFFFFF, 123_456_789):
         assert driver_encoder.gray_to_binary(wire_format.gray_code(count)) == count
-    assert wire_format.THERMOCOUPLE_FULL_SCALE_C[0x0F] == 1370.0  # PROTOCOLS.md: 0F K, +1370.0 °C
+    assert wire_format.THERMOCOUPLE_FULL_SCALE_C[0x0F] == 1370.0  # docs/protocols.md: 0F K, +1370.0 °C
