@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 import tempfile
 import time
@@ -38,8 +37,7 @@ from flowcurve.errors import FlowcurveError
 from flowcurve.record.format import Record
 
 METHODS = ("window", "sdar", "auto")  # auto: the default (SDAR on a crosshead-only tension record, else the window)
-SHARED = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[2] / "shared")
-DATA = SHARED / "validation" / "42CrMoS4" / "original_data"
+DATA = Path(__file__).resolve().parents[1] / "tests" / "data" / "42CrMoS4" / "original_data"  # vendored, CC BY 4.0
 D0_MM, L0_MM = 6.0, 30.0
 
 

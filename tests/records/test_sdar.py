@@ -4,7 +4,6 @@ the 42CrMoS4 lab's published moduli."""
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +13,7 @@ from flowcurve.errors import IdentificationError
 from flowcurve.identification.indicator import elastic_modulus, sdar_modulus
 from flowcurve.identification.sdar import sdar
 
-DATA = Path(os.environ.get("FLOWCURVE_SHARED") or Path(__file__).resolve().parents[3] / "shared") / "validation/42CrMoS4/original_data"
+DATA = Path(__file__).resolve().parents[1] / "data" / "42CrMoS4" / "original_data"  # vendored, CC BY 4.0
 
 
 def toe_line_knee(E=70_000.0, toe_stress=60.0, yield_MPa=300.0, offset_MPa=10.0, n=600, noise_MPa=0.3, seed=0):
@@ -75,7 +74,6 @@ def test_the_modulus_block_carries_the_metrics_and_the_method():
         elastic_modulus("tangent", e, s, 300.0)
 
 
-@pytest.mark.skipif(not DATA.exists(), reason="42CrMoS4 validation data not present")
 def test_sdar_on_the_published_42CrMoS4_moduli():
     """SDAR on the extensometer curve up to Fm against the lab's slope of the linear-elastic
     region: an independent regression by the lab's own software."""
