@@ -282,6 +282,7 @@ class Procedure:
         self._t0 = 0.0
         self.writer: RecordWriter | None = None
         self._writing = False
+        self._ending_process = False  # the test was ended by the system stopping the program (not an operator's Ctrl-C)
         self._retried_noted: dict[str, int] = {}  # exchanges retried per device, as the record's events last said
         self._unshown_rows: list[np.ndarray] = []  # recorded rows no snapshot has carried yet (the last batch)
         self._end_reason = ""
@@ -362,6 +363,7 @@ class Procedure:
                     sampler.start()
                     reason = self._record(sampler, state)
                 except Interrupted as exc:
+                    self._ending_process = exc.signame != "SIGINT"  # SIGTERM, a console shutting down: no one waits at a keyboard
                     if exc.signame == "SIGINT" and sampler is not None:  # Ctrl-C while loading: an operator stop
                         reason = "operator stop (Ctrl-C)"
                     else:
@@ -637,6 +639,10 @@ class Procedure:
         heated = self.spec.temperature_C is not None and not isinstance(error, SafetyError)
         over = isinstance(error, SafetyError) and "over-temperature" in str(error)
         if not (watch and (heated or over)):
+            return error
+        if self._ending_process and not over:  # a service manager or a console shutting down will not wait the watch out
+            self._alert("furnace: heater off; the program is being stopped, so nothing watches the furnace cool — "
+                        "check that it does (a stuck relay keeps heating)")
             return error
         self._alert(f"furnace: {'over-temperature — ' if over else ''}heater off; watching that it cools "
                     f"({WATCH_COOLING_S:g} s test time)")

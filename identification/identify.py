@@ -125,6 +125,15 @@ def check_record(record: Record) -> list[str]:
     noise = force_noise_N(force)
     if rise <= MIN_RISE_IN_NOISE * noise or rise == 0.0:
         raise RecordError(source, f"force never rises above noise (largest change {rise:.3g} N, noise {noise:.3g} N); is this the right column?", column="force_N")
+    moving = [c for c in ("crosshead_mm", "extensometer_mm") if record.has(c)]
+    def spread(column: str) -> float:
+        values = record.column(column)
+        values = values[np.isfinite(values)]
+        return float(np.ptp(values)) if values.size else 0.0
+
+    if moving and not any(spread(c) > 0 for c in moving):
+        raise RecordError(source, f"the displacement never changes ({', '.join(moving)} constant): a dead channel, "
+                                  "or a column scaled to zero?", column=moving[0])
     d0 = record.positive("specimen.d0_mm", required=True)
     record.positive(GAUGE_KEY[test], required=True)
     area_mm2 = math.pi * d0**2 / 4.0

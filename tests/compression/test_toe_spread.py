@@ -49,6 +49,7 @@ def test_a_sparse_virtual_record_says_its_strain_zero_is_unresolved(tmp_path):
         shifted = run.material.flow_stress(eps + 1.5 * uncertainty, run.strain_rate_per_s, run.temperature_C)
         assert np.all(sig <= shifted * 1.02)
     else:
-        assert np.max(np.abs(sig / truth - 1)) < 0.03  # the start unbiased too
+        # the warning says the toe is not compensated: the start may carry it, the curve past εp 0.05 not
+        assert np.max(np.abs(sig[eps >= 0.05] / truth[eps >= 0.05] - 1)) < 0.03
     late = eps >= 0.1
     assert np.max(np.abs(sig[late] / truth[late] - 1)) < 0.03
