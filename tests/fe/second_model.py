@@ -31,7 +31,7 @@ import re
 import subprocess
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -62,7 +62,6 @@ class Case:
     nu: float = 0.3
     nr: int = 10  # radial elements (CAX8R 8 → 12: dmax within 1 µm, dface 0.09 mm apart at C3)
     element: str = "CAX8R"
-    eps_table: tuple = field(default=None, repr=False)
 
     def flow(self, eps_p):
         return self.A_MPa + self.B_MPa * np.asarray(eps_p, float) ** self.n
