@@ -62,6 +62,29 @@ POST_PROMPTS = {
     "post.dmax_mm": "maximum barrel diameter dmax [mm]",
     "post.dface_mm": "original end-face diameter dface, its machined area without the folded side [mm] (optional)",
 }
+FACE_ASKED_FROM_H0_OVER_D0 = 1.6  # a compression specimen this tall: dface asked for, not optional (near sticking dmax barely tells μ)
+FACE_ASKED_PROMPT = ("original end-face diameter dface, its machined area without the folded side [mm] "
+                     "(needed: h0/d0 {ratio:.2f} ≥ 1.6, where the bulge barely tells friction)")
+
+
+def face_asked(test: str, geometry_mm: dict) -> bool:
+    """True when the end face's diameter is asked for: compression with h0/d0 ≥ 1.6."""
+    d0, h0 = geometry_mm.get("d0_mm"), geometry_mm.get("h0_mm")
+    return test == "compression" and bool(d0) and bool(h0) and h0 / d0 >= FACE_ASKED_FROM_H0_OVER_D0
+
+
+def post_prompts(test: str, geometry_mm: dict) -> dict[str, str]:
+    """The post-test prompts for this specimen (dface's says why it is needed on a tall one)."""
+    prompts = {k: POST_PROMPTS[k] for k in POST_KEYS[test]}
+    if face_asked(test, geometry_mm):
+        prompts["post.dface_mm"] = FACE_ASKED_PROMPT.format(ratio=geometry_mm["h0_mm"] / geometry_mm["d0_mm"])
+    return prompts
+
+
+def missing_post_keys(test: str, geometry_mm: dict, have) -> list[str]:
+    """The post-test measurements still to be given (dface only when asked for)."""
+    optional = () if face_asked(test, geometry_mm) else ("post.dface_mm",)
+    return [k for k in POST_KEYS.get(test, ()) if k not in have and k not in optional]
 
 
 class ProcedureError(FlowcurveError):
@@ -676,13 +699,21 @@ class Procedure:
         missing = [k for k in keys if k not in post]
         if missing and self.interactive:
             self.view.say("Post-test measurements (Enter to skip; add later with 'flowcurve annotate'):")
+            prompts = post_prompts(self.spec.test, self.spec.geometry_mm)
+            asked = missing_post_keys(self.spec.test, self.spec.geometry_mm, ())
             for key in missing:
-                text = self.prompt(f"  {POST_PROMPTS.get(key, key)}: ").strip()
+                text = self.prompt(f"  {prompts.get(key, key)}: ").strip()
+                if not text and key == "post.dface_mm" and key in asked:  # asked for: once more, saying why
+                    text = self.prompt("  dface is needed to tell μ on a specimen this tall; measure the original end face "
+                                       "(Enter again to add it later with 'flowcurve annotate'): ").strip()
                 if text:
                     try:
                         post[key] = float(text)
                     except ValueError:
                         self.view.say(f"  not a number, skipped: {text!r}")
+            still = missing_post_keys(self.spec.test, self.spec.geometry_mm, post)
+            if still:
+                self.view.say(f"still missing: {', '.join(still)} (add with 'flowcurve annotate RECORD --set KEY=VALUE')")
         return post
 
 

@@ -513,6 +513,15 @@ def _fe_table_warnings(chosen: fr.FrictionResult) -> list[str]:
     return out
 
 
+def _dface_advice(chosen: fr.FrictionResult) -> str | None:
+    """The advice to measure dface when the FE table's μ rests on a bulge that hardly tells it, else None."""
+    sensitivity = chosen.extra.get("sensitivity", {})
+    if chosen.method != "fe_table" or "mu_per_dface_resolution" in sensitivity or not sensitivity:
+        return None
+    dmu = sensitivity.get("mu_per_dmax_resolution")
+    return fr.DFACE_ADVICE if dmu is None or dmu > MU_RESOLUTION_WARN else None
+
+
 def _friction_correction(geo: dict, nominal: _Nominal, friction_method: str, E_used: float | None) -> _Friction:
     """μ (again, now with the curve: the FE table's μ depends on the hardening) and the curve by every correction."""
     warnings: list[str] = []
@@ -612,6 +621,7 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
             "hardening": f"{law} least squares on the {friction_correction} curve, eps_p >= {YIELD_OFFSET}",
         },
         warnings=warnings,
+        dface_advice=_dface_advice(chosen),
         record={
             "path": record.source,
             "material": record.meta.get("material"),

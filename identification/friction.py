@@ -50,6 +50,8 @@ BULGE_Q = 1.53
 # diameter d_n is read as "no bulge" (μ = 0) rather than as a negative bulge; on the radius
 # that is a quarter of it.
 DIAMETER_RESOLUTION_MM = 0.01
+DFACE_ADVICE = ("measure the original end face's diameter (post.dface_mm) and identify again: μ is poorly told by the bulge "
+                "(the faces nearly stick), and the end face still shrinks with μ there")  # result.json's dface_advice
 
 
 @dataclass(frozen=True)

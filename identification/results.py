@@ -136,7 +136,7 @@ class TensionResult(_ResultMapping):
 class CompressionResult(_ResultMapping):
     """A compression identification: friction by every method, corrected curves, hardening."""
 
-    _optional = ("E_apparent_stderr_MPa", "modulus", "friction_mu_range", "uncertainty", "provenance")
+    _optional = ("E_apparent_stderr_MPa", "modulus", "friction_mu_range", "uncertainty", "dface_advice", "provenance")
 
     test: str = "compression"
     E_MPa: float | None
@@ -165,4 +165,5 @@ class CompressionResult(_ResultMapping):
     record: dict = field(default_factory=dict)
     E_apparent_stderr_MPa: float | None = None  # only with the apparent modulus
     modulus: dict | None = None  # only with an elastic line
+    dface_advice: str | None = None  # μ poorly told by dmax and no end face measured: measuring post.dface_mm would settle it
     provenance: dict | None = None  # version, record_sha256, options, date (identification.provenance); set by the writer

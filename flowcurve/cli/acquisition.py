@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from flowcurve.acquisition.live import LiveView
-from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, Procedure, ProcedureError, StopCriteria, TestSpec
+from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, missing_post_keys, post_prompts, Procedure, ProcedureError, StopCriteria, TestSpec
 from flowcurve.record.format import amend_record, read_record, recover_record
 from flowcurve.cli.specimen import add_geometry_options, add_modulus_option, check_specimen_options, measurement
 from flowcurve.errors import EXIT_COMPLETE, EXIT_DATA_LOST, EXIT_STOPPED, DeviceError, FlowcurveError, RecordError, RecordWriteError, SafetyError
@@ -349,9 +349,13 @@ def cmd_annotate(args) -> int:
     rec = read_record(args.record)
     for key, value in updates.items():
         print(f"{key} = {rec.meta.get(key, '(removed)')}")
-    missing = [k for k in POST_KEYS.get(rec.meta.get("test", ""), ()) if k not in rec.meta]
+    test = rec.meta.get("test", "")
+    geometry = {k: rec.number(f"specimen.{k}") for k in ("d0_mm", "h0_mm")}
+    missing = missing_post_keys(test, geometry, rec.meta) if test in POST_KEYS else []
     if missing:
         print(f"still missing: {', '.join(missing)}")
+    if "post.dface_mm" in missing:
+        print(f"  {post_prompts(test, geometry)['post.dface_mm']}: give --set post.dface_mm=...")
     return 0
 
 

@@ -19,6 +19,7 @@ import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from flowcurve.acquisition.procedure import post_prompts
 from flowcurve.acquisition.safety import Interrupted
 from flowcurve.console.live_state import ABORTED_STATE, COMPLETE_STATE, FAILED_STATE, ConsoleView
 from flowcurve.console.setup_form import TestSetup
@@ -88,6 +89,7 @@ class TestRun:
             "max_force_N": getattr(o, "max_force_N", None),
             "error": self.error,
             "post": dict(self.post),
+            "post_prompts": post_prompts(self.setup.spec.test, self.setup.spec.geometry_mm),  # dface's says when it is needed
             "result": self.result,
             "setup": dict(self.form),
         }

@@ -41,7 +41,7 @@ from starlette.responses import FileResponse, JSONResponse, Response, StreamingR
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
-from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS
+from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, face_asked, post_prompts
 from flowcurve.console.request_guard import (MAX_BODY_BYTES, NAMES, NUMBER, TEXT, FailedLogins, HostAllowlist, Refused,
                                              check_fields, read_json_object)
 from flowcurve.console.runner import SHUTDOWN_SIGNAME, BusyError, TestRunner
@@ -295,6 +295,11 @@ def create_app(console: Console) -> Starlette:
             values = post_values(run.setup.spec.test, data)
         except FormError as exc:
             return _error(str(exc), 400, fields=exc.errors)
+        spec = run.setup.spec
+        if face_asked(spec.test, spec.geometry_mm) and "post.dface_mm" not in {**run.post, **values}:
+            prompt = post_prompts(spec.test, spec.geometry_mm)["post.dface_mm"]
+            return _error("post.dface_mm: the original end face's diameter is needed on this specimen", 400,
+                          fields={"post.dface_mm": f"required — {prompt}"})
         if values:
             amend_record(run.record, {k: repr(v) for k, v in values.items()})
             run.post.update(values)

@@ -44,7 +44,7 @@ import pandas as pd
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.elastic_modulus import modulus_for_model
 from flowcurve.identification.fe.solver_fit import fit_with_solver, serial_correlation
-from flowcurve.identification.friction import bulge_half_width, face_half_width, nominal_diameter
+from flowcurve.identification.friction import DFACE_ADVICE, bulge_half_width, face_half_width, nominal_diameter
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 from flowcurve.identification.outcome import Identification
@@ -285,6 +285,9 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
                       "force_sigma_pct": FORCE_SIGMA_PCT, "from_strain": FROM_STRAIN},
         },
     })
+    result.pop("dface_advice", None)  # the warm start's; the inverse judges μ itself
+    if dface is None and not se[-1] <= MU_TOLD:  # poorly told or undetermined, and no end face to tell it
+        result["dface_advice"] = DFACE_ADVICE
     result["methods"] = {**result.get("methods", {}), "inverse": "CalculiX upsetting in the loop (scipy least_squares), warm start: fast fe_table identification"}
     if warnings:
         result["warnings"] = [*result.get("warnings", []), *warnings]

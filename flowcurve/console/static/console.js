@@ -228,7 +228,7 @@ function showTest(t) {
   if (postShownFor !== t.test_id) {
     postShownFor = t.test_id;
     const keys = (info && info.post[t.test]) || [];
-    $("#post-fields").innerHTML = keys.map((k) => `<label>${esc(info.prompts[k] || k)}<input name="${esc(k)}" id="p-${esc(k.replace("post.", ""))}" inputmode="decimal" value="${t.post && t.post[k] !== undefined ? esc(t.post[k]) : ""}"><span class="field-error" data-for="${esc(k)}"></span></label>`).join("");
+    $("#post-fields").innerHTML = keys.map((k) => `<label>${esc((t.post_prompts || info.prompts)[k] || k)}<input name="${esc(k)}" id="p-${esc(k.replace("post.", ""))}" inputmode="decimal" value="${t.post && t.post[k] !== undefined ? esc(t.post[k]) : ""}"><span class="field-error" data-for="${esc(k)}"></span></label>`).join("");
   }
   $("#post").hidden = t.status !== "complete";
   showResult(t.result);

@@ -1,0 +1,68 @@
+"""Records from a second upsetting model (tests/fe/second_model.py: its own deck, CAX8R graded
+mesh, node-to-surface contact, stick slope 1e5, 200 increments) read by the product's default
+identification (`flowcurve identify`, fe_table): μ within ±0.02 and the flow curve within 2 %
+over ε_p 0.05–0.6 (issue 37). The fast tests read the vendored records (tests/fe/data); the slow
+one regenerates them with CalculiX and checks they are the vendored ones.
+
+Measured (this model, CAX8R 10 radial): C2 (μ 0.05, h0/d0 1.5) reads μ 0.046, curve 0.34 % from
+the bulge; μ 0.042 from the end face. C3 (μ 0.2, h0/d0 1.0) reads μ 0.2025 but the curve 2.30 %
+off (flagged: Swift ε0 beyond the table), and from the end face μ 0.176 with a range 0.170–0.183
+that excludes the truth, unflagged: this model's rim node sits 0.1–0.2 mm wider than the
+product's table expects at μ 0.2 (and moves 0.09 mm between 8 and 12 radial elements), more
+than the product's ± 0.005 d/d_n for the mesh's share of the end face."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from flowcurve.record.format import read_record
+
+from .second_model import C2, C3, identify_default, simulate, write_record
+
+DATA = Path(__file__).parent / "data"
+CASES = {"C2": C2, "C3": C3}
+C3_CURVE = "C3 from the bulge: μ 0.2025 but the curve +2.30 % off at ε_p 0.44 (flagged 'Swift ε0 beyond the table')"
+C3_FACE = ("C3 from the end face: μ 0.176 in 0.170–0.183, the truth 0.2 outside and no warning — the second model's rim node "
+           "and the product's table disagree by more than the table's mesh allowance (model-form error, issue 37)")
+
+
+@pytest.mark.parametrize("name", ["C2", pytest.param("C3", marks=pytest.mark.xfail(strict=True, reason=C3_CURVE))])
+def test_default_reads_second_model_records_from_the_bulge(tmp_path, name):
+    result, err = identify_default(DATA / f"second_model_{name}.csv", tmp_path, end_face=False)
+    assert result["friction_method"] == "fe_table"
+    assert result["friction_mu"] == pytest.approx(CASES[name].mu, abs=0.02)
+    assert err < 0.02, err
+
+
+def test_default_mu_from_the_bulge_of_c3(tmp_path):
+    """C3's μ is read within ±0.02 even though its curve misses 2 % (above): the miss is flagged."""
+    result, err = identify_default(DATA / "second_model_C3.csv", tmp_path, end_face=False)
+    assert result["friction_mu"] == pytest.approx(C3.mu, abs=0.02)
+    assert err < 0.02 or any(w.startswith("FE table:") for w in result["warnings"])
+
+
+@pytest.mark.parametrize("name", ["C2", pytest.param("C3", marks=pytest.mark.xfail(strict=True, reason=C3_FACE))])
+def test_default_reads_second_model_records_from_the_end_face(tmp_path, name):
+    result, err = identify_default(DATA / f"second_model_{name}.csv", tmp_path, end_face=True)
+    assert result["friction_details"]["fe_table"]["mu_basis"] == "original end face (dface)"
+    assert result["friction_mu"] == pytest.approx(CASES[name].mu, abs=0.02)
+    assert err < 0.02, err
+
+
+@pytest.mark.slow
+@pytest.mark.solver
+@pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")
+@pytest.mark.parametrize("name", ["C2", "C3"])
+def test_second_model_regenerates_the_vendored_records(tmp_path, name):
+    """CalculiX makes the vendored record again (post-test shape to 0.1 µm, forces to 0.5 N); ~15–20 s each."""
+    made = write_record(simulate(CASES[name]), tmp_path / f"{name}.csv")
+    new, old = read_record(made), read_record(DATA / f"second_model_{name}.csv")
+    for key in ("post.hk_mm", "post.dmax_mm", "post.dface_mm"):
+        assert float(new.meta[key]) == pytest.approx(float(old.meta[key]), abs=2e-4), key
+    assert len(new.data) == len(old.data)
+    assert (new.data["force_N"] - old.data["force_N"]).abs().max() < 0.5
+    result, _ = identify_default(made, tmp_path / "id", end_face=False)
+    assert result["friction_mu"] == pytest.approx(CASES[name].mu, abs=0.02)
