@@ -60,6 +60,7 @@ class DriverRig:
         self.max_temperature_C = config.furnace.max_temperature_C if self.has_furnace else float("inf")
         self.control_period_s = config.furnace.control_period_s if self.has_furnace else None
         self.frame_stiffness_N_per_um = config.frame.stiffness_N_per_um
+        self.instruments_meta = config.instruments.meta()  # the instruments' classes, for the results' uncertainty
         self.max_force_N = config.frame.max_force_N
         rate = aed.ICR_RATES_PER_S[config.loadcell.rate_code]
         self.loadcell_period_s = 1.0 / rate

@@ -423,7 +423,8 @@ def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_
         line, toe_mm = known if known is not None else (None, 0.0)
         if line is None:
             warnings.append(f"no elastic line ({exc}): the toe is not compensated; "
-                            + (f"the handbook E = {E_MPa:g} MPa strips the elastic strain" if E_MPa is not None
+                            + (f"the handbook E = {E_MPa:g} MPa strips the elastic strain; Rp0.2 is not reported (no strain zero "
+                               "to read its offset from: sample faster)" if E_MPa is not None
                                else "no modulus, so the elastic strain is not removed and there is no Rp0.2 — give E_MPa"))
     else:
         onset = _yield_estimate_MPa(diagram, area0)
@@ -483,6 +484,8 @@ def _modulus_and_yield(nominal: _Nominal, line: ModulusFit | None, E_MPa: float 
     pressure = nominal.pressure
     rp02 = offset_yield(plastic_strain(nominal.strain, pressure, E_used), pressure) if E_used is not None else None
     i_yield = int(np.argmax(pressure >= rp02)) if rp02 is not None else 0
+    if line is None:  # no line to place the strain zero on: the offset would be read on an uncompensated toe
+        rp02 = None
     return _Yield(E_used=E_used, E_fit=E_fit, E_source=E_source, rp02=rp02, i_yield=i_yield)
 
 
