@@ -3,7 +3,7 @@ time (tests/scenarios/matrix.py says what a cell is and what it must hold).
 
 The default selection runs :data:`matrix.DEFAULT_CELLS` cells drawn with a seed fixed per
 commit (printed at the end of the run; ``FLOWCURVE_MATRIX_SEED`` draws another set,
-``FLOWCURVE_MATRIX_CELLS`` names cells to run); ``-m slow`` runs the whole matrix. A failing
+``FLOWCURVE_MATRIX_CELLS`` names cells to run); ``-m matrix`` runs the whole matrix (its cells are also ``slow``). A failing
 cell re-runs by its node id: ``pytest 'tests/scenarios/test_matrix.py::test_cell[<cell id>]' -m ''``.
 """
 
@@ -19,7 +19,7 @@ DEFAULT = {c.id for c in CELLS if c.id in NAMED} if NAMED else {c.id for c in ma
 
 
 def _param(cell):
-    marks = [] if cell.id in DEFAULT else [pytest.mark.slow]
+    marks = [] if cell.id in DEFAULT else [pytest.mark.slow, pytest.mark.matrix]
     reason = known_defect(cell)
     if reason:
         marks.append(pytest.mark.xfail(reason=reason, strict=False))
