@@ -414,6 +414,10 @@ class Procedure:
                         except RecordWriteError as exc:
                             status, reason, error = STATUS_ABORTED, reason or str(exc), error or exc
                     error = self._after_safety_stop(error)
+                    try:
+                        self._note_retries(final=True)  # the furnace watch's exchanges too
+                    except RecordWriteError:
+                        pass
                     if error is not None and reason != str(error) and isinstance(error, SafetyError):
                         reason = str(error)
                     if not safety.off_confirmed and rig.has_furnace:
@@ -604,6 +608,13 @@ class Procedure:
             if late > self._late_noted.get(device, 0):
                 self._event("late_reply", f"{device}: {late - self._late_noted.get(device, 0)} late replies discarded ({late} so far)")
                 self._late_noted[device] = late
+        self._note_retries()
+        if final and self._loss_summary():
+            self._event("data_loss", self._loss_summary())
+
+    def _note_retries(self, final: bool = False) -> None:
+        """A ``retry`` event per device for the exchanges repeated since the last call after a
+        silent or garbled reply; at the end one line to the operator per device that needed any."""
         for device, retried in (getattr(self.rig, "retried_exchanges", None) or {}).items():
             if retried > self._retried_noted.get(device, 0):
                 self._event("retry", f"{device}: {retried - self._retried_noted.get(device, 0)} exchanges retried after a silent "
@@ -613,8 +624,6 @@ class Procedure:
             for device, retried in self._retried_noted.items():
                 self._alert(f"{device}: {retried} exchanges had to be retried (silent or garbled replies; nothing lost) — "
                             f"check its cable and connector if this recurs")
-            if self._loss_summary():
-                self._event("data_loss", self._loss_summary())
 
     def _drop_unbracketed(self, sampler: Sampler, rows: np.ndarray) -> np.ndarray:
         """The last rows without their faulted channel's values: a held value is no reading."""

@@ -39,6 +39,7 @@ class WireFaults:
         self.garble_fraction = 0.0
         self.delay_s = 0.0
         self.unplug_requested = False
+        self.replies_hit = 0  # replies a drop or garble fraction took (a rare fault may take none in a short test)
 
     def inject(self, fault: str, **kw) -> None:
         """Switch a fault on: ``silence``, ``drop(fraction=1.0)``, ``garble(fraction=1.0)``,
@@ -69,8 +70,10 @@ class WireFaults:
             if self.silent or not reply:
                 return None
             if self.drop_fraction and self._rng.random() < self.drop_fraction:
+                self.replies_hit += 1
                 return None
             if self.garble_fraction and self._rng.random() < self.garble_fraction:
+                self.replies_hit += 1
                 return garble(reply, self._rng)
             return reply
 

@@ -13,7 +13,7 @@ layer, surface-to-surface contact with stick slope 1e7 N/mm³ and 50 increments,
   top axis node, the widest side node, the original rim-corner node) and sprung back elastically
   (h·(1 + σ/E), d·(1 − ν·σ/E), σ = F/A). A lift in 30 increments was tried and fails at its first
   increment ("too many cutbacks", friction reversing, with stick slope 1e5 or 1e7 and with a
-  small tension cut-off σ∞), as CALCULIX.md reports for the product's model; the record's
+  small tension cut-off σ∞), as docs/calculix.md reports for the product's model; the record's
   unloading branch is therefore the elastic one, F → 0 with the stroke back by h·σ/E.
 
 :func:`write_record` adds the rig: frame compliance 136 N/µm, a seating toe
