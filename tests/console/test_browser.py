@@ -136,10 +136,13 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
                      "--material", "steel45", "--E", "200000", "--specimen-id", "C-browser", "--operator", "selenium", "--speed", SETUP["speed"]]) == 0
     ref = read_record(reference_path)
     assert list(rec.data.columns) == list(ref.data.columns)
-    assert set(rec.meta) - {"stop_reason"} == set(ref.meta) - {"stop_reason"}
-    varying = {"date", "stop_reason", "samples", "post.hk_mm", "post.dmax_mm"}  # the time, and where each test stopped
+    # what the rig lost is declared and varies with the machine's load (the virtual amplifier skips frames on a busy PC)
+    losses = {"samples_missing", "stream_restarts", "readings_rejected", "data_loss"}
+    assert set(rec.meta) - {"stop_reason"} - losses == set(ref.meta) - {"stop_reason"} - losses
+    varying = {"date", "stop_reason", "samples", "post.hk_mm", "post.dmax_mm", *losses}  # the time, where each test stopped
     assert {k: v for k, v in rec.meta.items() if k not in varying} == {k: v for k, v in ref.meta.items() if k not in varying}
-    assert [e.name for e in rec.events] == [e.name for e in ref.events]
+    declared = {"data_loss", "stream_restart", "retry", "late_reply", "dropped"}
+    assert [e.name for e in rec.events if e.name not in declared] == [e.name for e in ref.events if e.name not in declared]
     assert int(rec.meta["samples"]) == len(rec.data)
 
     # the records list: select it, fit, download the card
