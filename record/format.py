@@ -251,7 +251,7 @@ def parse_record_bytes(raw: bytes, source: str = "<memory>") -> Record:
     columns = [c.strip() for c in _decode_line(raw[pos:end], source, names_line).split(",")]
     missing = [c for c in REQUIRED_COLUMNS if c not in columns]
     if missing:
-        raise RecordError(source, f"missing column(s) {', '.join(missing)} in the column row (found: {', '.join(columns)})", line=names_line)
+        raise RecordError(source, f"missing column(s) {', '.join(missing)} in the column row (found: {shown(', '.join(columns), 200)})", line=names_line)
     if len(set(columns)) != len(columns):
         raise RecordError(source, "duplicate column names in the column row", line=names_line)
     start, stop = min(end + 1, n), n

@@ -442,7 +442,7 @@ def read_instron(path: str | os.PathLike, *, text: Text | None = None) -> Record
         raise RecordError(source, "the units row under the column row is missing or short", line=names_idx + 2)
     missing = [n for n in INSTRON_COLUMNS if n not in names]
     if missing:
-        raise RecordError(source, f"missing column(s) {', '.join(missing)} (found: {', '.join(names)})", line=names_idx + 1)
+        raise RecordError(source, f"missing column(s) {', '.join(missing)} (found: {shown(', '.join(names), 200)})", line=names_idx + 1)
     mapping = {names.index(name): Column(native, quantity, units[names.index(name)], name) for name, (native, quantity) in INSTRON_COLUMNS.items()}
     data = _read_columns(source, text, sep="\t", decimal=".", first_data_line=names_idx + 2, mapping=mapping)
     meta[FIRST_DATA_LINE_KEY] = str(names_idx + 3)

@@ -46,6 +46,9 @@ def register(subparsers) -> None:
     p.add_argument("--fix-C", type=float, metavar="VALUE", help="do not identify C, use this value (e.g. for a series at one rate)")
     p.add_argument("--fix-m", type=float, metavar="VALUE", help="do not identify m, use this value (e.g. for a series at one temperature)")
     p.add_argument("--E", dest="E_MPa", type=float, metavar="MPA", help="elastic modulus for records that have no handbook material.E_MPa (default: each record's identified modulus)")
+    p.add_argument("--rate-per-record", action="store_true",
+                   help="one strain rate per record (its mean) instead of each point's own v/h: for records whose material "
+                        "has no rate dependence within the record, e.g. FE records made with the law at one rate")
     p.add_argument("--strict", action="store_true", help="exit non-zero when the fit is poor (max error above 10 %%); fit.json is still written, marked poor")
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, metavar="N", help=f"points per record in the fit, the same for every record (default {DEFAULT_MAX_POINTS})")
     p.add_argument("--shape-error", type=float, default=DEFAULT_SHAPE_ERROR_PCT, metavar="PCT",
@@ -112,6 +115,9 @@ def run(args) -> int:
     from flowcurve.identification.series import fit_series
 
     members = load_members_in_parallel(args.inputs, {"E_MPa": args.E_MPa} if args.E_MPa is not None else {}, args.jobs, args.scheduler)
+    if getattr(args, "rate_per_record", False):
+        for m in members:
+            m.point_rates_per_s = None  # rates_at then gives the record's one rate
     fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
     missing = missing_inputs(members, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
                              melt_temperature_C=args.melt_temp, fixed=fixed)
