@@ -421,8 +421,8 @@ class Procedure:
                     if error is not None and reason != str(error) and isinstance(error, SafetyError):
                         reason = str(error)
                     if not safety.off_confirmed and rig.has_furnace:
-                        self._alert(f"furnace: heater-off not confirmed — the furnace module's watchdog switches it off "
-                                    f"by itself; if the furnace keeps heating, switch off its mains power")
+                        self._alert("furnace: heater-off not confirmed — the furnace module's watchdog switches it off "
+                                    "by itself; if the furnace keeps heating, switch off its mains power")
                     try:
                         self._event("stop", reason)
                     except RecordWriteError:

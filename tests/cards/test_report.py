@@ -1,7 +1,6 @@
 """``flowcurve report``: the test report (HTML and PDF) of a synthetic series and of a real record."""
 
 import base64
-import html
 import json
 import re
 from pathlib import Path

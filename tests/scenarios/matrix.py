@@ -43,7 +43,6 @@ import hashlib
 import io
 import itertools
 import json
-import math
 import os
 import random
 import re
@@ -101,23 +100,18 @@ class Fault:
 NO_FAULT = Fault("", "none")
 
 # The fault axis: every kind of rig/virtual/faults.py on every device it applies to.
+WIRE_FAULT_ARGS = {"silence": None, "drop": ("fraction", 0.05), "garble": ("fraction", 0.05), "delay": ("seconds", 0.5),
+                   "unplug": None}  # the one keyword each wire fault takes in VirtualRig.inject, with the matrix's value
+
+
+def _wire_fault(device: str, kind: str) -> Fault:
+    arg = WIRE_FAULT_ARGS[kind]
+    return Fault(device, kind) if arg is None else Fault(device, kind, arg[1], (arg,))
+
+
 FAULTS: tuple[Fault, ...] = (
     NO_FAULT,
-    Fault("loadcell", "silence"),
-    Fault("loadcell", "drop", 0.05, (("fraction", 0.05),)),
-    Fault("loadcell", "garble", 0.05, (("fraction", 0.05),)),
-    Fault("loadcell", "delay", 0.5, (("seconds", 0.5),)),
-    Fault("loadcell", "unplug"),
-    Fault("encoder", "silence"),
-    Fault("encoder", "drop", 0.05, (("fraction", 0.05),)),
-    Fault("encoder", "garble", 0.05, (("fraction", 0.05),)),
-    Fault("encoder", "delay", 0.5, (("seconds", 0.5),)),
-    Fault("encoder", "unplug"),
-    Fault("furnace", "silence"),
-    Fault("furnace", "drop", 0.05, (("fraction", 0.05),)),
-    Fault("furnace", "garble", 0.05, (("fraction", 0.05),)),
-    Fault("furnace", "delay", 0.5, (("seconds", 0.5),)),
-    Fault("furnace", "unplug"),
+    *(_wire_fault(device, kind) for device in ("loadcell", "encoder", "furnace") for kind in WIRE_FAULT_ARGS),
     Fault("furnace", "open_thermocouple"),
     Fault("furnace", "relay_stuck"),
 )
