@@ -123,9 +123,12 @@ def temperature(nominal_C: float | None, measured_C: Sequence[float] | None) -> 
 
 def elastic_stress_rate(time_s, stress_MPa, window_MPa: Sequence[float]) -> float | None:
     """The stress rate on the elastic line: slope of σ(t) over the samples before the maximum
-    whose stress lies in ``window_MPa`` (least squares), MPa/s; None with fewer than 3 samples."""
+    whose stress lies in ``window_MPa`` (least squares), MPa/s; None with fewer than 3 samples.
+    Samples whose time or stress is not a number (a blank or junk cell) are left out."""
     t = np.asarray(time_s, dtype=float)
     s = np.asarray(stress_MPa, dtype=float)
+    finite = np.isfinite(t) & np.isfinite(s)
+    t, s = t[finite], s[finite]
     if t.size < 3:
         return None
     i_m = int(np.nanargmax(s))

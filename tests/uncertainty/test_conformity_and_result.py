@@ -54,6 +54,14 @@ def test_elastic_stress_rate_reads_the_slope_in_the_window():
     assert cf.elastic_stress_rate(t[:2], s[:2], (50.0, 300.0)) is None
 
 
+def test_elastic_stress_rate_leaves_out_blank_cells():
+    """A blank time cell in the elastic window (the CI campaign's case: LAPACK's SVD failed on a NaN)."""
+    t = np.linspace(0, 100, 1001)
+    s = np.minimum(30.0 * t, 400.0 + 0.5 * t)
+    t[50], s[60] = np.nan, np.nan
+    assert cf.elastic_stress_rate(t, s, (50.0, 300.0)) == pytest.approx(30.0)
+
+
 def test_46NT71_result_json_has_the_rp02_budget(tmp_path):
     """identify the real INSTRON record: uncertainty.Rp02_MPa's components recomputed by hand."""
     from flowcurve.cli import main
