@@ -5,6 +5,13 @@ CalculiX solver, Chromium or a package of the test extra skip with
 a reason ("… is not installed", "validation data …") on a developer's machine that lacks
 them; in CI (``CI`` set, not "false"/"0") such a skip is a failure, a whole file skipped at
 import included, so a missing folder, solver or browser can never turn checks silently off.
+
+Property tests (hypothesis), wherever they are, draw the same cases on every run (profile
+``default``: derandomized, 25 examples unless a test says more), so a red CI run is a case anyone
+re-runs and a green one does not turn red by luck. ``FLOWCURVE_HYPOTHESIS=long`` draws 400 new
+cases a test (and ``explore`` new ones at each test's own count): the campaigns that look for
+what the repeatable draw has not met, e.g. ``FLOWCURVE_HYPOTHESIS=explore python3 -m pytest -m slow
+tests/property --hypothesis-show-statistics``.
 """
 
 from __future__ import annotations
@@ -14,6 +21,17 @@ import os
 import pytest
 
 MISSING_DATA_WORDS = ("validation data", "is not installed")
+
+try:
+    from hypothesis import HealthCheck, settings
+except ImportError:  # the test extra is not installed: the property tests skip on their own
+    pass
+else:  # here, not in a sub-folder's conftest: a profile loaded there would reach only the tests collected after it
+    settings.register_profile("default", max_examples=25, deadline=None, derandomize=True,
+                              suppress_health_check=[HealthCheck.too_slow])
+    settings.register_profile("long", max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    settings.register_profile("explore", deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    settings.load_profile(os.environ.get("FLOWCURVE_HYPOTHESIS", "default"))
 
 
 def _in_ci() -> bool:
