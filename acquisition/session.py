@@ -298,5 +298,5 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
         with DriverRig(config, time_scale=time_scale, virtual=vr, stream=stream) as rig:
             outcome = Procedure(rig, spec, path, view=view, interactive=interactive, stop_requested=stop_requested).run()
         model = vr.model
-        return VirtualRun(outcome, model.material, model.nominal_strain_rate_per_s, model.temperature_C, friction_mu,
+        return VirtualRun(outcome, model.material, model.nominal_strain_rate_per_s, model.loading_temperature_C, friction_mu,
                           compression_response, tension_response)

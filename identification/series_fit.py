@@ -378,6 +378,18 @@ class SeriesFit:
         """"good", or "poor" when the chosen fit's largest relative error exceeds 10 %."""
         return "poor" if not self.fit.fit_error_pct <= POOR_FIT_PCT else "good"
 
+    def point_rates(self) -> pd.DataFrame:
+        """The points each record was fitted on with the strain rate the model took at each
+        (point_rates.csv): its own from the record's time and strain when the member has them
+        (ε̇ = v/h drifts over a compression stroke), else the record's one rate."""
+        parts = []
+        for m in self.members:
+            eps, sig = m.fit_points(self.max_points)
+            parts.append(pd.DataFrame({"record": m.name, "true_plastic_strain": eps, "true_stress_MPa": sig,
+                                       "strain_rate_per_s": m.rates_at(eps), "temperature_C": m.temperature_C,
+                                       "strain_rate_source": "point" if m.point_rates_per_s is not None else "record"}))
+        return pd.concat(parts, ignore_index=True)
+
     def covered_range(self) -> dict[str, list[float]]:
         """The plastic strain, strain rate (1/s) and temperature (°C) the constants were identified on."""
         ms = self.members

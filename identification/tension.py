@@ -274,6 +274,7 @@ class _IsoResults:
 class _TrueCurve:
     """True strain, stress and plastic strain; the uniform range up to Fm, increasing in εp."""
 
+    strain: np.ndarray  # the specimen's engineering strain (the line's, unless its slope is apparent)
     log_strain: np.ndarray
     sig_t: np.ndarray
     eps_p: np.ndarray
@@ -283,6 +284,8 @@ class _TrueCurve:
     curve: pd.DataFrame  # the flow curve from Rp0.2 on (true_curve.csv)
     sig_t_rp: float | None  # true stress at 0.2 % plastic strain
     eps_p_at_Rm: float
+    E_specimen: float  # the E that strips the specimen's elastic strain (∞: left out)
+    warnings: list[str]
 
 
 @dataclass
@@ -468,7 +471,9 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
     noise_MPa = _stress_noise_MPa(eng_stress[: i_m + 1])
     raw_channel = "extensometer_mm" if src["source"] == "extensometer" else "crosshead_mm"
     strain_noise = strain_quantum_noise(inp.sub.column(raw_channel)[: i_m + 1] / length)  # the encoder's quantum, before the compliance
-    handbook_E = record.positive("material.E_MPa") if E_MPa is None else None
+    # the handbook E is the material's; a crosshead diagram without the frame's stiffness has the frame's compliance in its slope
+    apparent = src["source"] == "crosshead" and src["stiffness"] is None
+    handbook_E = record.positive("material.E_MPa") if E_MPa is None and not apparent else None
     disp0 = src["disp"]
     toe_mm, scale_factor = 0.0, None
     unresolved = None  # the line's fit when it was not resolved and the handbook E took its place (kept from then on)
@@ -504,7 +509,9 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         if E == mod.E_MPa and not _resolved(mod):
             raise IdentificationError(
                 f"{record.source}: the elastic line is not resolved: E = {E:.4g} ± {mod.E_stderr_MPa:.2g} MPa from {mod.n_points} samples "
-                f"({mod.source}); give the handbook modulus (--E or material.E_MPa) or sample faster")
+                f"({mod.source}); " + ("give the frame stiffness (rig.frame_stiffness_N_per_um), use an extensometer or sample faster "
+                                       "(the handbook E is not this diagram's slope: the frame is in it)" if apparent
+                                       else "give the handbook modulus (--E or material.E_MPa) or sample faster"))
         Rp02, _ = iso6892.offset_yield_strength(strain, eng_stress, E, MIN_YIELD_OFFSET, start_MPa=window_MPa[0])
         if window_fixed_MPa is not None or modulus_reference == "Rm" or abs(Rp02 - ref) <= 1e-6 * Rp02:
             break
@@ -549,22 +556,48 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     return _IsoResults(yp=yp, e_m=e_m, Ag=Ag, i_k=i_k, A=A, A_method=A_method, su=su, su_source=su_source, dk=dk, Z=Z, warnings=warnings)
 
 
+def specimen_strain(strain, eng_stress_MPa, E_line_MPa: float, E_specimen_MPa: float):
+    """The specimen's engineering strain from a diagram whose elastic slope E_line includes a
+    compliance in series (frame, grips): e_s = (e − σ_e/E_line) + σ_e/E_s — the plastic extension
+    with the elastic slope (ISO 6892-1), plus the specimen's own elastic strain (none for E_s = ∞)."""
+    s = np.asarray(eng_stress_MPa, dtype=float)
+    return np.asarray(strain, dtype=float) - s / E_line_MPa + s / E_specimen_MPa
+
+
+def _specimen_modulus(inp: _Inputs, line: _ElasticLine) -> tuple[float, str | None]:
+    """The specimen's E for the true curve, and a warning when it is not the line's slope: on a
+    crosshead record without the frame's stiffness the slope is apparent (frame in series); then
+    the handbook material.E_MPa, else none (∞: the specimen's elastic strain is left out)."""
+    if inp.src["source"] != "crosshead" or inp.src["stiffness"] is not None or tension_E_source(line.mod.source, "crosshead") != "apparent":
+        return line.E, None
+    handbook = inp.record.positive("material.E_MPa")
+    elastic = f"the crosshead's elastic extension is removed with the diagram's slope (apparent E = {line.E:.4g} MPa, ISO 6892-1's way for Rp)"
+    if handbook is not None and handbook > line.E:
+        return handbook, f"no frame stiffness: {elastic}; the specimen's own elastic strain is the handbook E's (material.E_MPa = {handbook:.4g} MPa)"
+    return math.inf, (f"no frame stiffness and no handbook E: {elastic}; the specimen's own elastic strain (Rm/E, about "
+                      f"{100 * inp.Rm / 2.1e5:.2g} % for a steel) is left out of the true stress, which reads that much low "
+                      "(give material.E_MPa or rig.frame_stiffness_N_per_um)")
+
+
 def _true_curve(inp: _Inputs, line: _ElasticLine, true_stress: str, poisson: float) -> _TrueCurve:
-    """The true curve of the uniform range (up to Fm): true strain, stress and plastic strain."""
-    strain, E, i_m = line.strain, line.E, inp.i_m
+    """The true curve of the uniform range (up to Fm): true strain, stress and plastic strain, of
+    the specimen's strain (:func:`specimen_strain` where the line's slope is apparent)."""
+    E, i_m = line.E, inp.i_m
+    E_s, note = _specimen_modulus(inp, line)
+    strain = line.strain if note is None else specimen_strain(line.strain, inp.eng_stress, E, E_s)
     log_strain = np.log1p(strain)  # (3.2) ε = ln((l0 + Δl)/l0)
     if true_stress == "gost_3_6":
-        sig_t = true_stress_gost(inp.eng_stress, log_strain, bulk_modulus(E, poisson))
+        sig_t = true_stress_gost(inp.eng_stress, log_strain, bulk_modulus(E_s, poisson))
     else:
         sig_t = true_stress_constant_volume(inp.eng_stress, strain)
-    eps_p = true_plastic_strain(log_strain, sig_t, E)
+    eps_p = true_plastic_strain(log_strain, sig_t, E_s)
     uni = slice(0, i_m + 1)
     ep_u, sig_u = _increasing(eps_p[uni], sig_t[uni])
     in_range = ep_u >= MIN_YIELD_OFFSET  # the flow curve from Rp0.2 on, as for compression; elastic jitter left out
     curve = pd.DataFrame({"true_plastic_strain": ep_u[in_range], "true_stress_MPa": sig_u[in_range]})
     sig_t_rp = float(np.interp(MIN_YIELD_OFFSET, ep_u, sig_u)) if ep_u[-1] > MIN_YIELD_OFFSET else None
-    return _TrueCurve(log_strain=log_strain, sig_t=sig_t, eps_p=eps_p, eps_u=float(log_strain[i_m]), ep_u=ep_u, sig_u=sig_u,
-                      curve=curve, sig_t_rp=sig_t_rp, eps_p_at_Rm=float(eps_p[i_m]))
+    return _TrueCurve(strain=strain, log_strain=log_strain, sig_t=sig_t, eps_p=eps_p, eps_u=float(log_strain[i_m]), ep_u=ep_u, sig_u=sig_u,
+                      curve=curve, sig_t_rp=sig_t_rp, eps_p_at_Rm=float(eps_p[i_m]), E_specimen=E_s, warnings=[note] if note else [])
 
 
 def _true_stress_warnings(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, true_stress: str) -> list[str]:
@@ -573,7 +606,7 @@ def _true_stress_warnings(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, tr
     if true_stress != "gost_3_6":
         return []
     i_m = inp.i_m
-    split = 100.0 * (float(true.sig_t[i_m]) / float(true_stress_constant_volume(inp.eng_stress[i_m], line.strain[i_m])) - 1.0)
+    split = 100.0 * (float(true.sig_t[i_m]) / float(true_stress_constant_volume(inp.eng_stress[i_m], true.strain[i_m])) - 1.0)
     if not split > TRUE_STRESS_SPLIT_PCT:
         return []
     return [f"true stress (3.6) at Fm reads {split:.1f} % above constant volume σ_e·(1 + e): its cross-section is first order "
@@ -739,6 +772,8 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
             "Rp02": "offset method, ISO 6892-1: intersection with the 0.2 % line of slope E",
             "Ag": "plastic extension at maximum force, 100·(e_m − Rm/E)",
             "Z": "(S0 − Su)/S0" if iso.Z is not None else None,
+            "true_curve_strain": ("the specimen's: crosshead strain less σ_e/E_apparent" + (f", plus σ_e/{true.E_specimen:.4g} MPa (handbook)" if math.isfinite(true.E_specimen) else " (its own elastic strain left out)")
+                                  if true.warnings else "the strain source's, elastic strain σ_t/E removed for εp"),
             "true_stress": "(3.6) corrected, K = E/(3(1 − 2ν))" if true_stress == "gost_3_6" else "σ_e(1 + e), constant volume",
             "poisson": poisson,
             "neck_correction": neck,
@@ -797,7 +832,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     fracture, neck_warnings = _neck_correction(inp, iso, true)
     hard = _hardening_fits(inp, iso, true, fracture, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
                            fit_range=fit_range, fracture_point=fracture_point)
-    warnings = inp.warnings + line.warnings + iso.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings + hard.warnings
+    warnings = inp.warnings + line.warnings + iso.warnings + true.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings + hard.warnings
     result = _result(inp, line, iso, true, fracture, hard, warnings, toe=toe, true_stress=true_stress, poisson=poisson,
                      neck=neck, law=law, hardening=hardening)
     return Identification(result=result, true_curve=true.curve, curves=_curves(inp, line, true, fracture, hard, neck))

@@ -185,8 +185,11 @@ def _safe(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]+", "_", name) or "record"
 
 
+POINT_RATES_FILE = "point_rates.csv"
+
+
 def write_fit(series: SeriesFit, outdir: str | Path, options: dict | None = None) -> Path:
-    """Write fit.json, curves/*.csv and plots/*.png into ``outdir``; returns the fit.json path.
+    """Write fit.json, curves/*.csv, point_rates.csv and plots/*.png into ``outdir``; returns the fit.json path.
 
     fit.json's ``provenance`` (identification.provenance) names every record's SHA-256 and the
     ``options`` as given."""
@@ -198,6 +201,8 @@ def write_fit(series: SeriesFit, outdir: str | Path, options: dict | None = None
     data = series.as_dict()
     for c in series.curves:
         c.table.to_csv(outdir / "curves" / c.filename, index=False, float_format="%.6g", lineterminator="\n")
+    series.point_rates().to_csv(outdir / POINT_RATES_FILE, index=False, float_format="%.6g", lineterminator="\n")
+    data["point_rates_file"] = POINT_RATES_FILE  # each fitted point's own strain rate (docs/fit-json.md)
     plots = _plots(series, outdir / "plots")
     curve_of = {name: f"curves/{c.filename}" for c in series.curves for name in c.records}
     for rec in data["records"]:

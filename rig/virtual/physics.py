@@ -565,6 +565,7 @@ class RigModel:
         self.moving = False
         self.thermocouple_open = False
         self.events: list[tuple[float, str]] = []
+        self._loading_C_s, self._loading_s = 0.0, 0.0  # ∫T dt and ∫dt while the crosshead moves
         self._update_conditions()
         if test == "tension" and tension_response == "fe":
             self.mechanics.fe_neck()  # made now, not in the model step that starts the test (the devices wait on it)
@@ -590,6 +591,12 @@ class RigModel:
     @property
     def temperature_C(self) -> float:
         return self.furnace.temperature_C
+
+    @property
+    def loading_temperature_C(self) -> float:
+        """The furnace's mean temperature while the crosshead moved (the temperature the flow
+        stress was made at; the furnace cools after the heater goes off); now, before it moved."""
+        return self._loading_C_s / self._loading_s if self._loading_s > 0 else self.furnace.temperature_C
 
     @property
     def fractured(self) -> bool:
@@ -620,6 +627,8 @@ class RigModel:
         self.furnace.step(dt)
         self._update_conditions()
         if self.moving:
+            self._loading_C_s += self.furnace.temperature_C * dt
+            self._loading_s += dt
             target = self.crosshead_mm + self.speed_mm_per_s * dt
             limit = self.stroke_limit_mm
             if self.test == "tension" and not self.fractured:

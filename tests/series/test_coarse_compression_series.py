@@ -62,3 +62,41 @@ def test_point_rates_from_a_coarse_record_are_local():
     eps = np.array([0.05, 0.3, 0.6])
     got = point_strain_rates(rec, E_MPa, eps)
     assert got == pytest.approx(np.interp(eps, truth["eps_p"], truth["rate_per_s"]), rel=0.05)
+
+
+def test_fit_writes_each_points_own_rate_beside_fit_json(tmp_path, capsys):
+    """point_rates.csv (named by fit.json's point_rates_file): every fitted point with the strain
+    rate the model took there, against the closed form's own ε̇(εp); --rate-per-record writes the
+    record's one rate."""
+    import json
+
+    import pandas as pd
+
+    from flowcurve.cli import main
+    from flowcurve.record.format import write_record
+
+    paths, truths = [], {}
+    for T, rate in SERIES:
+        rec, truth = compression_record(T, rate)
+        path = write_record(tmp_path / f"{rec.source}.csv", rec)
+        paths.append(path)
+        truths[path.stem] = truth
+    common = ["--E", repr(E_MPa), "--ref-rate", repr(REF["ref_strain_rate_per_s"]), "--ref-temp", "20", "--melt-temp", "1420"]
+    for extra, source in (([], "point"), (["--rate-per-record"], "record")):
+        out = tmp_path / f"fit-{source}"
+        assert main(["fit", *map(str, paths), "--out", str(out), *common, *extra]) == 0, capsys.readouterr().err
+        d = json.loads((out / "fit.json").read_text())
+        table = pd.read_csv(out / d["point_rates_file"])
+        assert list(table.columns) == ["record", "true_plastic_strain", "true_stress_MPa", "strain_rate_per_s", "temperature_C",
+                                       "strain_rate_source"]
+        assert set(table["strain_rate_source"]) == {source} and set(table["record"]) == set(truths)
+        for name, rows in table.groupby("record"):
+            eps, rates = rows["true_plastic_strain"].to_numpy(), rows["strain_rate_per_s"].to_numpy()
+            own = np.interp(eps, truths[name]["eps_p"], truths[name]["rate_per_s"])
+            one = next(r["strain_rate_per_s"] for r in d["records"] if r["name"] == name)
+            if source == "point":
+                late = eps >= 0.02
+                assert np.max(np.abs(rates[late] / own[late] - 1.0)) < 0.05, name
+                assert rates[-1] > 1.5 * rates[late][0], name  # the drift is there
+            else:
+                assert np.allclose(rates, one), name

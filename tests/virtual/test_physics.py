@@ -205,3 +205,20 @@ def test_noise_is_deterministic_given_the_seed_and_encoder_quantised():
     assert na == nb and 3.5 < np.std(na) < 6.5
     a.crosshead_mm = 1.23456
     assert a.encoder_counts() == 123
+
+
+def test_loading_temperature_is_the_furnaces_while_the_crosshead_moved():
+    """The truth a virtual run is judged against: the furnace's temperature while loading, not after
+    the test (an 850 C compression judged at the 802 C the furnace had cooled to by the stop read 9 %
+    off the virtual material)."""
+    m = RigModel("12Kh18N10T", "compression", speed_mm_per_s=0.5, initial_temperature_C=850.0)
+    m.step(10.0)  # heater off: the furnace cools from the start
+    m.start_crosshead()
+    seen = []
+    for _ in range(50):
+        m.step(0.1)
+        seen.append(m.temperature_C)  # the temperature the step's flow stress was made at
+    m.stop_crosshead()
+    m.step(60.0)
+    assert m.temperature_C < min(seen) - 5.0
+    assert m.loading_temperature_C == pytest.approx(np.mean(seen), abs=0.05)
