@@ -15,9 +15,11 @@ A thread takes part in a model clock from its first wait on it (or from :meth:`e
 a thread about to start) until it ends. A thread that
 blocks on something another thread's clock wait will release (a port's lock) says so with
 ``with clock.idle(): lock.acquire()``. One that blocks elsewhere unannounced would stop time
-for good, so when nothing has happened for ``stall_s`` of wall time the clock moves on to the
-next deadline anyway — as time passes on a loaded machine. A thread that merely computes
-(or imports) for that long lets the others move on too, so ``stall_s`` is generous.
+for good, so when nothing has happened for ``stall_s`` of wall time while the process was
+(nearly) idle — it used under ``STALL_CPU_FRACTION`` of that time on the CPU — the clock moves on
+to the next deadline anyway. A thread that is still computing, however slowly on a loaded
+machine, holds time (so a run's samples fall at the same model times on a busy machine as on an
+idle one) up to ``hard_stall_s`` of wall time, after which time moves on regardless.
 """
 
 from __future__ import annotations
@@ -98,6 +100,8 @@ class WallClock:
 
 WALL = WallClock()
 
+STALL_CPU_FRACTION = 0.05  # below this share of one core over the stall, no thread is computing: one is blocked
+
 
 class ModelClock:
     """Simulated seconds that move only when every participating thread waits (or by hand).
@@ -105,10 +109,12 @@ class ModelClock:
     ``auto=False`` leaves time entirely to :meth:`advance` (the test's hand on the clock).
     """
 
-    def __init__(self, start_s: float = 0.0, *, auto: bool = True, stall_s: float = 0.25):
+    def __init__(self, start_s: float = 0.0, *, auto: bool = True, stall_s: float = 0.25, hard_stall_s: float = 5.0):
         self._now = float(start_s)
         self.auto = auto
         self.stall_s = stall_s
+        self.hard_stall_s = max(hard_stall_s, stall_s)
+        self.stalls = 0  # times time moved on because a participant was stuck (diagnostics)
         self._cond = threading.Condition(threading.Lock())
         self._advancing = threading.Lock()  # one thread runs timers at a time, in order
         self._timers: list[tuple[float, int, Timer]] = []
@@ -116,6 +122,7 @@ class ModelClock:
         self._actors: set[threading.Thread] = set()
         self._waiting: dict[threading.Thread, float] = {}
         self._progress_wall = time.monotonic()
+        self._progress_cpu = time.process_time()
 
     def __repr__(self) -> str:
         return f"ModelClock(now={self._now:.6f})"
@@ -212,9 +219,9 @@ class ModelClock:
                     if jump is None:
                         seen = self._progress_wall
                         self._cond.wait(self.stall_s)
-                        if (self._progress_wall == seen and self.auto
-                                and time.monotonic() - seen >= self.stall_s):
+                        if self._progress_wall == seen and self.auto and self._stalled():
                             jump = self._next_deadline()  # someone is stuck: time goes on
+                            self.stalls += 1
                 finally:
                     del self._waiting[me]
             if jump is not None and math.isfinite(jump):
@@ -223,7 +230,16 @@ class ModelClock:
     # -- internals (called with the condition held) -------------------------------------------
     def _progressed(self) -> None:
         self._progress_wall = time.monotonic()
+        self._progress_cpu = time.process_time()
         self._cond.notify_all()
+
+    def _stalled(self) -> bool:
+        """No progress for ``stall_s`` of wall time with the process nearly idle (a thread blocked
+        outside the clock), or for ``hard_stall_s`` whatever the CPU did."""
+        wall = time.monotonic() - self._progress_wall
+        if wall >= self.hard_stall_s:
+            return True
+        return wall >= self.stall_s and time.process_time() - self._progress_cpu < STALL_CPU_FRACTION * wall
 
     def _next_deadline(self) -> float:
         due = [d for d in self._waiting.values()]

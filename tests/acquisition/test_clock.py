@@ -1,6 +1,7 @@
 """flowcurve.clock: the model clock against schedules worked out by hand, and the wall clock."""
 
 import threading
+import time
 
 import pytest
 
@@ -109,6 +110,48 @@ def test_a_participant_stuck_outside_the_clock_does_not_stop_time():
     finally:
         release.set()
         stuck.join(5)
+
+
+def test_a_participant_computing_holds_time_however_slow():
+    """A thread that is working (on a loaded machine: slowly) is not stuck: time waits for it,
+    so the run's samples fall at the same model times on a busy machine as on an idle one."""
+    clock = ModelClock(stall_s=0.01)
+    seen = []
+
+    def compute_then_read():
+        clock.sleep(0.1)
+        end = time.monotonic() + 0.3  # 30 stall periods of computing (a busy loop: CPU time grows)
+        while time.monotonic() < end:
+            pass
+        seen.append(clock.now())
+        clock.sleep(0.1)
+
+    worker = threading.Thread(target=compute_then_read)
+    clock.enlist(worker)
+    worker.start()
+    clock.sleep(1.0)  # the other participant: it would be the one to move time on a stall
+    worker.join(5)
+    assert seen == [pytest.approx(0.1)] and clock.stalls == 0
+
+
+def test_a_computing_participant_is_still_given_up_after_the_hard_stall():
+    clock = ModelClock(stall_s=0.01, hard_stall_s=0.05)
+    stop = threading.Event()
+
+    def spin():
+        clock.sleep(0.0)
+        while not stop.is_set():
+            pass
+
+    spinner = threading.Thread(target=spin)
+    clock.enlist(spinner)
+    spinner.start()
+    try:
+        clock.sleep(0.5)  # the spinner never waits again: only the hard stall moves time
+        assert clock.now() == 0.5 and clock.stalls >= 1
+    finally:
+        stop.set()
+        spinner.join(5)
 
 
 def test_manual_clock_moves_only_by_hand():
