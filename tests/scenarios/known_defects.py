@@ -21,9 +21,6 @@ KNOWN: list[tuple[str, object]] = [
     ("load cell delay: a constant delay of the amplifier's stream is not detected (it looks like a slow line): the force "
      "lags the crosshead by the delay, with no event",
      lambda c: _fault(c, "loadcell", "delay")),
-    ("furnace unplugged in-process: the virtual module's watchdog is ticked only while a host talks to it (on a pty its own "
-     "thread ticks it), so the heater output may still read on when the run returns",
-     lambda c: _fault(c, "furnace", "unplug")),
     ("compression at 850 C and 0.5 mm/s: the flow curve reads about 9 % off the virtual material with no warning "
      "(12Kh18N10T, 50 Hz, fault-free); cause not found yet (the rate doubles over the stroke and the comparison takes one)",
      lambda c: c.test == "compression" and c.temperature_C >= 850.0 and c.speed_mm_per_s >= 0.5),

@@ -308,9 +308,6 @@ def run_cell(cell: Cell, workdir: Path) -> CellRun:
     vr = rigs[0] if rigs else None
     if vr is not None:  # the virtual furnace module's outputs and the relay, as the test left them
         module = vr.devices["furnace"]
-        deadline = module.next_deadline()
-        if module.do and deadline is not None:  # no host can reach it (unplugged): its watchdog's time-out passes
-            module.on_tick(deadline)  # in-process nothing ticks the module after the run; on a pty its thread does
         out.heater_do, out.relay_on = module.do, vr.model.furnace.relay_on
         if cell.fault.kind in ("drop", "garble"):
             out.replies_hit = vr.devices[cell.fault.device].faults.replies_hit
