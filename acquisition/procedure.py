@@ -307,6 +307,7 @@ class Procedure:
         self.writer: RecordWriter | None = None
         self._writing = False
         self._ending_process = False  # the test was ended by the system stopping the program (not an operator's Ctrl-C)
+        self._heater_released = False  # set at the end's switch-off: the furnace channel reads, no longer controls
         self._retried_noted: dict[str, int] = {}  # exchanges retried per device, as the record's events last said
         self._unshown_rows: list[np.ndarray] = []  # recorded rows no snapshot has carried yet (the last batch)
         self._end_reason = ""
@@ -397,11 +398,14 @@ class Procedure:
                 finally:
                     if sampler is not None:  # the reading threads let go of the ports first
                         sampler.request_stop()
+                    self._heater_released = True  # no control step from here on commands the heater
                     safety.switch_off(reason or "end of test")
                     self._end_reason = reason
                     self._stop_motion()
                     if sampler is not None:
                         final = self._drop_unbracketed(sampler, sampler.finish())
+                        if rig.has_furnace and safety.off_confirmed:  # a control step in flight at the switch-off
+                            safety.switch_off(reason or "end of test")  # may have switched it on again: off once more
                         self._feed_watchdog()  # the furnace channel has stopped feeding it
                         late = sampler.fault
                         if error is None and isinstance(late, SafetyError):  # found while stopping: still told
@@ -486,7 +490,8 @@ class Procedure:
         setpoint, rig = self.spec.temperature_C, self.rig
 
         def guarded() -> float:
-            temp = rig.read_temperature_C() if setpoint is None else rig.hold_temperature(setpoint)
+            hold = setpoint is not None and not self._heater_released
+            temp = rig.hold_temperature(setpoint) if hold else rig.read_temperature_C()
             check_temperature(temp, rig.max_temperature_C)
             rig.host_ok()
             return temp
@@ -683,7 +688,12 @@ class Procedure:
             watch(WATCH_COOLING_S)
         except SafetyError as exc:
             self._event("fault", str(exc))
-            return exc
+            if error is None:
+                return exc
+            # the relay finding first (the operator must act), and the fault that stopped the test in its own words
+            both = SafetyError(exc.device, f"{str(exc)[len(exc.device) + 2:]}; the test had stopped on: {error}")
+            both.stopped_by = error
+            return both
         except FlowcurveError:
             pass
         return error

@@ -27,9 +27,6 @@ KNOWN: list[tuple[str, object]] = [
     ("a relay that sticks during a short test is not caught: the stuck-relay check needs about 30 s of the heater off, "
      "and no furnace watch follows a test that was not heated",
      lambda c: _fault(c, "furnace", "relay_stuck") and (c.temperature_C <= 20.0 or c.speed_mm_per_s >= 0.5)),
-    ("a device lost (silence, unplug) at 300-850 C: after the abort the stuck-relay check can read the furnace's lag (a few C "
-     "rise with the heater off) as a stuck relay, and that message replaces the lost device's own",
-     lambda c: c.fault.kind in ("unplug", "silence") and c.temperature_C >= 300.0),
 ]
 
 
