@@ -34,6 +34,7 @@ from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temper
 from flowcurve.acquisition.sampler import Channel, Sampler
 from flowcurve.clock import WALL, Clock
 from flowcurve.errors import FlowcurveError, RecordWriteError, SafetyError
+from flowcurve.rig.furnace import StuckRelayCheck
 
 MOTION_MM = 0.005  # the crosshead has moved once it is this far from where recording began
 SPEED_MARGIN = 2.0  # readings may change at up to this multiple of the declared speed's rate
@@ -45,6 +46,7 @@ STAMP_SLACK_S = 0.05  # host seconds two time stamps may be off by (thread sched
 LOSS_NOISE_FRAMES = 5  # the load cell's lost frames are declared beyond this many ...
 LOSS_NOISE_FRACTION = 0.005  # ... and this fraction (a loaded PC's scheduling; the count is an estimate)
 WATCH_COOLING_S = 45.0  # test seconds the furnace is watched after an over-temperature
+WATCH_UNHEATED_S = 15.0  # ... and after a test it did not heat (no stored heat to wait out: a stuck relay shows in ~12 s)
 HEAT_STEPS_PER_PERIOD = 4
 HEAT_MIN_TICK_S = 0.005  # host seconds
 FORCE_LIMIT_OF_CAPACITY = 0.98  # default force limit: this fraction of the frame's capacity
@@ -489,10 +491,15 @@ class Procedure:
     def _furnace_read(self) -> Callable[[], float]:
         setpoint, rig = self.spec.temperature_C, self.rig
 
+        # a test that never heats has the heater commanded off throughout: a furnace that warms is a stuck relay
+        never_heated = StuckRelayCheck(self._furnace_name(), settle_s=0.0) if setpoint is None else None
+
         def guarded() -> float:
             hold = setpoint is not None and not self._heater_released
             temp = rig.hold_temperature(setpoint) if hold else rig.read_temperature_C()
             check_temperature(temp, rig.max_temperature_C)
+            if never_heated is not None:
+                never_heated.update(temp, self.clock(), False)
             rig.host_ok()
             return temp
 
@@ -672,20 +679,29 @@ class Procedure:
     def _after_safety_stop(self, error: FlowcurveError | None) -> FlowcurveError | None:
         """After a heated test or an over-temperature the heater is off, or must be: watch the
         furnace cool for a while; if it keeps heating, the relay is stuck (SafetyError, the
-        operator cuts the power) — nothing watches the furnace once the process has ended."""
+        operator cuts the power) — nothing watches the furnace once the process has ended.
+        After a test that did not heat, while the furnace answers, a shorter watch without
+        settling (no stored heat): a relay that stuck during a short test shows only then."""
         watch = getattr(self.rig, "watch_heater_off", None)
         heated = self.spec.temperature_C is not None and not isinstance(error, SafetyError)
         over = isinstance(error, SafetyError) and "over-temperature" in str(error)
-        if not (watch and (heated or over)):
+        unheated = (self.spec.temperature_C is None and self.rig.has_furnace
+                    and getattr(error, "device", None) != self._furnace_name())
+        if not (watch and (heated or over or unheated)):
             return error
         if self._ending_process and not over:  # a service manager or a console shutting down will not wait the watch out
-            self._alert("furnace: heater off; the program is being stopped, so nothing watches the furnace cool — "
-                        "check that it does (a stuck relay keeps heating)")
+            if heated:
+                self._alert("furnace: heater off; the program is being stopped, so nothing watches the furnace cool — "
+                            "check that it does (a stuck relay keeps heating)")
             return error
-        self._alert(f"furnace: {'over-temperature — ' if over else ''}heater off; watching that it cools "
-                    f"({WATCH_COOLING_S:g} s test time)")
+        if heated or over:
+            self._alert(f"furnace: {'over-temperature — ' if over else ''}heater off; watching that it cools "
+                        f"({WATCH_COOLING_S:g} s test time)")
+            seconds, settle = WATCH_COOLING_S, {}
+        else:
+            seconds, settle = WATCH_UNHEATED_S, {"settle_s": 0.0}
         try:
-            watch(WATCH_COOLING_S)
+            watch(seconds, **settle)
         except SafetyError as exc:
             self._event("fault", str(exc))
             if error is None:
@@ -697,6 +713,9 @@ class Procedure:
         except FlowcurveError:
             pass
         return error
+
+    def _furnace_name(self) -> str:
+        return getattr(getattr(self.rig, "furnace", None), "name", "furnace")
 
     def _feed_watchdog(self) -> None:
         """Until the rig disarms the furnace module's watchdog at close, keep it fed: a trip

@@ -197,10 +197,11 @@ class DriverRig:
             self._verified_at = now
         return t
 
-    def watch_heater_off(self, seconds: float) -> None:
+    def watch_heater_off(self, seconds: float, settle_s: float = STUCK_SETTLE_S) -> None:
         """After a safety stop: read the furnace for ``seconds`` test seconds with the heater
-        off; SafetyError if it keeps heating (a stuck relay — the operator must cut the power)."""
-        check = StuckRelayCheck(self.furnace.name, settle_s=STUCK_SETTLE_S)
+        off; SafetyError if it keeps heating (a stuck relay — the operator must cut the power).
+        ``settle_s``: the stored heat's time (0 after a test that did not heat)."""
+        check = StuckRelayCheck(self.furnace.name, settle_s=settle_s)
         end = self._clock() + seconds
         while self._clock() < end:
             check.update(self.furnace.temperature_C(), self._clock(), False)
@@ -298,5 +299,6 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
         with DriverRig(config, time_scale=time_scale, virtual=vr, stream=stream) as rig:
             outcome = Procedure(rig, spec, path, view=view, interactive=interactive, stop_requested=stop_requested).run()
         model = vr.model
-        return VirtualRun(outcome, model.material, model.nominal_strain_rate_per_s, model.temperature_C, friction_mu,
+        loaded_C = model.temperature_C if vr.loading_ended_C is None else vr.loading_ended_C  # not after the furnace watch
+        return VirtualRun(outcome, model.material, model.nominal_strain_rate_per_s, loaded_C, friction_mu,
                           compression_response, tension_response)

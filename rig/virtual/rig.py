@@ -69,6 +69,7 @@ class VirtualRig:
         self._t0 = clock.now()
         self._running = False
         self._motion_start_s: float | None = None  # model time the crosshead first moved
+        self.loading_ended_C: float | None = None  # furnace temperature when the crosshead was first stopped
         self._scheduled: list[FaultSpec] = []  # --fault ...@SECONDS not yet due
         self.faults_applied: list[tuple[float, FaultSpec]] = []  # (model time, spec), in order
         self.devices: dict = {}
@@ -164,7 +165,10 @@ class VirtualRig:
 
     def stop_crosshead(self) -> None:
         with self._lock:
-            self.sync().stop_crosshead()
+            m = self.sync()
+            m.stop_crosshead()
+            if self.loading_ended_C is None:
+                self.loading_ended_C = m.temperature_C  # the truth's temperature: the furnace's after loading, not after the watch
 
     def schedule(self, spec: FaultSpec) -> None:
         """A fault of ``--fault`` (:mod:`rig.virtual.fault_spec`): on now, or ``spec.at_s``

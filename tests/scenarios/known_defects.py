@@ -24,9 +24,6 @@ KNOWN: list[tuple[str, object]] = [
     ("compression at 850 C and 0.5 mm/s: the flow curve reads about 9 % off the virtual material with no warning "
      "(12Kh18N10T, 50 Hz, fault-free); cause not found yet (the rate doubles over the stroke and the comparison takes one)",
      lambda c: c.test == "compression" and c.temperature_C >= 850.0 and c.speed_mm_per_s >= 0.5),
-    ("a relay that sticks during a short test is not caught: the stuck-relay check needs about 30 s of the heater off, "
-     "and no furnace watch follows a test that was not heated",
-     lambda c: _fault(c, "furnace", "relay_stuck") and (c.temperature_C <= 20.0 or c.speed_mm_per_s >= 0.5)),
 ]
 
 
