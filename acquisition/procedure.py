@@ -316,6 +316,7 @@ class Procedure:
         self._storage_error: RecordWriteError | None = None
         self._dropped = 0
         self._restarts_noted = 0
+        self._missing_noted = 0  # the load cell's missing frames the events named so far
         self._late_noted: dict[str, int] = {}
         self._rejected_noted: dict[str, int] = {}
 
@@ -612,6 +613,12 @@ class Procedure:
             for t, v, why in ch.guard.rejected[done:]:
                 self._event("corrupt", f"{ch.device}: reading {v:.6g} at {t:.3f} s rejected as corrupt: {why}")
             self._rejected_noted[ch.device] = len(ch.guard.rejected)
+        missing = getattr(self.rig, "frames_lost", 0)
+        if missing > self._missing_noted:  # every gap the stream's timing shows, named (an event, not a failure)
+            gap = missing - self._missing_noted
+            self._event("frames_missing", f"load cell: {gap} frame{'s' if gap != 1 else ''} missing from its stream ({missing} so "
+                                          "far, from the gaps in its timing: lost on the line, garbled or skipped)")
+            self._missing_noted = missing
         restarts = getattr(self.rig, "stream_restarts", 0)
         if restarts > self._restarts_noted:
             self._event("stream_restart", f"load cell: garbled stream restarted ({restarts - self._restarts_noted} more, {restarts} so far; frames lost meanwhile)")
@@ -623,6 +630,9 @@ class Procedure:
         self._note_retries()
         if final and self._loss_summary():
             self._event("data_loss", self._loss_summary())
+        elif final and self._missing_noted:  # below the data-loss limit: no failure, but the operator hears of it
+            self._alert(f"load cell: {self._missing_noted} frames missing from its stream (the record's events name them; "
+                        "below the data-loss limit) — check its cable if this recurs")
 
     def _note_retries(self, final: bool = False) -> None:
         """A ``retry`` event per device for the exchanges repeated since the last call after a

@@ -242,3 +242,44 @@ def test_a_relay_that_sticks_in_a_short_unheated_test_is_caught(tmp_path, device
     texts = [f"{e.name} {e.text}" for e in rec.events]
     assert any(t.startswith("fault furnace: heater does not switch off") for t in texts)
     assert any(t.startswith("heater_off") for t in texts)  # heater-off was tried
+
+
+def test_three_frames_lost_from_the_load_cells_stream_are_named(tmp_path, device_link):
+    """Issue 31 (d): a loss too small for the data-loss limit (3 frames of hundreds) is still
+    named in the record's events and in identify's warnings, and the operator hears of it."""
+    from flowcurve.identification.identify import fault_warnings
+
+    spec = TestSpec("compression", material=MATERIAL, geometry_mm={"d0_mm": 5.989, "h0_mm": 6.982}, speed_mm_per_s=0.5,
+                    stop=StopCriteria(target_displacement_mm=2.0))
+    lost = []
+
+    def drop_three_frames(vr):
+        aed = vr.devices["loadcell"]
+        apply, seen = aed.faults.apply, []
+
+        def dropping(reply):
+            if len(reply) == aed_frame_length(aed):
+                seen.append(reply)
+                if 40 <= len(seen) < 43:  # mid-test (the record has about 100 rows)
+                    lost.append(reply)
+                    return None
+            return apply(reply)
+
+        aed.faults.apply = dropping
+
+    run = run_virtual_test(spec, tmp_path / "r.csv", material=MATERIAL, time_scale=5.0, compression_response="slab",
+                           rig_setup=drop_three_frames, **device_link)
+    assert len(lost) == 3 and run.outcome.status == "complete"
+    rec = read_record(run.outcome.path)
+    named = [e.text for e in rec.events if e.name == "frames_missing"]
+    assert named and all(t.startswith("load cell: ") for t in named)
+    assert 1 <= sum(int(t.split()[2]) for t in named) <= 6  # an estimate from the stream's timing (3 when the clock is exact)
+    warnings, _doubtful = fault_warnings(rec)
+    assert any("frames_missing" in w and "load cell" in w for w in warnings)
+
+
+def aed_frame_length(aed) -> int:
+    """The length of one stream frame in the virtual amplifier's present output format."""
+    from flowcurve.rig.codecs.aed import output_format
+
+    return output_format(int(aed.s["cof"])).frame_length

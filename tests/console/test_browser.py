@@ -141,7 +141,7 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
     assert set(rec.meta) - {"stop_reason"} - losses == set(ref.meta) - {"stop_reason"} - losses
     varying = {"date", "stop_reason", "samples", "post.hk_mm", "post.dmax_mm", *losses}  # the time, where each test stopped
     assert {k: v for k, v in rec.meta.items() if k not in varying} == {k: v for k, v in ref.meta.items() if k not in varying}
-    declared = {"data_loss", "stream_restart", "retry", "late_reply", "dropped"}
+    declared = {"data_loss", "frames_missing", "stream_restart", "retry", "late_reply", "dropped"}
     assert [e.name for e in rec.events if e.name not in declared] == [e.name for e in ref.events if e.name not in declared]
     assert int(rec.meta["samples"]) == len(rec.data)
 

@@ -14,10 +14,6 @@ def _fault(cell: Cell, device: str | None, *kinds: str) -> bool:
 
 
 KNOWN: list[tuple[str, object]] = [
-    ("load cell, few frames after the fault: a drop or garble of 5 % that costs fewer than 5 frames (or 0.5 % of the test) is "
-     "counted in the header's samples_missing but raises no event (the threshold keeps the virtual amplifier's own skipped "
-     "frames on a loaded PC from failing fault-free runs), so the fault goes unnamed",
-     lambda c: _fault(c, "loadcell", "drop", "garble")),
     ("load cell delay: a constant delay of the amplifier's stream is not detected (it looks like a slow line): the force "
      "lags the crosshead by the delay, with no event",
      lambda c: _fault(c, "loadcell", "delay")),
