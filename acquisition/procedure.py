@@ -617,7 +617,7 @@ class Procedure:
         if missing > self._missing_noted:  # every gap the stream's timing shows, named (an event, not a failure)
             gap = missing - self._missing_noted
             self._event("frames_missing", f"load cell: {gap} frame{'s' if gap != 1 else ''} missing from its stream ({missing} so "
-                                          "far, from the gaps in its timing: lost on the line, garbled or skipped)")
+                                          "far, from the gaps in its timing: lost on the line, garbled, skipped, or late)")
             self._missing_noted = missing
         restarts = getattr(self.rig, "stream_restarts", 0)
         if restarts > self._restarts_noted:
