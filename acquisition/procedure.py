@@ -669,9 +669,9 @@ class Procedure:
             restarts = f"{self._restarts_noted} stream restarts; " if self._restarts_noted else ""
             parts.append(f"load cell: {restarts}{missing} of {expected} force samples lost "
                          f"({100.0 * missing / max(expected, 1):.1f} %)")
-        rejected = sum(self._rejected_noted.values())
-        if rejected:
-            parts.append(f"{rejected} readings rejected as corrupt")
+        rejected = [f"{device}: {n} reading{'s' if n != 1 else ''} rejected as corrupt" for device, n in self._rejected_noted.items() if n]
+        if rejected:  # each device by name: the operator's warning says where to look
+            parts.append("; ".join(rejected))
         if self._dropped:
             parts.append(f"{self._dropped} force samples after the fault left out")
         return "; ".join(parts)

@@ -16,8 +16,9 @@ def _fault(cell: Cell, device: str | None, *kinds: str) -> bool:
 KNOWN: list[tuple[str, object]] = [
     # not a matrix cell (the matrix injects at 1 mm of travel, where the stall as the stream falls behind is named as frames
     # missing); kept because it cannot be fixed in principle (README's fault table says so)
-    ("load cell delay present from the stream's first frame: not detectable — the frames arrive at their rate, only late, "
-     "and the force's lag behind the crosshead at the start of loading cannot be told from the specimen's seating slack",
+    ("load cell delay within the driver's time-out present from the stream's first frame: not detectable — the frames "
+     "arrive at their rate, only late, and the force's lag behind the crosshead at the start of loading cannot be told "
+     "from the specimen's seating slack (a longer one delays the set-up replies: named, exit 3)",
      lambda c: _fault(c, "loadcell", "delay") and FAULT_AT_MM == 0.0),
     ("compression at 850 C and 0.5 mm/s: the flow curve reads about 9 % off the virtual material with no warning "
      "(12Kh18N10T, 50 Hz, fault-free); cause not found yet (the rate doubles over the stroke and the comparison takes one)",
