@@ -34,7 +34,6 @@ from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temper
 from flowcurve.acquisition.sampler import Channel, Sampler
 from flowcurve.clock import WALL, Clock
 from flowcurve.errors import FlowcurveError, RecordWriteError, SafetyError
-from flowcurve.rig.furnace import StuckRelayCheck
 
 MOTION_MM = 0.005  # the crosshead has moved once it is this far from where recording began
 SPEED_MARGIN = 2.0  # readings may change at up to this multiple of the declared speed's rate
@@ -491,6 +490,8 @@ class Procedure:
 
     def _furnace_read(self) -> Callable[[], float]:
         setpoint, rig = self.spec.temperature_C, self.rig
+
+        from flowcurve.rig.furnace import StuckRelayCheck  # (pyserial: not on the parser's import path)
 
         # a test that never heats has the heater commanded off throughout: a furnace that warms is a stuck relay
         never_heated = StuckRelayCheck(self._furnace_name(), settle_s=0.0) if setpoint is None else None
