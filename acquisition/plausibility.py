@@ -4,8 +4,9 @@ A frame can be well formed and still wrong (AED frames carry no checksum; a coun
 step). :class:`RateGuard` sits between a channel's reads and its stream:
 
 * a **one-sample spike** — a sample further from both neighbours than ``max_rate`` × their
-  time apart (plus ``tolerance``) allows, while the neighbours agree — is rejected (the guard
-  holds each sample until the next arrives);
+  time apart (plus ``tolerance``) allows, while the neighbours agree, or further from their
+  chord than they differ from each other plus ``tolerance`` (samples sparse in time) — is
+  rejected (the guard holds each sample until the next arrives);
 * a lasting **rise** of ``|value|`` faster than ``max_rate`` per second (plus ``tolerance``, and
   ``time_slack`` for uncertain stamps) from the last accepted sample is impossible (force: the
   machine loads at most at frame stiffness × crosshead speed; crosshead: it moves at most at
@@ -77,8 +78,12 @@ class RateGuard:
         # a one-sample spike: far from both neighbours, which agree with each other
         if n is not None:
             tn, vn = n
-            if (abs(vc - vp) > self.limit(tc - tp, False) and abs(vn - vc) > self.limit(tn - tc, False)
-                    and abs(vn - vp) <= self.limit(tn - tp, False)):
+            # ... or, where the samples are too far apart in time for the rate to tell, off the chord of its
+            # neighbours by more than they differ (a fracture's fall, a knee stay within it)
+            chord = vp + (vn - vp) * (tc - tp) / (tn - tp) if tn > tp else vp
+            if ((abs(vc - vp) > self.limit(tc - tp, False) and abs(vn - vc) > self.limit(tn - tc, False)
+                    and abs(vn - vp) <= self.limit(tn - tp, False))
+                    or abs(vc - chord) > abs(vn - vp) + self.tolerance):
                 self._reject(tc, vc, f"{'rose' if abs(vc) > abs(vp) else 'fell'} {abs(abs(vc) - abs(vp)):.4g} {self.unit} "
                                      f"for one sample")
                 return

@@ -45,6 +45,7 @@ STAMP_SLACK_S = 0.05  # host seconds two time stamps may be off by (thread sched
 LOSS_NOISE_FRAMES = 5  # the load cell's lost frames are declared beyond this many ...
 LOSS_NOISE_FRACTION = 0.005  # ... and this fraction (a loaded PC's scheduling; the count is an estimate)
 WATCH_COOLING_S = 45.0  # test seconds the furnace is watched after an over-temperature
+WATCH_UNHEATED_S = 15.0  # ... and after a test it did not heat (no stored heat to wait out: a stuck relay shows in ~12 s)
 HEAT_STEPS_PER_PERIOD = 4
 HEAT_MIN_TICK_S = 0.005  # host seconds
 FORCE_LIMIT_OF_CAPACITY = 0.98  # default force limit: this fraction of the frame's capacity
@@ -307,12 +308,14 @@ class Procedure:
         self.writer: RecordWriter | None = None
         self._writing = False
         self._ending_process = False  # the test was ended by the system stopping the program (not an operator's Ctrl-C)
+        self._heater_released = False  # set at the end's switch-off: the furnace channel reads, no longer controls
         self._retried_noted: dict[str, int] = {}  # exchanges retried per device, as the record's events last said
         self._unshown_rows: list[np.ndarray] = []  # recorded rows no snapshot has carried yet (the last batch)
         self._end_reason = ""
         self._storage_error: RecordWriteError | None = None
         self._dropped = 0
         self._restarts_noted = 0
+        self._missing_noted = 0  # the load cell's missing frames the events named so far
         self._late_noted: dict[str, int] = {}
         self._rejected_noted: dict[str, int] = {}
 
@@ -397,11 +400,14 @@ class Procedure:
                 finally:
                     if sampler is not None:  # the reading threads let go of the ports first
                         sampler.request_stop()
+                    self._heater_released = True  # no control step from here on commands the heater
                     safety.switch_off(reason or "end of test")
                     self._end_reason = reason
                     self._stop_motion()
                     if sampler is not None:
                         final = self._drop_unbracketed(sampler, sampler.finish())
+                        if rig.has_furnace and safety.off_confirmed:  # a control step in flight at the switch-off
+                            safety.switch_off(reason or "end of test")  # may have switched it on again: off once more
                         self._feed_watchdog()  # the furnace channel has stopped feeding it
                         late = sampler.fault
                         if error is None and isinstance(late, SafetyError):  # found while stopping: still told
@@ -485,9 +491,17 @@ class Procedure:
     def _furnace_read(self) -> Callable[[], float]:
         setpoint, rig = self.spec.temperature_C, self.rig
 
+        from flowcurve.rig.furnace import StuckRelayCheck  # (pyserial: not on the parser's import path)
+
+        # a test that never heats has the heater commanded off throughout: a furnace that warms is a stuck relay
+        never_heated = StuckRelayCheck(self._furnace_name(), settle_s=0.0) if setpoint is None else None
+
         def guarded() -> float:
-            temp = rig.read_temperature_C() if setpoint is None else rig.hold_temperature(setpoint)
+            hold = setpoint is not None and not self._heater_released
+            temp = rig.hold_temperature(setpoint) if hold else rig.read_temperature_C()
             check_temperature(temp, rig.max_temperature_C)
+            if never_heated is not None:
+                never_heated.update(temp, self.clock(), False)
             rig.host_ok()
             return temp
 
@@ -600,6 +614,12 @@ class Procedure:
             for t, v, why in ch.guard.rejected[done:]:
                 self._event("corrupt", f"{ch.device}: reading {v:.6g} at {t:.3f} s rejected as corrupt: {why}")
             self._rejected_noted[ch.device] = len(ch.guard.rejected)
+        missing = getattr(self.rig, "frames_lost", 0)
+        if missing > self._missing_noted:  # every gap the stream's timing shows, named (an event, not a failure)
+            gap = missing - self._missing_noted
+            self._event("frames_missing", f"load cell: {gap} frame{'s' if gap != 1 else ''} missing from its stream ({missing} so "
+                                          "far, from the gaps in its timing: lost on the line, garbled, skipped, or late)")
+            self._missing_noted = missing
         restarts = getattr(self.rig, "stream_restarts", 0)
         if restarts > self._restarts_noted:
             self._event("stream_restart", f"load cell: garbled stream restarted ({restarts - self._restarts_noted} more, {restarts} so far; frames lost meanwhile)")
@@ -611,6 +631,9 @@ class Procedure:
         self._note_retries()
         if final and self._loss_summary():
             self._event("data_loss", self._loss_summary())
+        elif final and self._missing_noted:  # below the data-loss limit: no failure, but the operator hears of it
+            self._alert(f"load cell: {self._missing_noted} frames missing from its stream (the record's events name them; "
+                        "below the data-loss limit) — check its cable if this recurs")
 
     def _note_retries(self, final: bool = False) -> None:
         """A ``retry`` event per device for the exchanges repeated since the last call after a
@@ -647,9 +670,9 @@ class Procedure:
             restarts = f"{self._restarts_noted} stream restarts; " if self._restarts_noted else ""
             parts.append(f"load cell: {restarts}{missing} of {expected} force samples lost "
                          f"({100.0 * missing / max(expected, 1):.1f} %)")
-        rejected = sum(self._rejected_noted.values())
-        if rejected:
-            parts.append(f"{rejected} readings rejected as corrupt")
+        rejected = [f"{device}: {n} reading{'s' if n != 1 else ''} rejected as corrupt" for device, n in self._rejected_noted.items() if n]
+        if rejected:  # each device by name: the operator's warning says where to look
+            parts.append("; ".join(rejected))
         if self._dropped:
             parts.append(f"{self._dropped} force samples after the fault left out")
         return "; ".join(parts)
@@ -667,26 +690,43 @@ class Procedure:
     def _after_safety_stop(self, error: FlowcurveError | None) -> FlowcurveError | None:
         """After a heated test or an over-temperature the heater is off, or must be: watch the
         furnace cool for a while; if it keeps heating, the relay is stuck (SafetyError, the
-        operator cuts the power) — nothing watches the furnace once the process has ended."""
+        operator cuts the power) — nothing watches the furnace once the process has ended.
+        After a test that did not heat, while the furnace answers, a shorter watch without
+        settling (no stored heat): a relay that stuck during a short test shows only then."""
         watch = getattr(self.rig, "watch_heater_off", None)
         heated = self.spec.temperature_C is not None and not isinstance(error, SafetyError)
         over = isinstance(error, SafetyError) and "over-temperature" in str(error)
-        if not (watch and (heated or over)):
+        unheated = (self.spec.temperature_C is None and self.rig.has_furnace
+                    and getattr(error, "device", None) != self._furnace_name())
+        if not (watch and (heated or over or unheated)):
             return error
         if self._ending_process and not over:  # a service manager or a console shutting down will not wait the watch out
-            self._alert("furnace: heater off; the program is being stopped, so nothing watches the furnace cool — "
-                        "check that it does (a stuck relay keeps heating)")
+            if heated:
+                self._alert("furnace: heater off; the program is being stopped, so nothing watches the furnace cool — "
+                            "check that it does (a stuck relay keeps heating)")
             return error
-        self._alert(f"furnace: {'over-temperature — ' if over else ''}heater off; watching that it cools "
-                    f"({WATCH_COOLING_S:g} s test time)")
+        if heated or over:
+            self._alert(f"furnace: {'over-temperature — ' if over else ''}heater off; watching that it cools "
+                        f"({WATCH_COOLING_S:g} s test time)")
+            seconds, settle = WATCH_COOLING_S, {}
+        else:
+            seconds, settle = WATCH_UNHEATED_S, {"settle_s": 0.0}
         try:
-            watch(WATCH_COOLING_S)
+            watch(seconds, **settle)
         except SafetyError as exc:
             self._event("fault", str(exc))
-            return exc
+            if error is None:
+                return exc
+            # the relay finding first (the operator must act), and the fault that stopped the test in its own words
+            both = SafetyError(exc.device, f"{str(exc)[len(exc.device) + 2:]}; the test had stopped on: {error}")
+            both.stopped_by = error
+            return both
         except FlowcurveError:
             pass
         return error
+
+    def _furnace_name(self) -> str:
+        return getattr(getattr(self.rig, "furnace", None), "name", "furnace")
 
     def _feed_watchdog(self) -> None:
         """Until the rig disarms the furnace module's watchdog at close, keep it fed: a trip

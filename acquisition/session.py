@@ -197,10 +197,11 @@ class DriverRig:
             self._verified_at = now
         return t
 
-    def watch_heater_off(self, seconds: float) -> None:
+    def watch_heater_off(self, seconds: float, settle_s: float = STUCK_SETTLE_S) -> None:
         """After a safety stop: read the furnace for ``seconds`` test seconds with the heater
-        off; SafetyError if it keeps heating (a stuck relay — the operator must cut the power)."""
-        check = StuckRelayCheck(self.furnace.name, settle_s=STUCK_SETTLE_S)
+        off; SafetyError if it keeps heating (a stuck relay — the operator must cut the power).
+        ``settle_s``: the stored heat's time (0 after a test that did not heat)."""
+        check = StuckRelayCheck(self.furnace.name, settle_s=settle_s)
         end = self._clock() + seconds
         while self._clock() < end:
             check.update(self.furnace.temperature_C(), self._clock(), False)

@@ -258,9 +258,10 @@ class LoadCell:
                 continue
             self._resyncs_in_a_row = 0
             self.frames_received += 1
-            self._first_arrival = now if self._first_arrival is None else self._first_arrival
-            self._last_arrival = now
-            samples.append(self._to_sample(value, self._stream_time(now)))
+            t = self._stream_time(now)  # its arrival, back-dated past the frames already behind it
+            self._first_arrival = t if self._first_arrival is None else self._first_arrival
+            self._last_arrival = t
+            samples.append(self._to_sample(value, t))
             self._last_frame_t = now
         silent = self.transport.clock.now() - self._last_frame_t
         if not samples and silent > self.stream_silence_s:
@@ -270,7 +271,8 @@ class LoadCell:
     @property
     def frames_lost(self) -> int:
         """Frames the amplifier sent (its rate × the time between the first and the last good
-        frame) that did not arrive good: lost on the line, garbled, or skipped by restarts."""
+        frame's arrival, each back-dated past the frames buffered behind it) that did not arrive
+        good: lost on the line, garbled, or skipped by restarts."""
         if self._first_arrival is None or not self.output_rate_per_s:
             return 0
         sent = round((self._last_arrival - self._first_arrival) * self.output_rate_per_s) + 1

@@ -206,7 +206,8 @@ class TestRunner:
                         self.virtual_setup(vr)
 
                 virtual = run_virtual_test(spec, run.record, material=run.setup.virtual_material, time_scale=run.setup.time_scale,
-                                           view=run.view, stop_requested=self._stop_requested(run), rig_setup=attach)
+                                           view=run.view, stop_requested=self._stop_requested(run), rig_setup=attach,
+                                           faults=run.setup.faults)
                 run.outcome = virtual.outcome
             else:
                 from flowcurve.acquisition.procedure import Procedure

@@ -6,7 +6,7 @@ Endpoints (JSON unless said):
 * ``GET /api/events`` server-sent events: ``status`` (state, readings, heater) and
   ``points`` (new plot points) about twenty times a second while a test runs, ``test``
   (the test's summary) when it changes; a page that connects gets everything so far;
-* ``GET /api/status``; ``POST /api/start`` (the set-up form), ``/api/stop``, ``/api/abort``,
+* ``GET /api/status``; ``POST /api/start`` (the set-up form; on the virtual rig with its fault drills), ``/api/stop``, ``/api/abort``,
   ``/api/post`` (post-test measurements → record amended → identified);
 * ``GET /api/records``; ``POST /api/fit`` (selected records → fit → card);
 * ``GET /files/<path>`` a file under ``--out`` (read only); ``POST /api/login`` the token.
@@ -45,7 +45,7 @@ from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, face_asked,
 from flowcurve.console.request_guard import (MAX_BODY_BYTES, NAMES, NUMBER, TEXT, FailedLogins, HostAllowlist, Refused,
                                              check_fields, read_json_object)
 from flowcurve.console.runner import SHUTDOWN_SIGNAME, BusyError, TestRunner
-from flowcurve.console.setup_form import NUMERIC_FIELDS, TEXT_FIELDS, FormError, post_values, validate
+from flowcurve.console.setup_form import FAULT_FIELD, NUMERIC_FIELDS, TEXT_FIELDS, FormError, post_values, validate
 from flowcurve.console.workspace import PathError, Workspace, inside
 from flowcurve.errors import FlowcurveError
 
@@ -61,7 +61,7 @@ GRACEFUL_SHUTDOWN_S = 5.0  # then uvicorn closes connections that are still open
 FINAL_STATE_WAIT_S = 3.0  # a stream waits this long for an aborted test's final state before it closes
 DEFAULT_HOST = "127.0.0.1"  # any other --host needs a token
 # each POST endpoint's fields and their types (request_guard.check_fields)
-START_FIELDS = {"test": TEXT, **{k: NUMBER for k in NUMERIC_FIELDS}, **{k: TEXT for k in TEXT_FIELDS}}
+START_FIELDS = {"test": TEXT, **{k: NUMBER for k in NUMERIC_FIELDS}, **{k: TEXT for k in (*TEXT_FIELDS, FAULT_FIELD)}}
 POST_FIELDS = {k: NUMBER for keys in POST_KEYS.values() for k in keys}
 FIT_FIELDS = {"records": NAMES, **{k: NUMBER for k in ("melt_temp", "fix_C", "fix_m", "ref_rate", "ref_temp", "poisson", "density", "cp", "E_MPa")},
               **{k: TEXT for k in ("method", "format", "units")}}
@@ -236,8 +236,11 @@ def create_app(console: Console) -> Starlette:
         return FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
 
     async def info(request: Request) -> Response:
+        from flowcurve.rig.virtual.fault_spec import help_text
+
         return _json({"rig": console.rig_name, "virtual": runner.virtual, "out": str(workspace.root), "time_scale": console.time_scale,
-                      "token_required": bool(console.token), "post": POST_KEYS, "prompts": POST_PROMPTS})
+                      "token_required": bool(console.token), "post": POST_KEYS, "prompts": POST_PROMPTS,
+                      "fault_help": help_text() if runner.virtual else None})
 
     async def login(request: Request) -> Response:
         data = await _body(request, LOGIN_FIELDS)

@@ -28,9 +28,11 @@ NUMERIC_FIELDS = {
     "force_limit": ("--force-limit", "N"),
 }
 TEXT_FIELDS = ("material", "operator", "specimen_id")
+FAULT_FIELD = "fault"  # virtual rig only: run's --fault drills, DEVICE:KIND[:VALUE][@SECONDS], several split by spaces or commas
 # each field as the form labels it (static/index.html): an error beside a field names it so
 LABELS = {"E_MPa": "Handbook E, MPa", "d0": "d0, mm", "l0": "l0, mm", "h0": "h0, mm", "temperature": "Temperature, °C",
-          "soak": "Soak, s", "speed": "Speed, mm/s", "target": "Target, mm", "force_limit": "Force limit, N"}
+          "soak": "Soak, s", "speed": "Speed, mm/s", "target": "Target, mm", "force_limit": "Force limit, N",
+          FAULT_FIELD: "Fault drill"}
 SOAK_DEFAULT_S = 60.0  # run's --soak default
 
 
@@ -51,6 +53,7 @@ class TestSetup:
     spec: TestSpec
     virtual_material: str | None
     time_scale: float
+    faults: tuple = ()  # rig.virtual.fault_spec.FaultSpec drills (virtual rig only)
 
 
 def _number(field: str, text) -> float | None:
@@ -97,9 +100,25 @@ def field_of(message: str) -> str:
 
 def labelled(field: str, message: str) -> str:
     """``run``'s message with the field's option (``--d0 …``) named as the form labels it."""
-    if field in LABELS:
+    if field in NUMERIC_FIELDS:
         return re.sub(rf"(?<![\w-]){re.escape(NUMERIC_FIELDS[field][0])}(?![\w-])", LABELS[field], message, count=1)
     return message
+
+
+def fault_drills(form: dict, *, virtual: bool, errors: dict[str, str]) -> tuple:
+    """The form's fault drills parsed as ``run --fault`` parses them (several split by spaces or
+    commas); a bad one, or any on a configured rig, goes to ``errors`` under the field's name."""
+    from flowcurve.rig.virtual.fault_spec import parse_faults
+
+    texts = [t for t in re.split(r"[\s,]+", str(form.get(FAULT_FIELD) or "")) if t]
+    if texts and not virtual:
+        errors[FAULT_FIELD] = f"{LABELS[FAULT_FIELD]}: fault drills run on the virtual rig only; this console drives a configured rig"
+        return ()
+    try:
+        return parse_faults(texts)
+    except FlowcurveError as exc:  # parse_fault's words: the form and the devices, kinds or values allowed
+        errors[FAULT_FIELD] = str(exc).replace("--fault", LABELS[FAULT_FIELD], 1)
+        return ()
 
 
 def validate(form: dict, *, virtual: bool, time_scale: float | None, config=None) -> TestSetup:
@@ -110,6 +129,7 @@ def validate(form: dict, *, virtual: bool, time_scale: float | None, config=None
 
     errors: dict[str, str] = {}
     args = run_namespace(form, errors)
+    faults = fault_drills(form, virtual=virtual, errors=errors)
     for field, (option, _unit) in NUMERIC_FIELDS.items():
         if field in errors or field in ("E_MPa", "temperature"):
             continue
@@ -133,7 +153,7 @@ def validate(form: dict, *, virtual: bool, time_scale: float | None, config=None
     except FlowcurveError as exc:
         field = field_of(str(exc))
         raise FormError({field: labelled(field, str(exc))}) from None
-    return TestSetup(spec, material, scale)
+    return TestSetup(spec, material, scale, faults)
 
 
 def post_values(test: str, form: dict) -> dict[str, float]:

@@ -10,7 +10,8 @@ Host watchdog (I-7000 family behaviour): only the ``~**`` broadcast feeds it (ot
 commands do not); ``~AA3EVV`` arms it (E 0/1, VV time-out in 0.1 s, hex); when the host is
 quiet longer than the time-out the module sets its outputs to the safe value of
 ``~AA5PPSS``, sets status 04 (``~AA0`` → ``!AA04``) and refuses output commands (``?AA``)
-until ``~AA1`` clears the status. The watchdog runs on the device's clock (real time on a pty).
+until ``~AA1`` clears the status. The watchdog runs on the device's clock (real time on a pty),
+and an armed one outlives the virtual rig's session (:meth:`DconDevice.close`).
 
 I-7011 replies chosen where docs/protocols.md leaves the format open, after the I-7011 manual:
 ``#AA`` → ``>+0025.12`` (engineering, ``+dddd.dd``), ``>+001.84`` (% of FSR), ``>0046`` (hex,
@@ -159,6 +160,17 @@ class DconDevice(PtyDevice):
                 and now - self._last_host_ok >= self.watchdog_host_s):
             self.watchdog_status |= WATCHDOG_TIMED_OUT
             self.watchdog_tripped()
+
+    def close(self) -> None:
+        """The virtual rig closes, but a real module stays powered: a watchdog still armed (the
+        host is gone without disarming it: unplugged, silent, killed) runs its time-out out on
+        its own clock, as the pty's thread or a real module would, so the outputs end at their
+        safe value. In-process nothing moves the clock after the run: the trip is taken here."""
+        with self._lock:
+            if self.watchdog_enabled and not self.watchdog_status & WATCHDOG_TIMED_OUT:
+                self.watchdog_status |= WATCHDOG_TIMED_OUT
+                self.watchdog_tripped()
+        super().close()
 
 
 class I7011(DconDevice):

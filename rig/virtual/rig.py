@@ -164,7 +164,8 @@ class VirtualRig:
 
     def stop_crosshead(self) -> None:
         with self._lock:
-            self.sync().stop_crosshead()
+            m = self.sync()
+            m.stop_crosshead()
 
     def schedule(self, spec: FaultSpec) -> None:
         """A fault of ``--fault`` (:mod:`rig.virtual.fault_spec`): on now, or ``spec.at_s``

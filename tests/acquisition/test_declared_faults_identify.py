@@ -35,5 +35,5 @@ def test_a_clean_record_declares_nothing(tmp_path):
     record = tmp_path / "c.csv"
     assert main(["run", "compression", "--quiet", "--out", str(record), "--time-scale", "100", "--speed", "0.1"]) in (0, 5)
     rec = read_record(record)
-    if not any(e.name in ("data_loss", "stream_restart", "retry", "late_reply", "corrupt", "dropped") for e in rec.events):
+    if not any(e.name in ("data_loss", "frames_missing", "stream_restart", "retry", "late_reply", "corrupt", "dropped") for e in rec.events):
         assert fault_warnings(rec) == ([], False)

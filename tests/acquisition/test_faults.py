@@ -222,3 +222,64 @@ def test_kill_9_leaves_a_readable_record_and_the_watchdog_switches_the_heater_of
     again = read_record(rec_path)
     assert again.meta["status"] == "aborted" and not again.truncated
     assert len(again.data) == len(rec.data)
+
+
+@pytest.mark.parametrize("at_s", [0.0, 3.0])
+def test_a_relay_that_sticks_in_a_short_unheated_test_is_caught(tmp_path, device_link, at_s):
+    """Issue 31 (c): a room-temperature compression of a few seconds; the relay welds shut at
+    the start (caught while loading: the heater was never on, so any warming is the relay) or
+    just before the end (caught by the watch after the test). Named, heater-off tried, record kept."""
+    from flowcurve.rig.virtual.fault_spec import FaultSpec
+
+    spec = TestSpec("compression", material=MATERIAL, geometry_mm={"d0_mm": 5.989, "h0_mm": 6.982}, speed_mm_per_s=0.5,
+                    stop=StopCriteria(target_displacement_mm=2.0))
+    run = run_virtual_test(spec, tmp_path / "r.csv", material=MATERIAL, time_scale=20.0, compression_response="slab",
+                           faults=(FaultSpec("furnace", "relay_stuck", None, at_s),), **device_link)
+    out = run.outcome
+    assert isinstance(out.error, SafetyError) and "furnace" in str(out.error) and "relay stuck" in str(out.error)
+    rec = read_record(out.path)
+    assert len(rec.data) > 10 and rec.meta["status"] in ("complete", "aborted")
+    texts = [f"{e.name} {e.text}" for e in rec.events]
+    assert any(t.startswith("fault furnace: heater does not switch off") for t in texts)
+    assert any(t.startswith("heater_off") for t in texts)  # heater-off was tried
+
+
+def test_three_frames_lost_from_the_load_cells_stream_are_named(tmp_path, device_link):
+    """Issue 31 (d): a loss too small for the data-loss limit (3 frames of hundreds) is still
+    named in the record's events and in identify's warnings, and the operator hears of it."""
+    from flowcurve.identification.identify import fault_warnings
+
+    spec = TestSpec("compression", material=MATERIAL, geometry_mm={"d0_mm": 5.989, "h0_mm": 6.982}, speed_mm_per_s=0.5,
+                    stop=StopCriteria(target_displacement_mm=2.0))
+    lost = []
+
+    def drop_three_frames(vr):
+        aed = vr.devices["loadcell"]
+        apply, seen = aed.faults.apply, []
+
+        def dropping(reply):
+            if len(reply) == aed_frame_length(aed):
+                seen.append(reply)
+                if 40 <= len(seen) < 43:  # mid-test (the record has about 100 rows)
+                    lost.append(reply)
+                    return None
+            return apply(reply)
+
+        aed.faults.apply = dropping
+
+    run = run_virtual_test(spec, tmp_path / "r.csv", material=MATERIAL, time_scale=5.0, compression_response="slab",
+                           rig_setup=drop_three_frames, **device_link)
+    assert len(lost) == 3 and run.outcome.status == "complete"
+    rec = read_record(run.outcome.path)
+    named = [e.text for e in rec.events if e.name == "frames_missing"]
+    assert named and all(t.startswith("load cell: ") for t in named)
+    assert 1 <= sum(int(t.split()[2]) for t in named) <= 6  # an estimate from the stream's timing (3 when the clock is exact)
+    warnings, _doubtful = fault_warnings(rec)
+    assert any("frames_missing" in w and "load cell" in w for w in warnings)
+
+
+def aed_frame_length(aed) -> int:
+    """The length of one stream frame in the virtual amplifier's present output format."""
+    from flowcurve.rig.codecs.aed import output_format
+
+    return output_format(int(aed.s["cof"])).frame_length

@@ -54,3 +54,27 @@ def test_noise_within_the_tolerance_passes():
     f = 2000.0 * t + rng.normal(0, 30, t.size)
     g = force_guard()
     assert len(feed_all(g, t, f)) == t.size and not g.rejected
+
+
+def _sparse_tension(dt_s: float = 0.4):
+    """A tension curve sampled every ``dt_s`` (a fast virtual time scale): 68 kN/s elastic
+    (136 N/µm × 0.5 mm/s) to 10 kN, a knee, hardening to 13 kN, a fracture to 50 N."""
+    t = np.arange(0, 12, dt_s)
+    f = np.minimum(68_000.0 * t, 10_000.0 + 3_000.0 * (1.0 - np.exp(-(t - 10_000.0 / 68_000.0) / 2.0)))
+    f[t > 10.0] = 50.0
+    return t, f
+
+
+def test_a_spike_is_rejected_where_the_samples_are_too_sparse_for_the_rate_to_tell():
+    """Issue 31: on a fast time scale at 0.5 mm/s, 0.4 s between samples lets the stiff frame's
+    rate allow 27 kN; a +20 kN reading was taken as the maximum force. Off the chord of its
+    neighbours by more than they differ, it is rejected; the knee and the fracture pass."""
+    t, f = _sparse_tension()
+    g = RateGuard("load cell", max_rate=68_000.0 * 1.5, tolerance=1000.0, unit="N", falls_freely=True, time_slack=1.0)
+    assert len(feed_all(g, t, f)) == t.size and not g.rejected  # the clean curve: every sample kept
+    spiked = f.copy()
+    spiked[10] += 20_000.0
+    g = RateGuard("load cell", max_rate=68_000.0 * 1.5, tolerance=1000.0, unit="N", falls_freely=True, time_slack=1.0)
+    kept = feed_all(g, t, spiked)
+    assert len(kept) == t.size - 1 and max(v for _, v in kept) < 13_100.0
+    assert [r[0] for r in g.rejected] == [t[10]]

@@ -189,3 +189,65 @@ def test_live_rows_reach_the_view_up_to_the_fracture(tmp_path, fake_rig):
     shown = np.concatenate(view.rows)
     assert len(shown) == len(rec.data)
     np.testing.assert_allclose(shown[:, 1], rec.column("force_N"), atol=1e-6)
+
+
+@pytest.mark.parametrize("seed_delay_s", [0.01, 0.02, 0.03, 0.04])
+def test_a_control_step_in_flight_at_the_fault_does_not_leave_the_heater_on(tmp_path, fake_rig, seed_delay_s):
+    """Issue 31 (a): the furnace channel's control step reads, then commands the relay a little
+    later (a DCON exchange); a fault elsewhere switched the heater off in between. The step that
+    was in flight must not switch it back on (the matrix saw a 35 s 'stuck relay' made so)."""
+    rig = fake_rig(x_frac_mm=1e9, die_after_s=6.0, heat_rate_C_per_s=4.0)
+    hold = rig.hold_temperature
+    loading = []
+
+    def slow_hold(setpoint_C):
+        if not loading:
+            return hold(setpoint_C)
+        temperature_C = rig.read_temperature_C()
+        rig.timebase.sleep(seed_delay_s)  # the command's exchange: the main thread may switch off meanwhile
+        rig.set_heater(True)  # below the set-point: heat
+        return temperature_C
+
+    start = rig.start_crosshead
+
+    def start_and_load(speed, direction):
+        loading.append(True)
+        start(speed, direction)
+
+    switched = []  # every command after the first heater-off
+    heater_off, set_heater = rig.heater_off, rig.set_heater
+
+    def noted_off():
+        switched.append("off")
+        heater_off()
+
+    def noted_set(on):
+        if switched:
+            switched.append(on)
+        set_heater(on)
+
+    watched = []  # the heater as the after-stop watch for a stuck relay finds it
+
+    def watch_heater_off(seconds):
+        watched.append(rig.heater)
+
+    rig.hold_temperature, rig.start_crosshead, rig.heater_off, rig.set_heater = slow_hold, start_and_load, noted_off, noted_set
+    rig.watch_heater_off = watch_heater_off
+    out = Procedure(rig, spec(temperature_C=60.0, soak_s=1.0, soak_band_C=30.0), tmp_path / "r.csv").run()
+    assert out.status == "aborted" and isinstance(out.error, DeviceError)
+    assert watched == [False], f"the stuck-relay watch began with the heater on again: {switched}"
+    assert switched.count(True) <= 1 and not rig.heater  # at most the one step in flight, switched off again
+
+
+def test_a_relay_found_stuck_after_a_lost_device_keeps_the_lost_devices_own_message(tmp_path, fake_rig):
+    """Issue 31 (a): the watch after the abort finds a stuck relay; the operator gets both."""
+    rig = fake_rig(x_frac_mm=1e9, die_after_s=6.0, heat_rate_C_per_s=4.0)
+
+    def watch_heater_off(seconds):
+        raise SafetyError("furnace", "heater does not switch off (relay stuck?): 6.0 C rise with the heater off for 35 s")
+
+    rig.watch_heater_off = watch_heater_off
+    out = Procedure(rig, spec(temperature_C=60.0, soak_s=1.0, soak_band_C=30.0), tmp_path / "r.csv").run()
+    assert isinstance(out.error, SafetyError) and out.error.exit_code == 4
+    for text in (str(out.error), out.reason, read_record(out.path).meta["abort_reason"]):
+        assert text.startswith("furnace: heater does not switch off") and "disappeared" in text and "encoder" in text, text

@@ -141,7 +141,7 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
     assert set(rec.meta) - {"stop_reason"} - losses == set(ref.meta) - {"stop_reason"} - losses
     varying = {"date", "stop_reason", "samples", "post.hk_mm", "post.dmax_mm", *losses}  # the time, where each test stopped
     assert {k: v for k, v in rec.meta.items() if k not in varying} == {k: v for k, v in ref.meta.items() if k not in varying}
-    declared = {"data_loss", "stream_restart", "retry", "late_reply", "dropped"}
+    declared = {"data_loss", "frames_missing", "stream_restart", "retry", "late_reply", "dropped"}
     assert [e.name for e in rec.events if e.name not in declared] == [e.name for e in ref.events if e.name not in declared]
     assert int(rec.meta["samples"]) == len(rec.data)
 
@@ -438,3 +438,24 @@ def test_a_killed_console_leaves_the_page_disabled_and_saying_what_to_do(browser
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_the_fault_drill_field_on_the_virtual_rig(served_console, browser_factory, shot):
+    """Issue 31: the set-up form offers run's --fault on the virtual rig, with the kinds per device;
+    a bad drill is named beside its field and starts nothing; a good one runs and is declared."""
+    driver = browser_factory()
+    open_console(driver, served_console.url)
+    wait_for(lambda: driver.find_element(By.ID, "fault-row").is_displayed(), what="the fault drill field")
+    assert "relay_stuck [furnace]" in text(driver, "#fault-hint")
+    fill(driver, {**SETUP, "specimen_id": "C-drill", "speed": "0.2", "fault": "loadcell:melt"})
+    driver.find_element(By.ID, "btn-start").click()
+    error = wait_for(lambda: text(driver, '#setup .field-error[data-for="fault"]'), what="the drill's refusal")
+    assert error.startswith("Fault drill 'loadcell:melt': unknown fault 'melt'") and "relay_stuck" in error
+    assert served_console.console.runner.current is None
+    shot(driver, "1-bad-drill")
+    fill(driver, {"fault": "encoder:corrupt@2"})
+    driver.find_element(By.ID, "btn-start").click()
+    wait_for(lambda: text(driver, "#state").lower() in ("complete", "aborted", "failed"), timeout_s=120, what="the end of the test")
+    rec = read_record(served_console.console.runner.current.record)
+    assert rec.meta["virtual.faults"] == "encoder:corrupt:50@2"
+    assert any(e.name == "corrupt" and e.text.startswith("crosshead encoder") for e in rec.events)

@@ -213,6 +213,7 @@ class CellRun:
     heater_do: int | None = None  # the furnace module's digital outputs at the end
     relay_on: bool | None = None
     replies_hit: int | None = None  # replies the fault's drop or garble fraction took (None: not such a fault)
+    hit_at: list = field(default_factory=list)  # host times of those hits (a hit after the record's last row is no loss of it)
     notes: list[str] = field(default_factory=list)
     run_wall_s: float = 0.0
     identify_wall_s: float = 0.0
@@ -249,6 +250,8 @@ def run_cell(cell: Cell, workdir: Path) -> CellRun:
     def setup(vr):
         rigs.append(vr)
         _count_frames_sent(vr.devices["loadcell"], out.frames_sent_at)
+        if cell.fault.kind in ("drop", "garble"):
+            _note_hits(vr.devices[cell.fault.device], out.hit_at)
         if cell.fault is NO_FAULT or not cell.fault.device:
             return
         start = vr.start_crosshead
@@ -308,9 +311,6 @@ def run_cell(cell: Cell, workdir: Path) -> CellRun:
     vr = rigs[0] if rigs else None
     if vr is not None:  # the virtual furnace module's outputs and the relay, as the test left them
         module = vr.devices["furnace"]
-        deadline = module.next_deadline()
-        if module.do and deadline is not None:  # no host can reach it (unplugged): its watchdog's time-out passes
-            module.on_tick(deadline)  # in-process nothing ticks the module after the run; on a pty its thread does
         out.heater_do, out.relay_on = module.do, vr.model.furnace.relay_on
         if cell.fault.kind in ("drop", "garble"):
             out.replies_hit = vr.devices[cell.fault.device].faults.replies_hit
@@ -349,6 +349,31 @@ def _count_frames_sent(aed, times: list) -> None:
         return sent
 
     aed.on_tick, aed.faults.apply = counting_tick, counting_apply
+
+
+def _note_hits(device, times: list) -> None:
+    """Note the host time of every reply the device's drop or garble fault takes."""
+    faults = device.faults
+    apply = faults.apply
+
+    def noting_apply(reply):
+        before = faults.replies_hit
+        sent = apply(reply)
+        if faults.replies_hit > before:
+            times.append(device.clock.now())
+        return sent
+
+    faults.apply = noting_apply
+
+
+def hits_within(r: CellRun, rec) -> int | None:
+    """Replies the fault took up to the record's last row (host time); None when unknown."""
+    if r.replies_hit is None:
+        return None
+    if r.procedure_t0 is None or rec.data.empty:
+        return r.replies_hit
+    end = r.procedure_t0 + rec.data["time_s"].to_numpy()[-1] / r.cell.time_scale
+    return sum(1 for t in r.hit_at if t <= end + 1e-9)
 
 
 # -- invariants -------------------------------------------------------------------------------
@@ -428,7 +453,8 @@ def violations(r: CellRun) -> list[tuple[str, str]]:
     if r.relay_on and cell.fault.kind != "relay_stuck":
         bad.append(("heater on at the end", "furnace relay on"))
     seen_by_operator = r.run_out + r.run_err
-    if r.injected_at_s is not None and r.replies_hit != 0:  # a 5 % fault may take no reply in a short test: nothing to name
+    # a 5 % fault may take no reply before the record's end in a short test: nothing to name
+    if r.injected_at_s is not None and hits_within(r, rec) != 0:
         name = DEVICE_NAMES[cell.fault.device]
         texts = " ".join(f"{e.name} {e.text}" for e in rec.events) + " " + " ".join(
             str(rec.meta.get(k, "")) for k in ("abort_reason", "stop_reason"))

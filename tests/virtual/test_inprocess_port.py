@@ -62,3 +62,51 @@ def test_unplugged_or_closed_device_is_an_input_output_error(box):
 def test_a_driver_names_the_missing_virtual_port():
     with pytest.raises(DeviceError, match=r"crosshead encoder: cannot open port virtual://nothing-here"):
         CrossheadEncoder("virtual://nothing-here").read_counts()
+
+
+def _heating_module(model_clock):
+    """An in-process I-7011 whose host armed its 10 s watchdog and switched the heater on."""
+    from flowcurve.rig.furnace import Furnace
+    from flowcurve.rig.virtual.dcon import I7011
+
+    relay = []
+    module = I7011(lambda: 600.0, relay.append, address=0x01, clock=model_clock, link="inprocess").start()
+    host = Furnace(module.port, address=0x01)
+    host.arm_watchdog(10.0)
+    host.heater(True)
+    assert module.do == 1 and relay[-1] is True
+    return module, host, relay
+
+
+@pytest.mark.parametrize("silence", ["unplug", "host stops talking"])
+def test_the_module_watchdog_runs_on_its_own_clock_when_the_host_goes_silent(model_clock, silence):
+    """Issue 31 (b): nothing talks to the module any more; its time-out passes on its clock and the heater goes off."""
+    module, host, relay = _heating_module(model_clock)
+    if silence == "unplug":
+        module.unplug()
+    model_clock.advance(9.0)
+    assert module.do == 1
+    model_clock.advance(2.0)
+    assert module.do == 0 and relay[-1] is False
+    host.transport.close()
+    module.close()
+
+
+def test_a_module_left_heating_by_a_host_that_is_gone_still_times_out_after_the_session(model_clock):
+    """Issue 31 (b): the virtual rig closes (the run returned) 1 s after the cable was pulled: the
+    module stays powered, so its watchdog's time-out still passes and the heater output drops."""
+    module, host, relay = _heating_module(model_clock)
+    module.unplug()
+    model_clock.advance(1.0)
+    module.close()
+    assert module.do == 0 and relay[-1] is False
+    host.transport.close()
+
+
+def test_a_disarmed_module_is_left_as_the_host_left_it(model_clock):
+    module, host, relay = _heating_module(model_clock)
+    host.heater_off()
+    host.disarm_watchdog()
+    host.transport.close()
+    module.close()
+    assert module.do == 0 and module.watchdog_status == 0  # no trip after a clean end

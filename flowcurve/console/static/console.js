@@ -155,7 +155,7 @@ function setControls(running) {
   $("#btn-start").disabled = running || !connected;
   $("#btn-stop").disabled = !running || !connected;
   $("#btn-abort").disabled = !running || !connected;
-  for (const el of document.querySelectorAll("#setup input, #setup select")) el.disabled = running || !connected;
+  for (const el of document.querySelectorAll("#setup input, #setup select")) el.disabled = running || !connected || (el.id === "f-fault" && !(info && info.virtual));
 }
 
 // the readings' age: as the server said when it sent them, plus the time since
@@ -383,6 +383,8 @@ async function boot() {
   showScale(info.time_scale);
   $("#out").textContent = info.out;
   $("#setup-hint").textContent = info.virtual ? "Virtual rig: empty geometry and speed take the virtual specimen's and run's defaults." : "";
+  $("#fault-row").hidden = !info.virtual;  // fault drills: the virtual rig only
+  $("#fault-hint").textContent = info.virtual ? info.fault_help || "" : "";
   connect();
   loadRecords();
 }
