@@ -109,11 +109,17 @@ def _wire_fault(device: str, kind: str) -> Fault:
     return Fault(device, kind) if arg is None else Fault(device, kind, arg[1], (arg,))
 
 
+# kinds the matrix schedules as an operator does, ``--fault DEVICE:KIND@SECONDS`` on `flowcurve run` (their default VALUE)
+SCHEDULED_KINDS = ("corrupt", "jump", "wrong_address")
+
 FAULTS: tuple[Fault, ...] = (
     NO_FAULT,
     *(_wire_fault(device, kind) for device in ("loadcell", "encoder", "furnace") for kind in WIRE_FAULT_ARGS),
     Fault("furnace", "open_thermocouple"),
     Fault("furnace", "relay_stuck"),
+    *(Fault(device, "corrupt") for device in ("loadcell", "encoder", "furnace")),
+    Fault("encoder", "jump"),
+    Fault("furnace", "wrong_address"),
 )
 
 
@@ -252,7 +258,7 @@ def run_cell(cell: Cell, workdir: Path) -> CellRun:
         _count_frames_sent(vr.devices["loadcell"], out.frames_sent_at)
         if cell.fault.kind in ("drop", "garble"):
             _note_hits(vr.devices[cell.fault.device], out.hit_at)
-        if cell.fault is NO_FAULT or not cell.fault.device:
+        if cell.fault is NO_FAULT or not cell.fault.device or cell.fault.kind in SCHEDULED_KINDS:
             return
         start = vr.start_crosshead
 
@@ -298,6 +304,8 @@ def run_cell(cell: Cell, workdir: Path) -> CellRun:
         argv += ["--target", f"{COMPRESSION_TARGET_MM:g}"]
     if heated:
         argv += ["--temperature", f"{cell.temperature_C:g}", "--soak", f"{SOAK_S:g}"]
+    if cell.fault.kind in SCHEDULED_KINDS:
+        argv += ["--fault", f"{cell.fault.label}@{fault_time_s(cell):g}"]
     session.run_virtual_test = on_the_bench
     session.DriverRig.set_clock = set_and_note_clock
     t0 = time.monotonic()
@@ -314,6 +322,8 @@ def run_cell(cell: Cell, workdir: Path) -> CellRun:
         out.heater_do, out.relay_on = module.do, vr.model.furnace.relay_on
         if cell.fault.kind in ("drop", "garble"):
             out.replies_hit = vr.devices[cell.fault.device].faults.replies_hit
+        if cell.fault.kind in SCHEDULED_KINDS and vr.faults_applied:
+            out.injected_at_s = vr.faults_applied[0][0]  # model time the rig switched it on
     if out.record_path.exists():
         os.environ["FLOWCURVE_DEBUG"] = "1"  # an internal error raises here instead of one line
         try:
