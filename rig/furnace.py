@@ -124,13 +124,16 @@ class Furnace(DconDevice):
         except DeviceError:
             return False
 
-    def heater(self, on: bool) -> None:
-        """Switch the heater; refuses to switch it on at or above the maximum temperature."""
+    def heater(self, on: bool, reading_C: float | None = None) -> None:
+        """Switch the heater; refuses to switch it on at or above the maximum temperature.
+        ``reading_C``: a reading the caller took in the same step (the controller's), checked
+        instead of reading again — a reading of its own would reach no one else (a corrupt one
+        would go unnamed)."""
         if not on:
             self._write_outputs(0)
             self.heater_is_on = False
             return
-        t = self.temperature_C()
+        t = self.temperature_C() if reading_C is None else reading_C
         if t >= self.max_temperature_C:
             self.heater_off()
             raise SafetyError(self.name, f"heater not switched on: {t:.1f} C is at or above the "
@@ -326,7 +329,7 @@ class TemperatureController:
             self._on_s = 0.0
         want_on = self._target_on_s - self._on_s > 0.5 * dt
         if want_on != self.furnace.heater_is_on:
-            self.furnace.heater(want_on)
+            self.furnace.heater(want_on, reading_C=t)
         if self.furnace.watchdog_armed:
             self.furnace.host_ok()
         self._update_soak(t, now)

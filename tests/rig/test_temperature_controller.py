@@ -31,8 +31,8 @@ class ModelFurnace:
     def temperature_C(self):
         return self.model.temperature_C + self.rng.gauss(0.0, self.model.p.thermocouple_noise_C)
 
-    def heater(self, on):
-        if on and self.temperature_C() >= self.max_temperature_C:
+    def heater(self, on, reading_C=None):
+        if on and (self.temperature_C() if reading_C is None else reading_C) >= self.max_temperature_C:
             raise SafetyError(self.name, "at max")
         self.model.set_heater(on)
         self.heater_is_on = on

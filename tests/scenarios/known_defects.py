@@ -20,10 +20,6 @@ KNOWN: list[tuple[str, object]] = [
      "arrive at their rate, only late, and the force's lag behind the crosshead at the start of loading cannot be told "
      "from the specimen's seating slack (a longer one delays the set-up replies: named, exit 3)",
      lambda c: _fault(c, "loadcell", "delay") and FAULT_AT_MM == 0.0),
-    ("furnace corrupt on a heated test: when the corrupted reply is the one the driver reads before switching the heater on "
-     "(rig/furnace.py heater(): checked against the maximum only, then dropped), the fault leaves no trace and goes unnamed "
-     "(harmless below the maximum; above it the heater stays off); about 1 run in 4 at 600 C, 0.005 mm/s",
-     lambda c: _fault(c, "furnace", "corrupt") and c.temperature_C > 20.0),
 ]
 
 
