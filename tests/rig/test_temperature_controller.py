@@ -188,3 +188,19 @@ def test_holds_plus_minus_2_C_over_its_pty_at_10x_in_real_time():
     with virtual.VirtualRig(time_scale=10.0, temperature_C=295.0) as rig:
         held = hold_over_the_serial_port(rig, 300.0, 180.0)
     assert max(abs(t - 300.0) for t in held) <= 2.0
+
+
+def test_a_step_reads_the_furnace_once_even_when_it_switches_the_heater_on():
+    """The switch-on check uses the step's own reading: a second reading would reach no one
+    else, so a corrupt one would go unnamed (the scenario matrix's furnace:corrupt cells)."""
+    furnace = ModelFurnace()
+    reads = []
+    read = furnace.temperature_C
+    furnace.temperature_C = lambda: reads.append(1) or read()
+    ctl = TemperatureController(furnace, 600.0, max_temperature_C=900.0, max_rate_C_per_min=60.0)
+    steps = 0
+    while not furnace.heater_is_on and steps < 400:  # the ramp starts at the furnace's temperature
+        ctl.step(0.25 * steps)
+        furnace.model.step(0.25)
+        steps += 1
+    assert furnace.heater_is_on and len(reads) == steps
