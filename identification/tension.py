@@ -708,7 +708,8 @@ def _hardening_fits(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: 
 def _strain_zero(inp: _Inputs, line: _ElasticLine, hard: _Hardening, law: str) -> tuple[_Hardening, list[str]]:
     """The strain zero's uncertainty δε0 and its effect on the main fit's start and constants (§2.11)."""
     mod = line.mod
-    window = line.window_MPa if line.window_MPa[1] > line.window_MPa[0] else (0.0, line.Rp02)
+    top = line.Rp02 if line.Rp02 is not None and np.isfinite(line.Rp02) else float(np.nanmax(inp.eng_stress[: inp.i_m + 1]))
+    window = line.window_MPa if line.window_MPa[1] > line.window_MPa[0] else (0.0, top)  # no line: the zero read up to Rp0.2
     zero = tension_or_compression_zero(line.strain[: inp.i_m + 1], inp.eng_stress[: inp.i_m + 1], window_MPa=window, E_line_MPa=mod.E_MPa,
                                        E_line_stderr_MPa=mod.E_stderr_MPa, E_used_MPa=line.E, line_resolved=line.E == mod.E_MPa)
     main, start, warnings = apply_to_fit(hard.main, hard.grid, hard.fit_sig, zero, lambda e, s: fit_hardening(e, s, law))
