@@ -577,8 +577,12 @@ def _strain_zero(diagram: _Diagram, geo: dict, line: _Line, nominal: _Nominal, y
     else:
         window, E_line, E_se = el.window_MPa, el.E_MPa, el.E_stderr_MPa
     E_used = yld.E_used if yld.E_used is not None else E_line
+    toe_spread = 0.0  # a line of known slope E: its samples' offsets Δl − h0·σ/E spread by what is not on the line
+    if el is not None and yld.E_source != "apparent" and E_used is not None:
+        offsets = toe_offsets(diagram.specimen, diagram.force, window, E_MPa=E_used, area0_mm2=math.pi * geo["d0"] ** 2 / 4.0, h0_mm=geo["h0"])
+        toe_spread = float(np.ptp(offsets)) / 2.0 / geo["h0"]  # half the spread, as toe_spread_warning states it
     zero = tension_or_compression_zero(strain[: top + 1], stress[: top + 1], window_MPa=window, E_line_MPa=E_line, E_line_stderr_MPa=E_se,
-                                       E_used_MPa=E_used, line_resolved=yld.E_source == "apparent" and np.isfinite(E_se))
+                                       E_used_MPa=E_used, line_resolved=yld.E_source == "apparent" and np.isfinite(E_se), toe_spread=toe_spread)
     eps_tp, sig_t, _ = friction.corrected[friction_correction]
     idx = _fit_subset(eps_tp, YIELD_OFFSET, yld.i_yield)
     checked = check_fit_range(fit_range)
