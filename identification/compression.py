@@ -38,6 +38,7 @@ from flowcurve.identification.indicator import (DEFAULT_MODULUS_METHOD, FEW_POIN
                                                 reread_if_stepped, yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
+from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
 from flowcurve.identification.tension import check_fit_range, true_plastic_strain
 
 UNLOADING_BAND = (0.1, 0.9)  # the part of the unloading (× the largest force) the spring-back is read on
@@ -563,6 +564,35 @@ def _hardening_fits(src: str, corrected: dict, i_yield: int, fit_range, law: str
     return fits, warnings
 
 
+def _strain_zero(diagram: _Diagram, geo: dict, line: _Line, nominal: _Nominal, yld: _Yield, friction: _Friction, fits: dict,
+                 fit_range, law: str, friction_correction: str) -> tuple[dict, list[str]]:
+    """The strain zero's uncertainty δε0 and its effect on the main fit's start and constants (§2.11);
+    the main fit in ``fits`` gets the widened standard errors."""
+    stress = diagram.force / (math.pi * geo["d0"] ** 2 / 4.0)
+    strain = line.specimen / geo["h0"]
+    top = int(np.nanargmax(stress))
+    el = line.line
+    if el is None:
+        window, E_line, E_se = (0.0, float(nominal.pressure[yld.i_yield])), math.nan, math.nan
+    else:
+        window, E_line, E_se = el.window_MPa, el.E_MPa, el.E_stderr_MPa
+    E_used = yld.E_used if yld.E_used is not None else E_line
+    toe_spread = 0.0  # a line of known slope E: its samples' offsets Δl − h0·σ/E spread by what is not on the line
+    if el is not None and yld.E_source != "apparent" and E_used is not None:
+        offsets = toe_offsets(diagram.specimen, diagram.force, window, E_MPa=E_used, area0_mm2=math.pi * geo["d0"] ** 2 / 4.0, h0_mm=geo["h0"])
+        toe_spread = float(np.ptp(offsets)) / 2.0 / geo["h0"]  # half the spread, as toe_spread_warning states it
+    zero = tension_or_compression_zero(strain[: top + 1], stress[: top + 1], window_MPa=window, E_line_MPa=E_line, E_line_stderr_MPa=E_se,
+                                       E_used_MPa=E_used, line_resolved=yld.E_source == "apparent" and np.isfinite(E_se), toe_spread=toe_spread)
+    eps_tp, sig_t, _ = friction.corrected[friction_correction]
+    idx = _fit_subset(eps_tp, YIELD_OFFSET, yld.i_yield)
+    checked = check_fit_range(fit_range)
+    if checked is not None:
+        idx = idx[(eps_tp[idx] >= checked[0]) & (eps_tp[idx] <= checked[1])]
+    fits[friction_correction], start, warnings = apply_to_fit(fits[friction_correction], eps_tp[idx], sig_t[idx], zero,
+                                                              lambda e, s: fit_hardening(e, s, law))
+    return start, warnings
+
+
 def _flow_curve(eps_p: np.ndarray, stress_MPa: np.ndarray, i_yield: int) -> pd.DataFrame:
     """The curve a card starts from: where the plastic strain has passed the 0.2 % offset."""
     plastic = np.nonzero((np.maximum.accumulate(eps_p) >= YIELD_OFFSET) & (eps_p >= 0) & (np.arange(eps_p.size) >= i_yield))[0]
@@ -584,7 +614,7 @@ def _curves(diagram: _Diagram, nominal: _Nominal, friction: _Friction, fit: Hard
 
 
 def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: _Nominal, yld: _Yield, friction: _Friction,
-            fits: dict, warnings: list[str], *, E_MPa: float | None, law: str, friction_correction: str, toe: bool) -> CompressionResult:
+            fits: dict, warnings: list[str], *, start: dict | None = None, E_MPa: float | None, law: str, friction_correction: str, toe: bool) -> CompressionResult:
     """The typed result (result.json) of a compression identification."""
     t, strain, chosen, frictions, fit = diagram.t, nominal.strain, friction.chosen, friction.frictions, fits[friction_correction]
     duration = float(t[-1] - t[0])
@@ -602,7 +632,7 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
         friction={m: (r.mu if isinstance(r, fr.FrictionResult) else None) for m, r in frictions.items()},
         friction_details={m: (r.as_dict() if isinstance(r, fr.FrictionResult) else {"method": m, "error": r}) for m, r in frictions.items()},
         friction_correction=friction_correction,
-        hardening=CompressionHardening(fit=fit, correction=friction_correction),
+        hardening=CompressionHardening(fit=fit, correction=friction_correction, start_uncertainty=start),
         hardening_by_correction={m: f.as_dict() for m, f in fits.items()},
         indicator={
             "frame_stiffness_N_per_um": diagram.stiffness,
@@ -678,8 +708,9 @@ def identify_compression(
     yld = _modulus_and_yield(nominal, line.line, E_MPa, E_source)
     friction = _friction_correction(geo, nominal, friction_method, yld.E_used)
     fits, fit_warnings = _hardening_fits(record.source, friction.corrected, yld.i_yield, fit_range, law, friction_correction)
-    warnings = diagram.warnings + line.warnings + nominal.warnings + friction.warnings + fit_warnings
-    result = _result(record, geo, diagram, line, nominal, yld, friction, fits, warnings, E_MPa=E_MPa, law=law,
+    start, start_warnings = _strain_zero(diagram, geo, line, nominal, yld, friction, fits, fit_range, law, friction_correction)
+    warnings = diagram.warnings + line.warnings + nominal.warnings + friction.warnings + fit_warnings + start_warnings
+    result = _result(record, geo, diagram, line, nominal, yld, friction, fits, warnings, start=start, E_MPa=E_MPa, law=law,
                      friction_correction=friction_correction, toe=toe)
     eps_def, sig_def, _ = friction.corrected[friction_correction]
     return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield),

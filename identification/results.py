@@ -75,11 +75,12 @@ class TensionHardening:
     fracture_point_choice: str | None  # why
     uniform_range_error_pct: float  # max |σ_fit/σ − 1| over the uniform range, %
     fit_range: list[float]  # true plastic strain of the fitted uniform range
+    start_uncertainty: dict | None = None  # the curve's start as far as it rests on the strain zero (methods §2.11)
 
     def as_dict(self) -> dict:
         return {**self.fit.as_dict(), "fracture_point_weight": self.fracture_point_weight, "fracture_point": self.fracture_point,
                 "fracture_point_choice": self.fracture_point_choice, "uniform_range_error_pct": self.uniform_range_error_pct,
-                "fit_range": self.fit_range}
+                "fit_range": self.fit_range, "start_uncertainty": self.start_uncertainty}
 
 
 @dataclass
@@ -88,9 +89,10 @@ class CompressionHardening:
 
     fit: HardeningFit
     correction: str
+    start_uncertainty: dict | None = None  # the curve's start as far as it rests on the strain zero (methods §2.11)
 
     def as_dict(self) -> dict:
-        return {**self.fit.as_dict(), "correction": self.correction}
+        return {**self.fit.as_dict(), "correction": self.correction, "start_uncertainty": self.start_uncertainty}
 
 
 @dataclass(kw_only=True)

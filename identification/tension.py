@@ -26,6 +26,7 @@ from flowcurve.identification.necking import METHODS as NECK_METHODS
 from flowcurve.identification.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import TensionHardening, TensionResult
+from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
 
 logger = logging.getLogger(__name__)
 
@@ -303,6 +304,7 @@ class _Hardening:
     main: HardeningFit
     main_fracture: tuple
     warnings: list[str]
+    start: dict | None = None  # the curve's start as far as it rests on the strain zero (§2.11)
 
 
 def _check_options(*, true_stress, neck, hardening, modulus_reference, fracture_point, fit_range, modulus_window, modulus_window_MPa):
@@ -703,6 +705,17 @@ def _hardening_fits(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: 
                       main_key=main_key, main=main, main_fracture=main_fracture, warnings=warnings)
 
 
+def _strain_zero(inp: _Inputs, line: _ElasticLine, hard: _Hardening, law: str) -> tuple[_Hardening, list[str]]:
+    """The strain zero's uncertainty δε0 and its effect on the main fit's start and constants (§2.11)."""
+    mod = line.mod
+    top = line.Rp02 if line.Rp02 is not None and np.isfinite(line.Rp02) else float(np.nanmax(inp.eng_stress[: inp.i_m + 1]))
+    window = line.window_MPa if line.window_MPa[1] > line.window_MPa[0] else (0.0, top)  # no line: the zero read up to Rp0.2
+    zero = tension_or_compression_zero(line.strain[: inp.i_m + 1], inp.eng_stress[: inp.i_m + 1], window_MPa=window, E_line_MPa=mod.E_MPa,
+                                       E_line_stderr_MPa=mod.E_stderr_MPa, E_used_MPa=line.E, line_resolved=line.E == mod.E_MPa)
+    main, start, warnings = apply_to_fit(hard.main, hard.grid, hard.fit_sig, zero, lambda e, s: fit_hardening(e, s, law))
+    return replace(hard, main=main, start=start), warnings
+
+
 def _curves(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, fracture: dict, hard: _Hardening, neck: str) -> dict[str, pd.DataFrame]:
     """The intermediate curves for plots: raw and corrected diagram, engineering, true, fit, fracture point."""
     data, uni = inp.data, slice(0, inp.i_m + 1)
@@ -755,7 +768,7 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
             fracture_point={"with": "included", "without": "excluded"}.get(hard.main_fracture[0], "none"),
             fracture_point_choice=hard.main_fracture[1],
             uniform_range_error_pct=uniform_error_pct(main, hard.grid, hard.fit_sig),
-            fit_range=[float(hard.grid[0]), float(hard.grid[-1])]),
+            fit_range=[float(hard.grid[0]), float(hard.grid[-1])], start_uncertainty=hard.start),
         hardening_alternatives={**{k: f.as_dict() for k, f in hard.fits.items() if k != hard.main_key},
                                 **{k: f.as_dict() for k, f in hard.variants.items()}},
         three_points=[{"true_plastic_strain": e, "true_stress_MPa": s} for e, s in hard.three_points] if hard.three_points else None,
@@ -832,7 +845,9 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     fracture, neck_warnings = _neck_correction(inp, iso, true)
     hard = _hardening_fits(inp, iso, true, fracture, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
                            fit_range=fit_range, fracture_point=fracture_point)
-    warnings = inp.warnings + line.warnings + iso.warnings + true.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings + hard.warnings
+    hard, start_warnings = _strain_zero(inp, line, hard, law)
+    warnings = (inp.warnings + line.warnings + iso.warnings + true.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings
+                + hard.warnings + start_warnings)
     result = _result(inp, line, iso, true, fracture, hard, warnings, toe=toe, true_stress=true_stress, poisson=poisson,
                      neck=neck, law=law, hardening=hardening)
     return Identification(result=result, true_curve=true.curve, curves=_curves(inp, line, true, fracture, hard, neck))

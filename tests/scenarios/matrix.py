@@ -74,6 +74,8 @@ FALLBACK_SEED = 31
 NOT_ABOUT_THE_CURVE = re.compile(r"without a fracture: A is not reported|no post\.dk_mm or post\.sk_mm2|"
                                  r"three-point \w+ fit failed|has a yield point")
 
+START_ONLY = re.compile(r"the curve's start \(εp < [^)]*\) rests on the strain zero")  # methods §2.11: excuses εp < X only
+
 DEVICE_NAMES = {"loadcell": "load cell", "encoder": "crosshead encoder", "furnace": "furnace"}
 
 
@@ -411,9 +413,10 @@ def frames_sent_within(r: CellRun, rec) -> int | None:
     return int(np.count_nonzero((sent >= lo - 1e-9) & (sent <= hi + 1e-9)))
 
 
-def curve_deviation_pct(result: dict, cell_run: CellRun) -> tuple[float, tuple[float, float]] | None:
+def curve_deviation_pct(result: dict, cell_run: CellRun, from_eps_p: float = 0.0) -> tuple[float, tuple[float, float]] | None:
     """Max |σ_fit/σ_true − 1| in % over the hardening's measured range (``fit_range``, else
-    ``strain_range``); None when the result has no static Johnson-Cook-like law to compare."""
+    ``strain_range``) from ``from_eps_p`` on; None when the result has no static Johnson-Cook-like
+    law to compare."""
     from flowcurve.identification.hardening import johnson_cook_static
 
     hard = result.get("hardening") or {}
@@ -421,7 +424,7 @@ def curve_deviation_pct(result: dict, cell_run: CellRun) -> tuple[float, tuple[f
     run = cell_run.virtual_run
     if not rng or run is None or not {"A_MPa", "B_MPa", "n"} <= set(hard):
         return None
-    lo, hi = max(float(rng[0]), 0.002), float(rng[1])
+    lo, hi = max(float(rng[0]), 0.002, from_eps_p), float(rng[1])
     if not hi > lo:
         return None
     eps = np.linspace(lo, hi, 200)
@@ -503,6 +506,11 @@ def _curve_violations(r: CellRun, rec) -> list[tuple[str, str]]:
     hard = r.result.get("hardening") or {}
     excuses = [w for w in (r.result.get("warnings") or []) + (hard.get("warnings") or []) if not NOT_ABOUT_THE_CURVE.search(w)]
     flagged = hard.get("quality") not in (None, "good") or bool(excuses)
+    beyond = (hard.get("start_uncertainty") or {}).get("below_limit_from_eps_p")
+    if flagged and all(START_ONLY.search(w) for w in excuses) and hard.get("quality") == "good" and beyond is not None:
+        past = curve_deviation_pct(r.result, r, from_eps_p=beyond)  # the start's warning excuses the start only
+        if past is not None and past[0] > CURVE_TOLERANCE_PCT:
+            return [("flow curve off past the start the strain zero excuses", f"{past[0]:.1f} % over εp {past[1][0]:.3f}…{past[1][1]:.3f}")]
     if flagged:
         return []
     return [("flow curve off without a warning", f"{dev:.1f} % over εp {lo:.3f}…{hi:.3f}, quality {hard.get('quality')}, "

@@ -1,0 +1,191 @@
+"""The strain zero of a true curve and how sure it is (docs/methods.md §2.11).
+
+The plastic strain of every point is measured from the foot of the elastic line (ISO 6892-1 toe
+compensation): an error δε0 there shifts the whole curve along εp, which moves σ by
+|dσ/dεp|·δε0 — a few MPa where the curve is flat, several per cent at the start of a steeply
+hardening one. This module says how large δε0 is and what it does to the curve's start.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+START_LIMIT = 0.01  # u_σ/σ below which the curve's start is counted as resting on more than the strain zero
+WARN_LIMIT = 0.02  # u_σ/σ at the fit range's start above which the result warns
+HANDBOOK_E_REL_U = 0.05  # a handbook modulus (or a given one) taken as ±5 % (1 σ) of the specimen's
+
+
+def line_zero_u(E_MPa: float, E_stderr_MPa: float, window_MPa) -> float:
+    """Standard error of the strain zero ε0 = −c/E of a least-squares elastic line.
+
+    E_MPa, E_stderr_MPa: the line's slope and its standard error; window_MPa: (lo, hi) stress
+    window the line was regressed over (samples taken as evenly spread in it).
+    Equation: x-intercept error of a line, δε0 = (s_E/E)·√(σ̄² + Δσ²/12)/E, σ̄ and Δσ the window's
+    centre and span (the intercept at the centroid and the slope's error, uncorrelated)."""
+    if not (np.isfinite(E_MPa) and np.isfinite(E_stderr_MPa) and E_MPa > 0):
+        return 0.0
+    lo, hi = float(window_MPa[0]), float(window_MPa[1])
+    centre, span = 0.5 * (lo + hi), hi - lo
+    return float(abs(E_stderr_MPa) / E_MPa * math.sqrt(centre**2 + span**2 / 12.0) / E_MPa)
+
+
+def _zero_of_line(strain: np.ndarray, stress: np.ndarray) -> float | None:
+    if strain.size < 2 or np.ptp(strain) <= 0:
+        return None
+    slope, intercept = np.polyfit(strain, stress, 1)
+    return None if not slope > 0 else float(-intercept / slope)
+
+
+def line_curvature_u(strain, stress_MPa, window_MPa) -> float:
+    """The strain zero's spread from a line that is not straight (a toe, plasticity at its top).
+
+    strain, stress_MPa: the first loading (engineering strain, MPa); window_MPa: the line's window.
+    Equation: half the difference of the zeros (−c/E) of lines through the window's lower and
+    upper halves, |ε0,low − ε0,high|/2; 0 when either half has fewer than 2 samples."""
+    strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
+    lo, hi = float(window_MPa[0]), float(window_MPa[1])
+    top = int(np.nanargmax(stress)) if stress.size else 0
+    on = np.flatnonzero((stress[: top + 1] >= lo) & (stress[: top + 1] <= hi) & np.isfinite(strain[: top + 1]))
+    if on.size < 4:
+        return 0.0
+    halves = np.array_split(on, 2)
+    zeros = [_zero_of_line(strain[h], stress[h]) for h in halves]
+    if any(z is None for z in zeros):
+        return 0.0
+    return float(abs(zeros[0] - zeros[1]) / 2.0)
+
+
+def top_spacing_u(strain, stress_MPa, window_MPa) -> float:
+    """The strain zero's uncertainty from the sample spacing where the line ends.
+
+    The line's last sample may already hold up to one step of plastic strain, and the yield lies
+    anywhere within that step. Equation: rectangular over ±Δε, u = Δε/√3, Δε the strain between
+    the last sample in the window and the next one."""
+    strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
+    top = int(np.nanargmax(stress)) if stress.size else 0
+    on = np.flatnonzero(stress[: top + 1] <= float(window_MPa[1]))
+    if on.size == 0 or on[-1] + 1 >= strain.size:
+        return 0.0
+    step = abs(strain[on[-1] + 1] - strain[on[-1]])
+    return float(step / math.sqrt(3.0)) if np.isfinite(step) else 0.0
+
+
+def handbook_line_u(E_MPa: float, top_MPa: float, E_rel_u: float = HANDBOOK_E_REL_U) -> float:
+    """The strain zero's uncertainty when a given or handbook E, not a regressed line, places it.
+
+    Equation: the elastic strain at the line's top is uncertain by its relative share,
+    u = σ_top/E·u_E,rel (σ_top the highest stress the zero was read from)."""
+    if not (np.isfinite(E_MPa) and E_MPa > 0 and np.isfinite(top_MPa)):
+        return 0.0
+    return float(abs(top_MPa) / E_MPa * E_rel_u)
+
+
+def strain_zero_uncertainty(*, line: float = 0.0, curvature: float = 0.0, toe: float = 0.0, spacing: float = 0.0,
+                            handbook: float = 0.0) -> dict:
+    """δε0 of a true curve from what places its strain zero, each a standard uncertainty (strain).
+
+    line: the elastic line's fit (:func:`line_zero_u`); curvature: its lack of straightness
+    (:func:`line_curvature_u`); toe: the toe compensation's spread; spacing: the sample spacing at
+    the line's top (:func:`top_spacing_u`); handbook: a given/handbook E placing the zero
+    (:func:`handbook_line_u`). Equation: root sum of squares. Returns {"delta_eps0", "components"}."""
+    parts = {"line_fit": line, "line_curvature": curvature, "toe": toe, "sample_spacing": spacing, "handbook_E": handbook}
+    parts = {k: float(abs(v)) for k, v in parts.items() if np.isfinite(v)}
+    return {"delta_eps0": float(math.sqrt(sum(v**2 for v in parts.values()))), "components": parts}
+
+
+def stress_u_from_zero(slope_MPa, delta_eps0: float):
+    """σ's standard uncertainty from the strain zero: u_σ = |dσ/dεp|·δε0 (MPa)."""
+    return np.abs(np.asarray(slope_MPa, dtype=float)) * float(delta_eps0)
+
+
+def curve_slope(law_fit, eps_p) -> np.ndarray:
+    """dσ/dεp of a fitted law (callable σ(εp)) by a central difference (MPa per unit strain)."""
+    eps = np.asarray(eps_p, dtype=float)
+    h = np.maximum(1e-6, 1e-3 * eps)
+    lo = np.maximum(eps - h, 0.0)
+    return (law_fit(eps + h) - law_fit(lo)) / (eps + h - lo)
+
+
+def start_uncertainty(law_fit, eps_range, delta_eps0: float, *, limit: float = START_LIMIT) -> dict:
+    """The curve's start as far as it rests on the strain zero.
+
+    law_fit: the fitted law σ(εp); eps_range: the fit's (start, end) in εp; delta_eps0: δε0.
+    Returns u_σ/σ at the start (``stress_rel_u_at_start``), u_σ there in MPa and the εp from
+    which u_σ/σ = |dσ/dεp|·δε0/σ stays below ``limit`` (``below_limit_from_eps_p``; the start
+    when it is below there already, None when it never is within the range)."""
+    lo, hi = float(eps_range[0]), float(eps_range[1])
+    grid = np.linspace(lo, hi, 400)
+    rel = stress_u_from_zero(curve_slope(law_fit, grid), delta_eps0) / np.abs(law_fit(grid))
+    above = np.flatnonzero(rel >= limit)
+    if above.size == 0:
+        from_eps = lo
+    elif above[-1] + 1 < grid.size:
+        from_eps = float(grid[above[-1] + 1])
+    else:
+        from_eps = None
+    u0 = float(stress_u_from_zero(curve_slope(law_fit, np.array([lo])), delta_eps0)[0])
+    return {"delta_eps0": float(delta_eps0), "eps_p_start": lo, "stress_u_at_start_MPa": u0,
+            "stress_rel_u_at_start": float(rel[0]), "limit_rel": limit, "below_limit_from_eps_p": from_eps}
+
+
+def start_warning(start: dict, *, limit: float = WARN_LIMIT) -> str | None:
+    """The warning when σ at the reported range's start is uncertain by more than ``limit`` from the strain zero alone."""
+    if not start["stress_rel_u_at_start"] > limit:
+        return None
+    upto = start["below_limit_from_eps_p"]
+    where = f"εp < {upto:.3g}" if upto is not None else f"εp {start['eps_p_start']:.3g} on"
+    return (f"the curve's start ({where}) rests on the strain zero ± {start['delta_eps0']:.2g}: σ there ± "
+            f"{100 * start['stress_rel_u_at_start']:.1f} % (u_σ = |dσ/dεp|·δε0 at εp {start['eps_p_start']:.3g}); "
+            f"a hardening constant read from it (A, σ0) carries that")
+
+
+def constants_shift(refit, base, eps_p, stress_MPa, delta_eps0: float) -> dict[str, float]:
+    """The hardening constants' change when the curve is moved by the strain zero's uncertainty.
+
+    refit: eps, σ → HardeningFit; base: the fit of the curve as measured; the curve refitted with εp + δε0 (the lmfit way: a systematic
+    input's effect on each constant, added in quadrature to its standard error). Returns
+    {name: |Δ|} per constant, {} when the refit fails."""
+    from flowcurve.errors import IdentificationError
+
+    eps = np.asarray(eps_p, dtype=float)
+    try:
+        moved = refit(eps + float(delta_eps0), stress_MPa)
+    except IdentificationError:
+        return {}
+    return {k: float(abs(moved.params[k] - base.params[k])) for k in base.params}
+
+
+def tension_or_compression_zero(strain, stress_MPa, *, window_MPa, E_line_MPa: float, E_line_stderr_MPa: float,
+                                E_used_MPa: float, line_resolved: bool, toe_spread: float = 0.0) -> dict:
+    """δε0 of a first loading (:func:`strain_zero_uncertainty`) from its arrays and its elastic line.
+
+    strain, stress_MPa: the toe-compensated first loading; window_MPa: the line's window ((0, top)
+    when no line was found); E_line_MPa, E_line_stderr_MPa: the regressed line (nan: none);
+    E_used_MPa: the E that strips the elastic strain; line_resolved: False when a given/handbook E
+    took the line's place; toe_spread: the toe offsets' standard spread (strain)."""
+    has_line = np.isfinite(E_line_MPa) and np.isfinite(E_line_stderr_MPa) and window_MPa[1] > window_MPa[0]
+    return strain_zero_uncertainty(
+        line=line_zero_u(E_line_MPa, E_line_stderr_MPa, window_MPa) if has_line else 0.0,
+        curvature=line_curvature_u(strain, stress_MPa, window_MPa) if has_line else 0.0,
+        toe=toe_spread,
+        spacing=top_spacing_u(strain, stress_MPa, window_MPa),
+        handbook=0.0 if line_resolved else handbook_line_u(E_used_MPa, window_MPa[1]))
+
+
+def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dict, list[str]]:
+    """The strain zero's effect on a hardening fit: its constants' standard errors widened by
+    their shift under εp + δε0 (in quadrature), the curve's start (:func:`start_uncertainty`) and
+    its warning. fit: HardeningFit; eps_p, stress_MPa: the points it was fitted to; zero: from
+    :func:`strain_zero_uncertainty`; refit: eps, σ → HardeningFit. Returns (fit, block, warnings)."""
+    from dataclasses import replace
+
+    delta = zero["delta_eps0"]
+    start = {**start_uncertainty(fit, fit.strain_range, delta), "components": zero["components"]}
+    shift = constants_shift(refit, refit(np.asarray(eps_p, dtype=float), stress_MPa), eps_p, stress_MPa, delta) if delta > 0 else {}
+    start["constants_shift"] = shift
+    stderr = {k: (math.hypot(se, shift[k]) if se is not None and np.isfinite(se) else shift[k]) if k in shift else se
+              for k, se in fit.stderr.items()}
+    warning = start_warning(start)
+    return replace(fit, stderr=stderr), start, [warning] if warning else []

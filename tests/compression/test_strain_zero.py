@@ -1,0 +1,71 @@
+"""The strain zero's uncertainty δε0 and what it does to the curve's start (docs/methods.md §2.11).
+
+Checked against values obtained otherwise: the line's zero error against a Monte Carlo of noisy
+lines; the reported u_σ at the fit's start against the actual error of closed-form compression
+records (tests/compression/toe_records.py) over a grid of sample rates, toes and hardening slopes.
+"""
+
+import numpy as np
+import pytest
+
+from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.strain_zero import line_curvature_u, line_zero_u, start_uncertainty, strain_zero_uncertainty
+
+from .conftest import flow_stress
+from .toe_records import make_toe_compression
+
+STEEP = {"A": 105.0, "B": 1392.0, "n": 0.642}  # 12Kh18N12M3TL: dσ/dεp ≈ 8 000 MPa at εp 0.002
+FLAT = {"A": 300.0, "B": 250.0, "n": 1.0}  # 250 MPa per unit strain
+
+
+def test_line_zero_u_matches_a_monte_carlo_of_noisy_lines():
+    rng = np.random.default_rng(3)
+    E, noise, stress = 70_000.0, 2.0, np.linspace(10.0, 110.0, 12)
+    zeros, slopes, ses = [], [], []
+    for _ in range(4000):
+        strain = 1e-4 + stress / E + rng.normal(0.0, noise / E, stress.size)
+        (slope, icpt), cov = np.polyfit(strain, stress, 1, cov=True)
+        zeros.append(-icpt / slope), slopes.append(slope), ses.append(np.sqrt(cov[0, 0]))
+    predicted = line_zero_u(np.mean(slopes), np.mean(ses), (stress[0], stress[-1]))
+    assert predicted == pytest.approx(np.std(zeros), rel=0.15)
+
+
+def test_a_bent_line_has_a_curvature_term_a_straight_one_none():
+    stress = np.linspace(0.0, 120.0, 40)
+    straight = stress / 100_000.0
+    bent = straight + 2e-4 * (stress / 120.0) ** 4  # plasticity creeping in at the top
+    assert line_curvature_u(straight, stress, (10.0, 120.0)) < 1e-12
+    assert line_curvature_u(bent, stress, (10.0, 120.0)) > 2e-5
+
+
+def test_start_uncertainty_uses_the_law_slope_in_closed_form():
+    law = lambda e: flow_stress(e, **STEEP)  # noqa: E731
+    start = start_uncertainty(law, (0.002, 0.5), 1e-3)
+    slope = STEEP["B"] * STEEP["n"] * 0.002 ** (STEEP["n"] - 1)  # d(A + B·εp^n)/dεp
+    assert start["stress_u_at_start_MPa"] == pytest.approx(slope * 1e-3, rel=1e-3)
+    below = start["below_limit_from_eps_p"]  # from there on |dσ/dεp|·δε0/σ < 1 %
+    for e in (below, 1.01 * below):
+        assert STEEP["B"] * STEEP["n"] * e ** (STEEP["n"] - 1) * 1e-3 / law(e) < 0.0101
+    assert strain_zero_uncertainty(line=3e-4, spacing=4e-4)["delta_eps0"] == pytest.approx(5e-4)
+
+
+@pytest.mark.parametrize("law", [STEEP, FLAT], ids=["steep", "flat"])
+@pytest.mark.parametrize("rate_hz,toe_mm", [(0.25, 0.0), (0.25, 0.05), (2.0, 0.05), (10.0, 0.0)])
+def test_reported_start_uncertainty_covers_the_start_error(law, rate_hz, toe_mm):
+    """The measured curve's error at the fit's start is within 2 u_σ/σ from the strain zero plus
+    2 % (the friction correction's own tolerance); a start uncertain by more than 2 % is warned
+    about. (The fitted law's A is not checked here: over εp 0.002–0.65 the friction correction's
+    1–2 % shape error moves A by up to 18 %, which is not the strain zero's — docs/methods.md §2.11.)"""
+    record, _ = make_toe_compression(law=law, rate_hz=rate_hz, toe_mm=toe_mm, speed=0.005, handbook_E=True, noise_N=5.0)
+    ident = identify_compression(record)
+    result = ident.result
+    h = result["hardening"]
+    start = h["start_uncertainty"]
+    eps_p, sigma = ident.true_curve["true_plastic_strain"].to_numpy(), ident.true_curve["true_stress_MPa"].to_numpy()
+    i = int(np.searchsorted(eps_p, start["eps_p_start"]))
+    off_start = sigma[i] / flow_stress(eps_p[i], **law) - 1
+    assert abs(off_start) <= 2 * start["stress_rel_u_at_start"] + 0.02, (off_start, start)
+    print(f"{rate_hz} Hz toe {toe_mm}: δε0 {start['delta_eps0']:.2e} u {100 * start['stress_rel_u_at_start']:.2f} % "
+          f"start off {100 * off_start:+.2f} % A {h['A_MPa']:.1f} ± {h['A_MPa_stderr']:.1f}")
+    warned = any("rests on the strain zero" in w for w in result["warnings"])
+    assert warned == (start["stress_rel_u_at_start"] > 0.02)
