@@ -42,7 +42,7 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.elastic_modulus import modulus_for_model
+from flowcurve.identification.fe.machine import model_elastics
 from flowcurve.identification.fe.solver_fit import fit_with_solver, serial_correlation
 from flowcurve.identification.friction import DFACE_ADVICE, bulge_half_width, face_half_width, nominal_diameter
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
@@ -164,8 +164,10 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     """Fit ``law`` and μ to the record's force–stroke and dmax with CalculiX in the loop (a tension
     record: the hardening beyond Fm, :func:`.inverse_tension.identify_inverse_fe_tension`).
     ``law="auto"``: the law that best fits the fast identification's curve (:func:`best_law_for`);
-    on tension, the law that best fits the FE-consistent curve. The model's E: ``E_MPa`` (given),
-    else material.E_MPa, else an extensometer's; never an apparent slope (an error asking for --E)."""
+    on tension, the law that best fits the FE-consistent curve. The model's E and the frame's
+    stiffness: :func:`.machine.model_elastics` (E given, material.E_MPa, an extensometer's, else a
+    named material class's handbook value; k stated by the rig, else fitted by closure on hk);
+    never an apparent slope (else an error naming the inputs to give)."""
     from flowcurve.identification.fe.verify import record_force_stroke
 
     if law not in LAWS and law != "auto":
@@ -180,13 +182,18 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         raise IdentificationError(f"{record.source}: --method inverse-fe needs a compression or tension record (this is {record.test!r})")
     t0 = time.perf_counter()
     stroke, force, fast = record_force_stroke(record)
+    elastics = model_elastics(record, fast.result, E_MPa)  # never an apparent slope; k stated or fitted by closure
+    diagram_options = {**({"E_MPa": elastics.E_MPa} if elastics.E_basis != "the record's material.E_MPa" else {}),
+                       **({"frame_stiffness_N_per_um": elastics.frame_stiffness_N_per_um} if elastics.frame_stiffness_stderr_N_per_um is not None else {})}
+    if diagram_options:  # the record read again with the model's E and the fitted frame stiffness
+        stroke, force, fast = record_force_stroke(record, **diagram_options)
     d0 = record.positive("specimen.d0_mm", required=True)
     h0 = record.positive("specimen.h0_mm", required=True)
     dmax = record.positive("post.dmax_mm")
     if dmax is None:
         raise IdentificationError(f"{record.source}: --method inverse-fe needs the bulge diameter 'post.dmax_mm'")
     dface = record.positive("post.dface_mm")  # optional: near sticking it tells μ where dmax cannot (§4a.2)
-    E, E_source = modulus_for_model(record, fast.result, E_MPa, what="the inverse FE model")  # never an apparent slope
+    E = elastics.E_MPa
     law_choice = {"given": law}
     if law == "auto":
         law, rms = best_law_for(fast.true_curve)
@@ -218,6 +225,9 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     shape_sigma = {"dmax": 2.0 * bulge_half_width(max(dmax - d_n, 0.0) / 2.0)}
     if dface is not None:
         shape_sigma["dface"] = face_half_width(d_n) * d_n
+    # E's uncertainty in the spring-back d·ν·σ/E of the model's diameters, in quadrature (σ = F/A at the end)
+    springback_rel = 0.3 * float(np.max(force)) / (math.pi * d_n**2 / 4.0) / E * elastics.E_stderr_MPa / E
+    shape_sigma = {k: math.hypot(v, springback_rel * (dmax if k == "dmax" else dface)) for k, v in shape_sigma.items()}
     # every row in units of its own σ: the force rows' is pooled from their misfit for the covariance, the diameters' known
     row_sigma = np.array([np.nan] * FORCE_POINTS + [1.0] * len(shape_sigma))
 
@@ -281,10 +291,12 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
             "dmax_residual_mm": d_res_mm, **({"dface_residual_mm": face_res_mm} if dface is not None else {}),
             "shape_measured": ["hk", "dmax"] + (["dface"] if dface is not None else []), "optimizer": sol.optimizer(),
             "warm_start": {"mu": mu0, **{k: float(v) for k, v in zip(law_info.keys, p0)}},
-            "model": {"increments": increments, "E_MPa": float(E), "E_source": E_source, "h_end_mm": problem.h_end, "force_points": FORCE_POINTS,
+            "model": {"increments": increments, **elastics.as_dict(), "diagram_options": diagram_options, "h_end_mm": problem.h_end, "force_points": FORCE_POINTS,
                       "force_sigma_pct": FORCE_SIGMA_PCT, "from_strain": FROM_STRAIN},
         },
     })
+    if elastics.E_source == "handbook" and diagram_options.get("E_MPa"):  # a class's handbook value, not the fast's "option"
+        result.update(E_MPa=elastics.E_MPa, E_source=f"handbook ({elastics.E_basis})")
     result.pop("dface_advice", None)  # the warm start's; the inverse judges μ itself
     if dface is None and not se[-1] <= MU_TOLD:  # poorly told or undetermined, and no end face to tell it
         result["dface_advice"] = DFACE_ADVICE

@@ -30,6 +30,7 @@ class FlowCurveSource:
     E_MPa: float | None
     mu: float | None
     what: str
+    diagram_options: dict | None = None  # how the inverse read the record (its E, a fitted frame stiffness)
 
 
 def _table_from_function(fn, eps_max: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
@@ -49,8 +50,10 @@ def curve_from_result(result: dict, source: str = "result.json") -> FlowCurveSou
         raise IdentificationError(f"{source}: hardening constants {', '.join(law.keys)} missing or not numbers") from None
     eps, sig = _table_from_function(lambda e: law.func(e, **params))
     E = result.get("E_MPa") if result.get("E_source") in ("option", "record (material.E_MPa)") else None
+    model = (result.get("inverse_fe") or {}).get("model") or {}
+    E = model.get("E_MPa", E)  # the inverse's model E (given, handbook, a class's handbook value)
     mu = result.get("friction_mu")
-    return FlowCurveSource(eps, sig, E, None if mu is None else float(mu), f"{source}: {h['law']} {params}")
+    return FlowCurveSource(eps, sig, E, None if mu is None else float(mu), f"{source}: {h['law']} {params}", model.get("diagram_options"))
 
 
 def curve_from_card(text: str, source: str = "card") -> FlowCurveSource:
@@ -101,12 +104,13 @@ def load_curve(path: str | Path) -> FlowCurveSource:
         raise IdentificationError(f"{p}: no such result or card") from None
 
 
-def record_force_stroke(record):
+def record_force_stroke(record, **options):
     """(specimen shortening mm, force N) of the record's loading branch, frame-corrected and
-    scaled to the measured height change by the fast identification."""
+    scaled to the measured height change by the fast identification (``options``: its E_MPa,
+    frame_stiffness_N_per_um)."""
     from flowcurve.identification.compression import identify_compression
 
-    ident = identify_compression(record)
+    ident = identify_compression(record, **options)
     d = ident.curves["corrected_diagram"]
     return d["specimen_displacement_mm"].to_numpy(), d["force_N"].to_numpy(), ident
 
@@ -115,7 +119,7 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
     """FE force–stroke of ``curve`` on ``record``'s specimen vs the record; deviations in %."""
     if record.test != "compression":
         raise IdentificationError(f"{record.source}: verify runs upsetting (compression) records; this is a {record.test} record")
-    stroke, force, ident = record_force_stroke(record)
+    stroke, force, ident = record_force_stroke(record, **(curve.diagram_options or {}))
     d0 = record.positive("specimen.d0_mm", required=True)
     h0 = record.positive("specimen.h0_mm", required=True)
     mu = mu if mu is not None else curve.mu if curve.mu is not None else ident.result["friction_mu"]
