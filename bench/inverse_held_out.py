@@ -36,6 +36,8 @@ sys.path.insert(0, str(ROOT / "tests" / "fe"))
 import second_model as sm  # noqa: E402
 
 C1 = sm.Case("C1", 105.0, 1392.0, 0.642, 194_000.0, 0.15, 6.0, 9.0, 4.5)
+# the must-show's time per record: C1–C3 5 min (the inverse's default limit, 270 s), the Voce record 10 min
+TIME_LIMIT_S = {"Voce": 570.0}
 
 
 def _load() -> float:
@@ -80,7 +82,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--only", default="C1,C2,C3,Voce", help="comma-separated: C1, C2, C3, Voce")
-    ap.add_argument("--time-limit", type=float, default=None, help="the inverse's --time-limit, s (default: its own)")
+    ap.add_argument("--time-limit", type=float, default=None, help="the inverse's --time-limit, s (default: its own, 570 s for Voce)")
     a = ap.parse_args(argv)
     print("| record | truth μ | μ ± se | curve err | verify % | runs | inverse s | cut | E source | compliance source | load before→after |")
     print("|---|---|---|---|---|---|---|---|---|---|---|", flush=True)
@@ -92,8 +94,9 @@ def main(argv=None) -> int:
             os.environ["FLOWCURVE_FE_CACHE"] = str(cache)  # empty: every run is a real one
             load0 = _load()
             argv_id = ["identify", str(path), "--method", "inverse-fe", "--workers", str(a.workers), "--no-plots", "--out", str(tmp / name)]
-            if a.time_limit is not None:
-                argv_id += ["--time-limit", str(a.time_limit)]
+            limit = a.time_limit if a.time_limit is not None else TIME_LIMIT_S.get(name)
+            if limit is not None:
+                argv_id += ["--time-limit", str(limit)]
             t0 = time.perf_counter()
             with contextlib.redirect_stdout(io.StringIO()):
                 code = cli(argv_id)
