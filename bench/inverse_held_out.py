@@ -83,14 +83,16 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--only", default="C1,C2,C3,Voce", help="comma-separated: C1, C2, C3, Voce")
     ap.add_argument("--time-limit", type=float, default=None, help="the inverse's --time-limit, s (default: its own, 570 s for Voce)")
+    ap.add_argument("--out", help="keep the records, results and verify reports in this folder (default: a temporary one)")
     a = ap.parse_args(argv)
     print("| record | truth μ | μ ± se | curve err | verify % | runs | inverse s | cut | E source | compliance source | load before→after |")
     print("|---|---|---|---|---|---|---|---|---|---|---|", flush=True)
     with tempfile.TemporaryDirectory(prefix="inverse-held-out-") as tmp:
-        tmp = Path(tmp)
+        tmp = Path(a.out or tmp)
+        tmp.mkdir(parents=True, exist_ok=True)
         for name, path, mu_true, flow in _records(a.only.split(","), tmp):
             cache = tmp / f"cache-{name}"
-            cache.mkdir()
+            cache.mkdir(exist_ok=False)
             os.environ["FLOWCURVE_FE_CACHE"] = str(cache)  # empty: every run is a real one
             load0 = _load()
             argv_id = ["identify", str(path), "--method", "inverse-fe", "--workers", str(a.workers), "--no-plots", "--out", str(tmp / name)]

@@ -224,12 +224,13 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
             warnings.simplefilter("error", RuntimeWarning)
         record = load_record(path, columns=columns, meta=meta)
         if method == "inverse-fe":
-            from flowcurve.identification.fe.inverse import identify_inverse_fe
+            from flowcurve.identification.fe.inverse import TIME_LIMIT_S, identify_inverse_fe
 
             from flowcurve.cli.progress import budget_text
 
             def progress(runs, elapsed, left_s=None):
-                print(f"  inverse FE: {budget_text(runs, elapsed, left_s, limit_s=time_limit)}", file=sys.stderr, flush=True)
+                limit = None if record.test == "tension" else time_limit or TIME_LIMIT_S  # the tension inverse keeps no budget
+                print(f"  inverse FE: {budget_text(runs, elapsed, left_s, limit_s=limit)}", file=sys.stderr, flush=True)
 
             ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, progress=progress,
                                         E_MPa=options.get("E_MPa"), **({"time_limit_s": time_limit} if time_limit is not None else {}))

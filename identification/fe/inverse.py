@@ -267,10 +267,12 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
 
     x_scale = np.maximum(np.abs(x0), 1e-3)
     x_scale[-1] = 0.05
+    before = time.perf_counter() - t0  # the fast identification, the closure, the warm start's run: the budget's and the progress's clock
+    shown = (lambda runs, elapsed, left=None: progress(runs, before + elapsed, left)) if progress else None
     sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
-                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress,
+                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=shown,
                           other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma,
-                          correlated=True, time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - (time.perf_counter() - t0)))
+                          correlated=True, time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))
     r, se = sol.residuals, sol.stderr
     # what the shape alone tells of μ, beside what the fit tells with the force (information, not a bound: the force
     # curve's error is counted as serially correlated in the fit's covariance)
