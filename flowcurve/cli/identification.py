@@ -337,6 +337,7 @@ def solver_runs_text(inv: dict, noun: str = " solver runs") -> str:
     with a retry's settings (a result.json from before these counts: none said)."""
     failed, retried = inv.get("failed_solver_runs") or 0, inv.get("retried_solver_runs") or 0
     said = [f"{failed} did not converge"] * bool(failed) + [f"{retried} converged only when retried"] * bool(retried)
+    said += ["cut by the time limit"] * bool((inv.get("budget") or {}).get("cut"))
     return f"{inv['solver_runs']}{noun}" + (f" ({', '.join(said)})" if said else "")
 
 
