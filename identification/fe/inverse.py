@@ -43,7 +43,7 @@ import pandas as pd
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.machine import model_elastics
-from flowcurve.identification.fe.solver_fit import fit_with_solver, serial_correlation
+from flowcurve.identification.fe.solver_fit import fit_with_solver, serial_correlation, time_left_s
 from flowcurve.identification.friction import DFACE_ADVICE, bulge_half_width, face_half_width, nominal_diameter
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
@@ -268,9 +268,13 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     x_scale = np.maximum(np.abs(x0), 1e-3)
     x_scale[-1] = 0.05
     before = time.perf_counter() - t0  # the fast identification, the closure, the warm start's run: the budget's and the progress's clock
-    shown = (lambda runs, elapsed, left=None: progress(runs, before + elapsed, left)) if progress else None
+    n_params = len(x0)
+
+    def shown(runs, elapsed, _left=None):  # the time left at the rate of the whole identification so far (the warm start's run in it)
+        progress(runs, before + elapsed, time_left_s(runs, before + elapsed, n_params, time_limit_s))
+
     sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
-                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=shown,
+                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=shown if progress else None,
                           other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma,
                           correlated=True, time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))
     r, se = sol.residuals, sol.stderr
