@@ -112,8 +112,8 @@ def main(argv=None) -> int:
             inv = result["inverse_fe"]
             err = curve_error(pd.read_csv(folder / "true_curve.csv", comment="#"), flow)
             with contextlib.redirect_stdout(io.StringIO()):
-                cli(["verify", str(folder), str(path), "--out", str(tmp / f"v-{name}"), "--no-plots"])
-            ver = json.loads((tmp / f"v-{name}" / "verify.json").read_text())["max_force_deviation_pct"]
+                verified = cli(["verify", str(folder), str(path), "--out", str(tmp / f"v-{name}"), "--no-plots"]) == 0
+            ver = json.loads((tmp / f"v-{name}" / "verify.json").read_text())["max_force_deviation_pct"] if verified else float("nan")
             model = inv["model"]
             cut = inv.get("budget", {}).get("cut")
             print(f"| {name} | {mu_true:.3f} | {inv['mu']:.4f} ± {inv['mu_stderr']:.4f} | {100 * err:.2f} % | {ver:.2f} | {inv['solver_runs']} | "

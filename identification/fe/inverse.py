@@ -153,7 +153,7 @@ def _fit_warnings(force_rms_pct: float, dmax_residual_mm: float, mu: float, sol)
         out.append(f"inverse FE: the fitted model misses dmax by {dmax_residual_mm:+.3f} mm")
     if not MU_BOUNDS[0] + 1e-4 < mu < MU_BOUNDS[1] - 1e-4:
         out.append(f"inverse FE: μ {mu:.3f} sits on its bound ({MU_BOUNDS[0]:g}–{MU_BOUNDS[1]:g})")
-    if sol.status <= 0:
+    if sol.status <= 0 and not getattr(sol, "cut", False):  # a cut says so in its own warning
         out.append(f"inverse FE: the optimiser stopped before converging ({sol.message})")
     return out
 
