@@ -20,7 +20,16 @@ SOURCE_TEXT = {
     "apparent": "apparent (the crosshead diagram's slope: frame, grips and toe included, not the material's)",
     "none": "none (no elastic line, no handbook value)",
 }
-COMPRESSION_SOURCES = {"option": "given", "record": "handbook", "apparent": "apparent", "none": "none"}
+COMPRESSION_SOURCES = {"option": "given", "record": "handbook", "handbook": "handbook", "apparent": "apparent", "none": "none"}
+# handbook moduli of material classes, MPa: (E, its spread over the class's grades, ~1 standard error); a class is
+# named by one of its words in the record's ``material`` (carbon and alloy steels 200–215 GPa, austenitic 193–200)
+CLASS_MODULI = {
+    "steel": (200_000.0, 10_000.0, ("steel", "stainless", "сталь")),
+    "aluminium": (70_000.0, 3_000.0, ("aluminium", "aluminum", "alumin")),
+    "titanium": (110_000.0, 6_000.0, ("titanium", "ti-6al-4v")),
+    "copper": (120_000.0, 10_000.0, ("copper", "brass", "bronze")),
+    "nickel": (205_000.0, 10_000.0, ("nickel", "inconel")),
+}
 
 
 def tension_E_source(modulus_source: str, strain_source: str) -> str:
@@ -62,6 +71,14 @@ def result_E_source(result: dict) -> str:
     if isinstance(modulus, dict):  # tension written before modulus.E_source
         return tension_E_source(str(modulus.get("source", "")), str((result.get("methods") or {}).get("strain_source", "")))
     return "stated"
+
+
+def class_modulus(material: str | None) -> tuple[str, float, float] | None:
+    """(class, E MPa, its standard error MPa) of the material class one of whose words the
+    ``material`` text names (:data:`CLASS_MODULI`); None when it names none or two classes."""
+    text = str(material or "").lower()
+    found = [(name, E, se) for name, (E, se, words) in CLASS_MODULI.items() if any(w in text for w in words)]
+    return found[0] if len(found) == 1 else None
 
 
 def modulus_for_model(record, result: dict, E_MPa: float | None = None, *, what: str = "the FE model") -> tuple[float, str]:

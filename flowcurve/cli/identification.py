@@ -130,6 +130,8 @@ def register(subparsers) -> None:
     m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default fe_table: the CalculiX table; all are reported)")
     m.add_argument("--method", choices=("fast", "inverse-fe"), default="fast", help="fast (default; compression: FE tables, no solver at identification time) or inverse-fe (CalculiX in the loop: compression, the hardening law and μ fitted to the force-stroke curve and dmax; tension, the hardening beyond Fm fitted to the force-elongation curve and the neck diameter dk)")
     m.add_argument("--workers", type=int, metavar="N", help="inverse-fe: solver runs side by side (default: the cores)")
+    m.add_argument("--time-limit", type=float, metavar="S", help="inverse-fe (compression): wall-time budget, s; the fit ends by it with its best "
+                   "answer so far, marked cut in result.json (default 270: the held-out records end within 5 min on 2 cores)")
     m.add_argument("--scheduler", metavar="ADDRESS", help="send the records as tasks to this Dask distributed scheduler (needs the 'fe' extra); "
                    "inverse-fe solver runs stay with their record's task (--workers)")
     m.add_argument("--friction-correction", choices=_choices("flowcurve.identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default fe_table: the CalculiX force factor; all are computed)")
@@ -186,6 +188,7 @@ def _options_from_args(args) -> dict:
         "fracture_point": args.fracture_point,
         "method": getattr(args, "method", "fast"),
         "workers": getattr(args, "workers", None),
+        "time_limit": getattr(args, "time_limit", None),
     }
 
 
@@ -213,7 +216,7 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
 
     given = given_options(options, meta, columns)
     options = dict(options)
-    method, workers = options.pop("method", "fast"), options.pop("workers", None)
+    method, workers, time_limit = options.pop("method", "fast"), options.pop("workers", None), options.pop("time_limit", None)
     raise_runtime = _runtime_warnings_raise()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -221,13 +224,16 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
             warnings.simplefilter("error", RuntimeWarning)
         record = load_record(path, columns=columns, meta=meta)
         if method == "inverse-fe":
-            from flowcurve.identification.fe.inverse import identify_inverse_fe
+            from flowcurve.identification.fe.inverse import TIME_LIMIT_S, identify_inverse_fe
 
-            def progress(runs, elapsed):
-                print(f"  inverse FE: {runs} solver runs, {elapsed:.0f} s", file=sys.stderr, flush=True)
+            from flowcurve.cli.progress import budget_text
+
+            def progress(runs, elapsed, left_s=None):
+                limit = None if record.test == "tension" else time_limit or TIME_LIMIT_S  # the tension inverse keeps no budget
+                print(f"  inverse FE: {budget_text(runs, elapsed, left_s, limit_s=limit)}", file=sys.stderr, flush=True)
 
             ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, progress=progress,
-                                        E_MPa=options.get("E_MPa"))
+                                        E_MPa=options.get("E_MPa"), **({"time_limit_s": time_limit} if time_limit is not None else {}))
         else:
             ident = identify(record, **options)
     caught_lines = [f"{'numerical warning' if issubclass(w.category, RuntimeWarning) else w.category.__name__}: {w.message}" for w in caught]
@@ -331,6 +337,7 @@ def solver_runs_text(inv: dict, noun: str = " solver runs") -> str:
     with a retry's settings (a result.json from before these counts: none said)."""
     failed, retried = inv.get("failed_solver_runs") or 0, inv.get("retried_solver_runs") or 0
     said = [f"{failed} did not converge"] * bool(failed) + [f"{retried} converged only when retried"] * bool(retried)
+    said += ["cut by the time limit"] * bool((inv.get("budget") or {}).get("cut"))
     return f"{inv['solver_runs']}{noun}" + (f" ({', '.join(said)})" if said else "")
 
 

@@ -19,6 +19,16 @@ def bar_text(done: int, total: int, elapsed_s: float, what: str = "records", not
     return f"[{'#' * filled}{'.' * (WIDTH - filled)}] {done}/{total} {what}{note}, {elapsed_s:.0f} s{left}"
 
 
+def budget_text(done: int, elapsed_s: float, left_s: float | None, what: str = "solver runs", limit_s: float | None = None) -> str:
+    """``[######........] 12 solver runs, 45 s, about 105 s left (time limit 270 s)``: a bar of the
+    time spent over the time spent and left, for work whose total is estimated as it goes."""
+    total = elapsed_s + (left_s or 0.0)
+    filled = int(WIDTH * elapsed_s / total) if left_s is not None and total > 0 else 0
+    left = f", about {left_s:.0f} s left" if left_s is not None else ""
+    limit = f" (time limit {limit_s:.0f} s)" if limit_s is not None else ""
+    return f"[{'#' * filled}{'.' * (WIDTH - filled)}] {done} {what}, {elapsed_s:.0f} s{left}{limit}"
+
+
 class ProgressBar:
     """``update(done, note="")`` after each item; ``close()`` ends the line."""
 

@@ -42,8 +42,8 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.elastic_modulus import modulus_for_model
-from flowcurve.identification.fe.solver_fit import fit_with_solver, serial_correlation
+from flowcurve.identification.fe.machine import model_elastics
+from flowcurve.identification.fe.solver_fit import fit_with_solver, serial_correlation, time_left_s
 from flowcurve.identification.friction import DFACE_ADVICE, bulge_half_width, face_half_width, nominal_diameter
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
@@ -60,6 +60,8 @@ REL_STEP = 0.01  # finite-difference step, relative (absolute 0.005 for μ)
 # a warm start whose run stops (near sticking, or a tall specimen folding onto the platen at some μ) is moved in μ
 START_MU_STEPS = (-0.01, 0.01, -0.02, 0.02)
 MU_TOLD = 0.02  # a μ standard error beyond this is said to be poorly told (as the fast method's dmax sensitivity)
+TIME_LIMIT_S = 270.0  # the default wall-time budget: the held-out records C1–C3 end within 5 min on 2 cores
+MIN_FORCE_STRAIN = 0.3  # the force is fitted at least this far, even where the side folds over earlier
 
 
 @dataclass(frozen=True)
@@ -91,6 +93,7 @@ class _Run:
     wall_s: float
     cached: bool
     retried: bool = False  # the model's own settings stopped and a retry's carried it
+    fold_over_strain: float | None = None  # where the side began to fold onto the platen (None: it did not)
 
 
 def _run(problem: _Problem, x) -> _Run | None:
@@ -118,7 +121,21 @@ def _run(problem: _Problem, x) -> _Run | None:
     sigma_end = r.force_N[-1] / (math.pi * problem.d0**2 * problem.h0 / (4.0 * r.height_mm[-1]))
     springback = 1.0 - r.model.nu * sigma_end / problem.E
     return _Run(np.concatenate([[0.0], r.stroke_mm]), np.concatenate([[0.0], r.force_N]), float(r.dmax_mm[-1]) * springback,
-                float(r.dtop_mm[-1]) * springback, r.wall_s, r.cached, len(tried) > 1)
+                float(r.dtop_mm[-1]) * springback, r.wall_s, r.cached, len(tried) > 1, getattr(r, "fold_over_strain", None))
+
+
+def _warm_start_run(problem: _Problem, x0) -> _Run | None:
+    """The run at the warm start, before the fit (it stays in the run cache for the fit's first point)."""
+    return _run(problem, x0)
+
+
+def force_fit_limit(strain_max: float, fold_over_strain: float | None) -> float:
+    """The strain up to which the force is fitted: the fold-over's onset (where the model's force
+    error grows: the side folding onto the platen, its sawtooth, the mesh), held to at least
+    :data:`MIN_FORCE_STRAIN` (or the record's end); beyond it the shape rows speak."""
+    if fold_over_strain is None:
+        return strain_max
+    return float(min(strain_max, max(fold_over_strain, MIN_FORCE_STRAIN)))
 
 
 POOR_FORCE_RMS_PCT = 1.5  # a force misfit above this: the model (law, μ) does not describe the record
@@ -136,7 +153,7 @@ def _fit_warnings(force_rms_pct: float, dmax_residual_mm: float, mu: float, sol)
         out.append(f"inverse FE: the fitted model misses dmax by {dmax_residual_mm:+.3f} mm")
     if not MU_BOUNDS[0] + 1e-4 < mu < MU_BOUNDS[1] - 1e-4:
         out.append(f"inverse FE: μ {mu:.3f} sits on its bound ({MU_BOUNDS[0]:g}–{MU_BOUNDS[1]:g})")
-    if sol.status <= 0:
+    if sol.status <= 0 and not getattr(sol, "cut", False):  # a cut says so in its own warning
         out.append(f"inverse FE: the optimiser stopped before converging ({sol.message})")
     return out
 
@@ -160,12 +177,14 @@ def best_law_for(true_curve: pd.DataFrame) -> tuple[str, dict[str, float]]:
 
 
 def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None, scheduler=None, increments: int = 50,
-                        max_runs: int = 150, progress=None, E_MPa: float | None = None) -> Identification:
+                        max_runs: int = 150, progress=None, E_MPa: float | None = None, time_limit_s: float | None = TIME_LIMIT_S) -> Identification:
     """Fit ``law`` and μ to the record's force–stroke and dmax with CalculiX in the loop (a tension
     record: the hardening beyond Fm, :func:`.inverse_tension.identify_inverse_fe_tension`).
     ``law="auto"``: the law that best fits the fast identification's curve (:func:`best_law_for`);
-    on tension, the law that best fits the FE-consistent curve. The model's E: ``E_MPa`` (given),
-    else material.E_MPa, else an extensometer's; never an apparent slope (an error asking for --E)."""
+    on tension, the law that best fits the FE-consistent curve. The model's E and the frame's
+    stiffness: :func:`.machine.model_elastics` (E given, material.E_MPa, an extensometer's, else a
+    named material class's handbook value; k stated by the rig, else fitted by closure on hk);
+    never an apparent slope (else an error naming the inputs to give)."""
     from flowcurve.identification.fe.verify import record_force_stroke
 
     if law not in LAWS and law != "auto":
@@ -180,22 +199,24 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         raise IdentificationError(f"{record.source}: --method inverse-fe needs a compression or tension record (this is {record.test!r})")
     t0 = time.perf_counter()
     stroke, force, fast = record_force_stroke(record)
+    elastics = model_elastics(record, fast.result, E_MPa)  # never an apparent slope; k stated or fitted by closure
+    diagram_options = {**({"E_MPa": elastics.E_MPa} if elastics.E_basis != "the record's material.E_MPa" else {}),
+                       **({"frame_stiffness_N_per_um": elastics.frame_stiffness_N_per_um} if elastics.frame_stiffness_stderr_N_per_um is not None else {})}
+    if diagram_options:  # the record read again with the model's E and the fitted frame stiffness
+        stroke, force, fast = record_force_stroke(record, **diagram_options)
     d0 = record.positive("specimen.d0_mm", required=True)
     h0 = record.positive("specimen.h0_mm", required=True)
     dmax = record.positive("post.dmax_mm")
     if dmax is None:
         raise IdentificationError(f"{record.source}: --method inverse-fe needs the bulge diameter 'post.dmax_mm'")
     dface = record.positive("post.dface_mm")  # optional: near sticking it tells μ where dmax cannot (§4a.2)
-    E, E_source = modulus_for_model(record, fast.result, E_MPa, what="the inverse FE model")  # never an apparent slope
+    E = elastics.E_MPa
     law_choice = {"given": law}
     if law == "auto":
         law, rms = best_law_for(fast.true_curve)
         law_choice = {"chosen": law, "by": "the smallest RMS error of a fit to the fast (fe_table) curve", "rms_error_pct": rms}
     problem = _Problem(law, d0, h0, h0 - float(np.max(stroke)), float(E), increments)
     strain = -np.log(1.0 - stroke / h0)
-    targets = np.linspace(max(FROM_STRAIN, strain[strain > 0].min()), strain.max(), FORCE_POINTS)
-    s_pts = h0 * (1.0 - np.exp(-targets))
-    f_pts = np.interp(s_pts, stroke, force)
 
     # warm start: the fast identification's law (refitted in the requested law when needed)
     law_info = LAWS[law]
@@ -211,6 +232,14 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     lo = np.array([law_info.bounds[n][0] for n in law_info.names] + [MU_BOUNDS[0]])
     hi = np.array([law_info.bounds[n][1] for n in law_info.names] + [MU_BOUNDS[1]])
     x0 = np.clip(x0, lo + 1e-9, np.where(np.isfinite(hi), hi - 1e-9, np.inf))
+    # the force is fitted up to the fold-over's onset in the warm start's run (the time limit and the model's force error
+    # both grow where the side folds onto the platen); beyond it dmax and dface speak
+    first = _warm_start_run(problem, x0)
+    fold_over = first.fold_over_strain if first is not None else None
+    force_to = force_fit_limit(float(strain.max()), fold_over)
+    targets = np.linspace(max(FROM_STRAIN, strain[strain > 0].min()), force_to, FORCE_POINTS)
+    s_pts = h0 * (1.0 - np.exp(-targets))
+    f_pts = np.interp(s_pts, stroke, force)
 
     # what is known of the shape rows beforehand (diameters, mm): resolution and the mesh's share, in quadrature
     hk = record.positive("post.hk_mm") or problem.h_end
@@ -218,6 +247,9 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     shape_sigma = {"dmax": 2.0 * bulge_half_width(max(dmax - d_n, 0.0) / 2.0)}
     if dface is not None:
         shape_sigma["dface"] = face_half_width(d_n) * d_n
+    # E's uncertainty in the spring-back d·ν·σ/E of the model's diameters, in quadrature (σ = F/A at the end)
+    springback_rel = 0.3 * float(np.max(force)) / (math.pi * d_n**2 / 4.0) / E * elastics.E_stderr_MPa / E
+    shape_sigma = {k: math.hypot(v, springback_rel * (dmax if k == "dmax" else dface)) for k, v in shape_sigma.items()}
     # every row in units of its own σ: the force rows' is pooled from their misfit for the covariance, the diameters' known
     row_sigma = np.array([np.nan] * FORCE_POINTS + [1.0] * len(shape_sigma))
 
@@ -235,10 +267,16 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
 
     x_scale = np.maximum(np.abs(x0), 1e-3)
     x_scale[-1] = 0.05
+    before = time.perf_counter() - t0  # the fast identification, the closure, the warm start's run: the budget's and the progress's clock
+    n_params = len(x0)
+
+    def shown(runs, elapsed, _left=None):  # the time left at the rate of the whole identification so far (the warm start's run in it)
+        progress(runs, before + elapsed, time_left_s(runs, before + elapsed, n_params, time_limit_s))
+
     sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
-                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress,
+                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=shown if progress else None,
                           other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma,
-                          correlated=True)
+                          correlated=True, time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))
     r, se = sol.residuals, sol.stderr
     # what the shape alone tells of μ, beside what the fit tells with the force (information, not a bound: the force
     # curve's error is counted as serially correlated in the fit's covariance)
@@ -254,6 +292,9 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     d_res_mm = float(r[FORCE_POINTS] * shape_sigma["dmax"])
     face_res_mm = float(r[FORCE_POINTS + 1] * shape_sigma["dface"]) if dface is not None else None
     warnings = _fit_warnings(force_rms, d_res_mm, mu, sol) + sol.failed_runs_warnings() + sol.undetermined_warnings([*law_info.keys, "μ"])
+    if sol.cut:
+        warnings.append(f"inverse FE: cut by the time limit ({time_limit_s:g} s, --time-limit) after {sol.runs} solver runs: the answer is "
+                        "the best parameter set run so far, not a converged fit (its standard errors from the last Jacobian)")
     if face_res_mm is not None and not abs(face_res_mm) <= POOR_DMAX_MM:
         warnings.append(f"inverse FE: the fitted model misses the end face dface by {face_res_mm:+.3f} mm")
     if se[-1] > MU_TOLD:  # NaN (undetermined) is warned above
@@ -280,11 +321,20 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
             "wall_s": round(wall, 1), "force_rms_residual_pct": force_rms, "force_max_residual_pct": float(np.max(np.abs(r_force))),
             "dmax_residual_mm": d_res_mm, **({"dface_residual_mm": face_res_mm} if dface is not None else {}),
             "shape_measured": ["hk", "dmax"] + (["dface"] if dface is not None else []), "optimizer": sol.optimizer(),
+            "budget": {"time_limit_s": time_limit_s, "cut": sol.cut, "solver_runs": sol.runs, "wall_s": round(wall, 1),
+                       "fold_over_strain": fold_over, "force_fitted_to_strain": float(targets[-1]), "record_strain": float(strain.max()),
+                       "done": (f"force fitted over strain {targets[0]:.3g}–{targets[-1]:.3g} of {strain.max():.3g} ("
+                                + (f"the side folds onto the platen from {fold_over:.3g} in the warm start's run" if fold_over is not None
+                                   else "no fold-over in the warm start's run" if first is not None else "the warm start's run failed")
+                                + f"); shape {', '.join(['dmax'] + (['dface'] if dface is not None else []))} at the end; {sol.runs} runs; "
+                                + ("cut by the time limit" if sol.cut else "converged or stopped by the optimiser"))},
             "warm_start": {"mu": mu0, **{k: float(v) for k, v in zip(law_info.keys, p0)}},
-            "model": {"increments": increments, "E_MPa": float(E), "E_source": E_source, "h_end_mm": problem.h_end, "force_points": FORCE_POINTS,
+            "model": {"increments": increments, **elastics.as_dict(), "diagram_options": diagram_options, "h_end_mm": problem.h_end, "force_points": FORCE_POINTS,
                       "force_sigma_pct": FORCE_SIGMA_PCT, "from_strain": FROM_STRAIN},
         },
     })
+    if elastics.E_source == "handbook" and diagram_options.get("E_MPa"):  # a class's handbook value, not the fast's "option"
+        result.update(E_MPa=elastics.E_MPa, E_source=f"handbook ({elastics.E_basis})")
     result.pop("dface_advice", None)  # the warm start's; the inverse judges μ itself
     if dface is None and not se[-1] <= MU_TOLD:  # poorly told or undetermined, and no end face to tell it
         result["dface_advice"] = DFACE_ADVICE

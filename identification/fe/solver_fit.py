@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any, Callable
 
 import numpy as np
@@ -124,6 +125,8 @@ class SolverFit:
     covariance: np.ndarray | None = None  # of x (NaN rows and columns for the undetermined)
     failed_runs: int = 0  # runs that did not converge (counted in runs), whose parameter sets the optimiser was steered from
     retried_runs: int = 0  # runs that converged only when run again with other settings (an output's ``retried``)
+    cut: bool = False  # the time limit stopped the optimiser: x is the best parameter set run so far
+    time_limit_s: float | None = None
 
     def stderr_from_rows(self, k: int, rows, row_sigma) -> float:
         """The standard error of parameter ``k`` that ``rows`` alone give, the other parameters
@@ -153,11 +156,28 @@ class SolverFit:
                 f"no standard error: the residuals do not change with it, or its runs failed on both sides)" for k in self.undetermined]
 
 
+TYPICAL_JACOBIANS = 8  # Jacobians a fit takes (the compression inverse: 6–12), for the time-left estimate
+
+
+class _OutOfTime(Exception):
+    """The next batch of runs would end past the time limit."""
+
+
+def time_left_s(runs: int, elapsed_s: float, n_params: int, time_limit_s: float | None) -> float | None:
+    """An estimate of a fit's time left: the runs of :data:`TYPICAL_JACOBIANS` Jacobians (at
+    least one more) at the rate so far, held to the time limit; None before the first run."""
+    if runs <= 0:
+        return None
+    expected = max(runs + n_params + 1, TYPICAL_JACOBIANS * (n_params + 1))
+    left = elapsed_s / runs * (expected - runs)
+    return max(0.0, min(left, time_limit_s - elapsed_s)) if time_limit_s is not None else left
+
+
 def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[Any], np.ndarray], x0, lo, hi, *,
                     n_residuals: int, steps: Callable[[np.ndarray], np.ndarray], x_scale, workers: int | None = None,
                     scheduler=None, max_runs: int = 150, max_nfev: int = 20, xtol: float = 1e-6, ftol: float = 1e-6,
                     progress=None, what: str = "inverse FE", other_starts=(), best_start: bool = False, row_sigma=None,
-                    correlated: bool = False) -> SolverFit:
+                    correlated: bool = False, time_limit_s: float | None = None) -> SolverFit:
     """Minimise |residuals_of(run(x))|² over lo ≤ x ≤ hi from x0.
 
     ``run`` must be picklable (a module-level function or a ``functools.partial`` of one) and
@@ -168,13 +188,18 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     fails is taken the other way. ``row_sigma``: the residuals' known standard deviations, NaN where the
     fit's scatter stands in (:func:`parameter_stderr`); ``correlated``: that scatter runs along the
     rows (its variance inflated by :func:`serial_inflation`).
+    ``time_limit_s``: no batch of runs is started that would end past it (at the mean batch time so
+    far); the fit then ends with the best parameter set run so far, its covariance from the last
+    Jacobian, ``cut`` set. ``progress(runs, elapsed_s, left_s)``: left_s from :func:`time_left_s`.
     """
     from scipy.optimize import least_squares
 
     t0 = time.perf_counter()
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    runs = {"count": 0, "solver_s": 0.0, "failed": 0, "retried": 0}
+    runs = {"count": 0, "solver_s": 0.0, "failed": 0, "retried": 0, "batches": 0, "batch_s": 0.0}
     memo: dict[tuple, np.ndarray] = {}
+    best: dict = {}  # the least misfit run so far: x, residuals
+    last_jac: dict = {}  # x, J of the last Jacobian
     blind: dict[tuple, list[int]] = {}  # at x: the Jacobian columns whose runs failed on both sides
 
     def evaluate(points: list[np.ndarray]) -> list[np.ndarray]:
@@ -182,6 +207,10 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
         if todo:
             if runs["count"] + len(todo) > max_runs:
                 raise IdentificationError(f"{what}: more than {max_runs} solver runs without convergence")
+            elapsed = time.perf_counter() - t0
+            if time_limit_s is not None and best and elapsed + runs["batch_s"] / runs["batches"] > time_limit_s:
+                raise _OutOfTime
+            t_batch = time.perf_counter()
             for p, out in zip(todo, run_many(run, todo, workers=workers, scheduler=scheduler)):
                 runs["count"] += 1
                 runs["failed"] += out is None
@@ -189,8 +218,13 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
                 if out is not None and not out.cached:
                     runs["solver_s"] += out.wall_s
                 memo[tuple(p)] = np.full(n_residuals, FAILED_RUN_RESIDUAL) if out is None else residuals_of(out)
+                if out is not None and (not best or float(memo[tuple(p)] @ memo[tuple(p)]) < float(best["r"] @ best["r"])):
+                    best.update(x=np.asarray(p, float), r=memo[tuple(p)])
+            runs["batches"] += 1
+            runs["batch_s"] += time.perf_counter() - t_batch
             if progress:
-                progress(runs["count"], time.perf_counter() - t0)
+                elapsed = time.perf_counter() - t0
+                progress(runs["count"], elapsed, time_left_s(runs["count"], elapsed, len(x0), time_limit_s))
         return [memo[tuple(p)] for p in points]
 
     def fun(x):
@@ -218,8 +252,10 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
         # a column whose runs failed both ways is unknown, not the 1e3 of a failed run over a step: a zero column
         # keeps the optimiser from moving on it, and the parameter is reported undetermined if it stays so at the end
         blind[tuple(x)] = [i for i in range(x.size) if failed(res[i + 1])]
-        return np.column_stack([np.zeros(len(res[0])) if i in blind[tuple(x)] else (res[i + 1] - res[0]) / (pts[i][i] - x[i])
-                                for i in range(x.size)])
+        J = np.column_stack([np.zeros(len(res[0])) if i in blind[tuple(x)] else (res[i + 1] - res[0]) / (pts[i][i] - x[i])
+                             for i in range(x.size)])
+        last_jac.update(x=x, J=J)
+        return J
 
     starts = [np.asarray(x0, float)] + [np.clip(np.asarray(s, float), lo, hi) for s in other_starts]
     if best_start:  # all starts side by side, the least misfit first (a failed run's 1e3 residuals last)
@@ -231,8 +267,16 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     else:
         raise IdentificationError(f"{what}: the solver run failed at the warm start {np.round(starts[0], 4).tolist()} and at "
                                   f"{len(starts) - 1} other starts (see the log); the fast result is the one to use for this record")
-    sol = least_squares(fun, np.asarray(x0, float), jac=jac, bounds=(lo, hi), x_scale=x_scale, xtol=xtol, ftol=ftol,
-                        gtol=1e-8, max_nfev=max_nfev)
+    try:
+        sol = least_squares(fun, np.asarray(x0, float), jac=jac, bounds=(lo, hi), x_scale=x_scale, xtol=xtol, ftol=ftol,
+                            gtol=1e-8, max_nfev=max_nfev)
+        cut = False
+    except _OutOfTime:  # the best set run so far; its covariance from the last Jacobian (at it, or at the optimiser's last x)
+        J = last_jac["J"] if last_jac else np.zeros((n_residuals, len(x0)))
+        at = "at it" if last_jac and np.array_equal(last_jac["x"], best["x"]) else "at the optimiser's last point"
+        sol = SimpleNamespace(x=best["x"], fun=best["r"], jac=J, status=0, nfev=runs["count"],
+                              message=f"cut by the time limit of {time_limit_s:g} s: the best of {runs['count']} runs, the Jacobian {at}")
+        cut = True
     cov, undetermined = parameter_covariance(sol.jac, sol.fun, x_scale, row_sigma=row_sigma, correlated=correlated)
     undetermined = tuple(sorted({*undetermined, *blind.get(tuple(sol.x), [])}))
     cov[list(undetermined), :] = np.nan
@@ -240,4 +284,4 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     return SolverFit(x=sol.x, stderr=np.sqrt(np.diag(cov)), residuals=sol.fun, runs=runs["count"], solver_s=runs["solver_s"],
                      wall_s=time.perf_counter() - t0, status=int(sol.status), message=str(sol.message), nfev=int(sol.nfev),
                      undetermined=undetermined, jac=np.asarray(sol.jac, float), covariance=cov, failed_runs=runs["failed"],
-                     retried_runs=runs["retried"])
+                     retried_runs=runs["retried"], cut=cut, time_limit_s=time_limit_s)

@@ -256,11 +256,24 @@ class UpsettingResult:
     wall_s: float
     cached: bool
     message: str = ""
+    side_gap: np.ndarray | None = None  # the first side node below the rim: its height under the platen face over the first
 
     @property
     def strain(self) -> np.ndarray:
         """Logarithmic height strain ε = ln(h0/h) (3.31)."""
         return np.log(self.model.h0_mm / self.height_mm)
+
+    @property
+    def fold_over_strain(self) -> float | None:
+        """The strain at which the side begins to fold onto the platen: the first side node below
+        the rim comes within :data:`FOLD_OVER_GAP` of its first distance to the platen face (None: it never does)."""
+        if self.side_gap is None or self.side_gap.size == 0:
+            return None
+        on = np.nonzero(self.side_gap <= FOLD_OVER_GAP)[0]
+        return float(self.strain[on[0]]) if on.size else None
+
+
+FOLD_OVER_GAP = 0.05  # a side node this part of its first distance from the platen face has folded onto it
 
 
 def simulate_upsetting(m: UpsettingModel, *, require_complete: bool = True, timeout_s: float = 600.0, use_cache: bool = True) -> UpsettingResult:
@@ -278,7 +291,12 @@ def upsetting_result(m: UpsettingModel, out: CcxOutput) -> UpsettingResult:
     radius = r0[None, :] + u[:, :, 0]
     corner = list(out.nodes["OUTER"]).index(s["outer"][m.nr])  # the rim-corner node
     stroke = m.stroke_mm * t
+    below = list(out.nodes["OUTER"]).index(s["outer"][m.nr + 1])  # the first side node under the rim
+    platen_z = m.h0_mm / 2.0 - stroke / 2.0  # the platen face (half model, symmetry at mid-height)
+    z0 = mesh.nodes[s["outer"][m.nr + 1] - 1][1]
+    side_gap = (platen_z - (z0 + u[:, below, 1])) / (m.h0_mm / 2.0 - z0)
     return UpsettingResult(
         model=m, time=t, stroke_mm=stroke, height_mm=m.h0_mm - stroke, force_N=-rf[:, 1] * SECTOR,
         dmax_mm=2.0 * radius.max(axis=1), dtop_mm=2.0 * radius[:, corner], completed=out.completed,
-        wall_s=out.wall_s, cached=out.cached, message=out.message)
+        wall_s=out.wall_s, cached=out.cached, message=out.message,
+        side_gap=side_gap)

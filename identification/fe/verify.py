@@ -30,6 +30,7 @@ class FlowCurveSource:
     E_MPa: float | None
     mu: float | None
     what: str
+    diagram_options: dict | None = None  # how the inverse read the record (its E, a fitted frame stiffness)
 
 
 def _table_from_function(fn, eps_max: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
@@ -49,8 +50,10 @@ def curve_from_result(result: dict, source: str = "result.json") -> FlowCurveSou
         raise IdentificationError(f"{source}: hardening constants {', '.join(law.keys)} missing or not numbers") from None
     eps, sig = _table_from_function(lambda e: law.func(e, **params))
     E = result.get("E_MPa") if result.get("E_source") in ("option", "record (material.E_MPa)") else None
+    model = (result.get("inverse_fe") or {}).get("model") or {}
+    E = model.get("E_MPa", E)  # the inverse's model E (given, handbook, a class's handbook value)
     mu = result.get("friction_mu")
-    return FlowCurveSource(eps, sig, E, None if mu is None else float(mu), f"{source}: {h['law']} {params}")
+    return FlowCurveSource(eps, sig, E, None if mu is None else float(mu), f"{source}: {h['law']} {params}", model.get("diagram_options"))
 
 
 def curve_from_card(text: str, source: str = "card") -> FlowCurveSource:
@@ -101,29 +104,46 @@ def load_curve(path: str | Path) -> FlowCurveSource:
         raise IdentificationError(f"{p}: no such result or card") from None
 
 
-def record_force_stroke(record):
+def record_force_stroke(record, **options):
     """(specimen shortening mm, force N) of the record's loading branch, frame-corrected and
-    scaled to the measured height change by the fast identification."""
+    scaled to the measured height change by the fast identification (``options``: its E_MPa,
+    frame_stiffness_N_per_um)."""
     from flowcurve.identification.compression import identify_compression
 
-    ident = identify_compression(record)
+    ident = identify_compression(record, **options)
     d = ident.curves["corrected_diagram"]
     return d["specimen_displacement_mm"].to_numpy(), d["force_N"].to_numpy(), ident
+
+
+def _simulate_with_retries(model_with, timeout_s: float):
+    """(run, settings) of ``model_with(**settings)``: the model's own settings first, then the
+    table's retries (:data:`.make_table.RETRY_SETTINGS`, as the inverse FE) — where the side folds
+    onto the platen a run stops at a strain that moves with the stick slope and the increments."""
+    from flowcurve.identification.fe.ccx import SolverError
+    from flowcurve.identification.fe.make_table import RETRY_SETTINGS
+
+    for k, settings in enumerate(({}, *RETRY_SETTINGS)):
+        try:
+            return simulate_upsetting(model_with(**settings), timeout_s=timeout_s), settings
+        except SolverError:
+            if k == len(RETRY_SETTINGS):
+                raise
 
 
 def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = None, increments: int = 50, timeout_s: float = 900.0) -> dict:
     """FE force–stroke of ``curve`` on ``record``'s specimen vs the record; deviations in %."""
     if record.test != "compression":
         raise IdentificationError(f"{record.source}: verify runs upsetting (compression) records; this is a {record.test} record")
-    stroke, force, ident = record_force_stroke(record)
+    stroke, force, ident = record_force_stroke(record, **(curve.diagram_options or {}))
     d0 = record.positive("specimen.d0_mm", required=True)
     h0 = record.positive("specimen.h0_mm", required=True)
     mu = mu if mu is not None else curve.mu if curve.mu is not None else ident.result["friction_mu"]
     E = curve.E_MPa or record.positive("material.E_MPa") or DEFAULT_E_MPa
     s_end = float(np.max(stroke))
-    model = UpsettingModel(d0, h0, h0 - s_end, float(mu), tuple(map(float, curve.eps_p)), tuple(map(float, curve.stress_MPa)),
-                           E_MPa=float(E), increments=increments).realising()  # the curve as the specimen's, not ccx's reading
-    run = simulate_upsetting(model, timeout_s=timeout_s)
+    run, retry = _simulate_with_retries(
+        lambda **settings: UpsettingModel(d0, h0, h0 - s_end, float(mu), tuple(map(float, curve.eps_p)), tuple(map(float, curve.stress_MPa)),
+                                          E_MPa=float(E), **{"increments": increments, **settings}).realising(),  # the curve as the specimen's
+        timeout_s)
     s_fe = np.concatenate([[0.0], run.stroke_mm])
     f_fe = np.concatenate([[0.0], run.force_N])
     strain = -np.log(1.0 - stroke / h0)
@@ -142,5 +162,6 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
         "fe_dmax_mm": float(run.dmax_mm[-1]), "record_dmax_mm": post_dmax,
         "dmax_deviation_mm": None if post_dmax is None else float(post_dmax - run.dmax_mm[-1]),
         "compared_from_strain": COMPARE_FROM_STRAIN, "solver_wall_s": run.wall_s, "solver_cached": run.cached,
+        "solver_retry": retry or None,  # the settings that carried a run the model's own stopped (None: its own)
         "curves": {"stroke_mm": stroke[sel], "record_force_N": force[sel], "fe_force_N": f_at, "deviation_pct": dev},
     }

@@ -17,6 +17,12 @@ from flowcurve.identification.outcome import to_jsonable
 RECORD_E_MPa = 194_000.0
 
 
+@pytest.fixture(autouse=True)
+def _no_warm_start_run(monkeypatch):
+    """The warm start's run (the fold-over's onset) is the solver's: none here."""
+    monkeypatch.setattr(inverse, "_warm_start_run", lambda problem, x0: None)
+
+
 def test_an_untold_mu_is_null_with_a_warning(monkeypatch, seed_like_record):
     record, truth = seed_like_record
 

@@ -1,0 +1,87 @@
+"""The inverse's wall-time budget (issue 37): a fit whose runs would outlast ``time_limit_s``
+ends by it with the best parameter set run so far, marked ``cut``, its standard errors from the
+last Jacobian; the time left it shows is held to the limit; the force is fitted up to the
+fold-over's onset. Closed-form "runs" that take a known time on a model clock (the fit's clock
+replaced, so the machine's load does not move the test), no solver."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import flowcurve.identification.fe.solver_fit as solver_fit
+from flowcurve.cli.progress import budget_text
+from flowcurve.identification.fe.inverse import MIN_FORCE_STRAIN, force_fit_limit
+from flowcurve.identification.fe.solver_fit import fit_with_solver, time_left_s
+
+T = np.linspace(0.0, 1.0, 12)
+RUN_S = 0.05
+
+
+CLOCK = {"now": 0.0}  # the model clock, s
+
+
+@pytest.fixture(autouse=True)
+def _model_clock(monkeypatch):
+    CLOCK["now"] = 0.0
+    monkeypatch.setattr(solver_fit, "time", SimpleNamespace(perf_counter=lambda: CLOCK["now"]))
+
+
+class _Out:
+    cached = False
+
+    def __init__(self, y):
+        self.y, self.wall_s = y, RUN_S
+
+
+def _slow_exp(x):
+    """y = a·exp(b·t), one run taking RUN_S on the model clock: a fit that needs several iterations."""
+    CLOCK["now"] += RUN_S
+    return _Out(x[0] * np.exp(x[1] * T))
+
+
+def _fit(limit, seen=None):
+    target = 2.0 * np.exp(1.5 * T)
+    return fit_with_solver(_slow_exp, lambda out: out.y - target, np.array([0.5, -1.0]), [0.01, -5.0], [10.0, 5.0], n_residuals=T.size,
+                           steps=lambda x: np.full(2, 1e-6), x_scale=np.ones(2), workers=1, time_limit_s=limit,
+                           progress=(lambda runs, elapsed, left: seen.append((runs, elapsed, left))) if seen is not None else None)
+
+
+def test_without_a_limit_the_fit_converges():
+    sol = _fit(None)
+    assert not sol.cut and sol.x == pytest.approx([2.0, 1.5], rel=1e-5)
+
+
+def test_a_time_limit_cuts_the_fit_to_its_best_run_so_far():
+    full = _fit(None)
+    limit = 0.3 * full.wall_s
+    t0 = CLOCK["now"]
+    seen = []
+    sol = _fit(limit, seen)
+    wall = CLOCK["now"] - t0
+    assert sol.cut and "time limit" in sol.message
+    assert sol.runs < full.runs
+    assert wall <= limit + 1e-9  # no batch was started that would end past the limit
+    # the answer is the least misfit of the runs made, and it has standard errors from a Jacobian
+    start_cost = float(np.sum((0.5 * np.exp(-T) - 2.0 * np.exp(1.5 * T)) ** 2))
+    assert float(sol.residuals @ sol.residuals) < start_cost
+    assert np.all(np.isfinite(sol.stderr))
+    # the time left shown never reaches past the limit
+    assert all(left is None or elapsed + left <= limit + 1e-9 for _, elapsed, left in seen)
+
+
+def test_time_left_is_the_typical_fit_at_the_rate_so_far_held_to_the_limit():
+    assert time_left_s(0, 0.0, 4, 270.0) is None
+    assert time_left_s(10, 50.0, 4, None) == pytest.approx(5.0 * (8 * 5 - 10))
+    assert time_left_s(10, 50.0, 4, 100.0) == pytest.approx(50.0)
+    assert time_left_s(50, 250.0, 4, 270.0) == pytest.approx(20.0)
+    assert "about 20 s left (time limit 270 s)" in budget_text(50, 250.0, 20.0, limit_s=270.0)
+
+
+def test_the_force_is_fitted_to_the_fold_over_onset_but_not_less_than_the_minimum():
+    assert force_fit_limit(0.69, None) == 0.69
+    assert force_fit_limit(0.69, 0.6) == 0.6
+    assert force_fit_limit(0.69, 0.1) == MIN_FORCE_STRAIN
+    assert force_fit_limit(0.25, 0.1) == 0.25
