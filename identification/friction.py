@@ -404,6 +404,10 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
     continued = table.continued_at(mu, h0_d0, n, eps_k, eps0)
     if continued is not None:
         extra["continued_runs_from_strain"] = continued
+        # no run of the table reached this shape above the stopped μ: what it tells is a lower bound, the range opens up
+        extra["mu_range"] = [extra["mu_range"][0], float(table.mu[-1])]
+        extra["mu_range_basis"] += f"; open to the table's largest μ (its runs stopped at ε {continued:.2f} and were continued)"
+        extra["mu_stderr"] = mf.stderr_of_range(*extra["mu_range"])
     return FrictionResult("fe_table", mu, inputs, extra)
 
 
