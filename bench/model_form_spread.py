@@ -11,6 +11,11 @@ against the product's default: the bulge ΔR = (dmax − d_n)/2 (relative change
 d/d_n (absolute change), both sprung back elastically, and the force (largest relative change
 over ε 0.1 to the end). One ccx at a time; the runs go to $FLOWCURVE_FE_CACHE (a new folder
 makes them all run).
+
+Measured (one ccx at a time, load average 1 → 8 from other work; 6–100 s a run): the table in
+docs/methods.md §4a.7 — in quadrature per case at most ΔR 4.3 % (C2), d/d_n 0.017 (C3), force
+0.24 / 1.7 / 2.4 / 3.6 % at μ 0.05 / 0.15 / 0.2 / 0.3; S4 (h0/d0 2, μ 0.2) stops in the product's
+model at the fold-over with every setting, S2's stick 1e5 and 200-increment runs too.
 """
 
 from __future__ import annotations

@@ -5,6 +5,7 @@ node-to-surface contact, stick slope 1e5, 200 increments; the rig's compliance 1
 
     python bench/second_model_records.py [--workers 2] [--only C1,C2]
     python bench/second_model_records.py --records tests/fe/data    # the coverage table of the vendored records, no solver
+    python bench/second_model_records.py --records tests/fe/data --inverse --only C2,C3 --workers 2    # and the inverse's
 
 Per record: the truth μ; the default's μ and its reported range from the bulge (no end face) and
 from the end face (post.dface_mm); the curve error, the largest |σ/σ_true − 1| over ε_p
@@ -79,6 +80,28 @@ def _coverage(paths: list[Path]) -> None:
                   f"within 3 on {sum(v <= 3 for v in z)} of {len(z)}")
 
 
+def _inverse_coverage(paths: list[Path], workers: int) -> None:
+    """The inverse (--method inverse-fe, E from the record's material.E_MPa) on each record: μ, its
+    reported standard error (with the model form's share), z, the curve error, runs and seconds."""
+    from flowcurve.identification.fe.inverse import identify_inverse_fe
+    from flowcurve.record.format import read_record
+
+    print("inverse:  record  h0/d0  truth μ | μ      se     |μ−truth|/se  curve   runs  wall s")
+    z = []
+    for path in paths:
+        record = read_record(path)
+        meta = record.meta
+        case = sm.Case(meta["specimen.id"], *(float(meta[f"fe2.{k}"]) for k in ("A_MPa", "B_MPa", "n")), float(meta["material.E_MPa"]),
+                       float(meta["fe2.mu"]), float(meta["specimen.d0_mm"]), float(meta["specimen.h0_mm"]), float(meta["post.hk_mm"]))
+        ident = identify_inverse_fe(record, workers=workers)
+        inv = ident.result["inverse_fe"]
+        mu, se = inv["mu"], inv["mu_stderr"]
+        z.append(abs(mu - case.mu) / se if se else float("inf"))
+        print(f"          {case.name:6s} {case.h0_mm / case.d0_mm:5.2f}  {case.mu:6.3f} | {mu:6.3f} {se:6.3f}  {z[-1]:8.2f}      "
+              f"{100 * sm.curve_error(ident.true_curve, case):5.2f} %  {inv['solver_runs']:4d}  {inv['wall_s']:6.0f}", flush=True)
+    print(f"          inverse: within 2 se on {sum(v <= 2 for v in z)} of {len(z)}, within 3 on {sum(v <= 3 for v in z)} of {len(z)}")
+
+
 def _fmt(side: dict, mu: float) -> str:
     lo, hi = side["range"] or (float("nan"), float("nan"))
     inside = "in" if lo - 1e-9 <= mu <= hi + 1e-9 else "OUT"
@@ -92,10 +115,14 @@ def main() -> int:
     ap.add_argument("--only", default="", help="comma-separated record names")
     ap.add_argument("--records", type=Path, help="a folder of records second_model_<name>.csv already made (tests/fe/data): "
                     "only the coverage table, no solver runs")
+    ap.add_argument("--inverse", action="store_true", help="with --records: the inverse FE's coverage too (CalculiX in the loop: minutes a record)")
     args = ap.parse_args()
     cases = [c for c in CASES if not args.only or c.name in args.only.split(",")]
     if args.records is not None:
-        _coverage([p for c in cases if (p := args.records / f"second_model_{c.name}.csv").exists()])
+        paths = [p for c in cases if (p := args.records / f"second_model_{c.name}.csv").exists()]
+        _coverage(paths)
+        if args.inverse:
+            _inverse_coverage(paths, args.workers)
         return 0
     t0 = time.perf_counter()
     folder = Path(tempfile.mkdtemp(prefix="fe2-records-"))
