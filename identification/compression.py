@@ -556,6 +556,19 @@ def _constants_stderr(src: str, geo: dict, nominal: _Nominal, friction: _Frictio
     return shares
 
 
+def _model_form_shares(src: str, geo: dict, nominal: _Nominal, yld: _Yield, friction: _Friction, fit: HardeningFit, result: CompressionResult,
+                       fit_range, law: str, friction_correction: str) -> None:
+    """The main fit's standard errors with μ's and the model form's shares (:func:`_constants_stderr`),
+    said in ``methods.hardening_stderr``; a face and bulge that disagree make it poor, with a warning."""
+    shares = _constants_stderr(src, geo, nominal, friction, fit, yld.i_yield, fit_range, law, friction_correction, yld.E_used)
+    fit.stderr = mf.combined_stderr(fit.stderr, *shares.values())
+    result.methods["hardening_stderr"] = "; ".join(["the fit's standard errors", *shares]) + " (in quadrature)"
+    disagreement = _friction_disagreement(friction.chosen)
+    if disagreement:
+        fit.doubt = disagreement
+        result.warnings.append(disagreement)
+
+
 def _dface_advice(chosen: fr.FrictionResult) -> str | None:
     """The advice to measure dface when the FE table's μ rests on a bulge that hardly tells it, else None."""
     sensitivity = chosen.extra.get("sensitivity", {})
@@ -624,8 +637,7 @@ def _curves(diagram: _Diagram, nominal: _Nominal, friction: _Friction, fit: Hard
 
 
 def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: _Nominal, yld: _Yield, friction: _Friction,
-            fits: dict, warnings: list[str], *, E_MPa: float | None, law: str, friction_correction: str, toe: bool,
-            stderr_shares=()) -> CompressionResult:
+            fits: dict, warnings: list[str], *, E_MPa: float | None, law: str, friction_correction: str, toe: bool) -> CompressionResult:
     """The typed result (result.json) of a compression identification."""
     t, strain, chosen, frictions, fit = diagram.t, nominal.strain, friction.chosen, friction.frictions, fits[friction_correction]
     duration = float(t[-1] - t[0])
@@ -663,7 +675,6 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
             "elastic_volume": (f"fe_table: sigma_f = p / (factor * J), J = exp(-(1 - 2 nu) sigma_f / E), nu {geo['nu']:g} ({geo['nu_source']})"
                                if yld.E_used is not None else "fe_table: volume-constant area (no modulus)"),
             "hardening": f"{law} least squares on the {friction_correction} curve, eps_p >= {YIELD_OFFSET}",
-            "hardening_stderr": "; ".join(["the fit's standard errors", *stderr_shares]) + " (in quadrature)",
         },
         warnings=warnings,
         dface_advice=_dface_advice(chosen),
@@ -720,16 +731,10 @@ def identify_compression(
     yld = _modulus_and_yield(nominal, line.line, E_MPa, E_source)
     friction = _friction_correction(geo, nominal, friction_method, yld.E_used)
     fits, fit_warnings = _hardening_fits(record.source, friction.corrected, yld.i_yield, fit_range, law, friction_correction)
-    fit = fits[friction_correction]
-    shares = _constants_stderr(record.source, geo, nominal, friction, fit, yld.i_yield, fit_range, law, friction_correction, yld.E_used)
-    fit.stderr = mf.combined_stderr(fit.stderr, *shares.values())
-    disagreement = _friction_disagreement(friction.chosen)
-    if disagreement:
-        fit.doubt = disagreement
-        fit_warnings.append(disagreement)
     warnings = diagram.warnings + line.warnings + nominal.warnings + friction.warnings + fit_warnings
     result = _result(record, geo, diagram, line, nominal, yld, friction, fits, warnings, E_MPa=E_MPa, law=law,
-                     friction_correction=friction_correction, toe=toe, stderr_shares=tuple(shares))
+                     friction_correction=friction_correction, toe=toe)
     eps_def, sig_def, _ = friction.corrected[friction_correction]
+    _model_form_shares(record.source, geo, nominal, yld, friction, fits[friction_correction], result, fit_range, law, friction_correction)
     return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield),
                           curves=_curves(diagram, nominal, friction, fits[friction_correction]))
