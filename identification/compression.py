@@ -33,7 +33,8 @@ import pandas as pd
 from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
-from flowcurve.identification.hardening import HardeningFit, fit_hardening
+from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.hardening import LAWS, HardeningFit, fit_hardening
 from flowcurve.identification.indicator import (DEFAULT_MODULUS_METHOD, FEW_POINTS_TOP, SDAR_REACH, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
                                                 reread_if_stepped, yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
@@ -517,6 +518,58 @@ def _fe_table_warnings(chosen: fr.FrictionResult) -> list[str]:
     return out
 
 
+def _friction_disagreement(chosen: fr.FrictionResult) -> str | None:
+    """A warning when the end face's μ and the bulge's differ beyond their combined standard
+    errors (:data:`.fe.model_form.DISAGREE_SIGMAS`), else None: the shape pulls μ two ways."""
+    z = chosen.extra.get("face_bulge_disagreement_sigmas")
+    if z is None or not z > mf.DISAGREE_SIGMAS:
+        return None
+    return (f"friction: μ from the end face {chosen.mu:.3f} ± {chosen.extra['mu_stderr']:.3f} and from the bulge "
+            f"{chosen.extra['mu_from_bulge']:.3f} ± {chosen.extra['mu_from_bulge_stderr']:.3f} disagree ({z:.1f} combined standard "
+            "errors): the upsetting model does not describe this specimen's shape; the hardening is poor")
+
+
+def _constants_stderr(src: str, geo: dict, nominal: _Nominal, friction: _Friction, fit: HardeningFit, i_yield: int, fit_range, law: str,
+                      friction_correction: str, E_used: float | None) -> dict[str, dict[str, float]]:
+    """The shares of the hardening constants' standard errors beyond the fit's: μ's (the curve
+    corrected and fitted again at μ ∓ its standard error) and, on the FE table's correction, the
+    model form's force error on the stress constants (:func:`.fe.model_form.force_model_form`)."""
+    se_mu = friction.chosen.extra.get("mu_stderr")
+    shares: dict[str, dict[str, float]] = {}
+    if se_mu and math.isfinite(se_mu) and friction_correction in fr.CORRECTIONS:
+        eps_p = plastic_strain(nominal.strain, nominal.pressure, E_used) if E_used is not None else None
+        elastic = None if E_used is None else (E_used, geo["nu"])
+        params = []
+        for mu in (max(friction.chosen.mu - se_mu, 0.0), friction.chosen.mu + se_mu):
+            eps_t, sig_t = fr.correct(friction_correction, nominal.strain, nominal.pressure, mu, nominal.d_n / 2.0, nominal.h, eps_p=eps_p, elastic=elastic)
+            try:
+                fits, _ = _hardening_fits(src, {friction_correction: (plastic_strain(eps_t, sig_t, E_used), sig_t, eps_t)}, i_yield, fit_range, law,
+                                          friction_correction)
+            except IdentificationError:
+                return shares
+            params.append(fits[friction_correction].params)
+        shares["friction μ (fits at μ ∓ its standard error)"] = mf.through_mu(*params)
+    if friction_correction == "fe_table":
+        spec = LAWS[law]
+        u_force = mf.force_model_form(friction.chosen.mu)
+        shares[f"FE model form ({u_force:.1%} of the force at μ {friction.chosen.mu:.3f})"] = {
+            n: u_force * abs(fit.params[n]) for n, k in zip(spec.names, spec.keys) if k.endswith("_MPa")}
+    return shares
+
+
+def _model_form_shares(src: str, geo: dict, nominal: _Nominal, yld: _Yield, friction: _Friction, fit: HardeningFit, result: CompressionResult,
+                       fit_range, law: str, friction_correction: str) -> None:
+    """The main fit's standard errors with μ's and the model form's shares (:func:`_constants_stderr`),
+    said in ``methods.hardening_stderr``; a face and bulge that disagree make it poor, with a warning."""
+    shares = _constants_stderr(src, geo, nominal, friction, fit, yld.i_yield, fit_range, law, friction_correction, yld.E_used)
+    fit.stderr = mf.combined_stderr(fit.stderr, *shares.values())
+    result.methods["hardening_stderr"] = "; ".join(["the fit's standard errors", *shares]) + " (in quadrature)"
+    disagreement = _friction_disagreement(friction.chosen)
+    if disagreement:
+        fit.doubt = disagreement
+        result.warnings.append(disagreement)
+
+
 def _dface_advice(chosen: fr.FrictionResult) -> str | None:
     """The advice to measure dface when the FE table's μ rests on a bulge that hardly tells it, else None."""
     sensitivity = chosen.extra.get("sensitivity", {})
@@ -713,5 +766,6 @@ def identify_compression(
     result = _result(record, geo, diagram, line, nominal, yld, friction, fits, warnings, start=start, E_MPa=E_MPa, law=law,
                      friction_correction=friction_correction, toe=toe)
     eps_def, sig_def, _ = friction.corrected[friction_correction]
+    _model_form_shares(record.source, geo, nominal, yld, friction, fits[friction_correction], result, fit_range, law, friction_correction)
     return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield),
                           curves=_curves(diagram, nominal, friction, fits[friction_correction]))

@@ -35,6 +35,7 @@ from typing import Callable
 import numpy as np
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.fe import model_form as mf
 from flowcurve.identification.fe.upsetting import MESH_BULGE_UNCERTAINTY, MESH_FACE_UNCERTAINTY
 
 FRICTION_METHODS = ("fe_table", "bulge_regression", "ebrahimi_najafizadeh")
@@ -376,26 +377,37 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
     if face is None:
         extra.update(mu_basis="bulge (dmax)", sensitivity=_fe_mu_sensitivity(table, mu, h0_d0, hardening, eps_k, hk_mm),
                      mu_range=_fe_mu_range(table, delta_r, hk_mm, h0_d0, hardening, eps_k),
-                     mu_range_basis=f"the bulge with dmax ± {DIAMETER_RESOLUTION_MM} mm and the FE mesh's ± {MESH_BULGE_UNCERTAINTY:.0%} of it")
+                     mu_range_basis=f"the bulge with dmax ± {DIAMETER_RESOLUTION_MM} mm and the FE model form's ± {mf.BULGE_MODEL_FORM:.0%} of it")
+        extra["mu_stderr"] = mf.stderr_of_range(*extra["mu_range"])
     else:
         def face_mu(half):
             return [table.mu_from_face(min(face + sign * half, 1.0), h0_d0, n, eps_k, eps0=eps0, clamp=True) for sign in (1.0, -1.0)]
 
-        lo, hi = face_mu(face_half_width(d_n))
+        lo, hi = face_mu(mf.face_sigma(d_n, DIAMETER_RESOLUTION_MM))
         lo_res, hi_res = face_mu(DIAMETER_RESOLUTION_MM / d_n)
         try:
             bulge_mu = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)[0]
+            bulge_range = _fe_mu_range(table, delta_r, hk_mm, h0_d0, hardening, eps_k)
         except IdentificationError:
-            bulge_mu = None
+            bulge_mu = bulge_range = None
         extra.update(mu_basis="original end face (dface)", mu_from_bulge=bulge_mu, d_face_over_d_n=face,
                      sensitivity={"mu_per_dface_resolution": max(hi_res - lo_res, 0.0) / 2.0}, mu_range=[lo, hi],
-                     mu_range_basis=f"the end face with dface ± {DIAMETER_RESOLUTION_MM} mm and the FE mesh's ± {MESH_FACE_UNCERTAINTY} of d/d_n")
+                     mu_range_basis=f"the end face with dface ± {DIAMETER_RESOLUTION_MM} mm and the FE model form's ± {mf.FACE_MODEL_FORM} of d/d_n",
+                     mu_stderr=mf.stderr_of_range(lo, hi))
+        if bulge_range is not None:
+            se_bulge = mf.stderr_of_range(*bulge_range)
+            extra.update(mu_from_bulge_range=bulge_range, mu_from_bulge_stderr=se_bulge,
+                         face_bulge_disagreement_sigmas=mf.disagreement(mu, extra["mu_stderr"], bulge_mu, se_bulge))
     outside = _outside_table(table, h0_d0, n, eps0)
     if outside:
         extra["outside_table"] = outside
     continued = table.continued_at(mu, h0_d0, n, eps_k, eps0)
     if continued is not None:
         extra["continued_runs_from_strain"] = continued
+        # no run of the table reached this shape above the stopped μ: what it tells is a lower bound, the range opens up
+        extra["mu_range"] = [extra["mu_range"][0], float(table.mu[-1])]
+        extra["mu_range_basis"] += f"; open to the table's largest μ (its runs stopped at ε {continued:.2f} and were continued)"
+        extra["mu_stderr"] = mf.stderr_of_range(*extra["mu_range"])
     return FrictionResult("fe_table", mu, inputs, extra)
 
 
@@ -428,12 +440,12 @@ def face_half_width(d_n_mm: float) -> float:
 
 def _fe_mu_range(table, delta_r_mm: float, hk_mm: float, h0_d0: float, hardening: tuple[float, float], eps: float) -> list[float]:
     """[μ_lo, μ_hi]: the μ the table reads for the bulge ΔR less and plus its uncertainty
-    (:func:`bulge_half_width`: dmax's resolution, 0.01 mm, and the mesh's share of ΔR). Near
+    (:func:`.fe.model_form.bulge_sigma_mm`: dmax's resolution, 0.01 mm, and the model form's share of ΔR). Near
     sticking the barrel stops growing with μ and the interval opens up to the table's largest μ:
     what the bulge can tell, stated rather than hidden in a point value."""
     # ΔR ± √((δd/2)² + (u·ΔR)²) (3.29) inverted at the record's (h0/d0, n, ε0, ε)
     n, eps0 = hardening
-    half = bulge_half_width(delta_r_mm)
+    half = mf.bulge_sigma_mm(delta_r_mm, DIAMETER_RESOLUTION_MM)
     return [table.mu_from_bulge(max(delta_r_mm + sign * half, 0.0) / hk_mm, h0_d0, n, eps, eps0=eps0, clamp=True) for sign in (-1.0, 1.0)]
 
 

@@ -278,6 +278,11 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
                           other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma,
                           correlated=True, time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))
     r, se = sol.residuals, sol.stderr
+    if sol.jac is not None:  # the model form's share of the standard errors (fe/model_form.py), in quadrature with the fit's
+        from flowcurve.identification.fe.model_form import inverse_model_form_stderr
+
+        se = np.hypot(se, inverse_model_form_stderr(sol.jac, targets, FORCE_SIGMA_PCT, shape_sigma, mu=float(sol.x[-1]),
+                                                    delta_r_mm=max(dmax - d_n, 0.0) / 2.0, d_n_mm=d_n))
     # what the shape alone tells of μ, beside what the fit tells with the force (information, not a bound: the force
     # curve's error is counted as serially correlated in the fit's covariance)
     shape_rows = list(range(FORCE_POINTS, len(row_sigma)))

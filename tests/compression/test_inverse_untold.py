@@ -55,9 +55,13 @@ def test_a_told_mu_has_no_such_warning(monkeypatch, seed_like_record):
 
 def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_alone(monkeypatch, seed_like_record):
     """μ's standard error is the fit's, asked for with the force misfit counted as serially
-    correlated; what dmax alone tells, σ_d/|∂dmax/∂μ| with σ_d = √(0.01² + (0.04·(dmax − d_n))²)
-    mm, is reported beside it; beyond ±0.02 a "poorly told" warning."""
+    correlated, and the model form's share (fe/model_form.py) in quadrature: here μ is told by
+    dmax alone, so that share is the bulge's model-form offset 2·u_b·ΔR over ∂dmax/∂μ; what dmax
+    alone tells, σ_d/|∂dmax/∂μ| with σ_d = √(0.01² + (0.04·(dmax − d_n))²) mm, is reported
+    beside it; beyond ±0.02 a "poorly told" warning."""
     import math
+
+    from flowcurve.identification.fe.model_form import BULGE_MODEL_FORM
 
     record, _ = seed_like_record
     d0, h0 = (float(record.meta[k]) for k in ("specimen.d0_mm", "specimen.h0_mm"))
@@ -71,7 +75,7 @@ def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_al
         def outcome(run, residuals_of, x0, lo, hi, *, n_residuals, **kw):
             asked.update(kw)
             jac = np.zeros((n_residuals, len(x0)))
-            jac[: inverse.FORCE_POINTS, :] = 1.0
+            jac[: inverse.FORCE_POINTS, 0] = 1.0  # the force tells the first constant, dmax μ
             jac[inverse.FORCE_POINTS, -1] = 0.2 * w  # dmax moves 0.2 mm per unit μ
             se = np.full(len(x0), 0.01)
             se[-1] = mu_se
@@ -84,10 +88,11 @@ def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_al
         result = inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
         inv = result["inverse_fe"]
         assert asked["correlated"] is True
-        assert inv["mu_stderr"] == mu_se
+        model_form = 2.0 * BULGE_MODEL_FORM * (dmax - d0 * math.sqrt(h0 / hk)) / 2.0 / 0.2
+        assert inv["mu_stderr"] == pytest.approx(math.hypot(mu_se, model_form))
         assert inv["mu_stderr_shape_alone"] == pytest.approx(sigma_d / 0.2)
         assert 0.8 < inv["force_residual_serial_correlation"] <= 0.9
-        assert any("poorly told" in x for x in result.get("warnings", [])) == (mu_se > inverse.MU_TOLD)
+        assert any("poorly told" in x for x in result.get("warnings", [])) == (math.hypot(mu_se, model_form) > inverse.MU_TOLD)
 
 
 def test_a_fit_whose_runs_failed_often_says_so_in_the_result_and_the_summary(monkeypatch, seed_like_record):

@@ -269,6 +269,18 @@ def write_record(run: SecondRun, path: Path, *, stiffness_N_per_um: float = 136.
 
 C2 = Case("C2", A_MPa=280.0, B_MPa=1215.0, n=0.43, E_MPa=180_000.0, mu=0.05, d0_mm=6.0, h0_mm=9.0, h_end_mm=4.5)
 C3 = Case("C3", A_MPa=410.0, B_MPa=280.0, n=0.47, E_MPa=200_000.0, mu=0.2, d0_mm=6.0, h0_mm=6.0, h_end_mm=3.6)
+# the held-out records over h0/d0 1.0–2.0 and μ 0.05–0.3 (issue 37); S3 to h 5.6 mm: to 4.8 mm its side folded at 0.916 of the stroke
+HELD_OUT = (
+    Case("C1", 105.0, 1392.0, 0.642, 194_000.0, 0.15, 6.0, 9.0, 4.5),
+    C2,
+    C3,
+    Case("S1", 300.0, 600.0, 0.30, 200_000.0, 0.05, 6.0, 6.0, 3.6),
+    Case("S2", 250.0, 900.0, 0.50, 200_000.0, 0.30, 6.0, 7.2, 3.6),
+    Case("S3", 350.0, 500.0, 0.25, 210_000.0, 0.10, 6.0, 9.6, 5.6),
+    Case("S4", 200.0, 700.0, 0.40, 200_000.0, 0.20, 5.0, 10.0, 5.0),
+    Case("S5", 400.0, 400.0, 0.35, 200_000.0, 0.30, 5.0, 10.0, 5.0),
+    Case("S6", 150.0, 1000.0, 0.55, 195_000.0, 0.25, 5.0, 9.0, 4.5),
+)
 
 
 def curve_error(true_curve, case: Case, lo: float = 0.05, hi: float = 0.6) -> float:
@@ -302,3 +314,18 @@ def identify_default(path: Path, out: Path, *, end_face: bool) -> tuple[dict, fl
     folder = out / copy.stem
     result = json.loads((folder / "result.json").read_text())
     return result, curve_error(pd.read_csv(folder / "true_curve.csv", comment="#"), case)
+
+
+def coverage_row(path: Path, out: Path, *, end_face: bool) -> dict:
+    """The default's μ on a record against its truth (header ``fe2.mu``) in the result's own
+    standard errors (``friction_details.fe_table.mu_stderr``): record, truth μ, μ, se,
+    z = |μ − truth|/se, the curve error and the hardening's quality."""
+    from flowcurve.record.format import read_record
+
+    result, err = identify_default(path, out, end_face=end_face)
+    meta = read_record(path).meta
+    truth, mu = float(meta["fe2.mu"]), float(result["friction_mu"])
+    se = float(result["friction_details"]["fe_table"]["mu_stderr"])
+    return {"record": meta["specimen.id"], "h0_d0": float(meta["specimen.h0_mm"]) / float(meta["specimen.d0_mm"]), "truth_mu": truth,
+            "mu": mu, "se": se, "z": abs(mu - truth) / se if se > 0 else math.inf, "curve_error": err,
+            "quality": result["hardening"]["quality"]}

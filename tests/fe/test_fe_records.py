@@ -111,7 +111,7 @@ def test_a_record_the_default_misses_is_flagged(case):
 
 @pytest.mark.parametrize("case", VALIDATION_CASES, ids=[c["name"] for c in VALIDATION_CASES])
 def test_the_true_mu_is_inside_the_reported_range(case):
-    """friction_mu_range (the μ of the bulge ± dmax's 0.01 mm and the FE mesh's 4 % of it) holds
+    """friction_mu_range (the μ of the bulge ± dmax's 0.01 mm and the FE model form's 5 % of it) holds
     the true μ on every record, also where the point value misses ±0.02 because the barrel hardly
     grows with μ (near sticking): Voce at μ 0.17 reads 0.220 in 0.175–0.35. Counting dmax's
     resolution alone, that range began at 0.184 and missed."""
@@ -138,12 +138,13 @@ def test_with_the_end_face_the_default_reads_fe_records(case):
 def test_the_end_face_tells_mu_on_every_record():
     """μ from the end face within 0.015 of the truth on all six records (measured: at most
     0.0079, Voce at μ 0.17; from the bulge up to 0.050), its range (dface ± 0.01 mm and the FE
-    mesh's ± 0.005 of d/d_n) at most 0.02 wide (measured 0.006–0.017; from the bulge up to 0.175)."""
+    model form's ± 0.02 of d/d_n, §4a.7) holding the truth (with the mesh's ± 0.005 alone it was
+    0.006–0.017 wide)."""
     for case in VALIDATION_CASES:
         ident, _ = _read(case, end_face=True)
         lo, hi = ident.result["friction_mu_range"]
         assert ident.result["friction_mu"] == pytest.approx(case["mu"], abs=0.015), case["name"]
-        assert lo <= ident.result["friction_mu"] <= hi and hi - lo <= 0.02, (case["name"], lo, hi)
+        assert lo <= ident.result["friction_mu"] <= hi and lo <= case["mu"] <= hi, (case["name"], lo, hi)
 
 
 def test_the_force_factor_follows_the_hardening_near_the_strain():

@@ -1,0 +1,120 @@
+"""Model-form error of the upsetting model: how far another defensible model (mesh, contact,
+increments, another code's formulation) puts the final shape and the force at the same law, μ
+and h0/d0, as standard deviations, and what they do to μ and the hardening constants.
+
+The figures are the spread measured by ``bench/model_form_spread.py`` (docs/methods.md §4a.4):
+the product's model against a finer mesh, a softer stick slope, 200 increments and the second
+model of the tests (tests/fe/second_model.py), summed in quadrature per case, the largest case.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+import numpy as np
+
+# σ of the bulge ΔR = (dmax − d_n)/2, relative (mesh, increments, second model in quadrature)
+BULGE_MODEL_FORM = 0.05
+# σ of the original end face's d/d_n, absolute (the second model's rim node sits this much wider)
+FACE_MODEL_FORM = 0.02
+# σ of the force at a given law, μ and h0/d0, relative, per unit μ (it grows with friction's share of the force)
+FORCE_MODEL_FORM_PER_MU = 0.12
+# two μ whose difference exceeds this many combined standard errors disagree
+DISAGREE_SIGMAS = 2.0
+
+
+def quadrature(*parts: float) -> float:
+    """√(Σ part²): independent standard uncertainties combined."""
+    return math.sqrt(sum(float(p) ** 2 for p in parts))
+
+
+def bulge_sigma_mm(delta_r_mm: float, resolution_mm: float) -> float:
+    """σ of a bulge ΔR (mm) against the model: half dmax's resolution and the model form's share."""
+    # σ_ΔR = √((δd/2)² + (u_b·ΔR)²)
+    return quadrature(resolution_mm / 2.0, BULGE_MODEL_FORM * delta_r_mm)
+
+
+def face_sigma(d_n_mm: float, resolution_mm: float) -> float:
+    """σ of the end face's d/d_n against the model: dface's resolution over d_n and the model form's share."""
+    # σ_f = √((δd/d_n)² + u_f²)
+    return quadrature(resolution_mm / d_n_mm, FACE_MODEL_FORM)
+
+
+def stderr_of_range(lo: float, hi: float) -> float:
+    """The standard error a ±1σ interval [lo, hi] of μ stands for: half its width."""
+    return abs(float(hi) - float(lo)) / 2.0
+
+
+def disagreement(mu_a: float, se_a: float, mu_b: float, se_b: float) -> float:
+    """|μ_a − μ_b| in combined standard errors (inf when both are exact and differ)."""
+    # z = |μ_a − μ_b| / √(se_a² + se_b²)
+    diff, se = abs(mu_a - mu_b), quadrature(se_a, se_b)
+    return diff / se if se > 0 else (math.inf if diff > 0 else 0.0)
+
+
+def disagree(mu_a: float, se_a: float, mu_b: float, se_b: float) -> bool:
+    """True when two μ differ by more than :data:`DISAGREE_SIGMAS` combined standard errors."""
+    return disagreement(mu_a, se_a, mu_b, se_b) > DISAGREE_SIGMAS
+
+
+def force_model_form(mu: float) -> float:
+    """σ of the model's force at friction μ, relative: :data:`FORCE_MODEL_FORM_PER_MU`·μ."""
+    return FORCE_MODEL_FORM_PER_MU * max(float(mu), 0.0)
+
+
+def shift_of_bias(jac, bias) -> np.ndarray:
+    """The parameter shift a systematic residual offset ``bias`` (one per row, residual units)
+    makes in a least-squares fit with Jacobian ``jac`` (rows × parameters)."""
+    # δx = −J⁺·δr
+    J = np.nan_to_num(np.asarray(jac, float))  # a column a failed run left blank moves nothing
+    return -np.linalg.lstsq(J, np.asarray(bias, float), rcond=None)[0]
+
+
+def force_model_form_stderr(jac, force_rows, strain, force_sigma_pct: float, mu: float) -> np.ndarray:
+    """Per parameter: the shift a force model error of :func:`force_model_form` at μ makes, as a
+    uniform offset and as one growing from 0 to it over the strain, in quadrature. ``force_rows``
+    index the rows of ``jac`` holding the force residuals (in units of ``force_sigma_pct`` %)."""
+    J = np.asarray(jac, float)
+    rows = np.asarray(force_rows)
+    eps = np.asarray(strain, float)
+    ramp = (eps - eps.min()) / max(np.ptp(eps), 1e-12)
+    shifts = []
+    for pattern in (np.ones_like(eps), ramp):
+        bias = np.zeros(J.shape[0])
+        bias[rows] = 100.0 * force_model_form(mu) * pattern / force_sigma_pct
+        shifts.append(shift_of_bias(J, bias))
+    return np.hypot(*shifts)
+
+
+def through_mu(params_lo: Mapping[str, float], params_hi: Mapping[str, float]) -> dict[str, float]:
+    """Per constant: half the change between fits at μ − se and μ + se (μ's share of its standard error)."""
+    return {k: abs(float(params_hi[k]) - float(params_lo[k])) / 2.0 for k in params_lo if k in params_hi}
+
+
+def combined_stderr(stderr: Mapping[str, float | None], *shares: Mapping[str, float]) -> dict[str, float | None]:
+    """The fit's standard errors with other shares added in quadrature (None stays None: undetermined)."""
+    out: dict[str, float | None] = {}
+    for k, se in stderr.items():
+        if se is None or not math.isfinite(se):
+            out[k] = se
+            continue
+        out[k] = quadrature(se, *(s.get(k, 0.0) for s in shares))
+    return out
+
+
+def inverse_model_form_stderr(jac, strain, force_sigma_pct: float, shape_sigma_mm: Mapping[str, float], *, mu: float, delta_r_mm: float,
+                              d_n_mm: float) -> np.ndarray:
+    """Per parameter of an inverse FE fit whose rows are the force at ``strain`` (in units of
+    ``force_sigma_pct`` %), then dmax and, if in ``shape_sigma_mm``, dface (in units of their σ, mm):
+    the shifts the model form's force error (:func:`force_model_form_stderr`), bulge
+    (:data:`BULGE_MODEL_FORM` of ΔR) and end face (:data:`FACE_MODEL_FORM` of d_n) make, in quadrature."""
+    J = np.asarray(jac, float)
+    n_force = len(strain)
+    parts = [force_model_form_stderr(J, np.arange(n_force), strain, force_sigma_pct, mu)]
+    offsets = {"dmax": 2.0 * BULGE_MODEL_FORM * delta_r_mm, "dface": FACE_MODEL_FORM * d_n_mm}  # diameters, mm
+    for row, name in enumerate(shape_sigma_mm, start=n_force):
+        bias = np.zeros(J.shape[0])
+        bias[row] = offsets[name] / shape_sigma_mm[name]
+        parts.append(shift_of_bias(J, bias))
+    return np.sqrt(np.sum(np.square(parts), axis=0))
