@@ -429,13 +429,13 @@ def _fe_mu_sensitivity(table, mu: float, h0_d0: float, hardening: tuple[float, f
 def bulge_half_width(delta_r_mm: float) -> float:
     """The uncertainty of a bulge ΔR (mm) against the FE table or model: half of dmax's
     resolution and the mesh's share of ΔR (:data:`~.fe.upsetting.MESH_BULGE_UNCERTAINTY`), in quadrature."""
-    return math.hypot(DIAMETER_RESOLUTION_MM / 2.0, MESH_BULGE_UNCERTAINTY * delta_r_mm)
+    return mf.bulge_sigma_mm(delta_r_mm, DIAMETER_RESOLUTION_MM, share=MESH_BULGE_UNCERTAINTY)
 
 
 def face_half_width(d_n_mm: float) -> float:
     """The uncertainty of the end face's d/d_n against the FE table or model: dface's resolution
     over d_n and the mesh's :data:`~.fe.upsetting.MESH_FACE_UNCERTAINTY`, in quadrature."""
-    return math.hypot(DIAMETER_RESOLUTION_MM / d_n_mm, MESH_FACE_UNCERTAINTY)
+    return mf.face_sigma(d_n_mm, DIAMETER_RESOLUTION_MM, share=MESH_FACE_UNCERTAINTY)
 
 
 def _fe_mu_range(table, delta_r_mm: float, hk_mm: float, h0_d0: float, hardening: tuple[float, float], eps: float) -> list[float]:

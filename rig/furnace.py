@@ -212,7 +212,7 @@ class StuckRelayCheck:
     hotter still. A thermal lag (the elements' stored heat reaching the thermocouple late)
     rises ever slower to its peak; a stuck relay keeps heating (0.8 K/s at 850 C on the rig's
     6 kW). A lag still rising faster than ``confirm_rise_C / confirm_s`` after ``settle_s``
-    cannot be told from a stuck relay this way (docs/safety: fault table).
+    cannot be told from a stuck relay this way (the README's fault table).
 
     :meth:`update` (reading °C, time s, heater commanded on) raises :class:`SafetyError`.
     """

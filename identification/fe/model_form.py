@@ -29,16 +29,18 @@ def quadrature(*parts: float) -> float:
     return math.sqrt(sum(float(p) ** 2 for p in parts))
 
 
-def bulge_sigma_mm(delta_r_mm: float, resolution_mm: float) -> float:
-    """σ of a bulge ΔR (mm) against the model: half dmax's resolution and the model form's share."""
+def bulge_sigma_mm(delta_r_mm: float, resolution_mm: float, share: float = BULGE_MODEL_FORM) -> float:
+    """σ of a bulge ΔR (mm) against the model: half dmax's resolution and the model's relative
+    ``share`` of ΔR (the model form's by default; the mesh's alone for weighting a fit)."""
     # σ_ΔR = √((δd/2)² + (u_b·ΔR)²)
-    return quadrature(resolution_mm / 2.0, BULGE_MODEL_FORM * delta_r_mm)
+    return quadrature(resolution_mm / 2.0, share * delta_r_mm)
 
 
-def face_sigma(d_n_mm: float, resolution_mm: float) -> float:
-    """σ of the end face's d/d_n against the model: dface's resolution over d_n and the model form's share."""
+def face_sigma(d_n_mm: float, resolution_mm: float, share: float = FACE_MODEL_FORM) -> float:
+    """σ of the end face's d/d_n against the model: dface's resolution over d_n and the model's
+    absolute ``share`` (the model form's by default; the mesh's alone for weighting a fit)."""
     # σ_f = √((δd/d_n)² + u_f²)
-    return quadrature(resolution_mm / d_n_mm, FACE_MODEL_FORM)
+    return quadrature(resolution_mm / d_n_mm, share)
 
 
 def stderr_of_range(lo: float, hi: float) -> float:
