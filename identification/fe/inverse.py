@@ -340,6 +340,14 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     })
     if elastics.E_source == "handbook" and diagram_options.get("E_MPa"):  # a class's handbook value, not the fast's "option"
         result.update(E_MPa=elastics.E_MPa, E_source=f"handbook ({elastics.E_basis})")
+    if sol.jac is not None:  # what the force alone and the shape alone tell of μ; apart beyond their se: a warning, poor
+        from flowcurve.identification.fe.force_shape import force_shape_check, inverse_mu_by_side
+
+        by_side = inverse_mu_by_side(sol.jac, r, sol.x, targets, FORCE_SIGMA_PCT, shape_sigma, delta_r_mm=max(dmax - d_n, 0.0) / 2.0,
+                                     d_n_mm=d_n, x_scale=x_scale)
+        found, warning = force_shape_check(by_side, "dmax and dface" if dface is not None else "dmax")
+        result["inverse_fe"].update(by_side.as_dict(), force_shape_check=found)
+        warnings += [warning] if warning else []
     result.pop("dface_advice", None)  # the warm start's; the inverse judges μ itself
     if dface is None and not se[-1] <= MU_TOLD:  # poorly told or undetermined, and no end face to tell it
         result["dface_advice"] = DFACE_ADVICE

@@ -105,6 +105,11 @@ def combined_stderr(stderr: Mapping[str, float | None], *shares: Mapping[str, fl
     return out
 
 
+def shape_model_form_mm(delta_r_mm: float, d_n_mm: float) -> dict[str, float]:
+    """The model form's σ of the measured diameters (mm): dmax's 2·u_b·ΔR, dface's u_f·d_n."""
+    return {"dmax": 2.0 * BULGE_MODEL_FORM * delta_r_mm, "dface": FACE_MODEL_FORM * d_n_mm}
+
+
 def inverse_model_form_stderr(jac, strain, force_sigma_pct: float, shape_sigma_mm: Mapping[str, float], *, mu: float, delta_r_mm: float,
                               d_n_mm: float) -> np.ndarray:
     """Per parameter of an inverse FE fit whose rows are the force at ``strain`` (in units of
@@ -114,7 +119,7 @@ def inverse_model_form_stderr(jac, strain, force_sigma_pct: float, shape_sigma_m
     J = np.asarray(jac, float)
     n_force = len(strain)
     parts = [force_model_form_stderr(J, np.arange(n_force), strain, force_sigma_pct, mu)]
-    offsets = {"dmax": 2.0 * BULGE_MODEL_FORM * delta_r_mm, "dface": FACE_MODEL_FORM * d_n_mm}  # diameters, mm
+    offsets = shape_model_form_mm(delta_r_mm, d_n_mm)
     for row, name in enumerate(shape_sigma_mm, start=n_force):
         bias = np.zeros(J.shape[0])
         bias[row] = offsets[name] / shape_sigma_mm[name]
