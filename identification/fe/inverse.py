@@ -43,7 +43,7 @@ import pandas as pd
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.machine import model_elastics
-from flowcurve.identification.fe.solver_fit import fit_with_solver, serial_correlation, time_left_s
+from flowcurve.identification.fe.solver_fit import fit_with_solver, progress_on_whole_clock, serial_correlation
 from flowcurve.identification.friction import DFACE_ADVICE, bulge_half_width, face_half_width, nominal_diameter
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
@@ -177,14 +177,16 @@ def best_law_for(true_curve: pd.DataFrame) -> tuple[str, dict[str, float]]:
 
 
 def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None, scheduler=None, increments: int = 50,
-                        max_runs: int = 150, progress=None, E_MPa: float | None = None, time_limit_s: float | None = TIME_LIMIT_S) -> Identification:
+                        max_runs: int = 150, progress=None, E_MPa: float | None = None, time_limit_s: float | None | str = "default") -> Identification:
     """Fit ``law`` and μ to the record's force–stroke and dmax with CalculiX in the loop (a tension
     record: the hardening beyond Fm, :func:`.inverse_tension.identify_inverse_fe_tension`).
     ``law="auto"``: the law that best fits the fast identification's curve (:func:`best_law_for`);
     on tension, the law that best fits the FE-consistent curve. The model's E and the frame's
     stiffness: :func:`.machine.model_elastics` (E given, material.E_MPa, an extensometer's, else a
     named material class's handbook value; k stated by the rig, else fitted by closure on hk);
-    never an apparent slope (else an error naming the inputs to give)."""
+    never an apparent slope (else an error naming the inputs to give). ``time_limit_s``: the
+    wall-time budget, s (None: none; "default": :data:`TIME_LIMIT_S`, on tension
+    :data:`.inverse_tension.TIME_LIMIT_S`)."""
     from flowcurve.identification.fe.verify import record_force_stroke
 
     if law not in LAWS and law != "auto":
@@ -194,7 +196,9 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
 
         return identify_inverse_fe_tension(record, workers=workers, scheduler=scheduler, progress=progress,
                                            law="johnson_cook" if law == "auto" else law, refit_law=None if law == "auto" else law,
-                                           **({"E_MPa": E_MPa} if E_MPa is not None else {}))
+                                           **({"E_MPa": E_MPa} if E_MPa is not None else {}),
+                                           **({"time_limit_s": time_limit_s} if time_limit_s != "default" else {}))
+    time_limit_s = TIME_LIMIT_S if time_limit_s == "default" else time_limit_s
     if record.test != "compression":
         raise IdentificationError(f"{record.source}: --method inverse-fe needs a compression or tension record (this is {record.test!r})")
     t0 = time.perf_counter()
@@ -268,13 +272,8 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     x_scale = np.maximum(np.abs(x0), 1e-3)
     x_scale[-1] = 0.05
     before = time.perf_counter() - t0  # the fast identification, the closure, the warm start's run: the budget's and the progress's clock
-    n_params = len(x0)
-
-    def shown(runs, elapsed, _left=None):  # the time left at the rate of the whole identification so far (the warm start's run in it)
-        progress(runs, before + elapsed, time_left_s(runs, before + elapsed, n_params, time_limit_s))
-
     sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
-                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=shown if progress else None,
+                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress_on_whole_clock(progress, before, len(x0), time_limit_s),
                           other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma,
                           correlated=True, time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))
     r, se = sol.residuals, sol.stderr
@@ -297,9 +296,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     d_res_mm = float(r[FORCE_POINTS] * shape_sigma["dmax"])
     face_res_mm = float(r[FORCE_POINTS + 1] * shape_sigma["dface"]) if dface is not None else None
     warnings = _fit_warnings(force_rms, d_res_mm, mu, sol) + sol.failed_runs_warnings() + sol.undetermined_warnings([*law_info.keys, "μ"])
-    if sol.cut:
-        warnings.append(f"inverse FE: cut by the time limit ({time_limit_s:g} s, --time-limit) after {sol.runs} solver runs: the answer is "
-                        "the best parameter set run so far, not a converged fit (its standard errors from the last Jacobian)")
+    warnings += sol.cut_warnings("inverse FE", time_limit_s)
     if face_res_mm is not None and not abs(face_res_mm) <= POOR_DMAX_MM:
         warnings.append(f"inverse FE: the fitted model misses the end face dface by {face_res_mm:+.3f} mm")
     if se[-1] > MU_TOLD:  # NaN (undetermined) is warned above

@@ -40,7 +40,7 @@ import numpy as np
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.elastic_modulus import modulus_for_model
-from flowcurve.identification.fe.solver_fit import fit_with_solver, serial_correlation
+from flowcurve.identification.fe.solver_fit import fit_with_solver, progress_on_whole_clock, serial_correlation
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS
 from flowcurve.identification.outcome import Identification
 
@@ -63,6 +63,10 @@ LAW_RMS_WARN_PCT = 1.0  # a chosen law this far from the FE-consistent curve (RM
 TAPER_STEP = 2.5e-4  # finite-difference step of δ, absolute
 REL_STEP = 0.02  # finite-difference step of H, β and c, relative
 INCREMENTS = 100  # CAX8R 8×30 with 0.01 increments: force and neck within 0.35 % of converged (tension.py)
+# the default wall-time budget, s (--time-limit; a fit it cuts ends with its best run so far), set not to cut a normal run:
+# bench/inverse_fe_tension.py's Swift record took 18 runs, 328 s on 2 workers, empty cache, load average 4–6 (18 s a run);
+# §4a.4's records took up to 42 runs (229 s on an idle machine), 765 s at that loaded rate
+TIME_LIMIT_S = 900.0
 
 
 def hardening_beyond(d, H_MPa, beta, c):
@@ -207,11 +211,15 @@ def family_start(eps_p, stress_MPa, eps_a: float, sigma_a: float) -> tuple[float
 
 
 def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler=None, increments: int = INCREMENTS,
-                                max_runs: int = 60, progress=None, refit_law: str | None = None, **tension_options) -> Identification:
+                                max_runs: int = 60, progress=None, refit_law: str | None = None, time_limit_s: float | None = TIME_LIMIT_S,
+                                **tension_options) -> Identification:
     """The hardening beyond ε_a and the specimen's taper, fitted to the record's force from ε_a to
     fracture and its neck diameter with CalculiX. The FE-consistent curve is refitted in
     ``refit_law``; None: in the law that follows it best (a warning when a given law follows it
-    poorly and another well)."""
+    poorly and another well). ``time_limit_s``: the whole identification's wall-time budget (None:
+    none); no batch of runs starts that would end past it, and a fit so cut answers with the best
+    parameter set run so far (``inverse_fe.budget.cut``, a warning, the hardening poor).
+    ``progress(runs, elapsed_s, left_s)``: the time so far and an estimate of the time left."""
     import time
 
     import pandas as pd
@@ -288,10 +296,12 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
         h[3] = TAPER_STEP
         return h
 
+    before = time.perf_counter() - t0  # the fast identification: the budget's and the progress's clock start with it
     sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=row_sigma.size, steps=steps,
                           x_scale=np.array([sigma_u, max(x0[1], 1.0), 1.0, TAPER_START]), workers=workers, scheduler=scheduler,
-                          max_runs=max_runs, xtol=1e-3, ftol=1e-4, progress=progress, what="inverse FE (tension)", row_sigma=row_sigma,
-                          correlated=True, other_starts=others, best_start=True)
+                          max_runs=max_runs, xtol=1e-3, ftol=1e-4, progress=progress_on_whole_clock(progress, before, len(x0), time_limit_s),
+                          what="inverse FE (tension)", row_sigma=row_sigma, correlated=True, other_starts=others, best_start=True,
+                          time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))
     (H, beta, c, taper), (H_se, beta_se, c_se, taper_se) = map(float, sol.x), map(float, sol.stderr)
     r = sol.residuals
     r_force = r[:n_force] * FORCE_SIGMA_PCT
@@ -303,7 +313,7 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
     problems = [f"{', '.join(on_bound)} on a bound; the necking range may not be matched"] if on_bound else []
     if force_rms > POOR_FORCE_RMS_PCT or force_max > 5.0:
         problems.append(f"force residual {force_rms:.2f} % RMS, up to {force_max:.1f} % beyond ε_a: the model does not follow the record")
-    if sol.status <= 0:
+    if sol.status <= 0 and not sol.cut:  # a cut says so in its own warning
         problems.append(f"the optimiser stopped before converging ({sol.message})")
     if neck_res_mm is not None and abs(neck_res_mm) > 3.0 * neck_sigma:
         problems.append(f"the fitted model misses the neck radius by {neck_res_mm:+.3f} mm")
@@ -324,12 +334,13 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
              for m, v in (res.get("neck_corrections") or {}).items() if isinstance(v, dict) and fe_fracture}
     # what is wrong with the fit itself (not with the law refitted to its curve, which has its own quality)
     fit_warnings = (["inverse FE: " + "; ".join(problems)] if problems else []) + sol.failed_runs_warnings("inverse FE (tension)") \
-        + sol.undetermined_warnings(list(names), "inverse FE (tension)")
+        + sol.undetermined_warnings(list(names), "inverse FE (tension)") + sol.cut_warnings("inverse FE (tension)", time_limit_s)
     warnings = [*res.get("warnings", []), *fit_warnings, *([warnings_law] if warnings_law else [])]
     if dk is None:
         warnings.append("inverse FE: no post.dk_mm: only the force is fitted, not the neck diameter; the taper and the hardening "
                         "beyond Fm are then told apart by the force curve alone")
 
+    wall = time.perf_counter() - t0
     result = dict(res)
     result["hardening_alternatives"] = {**res.get("hardening_alternatives", {}), "fast": res["hardening"]}
     result["hardening"] = {**refit.as_dict(), "method": "inverse_fe", "fitted_to": "the FE-consistent flow curve (measured to ε_a, CalculiX beyond)",
@@ -345,7 +356,11 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
         "uniform_true_plastic_strain": eps_pu, "fracture_true_stress_MPa": fe_fracture, "fracture_true_stress_MPa_stderr": fe_fracture_se,
         "neck_corrections_vs_fe": necks,
         "solver_runs": sol.runs, "failed_solver_runs": sol.failed_runs, "solver_s": round(sol.solver_s, 1),
-        "wall_s": round(time.perf_counter() - t0, 1),
+        "wall_s": round(wall, 1),
+        "budget": {"time_limit_s": time_limit_s, "cut": sol.cut, "solver_runs": sol.runs, "wall_s": round(wall, 1),
+                   "done": (f"force fitted over elongation {e_pts[0]:.3g}–{e_pts[-1]:.3g} mm (ε_a to fracture, {n_force} points)"
+                            + (", the neck radius at fracture" if dk is not None else ", no neck diameter") + f"; {len(starts)} warm starts, "
+                            + f"{sol.runs} runs; " + ("cut by the time limit" if sol.cut else "converged or stopped by the optimiser"))},
         "force_rms_residual_pct": force_rms, "force_max_residual_pct": force_max,
         "force_residual_serial_correlation": serial_correlation(r[:n_force]),
         "neck_radius_residual_mm": neck_res_mm,

@@ -150,6 +150,15 @@ class SolverFit:
                 "settings); the optimiser was steered around those parameter sets, so the fit may have stopped short of the "
                 "best one — compare it with the fast result"]
 
+    def cut_warnings(self, what: str = "inverse FE", time_limit_s: float | None = None) -> list[str]:
+        """A warning when the time limit cut the fit (``time_limit_s``: the whole identification's, as
+        the user gave it; default the fit's own): its answer is not a converged one."""
+        if not self.cut:
+            return []
+        limit = self.time_limit_s if time_limit_s is None else time_limit_s
+        return [f"{what}: cut by the time limit ({limit:g} s, --time-limit) after {self.runs} solver runs: the answer "
+                "is the best parameter set run so far, not a converged fit (its standard errors from the last Jacobian)"]
+
     def undetermined_warnings(self, names, what: str = "inverse FE") -> list[str]:
         """One warning per parameter the residuals do not tell at the solution (no standard error)."""
         return [f"{what}: the record does not determine {names[k]} at the fit (its value is where the optimiser left it; "
@@ -171,6 +180,20 @@ def time_left_s(runs: int, elapsed_s: float, n_params: int, time_limit_s: float 
     expected = max(runs + n_params + 1, TYPICAL_JACOBIANS * (n_params + 1))
     left = elapsed_s / runs * (expected - runs)
     return max(0.0, min(left, time_limit_s - elapsed_s)) if time_limit_s is not None else left
+
+
+def progress_on_whole_clock(progress, before_s: float, n_params: int, time_limit_s: float | None):
+    """A ``progress(runs, elapsed_s, left_s)`` for :func:`fit_with_solver` whose elapsed time and time
+    left count the ``before_s`` an identification spent before its fit (the fast identification,
+    warm-start runs): the time left at the whole run's rate, held to ``time_limit_s``; None without
+    ``progress``."""
+    if progress is None:
+        return None
+
+    def shown(runs, elapsed, _left=None):
+        progress(runs, before_s + elapsed, time_left_s(runs, before_s + elapsed, n_params, time_limit_s))
+
+    return shown
 
 
 def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[Any], np.ndarray], x0, lo, hi, *,

@@ -1,4 +1,4 @@
-"""The inverse's wall-time budget (issue 37): a fit whose runs would outlast ``time_limit_s``
+"""The inverses' wall-time budget (issue 37; compression and tension): a fit whose runs would outlast ``time_limit_s``
 ends by it with the best parameter set run so far, marked ``cut``, its standard errors from the
 last Jacobian; the time left it shows is held to the limit; the force is fitted up to the
 fold-over's onset. Closed-form "runs" that take a known time on a model clock (the fit's clock
@@ -85,3 +85,84 @@ def test_the_force_is_fitted_to_the_fold_over_onset_but_not_less_than_the_minimu
     assert force_fit_limit(0.69, 0.6) == 0.6
     assert force_fit_limit(0.69, 0.1) == MIN_FORCE_STRAIN
     assert force_fit_limit(0.25, 0.1) == 0.25
+
+
+# ---- the tension inverse (identify_inverse_fe_tension) keeps the same budget ------------------------------------------
+
+TENSION_RUN_S = 10.0  # one stand-in necking run on the model clock
+
+
+@pytest.fixture
+def slow_tension_runs(monkeypatch):
+    """The tension inverse's runs replaced by a closed form (no solver) that takes TENSION_RUN_S on
+    the model clock, which the whole identification reads (the fast part takes no model time): the
+    record's own corrected force scaled by 1 + (H/H* − 1)·u + 10·(δ − δ*)·u², u the elongation over
+    its end, H* 1.2 times the first start's H, δ* 0.008 — a fit that takes several Jacobians."""
+    import time
+
+    import flowcurve.identification.fe.inverse_tension as inv
+    from flowcurve.identification.tension import identify_tension
+
+    from .test_inverse_tension_inputs import _record
+
+    monkeypatch.setattr(time, "perf_counter", lambda: CLOCK["now"])
+    record = _record(0.7)
+    diagram = identify_tension(record).curves["corrected_diagram"]
+    elong, force = diagram["elongation_mm"].to_numpy(), diagram["force_N"].to_numpy()
+    state = {}
+
+    def run(problem, x):
+        CLOCK["now"] += TENSION_RUN_S
+        target = state.setdefault("target", (1.2 * float(x[0]), 0.008))
+        u = elong / elong.max()
+        factor = 1.0 + (x[0] / target[0] - 1.0) * u + 10.0 * (x[3] - target[1]) * u**2
+        return inv._Run(elong, force * factor, np.full(elong.size, 2.2), TENSION_RUN_S, False)
+
+    monkeypatch.setattr(inv, "_run", run)
+    return record
+
+
+def test_a_time_limit_cuts_the_tension_fit_with_a_warning(slow_tension_runs):
+    from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
+
+    full = identify_inverse_fe_tension(slow_tension_runs, workers=1, time_limit_s=None).result
+    assert not full["inverse_fe"]["budget"]["cut"] and not any("time limit" in w for w in full["warnings"])
+    assert full["inverse_fe"]["budget"]["solver_runs"] * TENSION_RUN_S > 75.0  # the limit below would cut it
+    seen = []
+    t0 = CLOCK["now"]
+    cut = identify_inverse_fe_tension(slow_tension_runs, workers=1, time_limit_s=75.0,
+                                      progress=lambda runs, elapsed, left: seen.append((runs, elapsed, left))).result
+    budget = cut["inverse_fe"]["budget"]
+    assert budget["cut"] and budget["time_limit_s"] == 75.0 and "cut by the time limit" in budget["done"]
+    assert CLOCK["now"] - t0 <= 75.0 and budget["solver_runs"] < full["inverse_fe"]["budget"]["solver_runs"]
+    said = [w for w in cut["warnings"] if "cut by the time limit (75 s, --time-limit)" in w]
+    assert said and "the best parameter set run so far, not a converged fit" in said[0]
+    assert not any("stopped before converging" in w for w in cut["warnings"])  # the cut says so once
+    assert cut["hardening"]["quality"] == "poor"
+    assert seen and all(left is None or elapsed + left <= 75.0 + 1e-9 for _, elapsed, left in seen)
+
+
+def test_the_cli_passes_the_time_limit_to_a_tension_record(slow_tension_runs, tmp_path, capsys):
+    import json
+
+    from flowcurve.cli import main
+    from flowcurve.record.format import write_record
+
+    path = write_record(tmp_path / "t.csv", slow_tension_runs)
+    assert main(["identify", str(path), "--method", "inverse-fe", "--workers", "1", "--time-limit", "75", "--no-plots",
+                 "--out", str(tmp_path / "out")]) == 0
+    err = capsys.readouterr().err
+    budget = json.loads((tmp_path / "out" / "t" / "result.json").read_text())["inverse_fe"]["budget"]
+    assert budget["time_limit_s"] == 75.0 and budget["cut"]
+    assert "(time limit 75 s)" in err  # the progress line shows the tension's limit too
+
+
+def test_the_time_limit_help_names_both_inverses_and_their_defaults(capsys):
+    from flowcurve.cli import main
+    from flowcurve.identification.fe import inverse, inverse_tension
+
+    with pytest.raises(SystemExit):
+        main(["identify", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "inverse-fe (compression and tension)" in text
+    assert f"compression {inverse.TIME_LIMIT_S:g}" in text and f"tension {inverse_tension.TIME_LIMIT_S:g}" in text
