@@ -36,7 +36,6 @@ import numpy as np
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe import model_form as mf
-from flowcurve.identification.fe.upsetting import MESH_BULGE_UNCERTAINTY, MESH_FACE_UNCERTAINTY
 
 FRICTION_METHODS = ("fe_table", "bulge_regression", "ebrahimi_najafizadeh")
 DEFAULT_FRICTION_METHOD = "fe_table"
@@ -424,18 +423,6 @@ def _fe_mu_sensitivity(table, mu: float, h0_d0: float, hardening: tuple[float, f
     if not (math.isfinite(slope_mm) and slope_mm > 0):  # a flat barrel: no μ moves it (None: not told at all)
         return {"dR_mm_per_mu": slope_mm if math.isfinite(slope_mm) else None, "mu_per_dmax_resolution": None}
     return {"dR_mm_per_mu": slope_mm, "mu_per_dmax_resolution": DIAMETER_RESOLUTION_MM / 2.0 / slope_mm}
-
-
-def bulge_half_width(delta_r_mm: float) -> float:
-    """The uncertainty of a bulge ΔR (mm) against the FE table or model: half of dmax's
-    resolution and the mesh's share of ΔR (:data:`~.fe.upsetting.MESH_BULGE_UNCERTAINTY`), in quadrature."""
-    return mf.bulge_sigma_mm(delta_r_mm, DIAMETER_RESOLUTION_MM, share=MESH_BULGE_UNCERTAINTY)
-
-
-def face_half_width(d_n_mm: float) -> float:
-    """The uncertainty of the end face's d/d_n against the FE table or model: dface's resolution
-    over d_n and the mesh's :data:`~.fe.upsetting.MESH_FACE_UNCERTAINTY`, in quadrature."""
-    return mf.face_sigma(d_n_mm, DIAMETER_RESOLUTION_MM, share=MESH_FACE_UNCERTAINTY)
 
 
 def _fe_mu_range(table, delta_r_mm: float, hk_mm: float, h0_d0: float, hardening: tuple[float, float], eps: float) -> list[float]:

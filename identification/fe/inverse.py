@@ -13,8 +13,9 @@ finite-difference runs go side by side (:func:`.pool.run_many`: ``workers`` proc
 ``scheduler``); repeated parameter sets come from the run cache. Each residual is its misfit over
 what is known of it beforehand (weighted least squares): the force at ``FORCE_POINTS`` strokes
 (ε ≥ 0.02) in units of ``FORCE_SIGMA_PCT`` (the model's own force error), dmax and dface in units of
-their resolution (0.01 mm) and the mesh's share of the shape (:data:`.upsetting.MESH_BULGE_UNCERTAINTY`,
-:data:`.upsetting.MESH_FACE_UNCERTAINTY`), in quadrature. Near sticking, where dmax hardly moves
+their resolution (0.01 mm) and the model form's share of the shape (:data:`.model_form.BULGE_MODEL_FORM`,
+:data:`.model_form.FACE_MODEL_FORM`: how far another defensible model puts them at the same law and μ), in
+quadrature. Near sticking, where dmax hardly moves
 with μ and the model's barrel is 3.5 % mesh-dependent, the force curve then tells μ as much as the
 diameter does (a dmax met to 5 µm at any price read steel 45's μ 0.225 for 0.25; weighed so, 0.256).
 Uncertainties from the weighted Gauss–Newton covariance (:func:`.solver_fit.parameter_stderr`):
@@ -43,8 +44,9 @@ import pandas as pd
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.machine import model_elastics
+from flowcurve.identification.fe import model_form as mf
 from flowcurve.identification.fe.solver_fit import fit_with_solver, progress_on_whole_clock, serial_correlation
-from flowcurve.identification.friction import DFACE_ADVICE, bulge_half_width, face_half_width, nominal_diameter
+from flowcurve.identification.friction import DFACE_ADVICE, DIAMETER_RESOLUTION_MM, nominal_diameter
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 from flowcurve.identification.outcome import Identification
@@ -245,24 +247,31 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     s_pts = h0 * (1.0 - np.exp(-targets))
     f_pts = np.interp(s_pts, stroke, force)
 
-    # what is known of the shape rows beforehand (diameters, mm): resolution and the mesh's share, in quadrature
+    # what is known of the shape rows beforehand (diameters, mm): resolution and the model form's share (another defensible
+    # model's shape at the same law and μ, fe/model_form.py), in quadrature — the mesh's share alone let the end face, whose
+    # rim corner the models place 0.01–0.02 d_n apart, pull μ 0.01–0.02 low on the second model's records (docs/methods.md §4a.7)
     hk = record.positive("post.hk_mm") or problem.h_end
     d_n = float(nominal_diameter(d0, h0, hk))
-    shape_sigma = {"dmax": 2.0 * bulge_half_width(max(dmax - d_n, 0.0) / 2.0)}
+    shape_sigma = {"dmax": 2.0 * mf.bulge_sigma_mm(max(dmax - d_n, 0.0) / 2.0, DIAMETER_RESOLUTION_MM)}
     if dface is not None:
-        shape_sigma["dface"] = face_half_width(d_n) * d_n
+        shape_sigma["dface"] = mf.face_sigma(d_n, DIAMETER_RESOLUTION_MM) * d_n
     # E's uncertainty in the spring-back d·ν·σ/E of the model's diameters, in quadrature (σ = F/A at the end)
     springback_rel = 0.3 * float(np.max(force)) / (math.pi * d_n**2 / 4.0) / E * elastics.E_stderr_MPa / E
     shape_sigma = {k: math.hypot(v, springback_rel * (dmax if k == "dmax" else dface)) for k, v in shape_sigma.items()}
     # every row in units of its own σ: the force rows' is pooled from their misfit for the covariance, the diameters' known
     row_sigma = np.array([np.nan] * FORCE_POINTS + [1.0] * len(shape_sigma))
+    # the force rows whitened by what is known of them beforehand: each point's own error and the model form's uniform and
+    # growing offsets (0.12·μ each at the warm start's μ, fe/model_form.py) — weighed as independent, another model's force,
+    # 0.3 % stiffer at the same law and μ, read as μ 0.013 lower (C1, docs/methods.md §4a.7)
+    force_cov_L = np.linalg.cholesky(mf.force_covariance(targets, FORCE_SIGMA_PCT, mu0))
+    whiten = np.linalg.inv(force_cov_L)
 
     def residuals_of(out: _Run) -> np.ndarray:
-        r_f = 100.0 * (np.interp(s_pts, out.stroke_mm, out.force_N) - f_pts) / f_pts
+        r_f = whiten @ (100.0 * (np.interp(s_pts, out.stroke_mm, out.force_N) - f_pts) / f_pts)
         shape = [(out.dmax_unloaded_mm - dmax) / shape_sigma["dmax"]]
         if dface is not None:
             shape.append((out.dface_unloaded_mm - dface) / shape_sigma["dface"])
-        return np.concatenate([r_f / FORCE_SIGMA_PCT, shape])
+        return np.concatenate([r_f, shape])
 
     def steps(x):
         h = np.maximum(np.abs(x) * REL_STEP, 1e-6)
@@ -277,11 +286,9 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
                           other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma,
                           correlated=True, time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))
     r, se = sol.residuals, sol.stderr
-    if sol.jac is not None:  # the model form's share of the standard errors (fe/model_form.py), in quadrature with the fit's
-        from flowcurve.identification.fe.model_form import inverse_model_form_stderr
-
-        se = np.hypot(se, inverse_model_form_stderr(sol.jac, targets, FORCE_SIGMA_PCT, shape_sigma, mu=float(sol.x[-1]),
-                                                    delta_r_mm=max(dmax - d_n, 0.0) / 2.0, d_n_mm=d_n))
+    if sol.jac is not None:  # the force's model-form share of the standard errors, in quadrature with the fit's (the shape's is in its σ)
+        se = np.hypot(se, mf.force_model_form_stderr(sol.jac, np.arange(FORCE_POINTS), targets, FORCE_SIGMA_PCT, float(sol.x[-1]),
+                                                           whiten=whiten))
     # what the shape alone tells of μ, beside what the fit tells with the force (information, not a bound: the force
     # curve's error is counted as serially correlated in the fit's covariance)
     shape_rows = list(range(FORCE_POINTS, len(row_sigma)))
@@ -291,7 +298,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     params = dict(zip(law_info.names, map(float, sol.x[:-1])))
     mu = float(sol.x[-1])
     wall = time.perf_counter() - t0
-    r_force = r[:FORCE_POINTS] * FORCE_SIGMA_PCT
+    r_force = force_cov_L @ r[:FORCE_POINTS]  # back to % of the force
     force_rms = float(np.sqrt(np.mean(r_force**2)))
     d_res_mm = float(r[FORCE_POINTS] * shape_sigma["dmax"])
     face_res_mm = float(r[FORCE_POINTS + 1] * shape_sigma["dface"]) if dface is not None else None
@@ -303,7 +310,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         shape = "dmax and dface" if dface is not None else "dmax (the faces nearly stick; the original end face, post.dface_mm, would tell more)"
         known = " and ".join(f"{k} to ± {v:.3f} mm" for k, v in shape_sigma.items())
         warnings.append(f"inverse FE: μ {mu:.3f} ± {se[-1]:.3f} is poorly told by the force curve and {shape}: the model knows "
-                        f"{known} (the resolution and the FE mesh's share of the shape), and μ moves them little here")
+                        f"{known} (the resolution and the model form's share of the shape), and μ moves them little here")
 
     e_hi = float(fast.result["hardening"]["strain_range"][1]) if fast.result.get("hardening") else float(strain.max())
     grid = np.linspace(0.002, e_hi, 200)
@@ -340,8 +347,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     if sol.jac is not None:  # what the force alone and the shape alone tell of μ; apart beyond their se: a warning, poor
         from flowcurve.identification.fe.force_shape import force_shape_check, inverse_mu_by_side
 
-        by_side = inverse_mu_by_side(sol.jac, r, sol.x, targets, FORCE_SIGMA_PCT, shape_sigma, delta_r_mm=max(dmax - d_n, 0.0) / 2.0,
-                                     d_n_mm=d_n, x_scale=x_scale)
+        by_side = inverse_mu_by_side(sol.jac, r, sol.x, targets, FORCE_SIGMA_PCT, len(shape_sigma), whiten=whiten, x_scale=x_scale)
         found, warning = force_shape_check(by_side, "dmax and dface" if dface is not None else "dmax")
         result["inverse_fe"].update(by_side.as_dict(), force_shape_check=found)
         warnings += [warning] if warning else []

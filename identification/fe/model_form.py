@@ -73,18 +73,41 @@ def shift_of_bias(jac, bias) -> np.ndarray:
     return -np.linalg.lstsq(J, np.asarray(bias, float), rcond=None)[0]
 
 
-def force_model_form_stderr(jac, force_rows, strain, force_sigma_pct: float, mu: float) -> np.ndarray:
+def force_patterns(strain) -> tuple[np.ndarray, np.ndarray]:
+    """The shapes the model form's force error takes along the stroke: a uniform offset and one
+    growing from 0 to 1 over the strain (friction's share of the force grows with d/h)."""
+    eps = np.asarray(strain, float)
+    return np.ones_like(eps), (eps - eps.min()) / max(np.ptp(eps), 1e-12)
+
+
+def force_covariance(strain, force_sigma_pct: float, mu: float) -> np.ndarray:
+    """Covariance (%²) of the model's force at ``strain``: each point's own σ (``force_sigma_pct``,
+    independent) and the model form's :func:`force_model_form` at μ in each of :func:`force_patterns`."""
+    # C = σ²·I + s²·(u·uᵀ + v·vᵀ), s = 100·u_F·μ
+    s = 100.0 * force_model_form(mu)
+    u, v = force_patterns(strain)
+    return force_sigma_pct**2 * np.eye(u.size) + s**2 * (np.outer(u, u) + np.outer(v, v))
+
+
+def force_whitening(strain, force_sigma_pct: float, mu: float) -> np.ndarray:
+    """W with W·C·Wᵀ = I for C = :func:`force_covariance`: force misfits (%) times W are
+    independent and of unit variance (generalised least squares)."""
+    # W = L⁻¹, C = L·Lᵀ
+    return np.linalg.inv(np.linalg.cholesky(force_covariance(strain, force_sigma_pct, mu)))
+
+
+def force_model_form_stderr(jac, force_rows, strain, force_sigma_pct: float, mu: float, whiten=None) -> np.ndarray:
     """Per parameter: the shift a force model error of :func:`force_model_form` at μ makes, as a
     uniform offset and as one growing from 0 to it over the strain, in quadrature. ``force_rows``
-    index the rows of ``jac`` holding the force residuals (in units of ``force_sigma_pct`` %)."""
+    index the rows of ``jac`` holding the force residuals: in units of ``force_sigma_pct`` %, or
+    whitened by ``whiten`` (a force-rows square matrix applied to the misfits in %)."""
     J = np.asarray(jac, float)
     rows = np.asarray(force_rows)
-    eps = np.asarray(strain, float)
-    ramp = (eps - eps.min()) / max(np.ptp(eps), 1e-12)
+    W = np.eye(len(rows)) / force_sigma_pct if whiten is None else np.asarray(whiten, float)
     shifts = []
-    for pattern in (np.ones_like(eps), ramp):
+    for pattern in force_patterns(strain):
         bias = np.zeros(J.shape[0])
-        bias[rows] = 100.0 * force_model_form(mu) * pattern / force_sigma_pct
+        bias[rows] = W @ (100.0 * force_model_form(mu) * pattern)
         shifts.append(shift_of_bias(J, bias))
     return np.hypot(*shifts)
 
@@ -103,25 +126,3 @@ def combined_stderr(stderr: Mapping[str, float | None], *shares: Mapping[str, fl
             continue
         out[k] = quadrature(se, *(s.get(k, 0.0) for s in shares))
     return out
-
-
-def shape_model_form_mm(delta_r_mm: float, d_n_mm: float) -> dict[str, float]:
-    """The model form's σ of the measured diameters (mm): dmax's 2·u_b·ΔR, dface's u_f·d_n."""
-    return {"dmax": 2.0 * BULGE_MODEL_FORM * delta_r_mm, "dface": FACE_MODEL_FORM * d_n_mm}
-
-
-def inverse_model_form_stderr(jac, strain, force_sigma_pct: float, shape_sigma_mm: Mapping[str, float], *, mu: float, delta_r_mm: float,
-                              d_n_mm: float) -> np.ndarray:
-    """Per parameter of an inverse FE fit whose rows are the force at ``strain`` (in units of
-    ``force_sigma_pct`` %), then dmax and, if in ``shape_sigma_mm``, dface (in units of their σ, mm):
-    the shifts the model form's force error (:func:`force_model_form_stderr`), bulge
-    (:data:`BULGE_MODEL_FORM` of ΔR) and end face (:data:`FACE_MODEL_FORM` of d_n) make, in quadrature."""
-    J = np.asarray(jac, float)
-    n_force = len(strain)
-    parts = [force_model_form_stderr(J, np.arange(n_force), strain, force_sigma_pct, mu)]
-    offsets = shape_model_form_mm(delta_r_mm, d_n_mm)
-    for row, name in enumerate(shape_sigma_mm, start=n_force):
-        bias = np.zeros(J.shape[0])
-        bias[row] = offsets[name] / shape_sigma_mm[name]
-        parts.append(shift_of_bias(J, bias))
-    return np.sqrt(np.sum(np.square(parts), axis=0))

@@ -30,17 +30,6 @@ def test_the_force_model_form_share_is_both_patterns_in_quadrature():
     np.testing.assert_allclose(se, [math.hypot(c, c * 0.1 / 0.6), c / 0.6, 0.0], atol=1e-9)
 
 
-def test_the_inverse_share_counts_the_shape_rows_by_their_sigma():
-    """One parameter told by the dface row alone: its shift is the face's model-form offset
-    (FACE_MODEL_FORM·d_n) over the row's σ, divided by the row's sensitivity."""
-    strain = np.linspace(0.1, 0.6, 5)
-    J = np.zeros((7, 1))
-    J[6, 0] = 4.0  # ∂(dface residual)/∂μ, residual in units of σ
-    se = mf.inverse_model_form_stderr(J, strain, 1.0, {"dmax": 0.02, "dface": 0.05}, mu=0.1, delta_r_mm=0.1,
-                                       d_n_mm=7.0)
-    assert se[0] == pytest.approx(mf.FACE_MODEL_FORM * 7.0 / 0.05 / 4.0)
-
-
 def test_disagreement_in_combined_standard_errors():
     assert mf.disagreement(0.2, 0.03, 0.1, 0.04) == pytest.approx(2.0)
     assert not mf.disagree(0.2, 0.03, 0.1, 0.04) and mf.disagree(0.2, 0.03, 0.09, 0.04)
