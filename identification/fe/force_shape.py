@@ -86,10 +86,9 @@ def mu_shape_alone(jac, residuals, x, shape_rows, *, k: int = -1, model_form_off
     return float(np.asarray(x, float)[k] - (g @ r) / info), mf.quadrature(1.0 / math.sqrt(info), *(offsets * g / info))
 
 
-def inverse_mu_by_side(jac, residuals, x, strain, force_sigma_pct: float, n_shape: int, *, whiten=None, x_scale=None) -> MuBySide:
+def inverse_mu_by_side(jac, residuals, x, strain, force_sigma_pct: float, n_shape: int, *, x_scale=None) -> MuBySide:
     """:class:`MuBySide` of an inverse FE fit whose rows are the force at ``strain`` (in units of
-    ``force_sigma_pct`` %, or whitened by ``whiten``: :func:`.model_form.force_whitening`), then
-    ``n_shape`` shape rows in units of their σ (the model form's share in it); μ the last
+    ``force_sigma_pct`` %), then ``n_shape`` shape rows in units of their σ (the model form's share in it); μ the last
     parameter. The force side adds the shift the model form's force error (0.12·μ, uniform and
     growing) makes in it, in quadrature."""
     J = np.asarray(jac, float)
@@ -97,7 +96,7 @@ def inverse_mu_by_side(jac, residuals, x, strain, force_sigma_pct: float, n_shap
     force_rows, shape_rows = np.arange(n_force), np.arange(n_force, n_force + n_shape)
     mu = float(np.asarray(x, float)[-1])
     if np.all(np.isfinite(J[force_rows])):
-        force_mf = float(mf.force_model_form_stderr(J[force_rows], force_rows, strain, force_sigma_pct, mu, whiten=whiten)[-1])
+        force_mf = float(mf.force_model_form_stderr(J[force_rows], force_rows, strain, force_sigma_pct, mu)[-1])
     else:
         force_mf = math.nan
     mu_f, se_f = mu_force_alone(J, residuals, x, force_rows, x_scale=x_scale, model_form_stderr=force_mf)

@@ -64,6 +64,9 @@ START_MU_STEPS = (-0.01, 0.01, -0.02, 0.02)
 MU_TOLD = 0.02  # a μ standard error beyond this is said to be poorly told (as the fast method's dmax sensitivity)
 TIME_LIMIT_S = 270.0  # the default wall-time budget: the held-out records C1–C3 end within 5 min on 2 cores
 MIN_FORCE_STRAIN = 0.3  # the force is fitted at least this far, even where the side folds over earlier
+# the force is fitted to this much strain before the warm start's fold-over: its force dip begins about 0.09 before the
+# onset the mesh reports, and earlier at a larger μ (C1: the last five points, past ε 0.53 of an onset at 0.616, held μ 0.013 low)
+FOLD_OVER_MARGIN = 0.1
 
 
 @dataclass(frozen=True)
@@ -137,7 +140,7 @@ def force_fit_limit(strain_max: float, fold_over_strain: float | None) -> float:
     :data:`MIN_FORCE_STRAIN` (or the record's end); beyond it the shape rows speak."""
     if fold_over_strain is None:
         return strain_max
-    return float(min(strain_max, max(fold_over_strain, MIN_FORCE_STRAIN)))
+    return float(min(strain_max, max(fold_over_strain - FOLD_OVER_MARGIN, MIN_FORCE_STRAIN)))
 
 
 POOR_FORCE_RMS_PCT = 1.5  # a force misfit above this: the model (law, μ) does not describe the record
@@ -260,18 +263,12 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     shape_sigma = {k: math.hypot(v, springback_rel * (dmax if k == "dmax" else dface)) for k, v in shape_sigma.items()}
     # every row in units of its own σ: the force rows' is pooled from their misfit for the covariance, the diameters' known
     row_sigma = np.array([np.nan] * FORCE_POINTS + [1.0] * len(shape_sigma))
-    # the force rows whitened by what is known of them beforehand: each point's own error and the model form's uniform and
-    # growing offsets (0.12·μ each at the warm start's μ, fe/model_form.py) — weighed as independent, another model's force,
-    # 0.3 % stiffer at the same law and μ, read as μ 0.013 lower (C1, docs/methods.md §4a.7)
-    force_cov_L = np.linalg.cholesky(mf.force_covariance(targets, FORCE_SIGMA_PCT, mu0))
-    whiten = np.linalg.inv(force_cov_L)
-
     def residuals_of(out: _Run) -> np.ndarray:
-        r_f = whiten @ (100.0 * (np.interp(s_pts, out.stroke_mm, out.force_N) - f_pts) / f_pts)
+        r_f = 100.0 * (np.interp(s_pts, out.stroke_mm, out.force_N) - f_pts) / f_pts
         shape = [(out.dmax_unloaded_mm - dmax) / shape_sigma["dmax"]]
         if dface is not None:
             shape.append((out.dface_unloaded_mm - dface) / shape_sigma["dface"])
-        return np.concatenate([r_f, shape])
+        return np.concatenate([r_f / FORCE_SIGMA_PCT, shape])
 
     def steps(x):
         h = np.maximum(np.abs(x) * REL_STEP, 1e-6)
@@ -287,8 +284,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
                           correlated=True, time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))
     r, se = sol.residuals, sol.stderr
     if sol.jac is not None:  # the force's model-form share of the standard errors, in quadrature with the fit's (the shape's is in its σ)
-        se = np.hypot(se, mf.force_model_form_stderr(sol.jac, np.arange(FORCE_POINTS), targets, FORCE_SIGMA_PCT, float(sol.x[-1]),
-                                                           whiten=whiten))
+        se = np.hypot(se, mf.force_model_form_stderr(sol.jac, np.arange(FORCE_POINTS), targets, FORCE_SIGMA_PCT, float(sol.x[-1])))
     # what the shape alone tells of μ, beside what the fit tells with the force (information, not a bound: the force
     # curve's error is counted as serially correlated in the fit's covariance)
     shape_rows = list(range(FORCE_POINTS, len(row_sigma)))
@@ -298,7 +294,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     params = dict(zip(law_info.names, map(float, sol.x[:-1])))
     mu = float(sol.x[-1])
     wall = time.perf_counter() - t0
-    r_force = force_cov_L @ r[:FORCE_POINTS]  # back to % of the force
+    r_force = r[:FORCE_POINTS] * FORCE_SIGMA_PCT
     force_rms = float(np.sqrt(np.mean(r_force**2)))
     d_res_mm = float(r[FORCE_POINTS] * shape_sigma["dmax"])
     face_res_mm = float(r[FORCE_POINTS + 1] * shape_sigma["dface"]) if dface is not None else None
@@ -347,7 +343,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     if sol.jac is not None:  # what the force alone and the shape alone tell of μ; apart beyond their se: a warning, poor
         from flowcurve.identification.fe.force_shape import force_shape_check, inverse_mu_by_side
 
-        by_side = inverse_mu_by_side(sol.jac, r, sol.x, targets, FORCE_SIGMA_PCT, len(shape_sigma), whiten=whiten, x_scale=x_scale)
+        by_side = inverse_mu_by_side(sol.jac, r, sol.x, targets, FORCE_SIGMA_PCT, len(shape_sigma), x_scale=x_scale)
         found, warning = force_shape_check(by_side, "dmax and dface" if dface is not None else "dmax")
         result["inverse_fe"].update(by_side.as_dict(), force_shape_check=found)
         warnings += [warning] if warning else []

@@ -80,34 +80,16 @@ def force_patterns(strain) -> tuple[np.ndarray, np.ndarray]:
     return np.ones_like(eps), (eps - eps.min()) / max(np.ptp(eps), 1e-12)
 
 
-def force_covariance(strain, force_sigma_pct: float, mu: float) -> np.ndarray:
-    """Covariance (%²) of the model's force at ``strain``: each point's own σ (``force_sigma_pct``,
-    independent) and the model form's :func:`force_model_form` at μ in each of :func:`force_patterns`."""
-    # C = σ²·I + s²·(u·uᵀ + v·vᵀ), s = 100·u_F·μ
-    s = 100.0 * force_model_form(mu)
-    u, v = force_patterns(strain)
-    return force_sigma_pct**2 * np.eye(u.size) + s**2 * (np.outer(u, u) + np.outer(v, v))
-
-
-def force_whitening(strain, force_sigma_pct: float, mu: float) -> np.ndarray:
-    """W with W·C·Wᵀ = I for C = :func:`force_covariance`: force misfits (%) times W are
-    independent and of unit variance (generalised least squares)."""
-    # W = L⁻¹, C = L·Lᵀ
-    return np.linalg.inv(np.linalg.cholesky(force_covariance(strain, force_sigma_pct, mu)))
-
-
-def force_model_form_stderr(jac, force_rows, strain, force_sigma_pct: float, mu: float, whiten=None) -> np.ndarray:
+def force_model_form_stderr(jac, force_rows, strain, force_sigma_pct: float, mu: float) -> np.ndarray:
     """Per parameter: the shift a force model error of :func:`force_model_form` at μ makes, as a
     uniform offset and as one growing from 0 to it over the strain, in quadrature. ``force_rows``
-    index the rows of ``jac`` holding the force residuals: in units of ``force_sigma_pct`` %, or
-    whitened by ``whiten`` (a force-rows square matrix applied to the misfits in %)."""
+    index the rows of ``jac`` holding the force residuals (in units of ``force_sigma_pct`` %)."""
     J = np.asarray(jac, float)
     rows = np.asarray(force_rows)
-    W = np.eye(len(rows)) / force_sigma_pct if whiten is None else np.asarray(whiten, float)
     shifts = []
     for pattern in force_patterns(strain):
         bias = np.zeros(J.shape[0])
-        bias[rows] = W @ (100.0 * force_model_form(mu) * pattern)
+        bias[rows] = 100.0 * force_model_form(mu) * pattern / force_sigma_pct
         shifts.append(shift_of_bias(J, bias))
     return np.hypot(*shifts)
 

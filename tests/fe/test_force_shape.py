@@ -101,18 +101,17 @@ def test_force_rows_that_cannot_tell_mu_from_the_law_are_undetermined():
     assert warning is None and "the force curve alone does not tell μ" in found
 
 
-def test_the_inverse_layout_counts_the_force_model_form_through_its_whitening():
-    """Whitened force rows at strain, then dmax and dface (their σ hold the shape's model form): the
-    force side gets the shift the force model form (fe/model_form.py) makes in the whitened
-    force-alone fit; the shape side is μ moved alone over the two rows, 1/√Σg²."""
+def test_the_inverse_layout_counts_the_force_model_form_on_the_force_side():
+    """Force rows at strain, then dmax and dface (their σ hold the shape's model form): the force
+    side gets the shift the force model form (fe/model_form.py) makes in the force-alone fit; the
+    shape side is μ moved alone over the two rows, 1/√Σg²."""
     x_fit = np.array([1.0, 0.5, -0.2, 0.15])
     g = np.array([6.0, 3.0])
     jac, res, _ = _rows(x_fit, x_fit, 0.15, g)
     jac[:M, 1], jac[:M, -1] = T**3, 5.0 * np.sqrt(T)  # law 1, t³, t²; μ √t: a ramp the law does not take up moves μ
-    W = mf.force_whitening(T, 1.0, 0.15)
-    side = fs.inverse_mu_by_side(jac, res, x_fit, T, 1.0, 2, whiten=W)
+    side = fs.inverse_mu_by_side(jac, res, x_fit, T, 1.0, 2)
     mu_f, se_f = fs.mu_force_alone(jac, res, x_fit, np.arange(M))
-    force_mf = mf.force_model_form_stderr(jac[:M], np.arange(M), T, 1.0, 0.15, whiten=W)[-1]
+    force_mf = mf.force_model_form_stderr(jac[:M], np.arange(M), T, 1.0, 0.15)[-1]
     assert force_mf > 0.1 * se_f
     assert side.mu_force == pytest.approx(mu_f) and side.stderr_force == pytest.approx(math.hypot(se_f, force_mf))
     assert side.stderr_shape == pytest.approx(1.0 / math.sqrt(float(g @ g)))
