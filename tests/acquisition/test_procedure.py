@@ -228,7 +228,7 @@ def test_a_control_step_in_flight_at_the_fault_does_not_leave_the_heater_on(tmp_
 
     watched = []  # the heater as the after-stop watch for a stuck relay finds it
 
-    def watch_heater_off(seconds):
+    def watch_heater_off(seconds, **_):
         watched.append(rig.heater)
 
     rig.hold_temperature, rig.start_crosshead, rig.heater_off, rig.set_heater = slow_hold, start_and_load, noted_off, noted_set
@@ -243,7 +243,7 @@ def test_a_relay_found_stuck_after_a_lost_device_keeps_the_lost_devices_own_mess
     """Issue 31 (a): the watch after the abort finds a stuck relay; the operator gets both."""
     rig = fake_rig(x_frac_mm=1e9, die_after_s=6.0, heat_rate_C_per_s=4.0)
 
-    def watch_heater_off(seconds):
+    def watch_heater_off(seconds, **_):
         raise SafetyError("furnace", "heater does not switch off (relay stuck?): 6.0 C rise with the heater off for 35 s")
 
     rig.watch_heater_off = watch_heater_off
