@@ -46,6 +46,10 @@ LOSS_NOISE_FRAMES = 5  # the load cell's lost frames are declared beyond this ma
 LOSS_NOISE_FRACTION = 0.005  # ... and this fraction (a loaded PC's scheduling; the count is an estimate)
 WATCH_COOLING_S = 45.0  # test seconds the furnace is watched after an over-temperature
 WATCH_UNHEATED_S = 15.0  # ... and after a test it did not heat (no stored heat to wait out: a stuck relay shows in ~12 s)
+# ... and on while the furnace still rises, up to this (then named): four times the 30 s allowed for stored heat to reach
+# the thermocouple; the virtual furnace's time constant C/(dP_loss/dT) ≈ 410 s at 850 C keeps a stuck relay's rise
+# (≥ 0.7 K/s below its 900 C maximum) within 25 % of its rate over it: the check (≥ 0.3 K/s) names it long before
+WATCH_LONGEST_S = 120.0
 HEAT_STEPS_PER_PERIOD = 4
 HEAT_MIN_TICK_S = 0.005  # host seconds
 FORCE_LIMIT_OF_CAPACITY = 0.98  # default force limit: this fraction of the frame's capacity
@@ -707,12 +711,17 @@ class Procedure:
             return error
         if heated or over:
             self._alert(f"furnace: {'over-temperature — ' if over else ''}heater off; watching that it cools "
-                        f"({WATCH_COOLING_S:g} s test time)")
+                        f"({WATCH_COOLING_S:g} s test time, longer while it still rises)")
             seconds, settle = WATCH_COOLING_S, {}
         else:
             seconds, settle = WATCH_UNHEATED_S, {"settle_s": 0.0}
+
+        def extended(why: str) -> None:
+            self._alert(f"furnace: {why}")
+            self._event("watch_extended", why)
+
         try:
-            watch(seconds, **settle)
+            watch(seconds, **settle, longest_s=WATCH_LONGEST_S, on_extend=extended)
         except SafetyError as exc:
             self._event("fault", str(exc))
             if error is None:

@@ -17,9 +17,9 @@ from typing import Callable
 
 from flowcurve.acquisition.sampler import Channel, lower_envelope_stamps
 from flowcurve.clock import WALL, Clock
-from flowcurve.errors import DeviceError
+from flowcurve.errors import DeviceError, SafetyError
 from flowcurve.rig.codecs import aed
-from flowcurve.rig.furnace import StuckRelayCheck
+from flowcurve.rig.furnace import STUCK_RELAY_ADVICE, StuckRelayCheck
 
 logger = logging.getLogger(__name__)
 
@@ -32,6 +32,7 @@ FURNACE_PERIOD_S = 0.25  # of the furnace module (DCON replies take up to 0.3 s)
 FURNACE_MIN_PERIOD_S = 0.02  # ... shorter on a time-scaled virtual rig: 4 steps per control period
 FURNACE_VERIFY_S = 1.0  # host seconds between the furnace module's address checks (@AADI)
 STUCK_SETTLE_S = 30.0  # test seconds with the heater off before the furnace must not rise any more
+STILL_RISING_C = 1.0  # a furnace risen more than this over the stuck-relay check's confirm_s (5 s) still rises (noise ~0.1 C)
 STREAM_BLOCK = 20  # load-cell frames per read call at most
 STREAM_PERIOD_MARGIN = 1.01  # stamps step 1 % longer than the nominal output period
 
@@ -197,13 +198,33 @@ class DriverRig:
             self._verified_at = now
         return t
 
-    def watch_heater_off(self, seconds: float, settle_s: float = STUCK_SETTLE_S) -> None:
+    def watch_heater_off(self, seconds: float, settle_s: float = STUCK_SETTLE_S, *, longest_s: float | None = None,
+                         on_extend: Callable[[str], None] | None = None) -> float:
         """After a safety stop: read the furnace for ``seconds`` test seconds with the heater
         off; SafetyError if it keeps heating (a stuck relay — the operator must cut the power).
-        ``settle_s``: the stored heat's time (0 after a test that did not heat)."""
+        ``settle_s``: the stored heat's time (0 after a test that did not heat). A furnace still
+        rising (over STILL_RISING_C in the check's last confirm_s) at ``seconds`` is watched on
+        until it stops rising, up to ``longest_s`` (``on_extend`` is told why, once); still
+        rising then: SafetyError. Returns the test seconds watched."""
         check = StuckRelayCheck(self.furnace.name, settle_s=settle_s)
-        end = self._clock() + seconds
-        while self._clock() < end:
+        start = self._clock()
+        end, longest = start + seconds, start + max(seconds, longest_s or seconds)
+        told = on_extend is None
+        while True:
+            now = self._clock()
+            if now >= end:  # and from then on at every reading
+
+                rise = check.rising_C()
+                if rise <= STILL_RISING_C:
+                    return now - start
+                if now >= longest:
+                    raise SafetyError(self.furnace.name, f"heater does not switch off (relay stuck?): still rising "
+                                      f"({rise:+.1f} C in {check.confirm_s:g} s) with the heater off for {now - start:.0f} s, "
+                                      f"longer than stored heat lasts — {STUCK_RELAY_ADVICE}")
+                if not told:
+                    told = True
+                    on_extend(f"still rising ({rise:+.1f} C in the last {check.confirm_s:g} s) after {seconds:g} s with the "
+                              f"heater off: watching on, up to {longest - start:g} s, to tell a stuck relay from stored heat")
             check.update(self.furnace.temperature_C(), self._clock(), False)
             self.furnace.host_ok()
             self.timebase.sleep(max(FURNACE_MIN_PERIOD_S, min(FURNACE_PERIOD_S, 1.0 / self.time_scale)))

@@ -12,7 +12,8 @@ and watchdogs) asks a :class:`Clock` instead of :mod:`time`:
   A test may also move it by hand with :meth:`ModelClock.advance`.
 
 A thread takes part in a model clock from its first wait on it (or from :meth:`enlist`, for
-a thread about to start) until it ends. A thread that
+a thread about to start) until it ends. A waiter whose event was set (a reply arrived) acts at
+that time before time moves on: the runs are repeatable to the sample. A thread that
 blocks on something another thread's clock wait will release (a port's lock) says so with
 ``with clock.idle(): lock.acquire()``. One that blocks elsewhere unannounced would stop time
 for good, so when nothing has happened for ``stall_s`` of wall time while the process was
@@ -121,6 +122,7 @@ class ModelClock:
         self._seq = itertools.count()
         self._actors: set[threading.Thread] = set()
         self._waiting: dict[threading.Thread, float] = {}
+        self._events: dict[threading.Thread, threading.Event] = {}  # what a waiter waits for besides its deadline
         self._progress_wall = time.monotonic()
         self._progress_cpu = time.process_time()
 
@@ -214,6 +216,8 @@ class ModelClock:
                 if self._now >= deadline:
                     return False
                 self._waiting[me] = deadline
+                if event is not None:
+                    self._events[me] = event
                 try:
                     jump = self._jump_target()
                     if jump is None:
@@ -224,6 +228,7 @@ class ModelClock:
                             self.stalls += 1
                 finally:
                     del self._waiting[me]
+                    self._events.pop(me, None)
             if jump is not None and math.isfinite(jump):
                 self.advance_to(jump)
 
@@ -255,6 +260,8 @@ class ModelClock:
             return None
         self._actors = {t for t in self._actors if t.is_alive() or t.ident is None}  # (or starting)
         if any(t not in self._waiting for t in self._actors):
+            return None
+        if any(e.is_set() for e in self._events.values()):  # woken by its event, not yet run: it acts at this time
             return None
         target = self._next_deadline()
         # a deadline already reached belongs to a waiter that was woken and has yet to run

@@ -94,8 +94,8 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | No
     unless nothing else is left. Ae: the extension from ReH to the start of uniform work hardening — the last sample up
     to Fm still within the plateau band (ReL + half the drop, at most 2 % of ReL, at least 3
     noise deviations), in % of the gauge length. None when the curve has no yield point.
-    ``start_MPa``: ReH lies above it (give the top of the fitted elastic line: a dip below it is
-    noise at zero force or in the toe, not yield); with ``E_MPa``, ReH lies within 0.5 % plastic
+    ``start_MPa``: ReH lies above it (give the start of the fitted elastic line, not its top, which
+    can reach ReH: a dip below the start is noise at zero force or in the toe, not yield); with ``E_MPa``, ReH lies within 0.5 % plastic
     extension (a later drop is a relaxation in a pause). A search on to the record's end stops at the
     fracture; a stress that falls to zero after the maximum is no plateau (None).
     Returns ReH_MPa, ReL_MPa, Ae_pct and the sample indices of ReH and of the plateau end.

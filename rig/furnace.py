@@ -214,7 +214,9 @@ class StuckRelayCheck:
     6 kW). A lag still rising faster than ``confirm_rise_C / confirm_s`` after ``settle_s``
     cannot be told from a stuck relay this way (the README's fault table).
 
-    :meth:`update` (reading °C, time s, heater commanded on) raises :class:`SafetyError`.
+    :meth:`update` (reading °C, time s, heater commanded on) raises :class:`SafetyError`;
+    :meth:`rising_C` is the rise over the last ``confirm_s`` with the heater off (a watch that
+    ends while the furnace still rises goes on: :meth:`DriverRig.watch_heater_off`).
     """
 
     def __init__(self, device: str = "furnace", *, settle_s: float = 30.0, rise_C: float = 5.0,
@@ -227,13 +229,18 @@ class StuckRelayCheck:
         self._off_since: float | None = None
         self._off_min_C = math.inf
         self._risen: tuple[float, float] | None = None  # (time, reading) when the rise passed rise_C
+        self._recent: deque[tuple[float, float]] = deque()  # (time, reading) with the heater off, the last confirm_s and one before
 
     def update(self, temperature_C: float, now: float, heater_on: bool) -> None:
         if heater_on:
             self._off_since = None
+            self._recent.clear()
             return
         if self._off_since is None:
             self._off_since, self._off_min_C, self._risen = now, math.inf, None
+        self._recent.append((now, temperature_C))
+        while len(self._recent) > 2 and now - self._recent[1][0] >= self.confirm_s:
+            self._recent.popleft()
         if now - self._off_since < self.settle_s:
             return
         self._off_min_C = min(self._off_min_C, temperature_C)
@@ -247,6 +254,13 @@ class StuckRelayCheck:
         if now - since >= self.confirm_s and temperature_C - then_C >= self.confirm_rise_C:
             raise SafetyError(self.device, f"heater does not switch off (relay stuck?): {rise:.1f} C rise with the heater "
                                            f"off for {now - self._off_since:.0f} s, still rising — {STUCK_RELAY_ADVICE}")
+
+
+    def rising_C(self) -> float:
+        """The reading's rise over the last ``confirm_s`` with the heater off (0 before that long)."""
+        if len(self._recent) < 2 or self._recent[-1][0] - self._recent[0][0] < self.confirm_s:
+            return 0.0
+        return self._recent[-1][1] - self._recent[0][1]
 
 
 class TemperatureController:

@@ -173,3 +173,26 @@ def test_wall_clock_is_real_time():
     assert WALL.now() >= t0
     with WALL.idle():
         pass
+
+
+def test_a_waiter_woken_by_its_event_acts_at_that_time_before_time_moves_on():
+    """A port's reply set by a device timer at 1.0 s wakes the reader waiting for it; a second
+    thread that then sleeps must not move time on before the reader has run (it read at 1.5 s
+    or 5.0 s, whichever thread took the clock's lock first: the start of in-process runs raced)."""
+    for _ in range(50):
+        clock = ModelClock()
+        reply, seen = threading.Event(), []
+
+        def reader():
+            clock.wait(reply, 10.0)
+            seen.append(clock.now())
+            clock.notify()  # ending: the main thread need not wait a stall out to see it gone
+
+        clock.call_at(1.0, reply.set)
+        t = threading.Thread(target=reader)
+        clock.enlist(threading.current_thread())  # the main thread: the clock's other participant
+        clock.enlist(t)
+        t.start()
+        clock.sleep(5.0)
+        t.join(5.0)
+        assert seen == [1.0]

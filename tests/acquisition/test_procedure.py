@@ -228,7 +228,7 @@ def test_a_control_step_in_flight_at_the_fault_does_not_leave_the_heater_on(tmp_
 
     watched = []  # the heater as the after-stop watch for a stuck relay finds it
 
-    def watch_heater_off(seconds):
+    def watch_heater_off(seconds, **_):
         watched.append(rig.heater)
 
     rig.hold_temperature, rig.start_crosshead, rig.heater_off, rig.set_heater = slow_hold, start_and_load, noted_off, noted_set
@@ -243,7 +243,7 @@ def test_a_relay_found_stuck_after_a_lost_device_keeps_the_lost_devices_own_mess
     """Issue 31 (a): the watch after the abort finds a stuck relay; the operator gets both."""
     rig = fake_rig(x_frac_mm=1e9, die_after_s=6.0, heat_rate_C_per_s=4.0)
 
-    def watch_heater_off(seconds):
+    def watch_heater_off(seconds, **_):
         raise SafetyError("furnace", "heater does not switch off (relay stuck?): 6.0 C rise with the heater off for 35 s")
 
     rig.watch_heater_off = watch_heater_off
@@ -251,3 +251,21 @@ def test_a_relay_found_stuck_after_a_lost_device_keeps_the_lost_devices_own_mess
     assert isinstance(out.error, SafetyError) and out.error.exit_code == 4
     for text in (str(out.error), out.reason, read_record(out.path).meta["abort_reason"]):
         assert text.startswith("furnace: heater does not switch off") and "disappeared" in text and "encoder" in text, text
+
+
+def test_a_watch_extended_while_the_furnace_still_rises_is_told_and_recorded(tmp_path, fake_rig, capsys):
+    """Issue 31 (the relay stuck near 850 C): the watch's 'watching on' reaches the operator (stderr when quiet) and the record."""
+    rig = fake_rig(x_frac_mm=3.0, heat_rate_C_per_s=4.0)
+    asked = {}
+
+    def watch_heater_off(seconds, longest_s=None, on_extend=None, **_):
+        asked.update(seconds=seconds, longest_s=longest_s)
+        on_extend("still rising (+3.9 C in the last 5 s) after 45 s with the heater off: watching on, up to 120 s")
+        return 47.0
+
+    rig.watch_heater_off = watch_heater_off
+    out = Procedure(rig, spec(temperature_C=60.0, soak_s=1.0, soak_band_C=30.0), tmp_path / "r.csv").run()
+    assert asked["longest_s"] > asked["seconds"]
+    assert "furnace: still rising" in capsys.readouterr().err
+    events = {e.name: e.text for e in read_record(out.path).events}
+    assert "watching on" in events.get("watch_extended", ""), events

@@ -13,10 +13,10 @@ from flowcurve.record.format import Record
 E, REH, REL, AE = 200_000.0, 450.0, 398.0, 0.015  # MPa, MPa, MPa (plateau minimum), strain
 
 
-def yield_point_curve(noise_MPa=0.0, seed=0):
+def yield_point_curve(noise_MPa=0.0, seed=0, n_elastic=60):
     """Engineering curve: elastic to ReH, a transient drop to 392 MPa (to be disregarded), a
     Lüders plateau 400 ± 2 MPa ending AE after ReH, then hardening to Rm and a falling neck."""
-    e_el = np.linspace(0, REH / E, 60)
+    e_el = np.linspace(0, REH / E, n_elastic)
     e_h = REH / E
     e_drop = e_h + np.linspace(0.0002, 0.001, 5)
     s_drop = np.array([430.0, 410.0, 392.0, 395.0, 399.0])
@@ -63,3 +63,17 @@ def test_tension_reports_reh_rel_ae_and_fits_past_the_plateau(synthetic):
     assert r["hardening"]["fit_range"][0] >= AE - 0.003
     smooth = identify_tension(synthetic(noise_N=5.0)[0]).result  # continuous yielding (Johnson–Cook)
     assert smooth["yield_point"] is False and smooth["ReH_MPa"] is None and smooth["Ae_pct"] is None
+
+
+def test_reh_on_a_crosshead_record_whose_line_runs_up_to_it():
+    """The search starts at the elastic line's start, not its top (docs/methods.md §3.3a): SDAR's line on a
+    crosshead-only record of a sharp yield point reaches ReH itself, and a search above its top found none."""
+    e, s = yield_point_curve(noise_MPa=0.3, n_elastic=100)
+    d0, l0 = 6.0, 30.0
+    s0 = math.pi * d0**2 / 4
+    data = pd.DataFrame({"time_s": np.arange(e.size) * 0.1, "force_N": s * s0, "crosshead_mm": e * l0})
+    meta = {"test": "tension", "specimen.d0_mm": repr(d0), "specimen.l0_mm": repr(l0)}
+    r = identify_tension(Record(meta=meta, data=data, source="yield-point-crosshead.csv")).result
+    assert r["modulus_window_MPa"][1] > 0.99 * REH  # the case: the line's top at ReH
+    assert r["yield_point"] is True and r["ReH_MPa"] == pytest.approx(REH, rel=0.005)
+    assert r["ReL_MPa"] == pytest.approx(REL, rel=0.01)
