@@ -51,7 +51,6 @@ sys.path.insert(0, str(ROOT / "tests" / "fe"))
 
 import second_model as sm  # noqa: E402
 
-C1 = sm.Case("C1", 105.0, 1392.0, 0.642, 194_000.0, 0.15, 6.0, 9.0, 4.5)
 # the must-show's time per record: C1–C3 5 min (the inverse's default limit, 270 s), the Voce record 10 min
 TIME_LIMIT_S = {"Voce": 570.0}
 
@@ -60,19 +59,20 @@ def _load() -> float:
     return os.getloadavg()[0]
 
 
-def _records(names: list[str], folder: Path) -> list[tuple[str, Path, float, object]]:
-    """(name, record path, truth μ, flow function) of each record asked for."""
+def _records(names: list[str], folder: Path, family: str = "second_model") -> list[tuple[str, Path, float, object]]:
+    """(name, record path, truth μ, flow function) of each record asked for: the vendored ``family``
+    records of tests/fe/data (second_model: C1–C3, S1–S6; other_settings: C1–C3), or Voce."""
     from flowcurve.identification.fe.synthetic import VALIDATION_CASES, case_flow, run_case, upsetting_record
     from flowcurve.record.format import write_record
 
+    cases = {c.name: c for c in sm.HELD_OUT}
     out = []
     for name in names:
-        if name == "C1":
-            path = sm.write_record(sm.simulate(C1), folder / "second_model_C1.csv")
-            out.append((name, path, C1.mu, C1.flow))
-        elif name in ("C2", "C3"):
-            case = {"C2": sm.C2, "C3": sm.C3}[name]
-            out.append((name, ROOT / "tests" / "fe" / "data" / f"second_model_{name}.csv", case.mu, case.flow))
+        if name in cases:
+            path = ROOT / "tests" / "fe" / "data" / f"{family}_{name}.csv"
+            if not path.exists():
+                raise SystemExit(f"no {family} record {name!r} in tests/fe/data")
+            out.append((name, path, cases[name].mu, cases[name].flow))
         elif name == "Voce":
             case = VALIDATION_CASES[3]
             with tempfile.TemporaryDirectory() as cache:  # the record's own run, not the inverse's cache
@@ -97,7 +97,9 @@ def main(argv=None) -> int:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--only", default="C1,C2,C3,Voce", help="comma-separated: C1, C2, C3, Voce")
+    ap.add_argument("--only", default="C1,C2,C3,Voce", help="comma-separated: C1–C3, S1–S6 (second_model only), Voce")
+    ap.add_argument("--family", default="second_model", choices=["second_model", "other_settings"],
+                    help="the vendored records: the second model (tests/fe/second_model.py) or the product's kind with the issue's other settings (tests/fe/other_settings.py)")
     ap.add_argument("--time-limit", type=float, default=None, help="the inverse's --time-limit, s (default: its own, 570 s for Voce)")
     ap.add_argument("--out", help="keep the records, results and verify reports in this folder (default: a temporary one)")
     a = ap.parse_args(argv)
@@ -106,7 +108,7 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="inverse-held-out-") as tmp:
         tmp = Path(a.out or tmp)
         tmp.mkdir(parents=True, exist_ok=True)
-        for name, path, mu_true, flow in _records(a.only.split(","), tmp):
+        for name, path, mu_true, flow in _records(a.only.split(","), tmp, a.family):
             cache = tmp / f"cache-{name}"
             cache.mkdir(exist_ok=False)
             os.environ["FLOWCURVE_FE_CACHE"] = str(cache)  # empty: every run is a real one

@@ -41,6 +41,14 @@ class MuBySide:
         return mf.disagreement(self.mu_force, self.stderr_force, self.mu_shape, self.stderr_shape)
 
     @property
+    def combined_stderr(self) -> float:
+        """The standard error of the two sides' estimates combined by their weights, (se_f⁻² + se_s⁻²)^(−1/2);
+        the one side's where only one tells μ; NaN where neither does."""
+        # se = (Σ se_i⁻²)^(−1/2) over the sides that tell μ
+        told = [se for se, ok in ((self.stderr_force, self.force_told), (self.stderr_shape, self.shape_told)) if ok and se > 0]
+        return float(sum(se**-2 for se in told) ** -0.5) if told else math.nan
+
+    @property
     def disagree(self) -> bool:
         """True when both sides tell μ and differ by more than :data:`.model_form.DISAGREE_SIGMAS`."""
         return self.disagreement_sigmas > mf.DISAGREE_SIGMAS  # NaN compares False

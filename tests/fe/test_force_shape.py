@@ -83,6 +83,13 @@ def test_agreeing_sides_give_no_warning_and_sides_three_standard_errors_apart_do
     assert not _by_side(0.15, 0.15 + 1.9 * math.hypot(agree.stderr_force, agree.stderr_shape)).disagree
 
 
+def test_the_sides_combine_by_their_weights():
+    side = fs.MuBySide(0.14, 0.03, 0.16, 0.04)
+    assert side.combined_stderr == pytest.approx(0.024)  # (0.03⁻² + 0.04⁻²)^(−1/2) = 0.03·0.04/0.05
+    assert fs.MuBySide(0.14, 0.03, math.nan, math.nan).combined_stderr == pytest.approx(0.03)
+    assert math.isnan(fs.MuBySide(math.nan, math.nan, math.nan, math.nan).combined_stderr)
+
+
 def test_a_shape_row_that_does_not_move_with_mu_is_undetermined_not_a_warning():
     side = _by_side(0.10, 0.30, g=(0.0,))
     assert side.force_told and not side.shape_told and math.isnan(side.mu_shape)

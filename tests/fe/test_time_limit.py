@@ -13,7 +13,8 @@ import pytest
 
 import flowcurve.identification.fe.solver_fit as solver_fit
 from flowcurve.cli.progress import budget_text
-from flowcurve.identification.fe.inverse import FOLD_OVER_MARGIN, MIN_FORCE_STRAIN, force_fit_limit
+from flowcurve.identification.fe.inverse import (FOLD_OVER_BAND, FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, MIN_FORCE_STRAIN,
+                                                 force_fit_limit, force_sigma_pct)
 from flowcurve.identification.fe.solver_fit import fit_with_solver, time_left_s
 
 T = np.linspace(0.0, 1.0, 12)
@@ -80,11 +81,19 @@ def test_time_left_is_the_typical_fit_at_the_rate_so_far_held_to_the_limit():
     assert "about 20 s left (time limit 270 s)" in budget_text(50, 250.0, 20.0, limit_s=270.0)
 
 
-def test_the_force_is_fitted_to_a_margin_before_the_fold_over_onset_but_not_less_than_the_minimum():
+def test_the_force_is_fitted_to_the_fold_over_onset_but_not_less_than_the_minimum():
     assert force_fit_limit(0.69, None) == 0.69
-    assert force_fit_limit(0.69, 0.6) == pytest.approx(0.6 - FOLD_OVER_MARGIN)
+    assert force_fit_limit(0.69, 0.6) == 0.6
     assert force_fit_limit(0.69, 0.1) == MIN_FORCE_STRAIN
     assert force_fit_limit(0.25, 0.1) == 0.25
+
+
+def test_a_force_points_sigma_grows_over_the_band_before_the_fold_over():
+    eps = np.array([0.1, 0.5, 0.55, 0.6, 0.65])
+    np.testing.assert_allclose(force_sigma_pct(eps, None), FORCE_SIGMA_PCT)
+    k = FOLD_OVER_SIGMA_FACTOR
+    onset = 0.5 + FOLD_OVER_BAND  # the band is 0.5–0.6
+    np.testing.assert_allclose(force_sigma_pct(eps, onset), FORCE_SIGMA_PCT * np.array([1.0, 1.0, (1.0 + k) / 2.0, k, k]))
 
 
 # ---- the tension inverse (identify_inverse_fe_tension) keeps the same budget ------------------------------------------
