@@ -66,7 +66,9 @@ class Furnace(DconDevice):
 
         An over- or under-range reading is checked with ``$AAB``: an open thermocouple, or a
         reading out of range, switches the heater off and raises :class:`SafetyError`. Above
-        ``max_temperature_C`` the heater is switched off; if it was on, SafetyError too.
+        ``max_temperature_C`` the heater is switched off; if it was on, SafetyError too (if it
+        was off and the furnace crossed the maximum so: :class:`StuckRelayCheck`, which every
+        heater-off reader runs).
         """
         if self.data_format is None:
             self.configuration()
