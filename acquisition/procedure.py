@@ -498,7 +498,8 @@ class Procedure:
         from flowcurve.rig.furnace import StuckRelayCheck  # (pyserial: not on the parser's import path)
 
         # a test that never heats has the heater commanded off throughout: a furnace that warms is a stuck relay
-        never_heated = StuckRelayCheck(self._furnace_name(), settle_s=0.0) if setpoint is None else None
+        never_heated = (StuckRelayCheck(self._furnace_name(), settle_s=0.0, max_temperature_C=rig.max_temperature_C)
+                        if setpoint is None else None)
 
         def guarded() -> float:
             hold = setpoint is not None and not self._heater_released

@@ -190,7 +190,7 @@ class DriverRig:
         and every FURNACE_VERIFY_S the module proves its address (``@AADI``: ``>`` data has none)."""
         t = self.furnace.temperature_C()
         if self._stuck is None:
-            self._stuck = StuckRelayCheck(self.furnace.name, settle_s=STUCK_SETTLE_S)
+            self._stuck = StuckRelayCheck(self.furnace.name, settle_s=STUCK_SETTLE_S, max_temperature_C=self.max_temperature_C)
         self._stuck.update(t, self._clock(), self.furnace.heater_is_on)
         now = self.timebase.now()
         if now - self._verified_at >= FURNACE_VERIFY_S:
@@ -201,12 +201,13 @@ class DriverRig:
     def watch_heater_off(self, seconds: float, settle_s: float = STUCK_SETTLE_S, *, longest_s: float | None = None,
                          on_extend: Callable[[str], None] | None = None) -> float:
         """After a safety stop: read the furnace for ``seconds`` test seconds with the heater
-        off; SafetyError if it keeps heating (a stuck relay — the operator must cut the power).
+        off; SafetyError if it keeps heating (a stuck relay — the operator must cut the power),
+        at once when it crosses the configured maximum.
         ``settle_s``: the stored heat's time (0 after a test that did not heat). A furnace still
         rising (over STILL_RISING_C in the check's last confirm_s) at ``seconds`` is watched on
         until it stops rising, up to ``longest_s`` (``on_extend`` is told why, once); still
         rising then: SafetyError. Returns the test seconds watched."""
-        check = StuckRelayCheck(self.furnace.name, settle_s=settle_s)
+        check = StuckRelayCheck(self.furnace.name, settle_s=settle_s, max_temperature_C=self.max_temperature_C)
         start = self._clock()
         end, longest = start + seconds, start + max(seconds, longest_s or seconds)
         told = on_extend is None

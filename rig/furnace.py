@@ -66,7 +66,9 @@ class Furnace(DconDevice):
 
         An over- or under-range reading is checked with ``$AAB``: an open thermocouple, or a
         reading out of range, switches the heater off and raises :class:`SafetyError`. Above
-        ``max_temperature_C`` the heater is switched off; if it was on, SafetyError too.
+        ``max_temperature_C`` the heater is switched off; if it was on, SafetyError too (if it
+        was off and the furnace crossed the maximum so: :class:`StuckRelayCheck`, which every
+        heater-off reader runs).
         """
         if self.data_format is None:
             self.configuration()
@@ -214,14 +216,25 @@ class StuckRelayCheck:
     6 kW). A lag still rising faster than ``confirm_rise_C / confirm_s`` after ``settle_s``
     cannot be told from a stuck relay this way (the README's fault table).
 
+    With ``max_temperature_C`` given, a reading above it is named at once when the furnace
+    crossed it with the heater commanded off (a heater-off reading at or below it came first; a
+    reading more than ``rise_C`` above the one before is no heating — a corrupt reading, left to
+    the over-temperature rule — so a furnace really that hot is named at the next reading):
+    stored heat alone carries a furnace over its maximum only when the heater went off within
+    that heat's rise of it (the virtual furnace: 5 s dead time x 0.85 K/s at 850 C, about 4 C).
+    A furnace already above it when the heater went off (an over-temperature stop) is left to
+    the rise check until it falls back below.
+
     :meth:`update` (reading °C, time s, heater commanded on) raises :class:`SafetyError`;
     :meth:`rising_C` is the rise over the last ``confirm_s`` with the heater off (a watch that
     ends while the furnace still rises goes on: :meth:`DriverRig.watch_heater_off`).
     """
 
     def __init__(self, device: str = "furnace", *, settle_s: float = 30.0, rise_C: float = 5.0,
-                 confirm_s: float = 5.0, confirm_rise_C: float = 1.5):
+                 confirm_s: float = 5.0, confirm_rise_C: float = 1.5, max_temperature_C: float = math.inf):
         self.device = device
+        self.max_temperature_C = float(max_temperature_C)
+        self._off_below_max = False  # a heater-off reading at or below the maximum since the heater went off
         self.settle_s = float(settle_s)
         self.rise_C = float(rise_C)
         self.confirm_s = float(confirm_s)
@@ -237,7 +250,15 @@ class StuckRelayCheck:
             self._recent.clear()
             return
         if self._off_since is None:
-            self._off_since, self._off_min_C, self._risen = now, math.inf, None
+            self._off_since, self._off_min_C, self._risen, self._off_below_max = now, math.inf, None, False
+        last_C = self._recent[-1][1] if self._recent else temperature_C
+        if temperature_C <= self.max_temperature_C:
+            self._off_below_max = True
+        elif self._off_below_max and temperature_C - last_C <= self.rise_C:  # crossed heating, not one jumping reading
+            raise SafetyError(self.device, f"heater does not switch off (relay stuck?): {temperature_C:.1f} C, above the "
+                                           f"maximum {self.max_temperature_C:g} C, {now - self._off_since:.0f} s after the "
+                                           f"heater was commanded off — the heater is commanded off and the furnace still "
+                                           f"heats: {STUCK_RELAY_ADVICE}")
         self._recent.append((now, temperature_C))
         while len(self._recent) > 2 and now - self._recent[1][0] >= self.confirm_s:
             self._recent.popleft()
@@ -270,7 +291,8 @@ class TemperatureController:
     ``max_rate_C_per_min``, easing in over ``approach_s``) gives the duty cycle; within the period the heater is on for
     ``duty × period_s``. Above ``max_temperature_C`` the heater is switched off and
     :class:`SafetyError` raised; so it is when the furnace keeps heating more than
-    ``stuck_rise_C`` with the heater off for over ``stuck_settle_s`` (a stuck relay).
+    ``stuck_rise_C`` with the heater off for over ``stuck_settle_s``, or crosses the maximum
+    with the heater off (a stuck relay: :class:`StuckRelayCheck`).
     Call :meth:`step` from a loop (``now`` in monotonic s, or the ``clock`` given).
     """
 
@@ -303,7 +325,8 @@ class TemperatureController:
         self._history: deque[tuple[float, float]] = deque(maxlen=200_000)
         self.stuck_settle_s = stuck_settle_s
         self.stuck_rise_C = stuck_rise_C
-        self._stuck = StuckRelayCheck(furnace.name, settle_s=stuck_settle_s, rise_C=stuck_rise_C)
+        self._stuck = StuckRelayCheck(furnace.name, settle_s=stuck_settle_s, rise_C=stuck_rise_C,
+                                      max_temperature_C=self.max_temperature_C)
 
     def step(self, now: float | None = None) -> dict[str, float | bool]:
         """Read the temperature, update ramp and duty, switch the heater; returns the state.
@@ -321,6 +344,7 @@ class TemperatureController:
     def _step(self, now: float) -> dict[str, float | bool]:
         t = self.furnace.temperature_C()  # SafetyError on an open thermocouple
         self.temperature_C = t
+        self._check_heater_follows(t, now)  # first: over the maximum with the heater off is a stuck relay
         if t > self.max_temperature_C:
             raise SafetyError(self.furnace.name, f"over-temperature: {t:.1f} C above the maximum "
                                                  f"{self.max_temperature_C:g} C; heater off")
@@ -328,7 +352,6 @@ class TemperatureController:
         self._last_t = now
         if self.furnace.heater_is_on:
             self._on_s += dt  # heater-on time delivered since the last step
-        self._check_heater_follows(t, now)
         self._update_ramp(t, dt)
         if self._period_start is None or now - self._period_start >= self.period_s:
             self._period_start = now

@@ -42,11 +42,15 @@ class CurveFurnace:
         pass
 
 
-def watch(curve):
+MAX_C = 900.0  # the matrix's configured maximum
+
+
+def watch(curve, max_C=MAX_C):
     """Run DriverRig.watch_heater_off over ``curve``: (seconds watched or the SafetyError, what the operator was told)."""
     clock = SteppedClock()
-    rig = DriverRig.__new__(DriverRig)  # the watch needs only the furnace, the clocks and the time scale
+    rig = DriverRig.__new__(DriverRig)  # the watch needs only the furnace, the clocks, the time scale and the maximum
     rig.furnace, rig.timebase, rig.time_scale = CurveFurnace(curve, clock), clock, 1.0 / STEP_S
+    rig.max_temperature_C = max_C
     rig._clock = clock.now
     told = []
     try:
@@ -103,3 +107,17 @@ def test_a_rise_too_slow_for_the_check_that_goes_on_is_named_at_the_longest_watc
     """0.25 K/s with the heater off (the check confirms from 0.3 K/s): still rising at the bound, so named then."""
     result, told = watch(lambda t: 850.0 + 0.25 * t)
     assert isinstance(result, SafetyError) and "still rising" in str(result) and len(told) == 1, result
+
+
+def test_a_relay_stuck_near_the_maximum_is_named_at_the_crossing_not_at_the_watchs_end():
+    """The matrix's trace (issue 31's follow-up): a furnace at 881 C at the watch's start, relay stuck, crossed 900 C
+    during the watch and was named only at its end, at 913.7 C. Now named at the first reading above the maximum."""
+    curve = virtual_furnace(881.0, stuck=True)
+    crossing = next(t for t in np.arange(0.0, WATCH_LONGEST_S, STEP_S / 2) if curve(t) > MAX_C)
+    result, told = watch(curve)
+    assert isinstance(result, SafetyError) and "above the maximum 900 C" in str(result), result
+    named_C = float(str(result).split("(relay stuck?): ")[1].split(" C,")[0])
+    assert MAX_C < named_C <= curve(crossing + STEP_S), (named_C, curve(crossing))  # within one reading of the crossing
+    assert "mains power" in str(result) and crossing < WATCH_COOLING_S and told == []
+    unbounded, _ = watch(curve, max_C=float("inf"))  # the watch before: the rise check, later and hotter
+    assert isinstance(unbounded, SafetyError) and "above the maximum" not in str(unbounded)

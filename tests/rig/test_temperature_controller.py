@@ -101,14 +101,29 @@ def test_heating_rate_is_limited():
 
 
 def test_over_temperature_cuts_the_heater():
+    """Above the maximum with the heater commanded on (here a second heat source: the model jumps to 460 C)."""
     furnace = ModelFurnace(max_temperature_C=900.0)
-    ctl = TemperatureController(furnace, 400.0, max_temperature_C=450.0, max_rate_C_per_min=100.0,
-                                stuck_rise_C=1000.0)  # only the temperature limit acts here
-    run(ctl, furnace, 600)
-    furnace.model.set_relay_stuck(True)  # the relay welds shut: the heater stays on
-    with pytest.raises(SafetyError, match="over-temperature: 45[0-9.]+ C above the maximum 450 C"):
-        run(ctl, furnace, 3600)
+    ctl = TemperatureController(furnace, 400.0, max_temperature_C=450.0, max_rate_C_per_min=100.0)
+    _, t = run(ctl, furnace, 600)
+    _, t = run(ctl, furnace, 60, t0=t, until=lambda c: c.furnace.heater_is_on)
+    assert furnace.heater_is_on
+    furnace.model.temperature_C = 460.0
+    with pytest.raises(SafetyError, match="over-temperature: 4[56][0-9.]+ C above the maximum 450 C"):
+        run(ctl, furnace, 10, t0=t)
     assert furnace.offs >= 1 and not furnace.heater_is_on
+
+
+def test_a_stuck_relay_crossing_the_maximum_is_named_at_the_crossing():
+    """The relay welds shut (the controller commands it off): the furnace crosses 450 C with the heater commanded off,
+    named as the stuck relay at the first reading above, not as a plain over-temperature ("heater off": it is not)."""
+    furnace = ModelFurnace(max_temperature_C=900.0)
+    ctl = TemperatureController(furnace, 440.0, max_temperature_C=450.0, max_rate_C_per_min=100.0,
+                                stuck_rise_C=1000.0)  # only the maximum acts here
+    _, t = run(ctl, furnace, 900)
+    furnace.model.set_relay_stuck(True)
+    with pytest.raises(SafetyError, match=r"relay stuck\?\): 45[0-9.]+ C, above the maximum 450 C.*commanded off.*mains power"):
+        run(ctl, furnace, 3600, t0=t)
+    assert abs(furnace.model.temperature_C - 450.0) < 0.6 and not furnace.heater_is_on  # within a step (0.25 s, ~1 K/s) and the noise
 
 
 def test_stuck_relay_is_caught_long_before_the_maximum():
