@@ -67,7 +67,8 @@ def run_verify(args) -> int:
     print(f"  force deviation: max {report['max_force_deviation_pct']:.2f} %, rms {report['rms_force_deviation_pct']:.2f} %, "
           f"at the end {report['final_force_deviation_pct']:+.2f} %" + ("" if dd is None else f"; dmax record − FE {dd:+.3f} mm"))
     if report.get("fold_over_strain") is not None and report.get("max_force_deviation_before_fold_over_pct") is not None:
-        print(f"  before the model's side folds onto the platen (from strain {report['fold_over_strain']:.3f}, where the model's own "
-              f"force error grows): max {report['max_force_deviation_before_fold_over_pct']:.2f} %")
+        print(f"  up to strain {report['before_fold_over_to_strain']:.3f}, before the band where the model's own force error grows "
+              f"(its side folds onto the platen from {report['fold_over_strain']:.3f}): max "
+              f"{report['max_force_deviation_before_fold_over_pct']:.2f} %")
     print(f"  → {out / 'verify.json'}")
     return 0

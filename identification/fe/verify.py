@@ -153,15 +153,18 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
     f_at = np.interp(stroke[sel], s_fe, f_fe)
     dev = (force[sel] - f_at) / f_at * 100.0
     post_dmax = record.positive("post.dmax_mm")
-    # where the model's side folds onto the platen its force error grows (fold-over sawtooth, mesh: docs/methods.md §4a.3);
-    # the deviation before it is reported apart, so that a model-form difference there is not read as the curve's
+    # the model's force error grows over the band before its side folds onto the platen (the inverse's σ there,
+    # docs/methods.md §4a.3; a finer record's side folds earlier); the deviation before that band is reported apart
+    from flowcurve.identification.fe.inverse import FOLD_OVER_BAND
+
     fold = run.fold_over_strain
-    before = strain[sel] < fold if fold is not None else np.ones(dev.size, bool)
+    steady_to = None if fold is None else fold - FOLD_OVER_BAND
+    before = strain[sel] < steady_to if steady_to is not None else np.ones(dev.size, bool)
     return {
         "record": record.source, "curve": curve.what, "mu": float(mu), "E_MPa": float(E),
         "d0_mm": d0, "h0_mm": h0, "stroke_end_mm": s_end,
         "max_force_deviation_pct": float(np.max(np.abs(dev))),
-        "fold_over_strain": fold,
+        "fold_over_strain": fold, "before_fold_over_to_strain": steady_to,
         "max_force_deviation_before_fold_over_pct": float(np.max(np.abs(dev[before]))) if before.any() else None,
         "rms_force_deviation_pct": float(np.sqrt(np.mean(dev**2))),
         "final_force_deviation_pct": float(dev[-1]),
