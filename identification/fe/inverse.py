@@ -159,17 +159,23 @@ def force_sigma_pct(strain, fold_over_strain: float | None) -> np.ndarray:
 
 
 POOR_FORCE_RMS_PCT = 1.5  # a force misfit above this: the model (law, μ) does not describe the record
-POOR_DMAX_MM = 0.02  # a bulge misfit above this (twice a caliper's 0.01 mm)
+POOR_DMAX_MM = 0.02  # a bulge misfit above this (twice a caliper's 0.01 mm) and above twice its σ (the model form's share)
 
 
-def _fit_warnings(force_rms_pct: float, dmax_residual_mm: float, mu: float, sol) -> list[str]:
+def poor_shape_misfit(residual_mm: float, sigma_mm: float = 0.0) -> bool:
+    """True when a diameter's misfit exceeds both :data:`POOR_DMAX_MM` and twice its σ in the fit
+    (resolution and the model form's share: another model places the end face 0.1–0.2 mm apart)."""
+    return not abs(residual_mm) <= max(POOR_DMAX_MM, 2.0 * sigma_mm)
+
+
+def _fit_warnings(force_rms_pct: float, dmax_residual_mm: float, mu: float, sol, dmax_sigma_mm: float = 0.0) -> list[str]:
     """What a user must not miss about an inverse fit: a force or bulge misfit the law and μ
     leave, a μ on its bound, an optimiser that did not converge."""
     out = []
     if not force_rms_pct <= POOR_FORCE_RMS_PCT:
         out.append(f"inverse FE: the fitted model misses the force by {force_rms_pct:.2g} % RMS (more than {POOR_FORCE_RMS_PCT:g} %): "
                    "the law or μ does not describe this record; try another --law, and check the fast result")
-    if not abs(dmax_residual_mm) <= POOR_DMAX_MM:
+    if poor_shape_misfit(dmax_residual_mm, dmax_sigma_mm):
         out.append(f"inverse FE: the fitted model misses dmax by {dmax_residual_mm:+.3f} mm")
     if not MU_BOUNDS[0] + 1e-4 < mu < MU_BOUNDS[1] - 1e-4:
         out.append(f"inverse FE: μ {mu:.3f} sits on its bound ({MU_BOUNDS[0]:g}–{MU_BOUNDS[1]:g})")
@@ -323,10 +329,10 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     force_rms = float(np.sqrt(np.mean(r_force**2)))
     d_res_mm = float(r[FORCE_POINTS] * shape_sigma["dmax"])
     face_res_mm = float(r[FORCE_POINTS + 1] * shape_sigma["dface"]) if dface is not None else None
-    warnings = _fit_warnings(force_rms, d_res_mm, mu, sol) + sol.failed_runs_warnings() + sol.undetermined_warnings([*law_info.keys, "μ"])
+    warnings = _fit_warnings(force_rms, d_res_mm, mu, sol, shape_sigma["dmax"]) + sol.failed_runs_warnings() + sol.undetermined_warnings([*law_info.keys, "μ"])
     warnings += sol.cut_warnings("inverse FE", time_limit_s)
-    if face_res_mm is not None and not abs(face_res_mm) <= POOR_DMAX_MM:
-        warnings.append(f"inverse FE: the fitted model misses the end face dface by {face_res_mm:+.3f} mm")
+    if face_res_mm is not None and poor_shape_misfit(face_res_mm, shape_sigma["dface"]):
+        warnings.append(f"inverse FE: the fitted model misses the end face dface by {face_res_mm:+.3f} mm (its σ ± {shape_sigma['dface']:.3f} mm)")
     if se[-1] > MU_TOLD:  # NaN (undetermined) is warned above
         shape = "dmax and dface" if dface is not None else "dmax (the faces nearly stick; the original end face, post.dface_mm, would tell more)"
         known = " and ".join(f"{k} to ± {v:.3f} mm" for k, v in shape_sigma.items())

@@ -64,6 +64,9 @@ def test_a_poor_inverse_fit_carries_warnings():
     assert _fit_warnings(0.4, 0.004, 0.12, converged) == []
     assert any("misses the force by 1.9 %" in w for w in _fit_warnings(1.9, 0.004, 0.12, converged))
     assert any("misses dmax by +0.030 mm" in w for w in _fit_warnings(0.4, 0.03, 0.12, converged))
+    # a misfit within twice its σ in the fit (the model form's share) is not one
+    assert _fit_warnings(0.4, 0.03, 0.12, converged, dmax_sigma_mm=0.016) == []
+    assert any("misses dmax" in w for w in _fit_warnings(0.4, 0.033, 0.12, converged, dmax_sigma_mm=0.016))
     assert any("on its bound" in w for w in _fit_warnings(0.4, 0.004, MU_BOUNDS[1], converged))
     assert any("before converging" in w for w in _fit_warnings(0.4, 0.004, 0.12, SimpleNamespace(status=0, message="max nfev")))
 
