@@ -73,6 +73,25 @@ def test_a_time_limit_cuts_the_fit_to_its_best_run_so_far():
     assert all(left is None or elapsed + left <= limit + 1e-9 for _, elapsed, left in seen)
 
 
+def test_a_fit_whose_batches_vary_stays_within_its_limit():
+    """Every third run, the first among them, takes ten times as long (a run that stops where the side folds over and is
+    retried): the next batch is judged at the longest so far, so the fit never ends past its limit
+    (at the mean batch time it would)."""
+    calls = {"n": 0}
+
+    def uneven(x):
+        calls["n"] += 1
+        CLOCK["now"] += RUN_S * (10.0 if calls["n"] % 3 == 1 else 1.0)
+        return _Out(x[0] * np.exp(x[1] * T))
+
+    target = 2.0 * np.exp(1.5 * T)
+    for limit in np.linspace(0.6, 2.0, 15):  # the first run (0.5) always runs: there is no best run to end with before it
+        calls["n"], t0 = 0, CLOCK["now"]
+        sol = fit_with_solver(uneven, lambda out: out.y - target, np.array([0.5, -1.0]), [0.01, -5.0], [10.0, 5.0], n_residuals=T.size,
+                              steps=lambda x: np.full(2, 1e-6), x_scale=np.ones(2), workers=1, time_limit_s=limit)
+        assert CLOCK["now"] - t0 <= limit + 1e-9 or not sol.cut, (limit, CLOCK["now"] - t0)
+
+
 def test_time_left_is_the_typical_fit_at_the_rate_so_far_held_to_the_limit():
     assert time_left_s(0, 0.0, 4, 270.0) is None
     assert time_left_s(10, 50.0, 4, None) == pytest.approx(5.0 * (8 * 5 - 10))
