@@ -103,7 +103,7 @@ def main(argv=None) -> int:
     ap.add_argument("--time-limit", type=float, default=None, help="the inverse's --time-limit, s (default: its own, 570 s for Voce)")
     ap.add_argument("--out", help="keep the records, results and verify reports in this folder (default: a temporary one)")
     a = ap.parse_args(argv)
-    print("| record | truth μ | μ ± se | curve err | verify % | runs | inverse s | cut | E source | compliance source | load before→after |")
+    print("| record | truth μ | μ ± se | curve err | verify % (before the fold-over band) | runs | inverse s | cut | E source | compliance source | load before→after |")
     print("|---|---|---|---|---|---|---|---|---|---|---|", flush=True)
     with tempfile.TemporaryDirectory(prefix="inverse-held-out-") as tmp:
         tmp = Path(a.out or tmp)
@@ -131,10 +131,11 @@ def main(argv=None) -> int:
             err = curve_error(pd.read_csv(folder / "true_curve.csv", comment="#"), flow)
             with contextlib.redirect_stdout(io.StringIO()):
                 verified = cli(["verify", str(folder), str(path), "--out", str(tmp / f"v-{name}"), "--no-plots"]) == 0
-            ver = json.loads((tmp / f"v-{name}" / "verify.json").read_text())["max_force_deviation_pct"] if verified else float("nan")
+            report = json.loads((tmp / f"v-{name}" / "verify.json").read_text()) if verified else {}
+            ver, ver_before = (report.get(k, float("nan")) for k in ("max_force_deviation_pct", "max_force_deviation_before_fold_over_pct"))
             model = inv["model"]
             cut = inv.get("budget", {}).get("cut")
-            print(f"| {name} | {mu_true:.3f} | {inv['mu']:.4f} ± {inv['mu_stderr']:.4f} | {100 * err:.2f} % | {ver:.2f} | {inv['solver_runs']} | "
+            print(f"| {name} | {mu_true:.3f} | {inv['mu']:.4f} ± {inv['mu_stderr']:.4f} | {100 * err:.2f} % | {ver:.2f} ({ver_before:.2f}) | {inv['solver_runs']} | "
                   f"{wall:.0f} | {'cut' if cut else 'no'} | {model.get('E_source')} | {model.get('frame_compliance_source', '-')} | "
                   f"{load0:.2f}→{load1:.2f} |", flush=True)
     return 0

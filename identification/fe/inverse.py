@@ -36,7 +36,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 
 import numpy as np
@@ -63,6 +63,7 @@ REL_STEP = 0.01  # finite-difference step, relative (absolute 0.005 for μ)
 START_MU_STEPS = (-0.01, 0.01, -0.02, 0.02)
 MU_TOLD = 0.02  # a μ standard error beyond this is said to be poorly told (as the fast method's dmax sensitivity)
 TIME_LIMIT_S = 270.0  # the default wall-time budget: the held-out records C1–C3 end within 5 min on 2 cores
+RUN_TIMEOUT_S = 600.0  # one upsetting run's own bound (simulate_upsetting's default)
 MIN_FORCE_STRAIN = 0.3  # the force is fitted at least this far, even where the side folds over earlier
 # a force point's σ grows over this much strain before the warm start's fold-over, to FOLD_OVER_SIGMA_FACTOR times
 # FORCE_SIGMA_PCT at the onset: the model's force error grows there (another model's record at the truth: 0.3 % below
@@ -80,6 +81,7 @@ class _Problem:
     h_end: float
     E: float
     increments: int
+    deadline: float | None = None  # wall clock (time.time()) by which a run must end: it is stopped there (the time limit)
 
 
 def _model(problem: _Problem, x, **settings) -> UpsettingModel:
@@ -118,8 +120,12 @@ def _run(problem: _Problem, x) -> _Run | None:
         if model in tried:  # a retry on the inverse's own increments is the first run again
             continue
         tried.append(model)
+        left = None if problem.deadline is None else problem.deadline - time.time()
+        if left is not None and left <= 0.0:  # the time limit has come: a failed run, the fit ends with its best so far
+            log.info("inverse FE: run at %s not started: the time limit has come", x)
+            return None
         try:
-            r = simulate_upsetting(model)
+            r = simulate_upsetting(model, **({} if left is None else {"timeout_s": min(left, RUN_TIMEOUT_S)}))
             break
         except SolverError as exc:
             log.info("inverse FE: run at %s%s failed (%s)", x, f" with {settings}" if settings else "", exc)
@@ -300,7 +306,10 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     x_scale = np.maximum(np.abs(x0), 1e-3)
     x_scale[-1] = 0.05
     before = time.perf_counter() - t0  # the fast identification, the closure, the warm start's run: the budget's and the progress's clock
-    sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
+    # a run still going at the time limit is stopped there (a batch's length is not known beforehand: where the side
+    # folds over its runs stop and are retried, and a tall record's first Jacobian ran 250 s past a mean of 90)
+    fit_problem = problem if time_limit_s is None else replace(problem, deadline=time.time() + max(1.0, time_limit_s - before))
+    sol = fit_with_solver(partial(_run, fit_problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
                           x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress_on_whole_clock(progress, before, len(x0), time_limit_s),
                           other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma,
                           correlated=True, time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))

@@ -212,7 +212,8 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     fit's scatter stands in (:func:`parameter_stderr`); ``correlated``: that scatter runs along the
     rows (its variance inflated by :func:`serial_inflation`).
     ``time_limit_s``: no batch of runs is started that would end past it (at the longest batch time so
-    far); the fit then ends with the best parameter set run so far, its covariance from the last
+    far), and a batch that ends past it (its runs stopped there by a ``run`` that keeps a deadline:
+    None, not counted failed) ends the fit; the fit then ends with the best parameter set run so far, its covariance from the last
     Jacobian, ``cut`` set. ``progress(runs, elapsed_s, left_s)``: left_s from :func:`time_left_s`.
     """
     from scipy.optimize import least_squares
@@ -236,8 +237,13 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
             if time_limit_s is not None and best and elapsed + runs["longest_batch_s"] > time_limit_s:
                 raise _OutOfTime
             t_batch = time.perf_counter()
-            for p, out in zip(todo, run_many(run, todo, workers=workers, scheduler=scheduler)):
+            outs = run_many(run, todo, workers=workers, scheduler=scheduler)
+            # past the limit a run that did not end was stopped by it (a ``run`` that keeps a deadline), not failed
+            over = bool(time_limit_s is not None and best and time.perf_counter() - t0 >= time_limit_s)
+            for p, out in zip(todo, outs):
                 runs["count"] += 1
+                if out is None and over:
+                    continue
                 runs["failed"] += out is None
                 runs["retried"] += bool(getattr(out, "retried", False))
                 if out is not None and not out.cached:
@@ -246,6 +252,8 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
                 if out is not None and (not best or float(memo[tuple(p)] @ memo[tuple(p)]) < float(best["r"] @ best["r"])):
                     best.update(x=np.asarray(p, float), r=memo[tuple(p)])
             runs["longest_batch_s"] = max(runs["longest_batch_s"], time.perf_counter() - t_batch)
+            if over:
+                raise _OutOfTime
             if progress:
                 elapsed = time.perf_counter() - t0
                 progress(runs["count"], elapsed, time_left_s(runs["count"], elapsed, len(x0), time_limit_s))

@@ -194,3 +194,47 @@ def test_the_time_limit_help_names_both_inverses_and_their_defaults(capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert "inverse-fe (compression and tension)" in text
     assert f"compression {inverse.TIME_LIMIT_S:g}" in text and f"tension {inverse_tension.TIME_LIMIT_S:g}" in text
+
+
+def test_a_run_past_the_deadline_is_not_started_and_one_before_it_is_stopped_there(monkeypatch):
+    """The compression inverse's run keeps the fit's deadline: none is started after it, and one
+    started before it gets the time left as its solver time-out (a run that stops at the fold-over
+    and is retried would otherwise run past the limit)."""
+    import time
+
+    import flowcurve.identification.fe.inverse as inv
+
+    from flowcurve.identification.fe.ccx import SolverError
+
+    timeouts = []
+
+    def stopped(model, timeout_s=600.0):
+        timeouts.append(timeout_s)
+        raise SolverError("timed out")
+
+    monkeypatch.setattr(inv, "simulate_upsetting", stopped)
+    monkeypatch.setattr(inv, "_model", lambda problem, x, **settings: ("model", tuple(x), tuple(sorted(settings.items()))))
+    problem = inv._Problem("johnson_cook", 6.0, 9.0, 4.5, 200_000.0, 50, deadline=time.time() - 1.0)
+    assert inv._run(problem, np.array([100.0, 1000.0, 0.5, 0.1])) is None and timeouts == []
+    problem = inv._Problem("johnson_cook", 6.0, 9.0, 4.5, 200_000.0, 50, deadline=time.time() + 30.0)
+    assert inv._run(problem, np.array([100.0, 1000.0, 0.5, 0.1])) is None
+    assert timeouts and all(0.0 < t <= 30.0 for t in timeouts)
+
+
+def test_runs_stopped_by_the_limit_end_the_fit_and_are_not_counted_failed():
+    """A batch that ends past the limit, its runs None (stopped there): the fit is cut with its best
+    run so far, and those runs are not 'did not converge'."""
+    target = 2.0 * np.exp(1.5 * T)
+    state = {"n": 0}
+
+    def run(x):
+        state["n"] += 1
+        if state["n"] <= 3:
+            CLOCK["now"] += RUN_S
+            return _Out(x[0] * np.exp(x[1] * T))
+        CLOCK["now"] += 10.0  # the next batch runs into the limit and is stopped
+        return None
+
+    sol = fit_with_solver(run, lambda out: out.y - target, np.array([0.5, -1.0]), [0.01, -5.0], [10.0, 5.0], n_residuals=T.size,
+                          steps=lambda x: np.full(2, 1e-6), x_scale=np.ones(2), workers=1, time_limit_s=1.0)
+    assert sol.cut and sol.failed_runs == 0 and sol.runs > 3
