@@ -121,7 +121,7 @@ def _run(problem: _Problem, x) -> _Run | None:
             continue
         tried.append(model)
         left = None if problem.deadline is None else problem.deadline - time.time()
-        if left is not None and left <= 0.0:  # the time limit has come: a failed run, the fit ends with its best so far
+        if left is not None and left <= 0.0:  # the time limit has come: no run (the fit ends with its best so far)
             log.info("inverse FE: run at %s not started: the time limit has come", x)
             return None
         try:
@@ -291,6 +291,7 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     shape_sigma = {k: math.hypot(v, springback_rel * (dmax if k == "dmax" else dface)) for k, v in shape_sigma.items()}
     # every row in units of its own σ: the force rows' is pooled from their misfit for the covariance, the diameters' known
     row_sigma = np.array([np.nan] * FORCE_POINTS + [1.0] * len(shape_sigma))
+
     def residuals_of(out: _Run) -> np.ndarray:
         r_f = 100.0 * (np.interp(s_pts, out.stroke_mm, out.force_N) - f_pts) / f_pts
         shape = [(out.dmax_unloaded_mm - dmax) / shape_sigma["dmax"]]
