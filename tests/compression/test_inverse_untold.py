@@ -55,10 +55,11 @@ def test_a_told_mu_has_no_such_warning(monkeypatch, seed_like_record):
 
 def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_alone(monkeypatch, seed_like_record):
     """μ's standard error is the fit's, asked for with the force misfit counted as serially
-    correlated, and the model form's share (fe/model_form.py) in quadrature: here μ is told by
-    dmax alone, so that share is the bulge's model-form offset 2·u_b·ΔR over ∂dmax/∂μ; what dmax
-    alone tells, σ_d/|∂dmax/∂μ| with σ_d = √(0.01² + (0.04·(dmax − d_n))²) mm, is reported
-    beside it; beyond ±0.02 a "poorly told" warning."""
+    correlated, and no smaller than what the force and the shape tell apart, combined: here μ is
+    told by dmax alone (the force rows do not move with it), so that floor is dmax's σ in the fit
+    over ∂dmax/∂μ, σ_d/|∂dmax/∂μ| with σ_d = √(0.01² + (0.05·(dmax − d_n))²) mm (its resolution and
+    the model form's share, fe/model_form.py); the same is reported as what dmax alone tells; beyond
+    ±0.02 a "poorly told" warning."""
     import math
 
     from flowcurve.identification.fe.model_form import BULGE_MODEL_FORM
@@ -66,10 +67,10 @@ def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_al
     record, _ = seed_like_record
     d0, h0 = (float(record.meta[k]) for k in ("specimen.d0_mm", "specimen.h0_mm"))
     hk, dmax = float(record.meta["post.hk_mm"]), float(record.meta["post.dmax_mm"])
-    sigma_d = math.hypot(0.01, 0.04 * (dmax - d0 * math.sqrt(h0 / hk)))
+    sigma_d = math.hypot(0.01, 2.0 * BULGE_MODEL_FORM * (dmax - d0 * math.sqrt(h0 / hk)) / 2.0)
     w = 1.0 / sigma_d  # residual units of the dmax row per mm (its misfit over its σ)
 
-    for mu_se in (0.01, 0.03):
+    for mu_se in (0.01, 0.03, 0.2):
         asked = {}
 
         def outcome(run, residuals_of, x0, lo, hi, *, n_residuals, **kw):
@@ -88,11 +89,13 @@ def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_al
         result = inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
         inv = result["inverse_fe"]
         assert asked["correlated"] is True
-        model_form = 2.0 * BULGE_MODEL_FORM * (dmax - d0 * math.sqrt(h0 / hk)) / 2.0 / 0.2
-        assert inv["mu_stderr"] == pytest.approx(math.hypot(mu_se, model_form))
-        assert inv["mu_stderr_shape_alone"] == pytest.approx(sigma_d / 0.2)
+        shape_alone = sigma_d / 0.2
+        assert inv["mu_stderr"] == pytest.approx(max(mu_se, shape_alone))
+        assert inv["mu_stderr_shape_alone"] == pytest.approx(shape_alone)
+        assert inv["mu_shape_alone"]["stderr"] == pytest.approx(shape_alone)
+        assert not np.isfinite(inv["mu_force_alone"]["mu"])  # the force rows do not move with μ: not told
         assert 0.8 < inv["force_residual_serial_correlation"] <= 0.9
-        assert any("poorly told" in x for x in result.get("warnings", [])) == (math.hypot(mu_se, model_form) > inverse.MU_TOLD)
+        assert any("poorly told" in x for x in result.get("warnings", [])) == (max(mu_se, shape_alone) > inverse.MU_TOLD)
 
 
 def test_a_fit_whose_runs_failed_often_says_so_in_the_result_and_the_summary(monkeypatch, seed_like_record):
