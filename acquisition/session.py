@@ -214,7 +214,6 @@ class DriverRig:
         while True:
             now = self._clock()
             if now >= end:  # and from then on at every reading
-
                 rise = check.rising_C()
                 if rise <= STILL_RISING_C:
                     return now - start

@@ -276,7 +276,6 @@ class StuckRelayCheck:
             raise SafetyError(self.device, f"heater does not switch off (relay stuck?): {rise:.1f} C rise with the heater "
                                            f"off for {now - self._off_since:.0f} s, still rising — {STUCK_RELAY_ADVICE}")
 
-
     def rising_C(self) -> float:
         """The reading's rise over the last ``confirm_s`` with the heater off (0 before that long)."""
         if len(self._recent) < 2 or self._recent[-1][0] - self._recent[0][0] < self.confirm_s:

@@ -47,7 +47,8 @@ from flowcurve.identification.fe.machine import model_elastics
 from flowcurve.identification.fe import model_form as mf
 from flowcurve.identification.fe.solver_fit import fit_with_solver, progress_on_whole_clock, serial_correlation
 from flowcurve.identification.friction import DFACE_ADVICE, DIAMETER_RESOLUTION_MM, nominal_diameter
-from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
+from flowcurve.identification.fe.ccx import DEFAULT_TIMEOUT_S
+from flowcurve.identification.fe.upsetting import FOLD_OVER_BAND, PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 from flowcurve.identification.outcome import Identification
 
@@ -63,13 +64,10 @@ REL_STEP = 0.01  # finite-difference step, relative (absolute 0.005 for μ)
 START_MU_STEPS = (-0.01, 0.01, -0.02, 0.02)
 MU_TOLD = 0.02  # a μ standard error beyond this is said to be poorly told (as the fast method's dmax sensitivity)
 TIME_LIMIT_S = 270.0  # the default wall-time budget: the held-out records C1–C3 end within 5 min on 2 cores
-RUN_TIMEOUT_S = 600.0  # one upsetting run's own bound (simulate_upsetting's default)
 MIN_FORCE_STRAIN = 0.3  # the force is fitted at least this far, even where the side folds over earlier
-# a force point's σ grows over this much strain before the warm start's fold-over, to FOLD_OVER_SIGMA_FACTOR times
-# FORCE_SIGMA_PCT at the onset: the model's force error grows there (another model's record at the truth: 0.3 % below
-# ε 0.45, 0.5–0.9 % at 0.45–0.55, 1.3–1.7 % at 0.55–0.6 for an onset at 0.616); weighed as the rest, those points held
-# C1's μ 0.013 low, and cut off, they left C3's law unheld beyond ε 0.4 (its curve 1.1 %, verify 3.2 %)
-FOLD_OVER_BAND = 0.1
+# a force point's σ grows over the FOLD_OVER_BAND before the warm start's fold-over to this many times FORCE_SIGMA_PCT at
+# the onset, where the model's force error grows; weighed as the rest, those points held C1's μ 0.013 low, and cut off,
+# they left C3's law unheld beyond ε 0.4 (its curve 1.1 %, verify 3.2 %)
 FOLD_OVER_SIGMA_FACTOR = 3.0
 
 
@@ -125,7 +123,7 @@ def _run(problem: _Problem, x) -> _Run | None:
             log.info("inverse FE: run at %s not started: the time limit has come", x)
             return None
         try:
-            r = simulate_upsetting(model, **({} if left is None else {"timeout_s": min(left, RUN_TIMEOUT_S)}))
+            r = simulate_upsetting(model, **({} if left is None else {"timeout_s": min(left, DEFAULT_TIMEOUT_S)}))
             break
         except SolverError as exc:
             log.info("inverse FE: run at %s%s failed (%s)", x, f" with {settings}" if settings else "", exc)

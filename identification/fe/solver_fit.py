@@ -212,9 +212,9 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     fit's scatter stands in (:func:`parameter_stderr`); ``correlated``: that scatter runs along the
     rows (its variance inflated by :func:`serial_inflation`).
     ``time_limit_s``: no batch of runs is started that would end past it (at the longest batch time so
-    far), and a batch that ends past it (its runs stopped there by a ``run`` that keeps a deadline:
-    None, not counted failed) ends the fit; the fit then ends with the best parameter set run so far, its covariance from the last
-    Jacobian, ``cut`` set. ``progress(runs, elapsed_s, left_s)``: left_s from :func:`time_left_s`.
+    far), and a batch that ends past it ends the fit (its runs stopped there by a ``run`` that keeps
+    a deadline: None, not counted failed); the fit then ends with the best parameter set run so far,
+    its covariance from the last Jacobian, ``cut`` set. ``progress(runs, elapsed_s, left_s)``: left_s from :func:`time_left_s`.
     """
     from scipy.optimize import least_squares
 

@@ -9,14 +9,13 @@ identification's ``corrected_diagram``) is compared with the FE force at the sam
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
+from flowcurve.identification.fe.upsetting import FOLD_OVER_BAND, PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 
 DEFAULT_E_MPa = 200_000.0
@@ -155,8 +154,6 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
     post_dmax = record.positive("post.dmax_mm")
     # the model's force error grows over the band before its side folds onto the platen (the inverse's σ there,
     # docs/methods.md §4a.3; a finer record's side folds earlier); the deviation before that band is reported apart
-    from flowcurve.identification.fe.inverse import FOLD_OVER_BAND
-
     fold = run.fold_over_strain
     steady_to = None if fold is None else fold - FOLD_OVER_BAND
     before = strain[sel] < steady_to if steady_to is not None else np.ones(dev.size, bool)
