@@ -21,7 +21,8 @@ def register(subparsers) -> None:
     p.add_argument("record", metavar="RECORD", help="the compression record to verify against")
     p.add_argument("--out", metavar="DIR", default="flowcurve-verify", help="folder for verify.json and verify.png (default ./flowcurve-verify)")
     p.add_argument("--mu", type=float, help="friction coefficient (default: the result's friction_mu; for a card, the record's fe_table μ)")
-    p.add_argument("--increments", type=int, default=50, help="solver increments (default 50)")
+    p.add_argument("--increments", type=int, help="solver increments of the check (default 200; the inverse FE fits with 50)")
+    p.add_argument("--layers", type=int, help="boundary-layer elements at the free surface (default 4; the inverse FE's 2)")
     p.add_argument("--no-plots", action="store_true", help="skip verify.png")
     p.set_defaults(func=run_verify)
 
@@ -49,13 +50,13 @@ def _plot(report: dict, path: Path) -> None:
 
 
 def run_verify(args) -> int:
-    from flowcurve.identification.fe.verify import load_curve, verify_compression
+    from flowcurve.identification.fe.verify import VERIFY_INCREMENTS, VERIFY_LAYERS, load_curve, verify_compression
     from flowcurve.identification.outcome import to_jsonable
     from flowcurve.record.importers import load_record
 
     curve = load_curve(args.curve)
     record = load_record(args.record)
-    report = verify_compression(curve, record, mu=args.mu, increments=args.increments)
+    report = verify_compression(curve, record, mu=args.mu, increments=args.increments or VERIFY_INCREMENTS, layers=args.layers or VERIFY_LAYERS)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "verify.json").write_text(json.dumps(to_jsonable(report), indent=2) + "\n", encoding="utf-8")
@@ -70,5 +71,10 @@ def run_verify(args) -> int:
         print(f"  up to strain {report['before_fold_over_to_strain']:.3f}, before the band where the model's own force error grows "
               f"(its side folds onto the platen from {report['fold_over_strain']:.3f}): max "
               f"{report['max_force_deviation_before_fold_over_pct']:.2f} %")
+    disc = report.get("discretisation")
+    if disc:
+        print(f"  the check's model ({report['model']['layers']} rim layers, {report['model']['increments']} increments) against the fit's "
+              f"({disc['layers']}, {disc['increments']}): force up to {disc['max_force_gap_pct']:.2f} % apart — the check's own "
+              f"discretisation error; the fit's model reads {disc['max_force_deviation_pct']:.2f} % from the record")
     print(f"  → {out / 'verify.json'}")
     return 0

@@ -5,6 +5,10 @@ The check the seed did in LS-DYNA (5.1 %), done with an open solver: the identif
 and friction μ drive the upsetting model (:mod:`.upsetting`) on the record's d0, h0 to the
 record's largest shortening; the record's frame-corrected force–stroke curve (the fast
 identification's ``corrected_diagram``) is compared with the FE force at the same stroke.
+
+The check runs a finer discretisation than the inverse FE fits with (:data:`VERIFY_LAYERS`
+rim-layer elements, :data:`VERIFY_INCREMENTS` increments), and the inverse's own one beside it:
+the gap between the two is the check's own discretisation error, reported with the deviation.
 """
 
 from __future__ import annotations
@@ -20,6 +24,10 @@ from flowcurve.identification.hardening import LAWS
 
 DEFAULT_E_MPa = 200_000.0
 COMPARE_FROM_STRAIN = 0.02  # the toe and the elastic rise are left out of the deviation
+# the check's discretisation: finer than the fit's (2 rim-layer elements, 50 increments), so that a curve is not judged
+# on the model it was fitted with; where the side folds over, the two differ most (docs/methods.md §4a.5)
+VERIFY_LAYERS, VERIFY_INCREMENTS = 4, 200
+FIT_LAYERS, FIT_INCREMENTS = UpsettingModel.layers, UpsettingModel.increments
 
 
 @dataclass
@@ -129,8 +137,27 @@ def _simulate_with_retries(model_with, timeout_s: float):
                 raise
 
 
-def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = None, increments: int = 50, timeout_s: float = 900.0) -> dict:
-    """FE force–stroke of ``curve`` on ``record``'s specimen vs the record; deviations in %."""
+def _deviation(stroke, force, strain, sel, run) -> dict:
+    """The record's force against a run's at the record's strokes (%), over the compared range and before the band
+    where the model's force error grows (the inverse's σ there, docs/methods.md §4a.3)."""
+    s_fe = np.concatenate([[0.0], run.stroke_mm])
+    f_fe = np.concatenate([[0.0], run.force_N])
+    f_at = np.interp(stroke[sel], s_fe, f_fe)
+    dev = (force[sel] - f_at) / f_at * 100.0
+    fold = run.fold_over_strain
+    steady_to = None if fold is None else fold - FOLD_OVER_BAND
+    before = strain[sel] < steady_to if steady_to is not None else np.ones(dev.size, bool)
+    return {"fe_force_N": f_at, "deviation_pct": dev, "fold_over_strain": fold, "before_fold_over_to_strain": steady_to,
+            "max_force_deviation_pct": float(np.max(np.abs(dev))),
+            "max_force_deviation_before_fold_over_pct": float(np.max(np.abs(dev[before]))) if before.any() else None}
+
+
+def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = None, increments: int = VERIFY_INCREMENTS,
+                       layers: int = VERIFY_LAYERS, timeout_s: float = 900.0) -> dict:
+    """FE force–stroke of ``curve`` on ``record``'s specimen vs the record; deviations in %.
+
+    The run at ``layers``/``increments`` is the check; unless that is the fit's own discretisation, the fit's is run too
+    and ``discretisation`` gives their largest force gap (%), the check's own model error."""
     if record.test != "compression":
         raise IdentificationError(f"{record.source}: verify runs upsetting (compression) records; this is a {record.test} record")
     stroke, force, ident = record_force_stroke(record, **(curve.diagram_options or {}))
@@ -139,35 +166,45 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
     mu = mu if mu is not None else curve.mu if curve.mu is not None else ident.result["friction_mu"]
     E = curve.E_MPa or record.positive("material.E_MPa") or DEFAULT_E_MPa
     s_end = float(np.max(stroke))
-    run, retry = _simulate_with_retries(
-        lambda **settings: UpsettingModel(d0, h0, h0 - s_end, float(mu), tuple(map(float, curve.eps_p)), tuple(map(float, curve.stress_MPa)),
-                                          E_MPa=float(E), **{"increments": increments, **settings}).realising(),  # the curve as the specimen's
-        timeout_s)
-    s_fe = np.concatenate([[0.0], run.stroke_mm])
-    f_fe = np.concatenate([[0.0], run.force_N])
     strain = -np.log(1.0 - stroke / h0)
     sel = strain >= COMPARE_FROM_STRAIN
     if sel.sum() < 3:
         raise IdentificationError(f"{record.source}: too little of the record beyond {COMPARE_FROM_STRAIN:g} strain to compare")
-    f_at = np.interp(stroke[sel], s_fe, f_fe)
-    dev = (force[sel] - f_at) / f_at * 100.0
+
+    def run_at(n_layers: int, n_increments: int):
+        return _simulate_with_retries(
+            lambda **settings: UpsettingModel(d0, h0, h0 - s_end, float(mu), tuple(map(float, curve.eps_p)), tuple(map(float, curve.stress_MPa)),
+                                              E_MPa=float(E), **{"layers": n_layers, "increments": n_increments, **settings}).realising(),
+            timeout_s)  # the curve as the specimen's
+
+    run, retry = run_at(layers, increments)
+    check = _deviation(stroke, force, strain, sel, run)
+    discretisation = None
+    if (layers, increments) != (FIT_LAYERS, FIT_INCREMENTS):
+        fit_run, fit_retry = run_at(FIT_LAYERS, FIT_INCREMENTS)
+        fit = _deviation(stroke, force, strain, sel, fit_run)
+        gap = (fit["fe_force_N"] - check["fe_force_N"]) / check["fe_force_N"] * 100.0
+        discretisation = {
+            "layers": FIT_LAYERS, "increments": FIT_INCREMENTS, "solver_retry": fit_retry or None,
+            "max_force_gap_pct": float(np.max(np.abs(gap))),  # the fit's model against the check's, the curve and μ the same
+            "max_force_deviation_pct": fit["max_force_deviation_pct"],
+            "max_force_deviation_before_fold_over_pct": fit["max_force_deviation_before_fold_over_pct"],
+            "fold_over_strain": fit["fold_over_strain"], "solver_wall_s": fit_run.wall_s}
+    dev = check["deviation_pct"]
     post_dmax = record.positive("post.dmax_mm")
-    # the model's force error grows over the band before its side folds onto the platen (the inverse's σ there,
-    # docs/methods.md §4a.3; a finer record's side folds earlier); the deviation before that band is reported apart
-    fold = run.fold_over_strain
-    steady_to = None if fold is None else fold - FOLD_OVER_BAND
-    before = strain[sel] < steady_to if steady_to is not None else np.ones(dev.size, bool)
     return {
         "record": record.source, "curve": curve.what, "mu": float(mu), "E_MPa": float(E),
         "d0_mm": d0, "h0_mm": h0, "stroke_end_mm": s_end,
-        "max_force_deviation_pct": float(np.max(np.abs(dev))),
-        "fold_over_strain": fold, "before_fold_over_to_strain": steady_to,
-        "max_force_deviation_before_fold_over_pct": float(np.max(np.abs(dev[before]))) if before.any() else None,
+        "model": {"layers": layers, "increments": increments},
+        "max_force_deviation_pct": check["max_force_deviation_pct"],
+        "fold_over_strain": check["fold_over_strain"], "before_fold_over_to_strain": check["before_fold_over_to_strain"],
+        "max_force_deviation_before_fold_over_pct": check["max_force_deviation_before_fold_over_pct"],
         "rms_force_deviation_pct": float(np.sqrt(np.mean(dev**2))),
         "final_force_deviation_pct": float(dev[-1]),
+        "discretisation": discretisation,
         "fe_dmax_mm": float(run.dmax_mm[-1]), "record_dmax_mm": post_dmax,
         "dmax_deviation_mm": None if post_dmax is None else float(post_dmax - run.dmax_mm[-1]),
         "compared_from_strain": COMPARE_FROM_STRAIN, "solver_wall_s": run.wall_s, "solver_cached": run.cached,
         "solver_retry": retry or None,  # the settings that carried a run the model's own stopped (None: its own)
-        "curves": {"stroke_mm": stroke[sel], "record_force_N": force[sel], "fe_force_N": f_at, "deviation_pct": dev},
+        "curves": {"stroke_mm": stroke[sel], "record_force_N": force[sel], "fe_force_N": check["fe_force_N"], "deviation_pct": dev},
     }
