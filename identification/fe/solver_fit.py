@@ -156,8 +156,10 @@ class SolverFit:
         if not self.cut:
             return []
         limit = self.time_limit_s if time_limit_s is None else time_limit_s
+        errors = "its standard errors from the last Jacobian" if self.jac is not None and np.any(self.jac) else \
+            "no Jacobian was formed: no standard errors"
         return [f"{what}: cut by the time limit ({limit:g} s, --time-limit) after {self.runs} solver runs: the answer "
-                "is the best parameter set run so far, not a converged fit (its standard errors from the last Jacobian)"]
+                f"is the best parameter set run so far, not a converged fit ({errors})"]
 
     def undetermined_warnings(self, names, what: str = "inverse FE") -> list[str]:
         """One warning per parameter the residuals do not tell at the solution (no standard error)."""

@@ -337,6 +337,7 @@ def test_a_limit_that_stops_the_warm_starts_says_so(hanging_tension_solver):
     inv = result["inverse_fe"]
     assert inv["budget"]["cut"] and inv["failed_solver_runs"] == 0
     assert all(not np.isfinite(inv[k]) for k in ("H_MPa_stderr", "beta_stderr", "c_stderr", "taper_stderr"))
+    assert any("cut by the time limit" in w and "no Jacobian was formed: no standard errors" in w for w in result["warnings"])
     assert result["hardening"]["quality"] == "poor"
 
     calls.clear()
