@@ -41,6 +41,16 @@ class SolverError(FlowcurveError):
     """CalculiX is missing, failed, timed out or did not converge (one line, names the job)."""
 
 
+def timeout_by(deadline: float | None) -> float | None:
+    """The solver time-out of a run that must end by ``deadline`` (wall clock, ``time.time()``; None:
+    no deadline): the time left, held to :data:`DEFAULT_TIMEOUT_S`; None when the deadline has come
+    (start no run). A run stopped so is the time limit's, not a failed one (:mod:`.solver_fit`)."""
+    if deadline is None:
+        return DEFAULT_TIMEOUT_S
+    left = deadline - time.time()
+    return min(left, DEFAULT_TIMEOUT_S) if left > 0.0 else None
+
+
 @dataclass
 class CcxOutput:
     """What one run printed: step times, total reactions and nodal displacements per set."""

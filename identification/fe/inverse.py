@@ -45,9 +45,9 @@ import pandas as pd
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.fe.machine import model_elastics
 from flowcurve.identification.fe import model_form as mf
-from flowcurve.identification.fe.solver_fit import fit_with_solver, progress_on_whole_clock, serial_correlation
+from flowcurve.identification.fe.solver_fit import fit_time_limit, fit_with_solver, progress_on_whole_clock, serial_correlation
 from flowcurve.identification.friction import DFACE_ADVICE, DIAMETER_RESOLUTION_MM, nominal_diameter
-from flowcurve.identification.fe.ccx import DEFAULT_TIMEOUT_S
+from flowcurve.identification.fe.ccx import timeout_by
 from flowcurve.identification.fe.upsetting import FOLD_OVER_BAND, PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 from flowcurve.identification.outcome import Identification
@@ -118,12 +118,12 @@ def _run(problem: _Problem, x) -> _Run | None:
         if model in tried:  # a retry on the inverse's own increments is the first run again
             continue
         tried.append(model)
-        left = None if problem.deadline is None else problem.deadline - time.time()
-        if left is not None and left <= 0.0:  # the time limit has come: no run (the fit ends with its best so far)
+        timeout_s = timeout_by(problem.deadline)
+        if timeout_s is None:  # the time limit has come: no run (the fit ends with its best so far)
             log.info("inverse FE: run at %s not started: the time limit has come", x)
             return None
         try:
-            r = simulate_upsetting(model, **({} if left is None else {"timeout_s": min(left, DEFAULT_TIMEOUT_S)}))
+            r = simulate_upsetting(model, timeout_s=timeout_s)
             break
         except SolverError as exc:
             log.info("inverse FE: run at %s%s failed (%s)", x, f" with {settings}" if settings else "", exc)
@@ -307,11 +307,12 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     before = time.perf_counter() - t0  # the fast identification, the closure, the warm start's run: the budget's and the progress's clock
     # a run still going at the time limit is stopped there (a batch's length is not known beforehand: where the side
     # folds over its runs stop and are retried, and a tall record's first Jacobian ran 250 s past a mean of 90)
-    fit_problem = problem if time_limit_s is None else replace(problem, deadline=time.time() + max(1.0, time_limit_s - before))
+    fit_limit = fit_time_limit(time_limit_s, before)
+    fit_problem = problem if fit_limit is None else replace(problem, deadline=time.time() + fit_limit)
     sol = fit_with_solver(partial(_run, fit_problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
                           x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress_on_whole_clock(progress, before, len(x0), time_limit_s),
                           other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma,
-                          correlated=True, time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))
+                          correlated=True, time_limit_s=fit_limit)
     r, se = sol.residuals, sol.stderr
     if sol.jac is not None:  # the force's model-form share of the standard errors, in quadrature with the fit's (the shape's is in its σ)
         se = np.hypot(se, mf.force_model_form_stderr(sol.jac, np.arange(FORCE_POINTS), targets, f_sigma, float(sol.x[-1])))

@@ -33,14 +33,14 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 
 import numpy as np
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.elastic_modulus import modulus_for_model
-from flowcurve.identification.fe.solver_fit import fit_with_solver, progress_on_whole_clock, serial_correlation
+from flowcurve.identification.fe.solver_fit import fit_time_limit, fit_with_solver, progress_on_whole_clock, serial_correlation
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS
 from flowcurve.identification.outcome import Identification
 
@@ -132,6 +132,7 @@ class _Problem:
     uniform_eps_p: tuple  # the measured curve on a few rows, ending at ε_a
     uniform_stress_MPa: tuple
     increments: int
+    deadline: float | None = None  # wall clock (time.time()) by which a run must end: it is stopped there (the time limit)
 
 
 @dataclass(frozen=True)
@@ -153,14 +154,19 @@ def plastic_rows(problem: _Problem, H_MPa: float, beta: float, c: float) -> tupl
 
 
 def _run(problem: _Problem, x) -> _Run | None:
-    """Force, elongation and neck radius of one CalculiX necking run at x = (H, β, c, δ); None when it failed."""
-    from flowcurve.identification.fe.ccx import SolverError
+    """Force, elongation and neck radius of one CalculiX necking run at x = (H, β, c, δ); None when it
+    failed, or when the problem's deadline stopped it or came before it (:func:`.ccx.timeout_by`)."""
+    from flowcurve.identification.fe.ccx import SolverError, timeout_by
     from flowcurve.identification.fe.tension import TensionModel, simulate_tension
 
     eps, sig = plastic_rows(problem, float(x[0]), float(x[1]), float(x[2]))
+    timeout_s = timeout_by(problem.deadline)
+    if timeout_s is None:  # the time limit has come: no run (the fit ends with its best so far)
+        log.info("inverse FE tension: run at (H, β, c, taper) = %s not started: the time limit has come", x)
+        return None
     try:
         r = simulate_tension(TensionModel(problem.d0, problem.l0, problem.elongation, eps, sig, E_MPa=problem.E,
-                                          imperfection=float(x[3]), increments=problem.increments))
+                                          imperfection=float(x[3]), increments=problem.increments), timeout_s=timeout_s)
     except SolverError as exc:
         log.info("inverse FE tension: run at (H, β, c, taper) = %s failed (%s)", x, exc)
         return None
@@ -217,7 +223,8 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
     fracture and its neck diameter with CalculiX. The FE-consistent curve is refitted in
     ``refit_law``; None: in the law that follows it best (a warning when a given law follows it
     poorly and another well). ``time_limit_s``: the whole identification's wall-time budget (None:
-    none); no batch of runs starts that would end past it, and a fit so cut answers with the best
+    none); no batch of runs starts that would end past it, a run still going at it is stopped there
+    (not counted failed), and a fit so cut answers with the best
     parameter set run so far (``inverse_fe.budget.cut``, a warning, the hardening poor).
     ``progress(runs, elapsed_s, left_s)``: the time so far and an estimate of the time left."""
     import time
@@ -297,11 +304,13 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
         return h
 
     before = time.perf_counter() - t0  # the fast identification: the budget's and the progress's clock start with it
-    sol = fit_with_solver(partial(_run, problem), residuals_of, x0, lo, hi, n_residuals=row_sigma.size, steps=steps,
+    fit_limit = fit_time_limit(time_limit_s, before)  # a run still going at the limit is stopped there (as compression's)
+    fit_problem = problem if fit_limit is None else replace(problem, deadline=time.time() + fit_limit)
+    sol = fit_with_solver(partial(_run, fit_problem), residuals_of, x0, lo, hi, n_residuals=row_sigma.size, steps=steps,
                           x_scale=np.array([sigma_u, max(x0[1], 1.0), 1.0, TAPER_START]), workers=workers, scheduler=scheduler,
                           max_runs=max_runs, xtol=1e-3, ftol=1e-4, progress=progress_on_whole_clock(progress, before, len(x0), time_limit_s),
                           what="inverse FE (tension)", row_sigma=row_sigma, correlated=True, other_starts=others, best_start=True,
-                          time_limit_s=None if time_limit_s is None else max(1.0, time_limit_s - before))
+                          time_limit_s=fit_limit)
     (H, beta, c, taper), (H_se, beta_se, c_se, taper_se) = map(float, sol.x), map(float, sol.stderr)
     r = sol.residuals
     r_force = r[:n_force] * FORCE_SIGMA_PCT

@@ -156,8 +156,10 @@ class SolverFit:
         if not self.cut:
             return []
         limit = self.time_limit_s if time_limit_s is None else time_limit_s
+        errors = "its standard errors from the last Jacobian" if self.jac is not None and np.any(self.jac) else \
+            "no Jacobian was formed: no standard errors"
         return [f"{what}: cut by the time limit ({limit:g} s, --time-limit) after {self.runs} solver runs: the answer "
-                "is the best parameter set run so far, not a converged fit (its standard errors from the last Jacobian)"]
+                f"is the best parameter set run so far, not a converged fit ({errors})"]
 
     def undetermined_warnings(self, names, what: str = "inverse FE") -> list[str]:
         """One warning per parameter the residuals do not tell at the solution (no standard error)."""
@@ -180,6 +182,13 @@ def time_left_s(runs: int, elapsed_s: float, n_params: int, time_limit_s: float 
     expected = max(runs + n_params + 1, TYPICAL_JACOBIANS * (n_params + 1))
     left = elapsed_s / runs * (expected - runs)
     return max(0.0, min(left, time_limit_s - elapsed_s)) if time_limit_s is not None else left
+
+
+def fit_time_limit(time_limit_s: float | None, before_s: float) -> float | None:
+    """The fit's share of an identification's wall-time budget: what the ``before_s`` spent before
+    it (the fast identification, warm-start runs) left, at least 1 s; None without a limit. The
+    runs keep it as a deadline, ``time.time()`` + this, each with :func:`.ccx.timeout_by` as its time-out."""
+    return None if time_limit_s is None else max(1.0, time_limit_s - before_s)
 
 
 def progress_on_whole_clock(progress, before_s: float, n_params: int, time_limit_s: float | None):
@@ -214,7 +223,8 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     ``time_limit_s``: no batch of runs is started that would end past it (at the longest batch time so
     far), and a batch that ends past it ends the fit (its runs stopped there by a ``run`` that keeps
     a deadline: None, not counted failed); the fit then ends with the best parameter set run so far,
-    its covariance from the last Jacobian, ``cut`` set. ``progress(runs, elapsed_s, left_s)``: left_s from :func:`time_left_s`.
+    its covariance from the last Jacobian, ``cut`` set (an error naming the limit when no run had ended by then).
+    ``progress(runs, elapsed_s, left_s)``: left_s from :func:`time_left_s`.
     """
     from scipy.optimize import least_squares
 
@@ -239,7 +249,7 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
             t_batch = time.perf_counter()
             outs = run_many(run, todo, workers=workers, scheduler=scheduler)
             # past the limit a run that did not end was stopped by it (a ``run`` that keeps a deadline), not failed
-            over = bool(time_limit_s is not None and best and time.perf_counter() - t0 >= time_limit_s)
+            over = bool(time_limit_s is not None and time.perf_counter() - t0 >= time_limit_s)
             for p, out in zip(todo, outs):
                 runs["count"] += 1
                 if out is None and over:
@@ -290,22 +300,26 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
         return J
 
     starts = [np.asarray(x0, float)] + [np.clip(np.asarray(s, float), lo, hi) for s in other_starts]
-    if best_start:  # all starts side by side, the least misfit first (a failed run's 1e3 residuals last)
-        costs = [float(r @ r) for r in evaluate(starts)]
-        starts = [starts[k] for k in np.argsort(costs, kind="stable")]
-    for x0 in starts:  # no Jacobian can be formed around a failed run
-        if not failed(evaluate([x0])[0]):
-            break
-    else:
-        raise IdentificationError(f"{what}: the solver run failed at the warm start {np.round(starts[0], 4).tolist()} and at "
-                                  f"{len(starts) - 1} other starts (see the log); the fast result is the one to use for this record")
     try:
+        if best_start:  # all starts side by side, the least misfit first (a failed run's 1e3 residuals last)
+            costs = [float(r @ r) for r in evaluate(starts)]
+            starts = [starts[k] for k in np.argsort(costs, kind="stable")]
+        for x0 in starts:  # no Jacobian can be formed around a failed run
+            if not failed(evaluate([x0])[0]):
+                break
+        else:
+            raise IdentificationError(f"{what}: the solver run failed at the warm start {np.round(starts[0], 4).tolist()} and at "
+                                      f"{len(starts) - 1} other starts (see the log); the fast result is the one to use for this record")
         sol = least_squares(fun, np.asarray(x0, float), jac=jac, bounds=(lo, hi), x_scale=x_scale, xtol=xtol, ftol=ftol,
                             gtol=1e-8, max_nfev=max_nfev)
         cut = False
     except _OutOfTime:  # the best set run so far; its covariance from the last Jacobian (at it, or at the optimiser's last x)
+        if not best:  # the limit stopped the first runs before one ended: there is no answer to give
+            raise IdentificationError(f"{what}: the time limit ({time_limit_s:g} s for the fit, --time-limit) stopped the first "
+                                      f"{runs['count']} solver runs before one ended; give a longer --time-limit "
+                                      "(the fast result is the one to use meanwhile)") from None
         J = last_jac["J"] if last_jac else np.zeros((n_residuals, len(x0)))
-        at = "at it" if last_jac and np.array_equal(last_jac["x"], best["x"]) else "at the optimiser's last point"
+        at = ("at it" if np.array_equal(last_jac["x"], best["x"]) else "at the optimiser's last point") if last_jac else "none formed"
         sol = SimpleNamespace(x=best["x"], fun=best["r"], jac=J, status=0, nfev=runs["count"],
                               message=f"cut by the time limit of {time_limit_s:g} s: the best of {runs['count']} runs, the Jacobian {at}")
         cut = True

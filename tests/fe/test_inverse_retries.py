@@ -24,7 +24,7 @@ def solver(monkeypatch):
     def model(problem, x, **settings):
         return (settings.get("stick_slope_MPa_per_mm", 1.0e7), settings.get("increments", problem.increments), float(x[-1]))
 
-    def simulate(m):
+    def simulate(m, timeout_s=None):  # the run's time-out (ccx.timeout_by) is not modelled here
         state.log.append(m[:2])
         if m[0] in state.stops:
             raise SolverError("stopped at step time 0.82 < 1 (*ERROR: too many cutbacks)")

@@ -238,3 +238,111 @@ def test_runs_stopped_by_the_limit_end_the_fit_and_are_not_counted_failed():
     sol = fit_with_solver(run, lambda out: out.y - target, np.array([0.5, -1.0]), [0.01, -5.0], [10.0, 5.0], n_residuals=T.size,
                           steps=lambda x: np.full(2, 1e-6), x_scale=np.ones(2), workers=1, time_limit_s=1.0)
     assert sol.cut and sol.failed_runs == 0 and sol.runs > 3
+
+
+# ---- the tension inverse's runs keep the deadline (a run still going at the limit is stopped there) ---------------------
+
+HANGING_CALL = 5  # the solver call that does not end by itself (a run that stalls and would go on to its own time-out)
+
+
+@pytest.fixture
+def hanging_tension_solver(monkeypatch):
+    """CalculiX replaced below the tension inverse's run (``tension.simulate_tension``) by a closed form
+    on the model clock, which ``time.time`` and ``time.perf_counter`` both read: a run takes
+    TENSION_RUN_S, except call :data:`HANGING_CALL`, which runs until its solver time-out and then
+    raises the solver's time-out error (as ``ccx.run_deck``). Each call's start and time-out are
+    logged. The force is the record's own, scaled by 1 + (σ_end/σ_end* − 1)·u + 10·(δ − δ*)·u²
+    (σ_end the last *PLASTIC row, * the first call's, δ* 0.008): a fit of several Jacobians."""
+    import time
+
+    import flowcurve.identification.fe.tension as tension
+    from flowcurve.identification.fe.ccx import SolverError
+    from flowcurve.identification.tension import identify_tension
+
+    from .test_inverse_tension_inputs import _record
+
+    monkeypatch.setattr(time, "perf_counter", lambda: CLOCK["now"])
+    monkeypatch.setattr(time, "time", lambda: CLOCK["now"])
+    record = _record(0.7)
+    diagram = identify_tension(record).curves["corrected_diagram"]
+    elong, force = diagram["elongation_mm"].to_numpy()[1:], diagram["force_N"].to_numpy()[1:]
+    calls = []
+
+    def simulate(model, *, timeout_s=600.0, **_):
+        calls.append((CLOCK["now"], timeout_s))
+        if len(calls) == HANGING_CALL or timeout_s < TENSION_RUN_S:
+            CLOCK["now"] += timeout_s
+            raise SolverError(f"CalculiX run 'tension' timed out after {timeout_s:g} s")
+        CLOCK["now"] += TENSION_RUN_S
+        target = calls and getattr(simulate, "target", None) or (model.stress_MPa[-1] * 1.2, 0.008)
+        simulate.target = target
+        u = elong / elong.max()
+        factor = 1.0 + (model.stress_MPa[-1] / target[0] - 1.0) * u + 10.0 * (model.imperfection - target[1]) * u**2
+        return SimpleNamespace(elongation_mm=elong, force_N=force * factor, neck_radius_mm=np.full(elong.size, 2.2),
+                               wall_s=TENSION_RUN_S, cached=False)
+
+    monkeypatch.setattr(tension, "simulate_tension", simulate)
+    return record, calls
+
+
+def test_a_tension_run_still_going_at_the_limit_is_stopped_there_and_not_counted_failed(hanging_tension_solver):
+    """Limit 75 s, runs of 10 s: the three warm starts (0–30 s), then a Jacobian's four runs, of which
+    the second (from 40 s) does not end by itself. It is given the time left as its solver time-out
+    and stopped at the deadline; the runs after it are not started; the identification ends by its
+    limit, cut, with the best run so far, and the stopped run is no failed one. (Before the runs
+    kept the deadline, the stalled run went on to the solver's own 600 s time-out.)"""
+    from flowcurve.identification.fe.ccx import DEFAULT_TIMEOUT_S
+    from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
+
+    record, calls = hanging_tension_solver
+    t0 = CLOCK["now"]
+    deadline = t0 + 75.0  # the fast identification takes no model time: the fit's deadline is the whole limit's
+    result = identify_inverse_fe_tension(record, workers=1, time_limit_s=75.0).result
+    assert CLOCK["now"] - t0 <= 75.0 + 1e-9  # the command ends by its limit
+    assert len(calls) == HANGING_CALL  # the stalled run was the last one started
+    assert all(start < deadline for start, _ in calls)  # no run starts after the deadline
+    assert all(0.0 < timeout <= DEFAULT_TIMEOUT_S and start + timeout <= deadline + 1e-9 for start, timeout in calls)
+    start, timeout = calls[HANGING_CALL - 1]
+    assert start + timeout == pytest.approx(deadline)  # the stalled run's time-out ends at the deadline
+    inv = result["inverse_fe"]
+    assert inv["budget"]["cut"] and "cut by the time limit" in inv["budget"]["done"]
+    assert inv["failed_solver_runs"] == 0 and not any("did not converge" in w for w in result["warnings"])
+    assert any("cut by the time limit (75 s, --time-limit)" in w for w in result["warnings"])
+    assert result["hardening"]["quality"] == "poor"
+
+
+def test_a_tension_run_without_a_limit_keeps_the_solvers_own_time_out(hanging_tension_solver):
+    """Without a time limit no deadline is set: every run has the solver's default time-out
+    (the stalled one fails after it, and is a failed run)."""
+    from flowcurve.identification.fe.ccx import DEFAULT_TIMEOUT_S
+    from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
+
+    record, calls = hanging_tension_solver
+    result = identify_inverse_fe_tension(record, workers=1, time_limit_s=None).result
+    assert calls and all(timeout == DEFAULT_TIMEOUT_S for _, timeout in calls)
+    assert result["inverse_fe"]["failed_solver_runs"] >= 1 and not result["inverse_fe"]["budget"]["cut"]
+
+
+def test_a_limit_that_stops_the_warm_starts_says_so(hanging_tension_solver):
+    """A limit within the warm starts' batch (three runs of 10 s): at 15 s the first start ends and
+    the second is stopped — the fit is cut with the one run that ended, its stopped runs not
+    counted failed, its parameters without standard errors (no Jacobian); at 8 s no start ends,
+    and the error names the time limit, not "the solver run failed at the warm start"."""
+    from flowcurve.errors import IdentificationError
+    from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
+
+    record, calls = hanging_tension_solver
+    result = identify_inverse_fe_tension(record, workers=1, time_limit_s=15.0).result
+    assert CLOCK["now"] <= 15.0 + 1e-9 and len(calls) == 2  # the third start is not begun
+    inv = result["inverse_fe"]
+    assert inv["budget"]["cut"] and inv["failed_solver_runs"] == 0
+    assert all(not np.isfinite(inv[k]) for k in ("H_MPa_stderr", "beta_stderr", "c_stderr", "taper_stderr"))
+    assert any("cut by the time limit" in w and "no Jacobian was formed: no standard errors" in w for w in result["warnings"])
+    assert result["hardening"]["quality"] == "poor"
+
+    calls.clear()
+    CLOCK["now"] = 0.0
+    with pytest.raises(IdentificationError, match="time limit") as err:
+        identify_inverse_fe_tension(record, workers=1, time_limit_s=8.0)
+    assert "failed at the warm start" not in str(err.value)
+    assert CLOCK["now"] <= 8.0 + 1e-9 and len(calls) == 1
