@@ -34,7 +34,7 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
 from flowcurve.identification.fe import model_form as mf
-from flowcurve.identification.hardening import LAWS, HardeningFit, fit_hardening
+from flowcurve.identification.hardening import RANGE_SHARE_PART, HardeningFit, fit_hardening, pattern_shift, range_shift
 from flowcurve.identification.indicator import (DEFAULT_MODULUS_METHOD, FEW_POINTS_TOP, SDAR_REACH, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
                                                 reread_if_stepped, yield_onset_from_rate)
 from flowcurve.identification.outcome import Identification
@@ -118,6 +118,16 @@ def _fit_subset(eps_p: np.ndarray, start: float, first: int = 0) -> np.ndarray:
         order = np.argsort(eps_p[idx], kind="stable")
         pos = np.searchsorted(eps_p[idx][order], targets).clip(0, idx.size - 1)
         idx = np.unique(idx[order][pos])
+    return idx
+
+
+def _fit_points(eps_p: np.ndarray, i_yield: int, fit_range) -> np.ndarray:
+    """Indices of the points the hardening fit uses: the plastic range from the yield sample on
+    (:func:`_fit_subset`), within ``fit_range`` (LO, HI) when given."""
+    idx = _fit_subset(eps_p, YIELD_OFFSET, i_yield)
+    checked = check_fit_range(fit_range)
+    if checked is not None:
+        idx = idx[(eps_p[idx] >= checked[0]) & (eps_p[idx] <= checked[1])]
     return idx
 
 
@@ -529,32 +539,61 @@ def _friction_disagreement(chosen: fr.FrictionResult) -> str | None:
             "errors): the upsetting model does not describe this specimen's shape; the hardening is poor")
 
 
+def _mu_share(src: str, geo: dict, nominal: _Nominal, friction: _Friction, i_yield: int, fit_range, law: str,
+              friction_correction: str, E_used: float | None) -> dict[str, float]:
+    """μ's share of the constants' standard errors: the curve corrected and fitted again at μ ∓ its
+    standard error ({} when μ has none or a refit fails)."""
+    se_mu = friction.chosen.extra.get("mu_stderr")
+    if not (se_mu and math.isfinite(se_mu) and friction_correction in fr.CORRECTIONS):
+        return {}
+    eps_p = plastic_strain(nominal.strain, nominal.pressure, E_used) if E_used is not None else None
+    elastic = None if E_used is None else (E_used, geo["nu"])
+    params = []
+    for mu in (max(friction.chosen.mu - se_mu, 0.0), friction.chosen.mu + se_mu):
+        eps_t, sig_t = fr.correct(friction_correction, nominal.strain, nominal.pressure, mu, nominal.d_n / 2.0, nominal.h, eps_p=eps_p, elastic=elastic)
+        try:
+            fits, _ = _hardening_fits(src, {friction_correction: (plastic_strain(eps_t, sig_t, E_used), sig_t, eps_t)}, i_yield, fit_range, law,
+                                      friction_correction)
+        except IdentificationError:
+            return {}
+        params.append(fits[friction_correction].params)
+    return mf.through_mu(*params)
+
+
 def _constants_stderr(src: str, geo: dict, nominal: _Nominal, friction: _Friction, fit: HardeningFit, i_yield: int, fit_range, law: str,
                       friction_correction: str, E_used: float | None) -> dict[str, dict[str, float]]:
-    """The shares of the hardening constants' standard errors beyond the fit's: μ's (the curve
-    corrected and fitted again at μ ∓ its standard error) and, on the FE table's correction, the
-    model form's force error on the stress constants (:func:`.fe.model_form.force_model_form`)."""
-    se_mu = friction.chosen.extra.get("mu_stderr")
+    """The shares of the hardening constants' standard errors beyond the fit's: μ's (:func:`_mu_share`);
+    on the FE table's correction, the model form's force error (:func:`.fe.model_form.force_model_form`)
+    as a uniform offset and as one growing with strain, each refitted; and the fit range's (the
+    constants fitted again over the first half of the range, :func:`.hardening.range_shift`): a
+    curve whose shape departs from the law moves correlated constants (A and n) far more than the
+    curve itself moves."""
     shares: dict[str, dict[str, float]] = {}
-    if se_mu and math.isfinite(se_mu) and friction_correction in fr.CORRECTIONS:
-        eps_p = plastic_strain(nominal.strain, nominal.pressure, E_used) if E_used is not None else None
-        elastic = None if E_used is None else (E_used, geo["nu"])
-        params = []
-        for mu in (max(friction.chosen.mu - se_mu, 0.0), friction.chosen.mu + se_mu):
-            eps_t, sig_t = fr.correct(friction_correction, nominal.strain, nominal.pressure, mu, nominal.d_n / 2.0, nominal.h, eps_p=eps_p, elastic=elastic)
-            try:
-                fits, _ = _hardening_fits(src, {friction_correction: (plastic_strain(eps_t, sig_t, E_used), sig_t, eps_t)}, i_yield, fit_range, law,
-                                          friction_correction)
-            except IdentificationError:
-                return shares
-            params.append(fits[friction_correction].params)
-        shares["friction μ (fits at μ ∓ its standard error)"] = mf.through_mu(*params)
+    by_mu = _mu_share(src, geo, nominal, friction, i_yield, fit_range, law, friction_correction, E_used)
+    if by_mu:
+        shares["friction μ (fits at μ ∓ its standard error)"] = by_mu
+    eps_tp, sig_t, _ = friction.corrected[friction_correction]
+    idx = _fit_points(eps_tp, i_yield, fit_range)
+    eps_fit, sig_fit = eps_tp[idx], sig_t[idx]
     if friction_correction == "fe_table":
-        spec = LAWS[law]
         u_force = mf.force_model_form(friction.chosen.mu)
-        shares[f"FE model form ({u_force:.1%} of the force at μ {friction.chosen.mu:.3f})"] = {
-            n: u_force * abs(fit.params[n]) for n, k in zip(spec.names, spec.keys) if k.endswith("_MPa")}
+        by_pattern = [pattern_shift(eps_fit, sig_fit, u_force, g, law) for g in mf.force_patterns(eps_fit)]
+        shares[f"FE model form ({u_force:.1%} of the force at μ {friction.chosen.mu:.3f}, uniform and growing with strain)"] = {
+            k: mf.quadrature(*(b.get(k, 0.0) for b in by_pattern)) for k in fit.params}
+    by_range = range_shift(eps_fit, sig_fit, law)
+    if by_range:
+        shares[f"the fit range (fitted again over its first {RANGE_SHARE_PART:.0%})"] = by_range
     return shares
+
+
+def trade_off_note(fit: HardeningFit, limit: float = 0.9) -> str | None:
+    """A note when two constants' correlation exceeds ``limit``: the curve is known better than either."""
+    pairs = [(abs(r), a, b, r) for a, row in fit.correlations.items() for b, r in row.items() if a < b and abs(r) > limit]
+    if not pairs:
+        return None
+    _, a, b, r = max(pairs)
+    return (f"{a} and {b} trade off (correlation {r:+.2f}): the curve is known better than either constant; "
+            "compare fits through the curve, not constant by constant")
 
 
 def _model_form_shares(src: str, geo: dict, nominal: _Nominal, yld: _Yield, friction: _Friction, fit: HardeningFit, result: CompressionResult,
@@ -563,7 +602,8 @@ def _model_form_shares(src: str, geo: dict, nominal: _Nominal, yld: _Yield, fric
     said in ``methods.hardening_stderr``; a face and bulge that disagree make it poor, with a warning."""
     shares = _constants_stderr(src, geo, nominal, friction, fit, yld.i_yield, fit_range, law, friction_correction, yld.E_used)
     fit.stderr = mf.combined_stderr(fit.stderr, *shares.values())
-    result.methods["hardening_stderr"] = "; ".join(["the fit's standard errors", *shares]) + " (in quadrature)"
+    note = trade_off_note(fit)
+    result.methods["hardening_stderr"] = "; ".join(["the fit's standard errors", *shares]) + " (in quadrature)" + (f". {note}" if note else "")
     disagreement = _friction_disagreement(friction.chosen)
     if disagreement:
         fit.doubt = disagreement
@@ -598,11 +638,8 @@ def _hardening_fits(src: str, corrected: dict, i_yield: int, fit_range, law: str
     """The hardening law fitted to every corrected curve from the yield sample on: (fits, warnings)."""
     warnings: list[str] = []
     fits = {}
-    fit_range = check_fit_range(fit_range)
     for method, (eps_tp, sig_t, _) in corrected.items():
-        idx = _fit_subset(eps_tp, YIELD_OFFSET, i_yield)
-        if fit_range is not None:
-            idx = idx[(eps_tp[idx] >= fit_range[0]) & (eps_tp[idx] <= fit_range[1])]
+        idx = _fit_points(eps_tp, i_yield, fit_range)
         if idx.size < 4:
             if method == friction_correction:
                 raise IdentificationError(f"{src}: the plastic range has only {idx.size} points; nothing to fit (did the specimen yield?)")
@@ -637,10 +674,7 @@ def _strain_zero(diagram: _Diagram, geo: dict, line: _Line, nominal: _Nominal, y
     zero = tension_or_compression_zero(strain[: top + 1], stress[: top + 1], window_MPa=window, E_line_MPa=E_line, E_line_stderr_MPa=E_se,
                                        E_used_MPa=E_used, line_resolved=yld.E_source == "apparent" and np.isfinite(E_se), toe_spread=toe_spread)
     eps_tp, sig_t, _ = friction.corrected[friction_correction]
-    idx = _fit_subset(eps_tp, YIELD_OFFSET, yld.i_yield)
-    checked = check_fit_range(fit_range)
-    if checked is not None:
-        idx = idx[(eps_tp[idx] >= checked[0]) & (eps_tp[idx] <= checked[1])]
+    idx = _fit_points(eps_tp, yld.i_yield, fit_range)
     fits[friction_correction], start, warnings = apply_to_fit(fits[friction_correction], eps_tp[idx], sig_t[idx], zero,
                                                               lambda e, s: fit_hardening(e, s, law))
     return start, warnings

@@ -339,6 +339,39 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
                         strain_range=(float(np.min(eps)), float(np.max(eps))), report=best.fit_report(), warnings=warnings)
 
 
+RANGE_SHARE_PART = 0.5  # the range-stability refit uses this first part of the fitted strain range
+
+
+def range_shift(eps_p, stress_MPa, law: str = "johnson_cook") -> dict[str, float]:
+    """Per constant: |fit over the first half of the strain range − fit over the whole|.
+
+    Near zero (noise) when the law describes the curve's shape; a curve whose shape departs
+    from the law (a correction's model form, another law) moves the correlated constants
+    apart (A and n trade off). {} when the first half holds fewer than 4 points or fails."""
+    eps, sig = _check_points(eps_p, stress_MPa, "range shift")
+    first = eps <= np.min(eps) + RANGE_SHARE_PART * np.ptp(eps)
+    if first.sum() < 4:
+        return {}
+    try:
+        whole, part = fit_hardening(eps, sig, law), fit_hardening(eps[first], sig[first], law)
+    except IdentificationError:
+        return {}
+    return {k: abs(part.params[k] - whole.params[k]) for k in whole.params}
+
+
+def pattern_shift(eps_p, stress_MPa, u: float, pattern, law: str = "johnson_cook") -> dict[str, float]:
+    """Per constant: half the change between fits to σ·(1 − u·g) and σ·(1 + u·g), g = ``pattern``
+    (one value per point): what a relative stress error of that shape does to the constants."""
+    eps, sig, g = (np.asarray(v, dtype=float).ravel() for v in (eps_p, stress_MPa, pattern))
+    ok = np.isfinite(eps) & np.isfinite(sig) & np.isfinite(g)
+    eps, sig, g = eps[ok], sig[ok], g[ok]
+    try:
+        lo, hi = (fit_hardening(eps, sig * (1.0 + sign * u * g), law) for sign in (-1.0, 1.0))
+    except IdentificationError:
+        return {}
+    return {k: abs(hi.params[k] - lo.params[k]) / 2.0 for k in lo.params}
+
+
 # -- three characteristic points ------------------------------------------------------------
 
 

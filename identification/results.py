@@ -92,7 +92,8 @@ class CompressionHardening:
     start_uncertainty: dict | None = None  # the curve's start as far as it rests on the strain zero (methods §2.11)
 
     def as_dict(self) -> dict:
-        return {**self.fit.as_dict(), "correction": self.correction, "start_uncertainty": self.start_uncertainty}
+        correlations = {a: {b: round(r, 3) for b, r in row.items()} for a, row in self.fit.correlations.items()}  # A and n trade off
+        return {**self.fit.as_dict(), "correlations": correlations, "correction": self.correction, "start_uncertainty": self.start_uncertainty}
 
 
 @dataclass(kw_only=True)

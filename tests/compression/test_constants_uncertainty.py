@@ -1,0 +1,69 @@
+"""The hardening constants' stated standard errors cover the truth on closed-form records.
+
+The records (tests/compression/toe_records.py) are made from a known Johnson–Cook law with the slab
+Coulomb pressure integrated over the face and the seed's bulge (3.18); the default identification
+reads μ and corrects the curve with the CalculiX table, a different model of the same friction. Its
+curve is within a few % of the law, but the shape of that difference (it grows towards the end of
+the stroke) used to go into A and n, which trade off: A read 121–134 for 105 with a stated standard
+error of 4–6 MPa (4.6–4.8 standard errors off). The constants' standard errors now include the
+model form's force error as a shape (growing with strain) and the fit range's (docs/methods.md §3.4).
+"""
+
+import itertools
+
+import pytest
+
+from flowcurve.identification.compression import identify_compression
+
+from .toe_records import make_toe_compression
+
+STEEP = {"A": 105.0, "B": 1392.0, "n": 0.642}  # 12Kh18N12M3TL (seed)
+STEEL45 = {"A": 410.0, "B": 280.0, "n": 0.47}  # steel 45, table 3.2
+LINEAR = {"A": 300.0, "B": 250.0, "n": 1.0}  # linear hardening
+MUS = (0.05, 0.11, 0.2)
+SHAPES = ((8.0, 6.0), (6.0, 9.0))  # (d0, h0): h0/d0 0.75 and 1.5
+WITHIN = 2.5  # standard errors
+
+
+def _hardening(law, mu, d0, h0):
+    record, _ = make_toe_compression(law=law, mu=mu, d0=d0, h0=h0, rate_hz=2.0, toe_mm=0.05, speed=0.005, handbook_E=True, noise_N=5.0)
+    return identify_compression(record).result
+
+
+def _z(h, law, key, name):
+    return (h[key] - law[name]) / h[f"{key}_stderr"]
+
+
+CASES = [pytest.param(law, mu, d0, h0, id=f"{name}-mu{mu}-h0d0_{h0 / d0:.2f}")
+         for (name, law), mu, (d0, h0) in itertools.product((("seed", STEEP), ("steel45", STEEL45)), MUS, SHAPES)]
+
+
+@pytest.mark.parametrize("law,mu,d0,h0", CASES)
+def test_the_truth_is_within_the_stated_standard_errors(law, mu, d0, h0):
+    result = _hardening(law, mu, d0, h0)
+    h = result["hardening"]
+    z = {name: _z(h, law, key, name) for name, key in (("A", "A_MPa"), ("B", "B_MPa"), ("n", "n"))}
+    assert all(abs(v) <= WITHIN for v in z.values()), (z, h, result["methods"]["hardening_stderr"])
+    assert "the fit range" in result["methods"]["hardening_stderr"]
+
+
+@pytest.mark.parametrize("mu", MUS)
+def test_a_linear_hardening_law_keeps_its_A_within_the_stated_standard_error(mu):
+    """n = 1: A is covered; B and n are not everywhere (the FE table's curve departs from the slab
+    record by up to 8 % at μ 0.2, more than the model form it states; see the xfail below)."""
+    h = _hardening(LINEAR, mu, 6.0, 9.0)["hardening"]
+    assert abs(_z(h, LINEAR, "A_MPa", "A")) <= WITHIN, h
+
+
+@pytest.mark.xfail(strict=True, reason="linear hardening, h0/d0 1.5, μ 0.11: n 1.22 ± 0.04 for 1.00 (5.5 se): the FE table's curve departs "
+                                       "from the slab record's by more than the force model form it states")
+def test_a_linear_hardening_law_keeps_n_within_the_stated_standard_error():
+    h = _hardening(LINEAR, 0.11, 6.0, 9.0)["hardening"]
+    assert abs(_z(h, LINEAR, "n", "n")) <= WITHIN, h
+
+
+def test_a_and_n_trade_off_is_reported():
+    result = _hardening(STEEP, 0.11, 5.989, 6.982)
+    h = result["hardening"]
+    assert h["correlations"]["A"]["n"] > 0.9
+    assert "A and n trade off" in result["methods"]["hardening_stderr"]
