@@ -6,7 +6,7 @@ reads μ and corrects the curve with the CalculiX table, a different model of th
 curve is within a few % of the law, but the shape of that difference (it grows towards the end of
 the stroke) used to go into A and n, which trade off: A read 121–134 for 105 with a stated standard
 error of 4–6 MPa (4.6–4.8 standard errors off). The constants' standard errors now include the
-model form's force error as a shape (growing with strain) and the fit range's (docs/methods.md §3.4).
+model form's force error as a shape (growing with strain) and the fit range's (docs/methods.md §4.8).
 """
 
 import itertools
