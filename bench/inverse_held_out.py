@@ -14,7 +14,7 @@ solver cache (a new ``FLOWCURVE_FE_CACHE``) with ``--workers`` runs side by side
 
 Printed per record: truth μ; μ ± its standard error; the curve error, the largest |σ/σ_true − 1|
 over ε_p 0.05–0.6; verify's largest force deviation (and before the band where the model's force
-error grows); solver runs; the identification's wall seconds; whether the time limit cut it; the
+error grows; what the fit's own discretisation reads, and its largest gap to the check's); solver runs; the identification's wall seconds; whether the time limit cut it; the
 model's E and frame compliance sources; the 1-minute load average before and after.
 
 Measured (2 workers, each from an empty cache, load average 1–2.7, 2 cores):
@@ -106,7 +106,7 @@ def main(argv=None) -> int:
     ap.add_argument("--time-limit", type=float, default=None, help="the inverse's --time-limit, s (default: its own, 570 s for Voce)")
     ap.add_argument("--out", help="keep the records, results and verify reports in this folder (default: a temporary one)")
     a = ap.parse_args(argv)
-    print("| record | truth μ | μ ± se | curve err | verify % (before the fold-over band) | runs | inverse s | cut | E source | compliance source | load before→after |")
+    print("| record | truth μ | μ ± se | curve err | verify % (before the fold-over band; the fit's model, its gap to the check's) | runs | inverse s | cut | E source | compliance source | load before→after |")
     print("|---|---|---|---|---|---|---|---|---|---|---|", flush=True)
     with tempfile.TemporaryDirectory(prefix="inverse-held-out-") as tmp:
         tmp = Path(a.out or tmp)
@@ -135,10 +135,12 @@ def main(argv=None) -> int:
             with contextlib.redirect_stdout(io.StringIO()):
                 verified = cli(["verify", str(folder), str(path), "--out", str(tmp / f"v-{name}"), "--no-plots"]) == 0
             report = json.loads((tmp / f"v-{name}" / "verify.json").read_text()) if verified else {}
-            ver, ver_before = (report.get(k, float("nan")) for k in ("max_force_deviation_pct", "max_force_deviation_before_fold_over_pct"))
+            ver, ver_before = (report.get(k) or float("nan") for k in ("max_force_deviation_pct", "max_force_deviation_before_fold_over_pct"))
+            disc = report.get("discretisation") or {}
+            fit_model = f"; fit's model {disc['max_force_deviation_pct']:.2f}, gap {disc['max_force_gap_pct']:.2f}" if disc else ""
             model = inv["model"]
             cut = inv.get("budget", {}).get("cut")
-            print(f"| {name} | {mu_true:.3f} | {inv['mu']:.4f} ± {inv['mu_stderr']:.4f} | {100 * err:.2f} % | {ver:.2f} ({ver_before:.2f}) | {inv['solver_runs']} | "
+            print(f"| {name} | {mu_true:.3f} | {inv['mu']:.4f} ± {inv['mu_stderr']:.4f} | {100 * err:.2f} % | {ver:.2f} ({ver_before:.2f}{fit_model}) | {inv['solver_runs']} | "
                   f"{wall:.0f} | {'cut' if cut else 'no'} | {model.get('E_source')} | {model.get('frame_compliance_source', '-')} | "
                   f"{load0:.2f}→{load1:.2f} |", flush=True)
     return 0
