@@ -23,7 +23,7 @@ The model's worst case is printed beside: the heater at full power through the d
 after the switch-off).
 
 Usage: python bench/stored_heat.py [--setpoints 100,300,500,700,850,890] [--cases end,fault,...]
-       [--tests tension,compression] [--speeds 0.05,0.5] [--time-scale 5] [--gaps 20,5,1]
+       [--tests tension,compression] [--speeds 0.05,0.5] [--time-scale 5] [--gaps 20,5,1] [--rate 200]
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ def full_power_rise_C(setpoint_C: float) -> float:
 
 
 def run_case(setpoint_C: float, case: str, test: str, speed: float, time_scale: float, gap_C: float | None, soak_s: float,
-             workdir: Path) -> dict:
+             workdir: Path, rate_C_per_min: float | None = None) -> dict:
     """One heated test; the readings' summary around the last switch-off."""
     from flowcurve.acquisition.procedure import StopCriteria, TestSpec
     from flowcurve.acquisition.safety import Interrupted
@@ -99,7 +99,8 @@ def run_case(setpoint_C: float, case: str, test: str, speed: float, time_scale: 
         run = run_virtual_test(spec, workdir / f"{test}-{setpoint_C:g}-{case}-{gap_C}.csv", material="steel45",
                                time_scale=time_scale, clock=ModelClock(), link="inprocess", rig_setup=setup,
                                initial_temperature_C=AMBIENT_C,
-                               config_overrides={"furnace_max_temperature_C": MAX_OUT_OF_THE_WAY_C},
+                               config_overrides={"furnace_max_temperature_C": MAX_OUT_OF_THE_WAY_C,
+                                                 **({"furnace_max_heating_rate_C_per_min": rate_C_per_min} if rate_C_per_min else {})},
                                stop_requested=stop_requested)
     finally:
         Furnace.temperature_C = real_read
@@ -124,13 +125,14 @@ def main() -> None:
     ap.add_argument("--speeds", default="0.05,0.5")
     ap.add_argument("--time-scale", type=float, default=5.0, help="model s per host s (the matrix's heated cells run at up to 50)")
     ap.add_argument("--soak", type=float, default=60.0, help="soak at the set-point, s (run's default 60)")
+    ap.add_argument("--rate", type=float, default=None, help="[furnace] max_heating_rate_C_per_min (default: the configuration's 30)")
     ap.add_argument("--gaps", default="20,5,1", help="ctrlc-heat: Ctrl-C at the first reading this close to the set-point, C")
     a = ap.parse_args()
     setpoints = [float(s) for s in a.setpoints.split(",")]
     cases, tests = a.cases.split(","), a.tests.split(",")
     speeds = [float(s) for s in a.speeds.split(",")]
     gaps = [float(g) for g in a.gaps.split(",")]
-    print(f"time scale {a.time_scale:g}, soak {a.soak:g} s; rises in C above the set-point; 'rise' is above the true temperature at the switch-off")
+    print(f"time scale {a.time_scale:g}, soak {a.soak:g} s, heating rate {a.rate or 30:g} C/min; rises in C above the set-point; 'rise' is above the true temperature at the switch-off")
     print(f"{'set C':>6} {'case':<10} {'test':<11} {'mm/s':>5} {'gap':>4} | {'at off':>6} {'peak rd':>7} {'peak':>6} {'rise':>5} "
           f"{'after s':>7} {'on pk':>6} | {'full-P':>6} | {'status':<9} wall s")
     worst = {}
@@ -140,7 +142,7 @@ def main() -> None:
                 for test in tests:
                     for speed in (speeds if case != "ctrlc-heat" else speeds[:1]):
                         for gap in (gaps if case == "ctrlc-heat" else [None]):
-                            r = run_case(s, case, test, speed, a.time_scale, gap, a.soak, Path(tmp))
+                            r = run_case(s, case, test, speed, a.time_scale, gap, a.soak, Path(tmp), a.rate)
                             if "error" in r:
                                 print(f"{s:6g} {case:<10} {test:<11} {speed:5g}: {r['error']}")
                                 continue
