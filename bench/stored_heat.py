@@ -22,8 +22,8 @@ The model's worst case is printed beside: the heater at full power through the d
 ``dead_time · (P − losses(T))/C`` at the set-point (the relay's last dead-time of switching acts
 after the switch-off).
 
-Usage: python bench/stored_heat.py [--setpoints 100,300,500,700,850,890] [--cases end,fault,...]
-       [--tests tension,compression] [--speeds 0.05,0.5] [--time-scale 5] [--gaps 20,5,1] [--rate 200]
+Usage: python bench/stored_heat.py [--setpoints 100,300,500,700,850,890,895] [--cases end,fault,...]
+       [--tests tension,compression] [--speeds 0.05,0.5] [--time-scale 1] [--gaps 20,5,1] [--rate 200]
 """
 
 from __future__ import annotations
@@ -119,11 +119,11 @@ def run_case(setpoint_C: float, case: str, test: str, speed: float, time_scale: 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--setpoints", default="100,300,500,700,850,890")
+    ap.add_argument("--setpoints", default="100,300,500,700,850,890,895")
     ap.add_argument("--cases", default="end,fault,ctrlc-load,ctrlc-heat")
     ap.add_argument("--tests", default="tension,compression")
     ap.add_argument("--speeds", default="0.05,0.5")
-    ap.add_argument("--time-scale", type=float, default=5.0, help="model s per host s (the matrix's heated cells run at up to 50)")
+    ap.add_argument("--time-scale", type=float, default=1.0, help="model s per host s (default 1: the controller steps as on the rig; the matrix's heated cells run at up to 50)")
     ap.add_argument("--soak", type=float, default=60.0, help="soak at the set-point, s (run's default 60)")
     ap.add_argument("--rate", type=float, default=None, help="[furnace] max_heating_rate_C_per_min (default: the configuration's 30)")
     ap.add_argument("--gaps", default="20,5,1", help="ctrlc-heat: Ctrl-C at the first reading this close to the set-point, C")
