@@ -54,11 +54,16 @@ def test_run_on_the_virtual_rig_refuses_a_set_point_inside_the_margin_before_the
     words_of_the_refusal(err.strip(), INSIDE_C)
 
 
-def test_run_on_a_configured_rig_refuses_it_with_nothing_switched_on(tmp_path):
-    """The configured rig's own maximum and margin, read from its file; the furnace module is never commanded."""
+def test_run_on_a_configured_rig_refuses_it_with_nothing_switched_on(tmp_path, monkeypatch):
+    """The configured rig's own maximum and margin, read from its file; the rig is not even opened."""
+    import flowcurve.acquisition.session as session
     from flowcurve.rig.config import to_toml, virtual_config
     from flowcurve.rig.virtual.rig import VirtualRig
 
+    def opened(rig):
+        raise AssertionError("the rig was opened for a set-point inside the margin")
+
+    monkeypatch.setattr(session.DriverRig, "__enter__", opened)
     with VirtualRig("steel45", test="tension") as vr:
         cfg = tmp_path / "rig.toml"
         cfg.write_text(to_toml(virtual_config(**{**vr.config_kwargs(), "max_temperature_C": MAX_C})))
@@ -92,7 +97,7 @@ def test_the_procedure_refuses_it_before_heating(tmp_path, fake_rig):
     assert not rig.heater and not (tmp_path / "r.csv").exists()
 
 
-def test_the_consoles_start_request_refuses_it_beside_the_temperature_field(tmp_path):
+def test_the_consoles_start_request_refuses_it_beside_the_temperature_field(tmp_path, monkeypatch):
     pytest.importorskip("starlette", reason="starlette is not installed (pip install -e .[test])")
     pytest.importorskip("httpx", reason="httpx is not installed (pip install -e .[test])")
     import warnings
@@ -100,15 +105,18 @@ def test_the_consoles_start_request_refuses_it_beside_the_temperature_field(tmp_
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         from starlette.testclient import TestClient
+    import flowcurve.acquisition.session as session
     from flowcurve.console.server import Console, create_app
 
+    made = []
+    monkeypatch.setattr(session, "run_virtual_test", lambda *a, **k: made.append(a))  # nothing may start
     console = Console(tmp_path / "out", time_scale=60.0)
     client = TestClient(create_app(console), base_url="http://127.0.0.1:8080")
     r = client.post("/api/start", json={"test": "compression", "temperature": f"{INSIDE_C:g}"},
                     headers={"Content-Type": "application/json"})
     assert r.status_code == 400 and set(r.json()["fields"]) == {"temperature"}, r.text
     said = r.json()["fields"]["temperature"]
-    assert said.startswith("Temperature, °C must leave") and console.runner.current is None
+    assert said.startswith("Temperature, °C must leave") and console.runner.current is None and not made
     words_of_the_refusal(said, INSIDE_C)
 
 
@@ -161,3 +169,22 @@ def test_a_relay_stuck_at_that_set_point_is_still_named(tmp_path, monkeypatch):
     assert [e for e in rec.events if e.name == "fault" and "relay stuck" in e.text]
     assert vr.devices["furnace"].do == 0 and vr.model.furnace.relay_on  # the output off; only the mains can stop it
     assert max(value for _, value, _ in readings) < MAX_C + 2.0  # named at the crossing
+
+
+def test_without_the_margin_a_healthy_test_at_1_C_under_the_maximum_ends_in_a_safety_stop(tmp_path):
+    """Why the margin: ``setpoint_margin_C = 0`` lets a set-point 1 C under the maximum through, and the heat stored
+    while the controller's heater was on (up to 2.6 C measured) carries a healthy furnace past the maximum in an
+    off-time of the controller's cycle: named a stuck relay — exit 4, the mains to be cut, for nothing."""
+    from flowcurve.acquisition.session import run_virtual_test
+    from flowcurve.clock import ModelClock
+
+    spec = TestSpec("compression", material="steel45", geometry_mm={"d0_mm": 5.989, "h0_mm": 6.982}, temperature_C=MAX_C - 1.0,
+                    speed_mm_per_s=0.5, soak_s=60.0)
+    spec.stop.target_displacement_mm = 3.0
+    rigs = []
+    run = run_virtual_test(spec, tmp_path / "r.csv", material="steel45", time_scale=1.0, clock=ModelClock(), link="inprocess",
+                           rig_setup=rigs.append, config_overrides={"furnace_max_temperature_C": MAX_C, "furnace_setpoint_margin_C": 0.0})
+    out = run.outcome
+    assert out.error is not None and out.error.exit_code == 4, (out.status, out.reason)
+    assert "relay stuck" in str(out.error) and f"above the maximum {MAX_C:g} C" in str(out.error)
+    assert not rigs[0].model.furnace.relay_on  # the relay works: the stop was for nothing
