@@ -16,7 +16,7 @@ import pytest
 from flowcurve.acquisition.procedure import Procedure, ProcedureError, TestSpec
 from flowcurve.cli import main
 from flowcurve.rig.config import SETPOINT_MARGIN_C, FrameConfig, FurnaceConfig, setpoint_refusal
-from flowcurve.record.format import read_record
+from tests.acquisition.conftest import run_logged as run_cli_logged
 
 MAX_C = 900.0  # the configuration's default maximum
 INSIDE_C = MAX_C - SETPOINT_MARGIN_C + 1.0  # 1 C inside the margin
@@ -124,30 +124,10 @@ def test_the_consoles_start_request_refuses_it_beside_the_temperature_field(tmp_
 
 
 def run_logged(tmp_path, monkeypatch, *extra):
-    """``flowcurve run compression --temperature EDGE_C`` from 20 C on the in-process virtual rig on model time, at the
-    real rig's pace (time scale 1: the controller's on-times as on the rig); (exit code, what the operator saw, the
-    record, the virtual rig, every reading the furnace driver took as (model s, C, heater commanded on))."""
-    import flowcurve.acquisition.session as session
-    from flowcurve.clock import ModelClock
-    from flowcurve.rig.furnace import Furnace
-
-    rigs, readings = [], []
-    real_run, real_read = session.run_virtual_test, Furnace.temperature_C
-
-    def on_model_time(*args, **kwargs):
-        return real_run(*args, clock=ModelClock(), link="inprocess", rig_setup=rigs.append, **kwargs)
-
-    def logged(furnace):
-        value = real_read(furnace)
-        readings.append((rigs[0].now(), value, furnace.heater_is_on))
-        return value
-
-    monkeypatch.setattr(session, "run_virtual_test", on_model_time)
-    monkeypatch.setattr(Furnace, "temperature_C", logged)
-    record = tmp_path / "r.csv"
-    code, out, err = cli("run", "compression", "--quiet", "--speed", "0.5", "--target", "3", "--time-scale", "1",
-                         "--temperature", f"{EDGE_C:g}", "--soak", "60", "--material", "steel45", "--out", record, *extra)
-    return code, out + err, read_record(record), rigs[0], readings
+    """``flowcurve run compression --temperature EDGE_C`` from 20 C, at the real rig's pace (time scale 1: the
+    controller's on-times as on the rig), on model time (conftest.run_logged)."""
+    return run_cli_logged(tmp_path, monkeypatch, ["compression", "--quiet", "--speed", "0.5", "--target", "3", "--time-scale", "1",
+                                                  "--temperature", f"{EDGE_C:g}", "--soak", "60", "--material", "steel45", *extra])
 
 
 def test_a_set_point_at_the_margin_heats_tests_and_cools_with_no_false_alarm(tmp_path, monkeypatch):
