@@ -33,6 +33,7 @@ from flowcurve.acquisition.plausibility import RateGuard
 from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temperature
 from flowcurve.acquisition.sampler import Channel, Sampler
 from flowcurve.clock import WALL, Clock
+from flowcurve.rig.config import SETPOINT_MARGIN_C, setpoint_refusal
 from flowcurve.errors import FlowcurveError, RecordWriteError, SafetyError
 
 MOTION_MM = 0.005  # the crosshead has moved once it is this far from where recording began
@@ -104,6 +105,7 @@ class RigIO(Protocol):
     time_scale: float  # test seconds per host second (1 on the real rig)
     timebase: Clock  # host time: the wall clock, or a model clock in the fast tests
     max_temperature_C: float
+    setpoint_margin_C: float  # a set-point leaves this below the maximum (rig.config.SETPOINT_MARGIN_C when absent)
     frame_stiffness_N_per_um: float | None
     loadcell_period_s: float
 
@@ -299,6 +301,9 @@ class Procedure:
                 raise ProcedureError("heating was asked for but the rig configuration has no furnace")
             if spec.temperature_C >= rig.max_temperature_C:
                 raise ProcedureError(f"set-point {spec.temperature_C:g} C is not below the configured maximum {rig.max_temperature_C:g} C")
+            refusal = setpoint_refusal(spec.temperature_C, rig.max_temperature_C, getattr(rig, "setpoint_margin_C", SETPOINT_MARGIN_C))
+            if refusal:
+                raise ProcedureError(f"set-point {refusal}")
         self.rig = rig
         self.spec = spec
         self.path = Path(path)

@@ -59,6 +59,7 @@ class DriverRig:
         self.can_drive = virtual is not None
         self.has_furnace = config.furnace is not None
         self.max_temperature_C = config.furnace.max_temperature_C if self.has_furnace else float("inf")
+        self.setpoint_margin_C = config.furnace.setpoint_margin_C if self.has_furnace else 0.0
         self.control_period_s = config.furnace.control_period_s if self.has_furnace else None
         self.frame_stiffness_N_per_um = config.frame.stiffness_N_per_um
         self.instruments_meta = config.instruments.meta()  # the instruments' classes, for the results' uncertainty

@@ -221,7 +221,8 @@ class StuckRelayCheck:
     reading more than ``rise_C`` above the one before is no heating — a corrupt reading, left to
     the over-temperature rule — so a furnace really that hot is named at the next reading):
     stored heat alone carries a furnace over its maximum only when the heater went off within
-    that heat's rise of it (the virtual furnace: 5 s dead time x 0.85 K/s at 850 C, about 4 C).
+    that heat's rise of it (the virtual furnace: 5 s dead time x 0.85 K/s at 850 C, about 4 C),
+    so a set-point must leave ``rig.config.SETPOINT_MARGIN_C`` below the maximum (the test is refused).
     A furnace already above it when the heater went off (an over-temperature stop) is left to
     the rise check until it falls back below.
 

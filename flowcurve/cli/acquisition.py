@@ -130,7 +130,7 @@ def out_of_range(args, config=None) -> dict[str, str]:
     """What is wrong with each given value (``args`` dest → text after the option's name) that the
     rig cannot do or take: the [frame] speed range, travel, largest specimen and capacity, the
     furnace's range. ``config`` None: the virtual rig, which has the configuration's defaults."""
-    from flowcurve.rig.config import FrameConfig, FurnaceConfig
+    from flowcurve.rig.config import FrameConfig, FurnaceConfig, setpoint_refusal
 
     frame = config.frame if config is not None else FrameConfig()
     furnace = config.furnace if config is not None else FurnaceConfig(port="virtual")
@@ -156,6 +156,8 @@ def out_of_range(args, config=None) -> dict[str, str]:
     elif temperature is not None and not ROOM_TEMPERATURE_C < temperature < furnace.max_temperature_C:
         problems["temperature"] = (f"must be above {ROOM_TEMPERATURE_C:g} C (room; leave it out for a test at room temperature) and below "
                                    f"{furnace.max_temperature_C:g} C (the furnace's [furnace] max_temperature_C), got {temperature:g}")
+    elif temperature is not None and (refusal := setpoint_refusal(temperature, furnace.max_temperature_C, furnace.setpoint_margin_C)):
+        problems["temperature"] = refusal
     return problems
 
 

@@ -131,3 +131,36 @@ class FakeRig:
 @pytest.fixture
 def fake_rig():
     return FakeRig
+
+
+def run_logged(tmp_path, monkeypatch, argv, *, initial_temperature_C=None, config_overrides=None):
+    """``flowcurve run *argv --out tmp_path/r.csv`` on the in-process virtual rig on model time; (exit code, what the
+    operator saw, the record, the virtual rig, readings) with readings the furnace driver's every ``temperature_C`` as
+    (model s, °C, heater commanded on) — a crossing is the model's, not the check's."""
+    import contextlib
+    import io
+
+    import flowcurve.acquisition.session as session
+    from flowcurve.cli import main
+    from flowcurve.record.format import read_record
+    from flowcurve.rig.furnace import Furnace
+
+    rigs, readings = [], []
+    real_run, real_read = session.run_virtual_test, Furnace.temperature_C
+
+    def on_model_time(*args, **kwargs):
+        return real_run(*args, clock=ModelClock(), link="inprocess", rig_setup=rigs.append,
+                        initial_temperature_C=initial_temperature_C, config_overrides=config_overrides, **kwargs)
+
+    def logged(furnace):
+        value = real_read(furnace)
+        readings.append((rigs[0].now(), value, furnace.heater_is_on))
+        return value
+
+    monkeypatch.setattr(session, "run_virtual_test", on_model_time)
+    monkeypatch.setattr(Furnace, "temperature_C", logged)
+    out, err = io.StringIO(), io.StringIO()
+    record = tmp_path / "r.csv"
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["run", *map(str, argv), "--out", str(record)])
+    return code, out.getvalue() + err.getvalue(), read_record(record), rigs[0], readings

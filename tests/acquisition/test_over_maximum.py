@@ -5,12 +5,9 @@ driver takes is logged here, so the crossing is the model's, not the check's."""
 
 from __future__ import annotations
 
-import contextlib
-import io
-
 import pytest
 
-from flowcurve.record.format import read_record
+from tests.acquisition.conftest import run_logged as run_cli_logged
 
 MAX_C = 900.0
 HELD_C = 850.0
@@ -19,32 +16,9 @@ ARGS = ["compression", "--quiet", "--speed", "0.05", "--target", "3", "--time-sc
 
 
 def run_logged(tmp_path, monkeypatch, *extra):
-    """``flowcurve run`` in this process; (exit code, what the operator saw, the record, the virtual rig, readings)
-    with readings the driver's every ``temperature_C`` as (model s, °C, heater commanded on)."""
-    import flowcurve.acquisition.session as session
-    from flowcurve.cli import main
-    from flowcurve.clock import ModelClock
-    from flowcurve.rig.furnace import Furnace
-
-    rigs, readings = [], []
-    real_run, real_read = session.run_virtual_test, Furnace.temperature_C
-
-    def on_model_time(*args, **kwargs):
-        return real_run(*args, clock=ModelClock(), link="inprocess", rig_setup=rigs.append, initial_temperature_C=HELD_C,
-                        config_overrides={"furnace_max_temperature_C": MAX_C}, **kwargs)
-
-    def logged(furnace):
-        value = real_read(furnace)
-        readings.append((rigs[0].now(), value, furnace.heater_is_on))
-        return value
-
-    monkeypatch.setattr(session, "run_virtual_test", on_model_time)
-    monkeypatch.setattr(Furnace, "temperature_C", logged)
-    out, err = io.StringIO(), io.StringIO()
-    record = tmp_path / "r.csv"
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(["run", *ARGS, "--out", str(record), *extra])
-    return code, out.getvalue() + err.getvalue(), read_record(record), rigs[0], readings
+    """The 850 C compression test from a furnace already at 850 C, under a 900 C maximum (conftest.run_logged)."""
+    return run_cli_logged(tmp_path, monkeypatch, [*ARGS, *extra], initial_temperature_C=HELD_C,
+                          config_overrides={"furnace_max_temperature_C": MAX_C})
 
 
 def test_a_relay_stuck_near_the_maximum_is_named_when_the_furnace_crosses_it(tmp_path, monkeypatch):
