@@ -48,7 +48,7 @@ from flowcurve.identification.fe import model_form as mf
 from flowcurve.identification.fe.solver_fit import fit_time_limit, fit_with_solver, progress_on_whole_clock, serial_correlation
 from flowcurve.identification.friction import DFACE_ADVICE, DIAMETER_RESOLUTION_MM, nominal_diameter
 from flowcurve.identification.fe.ccx import timeout_by
-from flowcurve.identification.fe.model_form import FOLD_OVER_BAND, FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, fold_over_ramp  # noqa: F401 (the band: re-exported)
+from flowcurve.identification.fe.model_form import FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, fold_over_ramp
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 from flowcurve.identification.outcome import Identification

@@ -10,6 +10,8 @@ The table holds, for μ × h0/d0 × Swift hardening (n, ε0) × strain ε = ln(h
   mesh lag, 0.2 %): near sticking it still moves with μ where the bulge has stopped;
 * the start of the curve, below the first strain (0.02): the force factor of short runs on the
   plastic strain ε_p (``start_plastic_strain``), read at the curve's own ε_p where it is given.
+* each run's fold-over onset, read from its force factor (:func:`fold_over_onsets`): where the
+  side folds onto the platen the model's force depends on its discretisation (docs/methods.md §4a.7).
 
 Values between grid points: linear in n, ln ε0 and ε and in d0/h0 (the force factor and the
 end face: the slab solution's friction term grows with d/h) or ln(h0/d0) (the bulge), then

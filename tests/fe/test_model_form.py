@@ -126,7 +126,6 @@ def test_the_corrected_stress_uncertainty_grows_over_the_band_before_the_fold_ov
 def test_the_inverse_weighs_the_fold_over_band_with_the_same_constants():
     from flowcurve.identification.fe import inverse
 
-    assert (inverse.FOLD_OVER_BAND, inverse.FOLD_OVER_SIGMA_FACTOR, inverse.FORCE_SIGMA_PCT) == (
-        mf.FOLD_OVER_BAND, mf.FOLD_OVER_SIGMA_FACTOR, mf.FORCE_SIGMA_PCT)
+    assert (inverse.FOLD_OVER_SIGMA_FACTOR, inverse.FORCE_SIGMA_PCT) == (mf.FOLD_OVER_SIGMA_FACTOR, mf.FORCE_SIGMA_PCT)
     eps = np.linspace(0.1, 0.7, 13)
     np.testing.assert_allclose(inverse.force_sigma_pct(eps, 0.5), mf.FORCE_SIGMA_PCT * (1 + 2 * mf.fold_over_ramp(eps, 0.5)))
