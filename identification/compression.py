@@ -680,10 +680,40 @@ def _strain_zero(diagram: _Diagram, geo: dict, line: _Line, nominal: _Nominal, y
     return start, warnings
 
 
-def _flow_curve(eps_p: np.ndarray, stress_MPa: np.ndarray, i_yield: int) -> pd.DataFrame:
-    """The curve a card starts from: where the plastic strain has passed the 0.2 % offset."""
+def _flow_curve(eps_p: np.ndarray, stress_MPa: np.ndarray, i_yield: int, uncertainty_pct: np.ndarray | None = None) -> pd.DataFrame:
+    """The curve a card starts from: where the plastic strain has passed the 0.2 % offset (with the
+    correction's per-point uncertainty, %, where it has one)."""
     plastic = np.nonzero((np.maximum.accumulate(eps_p) >= YIELD_OFFSET) & (eps_p >= 0) & (np.arange(eps_p.size) >= i_yield))[0]
-    return pd.DataFrame({"true_plastic_strain": eps_p[plastic], "true_stress_MPa": stress_MPa[plastic]})
+    curve = {"true_plastic_strain": eps_p[plastic], "true_stress_MPa": stress_MPa[plastic]}
+    if uncertainty_pct is not None:
+        curve["correction_uncertainty_pct"] = uncertainty_pct[plastic]
+    return pd.DataFrame(curve)
+
+
+def _fe_correction_uncertainty(geo: dict, friction: _Friction, E_used: float | None) -> tuple[np.ndarray, str, list[str]]:
+    """Per point of the fe_table-corrected curve: its stress's σ, % (:func:`.fe.model_form.corrected_stress_uncertainty_pct`:
+    the model form's force share at μ, growing to the inverse's 3 % over the band before the table's
+    fold-over onset, :func:`.friction.fe_fold_over_onset`), what it holds, and a warning when the
+    curve reaches that band."""
+    eps_tp, sig_t, eps_t = friction.corrected["fe_table"]
+    mu, h0_d0 = friction.chosen.mu, geo["h0"] / geo["d0"]
+    ok = np.isfinite(sig_t) & (eps_t > 0)
+    onset = fr.fe_fold_over_onset(mu, h0_d0, eps_t[ok], sig_t[ok], eps_tp[ok] if E_used is not None else None)
+    u = mf.corrected_stress_uncertainty_pct(eps_t, mu, onset)
+    u_mf = 100.0 * mf.force_model_form(mu)
+    basis = (f"fe_table: per point (true_curve.csv correction_uncertainty_pct) the model form's {u_mf:.1f} % of the force at μ {mu:.3f}"
+             + (f", growing to {float(u.max()):.1f} % over ε {onset - mf.FOLD_OVER_BAND:.2f}–{onset:.2f} before the table's fold-over onset"
+                if onset is not None else "; no fold-over in the table's runs at this μ, h0/d0 and hardening"))
+    warnings = []
+    band = None if onset is None else onset - mf.FOLD_OVER_BAND
+    if band is not None and np.nanmax(eps_t) > band and float(u.max()) > u_mf + 0.05:
+        order = np.argsort(eps_t[ok])
+        eps_p_band = float(np.interp(band, eps_t[ok][order], eps_tp[ok][order]))
+        warnings.append(f"fe_table correction: the points from ε {band:.2f} (ε_p {eps_p_band:.2f}) on carry the side folding onto the platen "
+                        f"(the table's runs fold over from ε {onset:.2f} at μ {mu:.3f}, h0/d0 {h0_d0:.2g}; a finer model folds over earlier "
+                        f"and differs by up to 2 % in force there): their uncertainty grows from {u_mf:.1f} % to {float(u.max()):.1f} % "
+                        "(true_curve.csv correction_uncertainty_pct)")
+    return u, basis, warnings
 
 
 def _curves(diagram: _Diagram, nominal: _Nominal, friction: _Friction, fit: HardeningFit) -> dict[str, pd.DataFrame]:
@@ -801,5 +831,9 @@ def identify_compression(
                      friction_correction=friction_correction, toe=toe)
     eps_def, sig_def, _ = friction.corrected[friction_correction]
     _model_form_shares(record.source, geo, nominal, yld, friction, fits[friction_correction], result, fit_range, law, friction_correction)
-    return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield),
+    uncertainty = None
+    if friction_correction == "fe_table":
+        uncertainty, result.methods["correction_uncertainty"], fold_warnings = _fe_correction_uncertainty(geo, friction, yld.E_used)
+        result.warnings.extend(fold_warnings)
+    return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield, uncertainty),
                           curves=_curves(diagram, nominal, friction, fits[friction_correction]))

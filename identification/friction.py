@@ -456,6 +456,17 @@ def elastic_volume_ratio(stress_MPa, E_MPa: float, nu: float = DEFAULT_POISSON):
     return np.exp(-(1.0 - 2.0 * nu) * np.asarray(stress_MPa, dtype=float) / E_MPa)
 
 
+def fe_fold_over_onset(mu: float, h0_d0: float, strain, stress_MPa, eps_p=None) -> float | None:
+    """The FE table's fold-over onset (height strain) for a record corrected at ``mu``: read at its
+    h0/d0 and the Swift (n, ε0) of its corrected curve (:meth:`.fe.table.UpsettingTable.fold_over_at`,
+    the earliest of the cell's runs); None when none of them folds over."""
+    from flowcurve.identification.fe.table import UpsettingTable
+
+    table = UpsettingTable.load()
+    n, eps0 = _swift_of(strain if eps_p is None else eps_p, stress_MPa, eps_p is not None)
+    return table.fold_over_at(mu, min(max(h0_d0, float(table.h0_d0[0])), float(table.h0_d0[-1])), n, eps0)
+
+
 def correct_fe_table(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None, elastic=None):
     """(strain, p) → (strain, σ_f) with the CalculiX force factor F/(σ_f·A) of the FE table; the
     table's hardening from the Swift fit of σ_f over ``eps_p`` (the plastic strain; without it

@@ -48,15 +48,14 @@ from flowcurve.identification.fe import model_form as mf
 from flowcurve.identification.fe.solver_fit import fit_time_limit, fit_with_solver, progress_on_whole_clock, serial_correlation
 from flowcurve.identification.friction import DFACE_ADVICE, DIAMETER_RESOLUTION_MM, nominal_diameter
 from flowcurve.identification.fe.ccx import timeout_by
-from flowcurve.identification.fe.upsetting import FOLD_OVER_BAND, PLASTIC_ROWS, UpsettingModel, simulate_upsetting
+from flowcurve.identification.fe.model_form import FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, fold_over_ramp
+from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 from flowcurve.identification.outcome import Identification
 
 log = logging.getLogger(__name__)
 
 FORCE_POINTS = 30
-# a force point's σ in the fit: the model's own force error, ±1 % where the side folds over (docs/calculix.md), its mesh 0.4 %
-FORCE_SIGMA_PCT = 1.0
 FROM_STRAIN = 0.02
 MU_BOUNDS = (0.0, 0.35)
 REL_STEP = 0.01  # finite-difference step, relative (absolute 0.005 for μ)
@@ -65,10 +64,9 @@ START_MU_STEPS = (-0.01, 0.01, -0.02, 0.02)
 MU_TOLD = 0.02  # a μ standard error beyond this is said to be poorly told (as the fast method's dmax sensitivity)
 TIME_LIMIT_S = 270.0  # the default wall-time budget: the held-out records C1–C3 end within 5 min on 2 cores
 MIN_FORCE_STRAIN = 0.3  # the force is fitted at least this far, even where the side folds over earlier
-# a force point's σ grows over the FOLD_OVER_BAND before the warm start's fold-over to this many times FORCE_SIGMA_PCT at
-# the onset, where the model's force error grows; weighed as the rest, those points held C1's μ 0.013 low, and cut off,
+# a force point's σ (FORCE_SIGMA_PCT) grows over the FOLD_OVER_BAND before the warm start's fold-over to
+# FOLD_OVER_SIGMA_FACTOR times it (model_form.py); weighed as the rest, those points held C1's μ 0.013 low, and cut off,
 # they left C3's law unheld beyond ε 0.4 (its curve 1.1 %, verify 3.2 %)
-FOLD_OVER_SIGMA_FACTOR = 3.0
 
 
 @dataclass(frozen=True)
@@ -158,8 +156,7 @@ def force_sigma_pct(strain, fold_over_strain: float | None) -> np.ndarray:
     eps = np.asarray(strain, float)
     if fold_over_strain is None:
         return np.full(eps.shape, FORCE_SIGMA_PCT)
-    ramp = np.clip((eps - fold_over_strain + FOLD_OVER_BAND) / FOLD_OVER_BAND, 0.0, 1.0)
-    return FORCE_SIGMA_PCT * (1.0 + (FOLD_OVER_SIGMA_FACTOR - 1.0) * ramp)
+    return FORCE_SIGMA_PCT * (1.0 + (FOLD_OVER_SIGMA_FACTOR - 1.0) * fold_over_ramp(eps, fold_over_strain))
 
 
 POOR_FORCE_RMS_PCT = 1.5  # a force misfit above this: the model (law, μ) does not describe the record

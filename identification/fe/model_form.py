@@ -22,6 +22,14 @@ FACE_MODEL_FORM = 0.02
 FORCE_MODEL_FORM_PER_MU = 0.12
 # two μ whose difference exceeds this many combined standard errors disagree
 DISAGREE_SIGMAS = 2.0
+# where the side folds onto the platen: the model's own force error, ±1 % (its sawtooth, docs/calculix.md; its mesh 0.4 %)
+FORCE_SIGMA_PCT = 1.0
+# the strain before the fold-over's onset over which the model's force error grows (another model's record at the true
+# law and μ: 0.3 % below ε 0.45, 0.5–0.9 % at 0.45–0.55, 1.3–1.7 % at 0.55–0.6 for an onset at 0.616)
+FOLD_OVER_BAND = 0.1
+# a force's σ grows over the FOLD_OVER_BAND before the fold-over to this many times FORCE_SIGMA_PCT at the onset and
+# beyond (the inverse's weights, §4a.3; a finer discretisation differs by up to 1.6–2.0 % there, §4a.5)
+FOLD_OVER_SIGMA_FACTOR = 3.0
 
 
 def quadrature(*parts: float) -> float:
@@ -63,6 +71,26 @@ def disagree(mu_a: float, se_a: float, mu_b: float, se_b: float) -> bool:
 def force_model_form(mu: float) -> float:
     """σ of the model's force at friction μ, relative: :data:`FORCE_MODEL_FORM_PER_MU`·μ."""
     return FORCE_MODEL_FORM_PER_MU * max(float(mu), 0.0)
+
+
+def fold_over_ramp(strain, onset: float | None) -> np.ndarray:
+    """0 before the :data:`FOLD_OVER_BAND` that ends at the fold-over's ``onset``, growing linearly
+    to 1 at the onset and 1 beyond it (all 0 when there is no onset)."""
+    # g = clip((ε − ε_f + b)/b, 0, 1)
+    eps = np.asarray(strain, float)
+    if onset is None:
+        return np.zeros(eps.shape)
+    return np.clip((eps - onset + FOLD_OVER_BAND) / FOLD_OVER_BAND, 0.0, 1.0)
+
+
+def corrected_stress_uncertainty_pct(strain, mu: float, onset: float | None) -> np.ndarray:
+    """σ of a flow stress corrected by the model's force factor, % per point at ``strain``: the
+    model form's force share at μ (:func:`force_model_form`), growing over the band before the
+    fold-over's ``onset`` (:func:`fold_over_ramp`) to :data:`FOLD_OVER_SIGMA_FACTOR` ×
+    :data:`FORCE_SIGMA_PCT` (the inverse's σ there) where that is larger."""
+    # u = u_mf + g·max(k·σ_F − u_mf, 0)
+    u_mf = 100.0 * force_model_form(mu)
+    return u_mf + fold_over_ramp(strain, onset) * max(FOLD_OVER_SIGMA_FACTOR * FORCE_SIGMA_PCT - u_mf, 0.0)
 
 
 def shift_of_bias(jac, bias) -> np.ndarray:

@@ -10,6 +10,8 @@ The table holds, for μ × h0/d0 × Swift hardening (n, ε0) × strain ε = ln(h
   mesh lag, 0.2 %): near sticking it still moves with μ where the bulge has stopped;
 * the start of the curve, below the first strain (0.02): the force factor of short runs on the
   plastic strain ε_p (``start_plastic_strain``), read at the curve's own ε_p where it is given.
+* each run's fold-over onset, read from its force factor (:func:`fold_over_onsets`): where the
+  side folds onto the platen the model's force depends on its discretisation (docs/methods.md §4a.7).
 
 Values between grid points: linear in n, ln ε0 and ε and in d0/h0 (the force factor and the
 end face: the slab solution's friction term grows with d/h) or ln(h0/d0) (the bulge), then
@@ -60,6 +62,17 @@ class UpsettingTable:
     face: np.ndarray | None = None  # original end face d/d_n (mu, h0_d0, n, eps0, strain); None in older tables
     start_plastic_strain: np.ndarray | None = None  # ε_p of the start (below the first strain); None in older tables
     start_force_factor: np.ndarray | None = None  # (mu, h0_d0, n, eps0, start_plastic_strain)
+    fold_over: np.ndarray | None = None  # (mu, h0_d0, n, eps0): each run's fold-over onset (inf: none), fold_over_onsets
+
+    def fold_over_at(self, mu: float, h0_d0: float, n: float, eps0: float | None = None) -> float | None:
+        """The fold-over's onset (strain) for a reading at (μ, h0/d0, n, ε0): the earliest of the
+        runs of its cell (the two μ rows around μ, the corners in h0/d0, n and ε0), conservative;
+        None when none of them folds over within the table."""
+        if self.fold_over is None:
+            return None
+        m = int(np.clip(np.searchsorted(self.mu, mu), 1, self.mu.size - 1))
+        low = min(float(self.fold_over[row, i, j, k]) for row in (m - 1, m) for (i, j, k), _ in self._corners(h0_d0, n, eps0, slender=True))
+        return low if math.isfinite(low) else None
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> "UpsettingTable":
@@ -238,6 +251,7 @@ def _load(path: str) -> UpsettingTable:
         else:  # the first table: n only, at the Swift ε0 of its provenance
             eps0 = np.array([0.002])
             factor, bulge = factor[:, :, :, None], bulge[:, :, :, None]
+        start = {}  # the optional arrays of later tables
         pad = lambda a, v: np.concatenate([np.full(a.shape[:4] + (1,), v), a], axis=4)  # noqa: E731
         material = table_material(meta)
         if material is not None and "force_factor_raw" in z and "eps0" in z:
@@ -248,7 +262,7 @@ def _load(path: str) -> UpsettingTable:
         bulge = pad(bulge, 0.0)
         factor = pad(factor, 1.0)
         reached = np.where(np.isnan(factor), -np.inf, strain).max(axis=-1)
-        start = {}  # the optional arrays of later tables
+        start["fold_over"] = fold_over_onsets(factor, strain, reached)
         if "face_d_over_dn" in z:
             face = pad(z["face_d_over_dn"], 1.0)
             start["face"] = continue_stopped_runs(face - (face[0][None] - 1.0), "mu_scaled")  # less the μ = 0 run's mesh offset
@@ -337,6 +351,33 @@ def bulge_as_measured(bulge, factor_raw, strain, h0_d0, n, eps0, *, K_MPa: float
         out[run] = np.where(eps_l <= reach + 1e-12, row, np.nan)
     out[0] = 0.0
     return out
+
+
+# the side folding onto the platen shows in a run's force factor as its first upward jump after the slow decline: a
+# step's relative rise exceeds the step before's by more than this (steps of 0.02 in ε). Over the table's μ > 0 runs
+# from ε 0.1, 90 % of the step-to-step changes are below 0.23 % (the mesh's sawtooth alternates by ±0.05 %); the
+# fold-over's first step is 0.4–1.3 %. The step's start is within 0.02 of the model's geometric onset
+# (UpsettingResult.fold_over_strain) on the runs compared in docs/methods.md §4a.7.
+FOLD_OVER_JUMP = 0.003
+FOLD_OVER_FROM = 0.1  # the elastic–plastic start's curvature is not a fold-over
+
+
+def fold_over_onsets(factor: np.ndarray, strain: np.ndarray, reached: np.ndarray, jump: float = FOLD_OVER_JUMP,
+                     start: float = FOLD_OVER_FROM) -> np.ndarray:
+    """Per run of ``factor`` (…, strain; the runs as they stopped, NaN beyond): the strain at the start
+    of the first step from ``start`` on whose relative rise exceeds the step before's by ``jump``,
+    or where the run stopped (``reached`` below the last strain: it stops as its side folds), the
+    earlier; inf where neither."""
+    # Δ_k = (F_k+1 − F_k)/F_k; onset: first ε_k+1 ≥ start with Δ_k+1 − Δ_k > jump
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rise = np.diff(factor, axis=-1) / factor[..., :-1]
+    change = np.diff(rise, axis=-1)
+    begins = np.asarray(strain, float)[1:-1]
+    hit = np.nan_to_num(change, nan=-np.inf) > jump
+    hit &= begins >= start
+    onset = np.where(hit.any(axis=-1), begins[np.argmax(hit, axis=-1)], np.inf)
+    stopped = reached < strain[-1] - 1e-9
+    return np.where(stopped, np.minimum(onset, reached), onset)
 
 
 # how a stopped run's tail is continued, per array (measured on the table's complete runs cut at ε 0.3/0.4/0.5 and

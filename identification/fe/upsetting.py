@@ -274,9 +274,6 @@ class UpsettingResult:
 
 
 FOLD_OVER_GAP = 0.05  # a side node this part of its first distance from the platen face has folded onto it
-# the strain before the fold-over's onset over which the model's force error grows (another model's record at the true
-# law and μ: 0.3 % below ε 0.45, 0.5–0.9 % at 0.45–0.55, 1.3–1.7 % at 0.55–0.6 for an onset at 0.616)
-FOLD_OVER_BAND = 0.1
 
 
 def simulate_upsetting(m: UpsettingModel, *, require_complete: bool = True, timeout_s: float = 600.0, use_cache: bool = True) -> UpsettingResult:

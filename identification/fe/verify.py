@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.fe.upsetting import FOLD_OVER_BAND, PLASTIC_ROWS, UpsettingModel, simulate_upsetting
+from flowcurve.identification.fe.model_form import FOLD_OVER_BAND
+from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 
 DEFAULT_E_MPa = 200_000.0

@@ -109,3 +109,23 @@ def test_a_record_whose_face_and_bulge_disagree_has_a_poor_hardening(tmp_path):
     said = [w for w in bad["warnings"] if "disagree" in w]
     assert said and f"{bad['friction_mu']:.3f}" in said[0] and f"{detail['mu_from_bulge']:.3f}" in said[0], bad["warnings"]
     assert bad["hardening"]["quality"] == "poor"
+
+
+def test_the_corrected_stress_uncertainty_grows_over_the_band_before_the_fold_over():
+    """The model form's 0.12·μ before the band, linear growth to the inverse's 3 % at the onset, held beyond
+    (closed form); at μ 0.3 the model form (3.6 %) is the larger and stays; no onset: the model form alone."""
+    onset = 0.5
+    eps = np.array([0.2, onset - mf.FOLD_OVER_BAND, onset - mf.FOLD_OVER_BAND / 2, onset, 0.7])
+    u_mf = 100 * 0.12 * 0.1
+    top = mf.FOLD_OVER_SIGMA_FACTOR * mf.FORCE_SIGMA_PCT
+    np.testing.assert_allclose(mf.corrected_stress_uncertainty_pct(eps, 0.1, onset), [u_mf, u_mf, (u_mf + top) / 2, top, top])
+    np.testing.assert_allclose(mf.corrected_stress_uncertainty_pct(eps, 0.3, onset), 3.6)
+    np.testing.assert_allclose(mf.corrected_stress_uncertainty_pct(eps, 0.1, None), u_mf)
+
+
+def test_the_inverse_weighs_the_fold_over_band_with_the_same_constants():
+    from flowcurve.identification.fe import inverse
+
+    assert (inverse.FOLD_OVER_SIGMA_FACTOR, inverse.FORCE_SIGMA_PCT) == (mf.FOLD_OVER_SIGMA_FACTOR, mf.FORCE_SIGMA_PCT)
+    eps = np.linspace(0.1, 0.7, 13)
+    np.testing.assert_allclose(inverse.force_sigma_pct(eps, 0.5), mf.FORCE_SIGMA_PCT * (1 + 2 * mf.fold_over_ramp(eps, 0.5)))

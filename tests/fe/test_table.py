@@ -11,6 +11,7 @@ FE table is for.
 from __future__ import annotations
 
 import math
+import shutil
 
 import numpy as np
 import pytest
@@ -304,3 +305,48 @@ def test_the_force_factor_interpolates_in_d0_over_h0_and_the_bulge_in_ln_h0_over
     assert rms(_held_out_plane(factor, h0_d0, slender)) < 0.8 * rms(_held_out_plane(factor, h0_d0, log))
     assert rms(_held_out_plane(face, h0_d0, slender)) < 0.9 * rms(_held_out_plane(face, h0_d0, log))
     assert rms(_held_out_plane(bulge, h0_d0, log)) < rms(_held_out_plane(bulge, h0_d0, slender))
+
+
+def test_the_fold_over_detector_on_a_made_up_run():
+    """A factor declining slowly with the mesh's ±0.05 % sawtooth, then rising 1 % in one step from ε 0.5: the
+    onset is 0.5; a jump below ε 0.1 is not one; a run that stopped at 0.44 folds over there at the latest."""
+    from flowcurve.identification.fe.table import fold_over_onsets
+
+    strain = np.round(np.arange(0.0, 0.9001, 0.02), 4)
+    rise = -0.002 + 0.0005 * (-1) ** np.arange(strain.size - 1)
+    rise[strain[:-1] >= 0.5] = 0.01
+    rise[2] = 0.02  # ε 0.04 → 0.06: the start's curvature
+    factor = np.concatenate([[1.0], np.cumprod(1.0 + rise)])
+    stopped = np.where(strain <= 0.44, factor, np.nan)
+    flat = np.concatenate([[1.0], np.cumprod(1.0 - 0.002 + 0.0005 * (-1) ** np.arange(strain.size - 1))])
+    runs = np.stack([factor, stopped, flat])
+    reached = np.where(np.isnan(runs), -np.inf, strain).max(axis=-1)
+    np.testing.assert_allclose(fold_over_onsets(runs, strain, reached), [0.5, 0.44, np.inf])
+
+
+def test_the_fold_over_onset_of_a_reading_is_the_earliest_of_its_cell(table):
+    """At a grid point's μ the cell holds that μ's row and the one below; off the grid in n its two n
+    columns: the reading takes the earliest onset (less hardening and more friction fold over earlier)."""
+    mu, h, n, e = 3, 1, 2, 1
+    cell = table.fold_over[mu - 1: mu + 1, h, n - 1: n + 1, e]
+    assert table.fold_over_at(float(table.mu[mu]), float(table.h0_d0[h]), float(table.n[n] - 0.01), float(table.eps0[e])) == float(cell.min())
+    assert table.fold_over_at(float(table.mu[mu]), float(table.h0_d0[h]), float(table.n[n]), float(table.eps0[e])) == float(
+        table.fold_over[mu - 1: mu + 1, h, n, e].min())
+    assert np.isinf(table.fold_over[0]).all()  # no friction, no fold-over
+
+
+@pytest.mark.slow
+@pytest.mark.solver
+@pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")
+def test_the_fold_over_detector_agrees_with_the_models_geometry(table, tmp_path, monkeypatch):
+    """The product's model at the table's grid point μ 0.2, h0/d0 1, n 0.4, ε0 0.02 (60 increments, the table's
+    mesh; ~11 s): its side reaches the platen (UpsettingResult.fold_over_strain, 0.554) within one table step
+    (0.02) of the onset the detector reads in the table's force factor (0.54)."""
+    from flowcurve.identification.fe.make_table import grid_model
+    from flowcurve.identification.fe.upsetting import simulate_upsetting
+
+    monkeypatch.setenv("FLOWCURVE_FE_CACHE", str(tmp_path / "cache"))
+    r = simulate_upsetting(grid_model(0.2, 1.0, 0.4, 0.02), require_complete=False, timeout_s=300.0)
+    assert r.fold_over_strain is not None
+    detected = table.fold_over[list(table.mu).index(0.2), list(table.h0_d0).index(1.0), list(table.n).index(0.4), list(table.eps0).index(0.02)]
+    assert abs(detected - r.fold_over_strain) <= 0.02 + 1e-9

@@ -13,8 +13,8 @@ import pytest
 
 import flowcurve.identification.fe.solver_fit as solver_fit
 from flowcurve.cli.progress import budget_text
-from flowcurve.identification.fe.inverse import (FOLD_OVER_BAND, FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, MIN_FORCE_STRAIN,
-                                                 force_fit_limit, force_sigma_pct)
+from flowcurve.identification.fe.inverse import MIN_FORCE_STRAIN, force_fit_limit, force_sigma_pct
+from flowcurve.identification.fe.model_form import FOLD_OVER_BAND, FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT
 from flowcurve.identification.fe.solver_fit import fit_with_solver, time_left_s
 
 T = np.linspace(0.0, 1.0, 12)
