@@ -763,6 +763,7 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
         },
         methods={
             "friction": f"{chosen.method} (all: {', '.join(fr.FRICTION_METHODS)})",
+            "friction_mu_stderr": _mu_stderr_basis(chosen),
             "correction": f"{friction_correction} (all: {', '.join(fr.CORRECTIONS)})",
             "stress": "mean pressure P/S, S = pi*d_n^2/4, d_n = d0*sqrt(h0/h) (3.28)-(3.32)",
             "scaling": "K_l = (h0 - hk [+ spring-back]) / max(specimen displacement) (3.1)",
@@ -785,6 +786,14 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
         modulus=None if el is None else {**el.as_dict(), "E_MPa": yld.E_used, "E_line_MPa": el.E_MPa / K_l,
                                          "E_stderr_MPa": el.E_stderr_MPa / K_l, "source": yld.E_source if E_MPa is not None else el.source},
     )
+
+
+def _mu_stderr_basis(chosen: fr.FrictionResult) -> str:
+    """What μ's standard error (``friction_details[method].mu_stderr``) holds, for result.json's methods."""
+    if chosen.extra.get("mu_stderr") is None:
+        return "none: mu has no standard error"
+    basis = chosen.extra.get("mu_stderr_basis")
+    return basis if basis else f"half mu_range ({chosen.extra.get('mu_range_basis')})"
 
 
 def identify_compression(

@@ -150,19 +150,49 @@ def friction_bulge_regression(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max
     """Mean friction μ from the post-test shape by the seed's regression ((3.28), (3.29), (3.31), (3.19)).
 
     Give the measured maximum (bulge) diameter ``d_max_mm`` or the largest cross-section area
-    ``s_max_mm2`` (the diameter takes precedence when both are given).
+    ``s_max_mm2`` (the diameter takes precedence when both are given). ``mu_stderr``: the
+    readings' resolution through (3.19) (:func:`resolution_stderr`).
     """
     _check_geometry(d0_mm, h0_mm, hk_mm)
     d_max, used = _measured_max_diameter(d_max_mm, s_max_mm2)
+    mu, extra = _bulge_regression(d0_mm, h0_mm, hk_mm, d_max)
+    inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
+    readings = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, "d_max_mm": d_max}
+    extra.update(mu_stderr=resolution_stderr(lambda **x: _bulge_regression(**x)[0], readings), mu_stderr_basis=_resolution_basis(readings))
+    return FrictionResult("bulge_regression", mu, inputs, extra)
+
+
+def _bulge_regression(d0_mm: float, h0_mm: float, hk_mm: float, d_max_mm: float) -> tuple[float, dict]:
+    """(μ, figures) of (3.19) from the four readings."""
     d_n = float(nominal_diameter(d0_mm, h0_mm, hk_mm))
-    delta_r = float(bulge_excess(d_max, d_n))
+    delta_r = float(bulge_excess(d_max_mm, d_n))
     if -DIAMETER_RESOLUTION_MM / 4 <= delta_r < 0:
         delta_r = 0.0  # within the reading resolution of d_max: no bulge, μ = 0
     eps_p = float(height_strain(hk_mm, h0_mm))
     mu = mu_from_bulge_ratio(delta_r / hk_mm, eps_p)
-    inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
-    extra = {"d_max_mm": d_max, "d_n_mm": d_n, "delta_R_mm": delta_r, "eps_p": eps_p}
-    return FrictionResult("bulge_regression", mu, inputs, extra)
+    return mu, {"d_max_mm": d_max_mm, "d_n_mm": d_n, "delta_R_mm": delta_r, "eps_p": eps_p}
+
+
+def resolution_stderr(mu_of: Callable[..., float], readings: dict[str, float], resolution_mm: float = DIAMETER_RESOLUTION_MM) -> float:
+    """μ's standard error from its readings (mm), each off by ± ``resolution_mm``: the method's own
+    formula ``mu_of(**readings)`` at each reading ± its resolution, the half-differences in quadrature.
+    A side the formula cannot read (e.g. no bulge left) is replaced by the centre (a one-sided difference)."""
+    # σ_μ = √Σ_i ((μ(x_i + δ) − μ(x_i − δ))/2)²
+    centre = mu_of(**readings)
+    halves = []
+    for name, value in readings.items():
+        sides = []
+        for sign in (1.0, -1.0):
+            try:
+                sides.append(mu_of(**{**readings, name: value + sign * resolution_mm}))
+            except IdentificationError:
+                pass
+        halves.append((max(sides) - min(sides)) / 2.0 if len(sides) == 2 else (abs(sides[0] - centre) if sides else 0.0))
+    return mf.quadrature(*halves)
+
+
+def _resolution_basis(readings: dict[str, float]) -> str:
+    return f"the method's formula at {', '.join(readings)} each ± {DIAMETER_RESOLUTION_MM} mm (their resolution), in quadrature"
 
 
 # -- Ebrahimi–Najafizadeh (2004) ------------------------------------------------------------
@@ -217,10 +247,24 @@ def friction_ebrahimi_najafizadeh(d0_mm: float, h0_mm: float, hk_mm: float, *, d
     """Friction factor m (and μ = m/√3) by the barrelling method of Ebrahimi & Najafizadeh (2004).
 
     The top-face diameter ``d_top_mm`` is used when measured; otherwise it follows from volume
-    constancy with a parabolic barrel (:func:`barrel_top_radius`).
+    constancy with a parabolic barrel (:func:`barrel_top_radius`). ``mu_stderr``: the readings'
+    resolution through the method (:func:`resolution_stderr`).
     """
     _check_geometry(d0_mm, h0_mm, hk_mm)
     d_max, used = _measured_max_diameter(d_max_mm, s_max_mm2)
+    if d_top_mm is not None:
+        used["dtop_mm"] = float(d_top_mm)
+    mu, extra = _ebrahimi_najafizadeh(d0_mm, h0_mm, hk_mm, d_max, d_top_mm)
+    inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
+    readings = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, "d_max_mm": d_max, **({"d_top_mm": float(d_top_mm)} if d_top_mm is not None else {})}
+    mu_of = lambda **x: _ebrahimi_najafizadeh(**{"d_top_mm": None, **x})[0]  # noqa: E731
+    extra.update(mu_stderr=resolution_stderr(mu_of, readings), mu_stderr_basis=_resolution_basis(readings))
+    return FrictionResult("ebrahimi_najafizadeh", mu, inputs, extra)
+
+
+def _ebrahimi_najafizadeh(d0_mm: float, h0_mm: float, hk_mm: float, d_max_mm: float, d_top_mm: float | None) -> tuple[float, dict]:
+    """(μ, figures) of Ebrahimi & Najafizadeh from the readings (``d_top_mm`` None: the parabolic barrel's)."""
+    d_max = d_max_mm
     r0, r_max = d0_mm / 2.0, d_max / 2.0
     r_mean = float(nominal_diameter(d0_mm, h0_mm, hk_mm)) / 2.0
     if r_mean - DIAMETER_RESOLUTION_MM / 4 <= r_max < r_mean:
@@ -229,7 +273,6 @@ def friction_ebrahimi_najafizadeh(d0_mm: float, h0_mm: float, hk_mm: float, *, d
         raise IdentificationError(f"Ebrahimi-Najafizadeh: negative bulge (maximum radius {r_max:.4g} mm below the volume-constant radius {r_mean:.4g} mm)")
     if d_top_mm is not None:
         r_top = d_top_mm / 2.0
-        used["dtop_mm"] = float(d_top_mm)
     else:
         radicand = 3.0 * r0**2 * h0_mm / hk_mm - 2.0 * r_max**2
         if radicand <= 0:
@@ -243,9 +286,7 @@ def friction_ebrahimi_najafizadeh(d0_mm: float, h0_mm: float, hk_mm: float, *, d
     if not (0.0 <= m <= 1.0):
         raise IdentificationError(f"Ebrahimi-Najafizadeh: friction factor m = {m:.4g} is outside [0, 1] (barrelling parameter b = {b:.4g}); the bulge is not a friction barrel")
     mu = float(mu_from_friction_factor(m))
-    inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
-    extra = {"m": m, "b": b, "R_mean_mm": r_mean, "R_max_mm": r_max, "R_top_mm": r_top, "mu_equal_slab_pressure": mu_equal_slab_pressure(m, r_mean / hk_mm)}
-    return FrictionResult("ebrahimi_najafizadeh", mu, inputs, extra)
+    return mu, {"m": m, "b": b, "R_mean_mm": r_mean, "R_max_mm": r_max, "R_top_mm": r_top, "mu_equal_slab_pressure": mu_equal_slab_pressure(m, r_mean / hk_mm)}
 
 
 def identify_friction(method: str, d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: float | None = None, s_max_mm2: float | None = None, d_top_mm: float | None = None, curve=None,
