@@ -50,6 +50,10 @@ BULGE_Q = 1.53
 # diameter d_n is read as "no bulge" (μ = 0) rather than as a negative bulge; on the radius
 # that is a quarter of it.
 DIAMETER_RESOLUTION_MM = 0.01
+# The model form of the methods that read μ from the barrel alone (they know neither the hardening nor,
+# (3.19), h0/d0): the rms of (μ_method − μ)/μ on the CalculiX table's barrels, μ 0.05–0.2 × h0/d0 0.6–2.5
+# × n 0.05–0.65 × ε 0.3–0.7 (bench/friction_model_form.py; docs/methods.md §4.8).
+MU_MODEL_FORM = {"bulge_regression": 0.41, "ebrahimi_najafizadeh": 0.44}
 DFACE_ADVICE = ("measure the original end face's diameter (post.dface_mm) and identify again: μ is poorly told by the bulge "
                 "(the faces nearly stick), and the end face still shrinks with μ there")  # result.json's dface_advice
 
@@ -158,7 +162,7 @@ def friction_bulge_regression(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max
     mu, extra = _bulge_regression(d0_mm, h0_mm, hk_mm, d_max)
     inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
     readings = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, "d_max_mm": d_max}
-    extra.update(mu_stderr=resolution_stderr(lambda **x: _bulge_regression(**x)[0], readings), mu_stderr_basis=_resolution_basis(readings))
+    extra.update(_mu_stderr("bulge_regression", mu, lambda **x: _bulge_regression(**x)[0], readings))
     return FrictionResult("bulge_regression", mu, inputs, extra)
 
 
@@ -191,8 +195,15 @@ def resolution_stderr(mu_of: Callable[..., float], readings: dict[str, float], r
     return mf.quadrature(*halves)
 
 
-def _resolution_basis(readings: dict[str, float]) -> str:
-    return f"the method's formula at {', '.join(readings)} each ± {DIAMETER_RESOLUTION_MM} mm (their resolution), in quadrature"
+def _mu_stderr(method: str, mu: float, mu_of: Callable[..., float], readings: dict[str, float]) -> dict:
+    """μ's standard error of a method that reads the barrel alone: the readings' resolution
+    (:func:`resolution_stderr`) and the method's model form (:data:`MU_MODEL_FORM` of μ), in quadrature."""
+    by_resolution, by_model = resolution_stderr(mu_of, readings), MU_MODEL_FORM[method] * mu
+    se = mf.quadrature(by_resolution, by_model)
+    basis = (f"the method's formula at {', '.join(readings)} each ± {DIAMETER_RESOLUTION_MM} mm (their resolution) and its "
+             f"model form, {MU_MODEL_FORM[method]:.0%} of mu (rms against the CalculiX upsetting table), in quadrature")
+    return {"mu_stderr": se, "mu_stderr_resolution": by_resolution, "mu_stderr_model_form": by_model, "mu_stderr_basis": basis,
+            "mu_range": [max(mu - se, 0.0), mu + se], "mu_range_basis": f"mu ± its standard error: {', '.join(readings)} ± {DIAMETER_RESOLUTION_MM} mm and the model form's {MU_MODEL_FORM[method]:.0%} of mu"}
 
 
 # -- Ebrahimi–Najafizadeh (2004) ------------------------------------------------------------
@@ -258,7 +269,7 @@ def friction_ebrahimi_najafizadeh(d0_mm: float, h0_mm: float, hk_mm: float, *, d
     inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used}
     readings = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, "d_max_mm": d_max, **({"d_top_mm": float(d_top_mm)} if d_top_mm is not None else {})}
     mu_of = lambda **x: _ebrahimi_najafizadeh(**{"d_top_mm": None, **x})[0]  # noqa: E731
-    extra.update(mu_stderr=resolution_stderr(mu_of, readings), mu_stderr_basis=_resolution_basis(readings))
+    extra.update(_mu_stderr("ebrahimi_najafizadeh", mu, mu_of, readings))
     return FrictionResult("ebrahimi_najafizadeh", mu, inputs, extra)
 
 

@@ -7,12 +7,23 @@ curve is within a few % of the law, but the shape of that difference (it grows t
 the stroke) used to go into A and n, which trade off: A read 121–134 for 105 with a stated standard
 error of 4–6 MPa (4.6–4.8 standard errors off). The constants' standard errors now include the
 model form's force error as a shape (growing with strain) and the fit range's (docs/methods.md §4.8).
+
+The non-default friction methods (bulge_regression, ebrahimi_najafizadeh) with the slab correction: their
+μ had no standard error, so μ's share was empty and linear hardening at μ 0.11 read B 251.5 ± 0.09 for
+250 (17 standard errors). μ's standard error now holds the readings' resolution through the method's
+formula and its model form against the CalculiX table (bench/friction_model_form.py).
 """
 
 import itertools
+import math
+import runpy
+from pathlib import Path
+from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
+from flowcurve.identification import friction as fr
 from flowcurve.identification.compression import identify_compression
 
 from .toe_records import make_toe_compression
@@ -25,9 +36,9 @@ SHAPES = ((8.0, 6.0), (6.0, 9.0))  # (d0, h0): h0/d0 0.75 and 1.5
 WITHIN = 2.5  # standard errors
 
 
-def _hardening(law, mu, d0, h0):
+def _hardening(law, mu, d0, h0, **options):
     record, _ = make_toe_compression(law=law, mu=mu, d0=d0, h0=h0, rate_hz=2.0, toe_mm=0.05, speed=0.005, handbook_E=True, noise_N=5.0)
-    return identify_compression(record).result
+    return identify_compression(record, **options).result
 
 
 def _z(h, law, key, name):
@@ -67,3 +78,47 @@ def test_a_and_n_trade_off_is_reported():
     h = result["hardening"]
     assert h["correlations"]["A"]["n"] > 0.9
     assert "A and n trade off" in result["methods"]["hardening_stderr"]
+
+
+BARREL_METHODS = ("bulge_regression", "ebrahimi_najafizadeh")
+BARREL_CASES = [pytest.param(method, law, mu, id=f"{method}-{name}-mu{mu}")
+                for method, (name, law), mu in itertools.product(BARREL_METHODS, (("seed", STEEP), ("steel45", STEEL45), ("linear", LINEAR)), MUS)]
+
+
+@pytest.mark.parametrize("method,law,mu", BARREL_CASES)
+def test_the_barrel_methods_constants_cover_the_truth(method, law, mu):
+    """The record's own model path (slab correction, the slab record): B read 251.5 ± 0.09 for 250 at
+    μ 0.11 (bulge_regression), 255.3 ± 0.83 (ebrahimi_najafizadeh) before μ had a standard error."""
+    result = _hardening(law, mu, 5.989, 6.982, friction_method=method, friction_correction="slab")
+    h = result["hardening"]
+    z = {name: _z(h, law, key, name) for name, key in (("A", "A_MPa"), ("B", "B_MPa"), ("n", "n"))}
+    assert all(abs(v) <= WITHIN for v in z.values()), (z, h, result["friction_details"][method])
+    assert "friction μ" in result["methods"]["hardening_stderr"]
+    assert "resolution" in result["methods"]["friction_mu_stderr"] and "model form" in result["methods"]["friction_mu_stderr"]
+
+
+@pytest.mark.parametrize("method", BARREL_METHODS)
+def test_the_resolution_share_is_the_scatter_of_mu_over_the_readings(method):
+    """Central differences at ± 0.01 mm against μ's scatter when every reading is off by a normal
+    0.01 mm (σ), sampled: the same to the sampling's and the linearisation's error."""
+    d0, h0, hk, dmax = 8.0, 6.0, 3.1, 11.3
+    rng = np.random.default_rng(7)
+    noise = rng.normal(0.0, fr.DIAMETER_RESOLUTION_MM, (4000, 4))
+    mus = [fr.identify_friction(method, d0 + a, h0 + b, hk + c, d_max_mm=dmax + d).mu for a, b, c, d in noise]
+    stated = fr.identify_friction(method, d0, h0, hk, d_max_mm=dmax).extra["mu_stderr_resolution"]
+    assert stated == pytest.approx(float(np.std(mus)), rel=0.08)
+
+
+@pytest.fixture(scope="module")
+def model_form_bench():
+    return SimpleNamespace(**runpy.run_path(str(Path(__file__).resolve().parents[2] / "bench" / "friction_model_form.py")))
+
+
+@pytest.mark.parametrize("method", BARREL_METHODS)
+def test_the_model_form_share_is_what_the_calculix_table_measures(model_form_bench, method):
+    """MU_MODEL_FORM against the method fed the CalculiX table's barrels (μ 0.05–0.2, the table's h0/d0 × n × ε0)."""
+    rows = model_form_bench.relative_errors(method)
+    assert np.isfinite(rows[:, 5]).sum() >= 0.95 * len(rows)
+    assert fr.MU_MODEL_FORM[method] == pytest.approx(model_form_bench.rms(rows[:, 5]), abs=0.01)
+    result = fr.identify_friction(method, 8.0, 6.0, 3.1, d_max_mm=11.3)
+    assert result.extra["mu_stderr"] == pytest.approx(math.hypot(result.extra["mu_stderr_resolution"], fr.MU_MODEL_FORM[method] * result.mu))
