@@ -17,22 +17,23 @@ over ε_p 0.05–0.6; verify's largest force deviation (and before the band wher
 error grows; what the fit's own discretisation reads, and its largest gap to the check's); solver runs; the identification's wall seconds; whether the time limit cut it; the
 model's E and frame compliance sources; the 1-minute load average before and after.
 
-Measured (2 workers, each from an empty cache, load average 1–2.7, 2 cores):
+Measured (2 workers, each from an empty cache, load average 1.2–2.2, 2 cores; Voce the last stop's):
 
-| family | record | truth μ | μ ± se | curve | verify (before the band) | runs | s | cut |
+| family | record | truth μ | μ ± se | curve | verify (before the band; the fit's model, its gap) | runs | s | cut |
 |---|---|---|---|---|---|---|---|---|
-| other_settings | C1 | 0.15 | 0.1508 ± 0.0056 | 0.31 % | 2.00 % (0.90 %) | 24 | 114 | no |
-| other_settings | C2 | 0.05 | 0.0483 ± 0.0044 | 0.06 % | 0.56 % | 27 | 118 | no |
-| other_settings | C3 | 0.2 | 0.1976 ± 0.0178 | 0.74 % | 2.88 % (0.52 %) | 33 | 148 | no |
-| second_model | C1 | 0.15 | 0.1412 ± 0.0078 | 0.30 % | 1.17 % | 23 | 125 | no |
-| second_model | C2 | 0.05 | 0.0475 ± 0.0045 | 0.16 % | 0.55 % | 23 | 92 | no |
-| second_model | C3 | 0.2 | 0.1854 ± 0.0174 | 0.69 % | 1.56 % | 33 | 136 | no |
-| — | Voce | 0.17 | 0.1736 ± 0.0139 | 0.45 % | 2.08 % (1.30 %) | 14 | 449 | yes (570 s) |
+| other_settings | C1 | 0.15 | 0.1508 ± 0.0056 | 0.31 % | 0.92 % (0.92; 2.00, 1.67) | 24 | 112 | no |
+| other_settings | C2 | 0.05 | 0.0483 ± 0.0044 | 0.06 % | 0.37 % (0.37; 0.56, 0.22) | 27 | 97 | no |
+| other_settings | C3 | 0.2 | 0.1976 ± 0.0178 | 0.74 % | 0.97 % (0.84; 2.88, 1.91) | 33 | 149 | no |
+| second_model | C1 | 0.15 | 0.1412 ± 0.0078 | 0.30 % | 1.50 % (0.94; 1.17, 1.59) | 23 | 106 | no |
+| second_model | C2 | 0.05 | 0.0475 ± 0.0045 | 0.16 % | 0.36 % (0.36; 0.55, 0.22) | 23 | 89 | no |
+| second_model | C3 | 0.2 | 0.1854 ± 0.0174 | 0.69 % | 2.26 % (0.71; 1.56, 1.96) | 33 | 124 | no |
+| — | Voce | 0.17 | 0.1736 ± 0.0139 | 0.45 % | 2.08 % on the fit's model (1.30 %) | 14 | 449 | yes (570 s) |
 
 S1–S6 of the second model: docs/methods.md §4a.7 (within 2 reported standard errors on the 8 it
 answers; S5, h0/d0 2 at μ 0.3, it refuses: every start's run stops where the side folds over).
-verify at the true law and μ reads 1.71 % (C1) and 2.12 % (C3) on the issue's kind: the two
-discretisations fold over at different strains.
+verify's check runs 4 rim layers and 200 increments, the fit 2 and 50 (docs/methods.md §4a.5): at
+the true law and μ the check reads 0.65 % (C1) and 1.12 % (C3) on the issue's kind, the fit's
+model 1.71 % and 2.11 %; on the second model's C3 both read over 3 % (3.12 %, 3.27 %).
 """
 
 from __future__ import annotations
