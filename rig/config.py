@@ -18,15 +18,10 @@ from typing import Any
 from flowcurve.errors import ConfigError
 from flowcurve.rig.codecs import aed
 
-# A furnace set-point must leave this much below [furnace] max_temperature_C: after a working
-# switch-off the heat already on its way (the relay's last dead time of heating) carries the
-# furnace above its set-point, and a furnace that crosses its maximum with the heater commanded
-# off is named a stuck relay (rig.furnace.StuckRelayCheck: exit 4, cut the mains).
-# Measured on the virtual furnace at the rig's pace (bench/stored_heat.py; docs/operator.md, "Set-point
-# margin"): over 120 switch-offs — set-points 100-895 C; end of test, device fault, Ctrl-C while loading
-# or heating; both tests at 0.05 and 0.5 mm/s — the highest reading was 2.6 C above the set-point
-# (895 C); the approach at 200 C/min never passed it. 5 C is about twice that, and above the model's bound at
-# 850-900 C: the heater at full power through the whole 5 s dead time from the set-point, 3.6-4.3 C.
+# A furnace set-point must leave this much below [furnace] max_temperature_C: after a working switch-off
+# the heat already in the elements carries the furnace above its set-point, and a furnace that crosses its
+# maximum with the heater off is named a stuck relay (rig.furnace.StuckRelayCheck). About twice the largest
+# overshoot measured on the virtual furnace (2.6 C; bench/stored_heat.py, docs/operator.md "Set-point margin").
 SETPOINT_MARGIN_C = 5.0
 
 PARITIES = ("N", "E", "O")

@@ -329,3 +329,14 @@ def coverage_row(path: Path, out: Path, *, end_face: bool) -> dict:
     return {"record": meta["specimen.id"], "h0_d0": float(meta["specimen.h0_mm"]) / float(meta["specimen.d0_mm"]), "truth_mu": truth,
             "mu": mu, "se": se, "z": abs(mu - truth) / se if se > 0 else math.inf, "curve_error": err,
             "quality": result["hardening"]["quality"]}
+
+
+def assert_regenerated(made: Path, vendored: Path) -> None:
+    """A record made again matches the vendored one: post-test shape to 0.2 µm, the same rows, forces to 0.5 N."""
+    from flowcurve.record.format import read_record
+
+    new, old = read_record(made), read_record(vendored)
+    for key in ("post.hk_mm", "post.dmax_mm", "post.dface_mm"):
+        assert abs(float(new.meta[key]) - float(old.meta[key])) <= 2e-4, key
+    assert len(new.data) == len(old.data)
+    assert (new.data["force_N"] - old.data["force_N"]).abs().max() < 0.5
