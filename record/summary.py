@@ -39,7 +39,21 @@ def record_summary(record: Record) -> dict:
     }
     if published:
         summary["published"] = published
+    summary.update(identity(meta))
     return summary
+
+
+def identity(meta) -> dict:
+    """Who tested what, when and with which instruments: the header keys a test report names
+    (``date``, ``operator``, ``specimen.id``, ``specimen.orientation``, ``standard`` and the
+    ``instruments.*`` data as tested that day); absent keys are left out, never guessed."""
+    out = {key: meta[m].strip() for key, m in (("date", "date"), ("operator", "operator"), ("specimen_id", "specimen.id"),
+                                               ("orientation", "specimen.orientation"), ("standard", "standard"))
+           if str(meta.get(m) or "").strip()}
+    instruments = {k.split(".", 1)[1]: _number_or_text(v) for k, v in meta.items() if k.startswith("instruments.")}
+    if instruments:
+        out["instruments"] = instruments
+    return out
 
 
 def _number_or_text(value: str):

@@ -14,13 +14,15 @@ from pathlib import Path
 
 from flowcurve.errors import FlowcurveError
 from flowcurve.reports.lab import LabHeader
-from flowcurve.reports.report_content import (Facts, Figure, Heading, Link, Para, Report, ReportError, Table, build_content,
-                                              find_fit, find_results)
+from flowcurve.reports.report_content import (Facts, Figure, Heading, Link, Para, Report, ReportError, Table, _g, build_content,
+                                              customer_text, find_fit, find_results)
 from flowcurve.reports.rounding import STEPS, format_step, value_with_U
 from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM
 
 __all__ = ["ReportError", "build_report", "find_fit", "find_results", "write_report"]
 
+JC_EQUATION = ("Johnson–Cook: σ = (A + B·εpⁿ)·(1 + C·ln(ε̇/ε̇0))·(1 − T*ᵐ), with ε̇/ε̇0 at least 1 and "
+               "T* = (T − Tref)/(Tmelt − Tref) between 0 and 1")
 FIT_CONSTANTS = (("A_MPa", "A, MPa"), ("B_MPa", "B, MPa"), ("n", "n"), ("C", "C"), ("m", "m"))
 
 
@@ -29,7 +31,7 @@ def _slug(text: str) -> str:
 
 
 def card_blocks(fit_path: Path, material: str | None, units: str, cards_dir: Path | None, link_base: Path | None,
-                overrides: dict) -> list:
+                overrides: dict, report: Report) -> list:
     """Write the LS-DYNA card into ``cards_dir`` and link it; or say what it lacks."""
     from flowcurve.reports.cards import load_card_data, write_card
 
@@ -40,20 +42,21 @@ def card_blocks(fit_path: Path, material: str | None, units: str, cards_dir: Pat
             data.material = material
         text = write_card(data, "lsdyna", units)
     except FlowcurveError as exc:
-        return blocks + [Para(f"LS-DYNA card not written: {exc}. Give the missing constant to 'flowcurve report' "
-                              "(e.g. --poisson, --density) or write it into fit.json; 'flowcurve card' writes the other formats.", "warn")]
+        report.for_engineer(f"LS-DYNA card not written: {exc}. Give the missing constant to 'flowcurve report' "
+                            "(e.g. --poisson, --density) or write it into fit.json; 'flowcurve card' writes the other formats.")
+        return blocks + [Para(f"LS-DYNA card not written: {customer_text(str(exc))}.", "warn")]
     if cards_dir is None:
-        return blocks + [Para(f"LS-DYNA card ({units}): written by 'flowcurve report' beside the report file.", "note")]
+        return blocks + [Para(f"LS-DYNA card ({units}): written beside the report file.", "note")]
     cards_dir.mkdir(parents=True, exist_ok=True)
     card = cards_dir / f"{_slug(data.material)}-lsdyna-{_slug(units)}.k"
     card.write_text(text, encoding="utf-8")
     href = card.relative_to(link_base).as_posix() if link_base else card.name
-    return blocks + [Link(f"LS-DYNA card ({units}, *MAT_JOHNSON_COOK and *MAT_PIECEWISE_LINEAR_PLASTICITY): {href}", href),
-                     Para("Other solvers: 'flowcurve card fit.json --format abaqus|radioss|calculix'.", "note")]
+    report.for_engineer("Other solvers: 'flowcurve card fit.json --format abaqus|radioss|calculix'.")
+    return blocks + [Link(f"LS-DYNA card ({units}, *MAT_JOHNSON_COOK and *MAT_PIECEWISE_LINEAR_PLASTICITY): {href}", href)]
 
 
 def fit_blocks_factory(units: str, cards_dir: Path | None, link_base: Path | None, overrides: dict):
-    def fit_blocks(fit_path: Path, fit: dict, material: str | None) -> list:
+    def fit_blocks(fit_path: Path, fit: dict, material: str | None, report: Report) -> list:
         """Constants ± U (k = 2 on the fit's standard errors), conditions, range, errors, plots, card link."""
         rows = []
         for key, label in FIT_CONSTANTS:
@@ -67,25 +70,29 @@ def fit_blocks_factory(units: str, cards_dir: Path | None, link_base: Path | Non
             r = rng.get(key)
             return f"{format_step(r[0], step)} – {format_step(r[1], step)}{unit}" if isinstance(r, list) and len(r) == 2 else "–"
 
-        facts = [("method", str(fit.get("method", "–"))), ("reference strain rate", f"{fit.get('ref_strain_rate_per_s', '–')} 1/s"),
+        facts = [("method", str(fit.get("method", "–"))), ("reference strain rate", f"{_g(fit.get('ref_strain_rate_per_s'))} 1/s"),
                  ("reference temperature", f"{format_step(fit.get('ref_temperature_C'), 1.0)} °C"),
                  ("melting temperature", f"{format_step(fit.get('melt_temperature_C'), 1.0)} °C"),
                  ("identified on: plastic strain", span("plastic_strain", 0.001)),
                  ("identified on: strain rate", span("strain_rate_per_s", None, " 1/s")),
                  ("identified on: temperature", span("temperature_C", 1.0, " °C")),
                  ("max / rms error", f"{format_step(fit.get('fit_error_pct'), 0.1)} / {format_step(fit.get('rms_error_pct'), 0.1)} %")]
-        per_record = [[str(r.get("name", "?")), format_step(r.get("temperature_C"), 1.0), f"{r.get('strain_rate_per_s', '–')}",
+        per_record = [[str(r.get("name", "?")), format_step(r.get("temperature_C"), 1.0), _g(r.get("strain_rate_per_s")),
                        format_step(r.get("fit_error_pct"), 0.1), format_step(r.get("rms_error_pct"), 0.1)]
                       for r in fit.get("records") or [] if isinstance(r, dict)]
-        blocks = [Heading("Johnson–Cook fit of the series"), Para(str(fit.get("equation", "")), "note"),
-                  Table(["constant", "value ± U (k = 2, fit statistics)", ""], rows), Facts(facts)]
-        blocks += [Para(str(w), "warn") for w in fit.get("warnings") or []]
+        if fit.get("equation"):
+            report.for_engineer(f"fit.json equation: {fit['equation']}")
+        blocks = [Heading("Johnson–Cook fit of the series"), Para(JC_EQUATION, "note"),
+                  Table(["constant", "value ± U (k = 2)", ""], rows,
+                        "series: one set of constants fitted to all specimens together; U from this fit's statistics "
+                        "(it does not hold the spread between specimens, see the per-specimen constants)"), Facts(facts)]
+        blocks += [Para(customer_text(str(w), report), "warn") for w in fit.get("warnings") or []]
         if per_record:
             blocks.append(Table(["record", "temperature, °C", "strain rate, 1/s", "max error, %", "rms error, %"], per_record,
                                 "error of the fit per record"))
         blocks += [Figure(p, f"series fit: {p.stem.replace('_', ' ')}") for p in sorted((fit_path.parent / "plots").glob("*.png"))]
         blocks.append(Para("The constants hold on the range above only; beyond it the law is extrapolated, at the user's risk.", "warn"))
-        return blocks + card_blocks(fit_path, material, units, cards_dir, link_base, overrides)
+        return blocks + card_blocks(fit_path, material, units, cards_dir, link_base, overrides, report)
     return fit_blocks
 
 
@@ -96,7 +103,7 @@ h1{font-size:22px;border-bottom:2px solid #444;padding-bottom:4px}h2{font-size:1
 h3{font-size:15px}table{border-collapse:collapse;margin:0.6em 0;font-size:13px}th,td{border:1px solid #bbb;padding:3px 7px;
 text-align:left;vertical-align:top}thead th{background:#eee}table.facts th{background:#f6f6f6;font-weight:normal;color:#555}
 figure{margin:1em 0}img{max-width:100%;height:auto;border:1px solid #ddd}figcaption{font-size:12px;color:#555}
-.warn{color:#a00}.note{color:#555;font-size:13px}td.num{white-space:nowrap}caption{text-align:left;caption-side:top}"""
+.warn{color:#a00}.release{color:#fff;background:#a00;padding:4px 8px;font-weight:bold}.ident{font-size:12px;color:#555}.note{color:#555;font-size:13px}td.num{white-space:nowrap}caption{text-align:left;caption-side:top}"""
 
 
 def _cell(text: str) -> str:
@@ -105,7 +112,11 @@ def _cell(text: str) -> str:
 
 def to_html(report: Report) -> str:
     parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(report.title)}</title>"
-             f"<style>{STYLE}</style></head><body><h1>{html.escape(report.title)}</h1>"]
+             f"<style>{STYLE}</style></head><body>"]
+    if report.not_for_release:
+        parts.append(f"<p class='release'>{html.escape(report.not_for_release)}</p>")
+    parts.append(f"<p class='ident'>report {html.escape(report.number)}, revision {report.lab.revision}, issued "
+                 f"{html.escape(report.issued)}</p><h1>{html.escape(report.title)}</h1>")
     for b in report.blocks:
         if isinstance(b, Heading):
             parts.append(f"<h{b.level}>{html.escape(b.text)}</h{b.level}>")
@@ -125,6 +136,9 @@ def to_html(report: Report) -> str:
                          f"<figcaption>{html.escape(b.caption)}</figcaption></figure>")
         elif isinstance(b, Link):
             parts.append(f"<p><a href='{html.escape(b.href)}'>{html.escape(b.text)}</a></p>")
+    if report.engineer:
+        parts.append("<hr><h2>For the engineer (not part of the test report)</h2><ul class='note'>"
+                     + "".join(f"<li>{html.escape(t)}</li>" for t in report.engineer) + "</ul>")
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"
 

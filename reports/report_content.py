@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
+import re
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,8 +21,9 @@ from pathlib import Path
 from flowcurve import __version__
 from flowcurve.errors import FlowcurveError
 from flowcurve.identification.outcome import read_json_object
+from flowcurve.reports import calibration as cal
 from flowcurve.reports.lab import LabHeader
-from flowcurve.reports.rounding import ISO_6892_1_RULES, STEPS, format_step, format_uncertainty, value_with_U
+from flowcurve.reports.rounding import ISO_6892_1_RULES, STEPS, format_range, format_step, format_uncertainty, value_with_U
 
 
 class ReportError(FlowcurveError):
@@ -69,9 +71,32 @@ class Report:
     title: str
     lab: LabHeader
     blocks: list = field(default_factory=list)
+    number: str = ""  # the report number, on every page
+    issued: str = ""  # date of issue
+    not_for_release: str = ""  # on every page and the HTML's header when set
+    engineer: list = field(default_factory=list)  # "for the engineer": command-line hints, codes (HTML only)
 
     def add(self, *blocks) -> None:
         self.blocks.extend(blocks)
+
+    def for_engineer(self, text: str) -> None:
+        if text not in self.engineer:
+            self.engineer.append(text)
+
+
+NOT_STATED = "not stated"
+# a command-line hint or code in a text: an option, a command, a file's key
+HINT = re.compile(r"--[a-z]|'flowcurve |flowcurve [a-z]+ |\.json\b|\.csv\b|\[[a-z_]+\]|\b[a-z][a-z0-9]*_[a-z0-9_]+\b")
+
+
+def customer_text(text: str, report: Report | None = None) -> str:
+    """``text`` without command-line hints or file keys (parenthesised hints and clauses holding one are
+    dropped); the whole text goes to the report's "for the engineer" notes when anything was dropped."""
+    out = re.sub(r"\s*\([^()]*\)", lambda m: "" if HINT.search(m.group(0)) else m.group(0), text)
+    out = "; ".join(c for c in out.split("; ") if not HINT.search(c)).strip()
+    if out != text and report is not None:
+        report.for_engineer(text)
+    return out
 
 
 PLOT_CAPTIONS = {"diagram": "indicator diagram: force against displacement, as recorded and corrected",
@@ -179,22 +204,67 @@ def modulus_cell(result: dict) -> str:
     return value_with_U(E / 1000.0, U / 1000.0 if U else None, STEPS["E_GPa"])
 
 
+# ---- identity and calibration ---------------------------------------------------------------
+
+def specimen_id(name: str, result: dict) -> str:
+    """The specimen's ID as the record states it (``specimen.id``), else its result folder's name."""
+    rec = _rec(result)
+    return str(rec.get("specimen_id") or _spec(result, "id") or name)
+
+
+def stated(value) -> str:
+    return str(value).strip() if value is not None and str(value).strip() else NOT_STATED
+
+
+def test_date(result: dict) -> str:
+    """The record's test date (its day, ``2022-08-18``) or 'not stated'."""
+    date = cal.iso_date(_rec(result).get("date"))
+    return date.isoformat() if date else stated(_rec(result).get("date"))
+
+
+def calibration(report: Report, results: list, issued: str) -> tuple[list, list[str]]:
+    """The instruments table (one block per set of specimens with the same data) and why the report may not be released."""
+    groups: dict[str, list] = {}
+    problems: dict[str, list[str]] = {}
+    for name, _, r in results:
+        record_inst = _rec(r).get("instruments") if isinstance(_rec(r).get("instruments"), dict) else {}
+        inst, sources = cal.effective(record_inst, report.lab.instruments)
+        sid = specimen_id(name, r)
+        rows = [[label, cal.instrument_cell(inst, prefix, class_key, what), sources[prefix]]
+                for prefix, label, class_key, what in cal.INSTRUMENTS]
+        groups.setdefault(repr(rows), [rows, []])[1].append(sid)
+        heated = (_num(_rec(r).get("nominal_temperature_C")) or 0.0) > cal.HEATED_ABOVE_C
+        for p in cal.release_problems(inst, test_date=cal.iso_date(_rec(r).get("date")), issued=cal.iso_date(issued),
+                                      extensometer=(r.get("methods") or {}).get("strain_source") == "extensometer",
+                                      heated=heated, budget_inst=_unc(r).get("instruments") or {}):
+            problems.setdefault(p, []).append(sid)
+    rows = [[", ".join(sids) if i == 0 else "", *row] for rows_, sids in groups.values() for i, row in enumerate(rows_)]
+    return ([Table(["specimens", "instrument", "class / MPE; calibration certificate, due date", "data from"], rows,
+                   "calibration of the measuring instruments (ISO/IEC 17025 6.4, 6.5)")],
+            [f"{p} ({', '.join(sids)})" for p, sids in problems.items()])
+
+
 # ---- sections -------------------------------------------------------------------------------
 
-def header(report: Report, root: Path, results: list, today: str) -> None:
+def header(report: Report, series: str, results: list) -> None:
     lab = report.lab
-    rows = lab.rows()
-    if not lab.report_number:
-        rows.append(("report number", f"{root.name}-{today}"))
-    rows += [("date of report", today), ("test series", f"{root.name} ({len(results)} specimen(s))"),
-             ("evaluated with", f"flowcurve {__version__}")]
+    rows = [("laboratory", lab.name), ("address", lab.address or NOT_STATED), ("accreditation", lab.accreditation),
+            ("report number", report.number), ("revision", lab.revision_text()), ("date of issue", report.issued),
+            ("customer", lab.customer or NOT_STATED), ("test series", f"{series} ({len(results)} specimen(s))"),
+            ("evaluated with", f"flowcurve {__version__}")]
     report.add(Facts(rows))
+    if report.not_for_release:
+        report.add(Para(report.not_for_release.upper(), "warn"))
     if lab.source.startswith("defaults"):
-        report.add(Para("Lab header: defaults (give 'flowcurve report --lab lab.toml' with the laboratory's name, "
-                        "accreditation and report number).", "note"))
+        report.add(Para("Lab header: defaults (no lab file).", "note"))
+        report.for_engineer("The lab header is the default: give 'flowcurve report --lab lab.toml' with the laboratory's name, "
+                            "accreditation, report number, customer, approved_by, decision_rule and [instruments] "
+                            "(docs/test-report.md).")
+    report.add(Para("The results relate only to the items tested. This report shall not be reproduced except in full "
+                    "without the laboratory's written approval.", "note"))
 
 
-def designations(results: list) -> list[tuple[str, str]]:
+def designations(results: list, lab: LabHeader) -> list[tuple[str, str]]:
     rows = []
     for name, _, r in results:
         conf = (r.get("methods") or {}).get("conformity") or {}
@@ -205,22 +275,27 @@ def designations(results: list) -> list[tuple[str, str]]:
             if heated and heated != rate.get("standard"):
                 text += f"; temperature: {heated}"
         else:
-            text = "compression test (upsetting); no ISO 6892-1 designation"
-        rows.append((name, text))
+            text = f"compression (upsetting): {lab.compression_standard or 'standard not stated'}"
+        rows.append((specimen_id(name, r), text))
     return rows
 
 
 def specimen_table(results: list) -> Table:
-    cols = ["specimen", "test", "material", "d0, mm", "L0 / h0, mm", "Lc, mm", "temperature, °C", "crosshead, mm/s",
-            "strain rate, 1/s", "record"]
+    rows = [[specimen_id(n, r), relative_name(_rec(r).get("path")), str(_rec(r).get("material") or NOT_STATED),
+             stated(_rec(r).get("orientation")), test_date(r), stated(_rec(r).get("operator"))] for n, _, r in results]
+    return Table(["specimen", "record", "material", "orientation", "test date", "operator"], rows)
+
+
+def conditions_table(results: list) -> Table:
+    cols = ["specimen", "test", "d0, mm", "L0 / h0, mm", "Lc, mm", "temperature, °C", "crosshead, mm/s", "strain rate, 1/s"]
     rows = []
     for name, _, r in results:
         rec = _rec(r)
         length = _spec(r, "l0_mm") if _spec(r, "l0_mm") is not None else _spec(r, "h0_mm")
-        rows.append([name, str(r.get("test", "–")), str(rec.get("material") or "–"), format_step(_num(_spec(r, "d0_mm")), 0.001),
+        rows.append([specimen_id(name, r), str(r.get("test", "–")), format_step(_num(_spec(r, "d0_mm")), 0.001),
                      format_step(_num(length), 0.01), format_step(_num(_spec(r, "parallel_length_mm")), 0.01),
                      format_step(_num(rec.get("nominal_temperature_C")), 1.0), _short(rec.get("crosshead_speed_mm_per_s")),
-                     _short(rec.get("strain_rate_per_s")), relative_name(rec.get("path"))])
+                     _short(rec.get("strain_rate_per_s"))])
     return Table(cols, rows)
 
 
@@ -235,12 +310,37 @@ def remarks(result: dict) -> str:
 
 
 def tension_table(results: list) -> Table | None:
-    rows = [[n, modulus_cell(r), modulus_source(r), _with_U(r, "Rp02_MPa"), _with_U(r, "Rm_MPa"), _with_U(r, "Ag_pct"),
-             _with_U(r, "A_pct"), _with_U(r, "Z_pct"), remarks(r)] for n, _, r in results if r.get("test") == "tension"]
+    rows = [[specimen_id(n, r), modulus_cell(r), modulus_source(r), _with_U(r, "Rp02_MPa"), _with_U(r, "Rm_MPa"),
+             _with_U(r, "Ag_pct"), _with_U(r, "A_pct"), _with_U(r, "Z_pct"), remarks(r)]
+            for n, _, r in results if r.get("test") == "tension"]
     if not rows:
         return None
     return Table(["specimen", "E, GPa", "E from", "Rp0.2, MPa", "Rm, MPa", "Ag, %", "A, %", "Z, %", "remarks"], rows,
                  "tension (ISO 6892-1): value ± U (k = 2)")
+
+
+def _or_dash(result: dict, key: str) -> str:
+    return _with_U(result, key) if _num(result.get(key)) is not None else "—"
+
+
+def iso_table(results: list, report: Report | None = None) -> Table | None:
+    """ReH, ReL, Ae, Agt, At, how A was obtained, Z, E's method and the test date: what the result carries, '—' else."""
+    rows = [[specimen_id(n, r), _or_dash(r, "ReH_MPa"), _or_dash(r, "ReL_MPa"), _or_dash(r, "Ae_pct"), _or_dash(r, "Agt_pct"),
+             _or_dash(r, "At_pct"), _or_dash(r, "Z_pct"), stated(customer_text(str(r.get("A_method") or ""), report)),
+             stated((r.get("modulus") or {}).get("source") or (r.get("methods") or {}).get("modulus")), test_date(r)]
+            for n, _, r in results if r.get("test") == "tension"]
+    if not rows:
+        return None
+    return Table(["specimen", "ReH, MPa", "ReL, MPa", "Ae, %", "Agt, %", "At, %", "Z, %", "A obtained", "E obtained", "test date"],
+                 rows, "further ISO 6892-1 results ('—': not determined, e.g. no yield point)")
+
+
+def friction_cell(result: dict) -> str:
+    """μ with its range where the method gives an asymmetric one (``0.084 (0.075–0.093)``), else μ ± U."""
+    rng = result.get("friction_mu_range")
+    if isinstance(rng, list) and len(rng) == 2 and all(_num(x) is not None for x in rng):
+        return f"{format_step(_num(result.get('friction_mu')), STEPS['friction_mu'])} ({format_range(rng[0], rng[1], STEPS['friction_mu'])})"
+    return _with_U(result, "friction_mu")
 
 
 def compression_table(results: list) -> Table | None:
@@ -251,11 +351,20 @@ def compression_table(results: list) -> Table | None:
     for n, r in comp:
         flow = _unc(r).get("flow_stress_MPa") or {}
         cells = [value_with_U(_num((flow.get(e) or {}).get("value")), _num((flow.get(e) or {}).get("U")), 1.0) for e in FLOW_SHOWN]
-        rows.append([n, modulus_cell(r), modulus_source(r), _with_U(r, "Rp02_MPa"), _with_U(r, "friction_mu"), *cells,
+        rows.append([specimen_id(n, r), modulus_cell(r), modulus_source(r), _with_U(r, "Rp02_MPa"), friction_cell(r), *cells,
                      FRICTION_METHODS.get(str(r.get("friction_method")), str(r.get("friction_method", "–")).replace("_", " ")),
                      remarks(r)])
-    return Table(["specimen", "E, GPa", "E from", "Rp0.2, MPa", "friction μ", *[f"σ at εp {e}, MPa" for e in FLOW_SHOWN],
-                  "friction method", "remarks"], rows, "compression: value ± U (k = 2); σ is the selected true curve")
+    return Table(["specimen", "E, GPa", "E from", "Rp0.2, MPa", "friction μ (range)", *[f"σ at εp {e}, MPa" for e in FLOW_SHOWN],
+                  "friction method", "remarks"], rows,
+                 "compression: value ± U (k = 2), μ with the range of its method; σ is the selected true curve")
+
+
+def compression_measures(results: list) -> Table | None:
+    """The upset specimen's measured height hk, bulge diameter dmax and face diameter dface."""
+    rows = [[specimen_id(n, r), format_step(_num(_sub(r, "post").get("hk_mm")), 0.01),
+             format_step(_num(_sub(r, "post").get("dmax_mm")), 0.01), format_step(_num(_sub(r, "post").get("dface_mm")), 0.01)]
+            for n, _, r in results if r.get("test") == "compression"]
+    return Table(["specimen", "hk, mm", "dmax, mm", "dface, mm"], rows, "measured after the test ('–': not measured)") if rows else None
 
 
 def hardening_table(results: list) -> Table:
@@ -267,26 +376,27 @@ def hardening_table(results: list) -> Table:
         def cell(key, h=h, hu=hu):
             return value_with_U(_num(h.get(key)), _num((hu.get(key) or {}).get("U")), STEPS.get(key))
         rng = h.get("strain_range") or h.get("fit_range") or [None, None]
-        rows.append([n, LAW_NAMES.get(h.get("law"), str(h.get("law", "–"))), cell("A_MPa"), cell("B_MPa"), cell("n"),
-                     f"{format_step(_num(rng[0]), 0.001)} – {format_step(_num(rng[1]), 0.001)}",
+        rows.append([specimen_id(n, r), LAW_NAMES.get(h.get("law"), str(h.get("law", "–"))), cell("A_MPa"), cell("B_MPa"),
+                     cell("n"), f"{format_step(_num(rng[0]), 0.001)} – {format_step(_num(rng[1]), 0.001)}",
                      f"{format_step(_num(h.get('fit_error_pct')), 0.1)} / {format_step(_num(h.get('rms_error_pct')), 0.1)}",
                      str(h.get("quality", "–"))])
     return Table(["specimen", "law", "A, MPa", "B, MPa", "n", "fitted εp range", "max / rms error, %", "quality"], rows,
-                 "hardening law σ = A + B·εpⁿ fitted to each selected true curve: value ± U (k = 2; fit statistics and stress scale)")
+                 "per specimen: hardening law σ = A + B·εpⁿ fitted to each specimen's own curve; value ± U (k = 2) of that one "
+                 "fit (its statistics and the stress scale) — not the constants of the series")
 
 
 def _verdict(block: dict) -> str:
     c = block.get("conforms")
-    return "conforms" if c is True else ("does not conform" if c is False else "not stated")
+    return "conforms" if c is True else ("does not conform" if c is False else NOT_STATED)
 
 
-def conformity_table(results: list) -> Table:
+def conformity_table(results: list, report: Report | None = None) -> Table:
     rows = []
     for n, _, r in results:
         conf = (r.get("methods") or {}).get("conformity") or {}
         rate, temp = conf.get("testing_rate") or {}, conf.get("temperature") or {}
-        rows.append([n, f"{_verdict(rate)}: " + "; ".join(rate.get("findings") or ["not evaluated"]),
-                     f"{_verdict(temp)}: " + "; ".join(temp.get("findings") or ["not evaluated"])])
+        rows.append([specimen_id(n, r), customer_text(f"{_verdict(rate)}: " + "; ".join(rate.get("findings") or ["not evaluated"]), report),
+                     customer_text(f"{_verdict(temp)}: " + "; ".join(temp.get("findings") or ["not evaluated"]), report)])
     return Table(["specimen", "testing rate (ISO 6892-1 §10)", "temperature (ISO 6892-1 §10 / ISO 6892-2)"], rows)
 
 
@@ -294,14 +404,16 @@ BUDGET_NAMES = {"E_MPa": "E, MPa", "Rp02_MPa": "Rp0.2, MPa", "Rm_MPa": "Rm, MPa"
                 "Z_pct": "Z, %", "friction_mu": "friction μ"}
 
 
-def budget_tables(name: str, result: dict) -> list:
+def budget_tables(name: str, result: dict, report: Report | None = None) -> list:
     """One table per specimen: each result's components, then u_c and U."""
     unc = _unc(result)
     budgets = [(BUDGET_NAMES[k], unc[k]) for k in BUDGET_NAMES if isinstance(unc.get(k), dict) and unc[k].get("components")]
     budgets += [(f"σ at εp {e}, MPa", b) for e, b in (unc.get("flow_stress_MPa") or {}).items()]
     budgets += [(f"{k.replace('_MPa', ', MPa')} (hardening)", b) for k, b in (unc.get("hardening") or {}).items()]
     if not budgets:
-        return [Para(f"{name}: no uncertainty budget in result.json (identified before budgets existed: identify again).", "warn")]
+        if report is not None:
+            report.for_engineer(f"{name}: result.json has no uncertainty budget (identified before budgets existed): identify again.")
+        return [Para(f"{name}: no uncertainty budget in the result (evaluated before budgets existed).", "warn")]
     rows = []
     for label, b in budgets:
         for i, c in enumerate(b["components"]):
@@ -312,11 +424,12 @@ def budget_tables(name: str, result: dict) -> list:
     inst = unc.get("instruments") or {}
     facts = (f"{name}: force ISO 7500-1 class {inst.get('force_class', '–')}, extensometer ISO 9513 class "
              f"{inst.get('extensometer_class', '–')}, diameters at {inst.get('diameter_resolution_mm', '–')} mm, lengths at "
-             f"{inst.get('length_resolution_mm', '–')} mm; source: {inst.get('source', '–')}")
+             f"{inst.get('length_resolution_mm', '–')} mm; source: {customer_text(str(inst.get('source', '–')), report)}")
     strain = unc.get("strain_scale") or {}
     if strain:
         facts += f". Strain: {strain.get('basis')}, relative u {_g(strain.get('u_rel'))}"
-    notes = [f"{label}: {b['note']}" for label, b in budgets if b.get("note") and not b["note"].startswith("at true plastic strain")]
+    notes = [f"{label}: {customer_text(b['note'], report)}" for label, b in budgets
+             if b.get("note") and not b["note"].startswith("at true plastic strain")]
     return [Heading(f"Uncertainty budget — {name}", 3), Para(facts, "note"),
             Table(["result", "input", "value", "u (standard)", "sensitivity c", "contribution |c|·u"], rows),
             *([Para("; ".join(notes), "note")] if notes else [])]
@@ -333,20 +446,32 @@ def in_words(text: str) -> str:
     return text
 
 
-def specimen_warnings(results: list) -> list:
-    return [Para(f"{n}: {in_words(str(w))}", "warn") for n, _, r in results for w in r.get("warnings") or []]
+def specimen_warnings(results: list, report: Report | None = None) -> list:
+    return [Para(f"{specimen_id(n, r)}: {customer_text(in_words(str(w)), report)}", "warn")
+            for n, _, r in results for w in r.get("warnings") or []]
 
 
 def standards_text() -> str:
     rules = "; ".join(f"{what} to {step}" for what, step in ISO_6892_1_RULES)
-    return (f"Results are rounded as ISO 6892-1:2019 §22 prescribes: {rules}; other quantities to the steps the "
+    return (f"Results are rounded as ISO 6892-1:2019 §22 prescribes ({rules}), or finer where U is finer (§22 allows "
+            "'or better'), so that value ± U always holds the unrounded result; other quantities to the steps the "
             "documentation lists. U is the expanded uncertainty (GUM, k = 2, about 95 % coverage) from the instruments' "
             "classes and the fits' statistics, given with two significant digits rounded up. E 'given' is a handbook "
             "value, not measured: it carries no U.")
 
 
+def signature_block(lab: LabHeader) -> list:
+    return [Heading("Approval"), Facts([("approved by", lab.approved_by or NOT_STATED), ("signature", "_" * 30),
+                                        ("date", "_" * 16)])]
+
+
+def series_name(root: Path) -> str:
+    """The series' name: the folder's own name, also when given as '.' or with a trailing separator."""
+    return root.resolve().name or "series"
+
+
 def build_content(root, *, lab: LabHeader | None = None, title: str | None = None, fit_blocks=None) -> Report:
-    """The report of the series under ``root``. ``fit_blocks(fit_path, fit, material)`` adds the series fit's blocks."""
+    """The report of the series under ``root``. ``fit_blocks(fit_path, fit, material, report)`` adds the series fit's blocks."""
     root = Path(root)
     if not root.is_dir():
         raise ReportError(f"{root}: no such folder")
@@ -356,32 +481,43 @@ def build_content(root, *, lab: LabHeader | None = None, title: str | None = Non
         raise ReportError(f"{root}: no result folders (result.json) and no fit.json to report")
     materials = Counter(str(_rec(r).get("material")) for _, _, r in results if _rec(r).get("material"))
     material = materials.most_common(1)[0][0] if materials else None
-    report = Report(title or f"Test report{': ' + material if material else ''}", lab or LabHeader())
-    today = _dt.date.today().isoformat()
-    header(report, root, results, today)
+    lab = lab or LabHeader()
+    series = series_name(root)
+    issued = lab.date_of_issue or _dt.date.today().isoformat()
+    report = Report(title or f"Test report{': ' + material if material else ''}", lab, number=lab.number(series, issued),
+                    issued=issued)
+    instruments, problems = calibration(report, results, issued)
+    if problems:
+        report.not_for_release = cal.NOT_FOR_RELEASE
+    header(report, series, results)
     if results:
-        report.add(Heading("Standard and method"), Facts(designations(results)), Para(standards_text(), "note"))
-        report.add(Heading("Specimens and test conditions"), specimen_table(results))
+        report.add(Heading("Standard and method"), Facts(designations(results, lab)), Para(standards_text(), "note"))
+        report.add(Heading("Specimens"), specimen_table(results))
+        report.add(Heading("Test conditions"), conditions_table(results))
+        report.add(Heading("Measuring instruments"), *instruments)
+        if problems:
+            report.add(Para(f"{cal.NOT_FOR_RELEASE}: " + "; ".join(problems), "warn"))
         report.add(Heading("Results"))
-        report.add(*[t for t in (tension_table(results), compression_table(results)) if t is not None])
+        report.add(*[t for t in (tension_table(results), iso_table(results, report), compression_table(results),
+                                 compression_measures(results)) if t is not None])
         report.add(hardening_table(results))
-        warnings = specimen_warnings(results)
+        warnings = specimen_warnings(results, report)
         if warnings:
             report.add(Heading("Warnings", 3), *warnings,
                        Para("U covers the instruments and the fits' statistics, not the identification's own errors that "
                             "these warnings point at.", "note"))
-        report.add(Heading("Conformity of the test conditions"), conformity_table(results))
+        report.add(Heading("Conformity of the test conditions"), Para(lab.decision_rule_text(), "note"), conformity_table(results, report))
         report.add(Heading("Figures"))
-        for n, folder, _ in results:
-            report.add(*figures(n, folder))
+        for n, folder, r in results:
+            report.add(*figures(specimen_id(n, r), folder))
     if fit_path is not None and fit_blocks is not None:
-        report.add(*fit_blocks(fit_path, _read_json(fit_path), material))
+        report.add(*fit_blocks(fit_path, _read_json(fit_path), material, report))
     elif fit_path is None:
         report.add(Heading("Johnson–Cook fit of the series"),
-                   Para("No series fit in this folder ('flowcurve fit' on the result folders writes one); the hardening "
-                        "laws above are per specimen.", "note"))
+                   Para("No series fit in this report; the hardening laws above are per specimen.", "note"))
     if results:
         report.add(Heading("Uncertainty budgets"))
         for n, _, r in results:
-            report.add(*budget_tables(n, r))
+            report.add(*budget_tables(specimen_id(n, r), r, report))
+    report.add(*signature_block(lab))
     return report

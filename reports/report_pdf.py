@@ -3,7 +3,7 @@
 A small flow layout: blocks of :mod:`.report_content` go down the page from a cursor; text wraps
 at the page width, tables wrap their widest columns and repeat their heading row after a page
 break, figures take the full text width. Each page carries the lab and report number at the
-top and "page n of m" at the bottom.
+top, "page n of m" at the bottom, and "not for release" on every page when the report says so.
 """
 
 from __future__ import annotations
@@ -48,6 +48,11 @@ class _Layout:
         self.fig = fig
         lab = self.report.lab
         fig.text(MARGIN_X / PAGE_W, 1 - 0.4 / PAGE_H, f"{lab.name} — {self.report.title}", fontsize=SIZES["small"], color="#555")
+        fig.text(1 - MARGIN_X / PAGE_W, 1 - 0.4 / PAGE_H, f"report {self.report.number}, revision {lab.revision}, issued "
+                 f"{self.report.issued}", fontsize=SIZES["small"], color="#555", ha="right")
+        if self.report.not_for_release:
+            fig.text(0.5, 1 - 0.22 / PAGE_H, self.report.not_for_release.upper(), fontsize=SIZES[3], color="#a00000",
+                     weight="bold", ha="center")
         fig.add_artist(self._plt.Line2D([MARGIN_X / PAGE_W, 1 - MARGIN_X / PAGE_W], [1 - 0.5 / PAGE_H] * 2, color="#999", lw=0.5))
         self.y = MARGIN_TOP
 
@@ -166,12 +171,10 @@ class _Layout:
         from matplotlib.backends.backend_pdf import PdfPages
 
         total = len(self.pages)
-        lab = self.report.lab
         with PdfPages(path, metadata={"Title": self.report.title, "Creator": "flowcurve report"}) as pdf:
             for i, fig in enumerate(self.pages, 1):
                 fig.text(1 - MARGIN_X / PAGE_W, 0.35 / PAGE_H, f"page {i} of {total}", fontsize=SIZES["small"], ha="right", color="#555")
-                if lab.report_number:
-                    fig.text(MARGIN_X / PAGE_W, 0.35 / PAGE_H, f"report {lab.report_number}", fontsize=SIZES["small"], color="#555")
+                fig.text(MARGIN_X / PAGE_W, 0.35 / PAGE_H, f"report {self.report.number}", fontsize=SIZES["small"], color="#555")
                 pdf.savefig(fig)
                 self._plt.close(fig)
         return path

@@ -6,12 +6,14 @@ ISO 6892-1 §22, unless a product standard says otherwise: strength values to th
 a tie to the even multiple (ISO 80000-1 Annex B, rule A). Quantities §22 does not name are
 given to the steps of :data:`STEPS` (a lab convention, stated in the report). An expanded
 uncertainty is given with two significant digits, rounded up (GUM 7.2.6: never understate it).
+A value with a U is given to its §22 step or finer ("or better"): never coarser than U's last
+digit, so value ± U always holds the unrounded value.
 """
 
 from __future__ import annotations
 
 import math
-from decimal import ROUND_CEILING, ROUND_HALF_EVEN, Decimal
+from decimal import ROUND_CEILING, ROUND_FLOOR, ROUND_HALF_EVEN, Decimal
 
 # result key → rounding step, in the unit the report shows
 STEPS = {
@@ -59,7 +61,33 @@ def format_uncertainty(U) -> str:
     return f"{rounded:.{max(0, -exponent)}f}"
 
 
+def uncertainty_step(U) -> float | None:
+    """The place of U's second significant digit (``0.1853`` → ``0.01``), None when U is unknown or 0."""
+    if U is None or not math.isfinite(U) or U <= 0:
+        return None
+    return float(Decimal(1).scaleb(math.floor(math.log10(U)) - 1))
+
+
+def value_step(step: float | None, U) -> float | None:
+    """The step a value is printed to: its §22 step, or U's last digit where that is finer."""
+    finer = uncertainty_step(U)
+    if finer is None:
+        return step
+    return finer if step is None else min(step, finer)
+
+
 def value_with_U(value, U, step: float | None) -> str:
-    """``'1132 ± 14'``: the value at its step and U beside it (``'1132'`` when U is unknown)."""
-    text = format_step(value, step)
+    """``'1132 ± 14'``, ``'55.42 ± 0.19'``: the value at :func:`value_step` and U beside it (``'1132'`` when U is unknown)."""
+    text = format_step(value, value_step(step, U))
     return f"{text} ± {format_uncertainty(U)}" if U is not None and text != "–" else text
+
+
+def format_range(low, high, step: float | None) -> str:
+    """An asymmetric interval as a range, ``'0.076–0.092'``, outward to ``step`` so it never narrows."""
+    if low is None or high is None:
+        return "–"
+    if step is None:
+        return f"{low:.3g}–{high:.3g}"
+    lo = float((Decimal(repr(float(low))) / Decimal(repr(step))).to_integral_value(rounding=ROUND_FLOOR) * Decimal(repr(step)))
+    hi = float((Decimal(repr(float(high))) / Decimal(repr(step))).to_integral_value(rounding=ROUND_CEILING) * Decimal(repr(step)))
+    return f"{lo:.{_decimals(step)}f}–{hi:.{_decimals(step)}f}"

@@ -9,6 +9,7 @@ and the key (``rig.toml: [furnace] max_temperature_C: must be in 0 < x <= 1370, 
 
 from __future__ import annotations
 
+import datetime as _dt
 import math
 import tomllib
 from dataclasses import dataclass, fields
@@ -33,6 +34,14 @@ def _in(lo, hi, *, lo_open=False):
         ok = (lo < v if lo_open else lo <= v) and v <= hi
         return None if ok else f"must be in {lo} {'<' if lo_open else '<='} x <= {hi}, got {v}"
     return check
+
+
+def _iso_date(value: str) -> str | None:
+    try:
+        _dt.date.fromisoformat(value)
+    except ValueError:
+        return f"must be a date YYYY-MM-DD, got {value!r}"
+    return None
 
 
 def _one_of(choices):
@@ -163,10 +172,26 @@ class InstrumentsConfig:
     diameter_resolution_mm: float = 0.01  # resolution of the diameter measurement
     length_resolution_mm: float = 0.01  # resolution of lengths and heights (L0, Lu, h0, hk)
     crosshead_strain_error_pct: float = 2.0  # bound on a strain from crosshead travel (no extensometer)
+    # calibration data (optional; a report with none of it is "not for release"): certificate number and due date
+    force_certificate: str | None = None
+    force_due_date: str | None = None  # ISO date, YYYY-MM-DD
+    force_U_rel_pct: float | None = None  # the certificate's relative expanded uncertainty, %
+    force_resolution_N: float | None = None
+    extensometer_certificate: str | None = None
+    extensometer_due_date: str | None = None
+    micrometer_mpe_mm: float | None = None  # maximum permissible error (diameters)
+    micrometer_certificate: str | None = None
+    micrometer_due_date: str | None = None
+    caliper_mpe_mm: float | None = None  # maximum permissible error (lengths)
+    caliper_certificate: str | None = None
+    caliper_due_date: str | None = None
+    thermocouple_tolerance_C: float | None = None  # e.g. ±1.5 °C for IEC 60584-1 class 1 type K
+    thermocouple_certificate: str | None = None
+    thermocouple_due_date: str | None = None
 
-    def meta(self) -> dict[str, float]:
-        """The record metadata (``instruments.<key>``) the identification reads them from."""
-        return {f"instruments.{f.name}": getattr(self, f.name) for f in fields(self)}
+    def meta(self) -> dict[str, float | str]:
+        """The record metadata (``instruments.<key>``) the identification reads them from (unset keys left out)."""
+        return {f"instruments.{f.name}": getattr(self, f.name) for f in fields(self) if getattr(self, f.name) is not None}
 
 
 @dataclass(frozen=True)
@@ -232,6 +257,14 @@ SCHEMA: dict[str, tuple[type, dict[str, tuple[type, Any]]]] = {
         "diameter_resolution_mm": (float, _in(0.0, 1.0, lo_open=True)),
         "length_resolution_mm": (float, _in(0.0, 1.0, lo_open=True)),
         "crosshead_strain_error_pct": (float, _in(0.0, 50.0, lo_open=True)),
+        "force_U_rel_pct": (float, _in(0.0, 10.0, lo_open=True)),
+        "force_resolution_N": (float, _in(0.0, 1e6, lo_open=True)),
+        "micrometer_mpe_mm": (float, _in(0.0, 1.0, lo_open=True)),
+        "caliper_mpe_mm": (float, _in(0.0, 1.0, lo_open=True)),
+        "thermocouple_tolerance_C": (float, _in(0.0, 50.0, lo_open=True)),
+        **{f"{i}_certificate": (str, lambda v: None if v else "must not be empty")
+           for i in ("force", "extensometer", "micrometer", "caliper", "thermocouple")},
+        **{f"{i}_due_date": (str, _iso_date) for i in ("force", "extensometer", "micrometer", "caliper", "thermocouple")},
     }),
 }
 REQUIRED_SECTIONS = ("loadcell", "encoder", "frame")
@@ -251,6 +284,8 @@ def setpoint_refusal(setpoint_C: float, max_temperature_C: float, margin_C: floa
 
 
 def _value(where: str, key: str, value: Any, kind: type, check) -> Any:
+    if kind is str and isinstance(value, _dt.date):  # a TOML date literal (due_date = 2027-03-31)
+        value = value.isoformat()
     if kind is float and isinstance(value, int) and not isinstance(value, bool):
         value = float(value)
     if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
@@ -291,6 +326,13 @@ def _section(origin: str, name: str, table: Any):
             raise ConfigError(f"{where} nominal_load_N: give exactly one of nominal_load_N and "
                               f"calibration_N_per_count (got {len(given)})")
     return cls(**values)
+
+
+def instruments_given(table: Any, origin: str) -> dict:
+    """The keys an ``[instruments]`` table gives, checked as the rig configuration checks them
+    (also for a lab file's ``[instruments]``): ``{key: value}`` without the defaults."""
+    section = _section(origin, "instruments", table)
+    return {k: getattr(section, k) for k in table}
 
 
 def parse_config(data: dict, origin: str = "<config>") -> RigConfig:
