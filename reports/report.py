@@ -19,7 +19,7 @@ from flowcurve.reports.report_content import (Facts, Figure, Heading, Link, Para
 from flowcurve.reports.rounding import STEPS, format_step, value_with_U
 from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM
 
-__all__ = ["ReportError", "build_report", "find_fit", "find_results", "write_report"]
+__all__ = ["ReportError", "build_report", "find_fit", "find_results", "report_content", "write_report"]
 
 JC_EQUATION = ("Johnson–Cook: σ = (A + B·εpⁿ)·(1 + C·ln(ε̇/ε̇0))·(1 − T*ᵐ), with ε̇/ε̇0 at least 1 and "
                "T* = (T − Tref)/(Tmelt − Tref) between 0 and 1")
@@ -146,11 +146,13 @@ def to_html(report: Report) -> str:
 def build_report(root, *, units: str = DEFAULT_UNIT_SYSTEM, title: str | None = None, lab: LabHeader | None = None,
                  cards_dir=None, link_base=None, **overrides) -> str:
     """The report of the series under ``root`` as HTML text (cards written to ``cards_dir`` when given)."""
-    return to_html(_content(root, units, title, lab, cards_dir, link_base, overrides))
+    return to_html(report_content(root, units, title, lab, cards_dir, link_base, overrides))
 
 
-def _content(root, units, title, lab, cards_dir, link_base, overrides) -> Report:
-    fit_blocks = fit_blocks_factory(units, Path(cards_dir) if cards_dir else None, Path(link_base) if link_base else None, overrides)
+def report_content(root, units: str = DEFAULT_UNIT_SYSTEM, title: str | None = None, lab: LabHeader | None = None,
+                   cards_dir=None, link_base=None, overrides: dict | None = None) -> Report:
+    """The report's content (both renderers' input); cards written to ``cards_dir`` when given."""
+    fit_blocks = fit_blocks_factory(units, Path(cards_dir) if cards_dir else None, Path(link_base) if link_base else None, overrides or {})
     return build_content(root, lab=lab, title=title, fit_blocks=fit_blocks)
 
 
@@ -161,7 +163,7 @@ def write_report(root, output=None, *, units: str = DEFAULT_UNIT_SYSTEM, title: 
     from flowcurve.reports.report_pdf import write_pdf
 
     out = Path(output) if output else Path(root) / "report.html"
-    report = _content(root, units, title, lab, out.parent / "cards", out.parent, overrides)
+    report = report_content(root, units, title, lab, out.parent / "cards", out.parent, overrides)
     written = []
     try:
         out.write_text(to_html(report), encoding="utf-8")

@@ -420,7 +420,7 @@ def budget_tables(name: str, result: dict, report: Report | None = None) -> list
             unit = f" {c['unit']}" if c["unit"] != "1" else ""
             rows.append([label if i == 0 else "", c["name"], f"{_g(c['value'], 5)}{unit}", _g(c["u"]), _g(c["sensitivity"]),
                          _g(c["contribution"])])
-        rows.append(["", "combined u_c, U (k = 2)", f"{_g(b['value'], 5)}", _g(b["u"]), "", f"U = {format_uncertainty(b['U'])}"])
+        rows.append(["", "combined uc, U (k = 2)", f"{_g(b['value'], 5)}", _g(b["u"]), "", f"U = {format_uncertainty(b['U'])}"])
     inst = unc.get("instruments") or {}
     facts = (f"{name}: force ISO 7500-1 class {inst.get('force_class', '–')}, extensometer ISO 9513 class "
              f"{inst.get('extensometer_class', '–')}, diameters at {inst.get('diameter_resolution_mm', '–')} mm, lengths at "

@@ -167,21 +167,40 @@ class _Layout:
         self.y += height + 0.05
         self.para(b.caption, "note")
 
-    def finish(self, path: Path) -> Path:
-        from matplotlib.backends.backend_pdf import PdfPages
-
+    def number_pages(self) -> None:
         total = len(self.pages)
-        with PdfPages(path, metadata={"Title": self.report.title, "Creator": "flowcurve report"}) as pdf:
-            for i, fig in enumerate(self.pages, 1):
-                fig.text(1 - MARGIN_X / PAGE_W, 0.35 / PAGE_H, f"page {i} of {total}", fontsize=SIZES["small"], ha="right", color="#555")
-                fig.text(MARGIN_X / PAGE_W, 0.35 / PAGE_H, f"report {self.report.number}", fontsize=SIZES["small"], color="#555")
-                pdf.savefig(fig)
-                self._plt.close(fig)
-        return path
+        for i, fig in enumerate(self.pages, 1):
+            fig.text(1 - MARGIN_X / PAGE_W, 0.35 / PAGE_H, f"page {i} of {total}", fontsize=SIZES["small"], ha="right", color="#555")
+            fig.text(MARGIN_X / PAGE_W, 0.35 / PAGE_H, f"report {self.report.number}", fontsize=SIZES["small"], color="#555")
 
 
 def write_pdf(report: Report, path) -> Path:
     """Lay the report out on A4 pages and write it to ``path``."""
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    layout = lay_out(report)
+    try:
+        with PdfPages(path, metadata={"Title": report.title, "Creator": "flowcurve report"}) as pdf:
+            for fig in layout.pages:
+                pdf.savefig(fig)
+        return Path(path)
+    finally:
+        for fig in layout.pages:
+            layout._plt.close(fig)
+
+
+def page_texts(report: Report) -> list[list[str]]:
+    """The texts drawn on each PDF page, in drawing order (what :func:`write_pdf` saves)."""
+    layout = lay_out(report)
+    try:
+        return [[t.get_text() for t in fig.texts] for fig in layout.pages]
+    finally:
+        for fig in layout.pages:
+            layout._plt.close(fig)
+
+
+def lay_out(report: Report) -> _Layout:
+    """The report on numbered A4 pages (matplotlib figures; the caller closes them)."""
     layout = _Layout(report)
     try:
         layout.title()
@@ -199,7 +218,9 @@ def write_pdf(report: Report, path) -> Path:
                 layout.figure(b)
             elif isinstance(b, Link):
                 layout.para(b.text, url=b.href)
-        return layout.finish(Path(path))
-    finally:
+        layout.number_pages()
+        return layout
+    except BaseException:
         for fig in layout.pages:
             layout._plt.close(fig)
+        raise
