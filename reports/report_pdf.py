@@ -112,8 +112,6 @@ class _Layout:
         scale = TEXT_W / sum(w + 2 for w in widths)
         col_w = [(w + 2) * scale for w in widths]
         line = _line_h(size)
-        if caption:
-            self.para(caption, "note")
 
         def wrap(row):
             return [textwrap.wrap(str(c), w) or [""] for c, w in zip(row, widths)]
@@ -138,7 +136,11 @@ class _Layout:
             return max(len(c) for c in wrap(row)) * line + 0.5 * line
 
         header_h = row_height(columns) if columns else 0.0
-        self._room(header_h + (row_height(rows[0]) if rows else 0))
+        caption_size = SIZES["small"] + 0.5
+        caption_h = (len(textwrap.wrap(caption, _chars(TEXT_W, caption_size))) + 0.4) * _line_h(caption_size) if caption else 0.0
+        self._room(caption_h + header_h + (row_height(rows[0]) if rows else 0))  # the caption stays with its table
+        if caption:
+            self.para(caption, "note")
         if columns:
             draw(columns, bold=True, shade=True)
         for row in rows:

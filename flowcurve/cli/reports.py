@@ -63,17 +63,20 @@ def register(subparsers) -> None:
         help="test report of a series as PDF and HTML (results ± U, conformity, curves, fit, card)",
         description=(
             "The test report a lab sends its customer, as report.pdf and report.html: the lab header, "
-            "the standard and method designation (ISO 6892-1), the specimens, the results of the "
+            "the standard and method designation (ISO 6892-1), the specimens with test date and operator, the "
+            "instruments' calibration ('not for release' on every page without it), the results of the "
             "'flowcurve identify' result folders under DIR rounded as ISO 6892-1 §22 prescribes with "
-            "their expanded uncertainty U (k = 2), the conformity of testing rate and temperature, the "
+            "their expanded uncertainty U (k = 2), the conformity of testing rate and temperature under the lab's decision rule, the "
             "uncertainty budgets, the figures, the series fit (fit.json under DIR) and a link to the "
             "LS-DYNA card written into cards/ beside the report."
         ),
     )
     r.add_argument("dir", metavar="DIR", help="folder holding the result folders and the fit folder")
     r.add_argument("-o", "--output", metavar="FILE", help="HTML file to write (default: DIR/report.html); the PDF goes beside it")
-    r.add_argument("--lab", metavar="LAB.toml", help="lab header: [lab] name, address, accreditation, report_number, customer, "
-                   "approved_by (default: a generic header, said so in the report)")
+    r.add_argument("--lab", metavar="LAB.toml", help="lab file: [lab] name, address, accreditation, report_number or "
+                   "report_number_scheme, revision, date_of_issue, customer, approved_by, compression_standard, decision_rule, "
+                   "guard_band_U; [instruments] classes, certificates and due dates (docs/test-report.md; default: a generic "
+                   "header, said so in the report)")
     r.add_argument("--no-pdf", action="store_true", help="write the HTML only")
     r.add_argument("--units", "-u", default=DEFAULT_UNIT_SYSTEM, choices=sorted(UNIT_SYSTEMS), help="unit system of the card")
     r.add_argument("--title", metavar="TEXT", help="report title")
