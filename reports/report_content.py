@@ -400,6 +400,25 @@ def conformity_table(results: list, report: Report | None = None) -> Table:
     return Table(["specimen", "testing rate (ISO 6892-1 §10)", "temperature (ISO 6892-1 §10 / ISO 6892-2)"], rows)
 
 
+def heated_table(results: list) -> Table | None:
+    """ISO 6892-2's temperature rows of the heated tests: tolerance, measured deviation, gradient, soak."""
+    rows = []
+    for n, _, r in results:
+        temp = ((r.get("methods") or {}).get("conformity") or {}).get("temperature") or {}
+        if not str(temp.get("standard", "")).startswith("ISO 6892-2"):
+            continue
+        tol, dev = _num(temp.get("tolerance_C")), _num(temp.get("max_deviation_C"))
+        gradient, soak = _num(temp.get("gradient_C")), _num(temp.get("soak_min"))
+        rows.append([specimen_id(n, r), format_step(_num(temp.get("nominal_C")), 1.0), f"± {tol:g}" if tol else "by agreement",
+                     format_step(dev, 0.1) if dev is not None else "not measured",
+                     format_step(gradient, 0.1) if gradient is not None else "not measured",
+                     format_step(soak, 1.0) if soak is not None else NOT_STATED, _verdict(temp)])
+    if not rows:
+        return None
+    return Table(["specimen", "T, °C", "permitted deviation, °C", "largest deviation, °C", "gradient, °C", "soak, min", "verdict"],
+                 rows, "heated tests (ISO 6892-2:2018 §10.3, Table 1; soak at least 10 min before loading)")
+
+
 BUDGET_NAMES = {"E_MPa": "E, MPa", "Rp02_MPa": "Rp0.2, MPa", "Rm_MPa": "Rm, MPa", "Ag_pct": "Ag, %", "A_pct": "A, %",
                 "Z_pct": "Z, %", "friction_mu": "friction μ"}
 
@@ -506,7 +525,8 @@ def build_content(root, *, lab: LabHeader | None = None, title: str | None = Non
             report.add(Heading("Warnings", 3), *warnings,
                        Para("U covers the instruments and the fits' statistics, not the identification's own errors that "
                             "these warnings point at.", "note"))
-        report.add(Heading("Conformity of the test conditions"), Para(lab.decision_rule_text(), "note"), conformity_table(results, report))
+        report.add(Heading("Conformity of the test conditions"), Para(lab.decision_rule_text(), "note"), conformity_table(results, report),
+                   *[t for t in (heated_table(results),) if t is not None])
         report.add(Heading("Figures"))
         for n, folder, r in results:
             report.add(*figures(specimen_id(n, r), folder))

@@ -194,3 +194,14 @@ def test_instrument_calibration_keys_in_the_rig_configuration():
                                                       "instruments.length_resolution_mm", "instruments.crosshead_strain_error_pct"}
     with pytest.raises(ConfigError, match=r"rig.toml: \[instruments\] force_due_date: must be a date"):
         instruments_given({"force_due_date": "next spring"}, "rig.toml")
+
+
+def test_heated_tests_get_iso_6892_2_temperature_rows():
+    from flowcurve.reports.report_content import heated_table
+
+    temp = {"standard": "ISO 6892-2:2018", "nominal_C": 600.0, "tolerance_C": 3.0, "max_deviation_C": 1.24, "conforms": True}
+    results = [("T600", None, {"record": {"specimen_id": "T600-01"}, "methods": {"conformity": {"temperature": temp}}}),
+               ("RT", None, {"methods": {"conformity": {"temperature": {"standard": "ISO 6892-1:2019"}}}})]
+    table = heated_table(results)
+    assert table.rows == [["T600-01", "600", "± 3", "1.2", "not measured", "not stated", "conforms"]]
+    assert heated_table(results[1:]) is None
