@@ -21,8 +21,8 @@ from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM
 
 __all__ = ["ReportError", "build_report", "find_fit", "find_results", "report_content", "write_report"]
 
-JC_EQUATION = ("Johnson–Cook: σ = (A + B·εpⁿ)·(1 + C·ln(ε̇/ε̇0))·(1 − T*ᵐ), with ε̇/ε̇0 at least 1 and "
-               "T* = (T − Tref)/(Tmelt − Tref) between 0 and 1")
+JC_EQUATION = ("Johnson–Cook: σ = (A + B·εpⁿ)·(1 + C·ln ε*)·(1 − T*ᵐ), with ε* = strain rate / reference strain rate "
+               "(at least 1) and T* = (T − Tref)/(Tmelt − Tref) (between 0 and 1)")
 FIT_CONSTANTS = (("A_MPa", "A, MPa"), ("B_MPa", "B, MPa"), ("n", "n"), ("C", "C"), ("m", "m"))
 
 
