@@ -69,7 +69,8 @@ class LabHeader:
         if self.decision_rule == "guard band":
             return (f"Decision rule (ISO/IEC 17025 7.8.6, ILAC-G8:09/2019 guarded acceptance): a statement 'conforms' needs the "
                     f"value inside its limit by at least the guard band w = {self.guard_band_U:g}·U; within w of the limit the "
-                    "statement is 'not decided'.")
+                    "statement is 'not decided'. The testing-rate and temperature statements below carry no U of their own: "
+                    "they are made on the value (w = 0).")
         return ("Decision rule (ISO/IEC 17025 7.8.6, ILAC-G8:09/2019 simple acceptance, w = 0): a value on its side of the "
                 "limit conforms; the measurement uncertainty is not deducted, so a value close to a limit carries a risk of "
                 f"a false decision of up to 50 %{chosen}.")
