@@ -28,7 +28,7 @@ import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
-from flowcurve.errors import ConfigError, FlowcurveError
+from flowcurve.errors import FlowcurveError
 
 
 class LabFileError(FlowcurveError):
@@ -105,10 +105,22 @@ def _check(path: Path, key: str, value):
     return value
 
 
-def load_lab(path=None) -> LabHeader:
-    """The header from ``path`` (its ``[lab]`` table, or top-level keys, and ``[instruments]``), or the defaults when None."""
-    from flowcurve.rig.config import instruments_given
+def _instruments(path: Path, table, check) -> dict:
+    """``[instruments]`` checked by ``check(table, origin)`` (the rig configuration's schema, given by the
+    application layer: reports do not import rig), else kept as written with its dates as ISO text."""
+    if not isinstance(table, dict):
+        raise LabFileError(f"{path}: [instruments]: must be a table, got {table!r}")
+    if check is not None:
+        try:
+            return check(table, str(path))
+        except FlowcurveError as exc:
+            raise LabFileError(str(exc)) from None
+    return {k: v.isoformat() if isinstance(v, _dt.date) else v for k, v in table.items()}
 
+
+def load_lab(path=None, check_instruments=None) -> LabHeader:
+    """The header from ``path`` (its ``[lab]`` table, or top-level keys, and ``[instruments]``), or the defaults when None.
+    ``check_instruments(table, origin)``: the rig configuration's check of ``[instruments]`` (rig.config.instruments_given)."""
     if path is None:
         return LabHeader()
     path = Path(path)
@@ -125,9 +137,6 @@ def load_lab(path=None) -> LabHeader:
         if key not in known:
             raise LabFileError(f"{path}: [lab] {key}: unknown key (known: {', '.join(sorted(known))})")
         values[key] = _check(path, key, value)
-    try:
-        instruments = instruments_given(data.get("instruments", {}), str(path))
-    except ConfigError as exc:
-        raise LabFileError(str(exc)) from None
+    instruments = _instruments(path, data.get("instruments", {}), check_instruments)
     return LabHeader(**values, instruments=instruments, given=frozenset(values), source=path.name)
 

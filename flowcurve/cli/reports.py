@@ -157,8 +157,10 @@ def run_card(args) -> int:
 def run_report(args) -> int:
     from flowcurve.reports.lab import load_lab
     from flowcurve.reports.report import write_report
+    from flowcurve.rig.config import instruments_given
 
-    written = write_report(args.dir, args.output, units=args.units, title=args.title, lab=load_lab(args.lab),
+    lab = load_lab(args.lab, check_instruments=instruments_given)  # [instruments] as the rig configuration's
+    written = write_report(args.dir, args.output, units=args.units, title=args.title, lab=lab,
                            pdf=not args.no_pdf, **overrides(args))
     print(f"report written to {', '.join(map(str, written))}", file=sys.stderr)
     return 0

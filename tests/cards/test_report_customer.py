@@ -205,3 +205,24 @@ def test_heated_tests_get_iso_6892_2_temperature_rows():
     table = heated_table(results)
     assert table.rows == [["T600-01", "600", "± 3", "1.2", "not measured", "not stated", "conforms"]]
     assert heated_table(results[1:]) is None
+
+
+def test_lab_file_scheme_and_one_line_errors(tmp_path):
+    lab = tmp_path / "lab.toml"
+    lab.write_text('[lab]\nreport_number_scheme = "PN-{year}-{series}"\ndate_of_issue = 2026-12-01\n')
+    header = load_lab(lab)
+    assert header.number("46NT", header.date_of_issue) == "PN-2026-46NT" and header.date_of_issue == "2026-12-01"
+    for text, error in (('[instruments]\nforce_klass = 0.5\n', r"lab.toml: \[instruments\] force_klass: unknown key"),
+                        ('[lab]\nrevision = "two"\n', r"lab.toml: \[lab\] revision: must be an integer"),
+                        ('[lab]\nreport_number_scheme = "{customer}"\n', r"report_number_scheme: use only")):
+        lab.write_text(text)
+        with pytest.raises(LabFileError, match=error):
+            load_lab(lab, check_instruments=instruments_given)  # as the CLI reads it
+
+
+def test_report_command_checks_the_lab_files_instruments_as_the_rig_configuration(crmo, tmp_path, capsys):
+    lab = tmp_path / "lab.toml"
+    lab.write_text("[instruments]\nforce_class = 0.7\n")
+    assert main(["report", str(crmo), "--lab", str(lab), "--no-pdf", "-o", str(tmp_path / "r.html")]) == 2
+    err = capsys.readouterr().err
+    assert "lab.toml: [instruments] force_class: must be one of" in err and "Traceback" not in err
