@@ -364,7 +364,7 @@ def compression_measures(results: list) -> Table | None:
     rows = [[specimen_id(n, r), format_step(_num(_sub(r, "post").get("hk_mm")), 0.01),
              format_step(_num(_sub(r, "post").get("dmax_mm")), 0.01), format_step(_num(_sub(r, "post").get("dface_mm")), 0.01)]
             for n, _, r in results if r.get("test") == "compression"]
-    return Table(["specimen", "hk, mm", "dmax, mm", "dface, mm"], rows, "measured after the test ('–': not measured)") if rows else None
+    return Table(["specimen", "hk, mm", "dmax, mm", "dface, mm"], rows, "measured after the test ('–': not in the result)") if rows else None
 
 
 def hardening_table(results: list) -> Table:
