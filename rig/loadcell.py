@@ -113,8 +113,9 @@ class LoadCell:
         self.stream_resyncs = 0  # restarts so far (for the record's warnings)
         self.frames_received = 0  # good stream frames since the first start_stream
         self.frames_garbled = 0  # frames skipped by realigning on the next frame (no restart)
+        self._first_stamp: float | None = None
         self._last_stamp: float | None = None
-        self._frames_skipped = 0  # the stamps' gaps in output periods beyond one, summed (frames_lost)
+        self._frames_skipped = 0  # frames_lost: the largest count of frames the stamps' span shows missing
         self._phase_known = False  # after a (re)start the stream's phase is new: the chain starts again
         self._carry = b""  # bytes read past a realignment, framed next
         self._resyncs_in_a_row = 0
@@ -317,10 +318,10 @@ class LoadCell:
     @property
     def frames_lost(self) -> int:
         """Frames the amplifier sent that did not arrive good (lost on the line, garbled, skipped
-        by the amplifier or a restart, or one so late it reads as a gap): the output periods each
-        good frame's stamp lies after the previous one, less one, summed (:func:`stream_stamps`'
-        j_k − 1). It only grows, so the events, the header and the operator's alert that read it
-        at different times tell one count."""
+        by the amplifier or a restart): the output periods between the first and the latest good
+        frame's stamp (:func:`stream_stamps`), plus one, less the frames received. A late frame
+        does not count (the next one heals the span). The count never goes down, so the events,
+        the header and the operator's alert that read it at different times tell one number."""
         return self._frames_skipped
 
     def _next_frame(self, timeout: float) -> bytes:
@@ -399,16 +400,17 @@ class LoadCell:
 
     def _stamp(self, arrival: float) -> float:
         """The frame's send time on the stream's rhythm (:func:`stream_stamps`, one step); the
-        periods its gap spans beyond one are counted in :attr:`frames_lost`."""
-        if not self.output_rate_per_s or self._last_stamp is None:
-            t = arrival
+        frames missing from the stamps' span so far update :attr:`frames_lost`."""
+        if not self.output_rate_per_s or self._last_stamp is None or not self._phase_known:
+            t = arrival  # the stream (re)started: a new phase, the chain starts at this arrival
         else:
-            stamps, spans = stream_stamps([arrival], self._period_s(), last=self._last_stamp)
-            self._frames_skipped += int(spans[0]) - 1
-            # after a (re)start the stream has a new phase: the chain starts again at the arrival
-            t = float(stamps[0]) if self._phase_known else arrival
+            t = float(stream_stamps([arrival], self._period_s(), last=self._last_stamp)[0][0])
         self._phase_known = True
+        self._first_stamp = t if self._first_stamp is None else self._first_stamp
         self._last_stamp = t
+        if self.output_rate_per_s:
+            sent = round((t - self._first_stamp) * self.output_rate_per_s) + 1
+            self._frames_skipped = max(self._frames_skipped, sent - self.frames_received)
         return t
 
     def stop_stream(self) -> None:

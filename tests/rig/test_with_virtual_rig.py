@@ -139,7 +139,7 @@ def test_stream_survives_garbled_frames(rig):
     assert len(got) == 100
     # some frames were garbled: each cost that frame, the stream realigned on the next (issue 42) ...
     assert cell.frames_garbled >= 1 and cell.stream_resyncs == 0
-    assert cell.frames_lost >= cell.frames_garbled
+    assert cell.frames_lost >= cell.frames_garbled - 1  # (one garbled in the read-ahead past the last frame taken)
     assert all(abs(s.force_N) < 100.0 for s in got)  # ... and none was decoded shifted
 
 
