@@ -171,6 +171,15 @@ def stop_reason(rows: np.ndarray, state: StopState, crit: StopCriteria) -> str |
     return None
 
 
+def target_reached(crosshead_mm: tuple[float, float] | None, crit: StopCriteria) -> str | None:
+    """The displacement target judged on the crosshead reading itself (the encoder stream's latest,
+    ``(time_s, mm)``), not on record rows: a row waits for every stream to bracket its force sample,
+    so rows come later than the reading that reached the target."""
+    if crit.target_displacement_mm is None or crosshead_mm is None or not abs(crosshead_mm[1]) >= crit.target_displacement_mm:
+        return None
+    return f"target displacement {crit.target_displacement_mm:g} mm reached"
+
+
 def _update_stall(rows: np.ndarray, state: StopState, crit: StopCriteria) -> bool:
     """Track crosshead motion; True once it has moved and then stood still for stall_s."""
     if crit.stall_s is None:
@@ -553,6 +562,10 @@ class Procedure:
                     reason = stop_reason(rows, state, crit)
                     if reason:
                         return reason  # the done snapshot carries the rows to live plots
+                crosshead = sampler.channels.get("crosshead_mm")
+                reason = target_reached(crosshead.stream.last() if crosshead is not None else None, crit)
+                if reason:
+                    return reason
                 fault = sampler.fault or sampler.check_silence()
                 if fault is not None:
                     self._event("fault", str(fault))

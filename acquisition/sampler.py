@@ -36,9 +36,10 @@ logger = logging.getLogger(__name__)
 # what a failing device raises: the drivers' errors, a vanished port (SerialException is an OSError)
 DEVICE_FAILURES = (DeviceError, OSError)
 
-# A read function returns one value, a list of values (a streamed block; each is stamped
-# when the block arrives, spaced by ``period_s`` backwards), or a list of (t, value) pairs
-# already stamped on the sampler's clock.
+# A read function returns one value (stamped at the middle of the read: its request and reply
+# bracket it), a list of values (a streamed block; each is stamped when the block arrives,
+# spaced by ``spacing_s`` backwards), or a list of (t, value) pairs already stamped on the
+# sampler's clock (the load cell's stream: on its own rhythm, rig.loadcell.stream_stamps).
 ReadFn = Callable[[], "float | Sequence[float] | Sequence[tuple[float, float]] | None"]
 
 
@@ -73,24 +74,6 @@ class Stream:
     def last_time(self) -> float:
         with self._lock:
             return self._t[-1] if self._t else -np.inf
-
-
-def lower_envelope_stamps(arrival: np.ndarray, period: float, last: float | None = None) -> np.ndarray:
-    """Send times of streamed frames from their arrival times (same clock).
-
-    A device streaming at a fixed rate sends frame k one ``period`` after frame k-1, and no
-    frame arrives before it was sent. So stamp_k = min(arrival_k, stamp_(k-1) + period):
-    frames read in a burst after the host lagged get their spacing back instead of one
-    arrival time. ``period`` should be slightly longer than the device's nominal period, so
-    that stamps lean on the least-delayed arrivals when the device's crystal is slow.
-    ``last`` is the previous block's last stamp.
-    """
-    arrival = np.asarray(arrival, dtype=float)
-    k = np.arange(arrival.size)
-    base = arrival - k * period  # stamp_k = k·T + min_j<=k (arrival_j − j·T)
-    if last is not None and arrival.size:
-        base[0] = min(base[0], last + period)
-    return np.minimum.accumulate(base) + k * period
 
 
 def interpolate_at(t: np.ndarray, ts: np.ndarray, vs: np.ndarray) -> np.ndarray:
@@ -137,6 +120,7 @@ class Channel(threading.Thread):
         self.stream = Stream(name)
         self.guard = None  # an acquisition.plausibility.RateGuard: impossible readings rejected
         self.last_error: str | None = None  # the last failed read (for a silence fault's message)
+        self.half_width_s = 0.0  # the widest bracket (request .. reply) of a bare value's stamp, clock units
         self.reads = 0
         self.last_data_wall_s = timebase.now()
         self.error: str | None = None
@@ -152,6 +136,7 @@ class Channel(threading.Thread):
         self.last_data_wall_s = tb.now()
         next_due = tb.now()
         while not self._stop_event.is_set():
+            asked = self.clock()  # a polled reading lies between its request and its reply
             try:
                 got = self.read()
             except SafetyError as exc:  # over-temperature, open thermocouple: stop at once
@@ -173,7 +158,7 @@ class Channel(threading.Thread):
                 return
             failures = 0
             try:
-                n = self._store(got, self.clock())
+                n = self._store(got, self.clock(), asked)
             except ImplausibleReadings as exc:  # readings no machine makes, again and again
                 self._fault(str(exc), exc)
                 return
@@ -195,12 +180,16 @@ class Channel(threading.Thread):
             held = self.guard.flush()
             self.stream.extend([p[0] for p in held], [p[1] for p in held])
 
-    def _store(self, got, now: float) -> int:
-        """Stamp and keep what a read returned (through the guard); how many values came."""
+    def _store(self, got, now: float, asked: float | None = None) -> int:
+        """Stamp and keep what a read returned (through the guard); how many values came. A bare
+        value is stamped at the middle of its read (``asked`` .. ``now``: the request and the reply
+        bracket it; the largest half-width is kept in :attr:`half_width_s`)."""
         if got is None:
             return 0
         if np.isscalar(got):
-            pairs = [(now, float(got))]
+            asked = now if asked is None else min(asked, now)
+            self.half_width_s = max(self.half_width_s, 0.5 * (now - asked))
+            pairs = [(0.5 * (asked + now), float(got))]
         else:
             items = list(got)
             if not items:

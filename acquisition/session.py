@@ -15,9 +15,10 @@ import logging
 from dataclasses import dataclass
 from typing import Callable
 
-from flowcurve.acquisition.sampler import Channel, lower_envelope_stamps
+from flowcurve.acquisition.sampler import Channel
 from flowcurve.clock import WALL, Clock
 from flowcurve.errors import DeviceError, SafetyError
+from flowcurve.record.format import WRITER_STAMPING, WRITER_STAMPING_KEY
 from flowcurve.rig.codecs import aed
 from flowcurve.rig.furnace import STUCK_RELAY_ADVICE, StuckRelayCheck
 
@@ -34,7 +35,8 @@ FURNACE_VERIFY_S = 1.0  # host seconds between the furnace module's address chec
 STUCK_SETTLE_S = 30.0  # test seconds with the heater off before the furnace must not rise any more
 STILL_RISING_C = 1.0  # a furnace risen more than this over the stuck-relay check's confirm_s (5 s) still rises (noise ~0.1 C)
 STREAM_BLOCK = 20  # load-cell frames per read call at most
-STREAM_PERIOD_MARGIN = 1.01  # stamps step 1 % longer than the nominal output period
+BRACKET_SLACK_S = 0.002  # host seconds a crosshead exchange's half-width may exceed the narrowest one's
+BRACKET_KEEP_S = 0.2  # ... a reading is kept at least this often (host seconds) all the same
 
 
 class DriverRig:
@@ -62,7 +64,8 @@ class DriverRig:
         self.setpoint_margin_C = config.furnace.setpoint_margin_C if self.has_furnace else 0.0
         self.control_period_s = config.furnace.control_period_s if self.has_furnace else None
         self.frame_stiffness_N_per_um = config.frame.stiffness_N_per_um
-        self.instruments_meta = config.instruments.meta()  # the instruments' classes, for the results' uncertainty
+        # the instruments' classes, for the results' uncertainty; how this driver stamps (the record's writer.stamping)
+        self.instruments_meta = {**config.instruments.meta(), WRITER_STAMPING_KEY: WRITER_STAMPING}
         self.max_force_N = config.frame.max_force_N
         rate = aed.ICR_RATES_PER_S[config.loadcell.rate_code]
         self.loadcell_period_s = 1.0 / rate
@@ -72,6 +75,10 @@ class DriverRig:
         self._controller = None
         self._stuck = None
         self._verified_at = -float("inf")
+        self.position_half_width_s = 0.0
+        self.positions_doubted = 0
+        self._narrowest_half_s = float("inf")
+        self._position_kept_at = -float("inf")
         self._clock: Callable[[], float] = lambda: self.timebase.now() * self.time_scale
 
     # life cycle ------------------------------------------------------------------------------
@@ -125,19 +132,11 @@ class DriverRig:
         if self.stream:
             started = []
 
-            last: list[float] = []
-            period = self.loadcell_period_s * STREAM_PERIOD_MARGIN
-
-            def read_force():
+            def read_force():  # stamped by the driver on the stream's rhythm (rig.loadcell.stream_stamps)
                 if not started:
                     cell.start_stream()
                     started.append(True)
-                samples = cell.read_stream(STREAM_BLOCK, 0.1)
-                if not samples:
-                    return []
-                stamps = lower_envelope_stamps([s.t_monotonic_s for s in samples], period, last[-1] if last else None)
-                last[:] = [float(stamps[-1])]
-                return [(to_clock(t), s.force_N) for t, s in zip(stamps, samples)]
+                return [(to_clock(s.t_monotonic_s), s.force_N) for s in cell.read_stream(STREAM_BLOCK, 0.1)]
         else:
 
             def read_force():
@@ -180,10 +179,24 @@ class DriverRig:
         return max(SILENCE_MIN_S, SILENCE_TIMEOUTS * section.timeout_s)
 
     def _read_position(self) -> list[tuple[float, float]]:
-        """The crosshead position stamped at the middle of its exchange."""
-        t1 = self.timebase.now()
+        """The crosshead position stamped at the middle of its exchange: the request and the
+        reply bracket the moment the counter was read. A reading whose bracket is wider than the
+        narrowest one by more than BRACKET_SLACK_S (the host was held up meanwhile: its time is
+        doubtful by half of that) is left out while one was kept within BRACKET_KEEP_S — the
+        next comes one poll later, and the stream never falls silent. The widest half-width of a
+        kept reading (host seconds) is :attr:`position_half_width_s`; :attr:`positions_doubted` counts
+        those left out."""
+        asked = self.timebase.now()
         mm = self.encoder.position_mm()
-        return [(self._to_clock(0.5 * (t1 + self.timebase.now())), mm)]
+        answered = self.timebase.now()
+        half = 0.5 * (answered - asked)
+        self._narrowest_half_s = min(self._narrowest_half_s, half)
+        if half > self._narrowest_half_s + BRACKET_SLACK_S and answered - self._position_kept_at < BRACKET_KEEP_S:
+            self.positions_doubted += 1
+            return []
+        self._position_kept_at = answered
+        self.position_half_width_s = max(self.position_half_width_s, half)
+        return [(self._to_clock(0.5 * (asked + answered)), mm)]
 
     # furnace ---------------------------------------------------------------------------------
     def read_temperature_C(self) -> float:

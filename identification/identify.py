@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from flowcurve.record.format import STATUS_ABORTED, Record
+from flowcurve.record.format import STATUS_ABORTED, WRITER_STAMPING_KEY, Record
 from flowcurve.record.summary import GAUGE_KEY, record_summary
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.compression import identify_compression
@@ -107,6 +107,31 @@ def fault_warnings(record: Record) -> tuple[list[str], bool]:
     return warnings, lost > POOR_LOSS_FRACTION or "corrupt" in seen
 
 
+LOSS_EVENTS = ("frames_missing", "stream_restart", "data_loss")  # a load-cell frame went missing
+
+
+def old_writer_warning(record: Record) -> str | None:
+    """A record written before the force samples were stamped on the stream's rhythm (no
+    ``writer.stamping`` in its header) that declares lost load-cell frames: that writer stamped
+    the frames after a loss as if none had been lost, so from the first loss on each force may
+    sit against an earlier crosshead position (docs/record-format.md, "Time stamps and losses")."""
+    if record.meta.get(WRITER_STAMPING_KEY) not in (None, ""):
+        return None
+    try:
+        missing = float(record.meta.get("samples_missing") or 0)
+    except ValueError:
+        missing = 0.0
+    first = next((e for e in record.events if e.name in LOSS_EVENTS), None)
+    if not missing and first is None:
+        return None
+    at = f" from {first.time_s:.1f} s ({first.name})" if first is not None else ""
+    lost = f"{missing:.0f} lost load-cell frames" if missing else "lost load-cell frames"
+    return (f"the record was written before flowcurve stamped force samples on the load cell's rhythm (no "
+            f"{WRITER_STAMPING_KEY} in its header) and declares {lost}: the force may be shifted against the "
+            f"crosshead after the first loss{at} — each later force paired with an earlier crosshead position, "
+            f"Fm and the curve too high while the force rises; use the curve up to the first loss, or test again")
+
+
 def check_record(record: Record) -> list[str]:
     """The checks every identification needs; returns warnings, raises on unusable records."""
     test = record.test
@@ -184,6 +209,10 @@ def identify(record: Record, **options) -> Identification:
         warnings.append(f"option(s) not used by {record.test} identification: {', '.join(ignored)}")
     declared, doubtful = fault_warnings(record)
     warnings += declared
+    shifted = old_writer_warning(record)
+    if shifted:
+        warnings.append(shifted)
+        doubtful = True
     fit = getattr(getattr(result, "hardening", None), "fit", None)  # the main fit (result["hardening"] is its copy)
     if doubtful and fit is not None and fit.quality == "good":
         fit.doubt = "the record declares lost or corrupt samples"

@@ -74,6 +74,7 @@ KNOWN_KEYS = (
     "nominal_temperature_C",
     "crosshead_speed_mm_per_s",
     "rig.frame_stiffness_N_per_um",
+    "writer.stamping",
     "specimen.d0_mm",
     "specimen.l0_mm",
     "specimen.h0_mm",
@@ -87,6 +88,13 @@ KNOWN_KEYS = (
     "post.smax_mm2",
     "post.dface_mm",
 )
+
+# How the acquisition stamped the samples (docs/record-format.md, "Time stamps and losses"):
+# 2 = each load-cell frame on the stream's rhythm, so a lost frame leaves a gap in time_s and
+# never moves a later force against the crosshead. Records without the key were written before:
+# after their first lost frame every force may sit against an earlier crosshead position.
+WRITER_STAMPING_KEY = "writer.stamping"
+WRITER_STAMPING = 2
 
 # metadata numbers beyond these magnitudes (native units: mm, N, s, MPa, N/µm, mm/s) are
 # overflow or typing slips, not measurements: a one-line error, not inf or 0 in the arithmetic

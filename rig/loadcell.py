@@ -11,6 +11,8 @@ import logging
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from flowcurve.errors import DeviceError
 from flowcurve.rig.codecs import ProtocolError
 from flowcurve.rig.codecs import aed
@@ -20,11 +22,49 @@ logger = logging.getLogger(__name__)
 
 SETTING_RETRIES = 2  # ICR/ASF/COF/TAR are idempotent: safe to repeat
 READ_RETRIES = 2
+PERIOD_MARGIN = 1.01  # the stamps' chain steps 1 % longer than the nominal period (an AED crystal is within 0.01 %)
+REALIGN_FRAMES = 8  # a garbled frame: the next frame boundary is looked for this many frames' bytes on
+REALIGN_CHECK = {"ascii": 1, "binary4": 2, "binary2": 2}  # ... where this many good frames in a row line up
+# (an ASCII frame parses or not; a binary one has only its CR LF, which a value's bytes can hold by chance)
+STREAM_WRITER = "stream-rhythm-1"  # how this driver stamps the stream (the record header's writer.stamping)
+
+
+def stream_stamps(arrival, period: float, last: float | None = None, margin: float = PERIOD_MARGIN):
+    """Send times of a fixed-rate stream's frames from their arrival times, and the output
+    periods each frame's gap spans — the *rhythm rule*::
+
+        j_k = max(1, round((a_k − s_(k−1)) / T))        periods since the previous frame
+        s_k = min(a_k, s_(k−1) + j_k · m · T)          its send time (no frame arrives before it is sent)
+
+    ``arrival`` a_k (host seconds, strictly increasing: the driver back-dates a frame read from a
+    burst by the frames buffered behind it), ``period`` T the configured output period, ``margin``
+    m ≥ 1 + the device crystal's tolerance, ``last`` the previous frame's stamp (None: the stream
+    starts, s_0 = a_0). AED frames carry no counter or stamp, so the gap in arrival is the only
+    count of frames lost: m lost frames leave a gap of m + 1 periods in the stamps and never move a
+    later one. A single late frame is stamped at most at its arrival and the next on-time frame
+    heals the chain; a device crystal slower than nominal by less than m − 1 makes the chain run
+    late, and the arrivals clip it (the stamp is never later than the arrival). Returns
+    (stamps, periods) as arrays. Before the fix (``lower_envelope_stamps``) j_k was always 1: after
+    a loss every later stamp stayed the lost periods too early.
+    """
+    a = np.asarray(arrival, dtype=float)
+    stamps, spans = np.empty(a.size), np.ones(a.size, dtype=int)
+    prev = last
+    for k, ak in enumerate(a):
+        if prev is None:
+            stamps[k] = ak
+        else:
+            spans[k] = max(1, int(round((ak - prev) / period)))
+            stamps[k] = min(ak, prev + spans[k] * margin * period)
+        prev = stamps[k]
+    return stamps, spans
 
 
 @dataclass(frozen=True)
 class ForceSample:
-    """One force reading: host monotonic time (the port's clock), force, raw status byte and overload flag."""
+    """One force reading: host monotonic time (the port's clock) — a streamed frame's send time on
+    the stream's rhythm (:func:`stream_stamps`), a polled value's exchange midpoint — force, raw
+    status byte and overload flag."""
 
     t_monotonic_s: float
     force_N: float
@@ -72,8 +112,12 @@ class LoadCell:
         self.max_resyncs = 3  # stream restarts in a row before a garbled stream is an error
         self.stream_resyncs = 0  # restarts so far (for the record's warnings)
         self.frames_received = 0  # good stream frames since the first start_stream
-        self._first_arrival: float | None = None
-        self._last_arrival: float | None = None
+        self.frames_garbled = 0  # frames skipped by realigning on the next frame (no restart)
+        self._first_stamp: float | None = None
+        self._last_stamp: float | None = None
+        self._frames_skipped = 0  # frames_lost: the largest count of frames the stamps' span shows missing
+        self._phase_known = False  # after a (re)start the stream's phase is new: the chain starts again
+        self._carry = b""  # bytes read past a realignment, framed next
         self._resyncs_in_a_row = 0
         self._last_frame_t = 0.0
         self._last_sample_t = -math.inf
@@ -167,9 +211,11 @@ class LoadCell:
         self._set("TAR")
 
     def read(self) -> ForceSample:
-        """One ``MSV?`` measured value as a :class:`ForceSample`."""
+        """One ``MSV?`` measured value as a :class:`ForceSample`, stamped at the middle of the
+        exchange (its request and reply bracket the measurement)."""
+        asked = self.transport.clock.now()
         frame = self._query("MSV?", length=self.fmt.frame_length, parse=self._check_frame)
-        return self._sample(frame, self.transport.clock.now())
+        return self._sample(frame, 0.5 * (asked + self.transport.clock.now()))
 
     def _check_frame(self, frame: bytes) -> bytes:
         aed.decode_msv(frame, self.fmt)  # raises ProtocolError (a ValueError) → retried
@@ -219,33 +265,36 @@ class LoadCell:
         self._not_streaming("MSV?0")
         self.open()
         self.transport.discard_input()
+        self._carry = b""
         self.transport.send(aed.command("MSV?0"))
         self.streaming = True
+        self._phase_known = False  # a new stream: its frames keep a new phase
         self._last_frame_t = self.transport.clock.now()
 
     def read_stream(self, max_samples: int, timeout: float) -> list[ForceSample]:
         """Up to ``max_samples`` frames (by length) arriving within ``timeout`` seconds.
 
         Returns early when ``max_samples`` are in; a frame cut by the deadline stays
-        buffered for the next call, so framing never slips. Timestamps are host times of
-        arrival, back-dated by one output period per complete frame still buffered behind
-        (known once ``configure(rate_code=...)`` ran). A frame that fails its check (a lost
-        or extra byte: no CR LF where one is due) restarts the stream (``STP``, ``MSV?0``)
-        to regain the framing — formats without CR LF (+32) cannot be checked. More than
-        ``max_resyncs`` restarts in a row, or a stream silent for more than
-        ``stream_silence_s``, raise DeviceError.
+        buffered for the next call, so framing never slips. Each sample is stamped with its
+        send time on the stream's rhythm (:func:`stream_stamps` over its arrival, back-dated by
+        one output period per complete frame still buffered behind it): a lost, garbled or
+        skipped frame leaves a gap in the stamps and never moves a later one. A frame that
+        fails its check (a lost or extra byte: no CR LF where one is due) costs that frame:
+        the stream is realigned on the next frame boundary where good frames line up (:meth:`_realign`); only when none does within :data:`REALIGN_FRAMES`
+        frames is the stream restarted (``STP``, ``MSV?0``) — formats without CR LF (+32)
+        cannot be checked. More than ``max_resyncs`` restarts in a row, or a stream silent
+        for more than ``stream_silence_s``, raise DeviceError.
         """
         if not self.streaming:
             raise DeviceError(self.name, "read_stream without start_stream")
         deadline = self.transport.clock.now() + timeout
         samples: list[ForceSample] = []
-        n = self.fmt.frame_length
         while len(samples) < max_samples:
             remaining = deadline - self.transport.clock.now()
             if remaining <= 0:
                 break
             try:
-                frame = self.transport.read_exactly(n, remaining, what="'MSV?0' stream")
+                frame = self._next_frame(remaining)
             except DeviceError:
                 if not self.transport.is_open:  # the port disappeared
                     raise
@@ -254,13 +303,11 @@ class LoadCell:
             try:
                 value = aed.decode_msv(frame, self.fmt)
             except ProtocolError as exc:
-                self._resync(exc)
+                self._realign(frame, exc)
                 continue
             self._resyncs_in_a_row = 0
             self.frames_received += 1
-            t = self._stream_time(now)  # its arrival, back-dated past the frames already behind it
-            self._first_arrival = t if self._first_arrival is None else self._first_arrival
-            self._last_arrival = t
+            t = self._stamp(self._stream_time(now))  # its send time on the stream's rhythm
             samples.append(self._to_sample(value, t))
             self._last_frame_t = now
         silent = self.transport.clock.now() - self._last_frame_t
@@ -270,13 +317,64 @@ class LoadCell:
 
     @property
     def frames_lost(self) -> int:
-        """Frames the amplifier sent (its rate × the time between the first and the last good
-        frame's arrival, each back-dated past the frames buffered behind it) that did not arrive
-        good: lost on the line, garbled, or skipped by restarts."""
-        if self._first_arrival is None or not self.output_rate_per_s:
-            return 0
-        sent = round((self._last_arrival - self._first_arrival) * self.output_rate_per_s) + 1
-        return max(0, sent - self.frames_received)
+        """Frames the amplifier sent that did not arrive good (lost on the line, garbled, skipped
+        by the amplifier or a restart): the output periods between the first and the latest good
+        frame's stamp (:func:`stream_stamps`), plus one, less the frames received. A late frame
+        does not count (the next one heals the span). The count never goes down, so the events,
+        the header and the operator's alert that read it at different times tell one number."""
+        return self._frames_skipped
+
+    def _next_frame(self, timeout: float) -> bytes:
+        """The next frame's bytes by length (first what a realignment read past)."""
+        n = self.fmt.frame_length
+        if len(self._carry) >= n:
+            frame, self._carry = self._carry[:n], self._carry[n:]
+            return frame
+        frame = self._carry + self.transport.read_exactly(n - len(self._carry), timeout, what="'MSV?0' stream")
+        self._carry = b""
+        return frame
+
+    def _realign(self, bad: bytes, exc: ProtocolError) -> None:
+        """A garbled frame costs that frame: go on from the first place after its start where
+        :data:`REALIGN_CHECK` frames in a row decode, within :data:`REALIGN_FRAMES` frames' bytes.
+        An ASCII frame parses or not, so any byte may start one; a binary frame is only its bytes
+        and a CR LF, so it may start only right after a CR LF (the garbled frame's own, or the next
+        frame's when that one was hit): the remnant of a frame with a byte too many also ends in
+        CR LF and would pass for a frame. None lines up (the bytes stay unreadable, or the stream
+        stalls meanwhile): restart the stream."""
+        n, check = self.fmt.frame_length, REALIGN_CHECK[self.fmt.kind]
+        ascii_frames = self.fmt.kind == "ascii"
+        buf = bad + self._carry
+        self._carry = b""
+        period = 1.0 / self.output_rate_per_s if self.output_rate_per_s else 0.0
+        wait_s = self.transport.timeout_s + (REALIGN_FRAMES + check) * period
+        for offset in range(1, REALIGN_FRAMES * n + 1):
+            need = offset + check * n
+            if len(buf) < need:
+                try:
+                    buf += self.transport.read_exactly(need - len(buf), wait_s, what="'MSV?0' stream")
+                except DeviceError:
+                    if not self.transport.is_open:
+                        raise
+                    break
+            if not ascii_frames and buf[offset - 2:offset] != aed.CRLF:
+                continue
+            if all(self._decodes(buf[offset + i * n: offset + (i + 1) * n]) for i in range(check)):
+                self._carry = buf[offset:]
+                self.frames_garbled += 1
+                logger.info("%s: garbled frame (%s): realigned %d bytes on", self.name, exc, offset)
+                return
+        self._resync(exc)
+
+    def _decodes(self, frame: bytes) -> bool:
+        try:
+            aed.decode_msv(frame, self.fmt)
+        except ProtocolError:
+            return False
+        return True
+
+    def _period_s(self) -> float:
+        return 1.0 / self.output_rate_per_s
 
     def _resync(self, exc: ProtocolError) -> None:
         self.stream_resyncs += 1
@@ -294,9 +392,25 @@ class LoadCell:
         # its spacing); never before the previous sample
         t = now
         if self.output_rate_per_s:
-            t -= (self.transport.buffered() // self.fmt.frame_length) / self.output_rate_per_s
+            behind = (self.transport.buffered() + len(self._carry)) // self.fmt.frame_length
+            t -= behind / self.output_rate_per_s
         t = max(t, self._last_sample_t + 1e-6)
         self._last_sample_t = t
+        return t
+
+    def _stamp(self, arrival: float) -> float:
+        """The frame's send time on the stream's rhythm (:func:`stream_stamps`, one step); the
+        frames missing from the stamps' span so far update :attr:`frames_lost`."""
+        if not self.output_rate_per_s or self._last_stamp is None or not self._phase_known:
+            t = arrival  # the stream (re)started: a new phase, the chain starts at this arrival
+        else:
+            t = float(stream_stamps([arrival], self._period_s(), last=self._last_stamp)[0][0])
+        self._phase_known = True
+        self._first_stamp = t if self._first_stamp is None else self._first_stamp
+        self._last_stamp = t
+        if self.output_rate_per_s:
+            sent = round((t - self._first_stamp) * self.output_rate_per_s) + 1
+            self._frames_skipped = max(self._frames_skipped, sent - self.frames_received)
         return t
 
     def stop_stream(self) -> None:
@@ -305,3 +419,4 @@ class LoadCell:
         self.streaming = False
         self.transport.clock.sleep(min(0.05, self.transport.timeout_s))
         self.transport.discard_input()
+        self._carry = b""

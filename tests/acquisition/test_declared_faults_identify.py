@@ -1,6 +1,7 @@
 """A fault the rig declared in the record reaches identify's warnings (issue 31's must-show):
-``run tension --fault loadcell:garble:0.05`` loses frames to stream restarts; the record names the
-loss in its events and ``identify`` repeats it and marks the hardening poor past 5 % lost."""
+``run tension --fault loadcell:garble:0.05`` loses the garbled frames (each costs that frame since
+issue 42, no stream restart); the record names the loss in its events and ``identify`` repeats it
+and marks the hardening poor past 5 % lost."""
 
 from __future__ import annotations
 
@@ -18,9 +19,9 @@ def test_a_garbled_load_cell_is_named_in_the_record_and_in_identify(tmp_path, ca
     assert code in (0, 5)  # 5: the run declares lost samples
     rec = read_record(record)
     names = [e.name for e in rec.events]
-    assert "stream_restart" in names
+    assert "frames_missing" in names and "stream_restart" not in names
     warnings, doubtful = fault_warnings(rec)
-    assert any("stream_restart" in w for w in warnings)
+    assert any("frames_missing" in w for w in warnings)
     assert main(["identify", str(record), "--out", str(tmp_path / "res"), "--no-plots"]) == 0
     result = json.loads((tmp_path / "res" / "t" / "result.json").read_text())
     said = [w for w in result["warnings"] if "declares rig faults" in w]

@@ -146,21 +146,3 @@ def test_hanging_read_is_caught_by_check_silence(tb):
     release.set()
     sampler.finish()
     assert fault is not None and str(fault).startswith("encoder: no answer")
-
-
-def test_lower_envelope_restores_the_spacing_of_a_burst():
-    from flowcurve.acquisition.sampler import lower_envelope_stamps
-
-    period = 0.01
-    sent = np.arange(50) * period
-    arrival = sent + 0.001
-    arrival[10:30] = sent[29] + 0.002  # the reader stalled: 20 frames read at once
-    stamps = lower_envelope_stamps(arrival, period * 1.01)
-    # never later than arrival; within 1 % of the stall of the true send time (+ latency)
-    assert np.all(stamps <= arrival + 1e-12)
-    assert np.max(np.abs(stamps - sent)) < 0.001 + 0.01 * 0.2 + 1e-9
-    # arrival stamps alone would be off by up to the stall (0.19 s)
-    assert np.max(np.abs(arrival - sent)) > 0.18
-    # continuing from a previous block
-    more = lower_envelope_stamps(arrival[25:], period * 1.01, last=stamps[24])
-    np.testing.assert_allclose(more, stamps[25:], atol=1e-12)

@@ -1,5 +1,6 @@
 """LoadCell driver through command/reply pairs (the AED command set of docs/protocols.md)."""
 
+import numpy as np
 import pytest
 
 from flowcurve.clock import ModelClock
@@ -214,18 +215,63 @@ def test_recover_line_brings_the_amplifier_back_to_the_configured_rate():
     assert lc.identify()["serial"] == "1234"
 
 
-def test_stream_with_an_extra_byte_restarts_and_regains_framing(fake_port):
+def test_stream_with_an_extra_byte_costs_that_frame_without_a_restart(fake_port):
+    """Issue 42: a garbled frame is skipped by realigning on the next frame; the stream goes on
+    (the old driver sent STP and MSV?0 and lost several frames to each restart)."""
     fmt = aed.output_format(3)
-    good = [aed.encode_msv(c, fmt) for c in (1, 2, 3)]
+    good = [aed.encode_msv(c, fmt) for c in (1, 2, 3, 4)]
     bad = good[1][:4] + b"\xa5" + good[1][4:]  # one byte too many in the second frame
-    fake = fake_port([(b";MSV?0;", good[0] + bad + good[2]),
-                      (b";STP;", None),
-                      (b";MSV?0;", b"".join(aed.encode_msv(c, fmt) for c in (10, 11)))])
+    fake = fake_port([(b";MSV?0;", good[0] + bad + good[2] + good[3])])
     lc = cell(fake)
     lc.start_stream()
     got = lc.read_stream(3, timeout=0.5)
-    assert [s.counts for s in got] == [1, 10, 11]  # the shifted frames were not decoded
-    assert lc.stream_resyncs == 1 and lc.streaming
+    assert [s.counts for s in got] == [1, 3, 4]  # the garbled frame alone is lost
+    assert lc.stream_resyncs == 0 and lc.frames_garbled == 1 and lc.streaming
+    assert fake.log == [b";MSV?0;"]  # no STP, no second MSV?0
+
+
+@pytest.mark.parametrize("cof, garble", [
+    (3, lambda f: f[:3] + f[4:]),  # ASCII, a byte lost
+    (3, lambda f: f[:8] + b"\xee" + f[9:] + b"\x91"),  # ASCII, its CR replaced, a byte added
+    (0, lambda f: f[:2] + b"\xd3" + f[2:]),  # 4-byte binary, a byte added
+    (8, lambda f: f[:1] + f[2:]),  # 4-byte binary with status, a byte lost
+    (2, lambda f: b"\x0a" + f),  # 2-byte binary, a stray byte before a frame: binary resumes after a CR LF
+])
+def test_each_format_with_cr_lf_realigns_on_the_next_frame(fake_port, cof, garble):
+    fmt = aed.output_format(cof)
+    counts = [0x0D0A, 0x0A0D, 300, 0x0D0A, 500, 600, 700]  # values whose bytes hold CR / LF
+    if fmt.kind == "binary2":
+        counts = [c % 20000 for c in counts]
+    frames = [aed.encode_msv(c, fmt) for c in counts]
+    fake = fake_port([(b";MSV?0;", b"".join(frames[:2]) + garble(frames[2]) + b"".join(frames[3:]))])
+    lc = cell(fake, output_format=cof)
+    lc.start_stream()
+    got = lc.read_stream(7, timeout=0.5)
+    assert [s.counts for s in got] == counts[:2] + counts[3:]
+    assert lc.stream_resyncs == 0 and lc.frames_garbled == 1
+
+
+def test_garbled_frames_are_counted_lost_on_the_streams_rhythm(fake_port):
+    """The amplifier sends a frame every 10 ms, every fourth garbled: each costs one frame,
+    counted in frames_lost, no restart, and the good frames' stamps keep the 100/s rhythm with a
+    gap where the lost one was (the old driver restarted the stream for each)."""
+    fmt = aed.output_format(3)
+    fake = fake_port([(b";ICR0;", b"0\r\n"), (b";NOV?;", b"0\r\n"), (b";MSV?0;", None)])
+    lc = cell(fake)
+    lc.configure(rate_code=0)
+    lc.start_stream()
+    t0 = fake.clock.now()
+    for k in range(40):
+        frame = aed.encode_msv(k, fmt)
+        frame = frame[:5] + b"\xf3" + frame[5:] if k % 4 == 2 else frame
+        fake.clock.call_at(t0 + 0.0043 + 0.01 * k, lambda frame=frame: fake.feed(frame))
+    got = lc.read_stream(40, timeout=0.45)
+    kept = [k for k in range(40) if k % 4 != 2]
+    assert [s.counts for s in got] == kept[:len(got)] and len(got) >= len(kept) - 1
+    assert lc.stream_resyncs == 0 and lc.frames_garbled == sum(1 for k in range(got[-1].counts) if k % 4 == 2)
+    assert lc.frames_lost == lc.frames_garbled
+    times = np.array([s.t_monotonic_s for s in got])
+    np.testing.assert_allclose(np.diff(times) / 0.01, np.diff([s.counts for s in got]), atol=0.2)
 
 
 def test_stream_that_never_regains_framing_is_an_error(fake_port):
