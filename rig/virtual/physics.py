@@ -422,11 +422,13 @@ class Mechanics:
         out: dict[str, str] = {}
         if s.test == "tension":
             eps_u, eps_n = st.eps_p, st.eps_neck
+            out["post.du_mm"] = f"{s.d0_mm * math.exp(-eps_u / 2.0):.4f}"
+            if not st.fractured:  # an unbroken bar has no fracture values (Lu, dk, the neck's radius at fracture)
+                return out
             lu = s.l0_mm * math.exp(eps_u) + (self.neck_extension_mm(eps_u, eps_n) if st.necked else 0.0)
             dk = s.d0_mm * math.exp(-eps_n / 2.0)
             out["post.lu_mm"] = f"{lu:.4f}"
             out["post.dk_mm"] = f"{dk:.4f}"
-            out["post.du_mm"] = f"{s.d0_mm * math.exp(-eps_u / 2.0):.4f}"
             if eps_n - eps_u > 1e-6:
                 out["post.neck_radius_mm"] = f"{(dk / 2.0) / self.neck_profile_a_over_R(eps_u, eps_n):.4f}"
         else:
