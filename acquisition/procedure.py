@@ -29,6 +29,7 @@ import numpy as np
 
 from flowcurve.acquisition.live import LiveView, Snapshot
 from flowcurve.record.format import STATUS_ABORTED, STATUS_COMPLETE, RecordWriter, amend_record
+from flowcurve.record.summary import MEASURED_SPEED_KEY, speed_mismatch
 from flowcurve.acquisition.plausibility import RateGuard
 from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temperature
 from flowcurve.acquisition.sampler import Channel, Sampler
@@ -188,6 +189,45 @@ def _update_stall(rows: np.ndarray, state: StopState, crit: StopCriteria) -> boo
     return state.moved and float(t[-1]) - state.still_since_s >= crit.stall_s
 
 
+SPEED_MIN_TRAVEL_MM = 0.2  # the crosshead's speed is measured over at least this travel (20 counts of the 10 µm encoder)
+
+
+@dataclass
+class SpeedMeter:
+    """The crosshead's speed from its own readings: travel / time from the first reading away from
+    rest (MOTION_MM) to the last reading that changed — the still tail after a stop left out."""
+
+    rest_mm: float | None = None
+    first: tuple[float, float] | None = None  # (time_s, crosshead_mm) of the first reading away from rest
+    last: tuple[float, float] | None = None  # ... of the last reading that changed
+    previous_mm: float | None = None
+
+    def update(self, rows: np.ndarray) -> None:
+        """Take a block of rows [time_s, force_N, crosshead_mm, ...]."""
+        if rows.size == 0:
+            return
+        t, x = rows[:, 0], rows[:, 2]
+        if self.rest_mm is None:
+            self.rest_mm = self.previous_mm = float(x[0])
+        if self.first is None:
+            away = np.flatnonzero(np.abs(x - self.rest_mm) > MOTION_MM)
+            if away.size == 0:
+                self.previous_mm = float(x[-1])
+                return
+            self.first = self.last = (float(t[away[0]]), float(x[away[0]]))
+        changed = np.flatnonzero(x != np.concatenate([[self.previous_mm], x[:-1]]))
+        if changed.size and float(t[changed[-1]]) > self.first[0]:
+            self.last = (float(t[changed[-1]]), float(x[changed[-1]]))
+        self.previous_mm = float(x[-1])
+
+    def speed_mm_per_s(self) -> float | None:
+        """|Δx| / Δt over the motion (None below SPEED_MIN_TRAVEL_MM of travel)."""
+        if self.first is None or self.last is None:
+            return None
+        travel, span = abs(self.last[1] - self.first[1]), self.last[0] - self.first[0]
+        return travel / span if travel >= SPEED_MIN_TRAVEL_MM and span > 0 else None
+
+
 @dataclass
 class TestSpec:
     """Everything about the test to run; geometry in mm, temperature in C, speed in mm/s."""
@@ -327,6 +367,7 @@ class Procedure:
         self._missing_noted = 0  # the load cell's missing frames the events named so far
         self._late_noted: dict[str, int] = {}
         self._rejected_noted: dict[str, int] = {}
+        self._speed = SpeedMeter()
 
     # clock: test seconds since the procedure started (time-scaled on the virtual rig)
     def clock(self) -> float:
@@ -342,6 +383,19 @@ class Procedure:
     def _write_rows(self, rows: np.ndarray) -> None:
         if self._writing:
             self._storing(self.writer.append_rows, rows)
+            self._speed.update(rows)
+
+    def _speed_meta(self) -> dict[str, object]:
+        """The header's measured crosshead speed (mm/s, when the crosshead travelled far enough to tell it)."""
+        measured = self._speed.speed_mm_per_s()
+        return {} if measured is None else {MEASURED_SPEED_KEY: float(f"{measured:.4g}")}
+
+    def _note_speed(self) -> None:
+        """A ``speed_mismatch`` event and the operator told when the crosshead ran at another speed than commanded."""
+        mismatch = speed_mismatch(self.spec.speed_mm_per_s, self._speed.speed_mm_per_s())
+        if mismatch:
+            self._event("speed_mismatch", mismatch)
+            self._alert(f"crosshead: {mismatch} — set the machine's speed to the test's")
 
     def _storing(self, write, *args) -> None:
         """A write to the record; a full disk (or any OSError) stops the recording, once."""
@@ -426,6 +480,7 @@ class Procedure:
                         try:
                             self._write_rows(final)
                             self._note_losses(sampler, final=True)
+                            self._note_speed()
                         except RecordWriteError as exc:
                             status, reason, error = STATUS_ABORTED, reason or str(exc), error or exc
                     error = self._after_safety_stop(error)
@@ -445,7 +500,7 @@ class Procedure:
         except BaseException as exc:  # anything unexpected: keep the record, mark it aborted
             self._close(STATUS_ABORTED, {"abort_reason": " ".join(f"{type(exc).__name__}: {exc}".split())})
             raise
-        extra = {"stop_reason": reason, **self._loss_meta()}
+        extra = {"stop_reason": reason, **self._loss_meta(), **self._speed_meta()}
         if status == STATUS_ABORTED:
             extra["abort_reason"] = reason
         samples = self.writer.rows_written

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from flowcurve.record.format import STATUS_ABORTED, Record
-from flowcurve.record.summary import GAUGE_KEY, record_summary
+from flowcurve.record.summary import GAUGE_KEY, MEASURED_SPEED_KEY, record_summary, speed_mismatch
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.compression import identify_compression
 from flowcurve.identification.outcome import Identification
@@ -184,6 +184,8 @@ def identify(record: Record, **options) -> Identification:
         warnings.append(f"option(s) not used by {record.test} identification: {', '.join(ignored)}")
     declared, doubtful = fault_warnings(record)
     warnings += declared
+    mismatch = speed_mismatch(record.number("crosshead_speed_mm_per_s"), record.number(MEASURED_SPEED_KEY))
+    warnings += [mismatch] if mismatch else []
     fit = getattr(getattr(result, "hardening", None), "fit", None)  # the main fit (result["hardening"] is its copy)
     if doubtful and fit is not None and fit.quality == "good":
         fit.doubt = "the record declares lost or corrupt samples"

@@ -613,6 +613,13 @@ class RigModel:
             self.moving = True
             self.events.append((self.time_s, "crosshead_start"))
 
+    def set_speed(self, speed_mm_per_s: float) -> None:
+        """The crosshead's speed from now on, mm/s (the rate term follows: v / l0 or v / h0)."""
+        if not (speed_mm_per_s > 0 and math.isfinite(speed_mm_per_s)):
+            raise ConfigError(f"speed_mm_per_s: must be positive, got {speed_mm_per_s}")
+        self.speed_mm_per_s = float(speed_mm_per_s)
+        self._update_conditions()
+
     def stop_crosshead(self) -> None:
         if self.moving:
             self.moving = False
