@@ -681,9 +681,12 @@ class Procedure:
             self._rejected_noted[ch.device] = len(ch.guard.rejected)
         missing = getattr(self.rig, "frames_lost", 0)
         if missing > self._missing_noted:  # every gap the stream's timing shows, named (an event, not a failure)
-            gap = missing - self._missing_noted
-            self._event("frames_missing", f"load cell: {gap} frame{'s' if gap != 1 else ''} missing from its stream ({missing} so "
+            self._event("frames_missing", f"load cell: {_frames(missing - self._missing_noted)} missing from its stream ({missing} so "
                                           "far, from the gaps in its timing: lost on the line, garbled, skipped, or late)")
+            self._missing_noted = missing
+        elif final and missing < self._missing_noted:  # the estimate came down as later frames arrived: the events say the count
+            self._event("frames_missing", f"load cell: {_frames(missing)} missing from its stream in all (the count revised from "
+                                          f"{self._missing_noted} as later frames arrived)")
             self._missing_noted = missing
         restarts = getattr(self.rig, "stream_restarts", 0)
         if restarts > self._restarts_noted:
@@ -697,7 +700,7 @@ class Procedure:
         if final and self._loss_summary():
             self._event("data_loss", self._loss_summary())
         elif final and self._missing_noted:  # below the data-loss limit: no failure, but the operator hears of it
-            self._alert(f"load cell: {self._missing_noted} frames missing from its stream (the record's events name them; "
+            self._alert(f"load cell: {_frames(self._missing_noted)} missing from its stream (the record's events name them; "
                         "below the data-loss limit) — check its cable if this recurs")
 
     def _note_retries(self, final: bool = False) -> None:
@@ -729,7 +732,7 @@ class Procedure:
 
     def _loss_summary(self) -> str:
         parts = []
-        missing = getattr(self.rig, "frames_lost", 0)
+        missing = self._missing_noted  # the one count of missing frames: the events', the header's, the operator's
         expected = (self.writer.rows_written if self.writer else 0) + missing
         if self._restarts_noted or missing > max(LOSS_NOISE_FRAMES, LOSS_NOISE_FRACTION * expected):
             restarts = f"{self._restarts_noted} stream restarts; " if self._restarts_noted else ""
@@ -745,7 +748,7 @@ class Procedure:
     def _loss_meta(self) -> dict[str, object]:
         """Header keys: the load cell's lost samples whenever any (an estimate: below the noise
         limit no data_loss event and no exit 5), and the whole summary when there is one."""
-        missing = getattr(self.rig, "frames_lost", 0)
+        missing = self._missing_noted
         meta: dict[str, object] = {"samples_missing": missing} if missing else {}
         if self._loss_summary():
             meta.update({"samples_missing": missing, "stream_restarts": self._restarts_noted,
@@ -835,6 +838,10 @@ class Procedure:
             if still:
                 self.view.say(f"still missing: {', '.join(still)} (add with 'flowcurve annotate RECORD --set KEY=VALUE')")
         return post
+
+
+def _frames(n: int) -> str:
+    return f"{n} frame{'s' if n != 1 else ''}"
 
 
 def _os_reason(exc: OSError) -> str:
