@@ -270,14 +270,14 @@ def _report_rig(rig, seen: dict) -> None:
 
 def post_test_lines(rig, reason: str) -> list[str]:
     """What the operator measures on the specimen when a test ends (the twin's values), ready for
-    'run''s prompts or 'flowcurve annotate'."""
+    the prompts of 'flowcurve run' or 'flowcurve annotate'."""
     post = rig.post_test_measurements()
     sets = " ".join(f"--set {k}={v}" for k, v in post.items())
     unbroken = rig.model.test == "tension" and not rig.model.fractured
     return [f"test ended ({reason}, model time {rig.model.time_s:.1f} s); post-test measurements of the specimen"
             + (" (unbroken: no fracture values)" if unbroken else "") + ":",
             *(f"  {k} = {v}" for k, v in post.items()),
-            f"  (give them at 'flowcurve run''s prompts, or: flowcurve annotate RECORD {sets})"]
+            f"  (give them at the prompts of 'flowcurve run', or: flowcurve annotate RECORD {sets})"]
 
 
 def _report_end(rig, seen: dict) -> None:
@@ -285,9 +285,8 @@ def _report_end(rig, seen: dict) -> None:
     post-test measurements, once per stop."""
     with rig.lock:
         model = rig.sync()
-        moving, events = model.moving, list(model.events)
+        moving, last = model.moving, model.events[-1][1] if model.events else "crosshead_stop"
     if seen.get("moving") and not moving:
-        last = events[-1][1] if events else "crosshead_stop"
         reason = {"fracture": "fracture", "stroke_limit": "stroke limit", "crosshead_stop": "motor stopped"}.get(last, last)
         print("\n".join(post_test_lines(rig, reason)), flush=True)
     seen["moving"] = moving
