@@ -189,7 +189,7 @@ def _update_stall(rows: np.ndarray, state: StopState, crit: StopCriteria) -> boo
     return state.moved and float(t[-1]) - state.still_since_s >= crit.stall_s
 
 
-SPEED_MIN_TRAVEL_MM = 0.2  # the crosshead's speed is measured over at least this travel (20 counts of the 10 µm encoder)
+SPEED_MIN_TRAVEL_MM = 1.0  # the crosshead's speed is measured over at least this travel: a count (10 µm) at each end is ≤ 2 %
 
 
 @dataclass

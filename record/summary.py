@@ -15,7 +15,7 @@ GAUGE_KEY = {"tension": "specimen.l0_mm", "compression": "specimen.h0_mm"}
 
 
 # a crosshead measured this far off its commanded speed ran at another speed: named (event, warnings), its rate the measured one's
-SPEED_TOLERANCE = 0.05  # a machine's speed is within ±5 % of the set one (encoder: ±2 counts over ≥ 0.2 mm, ≤ 10 %: see SPEED_MIN_TRAVEL_MM)
+SPEED_TOLERANCE = 0.05  # beyond a machine's speed error and the measurement's (≤ 2 %, acquisition.procedure.SPEED_MIN_TRAVEL_MM)
 MEASURED_SPEED_KEY = "crosshead_speed_measured_mm_per_s"
 
 
