@@ -29,6 +29,7 @@ import numpy as np
 
 from flowcurve.acquisition.live import LiveView, Snapshot
 from flowcurve.record.format import STATUS_ABORTED, STATUS_COMPLETE, RecordWriter, amend_record
+from flowcurve.record.summary import MEASURED_SPEED_KEY, speed_mismatch
 from flowcurve.acquisition.plausibility import RateGuard
 from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temperature
 from flowcurve.acquisition.sampler import Channel, Sampler
@@ -197,6 +198,45 @@ def _update_stall(rows: np.ndarray, state: StopState, crit: StopCriteria) -> boo
     return state.moved and float(t[-1]) - state.still_since_s >= crit.stall_s
 
 
+SPEED_MIN_TRAVEL_MM = 1.0  # the crosshead's speed is measured over at least this travel: a count (10 µm) at each end is ≤ 2 %
+
+
+@dataclass
+class SpeedMeter:
+    """The crosshead's speed from its own readings: travel / time from the first reading away from
+    rest (MOTION_MM) to the last reading that changed — the still tail after a stop left out."""
+
+    rest_mm: float | None = None
+    first: tuple[float, float] | None = None  # (time_s, crosshead_mm) of the first reading away from rest
+    last: tuple[float, float] | None = None  # ... of the last reading that changed
+    previous_mm: float | None = None
+
+    def update(self, rows: np.ndarray) -> None:
+        """Take a block of rows [time_s, force_N, crosshead_mm, ...]."""
+        if rows.size == 0:
+            return
+        t, x = rows[:, 0], rows[:, 2]
+        if self.rest_mm is None:
+            self.rest_mm = self.previous_mm = float(x[0])
+        if self.first is None:
+            away = np.flatnonzero(np.abs(x - self.rest_mm) > MOTION_MM)
+            if away.size == 0:
+                self.previous_mm = float(x[-1])
+                return
+            self.first = self.last = (float(t[away[0]]), float(x[away[0]]))
+        changed = np.flatnonzero(x != np.concatenate([[self.previous_mm], x[:-1]]))
+        if changed.size and float(t[changed[-1]]) > self.first[0]:
+            self.last = (float(t[changed[-1]]), float(x[changed[-1]]))
+        self.previous_mm = float(x[-1])
+
+    def speed_mm_per_s(self) -> float | None:
+        """|Δx| / Δt over the motion (None below SPEED_MIN_TRAVEL_MM of travel)."""
+        if self.first is None or self.last is None:
+            return None
+        travel, span = abs(self.last[1] - self.first[1]), self.last[0] - self.first[0]
+        return travel / span if travel >= SPEED_MIN_TRAVEL_MM and span > 0 else None
+
+
 @dataclass
 class TestSpec:
     """Everything about the test to run; geometry in mm, temperature in C, speed in mm/s."""
@@ -336,6 +376,7 @@ class Procedure:
         self._missing_noted = 0  # the load cell's missing frames the events named so far
         self._late_noted: dict[str, int] = {}
         self._rejected_noted: dict[str, int] = {}
+        self._speed = SpeedMeter()
 
     # clock: test seconds since the procedure started (time-scaled on the virtual rig)
     def clock(self) -> float:
@@ -351,6 +392,19 @@ class Procedure:
     def _write_rows(self, rows: np.ndarray) -> None:
         if self._writing:
             self._storing(self.writer.append_rows, rows)
+            self._speed.update(rows)
+
+    def _speed_meta(self) -> dict[str, object]:
+        """The header's measured crosshead speed (mm/s, when the crosshead travelled far enough to tell it)."""
+        measured = self._speed.speed_mm_per_s()
+        return {} if measured is None else {MEASURED_SPEED_KEY: float(f"{measured:.4g}")}
+
+    def _note_speed(self) -> None:
+        """A ``speed_mismatch`` event and the operator told when the crosshead ran at another speed than commanded."""
+        mismatch = speed_mismatch(self.spec.speed_mm_per_s, self._speed.speed_mm_per_s())
+        if mismatch:
+            self._event("speed_mismatch", mismatch)
+            self._alert(f"crosshead: {mismatch} — set the machine's speed to the test's")
 
     def _storing(self, write, *args) -> None:
         """A write to the record; a full disk (or any OSError) stops the recording, once."""
@@ -435,6 +489,7 @@ class Procedure:
                         try:
                             self._write_rows(final)
                             self._note_losses(sampler, final=True)
+                            self._note_speed()
                         except RecordWriteError as exc:
                             status, reason, error = STATUS_ABORTED, reason or str(exc), error or exc
                     error = self._after_safety_stop(error)
@@ -454,7 +509,7 @@ class Procedure:
         except BaseException as exc:  # anything unexpected: keep the record, mark it aborted
             self._close(STATUS_ABORTED, {"abort_reason": " ".join(f"{type(exc).__name__}: {exc}".split())})
             raise
-        extra = {"stop_reason": reason, **self._loss_meta()}
+        extra = {"stop_reason": reason, **self._loss_meta(), **self._speed_meta()}
         if status == STATUS_ABORTED:
             extra["abort_reason"] = reason
         samples = self.writer.rows_written
@@ -639,9 +694,12 @@ class Procedure:
             self._rejected_noted[ch.device] = len(ch.guard.rejected)
         missing = getattr(self.rig, "frames_lost", 0)
         if missing > self._missing_noted:  # every gap the stream's timing shows, named (an event, not a failure)
-            gap = missing - self._missing_noted
-            self._event("frames_missing", f"load cell: {gap} frame{'s' if gap != 1 else ''} missing from its stream ({missing} so "
+            self._event("frames_missing", f"load cell: {_frames(missing - self._missing_noted)} missing from its stream ({missing} so "
                                           "far, from the gaps in its timing: lost on the line, garbled, skipped, or late)")
+            self._missing_noted = missing
+        elif final and missing < self._missing_noted:  # the estimate came down as later frames arrived: the events say the count
+            self._event("frames_missing", f"load cell: {_frames(missing)} missing from its stream in all (the count revised from "
+                                          f"{self._missing_noted} as later frames arrived)")
             self._missing_noted = missing
         restarts = getattr(self.rig, "stream_restarts", 0)
         if restarts > self._restarts_noted:
@@ -655,7 +713,7 @@ class Procedure:
         if final and self._loss_summary():
             self._event("data_loss", self._loss_summary())
         elif final and self._missing_noted:  # below the data-loss limit: no failure, but the operator hears of it
-            self._alert(f"load cell: {self._missing_noted} frames missing from its stream (the record's events name them; "
+            self._alert(f"load cell: {_frames(self._missing_noted)} missing from its stream (the record's events name them; "
                         "below the data-loss limit) — check its cable if this recurs")
 
     def _note_retries(self, final: bool = False) -> None:
@@ -687,7 +745,7 @@ class Procedure:
 
     def _loss_summary(self) -> str:
         parts = []
-        missing = getattr(self.rig, "frames_lost", 0)
+        missing = self._missing_noted  # the one count of missing frames: the events', the header's, the operator's
         expected = (self.writer.rows_written if self.writer else 0) + missing
         if self._restarts_noted or missing > max(LOSS_NOISE_FRAMES, LOSS_NOISE_FRACTION * expected):
             restarts = f"{self._restarts_noted} stream restarts; " if self._restarts_noted else ""
@@ -703,7 +761,7 @@ class Procedure:
     def _loss_meta(self) -> dict[str, object]:
         """Header keys: the load cell's lost samples whenever any (an estimate: below the noise
         limit no data_loss event and no exit 5), and the whole summary when there is one."""
-        missing = getattr(self.rig, "frames_lost", 0)
+        missing = self._missing_noted
         meta: dict[str, object] = {"samples_missing": missing} if missing else {}
         if self._loss_summary():
             meta.update({"samples_missing": missing, "stream_restarts": self._restarts_noted,
@@ -793,6 +851,10 @@ class Procedure:
             if still:
                 self.view.say(f"still missing: {', '.join(still)} (add with 'flowcurve annotate RECORD --set KEY=VALUE')")
         return post
+
+
+def _frames(n: int) -> str:
+    return f"{n} frame{'s' if n != 1 else ''}"
 
 
 def _os_reason(exc: OSError) -> str:

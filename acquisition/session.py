@@ -271,7 +271,8 @@ class DriverRig:
         self.encoder.zero()
 
     def start_crosshead(self, speed_mm_per_s: float, direction: int) -> None:
-        self.virtual.start_crosshead()
+        """The virtual rig's motor at the test's speed (the direction is the test's: the twin knows it)."""
+        self.virtual.start_crosshead(speed_mm_per_s=speed_mm_per_s)
 
     def stop_crosshead(self) -> None:
         self.virtual.stop_crosshead()

@@ -10,11 +10,12 @@ record to :func:`identification.tension.identify_tension` or
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
 from flowcurve.record.format import STATUS_ABORTED, WRITER_STAMPING_KEY, Record
-from flowcurve.record.summary import GAUGE_KEY, record_summary
+from flowcurve.record.summary import GAUGE_KEY, MEASURED_SPEED_KEY, record_summary, speed_mismatch
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.compression import identify_compression
 from flowcurve.identification.outcome import Identification
@@ -89,6 +90,19 @@ FAULT_EVENTS = ("data_loss", "frames_missing", "corrupt", "stream_restart", "lat
 POOR_LOSS_FRACTION = 0.05  # samples lost beyond this share of the test mark the hardening poor
 
 
+def _is_number(text) -> bool:
+    try:
+        return math.isfinite(float(text))
+    except (TypeError, ValueError):
+        return False
+
+
+def _last_count(text: str) -> int | None:
+    """The running count a ``frames_missing`` event ends with: "(N so far" or "N … in all"."""
+    found = re.search(r"\((\d+) so far", text) or re.search(r"(\d+) frames? missing from its stream in all", text)
+    return int(found.group(1)) if found else None
+
+
 def fault_warnings(record: Record) -> tuple[list[str], bool]:
     """The rig faults a record declares (its fault events), as one warning per kind, and whether
     they make the curve doubtful: more than :data:`POOR_LOSS_FRACTION` of the samples lost, or a
@@ -102,7 +116,11 @@ def fault_warnings(record: Record) -> tuple[list[str], bool]:
         lost = float(missing) / (len(record.data) + float(missing)) if missing not in (None, "") else 0.0
     except (TypeError, ValueError, ZeroDivisionError):
         lost = 0.0
-    warnings = [f"the record declares rig faults ({name}, {len(texts)}×): {texts[-1][:200]} — the curve may carry them"
+    counted = {name: f"{len(texts)}×" for name, texts in seen.items()}
+    if "frames_missing" in seen:  # frames, not events: the header's count, which the events' last one says too
+        frames = int(float(missing)) if _is_number(missing) else _last_count(seen["frames_missing"][-1])
+        counted["frames_missing"] = f"{frames} frame{'s' if frames != 1 else ''}" if frames is not None else counted["frames_missing"]
+    warnings = [f"the record declares rig faults ({name}, {counted[name]}): {texts[-1][:200]} — the curve may carry them"
                 for name, texts in seen.items()]
     return warnings, lost > POOR_LOSS_FRACTION or "corrupt" in seen
 
@@ -213,6 +231,8 @@ def identify(record: Record, **options) -> Identification:
     if shifted:
         warnings.append(shifted)
         doubtful = True
+    mismatch = speed_mismatch(record.number("crosshead_speed_mm_per_s"), record.number(MEASURED_SPEED_KEY))
+    warnings += [mismatch] if mismatch else []
     fit = getattr(getattr(result, "hardening", None), "fit", None)  # the main fit (result["hardening"] is its copy)
     if doubtful and fit is not None and fit.quality == "good":
         fit.doubt = "the record declares lost or corrupt samples"

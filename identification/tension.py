@@ -153,6 +153,34 @@ def reaches_fracture(force_N: np.ndarray) -> bool:
     return i_k < force_N.size - 1 or float(force_N[-1]) <= FRACTURE_END_FORCE * Fm
 
 
+FRACTURE_KEYS = ("post.lu_mm", "post.dk_mm", "post.sk_mm2", "post.neck_radius_mm")  # measured on the broken halves
+
+
+def unbroken_statement(record: Record) -> str | None:
+    """The record's own word that its specimen did not break, or None: a ``stop_reason`` naming
+    another end (a target, a force limit, a stop) with a force that shows no break
+    (:func:`reaches_fracture`)."""
+    reason = " ".join(str(record.meta.get("stop_reason") or "").split())
+    if not reason or "fracture" in reason.lower() or not record.has("force_N"):
+        return None
+    force = record.column("force_N")
+    force = force[np.isfinite(force)]
+    return None if force.size < 3 or reaches_fracture(force) else reason
+
+
+def without_fracture_values(record: Record) -> tuple[Record, list[str]]:
+    """An unbroken specimen has no fracture values: the record without them (post.lu_mm, dk, sk,
+    neck radius — an unbroken bar's are no A, Z or fracture point), and the warning saying why."""
+    stopped = unbroken_statement(record)
+    if stopped is None:
+        return record, []
+    given = [k for k in FRACTURE_KEYS if k in record.meta]
+    kept = replace(record, meta={k: v for k, v in record.meta.items() if k not in FRACTURE_KEYS})
+    left_out = f"; {', '.join(given)} left out (not fracture values)" if given else ""
+    return kept, [f"the specimen did not break (the test ended on: {stopped[:120]}): no A, no Z and no fracture point"
+                  f"{left_out}; the rest is reported"]
+
+
 def _check_post_dimensions(record: Record, d0: float, l0: float, lu: float | None) -> None:
     """Measurements after fracture that no tension test can give: Lu < L0, du or dk > d0."""
     if lu is not None and lu < l0:
@@ -236,6 +264,7 @@ class _Inputs:
     lu: float | None
     length: float  # the length the strain refers to (l0 when scaled to a measured Lu)
     warnings: list[str]
+    unbroken: bool = False  # the record says the specimen did not break (:func:`unbroken_statement`)
 
 
 @dataclass
@@ -548,7 +577,8 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
         A_method = f"{inp.src['source']} at fracture, elastic part removed (no post.lu_mm)"
     else:
         A, A_method = None, None
-        warnings.append(f"the record ends at {100.0 * force[-1] / inp.Fm:.0f} % of Fm without a fracture: A is not reported (measure Lu and give it: post.lu_mm, --lu)")
+        if not inp.unbroken:  # (an unbroken specimen's warning says it already)
+            warnings.append(f"the record ends at {100.0 * force[-1] / inp.Fm:.0f} % of Fm without a fracture: A is not reported (measure Lu and give it: post.lu_mm, --lu)")
     su = record.positive("post.sk_mm2")
     dk = record.positive("post.dk_mm")
     su_source = "post.sk_mm2" if su is not None else None
@@ -618,7 +648,7 @@ def _true_stress_warnings(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, tr
 def _neck_correction(inp: _Inputs, iso: _IsoResults, true: _TrueCurve) -> tuple[dict, list[str]]:
     """The fracture point with every neck correction (empty without the area after fracture), and warnings."""
     if iso.su is None:
-        return {}, ["no post.dk_mm or post.sk_mm2: no reduction of area, fracture point or neck correction; the hardening law is fitted to the uniform range only"]
+        return {}, [] if inp.unbroken else ["no post.dk_mm or post.sk_mm2: no reduction of area, fracture point or neck correction; the hardening law is fitted to the uniform range only"]
     su, force_k = iso.su, float(inp.force[iso.i_k])
     eps_f = math.log(inp.s0 / su)  # (3.13) ε_f = ln(F0/Fk)
     avg = float(inp.force[iso.i_k] / su)  # P_k / F_k
@@ -836,8 +866,11 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     fit_range, fractions, window_fixed_MPa = _check_options(
         true_stress=true_stress, neck=neck, hardening=hardening, modulus_reference=modulus_reference, fracture_point=fracture_point,
         fit_range=fit_range, modulus_window=modulus_window, modulus_window_MPa=modulus_window_MPa)
+    record, unbroken = without_fracture_values(record)
     inp = _inputs(record, use_extensometer=use_extensometer, frame_stiffness_N_per_um=frame_stiffness_N_per_um,
                   crosshead_length_mm=crosshead_length_mm, scale=scale)
+    inp.warnings[:0] = unbroken
+    inp.unbroken = bool(unbroken)
     line = _elastic_line(inp, fractions=fractions, window_fixed_MPa=window_fixed_MPa, modulus_reference=modulus_reference,
                          E_MPa=E_MPa, toe=toe, scale=scale, modulus_method=modulus_method)
     iso = _iso_results(inp, line)

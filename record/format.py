@@ -96,6 +96,53 @@ KNOWN_KEYS = (
 WRITER_STAMPING_KEY = "writer.stamping"
 WRITER_STAMPING = 2
 
+# keys flowcurve and its importers write beyond KNOWN_KEYS (docs/record-format.md), and namespaces open to any name:
+# ``annotate --set`` and ``run --post`` refuse any other key, naming the nearest known one (a typo is never written)
+OTHER_KEYS = (
+    "material.nu", "material.batch", "specimen.type", "specimen.orientation", "specimen.s0_mm2", "specimen.parallel_length_mm",
+    "specimen.notch_radius_mm", "post.sk_mm2", "post.dtop_mm", "standard", "note", "stop_reason", "abort_reason",
+    "samples", "recovered_last_time_s", "samples_missing", "stream_restarts", "readings_rejected", "data_loss",
+    "crosshead_speed_measured_mm_per_s", "source_format",
+)
+OPEN_NAMESPACES = ("published.", "instruments.", "virtual.", "rig.", "note.")
+
+
+def nearest_key(key: str, known: Iterable[str]) -> str | None:
+    """The known key closest to ``key`` (difflib), matching also its short name: ``hk`` → ``post.hk_mm``."""
+    import difflib
+
+    names: dict[str, str] = {}
+    for k in known:
+        short = k.rsplit(".", 1)[-1]
+        for alias in (k, short, short.rsplit("_", 1)[0]):
+            names.setdefault(alias.lower(), k)
+    full, short = key.lower(), key.lower().rsplit(".", 1)[-1]
+    for probe in (full, short, short.rsplit("_", 1)[0]):  # the same name, with or without its namespace and unit
+        if probe in names:
+            return names[probe]
+    for k in names.values():  # a word of the name: speed → crosshead_speed_mm_per_s
+        if short in re.split(r"[._]", k.lower()):
+            return k
+    for probe in (full, short):
+        hit = difflib.get_close_matches(probe, list(names), n=1, cutoff=0.6)
+        if hit:
+            return names[hit[0]]
+    return None
+
+
+def unknown_key_message(key: str, known: Iterable[str] | None = None) -> str | None:
+    """None when ``key`` is one the record format knows (``known``: these only, no open namespace);
+    else why it is refused, with the nearest known key."""
+    allowed = tuple(known) if known is not None else KNOWN_KEYS + OTHER_KEYS
+    if key in allowed or (known is None and key.startswith(OPEN_NAMESPACES)):
+        return None
+    if key in KNOWN_KEYS + OTHER_KEYS:  # a known key, not one of those asked for here
+        return f"'{key}' is not one of the keys taken here ({', '.join(allowed)})"
+    near = nearest_key(key, allowed)
+    listed = ", ".join(allowed) if known is not None else "docs/record-format.md lists them"
+    return f"unknown key '{key}'" + (f" — did you mean {near}?" if near else f" (known: {listed})")
+
+
 # metadata numbers beyond these magnitudes (native units: mm, N, s, MPa, N/µm, mm/s) are
 # overflow or typing slips, not measurements: a one-line error, not inf or 0 in the arithmetic
 MAX_MAGNITUDE = 1e12

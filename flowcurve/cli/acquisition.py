@@ -94,8 +94,11 @@ def virtual_responses(args) -> dict[str, str]:
     return {"compression_response": args.compression_response or "fe", "tension_response": args.tension_response or "fe"}
 
 
-def parse_assignments(items: list[str], *, numeric_prefix: str = "post.") -> dict[str, str | None]:
-    """``["post.hk_mm=3.55", "operator=Ivanov"]`` → dict; post.* values must be numbers."""
+def parse_assignments(items: list[str], *, numeric_prefix: str = "post.", known=None, option: str = "--set") -> dict[str, str | None]:
+    """``["post.hk_mm=3.55", "operator=Ivanov"]`` → dict; post.* values must be numbers; a key the
+    record format does not know (``known``: only these) is refused with the nearest known one."""
+    from flowcurve.record.format import unknown_key_message
+
     out: dict[str, str | None] = {}
     for item in items:
         key, sep, value = item.partition("=")
@@ -104,6 +107,9 @@ def parse_assignments(items: list[str], *, numeric_prefix: str = "post.") -> dic
             raise FlowcurveError(f"'{item}': give KEY=VALUE, e.g. post.hk_mm=3.55")
         if key in ("flowcurve-record", "status"):
             raise FlowcurveError(f"'{key}' is managed by flowcurve and cannot be set")
+        refused = unknown_key_message(key, known)
+        if refused:
+            raise FlowcurveError(f"{option} {item}: {refused} (nothing written)")
         if value and key.startswith(numeric_prefix):
             try:
                 number = float(value)
@@ -113,6 +119,9 @@ def parse_assignments(items: list[str], *, numeric_prefix: str = "post.") -> dic
                 raise FlowcurveError(f"'{item}': {key} must be > 0")
         out[key] = value or None
     return out
+
+
+RUN_POST_KEYS = {"tension": POST_KEYS["tension"] + ("post.sk_mm2",), "compression": POST_KEYS["compression"] + ("post.smax_mm2", "post.dtop_mm")}
 
 
 def _positive(name: str, value: float | None) -> None:
@@ -201,7 +210,7 @@ def build_spec(args, geometry_default: dict[str, float] | None = None) -> TestSp
         geometry[key] = float(value)
     material = args.material or (_ask("material", "unknown") if interactive else "unknown")
     operator = args.operator if args.operator is not None else (_ask("operator", "") if interactive else "")
-    post = {k: float(v) for k, v in parse_assignments(args.post).items() if v is not None and k.startswith("post.")}
+    post = {k: float(v) for k, v in parse_assignments(args.post, known=RUN_POST_KEYS[args.test], option="--post").items() if v is not None}
     return TestSpec(
         test=args.test,
         material=material or "unknown",

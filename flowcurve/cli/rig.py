@@ -54,6 +54,10 @@ def register(subparsers) -> None:
     virtual.add_argument("--time-scale", type=float, default=1.0,
                          help="model seconds per wall-clock second (default 1)")
     virtual.add_argument("--checksum", action="store_true", help="DCON checksums on")
+    virtual.add_argument("--speed", type=float, default=0.01, metavar="MM_PER_S",
+                         help="the crosshead motor's speed, mm/s (default 0.01, what 'flowcurve run --config' asks for "
+                              "by default): set it to the test's, as at the real machine's speed dial; interactively, "
+                              "type a speed and Enter to change it")
     add_virtual_response_options(virtual)
     add_fault_option(virtual)
     virtual.add_argument("--motor-start-after", type=float, default=None, metavar="S",
@@ -214,11 +218,12 @@ def run_recover_loadcell(args) -> int:
 def run_virtual(args) -> int:
     from flowcurve.rig.virtual.rig import VirtualRig  # the virtual-rig engineer's twins
 
-    if not (args.time_scale > 0 and math.isfinite(args.time_scale)):
-        raise FlowcurveError(f"--time-scale must be a positive number, got {args.time_scale}")
+    for option, value in (("--time-scale", args.time_scale), ("--speed", args.speed)):
+        if not (value > 0 and math.isfinite(value)):
+            raise FlowcurveError(f"{option} must be a positive number, got {value}")
     responses = virtual_responses(args)
     faults = virtual_faults(args)
-    with VirtualRig(args.material, test=args.test, temperature_C=args.temperature,
+    with VirtualRig(args.material, test=args.test, temperature_C=args.temperature, speed_mm_per_s=args.speed,
                     time_scale=args.time_scale, checksum=args.checksum, **responses) as rig:
         path = args.config
         if path is None:
@@ -231,13 +236,15 @@ def run_virtual(args) -> int:
         for fault in faults:
             print(f"fault: {fault.describe()} " + ("from now" if fault.at_s is None else "after the crosshead starts"))
         print(f"{args.test} response: {responses[args.test + '_response']}")
+        print(f"crosshead speed: {args.speed:g} mm/s (time scale {args.time_scale:g}: give 'flowcurve run' the same --speed and --time-scale)")
         print(f"configuration: {path}")
         print(f"try: flowcurve rig check --config {path}")
         previous = signal.signal(signal.SIGTERM, _stop_on_sigterm)  # kill/systemd: stop cleanly too
         signal.signal(signal.SIGUSR1, _toggle_motor)  # scripts: 'kill -USR1 <pid>' is the motor switch
         interactive = sys.stdin is not None and sys.stdin.isatty()
         try:  # Ctrl-C may come as soon as the line below is out
-            print("running; " + ("Enter starts/stops the crosshead motor, " if interactive else "") + "Ctrl-C stops", flush=True)
+            print("running; " + ("Enter starts/stops the crosshead motor, a speed and Enter sets it (mm/s), " if interactive else "")
+                  + "Ctrl-C stops", flush=True)
             _serve_motor(rig, interactive, args.motor_start_after)
         except KeyboardInterrupt:
             print("virtual rig stopped")
@@ -261,13 +268,55 @@ def _report_rig(rig, seen: dict) -> None:
     seen["tripped"] = tripped
 
 
+def post_test_lines(rig, reason: str) -> list[str]:
+    """What the operator measures on the specimen when a test ends (the twin's values), ready for
+    the prompts of 'flowcurve run' or 'flowcurve annotate'."""
+    post = rig.post_test_measurements()
+    sets = " ".join(f"--set {k}={v}" for k, v in post.items())
+    unbroken = rig.model.test == "tension" and not rig.model.fractured
+    return [f"test ended ({reason}, model time {rig.model.time_s:.1f} s); post-test measurements of the specimen"
+            + (" (unbroken: no fracture values)" if unbroken else "") + ":",
+            *(f"  {k} = {v}" for k, v in post.items()),
+            f"  (give them at the prompts of 'flowcurve run', or: flowcurve annotate RECORD {sets})"]
+
+
+def _report_end(rig, seen: dict) -> None:
+    """When the crosshead stops after moving (fracture, stroke limit, the motor switched off): the
+    post-test measurements, once per stop."""
+    with rig.lock:
+        model = rig.sync()
+        moving, last = model.moving, model.events[-1][1] if model.events else "crosshead_stop"
+    if seen.get("moving") and not moving:
+        reason = {"fracture": "fracture", "stroke_limit": "stroke limit", "crosshead_stop": "motor stopped"}.get(last, last)
+        print("\n".join(post_test_lines(rig, reason)), flush=True)
+    seen["moving"] = moving
+
+
+def _set_speed(rig, text: str) -> bool:
+    """A typed speed (mm/s) for the motor; False when the line is not a number."""
+    try:
+        speed = float(text)
+    except ValueError:
+        return False
+    try:
+        rig.set_speed(speed)
+    except FlowcurveError as exc:
+        print(f"speed not changed: {str(exc).split(': ', 1)[-1]}", flush=True)
+        return True
+    print(f"crosshead speed set to {speed:g} mm/s", flush=True)
+    return True
+
+
 def _serve_motor(rig, interactive: bool, start_after_s: float | None) -> None:
-    """The operator's motor switch: Enter toggles the crosshead, or it starts after a delay."""
+    """The operator's motor switch: Enter toggles the crosshead, or it starts after a delay; a
+    number and Enter sets its speed. The post-test measurements are printed whenever it stops."""
     started_at = time.monotonic()
     running = False
     seen: dict = {}
     while True:
         _report_rig(rig, seen)
+        _report_end(rig, seen)
+        running = running and rig.model.moving  # a fracture or the stroke limit stopped it: Enter starts it again
         if start_after_s is not None and not running and time.monotonic() - started_at >= start_after_s:
             rig.start_crosshead()
             running, start_after_s = True, None
@@ -278,7 +327,8 @@ def _serve_motor(rig, interactive: bool, start_after_s: float | None) -> None:
             running = not running
             print(f"crosshead motor {'started' if running else 'stopped'}", flush=True)
         elif interactive and select.select([sys.stdin], [], [], 0.5)[0]:
-            sys.stdin.readline()
+            if _set_speed(rig, sys.stdin.readline().strip()):
+                continue
             (rig.stop_crosshead if running else rig.start_crosshead)()
             running = not running
             print(f"crosshead motor {'started' if running else 'stopped'}", flush=True)

@@ -422,11 +422,13 @@ class Mechanics:
         out: dict[str, str] = {}
         if s.test == "tension":
             eps_u, eps_n = st.eps_p, st.eps_neck
+            out["post.du_mm"] = f"{s.d0_mm * math.exp(-eps_u / 2.0):.4f}"
+            if not st.fractured:  # an unbroken bar has no fracture values (Lu, dk, the neck's radius at fracture)
+                return out
             lu = s.l0_mm * math.exp(eps_u) + (self.neck_extension_mm(eps_u, eps_n) if st.necked else 0.0)
             dk = s.d0_mm * math.exp(-eps_n / 2.0)
             out["post.lu_mm"] = f"{lu:.4f}"
             out["post.dk_mm"] = f"{dk:.4f}"
-            out["post.du_mm"] = f"{s.d0_mm * math.exp(-eps_u / 2.0):.4f}"
             if eps_n - eps_u > 1e-6:
                 out["post.neck_radius_mm"] = f"{(dk / 2.0) / self.neck_profile_a_over_R(eps_u, eps_n):.4f}"
         else:
@@ -610,6 +612,13 @@ class RigModel:
         if not self.fractured and self.crosshead_mm < self.stroke_limit_mm:
             self.moving = True
             self.events.append((self.time_s, "crosshead_start"))
+
+    def set_speed(self, speed_mm_per_s: float) -> None:
+        """The crosshead's speed from now on, mm/s (the rate term follows: v / l0 or v / h0)."""
+        if not (speed_mm_per_s > 0 and math.isfinite(speed_mm_per_s)):
+            raise ConfigError(f"speed_mm_per_s: must be positive, got {speed_mm_per_s}")
+        self.speed_mm_per_s = float(speed_mm_per_s)
+        self._update_conditions()
 
     def stop_crosshead(self) -> None:
         if self.moving:

@@ -154,9 +154,12 @@ class VirtualRig:
         """Serial ports: ``{"loadcell": "/dev/pts/N", ...}`` (or ``virtual://loadcell-N`` in-process)."""
         return {name: dev.port for name, dev in self.devices.items()}
 
-    def start_crosshead(self) -> None:
+    def start_crosshead(self, speed_mm_per_s: float | None = None) -> None:
+        """The motor on, at ``speed_mm_per_s`` when given (else at the speed it was set to)."""
         with self._lock:
             m = self.sync()
+            if speed_mm_per_s is not None:
+                m.set_speed(speed_mm_per_s)
             m.start_crosshead()
             if m.moving and self._motion_start_s is None:
                 self._motion_start_s = m.time_s
@@ -166,6 +169,11 @@ class VirtualRig:
         with self._lock:
             m = self.sync()
             m.stop_crosshead()
+
+    def set_speed(self, speed_mm_per_s: float) -> None:
+        """The motor's speed dial, mm/s (takes effect at once, running or not)."""
+        with self._lock:
+            self.sync().set_speed(speed_mm_per_s)
 
     def schedule(self, spec: FaultSpec) -> None:
         """A fault of ``--fault`` (:mod:`rig.virtual.fault_spec`): on now, or ``spec.at_s``

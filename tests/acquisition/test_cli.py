@@ -53,6 +53,28 @@ def test_annotate_bad_input_is_one_line(tmp_path, capsys, setting, message):
     assert p.read_text() == before
 
 
+@pytest.mark.parametrize("setting,near", [("hk=3", "post.hk_mm"), ("post.hk=3", "post.hk_mm"), ("dmax=7.1", "post.dmax_mm"),
+                                          ("specimen.d0=6", "specimen.d0_mm"), ("Operator=Ivanov", "operator")])
+def test_annotate_refuses_an_unknown_key_naming_the_nearest(tmp_path, capsys, setting, near):
+    """Issue 42: 'annotate --set hk=3' wrote '# hk: 3', which nothing reads; now refused, nothing
+    written, with the nearest known key (failed on the old code: exit 0 and the key written)."""
+    p = small_record(tmp_path / "r.csv")
+    before = p.read_text()
+    code, _, err = run_cli(capsys, "annotate", p, "--set", "post.dmax_mm=7", "--set", setting)
+    assert code == 2 and f"did you mean {near}?" in err and err.count("\n") == 1
+    assert p.read_text() == before  # the good key before it is not written either
+
+
+def test_run_post_refuses_an_unknown_key_before_the_test(tmp_path, capsys):
+    """Issue 42: 'run --post hk=3' dropped the value silently; now refused before anything runs
+    (failed on the old code: the test ran and the record had no post.hk_mm)."""
+    out = tmp_path / "c.csv"
+    code, _, err = run_cli(capsys, "run", "compression", "--quiet", "--out", out, "--target", "0.5", "--post", "hk=3")
+    assert code == 2 and "--post hk=3" in err and "did you mean post.hk_mm?" in err and not out.exists()
+    code, _, err = run_cli(capsys, "run", "tension", "--quiet", "--out", out, "--target", "0.5", "--post", "post.hk_mm=3")
+    assert code == 2 and "'post.hk_mm' is not one of the keys taken here" in err and "post.lu_mm" in err and not out.exists()  # not a tension measurement
+
+
 def test_annotate_not_a_record(tmp_path, capsys):
     p = tmp_path / "x.csv"
     p.write_text("a,b\n1,2\n")

@@ -459,3 +459,25 @@ def test_the_fault_drill_field_on_the_virtual_rig(served_console, browser_factor
     rec = read_record(served_console.console.runner.current.record)
     assert rec.meta["virtual.faults"] == "encoder:corrupt:50@2"
     assert any(e.name == "corrupt" and e.text.startswith("crosshead encoder") for e in rec.events)
+
+
+def test_start_stays_off_while_the_page_is_connecting(served_console, browser_factory, shot):
+    """Issue 42: until the event stream has told the rig's state and heater, Start is off (and a
+    submitted form starts nothing); once the state is known, Start is on. Failed on the old page:
+    Start was enabled while the badge said 'connecting'."""
+    driver = browser_factory()
+    driver.execute_cdp_cmd("Network.enable", {})
+    driver.execute_cdp_cmd("Network.setBlockedURLs", {"urls": ["*/api/events*"]})  # the state never arrives
+    driver.get(served_console.url)
+    wait_for(lambda: text(driver, "#rig").startswith("—"), what="the page to boot (/api/info answered)")
+    time.sleep(1.0)  # the blocked stream has failed by now
+    assert text(driver, "#state").lower() == "connecting" and text(driver, "#heater").lower() == "unknown"
+    assert driver.find_element(By.ID, "btn-start").get_attribute("disabled") is not None
+    driver.execute_script("document.querySelector('#setup').requestSubmit()")  # Enter in a field, a script
+    time.sleep(0.5)
+    assert served_console.console.runner.current is None  # nothing was started
+    shot(driver, "1-connecting-start-off")
+    driver.execute_cdp_cmd("Network.setBlockedURLs", {"urls": []})
+    driver.refresh()
+    wait_for(lambda: text(driver, "#state").lower() == "idle", what="the state to arrive", driver=driver)
+    assert driver.find_element(By.ID, "btn-start").get_attribute("disabled") is None

@@ -203,3 +203,63 @@ def test_rig_virtual_passes_the_response_options_to_the_rig(monkeypatch, tmp_pat
     with pytest.raises(Built):
         main(["rig", "virtual", "--config", str(tmp_path / "v.toml"), "--tension-response", "bridgman"])
     assert seen["tension_response"] == "bridgman" and seen["compression_response"] == "fe"
+
+
+def test_rig_virtual_prints_the_post_test_measurements_when_the_crosshead_stops(capsys):
+    """Issue 42: 'rig virtual' never offered the post-test measurements (demo, run in process and
+    the console do). Its loop prints them once when the crosshead stops after moving — the
+    operator stopping the motor here (failed on the old code: no such lines)."""
+    from flowcurve.cli.rig import _report_end
+    from flowcurve.clock import ModelClock
+    from flowcurve.rig.virtual.rig import VirtualRig
+
+    clock = ModelClock()
+    with VirtualRig("steel45", test="compression", speed_mm_per_s=0.05, time_scale=20.0, clock=clock, link="inprocess",
+                    compression_response="slab") as rig:
+        seen: dict = {}
+        _report_end(rig, seen)
+        rig.start_crosshead()
+        clock.advance(2.0)  # 40 model seconds: 2 mm
+        _report_end(rig, seen)
+        assert "post-test" not in capsys.readouterr().out  # nothing while it runs
+        rig.stop_crosshead()
+        _report_end(rig, seen)
+        _report_end(rig, seen)
+        out = capsys.readouterr().out
+        truth = rig.post_test_measurements()
+    assert out.count("post-test measurements") == 1 and "motor stopped" in out
+    for key in ("post.hk_mm", "post.dmax_mm"):
+        assert f"{key} = {truth[key]}" in out and f"--set {key}={truth[key]}" in out
+    assert 6.982 - 2.0 < float(truth["post.hk_mm"]) < 6.982 - 1.5  # 2 mm of crosshead, less the frame's and the elastic share
+
+
+@pytest.mark.pty
+def test_the_readmes_workflow_with_rig_virtual_identifies(tmp_path):
+    """README 'The virtual rig from another terminal', end to end in real time: 'rig virtual' at
+    the test's speed, 'run --config', the motor stopped when run says so, the post-test
+    measurements 'rig virtual' prints given with annotate, identify. The record's measured speed is
+    the one asked for (issue 42: the twin ran its own 0.01 mm/s for --speed 0.1, unsaid)."""
+    import re
+
+    from flowcurve.record.format import read_record
+
+    path, record = tmp_path / "virtual.toml", tmp_path / "c.csv"
+    proc = start_rig_virtual(path, "--test", "compression", "--material", "steel45", "--speed", "0.1",
+                             "--time-scale", "20", "--motor-start-after", "1.0")
+    try:
+        read_until_line(proc, "running")
+        run = subprocess.run([sys.executable, "-m", "flowcurve", "run", "compression", "--config", str(path), "--d0", "5.989",
+                              "--h0", "6.982", "--E", "200000", "--target", "3.3", "--speed", "0.1", "--time-scale", "20",
+                              "--quiet", "--out", str(record)], capture_output=True, text=True, timeout=120)
+        assert run.returncode in (0, 5), run.stderr
+        assert "Stop the crosshead motor" in run.stdout + run.stderr
+        proc.send_signal(signal.SIGUSR1)  # the operator stops the motor
+        text = read_until_line(proc, "  (give them at")
+        sets = re.search(r"flowcurve annotate RECORD (.*)\)", text).group(1).split()
+        stop_rig_virtual(proc, signal.SIGTERM)
+    finally:
+        kill_if_running(proc)
+    meta = read_record(record).meta
+    assert float(meta["crosshead_speed_measured_mm_per_s"]) == pytest.approx(0.1, rel=0.05)
+    assert main(["annotate", str(record), *sets]) == 0
+    assert main(["identify", str(record), "--out", str(tmp_path / "results"), "--no-plots"]) == 0

@@ -290,6 +290,7 @@ function showFieldErrors(form, fields) {
 
 async function startTest(ev) {
   ev.preventDefault();
+  if (!connected) return;  // the rig's state and heater are not known yet (connecting, or the connection lost)
   const form = $("#setup");
   showFieldErrors(form, {});
   const { ok, status, data } = await api("/api/start", formValues(form));
