@@ -33,12 +33,16 @@ def free_port() -> int:
 
 
 @contextlib.contextmanager
-def serving(app, port: int, lifespan: str = "on", log_level: str = "warning"):
-    """``app`` served by uvicorn on 127.0.0.1:``port`` in a thread, until the block ends."""
+def serving(app, port: int, lifespan: str = "on", log_level: str = "warning", forwarded_allow_ips: str | None = None):
+    """``app`` served by uvicorn on 127.0.0.1:``port`` in a thread, until the block ends, with
+    the proxy-header options ``flowcurve console`` serves with."""
     pytest.importorskip("uvicorn", reason="uvicorn is not installed (pip install -e .[test])")
     import uvicorn
 
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level=log_level, lifespan=lifespan))
+    from flowcurve.console.server import proxy_options
+
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level=log_level, lifespan=lifespan,
+                                           **proxy_options(forwarded_allow_ips)))
     thread = threading.Thread(target=server.run, name="console-under-test", daemon=True)
     thread.start()
     end = time.monotonic() + 20
