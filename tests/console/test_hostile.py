@@ -404,3 +404,22 @@ def test_forwarded_allow_ips_takes_addresses_and_networks_only(monkeypatch, tmp_
     assert cli_main(["console", "--out", str(tmp_path)]) == 0
     assert seen["console"].forwarded_allow_ips is None
     assert server.proxy_options(None) == {"proxy_headers": False}
+
+
+def test_post_test_values_identify_into_out_only(tmp_path_factory, tmp_path):
+    """A completed test whose result folder was made a link out of --out: the identification is
+    refused (named in the test's result), and nothing is written where the link leads."""
+    pytest.importorskip("hypothesis", reason="hypothesis is not installed (pip install -e .[test])")
+    from .test_fuzz import _completed, _console_with
+
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    with _console_with(tmp_path_factory, {"test": "compression", "target": "0.5", "specimen_id": "linked"}, _completed) as fuzzed:
+        record = fuzzed.console.runner.current.record
+        results = fuzzed.console.workspace.results
+        results.mkdir(parents=True, exist_ok=True)
+        (results / record.stem).symlink_to(elsewhere)
+        r = fuzzed.client.post("/api/post", json={}, headers=JSON)  # the virtual rig's own hk and dmax: it identifies
+        assert r.status_code == 200, r.text
+        assert "refused: a link out of the console's folder" in r.json()["test"]["result"]["error"], r.text
+    assert list(elsewhere.iterdir()) == []
