@@ -99,7 +99,10 @@ class Console:
         if run is None:
             return None
         out = run.summary()
-        out["record_url"] = self.workspace.url(run.record) if run.record.exists() else None
+        try:
+            out["record_url"] = self.workspace.url(self.workspace.within(run.record)) if run.record.exists() else None
+        except PathError:  # the record was made a link out of --out: not served, not a 500
+            out["record_url"] = None
         return out
 
 
@@ -309,7 +312,11 @@ def create_app(console: Console) -> Starlette:
             return _error("post.dface_mm: the original end face's diameter is needed on this specimen", 400,
                           fields={"post.dface_mm": f"required — {prompt}"})
         if values:
-            amend_record(run.record, {k: repr(v) for k, v in values.items()})
+            workspace.within(run.record)  # amended only inside --out (PathError: 400)
+            try:
+                amend_record(run.record, {k: repr(v) for k, v in values.items()})
+            except FlowcurveError as exc:
+                return _error(workspace.public_error(exc))
             run.post.update(values)
         try:
             run.result = await asyncio.to_thread(workspace.identify, run.record)

@@ -423,3 +423,23 @@ def test_post_test_values_identify_into_out_only(tmp_path_factory, tmp_path):
         assert r.status_code == 200, r.text
         assert "refused: a link out of the console's folder" in r.json()["test"]["result"]["error"], r.text
     assert list(elsewhere.iterdir()) == []
+
+
+def test_a_record_made_a_link_out_after_its_test_is_neither_served_nor_amended(tmp_path_factory, tmp_path):
+    """The test's record replaced by a link to a file outside --out: the status still answers (no
+    500, no link to it), and post-test values are refused without touching the outside file."""
+    pytest.importorskip("hypothesis", reason="hypothesis is not installed (pip install -e .[test])")
+    from .test_fuzz import _completed, _console_with
+
+    with _console_with(tmp_path_factory, {"test": "compression", "target": "0.5", "specimen_id": "moved"}, _completed) as fuzzed:
+        record = fuzzed.console.runner.current.record
+        outside = tmp_path / "outside.csv"
+        text = record.read_bytes()
+        outside.write_bytes(text)
+        record.unlink()
+        record.symlink_to(outside)
+        r = fuzzed.client.get("/api/status")
+        assert r.status_code == 200 and r.json()["test"]["record_url"] is None, r.text[:300]
+        r = fuzzed.client.post("/api/post", json={"post.hk_mm": "6.25"}, headers=JSON)
+        assert r.status_code == 400 and "refused: a link out of the console's folder" in r.json()["error"], r.text[:300]
+        assert outside.read_bytes() == text
