@@ -55,6 +55,21 @@ def serving(app, port: int, lifespan: str = "on", log_level: str = "warning", fo
     assert not thread.is_alive()
 
 
+def login_over_socket(port: int, token: str, source: str = "127.0.0.1", headers: dict | None = None) -> int:
+    """POST /api/login to 127.0.0.1:``port`` from the address ``source`` (any 127.x.y.z is this
+    computer) with extra ``headers`` (latin-1), over a socket of its own; the answer's status."""
+    import json
+
+    body = json.dumps({"token": token}).encode()
+    extra = "".join(f"{k}: {v}\r\n" for k, v in (headers or {}).items()).encode("latin-1")
+    head = (f"POST /api/login HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nContent-Type: application/json\r\n"
+            f"Content-Length: {len(body)}\r\nConnection: close\r\n").encode() + extra + b"\r\n"
+    with socket.create_connection(("127.0.0.1", port), timeout=30, source_address=(source, 0)) as sock:
+        sock.sendall(head + body)
+        answer = sock.recv(4096)
+    return int(answer.split(b" ", 2)[1])
+
+
 @pytest.fixture
 def served_console(tmp_path):
     pytest.importorskip("uvicorn", reason="uvicorn is not installed (pip install -e .[test])")

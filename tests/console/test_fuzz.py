@@ -50,7 +50,7 @@ from flowcurve.console.request_guard import MAX_BODY_BYTES, MAX_TEXT_CHARS, NAME
 from flowcurve.console.server import FIT_FIELDS, LOGIN_FIELDS, POST_FIELDS, START_FIELDS, Console, create_app  # noqa: E402
 from flowcurve.console.setup_form import validate  # noqa: E402
 
-from .conftest import ARTIFACTS, free_port, serving  # noqa: E402
+from .conftest import ARTIFACTS, free_port, login_over_socket, serving  # noqa: E402
 
 PORT = free_port()  # the fuzzed consoles' port: in their allowlist, and the real server's for the raw requests
 GOOD_HOSTS = (f"127.0.0.1:{PORT}", f"localhost:{PORT}", f"[::1]:{PORT}")
@@ -540,28 +540,18 @@ def test_fuzz_links_out_and_unreadable_files_never_break_the_list_or_quote_a_fil
         assert _tree(tmp / "outside") == before
 
 
-def _login_over(port: int, token: str, source: str = "127.0.0.1", extra: bytes = b"") -> int:
-    body = json.dumps({"token": token}).encode()
-    head = (f"POST /api/login HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nContent-Type: application/json\r\nContent-Length: {len(body)}\r\n"
-            "Connection: close\r\n").encode() + extra + b"\r\n"
-    with socket.create_connection(("127.0.0.1", port), timeout=30, source_address=(source, 0)) as sock:
-        sock.sendall(head + body)
-        answer = sock.recv(4096)
-    return int(answer.split(b" ", 2)[1])
-
-
 ip_text = st.tuples(*[st.integers(0, 255)] * 4).map(lambda t: ".".join(map(str, t)))
 forwarded_values = st.one_of(st.just("127.0.0.9"), ip_text, st.lists(ip_text, min_size=2, max_size=4).map(", ".join),
                              header_text.map(lambda b: b.decode("latin-1").strip()).filter(lambda t: t and ":" not in t[:1]))
 
 
 @pytest.fixture(scope="module")
-def served_with_token():
+def served_with_token(tmp_path_factory):
     """A console with a token served by uvicorn as ``flowcurve console`` serves it (no proxy named)."""
     from flowcurve.console.request_guard import FailedLogins
 
     port = free_port()
-    console = Console(ARTIFACTS, time_scale=1.0, port=port, token="t0ken-xff")  # nothing is written: no test runs
+    console = Console(tmp_path_factory.mktemp("xff") / "out", time_scale=1.0, port=port, token="t0ken-xff")
     with serving(create_app(console), port, lifespan="off", log_level="error"):
         yield console, port, FailedLogins
 
@@ -576,9 +566,8 @@ def test_fuzz_proxy_headers_never_choose_the_wrong_token_limits_key(served_with_
     console.failed_logins = FailedLogins()
     answers = []
     for headers in tries:
-        extra = b"".join(f"{k}: {v}\r\n".encode("latin-1") for k, v in headers.items())
-        answers.append(_login_over(port, "wrong", extra=extra))
+        answers.append(login_over_socket(port, "wrong", headers=headers))
         STATS["proxy-header requests"] += 1
     assert answers == [401] * min(5, len(tries)) + [429] * max(0, len(tries) - 5), (tries, answers)
     assert set(console.failed_logins._failures) == {"127.0.0.1"}
-    assert _login_over(port, "t0ken-xff", source="127.0.0.9") == 200
+    assert login_over_socket(port, "t0ken-xff", source="127.0.0.9") == 200

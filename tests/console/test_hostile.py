@@ -19,6 +19,7 @@ with warnings.catch_warnings():  # starlette's note about its test client's HTTP
 from flowcurve.cli import main as cli_main  # noqa: E402
 from flowcurve.console.server import Console, create_app  # noqa: E402
 
+from .conftest import login_over_socket as login  # noqa: E402
 from .test_api import start_then_abort  # noqa: E402
 
 JSON = {"Content-Type": "application/json"}
@@ -342,18 +343,8 @@ def _cli_console(tmp_path: Path, *options: str):
     raise AssertionError("flowcurve console did not start")
 
 
-def _login(port: int, token: str, source: str = "127.0.0.1", **headers: str) -> int:
-    """A login from the address ``source`` (any 127.x.y.z is this computer) with extra headers; its status."""
-    import socket
-
-    body = f'{{"token": "{token}"}}'.encode()
-    head = "".join(f"{k.replace('_', '-')}: {v}\r\n" for k, v in headers.items())
-    request = (f"POST /api/login HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nContent-Type: application/json\r\n{head}"
-               f"Content-Length: {len(body)}\r\nConnection: close\r\n\r\n").encode() + body
-    with socket.create_connection(("127.0.0.1", port), timeout=10, source_address=(source, 0)) as sock:
-        sock.sendall(request)
-        answer = sock.recv(4096)
-    return int(answer.split(b" ", 2)[1])
+def xff(address: str) -> dict:
+    return {"X-Forwarded-For": address}
 
 
 def _stopped(proc) -> None:
@@ -367,12 +358,12 @@ def test_x_forwarded_for_is_ignored_so_a_client_cannot_choose_its_limit_key(tmp_
     127.0.0.9 locked the real client at 127.0.0.9 out."""
     proc, port = _cli_console(tmp_path)
     try:
-        answers = [_login(port, "wrong", X_Forwarded_For="127.0.0.9") for _ in range(5)]
-        assert _login(port, "s3cret", source="127.0.0.9") == 200  # the real 127.0.0.9 is not locked out
-        answers += [_login(port, "wrong", X_Forwarded_For=f"10.9.{i}.{i}", X_Real_IP=f"10.8.{i}.1", Forwarded=f"for=10.7.{i}.1")
+        answers = [login(port, "wrong", headers=xff("127.0.0.9")) for _ in range(5)]
+        assert login(port, "s3cret", source="127.0.0.9") == 200  # the real 127.0.0.9 is not locked out
+        answers += [login(port, "wrong", headers={**xff(f"10.9.{i}.{i}"), "X-Real-IP": f"10.8.{i}.1", "Forwarded": f"for=10.7.{i}.1"})
                     for i in range(7)]
         assert answers == [401] * 5 + [429] * 7, answers
-        assert _login(port, "s3cret", X_Forwarded_For="10.1.1.1") == 429  # the sender, 127.0.0.1, waits
+        assert login(port, "s3cret", headers=xff("10.1.1.1")) == 429  # the sender, 127.0.0.1, waits
     finally:
         _stopped(proc)
 
@@ -380,12 +371,12 @@ def test_x_forwarded_for_is_ignored_so_a_client_cannot_choose_its_limit_key(tmp_
 def test_forwarded_allow_ips_names_the_proxy_whose_client_is_limited(tmp_path):
     proc, port = _cli_console(tmp_path, "--forwarded-allow-ips", "127.0.0.1")
     try:  # 127.0.0.1 is the proxy: the limit keys on the client it names
-        assert [_login(port, "wrong", X_Forwarded_For="10.0.0.7") for _ in range(6)] == [401] * 5 + [429]
-        assert _login(port, "s3cret", X_Forwarded_For="10.0.0.8") == 200  # another client behind the proxy
-        assert _login(port, "s3cret", X_Forwarded_For="10.0.0.7") == 429
+        assert [login(port, "wrong", headers=xff("10.0.0.7")) for _ in range(6)] == [401] * 5 + [429]
+        assert login(port, "s3cret", headers=xff("10.0.0.8")) == 200  # another client behind the proxy
+        assert login(port, "s3cret", headers=xff("10.0.0.7")) == 429
         # a client that is not the proxy names nobody: five wrong tokens count against its own address
-        assert [_login(port, "wrong", source="127.0.0.5", X_Forwarded_For="10.0.0.8") for _ in range(6)] == [401] * 5 + [429]
-        assert _login(port, "s3cret", X_Forwarded_For="10.0.0.8") == 200
+        assert [login(port, "wrong", source="127.0.0.5", headers=xff("10.0.0.8")) for _ in range(6)] == [401] * 5 + [429]
+        assert login(port, "s3cret", headers=xff("10.0.0.8")) == 200
     finally:
         _stopped(proc)
 
