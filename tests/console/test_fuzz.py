@@ -12,7 +12,9 @@ in-process). Two rigs are fuzzed:
 Most requests go through the test client (httpx, in-process); some are written by hand and sent
 over a socket to the heating console served by uvicorn (latin-1 bytes in headers, which httpx
 would not send, no Host or two, chunked bodies). A bare test client also fuzzes a console with
-a token (logins, wrong tokens into the 429 limit).
+a token (logins, wrong tokens into the 429 limit). Issue 42 adds workspaces of links out of
+--out and files an error message would quote (the records list and fits), and proxy headers
+on wrong tokens sent over a socket (the limit keys on the sender, never on a header).
 
 For every request: no answer ≥ 500, and a refused one (≥ 400) — or any GET — leaves the rig's
 state (test, state, readings, samples, stop and abort flags, post values, result, heater relay,

@@ -1,5 +1,6 @@
 """The console under hostile requests (issue 30): each of the seven findings of the probe, and
-the limits that answer them. Every refusal here is a 4xx that starts no test and writes no file."""
+the limits that answer them. Every refusal here is a 4xx that starts no test and writes no file.
+Issue 42: links out of --out, error messages that quoted a file, X-Forwarded-For."""
 
 from __future__ import annotations
 
