@@ -33,6 +33,10 @@ def register(subparsers) -> None:
     p.add_argument("--token", help="access token the page asks for (default: a random one when --host is not 127.0.0.1, where it may not be empty)")
     p.add_argument("--allow-host", action="append", default=[], metavar="NAME",
                    help="a further name or address the page may be opened by (a LAN name), besides localhost, 127.0.0.1, [::1] and --host; repeatable")
+    p.add_argument("--forwarded-allow-ips", metavar="ADDRS",
+                   help="the reverse proxy (addresses or networks, comma-separated) whose X-Forwarded-For names the client; "
+                        "the wrong-token limit then keys on that client. Default: none, proxy headers are ignored and the limit "
+                        "keys on the connection's own address")
     p.add_argument("--time-scale", type=float, default=None, metavar="X", help="virtual rig: model seconds per wall second (default 15, as 'run')")
     p.set_defaults(func=cmd_console)
 
@@ -58,6 +62,7 @@ def cmd_console(args) -> int:
         parts = split_host(f"[{name}]" if name.count(":") > 1 and not name.startswith("[") else name)  # a bare IPv6 address too
         if parts is None or parts[1] is not None:
             raise FlowcurveError(f"--allow-host: not a host name or address (without a port): {name!r}")
+    proxies = forwarded_allow_ips(args.forwarded_allow_ips)
     token = args.token
     if args.host != DEFAULT_HOST:
         if token is not None and not token.strip():
@@ -67,10 +72,26 @@ def cmd_console(args) -> int:
         raise FlowcurveError(f"--token: at most {MAX_TEXT_CHARS} characters")
     console = Console(args.out, config=config, time_scale=args.time_scale, token=token,
                       rig_name=f"rig {args.config}" if args.config else "virtual rig",
-                      host=args.host, port=args.port, allow_hosts=args.allow_host)
+                      host=args.host, port=args.port, allow_hosts=args.allow_host, forwarded_allow_ips=proxies)
     where = f"http://{'[' + args.host + ']' if ':' in args.host else args.host}:{args.port}/"
     print(f"flowcurve console on {where} — {console.rig_name}, records in {console.workspace.records}", file=sys.stderr)
     if token:
         print(f"access token (the page asks for it): {token}", file=sys.stderr)
     serve(console, args.host, args.port)
     return 0
+
+
+def forwarded_allow_ips(value: str | None) -> str | None:
+    """--forwarded-allow-ips as uvicorn takes it (``10.0.0.2,192.168.1.0/24``), or None; each an
+    address or a network ("*" refused: any client could then name itself)."""
+    import ipaddress
+
+    if value is None:
+        return None
+    items = []
+    for item in (part.strip() for part in value.split(",")):
+        try:  # as uvicorn reads them: a network strictly (10.0.0.0/24), else an address
+            items.append(str(ipaddress.ip_network(item, strict=False) if "/" in item else ipaddress.ip_address(item)))
+        except ValueError:
+            raise FlowcurveError(f"--forwarded-allow-ips: not an address or network: {item!r} (give the proxy's, e.g. 127.0.0.1 or 10.0.0.0/24)") from None
+    return ",".join(items)

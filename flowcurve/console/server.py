@@ -19,7 +19,9 @@ for any ``--host`` but the default) every ``/api`` and ``/files`` request needs 
 ``X-Flowcurve-Token`` header or the cookie the login sets; wrong tokens are limited per client
 (429). Every POST is ``application/json`` of at most 1 MiB (413), a JSON object of typed
 fields (400), and names files only by bare names checked against ``--out``
-(:mod:`flowcurve.console.workspace`). A refused request changes nothing.
+(:mod:`flowcurve.console.workspace`). A refused request changes nothing. The limit keys on
+the socket's peer: proxy headers (``X-Forwarded-For``) are ignored unless ``--forwarded-allow-ips``
+names the proxy in front (:func:`proxy_options`), so a client cannot choose its own key.
 """
 
 from __future__ import annotations
@@ -73,14 +75,16 @@ class Console:
     """Everything one console process serves: the rig's runner and the --out folder."""
 
     def __init__(self, out: Path, *, config=None, time_scale: float | None = None, token: str | None = None, rig_name: str = "", virtual_setup=None, open_rig=None,
-                 host: str = DEFAULT_HOST, port: int | None = None, allow_hosts=()):
+                 host: str = DEFAULT_HOST, port: int | None = None, allow_hosts=(), forwarded_allow_ips: str | None = None):
         """``host``, ``port`` and ``allow_hosts`` make the Host allowlist (``port`` None: the
-        loopback names on any port, for a console embedded in a test or a benchmark)."""
+        loopback names on any port, for a console embedded in a test or a benchmark);
+        ``forwarded_allow_ips`` the proxies trusted to name the client (:func:`proxy_options`)."""
         self.workspace = Workspace(out)
         self.runner = TestRunner(self.workspace.records, config=config, virtual_setup=virtual_setup, open_rig=open_rig)
         self.time_scale = time_scale
         self.token = token
         self.hosts = HostAllowlist([host, *allow_hosts], port)
+        self.forwarded_allow_ips = forwarded_allow_ips
         self.failed_logins = FailedLogins()
         self.rig_name = rig_name or ("virtual rig" if config is None else "configured rig")
         self.closing = threading.Event()  # set when the process is asked to stop: pages' streams end
@@ -95,7 +99,10 @@ class Console:
         if run is None:
             return None
         out = run.summary()
-        out["record_url"] = self.workspace.url(run.record) if run.record.exists() else None
+        try:
+            out["record_url"] = self.workspace.url(self.workspace.within(run.record)) if run.record.exists() else None
+        except PathError:  # the record was made a link out of --out: not served, not a 500
+            out["record_url"] = None
         return out
 
 
@@ -260,6 +267,7 @@ def create_app(console: Console) -> Starlette:
     async def start(request: Request) -> Response:
         try:
             data = await _body(request, START_FIELDS)
+            workspace.within(workspace.records)  # the record is written only inside --out
             setup = validate(data, virtual=runner.virtual, time_scale=console.time_scale, config=runner.config)
             run = runner.start(setup, {k: v for k, v in data.items() if isinstance(v, (str, int, float))})
         except FormError as exc:
@@ -304,7 +312,11 @@ def create_app(console: Console) -> Starlette:
             return _error("post.dface_mm: the original end face's diameter is needed on this specimen", 400,
                           fields={"post.dface_mm": f"required — {prompt}"})
         if values:
-            amend_record(run.record, {k: repr(v) for k, v in values.items()})
+            workspace.within(run.record)  # amended only inside --out (PathError: 400)
+            try:
+                amend_record(run.record, {k: repr(v) for k, v in values.items()})
+            except FlowcurveError as exc:
+                return _error(workspace.public_error(exc))
             run.post.update(values)
         try:
             run.result = await asyncio.to_thread(workspace.identify, run.record)
@@ -450,9 +462,19 @@ async def _last_words(console: Console):
                                       "start it again (flowcurve console) and reload this page"})
 
 
+def proxy_options(forwarded_allow_ips: str | None = None) -> dict:
+    """uvicorn's proxy-header options: ``X-Forwarded-For`` read only from the proxies named
+    (then a request's client, and the wrong-token limit's key, is the forwarded one), else never
+    — uvicorn's default trusts it from 127.0.0.1, where any local client could name itself."""
+    if not forwarded_allow_ips:
+        return {"proxy_headers": False}
+    return {"proxy_headers": True, "forwarded_allow_ips": forwarded_allow_ips}
+
+
 def serve(console: Console, host: str, port: int) -> None:
     """Serve until SIGINT/SIGTERM; the signal aborts a running test at once (the heater goes
-    off within a tick), and open pages do not hold the shutdown up."""
+    off within a tick), and open pages do not hold the shutdown up. Proxy headers are read only
+    from ``console.forwarded_allow_ips`` (:func:`proxy_options`)."""
     import uvicorn
 
     class ConsoleServer(uvicorn.Server):
@@ -462,7 +484,8 @@ def serve(console: Console, host: str, port: int) -> None:
             super().handle_exit(sig, frame)
 
     signals: list[int] = []
-    config = uvicorn.Config(create_app(console), host=host, port=port, log_level="warning", timeout_graceful_shutdown=GRACEFUL_SHUTDOWN_S)
+    config = uvicorn.Config(create_app(console), host=host, port=port, log_level="warning", timeout_graceful_shutdown=GRACEFUL_SHUTDOWN_S,
+                            **proxy_options(console.forwarded_allow_ips))
     ConsoleServer(config).run()  # uvicorn raises the signal it caught again once it has stopped
     exit_as_signalled(signals)
 

@@ -6,8 +6,11 @@
     OUT/results/<record stem>/      flowcurve identify's folder (result.json, plots, true curve)
     OUT/fits/<fit name>/            flowcurve fit's folder (fit.json, curves/, plots/) and cards
 
-Nothing the console writes goes anywhere else: every path a request names is a bare name
-checked against these folders (:func:`inside`), never a path joined as given.
+Nothing the console reads or writes goes anywhere else: every path a request names is a bare
+name checked against these folders (:func:`inside`), never a path joined as given, and every
+path is resolved before use — a link that leaves ``--out`` is refused (:meth:`Workspace.within`).
+An error from reading a file reaches an HTTP answer as :meth:`Workspace.public_error`: file,
+line and column, never the file's text.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ import logging
 import re
 from pathlib import Path
 
-from flowcurve.errors import FlowcurveError
+from flowcurve.errors import FlowcurveError, MissingValueError, RecordError
 
 log = logging.getLogger(__name__)
 
@@ -55,17 +58,58 @@ class Workspace:
         self.results = self.root / "results"
         self.fits = self.root / "fits"
 
+    def relative(self, path) -> str:
+        """``path`` as named under --out (``records/x.csv``), not resolved: the name a link has."""
+        try:
+            return Path(path).relative_to(self.root).as_posix()
+        except ValueError:
+            return Path(path).name
+
+    def within(self, path: Path) -> Path:
+        """``path`` resolved (links followed), or PathError when it leaves --out."""
+        resolved = Path(path).resolve()
+        if resolved != self.root and self.root not in resolved.parents:
+            raise PathError(f"{self.relative(path)}: refused: a link out of the console's folder")
+        return resolved
+
     def record_path(self, name: str) -> Path:
+        """OUT/records/``name`` resolved inside --out, or PathError."""
         name = bare_name(name, "record")
         if not name.endswith(".csv"):
             raise PathError(f"record: not a record file name (.csv): {name!r}")
-        path = self.records / name
+        path = self.within(self.records / name)
         if not path.is_file():
             raise PathError(f"record: no such record in {self.records}: {name}")
         return path
 
     def result_folder(self, record: Path) -> Path:
-        return self.results / record.stem
+        """OUT/results/<record stem> resolved inside --out (it may not exist yet), or PathError."""
+        return self.within(self.results / Path(record).stem)
+
+    def checked_folder(self, folder: Path) -> Path:
+        """``folder`` and everything in it resolved inside --out, or PathError naming the first link out."""
+        folder = self.within(folder)
+        for path in folder.rglob("*"):
+            self.within(path)
+        return folder
+
+    def public_error(self, exc: BaseException) -> str:
+        """What an HTTP answer may say of an error from reading a file of --out: the file (as named
+        under --out), line and column and what kind of problem — never the file's text. The whole
+        message goes to the console's log (the operator's terminal)."""
+        log.warning("reading the console's folder: %s", exc, exc_info=not isinstance(exc, FlowcurveError))
+        if isinstance(exc, PathError):
+            return str(exc)
+        if isinstance(exc, RecordError):
+            where = self.relative(exc.path)
+            where += f", line {exc.line}" if exc.line is not None else ""
+            where += f", column '{exc.column}'" if exc.column and NAME_RE.match(str(exc.column)) else ""
+            if isinstance(exc, MissingValueError):
+                return f"{where}: {exc.explain()}"  # from the keys asked for, not from the file
+            return f"{where}: not readable as a record (flowcurve identify {self.relative(exc.path)} on the console's computer says why)"
+        if isinstance(exc, FlowcurveError):  # the identification's or the fit's own words and figures
+            return str(exc).replace(f"{self.root}/", "")
+        return f"a file of the console's folder cannot be read ({type(exc).__name__})"
 
     def url(self, path: Path) -> str:
         """The /files/ address of a file inside the folder."""
@@ -77,21 +121,29 @@ class Workspace:
         from flowcurve.record.format import read_record
 
         rows = []
-        if not self.records.is_dir():
+        try:
+            records = self.within(self.records)
+        except PathError as exc:
+            return [{"name": "records", "url": None, "error": str(exc), "refused": True, "result": None}]
+        if not records.is_dir():
             return rows
-        for path in sorted(self.records.glob("*.csv"), key=lambda p: p.stat().st_mtime, reverse=True):
-            entry: dict = {"name": path.name, "url": self.url(path)}
+        for path in sorted(self.records.glob("*.csv"), key=_mtime, reverse=True):
+            entry: dict = {"name": path.name, "url": None}
             try:
-                rec = read_record(path)
+                resolved = self.within(path)
+                entry["url"] = self.url(resolved)
+                rec = read_record(resolved)
                 meta = rec.meta
                 entry.update({
                     "test": meta.get("test"), "material": meta.get("material"), "specimen_id": meta.get("specimen.id"),
                     "date": meta.get("date"), "status": meta.get("status"), "stop_reason": meta.get("stop_reason") or meta.get("abort_reason"),
                     "samples": len(rec.data), "nominal_temperature_C": meta.get("nominal_temperature_C"),
                 })
-            except FlowcurveError as exc:
-                entry["error"] = str(exc)
-            entry["result"] = self.result_summary(path)
+            except PathError as exc:
+                entry.update(error=str(exc), refused=True)
+            except Exception as exc:  # noqa: BLE001 — one unreadable file never breaks the list
+                entry["error"] = self.public_error(exc)
+            entry["result"] = None if entry.get("refused") else self.result_summary(path)
             rows.append(entry)
         return rows
 
@@ -99,20 +151,20 @@ class Workspace:
         """The key figures of a record's result.json, with links to its files; None if not identified."""
         from flowcurve.identification.outcome import read_json_object
 
-        folder = self.result_folder(record)
-        path = folder / "result.json"
-        if not path.is_file():
-            return None
         try:
+            folder = self.result_folder(record)
+            path = self.within(folder / "result.json")
+            if not path.is_file():
+                return None
             res = read_json_object(path, FlowcurveError, "result.json")
-        except FlowcurveError as exc:
-            return {"error": str(exc)}
+        except Exception as exc:  # noqa: BLE001 — a link out refused, an unreadable result named
+            return {"error": self.public_error(exc)}
         hard = res.get("hardening") or {}
         figures = {k: res.get(k) for k in ("E_MPa", "Rp02_MPa", "Rm_MPa", "A_pct", "Z_pct", "fracture_true_strain", "friction_mu", "final_true_strain", "max_force_N") if res.get(k) is not None}
         for k in ("A_MPa", "B_MPa", "n", "fit_error_pct"):
             if hard.get(k) is not None:
                 figures[f"JC {k}"] = hard[k]
-        files = sorted(p for p in folder.iterdir() if p.is_file())
+        files = sorted(p for p in folder.iterdir() if _inside_file(self, p))  # links out of --out are left out
         return {
             "folder": self.url(folder),
             "figures": figures,
@@ -127,7 +179,12 @@ class Workspace:
         """``flowcurve identify`` on one record into OUT/results/<stem>/; its summary."""
         from flowcurve.demo import identify_and_write
 
-        identify_and_write(record, self.results)
+        self.within(record)
+        self.result_folder(record)  # results/<stem> written only inside --out
+        try:
+            identify_and_write(record, self.within(self.results))
+        except Exception as exc:  # noqa: BLE001 — named without the record's text
+            raise FlowcurveError(self.public_error(exc)) from None
         return self.result_summary(record)
 
     # series fit and card ----------------------------------------------------------------------
@@ -149,8 +206,8 @@ class Workspace:
         for name in names:
             record = self.record_path(name)
             folder = self.result_folder(record)
-            inputs.append(str(folder if (folder / "result.json").is_file() else record))
-        out = self.fits / f"fit-{_dt.datetime.now():%Y%m%d-%H%M%S-%f}"
+            inputs.append(str(self.checked_folder(folder) if (folder / "result.json").is_file() else record))
+        out = self.within(self.fits) / f"fit-{_dt.datetime.now():%Y%m%d-%H%M%S-%f}"
         argv = ["fit", *inputs, "--out", str(out)]
         for key, option in (("melt_temp", "--melt-temp"), ("fix_C", "--fix-C"), ("fix_m", "--fix-m"), ("ref_rate", "--ref-rate"), ("ref_temp", "--ref-temp")):
             value = str(options.get(key) or "").strip()
@@ -168,7 +225,10 @@ class Workspace:
             if value:
                 card_argv += [option, value]
         card_args = _parse(build_parser(), card_argv)
-        members = load_members(args.inputs)
+        try:
+            members = load_members(args.inputs)
+        except Exception as exc:  # noqa: BLE001 — a record or result named without its text
+            raise FlowcurveError(self.public_error(exc)) from None
         fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
         _check_complete(members, args, card_args, fixed)
         try:
@@ -185,6 +245,22 @@ class Workspace:
         plots = sorted((out / "plots").glob("*.png"))
         return {"summary": text, "fit": self.url(fit_json), "card": self.url(card), "card_name": card.name,
                 "plots": [self.url(p) for p in plots], "folder": self.url(out)}
+
+
+def _mtime(path: Path) -> float:
+    """A file's modification time; 0 for a link to nothing (listed, not a traceback)."""
+    try:
+        return path.stat().st_mtime
+    except OSError:
+        return 0.0
+
+
+def _inside_file(workspace: Workspace, path: Path) -> bool:
+    """A file that resolves inside --out."""
+    try:
+        return workspace.within(path).is_file()
+    except PathError:
+        return False
 
 
 # the fit form's card fields → card option; and how the form labels every input it may lack

@@ -33,12 +33,16 @@ def free_port() -> int:
 
 
 @contextlib.contextmanager
-def serving(app, port: int, lifespan: str = "on", log_level: str = "warning"):
-    """``app`` served by uvicorn on 127.0.0.1:``port`` in a thread, until the block ends."""
+def serving(app, port: int, lifespan: str = "on", log_level: str = "warning", forwarded_allow_ips: str | None = None):
+    """``app`` served by uvicorn on 127.0.0.1:``port`` in a thread, until the block ends, with
+    the proxy-header options ``flowcurve console`` serves with."""
     pytest.importorskip("uvicorn", reason="uvicorn is not installed (pip install -e .[test])")
     import uvicorn
 
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level=log_level, lifespan=lifespan))
+    from flowcurve.console.server import proxy_options
+
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level=log_level, lifespan=lifespan,
+                                           **proxy_options(forwarded_allow_ips)))
     thread = threading.Thread(target=server.run, name="console-under-test", daemon=True)
     thread.start()
     end = time.monotonic() + 20
@@ -49,6 +53,21 @@ def serving(app, port: int, lifespan: str = "on", log_level: str = "warning"):
     server.should_exit = True
     thread.join(30)
     assert not thread.is_alive()
+
+
+def login_over_socket(port: int, token: str, source: str = "127.0.0.1", headers: dict | None = None) -> int:
+    """POST /api/login to 127.0.0.1:``port`` from the address ``source`` (any 127.x.y.z is this
+    computer) with extra ``headers`` (latin-1), over a socket of its own; the answer's status."""
+    import json
+
+    body = json.dumps({"token": token}).encode()
+    extra = "".join(f"{k}: {v}\r\n" for k, v in (headers or {}).items()).encode("latin-1")
+    head = (f"POST /api/login HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nContent-Type: application/json\r\n"
+            f"Content-Length: {len(body)}\r\nConnection: close\r\n").encode() + extra + b"\r\n"
+    with socket.create_connection(("127.0.0.1", port), timeout=30, source_address=(source, 0)) as sock:
+        sock.sendall(head + body)
+        answer = sock.recv(4096)
+    return int(answer.split(b" ", 2)[1])
 
 
 @pytest.fixture

@@ -12,7 +12,9 @@ in-process). Two rigs are fuzzed:
 Most requests go through the test client (httpx, in-process); some are written by hand and sent
 over a socket to the heating console served by uvicorn (latin-1 bytes in headers, which httpx
 would not send, no Host or two, chunked bodies). A bare test client also fuzzes a console with
-a token (logins, wrong tokens into the 429 limit).
+a token (logins, wrong tokens into the 429 limit). Issue 42 adds workspaces of links out of
+--out and files an error message would quote (the records list and fits), and proxy headers
+on wrong tokens sent over a socket (the limit keys on the sender, never on a header).
 
 For every request: no answer ≥ 500, and a refused one (≥ 400) — or any GET — leaves the rig's
 state (test, state, readings, samples, stop and abort flags, post values, result, heater relay,
@@ -50,7 +52,7 @@ from flowcurve.console.request_guard import MAX_BODY_BYTES, MAX_TEXT_CHARS, NAME
 from flowcurve.console.server import FIT_FIELDS, LOGIN_FIELDS, POST_FIELDS, START_FIELDS, Console, create_app  # noqa: E402
 from flowcurve.console.setup_form import validate  # noqa: E402
 
-from .conftest import ARTIFACTS, free_port, serving  # noqa: E402
+from .conftest import ARTIFACTS, free_port, login_over_socket, serving  # noqa: E402
 
 PORT = free_port()  # the fuzzed consoles' port: in their allowlist, and the real server's for the raw requests
 GOOD_HOSTS = (f"127.0.0.1:{PORT}", f"localhost:{PORT}", f"[::1]:{PORT}")
@@ -418,3 +420,156 @@ def test_fuzz_a_heating_rig_over_a_socket(heating, group, paths, examples):
     before = STATS[f"heating {group} requests"]
     one()
     assert STATS[f"heating {group} requests"] - before >= examples
+
+
+# issue 42: links out of --out and unreadable files; X-Forwarded-For -----------------------------------------
+GOOD_RECORD = ARTIFACTS.parents[2] / "examples" / "data" / "compression-steel45.csv"
+CANARY = "CANARY-5e1d"  # text of files no answer may quote
+RECORD_KINDS = ("good", "link out", "link to /etc/passwd", "link to nothing", "link inside", "link to nothing inside", "canary columns",
+                "canary bytes", "canary header", "folder")
+REFUSED_KINDS = ("link out", "link to /etc/passwd", "link to nothing")  # links that leave --out
+RESULT_KINDS = ("none", "link out", "result.json out", "garbage result.json", "a plot out")
+
+
+def _outside(tmp) -> dict:
+    outside = tmp / "outside"
+    (outside / "result").mkdir(parents=True)
+    (outside / "secret.csv").write_text(f"{CANARY}:x:0:0:root:/root:/bin/bash\n{CANARY},1,2\n")
+    (outside / "result" / "result.json").write_text(f'{{"test": "compression", "warnings": ["{CANARY}"], "E_MPa": 1}}')
+    (outside / "plot.png").write_text(CANARY)
+    return {"file": outside / "secret.csv", "result": outside / "result"}
+
+
+def _make_record(records, name: str, kind: str, outside: dict) -> None:
+    path = records / name
+    if kind == "good":
+        path.write_bytes(GOOD_RECORD.read_bytes())
+    elif kind == "link out":
+        path.symlink_to(outside["file"])
+    elif kind == "link to /etc/passwd":
+        path.symlink_to("/etc/passwd")
+    elif kind == "link to nothing":
+        path.symlink_to(outside["file"].parent / "gone.csv")
+    elif kind == "link to nothing inside":
+        path.symlink_to(records / "gone.csv")
+    elif kind == "link inside":
+        (records.parent / "inside.csv").write_bytes(GOOD_RECORD.read_bytes())
+        path.symlink_to(records.parent / "inside.csv")
+    elif kind == "canary columns":
+        path.write_text(f"time_s;{CANARY} [kN]\n0;{CANARY}\n")
+    elif kind == "canary bytes":
+        path.write_bytes(b"# flowcurve-record: 1\n# test: compression\ntime_s,force_N,crosshead_mm\n0,\xff" + CANARY.encode() + b",1\n")
+    elif kind == "canary header":
+        path.write_text(f"# flowcurve-record: 1\n# test: compression\n# specimen.d0_mm: {CANARY}\ntime_s,force_N,crosshead_mm\n0,1,2\n")
+    else:
+        path.mkdir()
+
+
+def _make_result(results, stem: str, kind: str, outside: dict) -> None:
+    folder = results / stem
+    if kind == "link out":
+        folder.symlink_to(outside["result"])
+        return
+    folder.mkdir()
+    if kind == "result.json out":
+        (folder / "result.json").symlink_to(outside["result"] / "result.json")
+    elif kind == "garbage result.json":
+        (folder / "result.json").write_text(f'{{"test": {CANARY}')
+    elif kind == "a plot out":
+        (folder / "result.json").write_text('{"test": "compression", "E_MPa": 200000}')
+        (folder / "plot.png").symlink_to(outside["result"].parent / "plot.png")
+
+
+def _tree(root) -> list:
+    return sorted((str(p), p.lstat().st_size, p.lstat().st_mtime_ns) for p in root.rglob("*"))
+
+
+@fuzz(40)
+@given(st.lists(st.tuples(st.sampled_from(RECORD_KINDS), st.sampled_from(RESULT_KINDS)), min_size=1, max_size=5),
+       st.lists(st.integers(0, 4), max_size=3), st.booleans())
+def test_fuzz_links_out_and_unreadable_files_never_break_the_list_or_quote_a_file(layout, fit_picks, records_linked_out):
+    """Any mix of records and result folders — links out of --out, to nothing, inside it, files
+    whose text would be quoted — gives a whole list (each file listed, links out refused), fits that
+    answer < 500, and no answer quotes a file's text; nothing outside --out is read into an answer
+    or written."""
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        outside = _outside(tmp)
+        out = tmp / "out"
+        records = out / "records"
+        if records_linked_out:  # the records folder itself a link out of --out
+            out.mkdir()
+            (tmp / "outside" / "records").mkdir()
+            records.symlink_to(tmp / "outside" / "records")
+        else:
+            records.mkdir(parents=True)
+        (out / "results").mkdir()
+        names = [f"r{i}.csv" for i in range(len(layout))]
+        for name, (kind, result) in zip(names, layout):
+            _make_record(records, name, kind, outside)
+            _make_result(out / "results", name[:-4], result, outside)
+        before = _tree(tmp / "outside")
+        console = Console(out, time_scale=1.0, port=PORT)
+        client = TestClient(create_app(console), base_url=f"http://127.0.0.1:{PORT}", raise_server_exceptions=False)
+        r = client.get("/api/records")
+        STATS["link requests"] += 1
+        assert r.status_code == 200, r.text[:300]
+        assert CANARY not in r.text and "root:x:" not in r.text, r.text
+        rows = {row["name"]: row for row in r.json()["records"]}
+        if records_linked_out:
+            assert list(rows) == ["records"] and rows["records"]["refused"]
+        else:
+            assert set(rows) == set(names)
+            for name, (kind, result) in zip(names, layout):
+                row = rows[name]
+                if kind in REFUSED_KINDS:
+                    assert row["refused"] and row["url"] is None and "link out" in row["error"], row
+                elif kind in ("good", "link inside"):
+                    assert row["test"] == "compression" and "error" not in row, row
+                    if result in ("link out", "result.json out"):
+                        assert "link out" in row["result"]["error"], row
+                    if result == "a plot out":  # listed without the plot that leaves --out
+                        assert row["result"]["plots"] == [] and "figures" in row["result"], row
+                elif kind != "canary header":  # a header value is read as text: the record lists
+                    assert row["error"].startswith(f"records/{name}"), row
+        picked = [names[i % len(names)] for i in fit_picks]
+        r = client.post("/api/fit", json={"records": picked, "melt_temp": 1400}, headers={"Content-Type": "application/json"})
+        STATS["link requests"] += 1
+        assert r.status_code < 500 and CANARY not in r.text and "root:x:" not in r.text, r.text
+        assert _tree(tmp / "outside") == before
+
+
+ip_text = st.tuples(*[st.integers(0, 255)] * 4).map(lambda t: ".".join(map(str, t)))
+forwarded_values = st.one_of(st.just("127.0.0.9"), ip_text, st.lists(ip_text, min_size=2, max_size=4).map(", ".join),
+                             header_text.map(lambda b: b.decode("latin-1").strip()).filter(lambda t: t and ":" not in t[:1]))
+
+
+@pytest.fixture(scope="module")
+def served_with_token(tmp_path_factory):
+    """A console with a token served by uvicorn as ``flowcurve console`` serves it (no proxy named)."""
+    from flowcurve.console.request_guard import FailedLogins
+
+    port = free_port()
+    console = Console(tmp_path_factory.mktemp("xff") / "out", time_scale=1.0, port=port, token="t0ken-xff")
+    with serving(create_app(console), port, lifespan="off", log_level="error"):
+        yield console, port, FailedLogins
+
+
+@fuzz(40)
+@given(st.lists(st.dictionaries(st.sampled_from(["X-Forwarded-For", "X-Real-IP", "Forwarded", "X-Forwarded-Host"]), forwarded_values,
+                                min_size=1, max_size=3), min_size=1, max_size=12))
+def test_fuzz_proxy_headers_never_choose_the_wrong_token_limits_key(served_with_token, tries):
+    """Wrong tokens from 127.0.0.1 with any proxy headers: the limit counts them against 127.0.0.1
+    (429 from the sixth), and the client at 127.0.0.9 they name logs in."""
+    console, port, FailedLogins = served_with_token
+    console.failed_logins = FailedLogins()
+    answers = []
+    for headers in tries:
+        answers.append(login_over_socket(port, "wrong", headers=headers))
+        STATS["proxy-header requests"] += 1
+    assert answers == [401] * min(5, len(tries)) + [429] * max(0, len(tries) - 5), (tries, answers)
+    assert set(console.failed_logins._failures) == {"127.0.0.1"}
+    assert login_over_socket(port, "t0ken-xff", source="127.0.0.9") == 200

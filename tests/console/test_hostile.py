@@ -1,5 +1,6 @@
 """The console under hostile requests (issue 30): each of the seven findings of the probe, and
-the limits that answer them. Every refusal here is a 4xx that starts no test and writes no file."""
+the limits that answer them. Every refusal here is a 4xx that starts no test and writes no file.
+Issue 42: links out of --out, error messages that quoted a file, X-Forwarded-For."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ with warnings.catch_warnings():  # starlette's note about its test client's HTTP
 from flowcurve.cli import main as cli_main  # noqa: E402
 from flowcurve.console.server import Console, create_app  # noqa: E402
 
+from .conftest import login_over_socket as login  # noqa: E402
 from .test_api import start_then_abort  # noqa: E402
 
 JSON = {"Content-Type": "application/json"}
@@ -251,3 +253,185 @@ def test_a_served_console_refuses_a_foreign_host_and_a_200_MB_body_before_readin
             f"Content-Length: {200 * 1024 * 1024}\n")
     assert _raw(served_console.url, head, b'{"material": "' + b"m" * 1024) == 413
     assert served_console.console.runner.current is None
+
+
+# issue 42: links out of --out, file text in error messages, X-Forwarded-For ------------------------------
+GOOD_RECORD = Path(__file__).resolve().parents[2] / "examples" / "data" / "compression-steel45.csv"
+CANARY = "CANARY-7f3a"  # text of files the answers must never quote
+
+
+def hostile_workspace(tmp_path: Path) -> tuple[Path, Path]:
+    """OUT with a good record beside links out of it (to a file, to /etc/passwd, to a folder of
+    results), a link to nothing, a link inside, and a record whose column row holds CANARY;
+    and the outside folder those links reach. (out, outside)"""
+    out, outside = tmp_path / "out", tmp_path / "outside"
+    (out / "records").mkdir(parents=True)
+    (out / "results").mkdir()
+    (outside / "result").mkdir(parents=True)
+    secret = outside / "secret.csv"
+    secret.write_text(f"{CANARY}:x:0:0:root:/root:/bin/bash\n{CANARY},1,2\n")
+    (outside / "result" / "result.json").write_text(f'{{"test": "compression", "note": "{CANARY}", ')
+    (out / "records" / "good.csv").write_bytes(GOOD_RECORD.read_bytes())
+    (out / "records" / "x.csv").symlink_to(secret)
+    (out / "records" / "passwd.csv").symlink_to("/etc/passwd")
+    (out / "records" / "nothing.csv").symlink_to(tmp_path / "gone.csv")
+    (out / "records" / "same.csv").symlink_to("good.csv")  # a link inside --out is a record like any
+    (out / "records" / "bad.csv").write_text(f"# flowcurve-record: 1\n# test: compression\ntime_s,{CANARY}_N\n0,1\n")
+    (out / "results" / "good").symlink_to(outside / "result")  # good.csv's result folder, out of --out
+    return out, outside
+
+
+def assert_quotes_nothing(text: str) -> None:
+    assert CANARY not in text and "root:x:0:0" not in text and ":/bin/" not in text and "Traceback" not in text, text
+
+
+def test_a_link_out_of_out_is_refused_in_the_list_and_the_rest_of_the_list_holds(tmp_path):
+    """A symlink records/x.csv → /etc/passwd answered 500 with a traceback: the whole list broke."""
+    out, outside = hostile_workspace(tmp_path)
+    console, client = _client(tmp_path)
+    r = client.get("/api/records")
+    assert r.status_code == 200, r.text[:300]
+    assert_quotes_nothing(r.text)
+    rows = {row["name"]: row for row in r.json()["records"]}
+    assert set(rows) == {"good.csv", "x.csv", "passwd.csv", "nothing.csv", "same.csv", "bad.csv"}
+    for name in ("x.csv", "passwd.csv"):
+        assert rows[name]["refused"] and "link out of the console's folder" in rows[name]["error"] and rows[name]["url"] is None
+    for name in ("good.csv", "same.csv"):  # read as records; good.csv's result folder (a link out) refused
+        assert rows[name]["test"] == "compression" and rows[name]["samples"] > 500, rows[name]
+    assert "link out" in rows["good.csv"]["result"]["error"]
+    assert rows["bad.csv"]["error"].startswith("records/bad.csv") and rows["nothing.csv"]["error"]
+    assert client.get("/files/records/x.csv").status_code == 404
+
+
+@pytest.mark.parametrize("name", ["x.csv", "passwd.csv", "bad.csv", "good.csv", "nothing.csv"])
+def test_a_fit_naming_a_link_out_or_an_unreadable_record_quotes_no_line_of_it(tmp_path, name):
+    """POST /api/fit naming records/x.csv → /etc/passwd answered 400 quoting a line of /etc/passwd."""
+    out, outside = hostile_workspace(tmp_path)
+    before = sorted((p, p.stat().st_mtime_ns) for p in outside.rglob("*"))
+    _console, client = _client(tmp_path)
+    r = client.post("/api/fit", json={"records": [name], "melt_temp": 1400, "format": "lsdyna"}, headers=JSON)
+    assert r.status_code == 400, r.text[:300]
+    assert_quotes_nothing(r.text)
+    error = r.json()["error"]
+    if name in ("x.csv", "passwd.csv", "good.csv"):  # good.csv: its result folder is the link out
+        assert "refused: a link out of the console's folder" in error, error
+    if name == "bad.csv":  # file and line named, not its text
+        assert error.startswith("records/bad.csv, line "), error
+    assert sorted((p, p.stat().st_mtime_ns) for p in outside.rglob("*")) == before
+    assert not (out / "fits").exists() or not any((out / "fits").iterdir())
+
+
+def _cli_console(tmp_path: Path, *options: str):
+    """``flowcurve console`` as an operator starts it, on a free port, with a token: (process, port)."""
+    import socket
+    import subprocess
+    import sys
+
+    from .conftest import free_port
+
+    port = free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "flowcurve", "console", "--out", str(tmp_path / "out"), "--port", str(port),
+                             "--token", "s3cret", *options], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    end = time.monotonic() + 60
+    while time.monotonic() < end:
+        assert proc.poll() is None, proc.stderr.read().decode()
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+            return proc, port
+        except OSError:
+            time.sleep(0.1)
+    proc.kill()
+    raise AssertionError("flowcurve console did not start")
+
+
+def xff(address: str) -> dict:
+    return {"X-Forwarded-For": address}
+
+
+def _stopped(proc) -> None:
+    proc.terminate()
+    proc.wait(30)
+
+
+def test_x_forwarded_for_is_ignored_so_a_client_cannot_choose_its_limit_key(tmp_path):
+    """The ASGI server trusted X-Forwarded-For from 127.0.0.1: a header changed on every try was
+    never limited (12 wrong tokens, no 429), and five wrong tokens sent with X-Forwarded-For:
+    127.0.0.9 locked the real client at 127.0.0.9 out."""
+    proc, port = _cli_console(tmp_path)
+    try:
+        answers = [login(port, "wrong", headers=xff("127.0.0.9")) for _ in range(5)]
+        assert login(port, "s3cret", source="127.0.0.9") == 200  # the real 127.0.0.9 is not locked out
+        answers += [login(port, "wrong", headers={**xff(f"10.9.{i}.{i}"), "X-Real-IP": f"10.8.{i}.1", "Forwarded": f"for=10.7.{i}.1"})
+                    for i in range(7)]
+        assert answers == [401] * 5 + [429] * 7, answers
+        assert login(port, "s3cret", headers=xff("10.1.1.1")) == 429  # the sender, 127.0.0.1, waits
+    finally:
+        _stopped(proc)
+
+
+def test_forwarded_allow_ips_names_the_proxy_whose_client_is_limited(tmp_path):
+    proc, port = _cli_console(tmp_path, "--forwarded-allow-ips", "127.0.0.1")
+    try:  # 127.0.0.1 is the proxy: the limit keys on the client it names
+        assert [login(port, "wrong", headers=xff("10.0.0.7")) for _ in range(6)] == [401] * 5 + [429]
+        assert login(port, "s3cret", headers=xff("10.0.0.8")) == 200  # another client behind the proxy
+        assert login(port, "s3cret", headers=xff("10.0.0.7")) == 429
+        # a client that is not the proxy names nobody: five wrong tokens count against its own address
+        assert [login(port, "wrong", source="127.0.0.5", headers=xff("10.0.0.8")) for _ in range(6)] == [401] * 5 + [429]
+        assert login(port, "s3cret", headers=xff("10.0.0.8")) == 200
+    finally:
+        _stopped(proc)
+
+
+@pytest.mark.parametrize("value", ["*", "nonsense", "10.0.0.1,", "10.0.0.300"])
+def test_forwarded_allow_ips_takes_addresses_and_networks_only(monkeypatch, tmp_path, capsys, value):
+    seen = {}
+    import flowcurve.console.server as server
+
+    monkeypatch.setattr(server, "serve", lambda console, host, port: seen.update(console=console))
+    assert cli_main(["console", "--out", str(tmp_path), "--forwarded-allow-ips", value]) != 0
+    err = capsys.readouterr().err.strip()
+    assert not seen and len(err.splitlines()) == 1 and "--forwarded-allow-ips" in err, err
+    assert cli_main(["console", "--out", str(tmp_path), "--forwarded-allow-ips", "10.0.0.5/24, ::1"]) == 0
+    assert seen["console"].forwarded_allow_ips == "10.0.0.0/24,::1"
+    assert cli_main(["console", "--out", str(tmp_path)]) == 0
+    assert seen["console"].forwarded_allow_ips is None
+    assert server.proxy_options(None) == {"proxy_headers": False}
+
+
+def test_post_test_values_identify_into_out_only(tmp_path_factory, tmp_path):
+    """A completed test whose result folder was made a link out of --out: the identification is
+    refused (named in the test's result), and nothing is written where the link leads."""
+    pytest.importorskip("hypothesis", reason="hypothesis is not installed (pip install -e .[test])")
+    from .test_fuzz import _completed, _console_with
+
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    with _console_with(tmp_path_factory, {"test": "compression", "target": "0.5", "specimen_id": "linked"}, _completed) as fuzzed:
+        record = fuzzed.console.runner.current.record
+        results = fuzzed.console.workspace.results
+        results.mkdir(parents=True, exist_ok=True)
+        (results / record.stem).symlink_to(elsewhere)
+        r = fuzzed.client.post("/api/post", json={}, headers=JSON)  # the virtual rig's own hk and dmax: it identifies
+        assert r.status_code == 200, r.text
+        assert "refused: a link out of the console's folder" in r.json()["test"]["result"]["error"], r.text
+    assert list(elsewhere.iterdir()) == []
+
+
+def test_a_record_made_a_link_out_after_its_test_is_neither_served_nor_amended(tmp_path_factory, tmp_path):
+    """The test's record replaced by a link to a file outside --out: the status still answers (no
+    500, no link to it), and post-test values are refused without touching the outside file."""
+    pytest.importorskip("hypothesis", reason="hypothesis is not installed (pip install -e .[test])")
+    from .test_fuzz import _completed, _console_with
+
+    with _console_with(tmp_path_factory, {"test": "compression", "target": "0.5", "specimen_id": "moved"}, _completed) as fuzzed:
+        record = fuzzed.console.runner.current.record
+        outside = tmp_path / "outside.csv"
+        text = record.read_bytes()
+        outside.write_bytes(text)
+        record.unlink()
+        record.symlink_to(outside)
+        r = fuzzed.client.get("/api/status")
+        assert r.status_code == 200 and r.json()["test"]["record_url"] is None, r.text[:300]
+        r = fuzzed.client.post("/api/post", json={"post.hk_mm": "6.25"}, headers=JSON)
+        assert r.status_code == 400 and "refused: a link out of the console's folder" in r.json()["error"], r.text[:300]
+        assert outside.read_bytes() == text

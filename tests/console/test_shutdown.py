@@ -89,7 +89,7 @@ def test_a_server_that_came_back_from_ctrl_c_still_ends_as_interrupted(monkeypat
     from flowcurve.console import server
 
     closed = []
-    console = type("Stub", (), {"close": lambda self: closed.append(True)})()
+    console = type("Stub", (), {"close": lambda self: closed.append(True), "forwarded_allow_ips": None})()
     monkeypatch.setattr(server, "create_app", lambda c: object())
 
     def run_and_miss(self, sockets=None):
@@ -100,7 +100,7 @@ def test_a_server_that_came_back_from_ctrl_c_still_ends_as_interrupted(monkeypat
         server.serve(console, "127.0.0.1", 8080)
     assert closed == [True]
 
-    monkeypatch.setattr(server, "Console", lambda *a, **k: type("C", (), {"rig_name": "virtual rig", "close": lambda self: None,
+    monkeypatch.setattr(server, "Console", lambda *a, **k: type("C", (), {"rig_name": "virtual rig", "close": lambda self: None, "forwarded_allow_ips": None,
                                                                           "workspace": type("W", (), {"records": "r"})()})())
     assert main(["console", "--out", "unused"]) == 130
     server.exit_as_signalled([])  # a server stopped without a signal: nothing raised
