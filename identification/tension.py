@@ -501,6 +501,7 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         mod.source = how
         if auto is not None:
             mod.quality = auto.quality
+            mod.sdar_failed = auto.sdar_failed
             mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
         E = _chosen_modulus(mod, E_MPa, handbook_E, given_window=not automatic)
         if unresolved is None and handbook_E is not None and E == mod.E_MPa and not _resolved(mod):
@@ -528,6 +529,16 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         warnings.append(f"apparent modulus {E:.4g} MPa is far from any metal's: check units, the frame stiffness or the window")
     return _ElasticLine(E=E, mod=mod, Rp02=Rp02, window_MPa=window_MPa, disp=disp, strain=strain, toe_mm=toe_mm,
                         scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings)
+
+
+def sdar_warnings(mod: ModulusFit) -> list[str]:
+    """The checks of ASTM E3076-18 that SDAR's least-residual window failed, as a warning: when
+    its line gives E (the failure stands beside it) or when the project's window replaced it."""
+    if mod.sdar_failed:
+        return [f"SDAR (ASTM E3076-18): the least-residual window failed {', '.join(mod.sdar_failed)}; E is from flowcurve's own "
+                "automatic window instead (not an E3076 result)"]
+    failed = [k for k, v in (mod.quality or {}).items() if not v.get("passed", True)]
+    return [f"SDAR (ASTM E3076-18): the least-residual window failed {', '.join(failed)}; E is reported from it"] if failed else []
 
 
 def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
@@ -846,7 +857,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     hard = _hardening_fits(inp, iso, true, fracture, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
                            fit_range=fit_range, fracture_point=fracture_point)
     hard, start_warnings = _strain_zero(inp, line, hard, law)
-    warnings = (inp.warnings + line.warnings + iso.warnings + true.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings
+    warnings = (inp.warnings + line.warnings + sdar_warnings(line.mod) + iso.warnings + true.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings
                 + hard.warnings + start_warnings)
     result = _result(inp, line, iso, true, fracture, hard, warnings, toe=toe, true_stress=true_stress, poisson=poisson,
                      neck=neck, law=law, hardening=hardening)
