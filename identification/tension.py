@@ -264,6 +264,7 @@ class _IsoResults:
     i_k: int  # index of the fracture
     A: float | None
     A_method: str | None
+    At: float | None  # total extension at fracture, %
     su: float | None  # area after fracture, mm²
     su_source: str | None
     dk: float | None
@@ -552,9 +553,10 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     e_m = float(strain[inp.i_m])
     Ag = float(iso6892.plastic_extension_pct(e_m, inp.Rm, E))
     i_k = fracture_index(force)
+    At = float(100.0 * strain[i_k]) if reaches_fracture(force) else None  # ISO 6892-1 3.6.6: elastic and plastic
     if inp.lu is not None:
         A, A_method = iso6892.elongation_after_fracture_pct(inp.l0, inp.lu), "measured gauge length after fracture (post.lu_mm)"
-    elif reaches_fracture(force):
+    elif At is not None:
         A = float(iso6892.plastic_extension_pct(strain[i_k], eng_stress[i_k], E))
         A_method = f"{inp.src['source']} at fracture, elastic part removed (no post.lu_mm)"
     else:
@@ -566,7 +568,7 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     if su is None and dk is not None:
         su, su_source = math.pi * dk**2 / 4.0, "post.dk_mm"
     Z = iso6892.reduction_of_area_pct(inp.s0, su) if su is not None else None
-    return _IsoResults(yp=yp, e_m=e_m, Ag=Ag, i_k=i_k, A=A, A_method=A_method, su=su, su_source=su_source, dk=dk, Z=Z, warnings=warnings)
+    return _IsoResults(yp=yp, e_m=e_m, Ag=Ag, i_k=i_k, A=A, A_method=A_method, At=At, su=su, su_source=su_source, dk=dk, Z=Z, warnings=warnings)
 
 
 def specimen_strain(strain, eng_stress_MPa, E_line_MPa: float, E_specimen_MPa: float):
@@ -765,6 +767,7 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
         Fm_N=inp.Fm,
         Ag_pct=iso.Ag,
         Agt_pct=100.0 * iso.e_m,
+        At_pct=iso.At,
         A_pct=iso.A,
         A_method=iso.A_method,
         Z_pct=iso.Z,
