@@ -216,7 +216,8 @@ def _slope(t: np.ndarray, y: np.ndarray) -> float | None:
     ok = np.isfinite(t) & np.isfinite(y)
     if ok.sum() < MIN_PHASE_SAMPLES or np.ptp(t[ok]) <= 0:
         return None
-    return float(np.polyfit(t[ok], y[ok], 1)[0])
+    dt = t[ok] - t[ok].mean()
+    return float(np.dot(dt, y[ok] - y[ok].mean()) / np.dot(dt, dt))  # least squares: Σ(t − t̄)(y − ȳ) / Σ(t − t̄)²
 
 
 def elastic_stress_rate(time_s, stress_MPa, window_MPa: Sequence[float]) -> float | None:

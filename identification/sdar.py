@@ -78,13 +78,13 @@ def tangency_index(x: np.ndarray, y: np.ndarray, raises: int = 0) -> int:
         raise IdentificationError(f"SDAR: the record never rises {100 * (OFFSET_RISE + OFFSET_STEP * raises):.0f} % of its range above the offset point: no tangency point")
     slope = (y[above] - y_off) / (x[above] - x_off)
     up = np.diff(slope) > 0
+    m = slope.size
     for need in (2, 1):
-        k = np.arange(need, slope.size - need)
-        is_peak = np.ones(k.size, dtype=bool)
+        is_peak = np.ones(max(m - 2 * need, 0), dtype=bool)  # the candidates k = need … m − need − 1
         for j in range(need):
-            is_peak &= up[k - j - 1] & ~up[k + j]  # rising into k, falling out of it
+            is_peak &= up[need - j - 1: m - need - j - 1] & ~up[need + j: m - need + j]  # rising into k, falling out of it
         if is_peak.any():
-            peaks = k[is_peak]
+            peaks = need + np.flatnonzero(is_peak)
             return int(above[peaks[np.argmax(slope[peaks])]])
     raise IdentificationError("SDAR: the tangent from the offset point touches the curve nowhere (no tangency point): the record has no curved end")
 
@@ -123,11 +123,9 @@ def resolution_metrics(xn: np.ndarray, yn: np.ndarray) -> dict:
     return out
 
 
-def _window_residuals(c: list[np.ndarray], i: np.ndarray, j: np.ndarray) -> np.ndarray:
-    """Normalized residual 1 − R² of the regression over samples i..j−1 (j exclusive) for arrays
-    of starts and ends, from the cumulative sums ``c`` of (1, x, y, x², xy, y²); inf where x or
-    y does not vary. Equation: R² = Sxy²/(Sxx·Syy), S·· the centred sums."""
-    k, sx, sy, sxx, sxy, syy = (cj[j] - cj[i] for cj in c)
+def _window_residuals(k, sx, sy, sxx, sxy, syy) -> np.ndarray:
+    """Normalized residual 1 − R² of the regression over windows given by their sums of
+    (1, x, y, x², xy, y²); inf where x or y does not vary. Equation: R² = Sxy²/(Sxx·Syy), S·· the centred sums."""
     with np.errstate(divide="ignore", invalid="ignore"):
         vxx, vxy, vyy = sxx - sx * sx / k, sxy - sx * sy / k, syy - sy * sy / k
         return np.where((vxx > 0) & (vyy > 0), 1.0 - vxy * vxy / (vxx * vyy), np.inf)
@@ -137,18 +135,20 @@ def _grid_best(c: list[np.ndarray], starts: np.ndarray, ends: np.ndarray, n_min:
     """The ``keep`` least residual windows (residual, start, exclusive end) over every pair of the
     two grids with at least ``n_min`` samples, in blocks of rows to bound the memory."""
     found: list[tuple[float, int, int]] = []
+    at_end = [cj[ends][None, :] for cj in c]
     rows = max(1, 2_000_000 // max(ends.size, 1))
     for b in range(0, starts.size, rows):
-        i = starts[b: b + rows, None]
-        j = np.broadcast_to(ends[None, :], (i.shape[0], ends.size))
-        res = np.where(j - i >= n_min, _window_residuals(c, i, j), np.inf).ravel()
+        i = starts[b: b + rows]
+        res = _window_residuals(*(e - cj[i][:, None] for e, cj in zip(at_end, c)))
+        res[ends[None, :] - i[:, None] < n_min] = np.inf
+        res = res.ravel()
         top = np.argpartition(res, keep - 1)[:keep] if res.size > keep else np.arange(res.size)
-        found += [(float(res[m]), int(i[m // ends.size, 0]), int(ends[m % ends.size])) for m in top if np.isfinite(res[m])]
+        found += [(float(res[m]), int(i[m // ends.size]), int(ends[m % ends.size])) for m in top if np.isfinite(res[m])]
     return sorted(found)[:keep]
 
 
 EXHAUSTIVE_POINTS = 2000  # up to this many points every window is scanned (about 1.3 million)
-COARSE_POINTS = 500  # above it, the coarse grid of starts and ends (stride n/500)
+COARSE_POINTS = 300  # above it, the coarse grid of starts and ends (stride n/300)
 COARSE_CANDIDATES = 8  # the coarse grid's best windows refined on the finer grids
 MIN_REFINE_SPAN = 16  # samples either side of a candidate's start and end searched on the next grid
 
@@ -158,7 +158,7 @@ def least_residual_window(xn: np.ndarray, yn: np.ndarray, *, stride: int | None 
     least normalized residual (§6.6); every window regressed from cumulative sums.
 
     Every window up to 2000 points; on a longer record coarse to fine: starts and ends on a grid
-    of ``stride`` samples (default n/500), then every start and end within two grid steps (at
+    of ``stride`` samples (default n/300), then every start and end within two grid steps (at
     least 16 samples) of the 8 best, on finer grids down to single samples. Each window's residual is exact (the
     full-resolution sums); only the windows scanned are fewer."""
     n = xn.size
