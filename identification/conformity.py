@@ -1,6 +1,6 @@
 """Did the test meet the standard's testing conditions? ISO 6892-1/-2 rates, temperatures.
 
-Testing rate, measured per phase from the record itself (docs/methods.md §3.6): the elastic
+Testing rate, measured per phase from the record itself (docs/methods.md §3.3c): the elastic
 line, the yield phase (to Rp, or ReH to the end of the yield point extension) and the plastic
 range to Rm. The strain rate is the estimate over the parallel length ė_Lc = v_c/L_c from the
 crosshead (v_c: the least-squares slope of the crosshead over time in the phase), or ė_Le from
