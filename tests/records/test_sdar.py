@@ -185,3 +185,20 @@ def _extensometer(path):
     i_m = int(np.argmax(force))
     gauge = rec.positive("specimen.extensometer_gauge_mm") or rec.positive("specimen.l0_mm")
     return (ext[: i_m + 1] - ext[0]) / gauge, force[: i_m + 1] / rec.positive("specimen.s0_mm2", required=True)
+
+
+def test_identify_reports_the_failed_check_in_result_json_and_warnings():
+    """46NT75 with --modulus-method sdar: E from the least-residual window (201.2 GPa), its failed
+    check in the modulus block and a warning. 46NT85 crosshead-only (default auto): SDAR's window
+    fails the fit range, the project's own window gives E, and both say so."""
+    from flowcurve.identification.identify import identify
+    from flowcurve.record.importers import load_record
+
+    r = identify(load_record(DATA / "46NT75.csv"), modulus_method="sdar").result
+    assert r["E_MPa"] == pytest.approx(201_200.0, rel=0.005)
+    assert not r["modulus"]["quality"]["fit_range"]["passed"] and "failed quality checks: fit_range" in r["modulus"]["source"]
+    assert any(w.startswith("SDAR (ASTM E3076-18): the least-residual window failed fit_range; E is reported from it") for w in r["warnings"])
+    x = identify(load_record(DATA / "46NT85.csv"), use_extensometer=False, frame_stiffness_N_per_um=40.0).result
+    assert x["modulus"]["sdar_failed_checks"] == ["fit_range"] and "(ASTM E3076-18, not used)" in x["modulus"]["source"]
+    assert any("E is from flowcurve's own automatic window instead (not an E3076 result)" in w for w in x["warnings"])
+    assert "all quality checks passed" not in x["modulus"]["source"]
