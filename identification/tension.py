@@ -341,7 +341,8 @@ def isolated_force_spikes(force_N) -> np.ndarray:
         return np.zeros(0, dtype=int)
     deviation = np.abs(f[1:-1] - 0.5 * (f[:-2] + f[2:]))
     gap = np.abs(f[2:] - f[:-2])
-    peak = float(np.max(np.abs(np.median(np.stack([f[:-2], f[1:-1], f[2:]]), axis=0))))
+    a, b, c = f[:-2], f[1:-1], f[2:]
+    peak = float(np.max(np.abs(np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c)))))  # median of three, in closed form
     threshold = max(SPIKE_NOISE_FACTOR * _stress_noise_MPa(f), SPIKE_FRACTION * peak)
     return np.flatnonzero((deviation > threshold) & (gap < 0.25 * deviation)) + 1
 
