@@ -201,37 +201,6 @@ def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> 
     return out
 
 
-def conformity(result: Mapping, data) -> dict:
-    """Testing rate (tension: ISO 6892-1 A2/B) and temperature (ISO 6892-1 room / ISO 6892-2 heated)."""
-    rec = result.get("record") or {}
-    spec = _block(result, "specimen")
-    out: dict = {}
-    temps = data["temperature_C"].to_numpy(dtype=float) if data is not None and "temperature_C" in data.columns else None
-    out["temperature"] = cf.temperature(_num(rec.get("nominal_temperature_C")), temps)
-    speed = _num(rec.get("crosshead_speed_mm_per_s"))
-    if result.get("test") != "tension":
-        rate = _num(rec.get("strain_rate_per_s"))
-        out["testing_rate"] = {"conforms": None, "strain_rate_per_s": rate,
-                               "findings": ["ISO 6892-1 rates apply to tension; the compression strain rate is stated, not checked"]}
-        return out
-    length = _num(spec.get("parallel_length_mm"))
-    basis = "parallel length Lc"
-    if length is None:
-        length, basis = _num(spec.get("l0_mm")), "gauge length L0 (no parallel length Lc in the record)"
-    if speed is None or not length:
-        out["testing_rate"] = {"conforms": None, "findings": ["no crosshead speed or specimen length: the testing rate cannot be checked"]}
-        return out
-    stress_rate = None
-    d0 = _num(spec.get("d0_mm"))
-    window = result.get("modulus_window_MPa") or (result.get("modulus") or {}).get("window_MPa")
-    if data is not None and d0 and window and "force_N" in data.columns:
-        stress = data["force_N"].to_numpy(dtype=float) / (math.pi * d0 ** 2 / 4.0)
-        stress_rate = cf.elastic_stress_rate(data["time_s"].to_numpy(dtype=float), stress, window)
-    out["testing_rate"] = cf.testing_rate(speed / length, stress_rate_MPa_per_s=stress_rate, E_MPa=_num(result.get("E_MPa")))
-    out["testing_rate"]["findings"].insert(0, f"ė_Lc = crosshead {speed:g} mm/s ÷ {basis} {length:g} mm")
-    return out
-
-
 def attach(result, curves: Mapping, record) -> None:
     """Fill ``result['uncertainty']`` and ``result['methods']['conformity']`` (tension or compression)."""
     inst = instruments_from_meta(record.meta)
@@ -240,4 +209,4 @@ def attach(result, curves: Mapping, record) -> None:
     result["uncertainty"] = {"instruments": inst, **budgets}
     methods = result.get("methods")
     if isinstance(methods, dict):
-        methods["conformity"] = conformity(result, record.data)
+        methods["conformity"] = cf.assess(result, curves, record.data, record.meta)

@@ -1,88 +1,158 @@
-"""Did the test meet the standard's testing conditions? ISO 6892-1 rates, ISO 6892-2 temperatures.
+"""Did the test meet the standard's testing conditions? ISO 6892-1/-2 rates, temperatures.
 
-Testing rate (ISO 6892-1:2019 §10): method A prescribes strain-rate ranges per result
-(range 1 0.00007 s⁻¹, 2 0.00025 s⁻¹, 3 0.002 s⁻¹, 4 0.0067 s⁻¹, each ±20 %): Rp/ReH in range
-1 or 2, ReL/Ae in 2 or 3, Rm/Ag/A/Z in 2, 3 or 4; a constant crosshead rate is method A2 (open
-loop) with the estimated strain rate over the parallel length ė_Lc = v_c/L_c. Method B prescribes
-the elastic stress rate (2–20 MPa/s for E < 150 GPa, 6–60 MPa/s otherwise), a plastic strain
-rate of 0.00025–0.0025 s⁻¹ while Rp is determined and at most 0.008 s⁻¹ for Rm. The designation
-is ``ISO 6892-1:2019 A222`` (the range of each of the three phases) or ``… B30`` (the stress rate,
-MPa/s).
+Testing rate, measured per phase from the record itself (docs/methods.md §3.3c): the elastic
+line, the yield phase (to Rp, or ReH to the end of the yield point extension) and the plastic
+range to Rm. The strain rate is the estimate over the parallel length ė_Lc = v_c/L_c from the
+crosshead (v_c: the least-squares slope of the crosshead over time in the phase), or ė_Le from
+the extensometer on a record without a crosshead; the elastic stress rate is the slope of σ(t).
 
-Temperature: ISO 6892-1 tests at 10–35 °C; ISO 6892-2:2018 (heated) allows the indicated
-temperature to deviate from the specified T by ±3 °C up to 600 °C, ±4 °C up to 800 °C and ±5 °C
-up to 1000 °C.
+ISO 6892-1:2019 §10.3 method A: ranges 1 0.00007, 2 0.00025, 3 0.002, 4 0.0067 s⁻¹, each
+±20 %: Rp/ReH (the elastic and yield phases) in 1 or 2, ReL/Ae in 2 or 3, Rm/Ag/A/Z in 2, 3
+or 4; designation ``A`` + the three phases' ranges. §10.4 method B: elastic stress rate by E
+(Table 4: 2–20 MPa/s below 150 GPa, 6–60 MPa/s from it), for Rp a strain rate ≤ 0.0025 s⁻¹ up
+to Rp, for ReL 0.00025–0.0025 s⁻¹ during yield, ≤ 0.008 s⁻¹ for Rm.
+ISO 6892-2:2018 (heated, above 35 °C) §10.3 method A: ranges 1 0.00007, 2 0.00025 (Rp/ReH),
+2 or 3 0.0014 s⁻¹ (ReL/Ae, Rm), ±20 %; §10.4 method B: 0.0000167–0.0000833 s⁻¹ from the
+start to the yield strength, 0.00033–0.0033 s⁻¹ for Rm.
+
+Temperature: ISO 6892-1 tests at 10–35 °C; ISO 6892-2 allows the indicated temperature to
+deviate from T by ±3 °C up to 600 °C, ±4 °C up to 800 °C and ±5 °C up to 1000 °C. A record
+that states no temperature, or "RT" (a word, not a temperature), is "not stated".
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 STANDARD_TENSION = "ISO 6892-1:2019"
 STANDARD_HEATED = "ISO 6892-2:2018"
-RANGES_PER_S = {1: 0.00007, 2: 0.00025, 3: 0.002, 4: 0.0067}  # method A strain-rate ranges, §10.3.3
-RANGE_TOLERANCE = 0.20  # ±20 % about each range
-PHASES = (("Rp/ReH", (1, 2)), ("ReL/Ae", (2, 3)), ("Rm/Ag/A/Z", (2, 3, 4)))
-B_STRESS_RATE_MPa_PER_S = {"E < 150 GPa": (2.0, 20.0), "E ≥ 150 GPa": (6.0, 60.0)}  # method B, Table 3
-B_PLASTIC_RATE_PER_S = (0.00025, 0.0025)  # method B while Rp is determined
-B_RM_MAX_RATE_PER_S = 0.008  # method B for Rm
+RANGE_TOLERANCE = 0.20  # ±20 % about each method A range
+# per standard: method A ranges (s⁻¹); the ranges allowed per result; method B limits
+RULES = {
+    STANDARD_TENSION: {
+        "ranges": {1: 0.00007, 2: 0.00025, 3: 0.002, 4: 0.0067},
+        "allowed": {"Rp/ReH": (1, 2), "ReL/Ae": (2, 3), "Rm/Ag/A/Z": (2, 3, 4)},
+    },
+    STANDARD_HEATED: {
+        "ranges": {1: 0.00007, 2: 0.00025, 3: 0.0014},
+        "allowed": {"Rp/ReH": (1, 2), "ReL/Ae": (2, 3), "Rm/Ag/A/Z": (2, 3)},
+    },
+}
+RANGES_PER_S = RULES[STANDARD_TENSION]["ranges"]
+B_STRESS_RATE_MPa_PER_S = {"E < 150 GPa": (2.0, 20.0), "E ≥ 150 GPa": (6.0, 60.0)}  # ISO 6892-1 method B, Table 4
+B_RP_MAX_RATE_PER_S = 0.0025  # ISO 6892-1 method B: plastic range up to Rp
+B_REL_RATE_PER_S = (0.00025, 0.0025)  # ISO 6892-1 method B: during yield, for ReL
+B_RM_MAX_RATE_PER_S = 0.008  # ISO 6892-1 method B: for Rm
+B2_YIELD_RATE_PER_S = (0.0000167, 0.0000833)  # ISO 6892-2 method B: from the start to the yield strength
+B2_RM_RATE_PER_S = (0.00033, 0.0033)  # ISO 6892-2 method B: for Rm
 ROOM_RANGE_C = (10.0, 35.0)  # ISO 6892-1 §10.1
 HEATED_TOLERANCE_C = ((600.0, 3.0), (800.0, 4.0), (1000.0, 5.0))  # ISO 6892-2: up to T, ± tolerance
+PHASE_NAMES = ("elastic", "yield", "to_Rm")
+MIN_PHASE_SAMPLES = 3
 
 
-def method_a_range(strain_rate_per_s: float) -> int | None:
-    """The method A range (1–4) whose ±20 % band holds this strain rate, or None."""
-    for number, centre in RANGES_PER_S.items():
+def method_a_range(strain_rate_per_s: float | None, standard: str = STANDARD_TENSION) -> int | None:
+    """The method A range whose ±20 % band holds this strain rate, or None."""
+    if strain_rate_per_s is None:
+        return None
+    for number, centre in RULES[standard]["ranges"].items():
         if abs(strain_rate_per_s - centre) <= RANGE_TOLERANCE * centre:
             return number
     return None
 
 
-def testing_rate(strain_rate_per_s: float, *, stress_rate_MPa_per_s: float | None, E_MPa: float | None) -> dict:
-    """Conformity of a constant-crosshead tension test with ISO 6892-1 methods A2 and B, and its designation."""
-    rng = method_a_range(strain_rate_per_s)
-    phases = {name: (rng is not None and rng in allowed) for name, allowed in PHASES}
-    findings = [f"estimated strain rate over the parallel length ė_Lc = {strain_rate_per_s:.3g} s⁻¹ "
-                + (f"(method A range {rng})" if rng else "(in no method A range ±20 %)")]
-    out: dict = {"standard": STANDARD_TENSION, "strain_rate_per_s": strain_rate_per_s, "method_a_range": rng,
-                 "stress_rate_MPa_per_s": stress_rate_MPa_per_s}
-    if all(phases.values()):
-        out.update(method="A2", conforms=True, designation=f"{STANDARD_TENSION} A{rng}{rng}{rng}")
-        findings.append("method A2 (open loop, constant crosshead rate): every phase in an allowed range")
+def _results_of(phase: str, yield_point: bool) -> str:
+    """The results a phase's rate governs: the elastic phase and (without a yield point) the yield phase Rp/ReH."""
+    if phase == "to_Rm":
+        return "Rm/Ag/A/Z"
+    return "ReL/Ae" if phase == "yield" and yield_point else "Rp/ReH"
+
+
+def _fmt(rate: float | None) -> str:
+    return "not measured" if rate is None else f"{rate:.3g} s⁻¹"
+
+
+def testing_rate(phases: Mapping[str, Mapping], *, E_MPa: float | None, yield_point: bool = False, heated: bool = False) -> dict:
+    """Conformity of the measured rates with method A, else method B, of ISO 6892-1 (or ISO 6892-2 when ``heated``).
+
+    phases: "elastic", "yield", "to_Rm" → {"strain_rate_per_s", "stress_rate_MPa_per_s" (elastic)};
+    a rate None was not measured. ``conforms``: True (method A or B met in every phase), False (a
+    measured rate meets neither), None ("not stated": a rate the verdict needs was not measured)."""
+    standard = STANDARD_HEATED if heated else STANDARD_TENSION
+    rates = {p: (phases.get(p) or {}).get("strain_rate_per_s") for p in PHASE_NAMES}
+    ranges = {p: method_a_range(rates[p], standard) for p in PHASE_NAMES}
+    a_ok = {p: None if rates[p] is None else ranges[p] in RULES[standard]["allowed"][_results_of(p, yield_point)] for p in PHASE_NAMES}
+    findings = [f"{p}: ė {_fmt(rates[p])}" + (f" (method A range {ranges[p]})" if ranges[p] else "") for p in PHASE_NAMES]
+    out: dict = {"standard": standard, "phases": {p: dict(phases.get(p) or {}, method_a_range=ranges[p]) for p in PHASE_NAMES},
+                 "strain_rate_per_s": rates["yield"], "method_a_range": ranges["yield"],
+                 "stress_rate_MPa_per_s": (phases.get("elastic") or {}).get("stress_rate_MPa_per_s")}
+    if all(a_ok.values()):
+        first = ranges["yield"] if not yield_point else ranges["elastic"]
+        out.update(method="A", conforms=True, designation=f"{standard} A{first}{ranges['yield']}{ranges['to_Rm']}")
+        findings.append("method A: every phase in an allowed range (±20 %)")
+        out["findings"] = findings
+        return out
+    bad = [p for p, ok in a_ok.items() if ok is False]
+    findings.append("method A: " + (f"not met in {', '.join(bad)}" if bad else "not every phase measured"))
+    b_ok, b_why = (_method_b_heated(rates) if heated else _method_b(rates, out["stress_rate_MPa_per_s"], E_MPa, yield_point))
+    findings.extend(b_why)
+    if b_ok:
+        tag = "B" if heated or out["stress_rate_MPa_per_s"] is None else f"B{out['stress_rate_MPa_per_s']:.0f}"
+        out.update(method="B", conforms=True, designation=f"{standard} {tag}")
+    elif b_ok is None:  # neither method can be judged on what was measured: not stated, never a guess
+        out.update(method=None, conforms=None, designation=f"{standard} (testing rate not stated)")
     else:
-        bad = ", ".join(name for name, ok in phases.items() if not ok)
-        findings.append(f"method A: not met for {bad}")
-        b_ok, b_why = _method_b(strain_rate_per_s, stress_rate_MPa_per_s, E_MPa)
-        findings.extend(b_why)
-        if b_ok:
-            out.update(method="B", conforms=True, designation=f"{STANDARD_TENSION} B{stress_rate_MPa_per_s:.0f}")
-        else:
-            out.update(method=None, conforms=False, designation=f"{STANDARD_TENSION} (testing rate not conforming)")
+        out.update(method=None, conforms=False, designation=f"{standard} (testing rate not conforming)")
     out["findings"] = findings
     return out
 
 
-def _method_b(rate: float, stress_rate: float | None, E_MPa: float | None) -> tuple[bool, list[str]]:
-    ok, why = True, []
-    if stress_rate is None or E_MPa is None:
-        return False, ["method B: the elastic stress rate could not be measured"]
-    band_name = "E < 150 GPa" if E_MPa < 150_000.0 else "E ≥ 150 GPa"
-    lo, hi = B_STRESS_RATE_MPa_PER_S[band_name]
-    if not lo <= stress_rate <= hi:
-        ok = False
-        why.append(f"method B: elastic stress rate {stress_rate:.3g} MPa/s outside {lo:g}–{hi:g} MPa/s ({band_name})")
-    plo, phi = B_PLASTIC_RATE_PER_S
-    if not plo <= rate <= phi:
-        ok = False
-        why.append(f"method B: plastic strain rate {rate:.3g} s⁻¹ outside {plo:g}–{phi:g} s⁻¹ for Rp")
-    if rate > B_RM_MAX_RATE_PER_S:
-        ok = False
-        why.append(f"method B: strain rate {rate:.3g} s⁻¹ above {B_RM_MAX_RATE_PER_S:g} s⁻¹ for Rm")
-    if ok:
-        why.append(f"method B: stress rate {stress_rate:.3g} MPa/s and strain rate {rate:.3g} s⁻¹ within the limits")
-    return ok, why
+def _limit(ok: list, why: list, name: str, value: float | None, lo: float | None, hi: float | None, unit: str, what: str) -> None:
+    """One method B limit: appends True/False/None (not measured) and the finding."""
+    if value is None:
+        ok.append(None)
+        why.append(f"method B: {name} not measured ({what})")
+        return
+    inside = (lo is None or value >= lo) and (hi is None or value <= hi)
+    ok.append(inside)
+    band = f"{lo:g}–{hi:g}" if lo is not None and hi is not None else (f"≤ {hi:g}" if hi is not None else f"≥ {lo:g}")
+    why.append(f"method B: {name} {value:.3g} {unit} {'within' if inside else 'outside'} {band} {unit} ({what})")
+
+
+def _verdict(ok: list) -> bool | None:
+    """False when a limit failed, None when one was not measured, else True."""
+    return False if False in ok else (None if None in ok else True)
+
+
+def _method_b(rates: Mapping, stress_rate: float | None, E_MPa: float | None, yield_point: bool) -> tuple[bool | None, list[str]]:
+    """ISO 6892-1 method B (§10.4): elastic stress rate by E class, the yield phase's strain rate, ≤ 0.008 s⁻¹ to Rm."""
+    ok: list = []
+    why: list[str] = []
+    if E_MPa is None:
+        ok.append(None)
+        why.append("method B: no E, so no stress-rate class")
+    else:
+        band = "E < 150 GPa" if E_MPa < 150_000.0 else "E ≥ 150 GPa"
+        _limit(ok, why, "elastic stress rate", stress_rate, *B_STRESS_RATE_MPa_PER_S[band], "MPa/s", f"Table 4, {band}")
+    if yield_point:
+        _limit(ok, why, "strain rate during yield", rates["yield"], *B_REL_RATE_PER_S, "s⁻¹", "ReL")
+    else:
+        _limit(ok, why, "strain rate up to Rp", rates["yield"], None, B_RP_MAX_RATE_PER_S, "s⁻¹", "Rp")
+    _limit(ok, why, "strain rate to Rm", rates["to_Rm"], None, B_RM_MAX_RATE_PER_S, "s⁻¹", "Rm")
+    return _verdict(ok), why
+
+
+def _method_b_heated(rates: Mapping) -> tuple[bool | None, list[str]]:
+    """ISO 6892-2 method B (§10.4): the strain rate from the start to the yield strength and for Rm."""
+    ok: list = []
+    why: list[str] = []
+    for phase in ("elastic", "yield"):
+        _limit(ok, why, f"strain rate ({phase})", rates[phase], *B2_YIELD_RATE_PER_S, "s⁻¹", "ISO 6892-2, to the yield strength")
+    _limit(ok, why, "strain rate to Rm", rates["to_Rm"], *B2_RM_RATE_PER_S, "s⁻¹", "ISO 6892-2, Rm")
+    return _verdict(ok), why
 
 
 def heated_tolerance_C(temperature_C: float) -> float | None:
@@ -93,12 +163,17 @@ def heated_tolerance_C(temperature_C: float) -> float | None:
     return None
 
 
-def temperature(nominal_C: float | None, measured_C: Sequence[float] | None) -> dict:
-    """Conformity of the test temperature: room (ISO 6892-1, 10–35 °C) or heated (ISO 6892-2 tolerance)."""
+def temperature(nominal_C: float | None, measured_C: Sequence[float] | None, *, as_written: str | None = None) -> dict:
+    """Conformity of the test temperature: room (ISO 6892-1, 10–35 °C) or heated (ISO 6892-2
+    tolerance); "not stated" (conforms None) when the record gives no number for it (``as_written``:
+    the header's own word, e.g. "RT", which the reader stood in for with a number)."""
     meas = np.asarray(measured_C if measured_C is not None else [], dtype=float)
     meas = meas[np.isfinite(meas)]
+    if as_written is not None and not _is_number(as_written):
+        return {"conforms": None, "nominal_C": None, "stated_as": as_written,
+                "findings": [f"test temperature not stated (the record says {as_written!r}, not a temperature)"]}
     if nominal_C is None:
-        return {"conforms": None, "findings": ["no nominal test temperature in the record"]}
+        return {"conforms": None, "nominal_C": None, "findings": ["test temperature not stated in the record"]}
     if nominal_C <= ROOM_RANGE_C[1]:
         lo, hi = ROOM_RANGE_C
         values = meas if meas.size else np.array([nominal_C])
@@ -121,6 +196,30 @@ def temperature(nominal_C: float | None, measured_C: Sequence[float] | None) -> 
     return out
 
 
+def _is_number(text: str) -> bool:
+    try:
+        return math.isfinite(float(str(text).strip()))
+    except ValueError:
+        return False
+
+
+def _elastic_stretch(stress_MPa: np.ndarray, window_MPa: Sequence[float], i_m: int) -> np.ndarray:
+    """Indices of the first contiguous stretch before the maximum whose stress lies in the window."""
+    lo, hi = window_MPa
+    sel = np.flatnonzero((stress_MPa[: i_m + 1] >= lo) & (stress_MPa[: i_m + 1] <= hi))
+    gaps = np.flatnonzero(np.diff(sel) > 1)
+    return sel[: gaps[0] + 1] if gaps.size else sel
+
+
+def _slope(t: np.ndarray, y: np.ndarray) -> float | None:
+    """Least-squares slope dy/dt over finite samples; None with fewer than 3 or no time span."""
+    ok = np.isfinite(t) & np.isfinite(y)
+    if ok.sum() < MIN_PHASE_SAMPLES or np.ptp(t[ok]) <= 0:
+        return None
+    dt = t[ok] - t[ok].mean()
+    return float(np.dot(dt, y[ok] - y[ok].mean()) / np.dot(dt, dt))  # least squares: Σ(t − t̄)(y − ȳ) / Σ(t − t̄)²
+
+
 def elastic_stress_rate(time_s, stress_MPa, window_MPa: Sequence[float]) -> float | None:
     """The stress rate on the elastic line: slope of σ(t) over the samples before the maximum
     whose stress lies in ``window_MPa`` (least squares), MPa/s; None with fewer than 3 samples.
@@ -131,14 +230,109 @@ def elastic_stress_rate(time_s, stress_MPa, window_MPa: Sequence[float]) -> floa
     t, s = t[finite], s[finite]
     if t.size < 3:
         return None
+    sel = _elastic_stretch(s, window_MPa, int(np.nanargmax(s)))
+    return _slope(t[sel], s[sel]) if sel.size >= MIN_PHASE_SAMPLES else None
+
+
+def phase_bounds(strain, stress_MPa, *, window_MPa: Sequence[float], Rp_MPa: float | None, yield_point: Mapping | None) -> dict:
+    """Sample ranges [first, last] of the three phases of a tension curve: the elastic line (the
+    modulus window's first stretch), the yield phase (to the Rp crossing after it, or with a yield
+    point from ReH to the end of the yield point extension Ae) and the plastic range to Fm."""
+    e = np.asarray(strain, dtype=float)
+    s = np.asarray(stress_MPa, dtype=float)
     i_m = int(np.nanargmax(s))
-    lo, hi = window_MPa
-    sel = np.nonzero((s[: i_m + 1] >= lo) & (s[: i_m + 1] <= hi))[0]
-    if sel.size < 3:
+    stretch = _elastic_stretch(s, window_MPa, i_m)
+    out: dict = {"elastic": [int(stretch[0]), int(stretch[-1])] if stretch.size else None}
+    start = int(stretch[-1]) if stretch.size else 0
+    if yield_point and yield_point.get("ReH_MPa") is not None:
+        i_h = int(np.argmax(s[: i_m + 1] >= yield_point["ReH_MPa"] - 1e-9 * abs(yield_point["ReH_MPa"])))
+        past = np.flatnonzero(e[i_h: i_m + 1] >= e[i_h] + (yield_point.get("Ae_pct") or 0.0) / 100.0)
+        end = i_h + int(past[0]) if past.size else i_m
+        out["yield"] = [i_h, end]
+    elif Rp_MPa is not None:
+        reach = np.flatnonzero(s[start: i_m + 1] >= Rp_MPa)
+        end = start + int(reach[0]) if reach.size else i_m
+        out["yield"] = [start, max(end, start + MIN_PHASE_SAMPLES - 1)]
+    else:
+        out["yield"] = None
+    out["to_Rm"] = [out["yield"][1], i_m] if out["yield"] else None
+    return out
+
+
+def measured_phases(time_s, elongation_mm, length_mm: float, stress_MPa, bounds: Mapping) -> dict:
+    """Per phase: the strain rate ė = v/L (v: the least-squares slope of the elongation over time,
+    L: the length it refers to) and, on the elastic line, the stress rate dσ/dt; None where a phase
+    has fewer than 3 samples or no time span."""
+    t = np.asarray(time_s, dtype=float)
+    x = np.asarray(elongation_mm, dtype=float)
+    s = np.asarray(stress_MPa, dtype=float)
+    out = {}
+    for phase in PHASE_NAMES:
+        span = bounds.get(phase)
+        sel = slice(span[0], span[1] + 1) if span else slice(0, 0)
+        v = _slope(t[sel], x[sel])
+        out[phase] = {"samples": span, "time_s": [float(t[span[0]]), float(t[span[1]])] if span else None,
+                      "strain_rate_per_s": v / length_mm if v is not None else None}
+        if phase == "elastic":
+            out[phase]["stress_rate_MPa_per_s"] = _slope(t[sel], s[sel])
+    return out
+
+
+def _num(value) -> float | None:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
         return None
-    first_exit = np.nonzero(np.diff(sel) > 1)[0]  # the first contiguous stretch only
-    if first_exit.size:
-        sel = sel[: first_exit[0] + 1]
-    if sel.size < 3 or np.ptp(t[sel]) <= 0:
-        return None
-    return float(np.polyfit(t[sel], s[sel], 1)[0])
+    return v if math.isfinite(v) else None
+
+
+def tension_testing_rate(result: Mapping, curves: Mapping) -> dict:
+    """The testing-rate verdict of a tension identification from its own record (``curves``:
+    ``raw_diagram`` with time and crosshead or extensometer, ``engineering`` strain and stress)."""
+    spec = (result.get("record") or {}).get("specimen") or {}
+    raw, eng = curves.get("raw_diagram"), curves.get("engineering")
+    heated = (_num((result.get("record") or {}).get("nominal_temperature_C")) or 0.0) > ROOM_RANGE_C[1]
+    E = _num(result.get("E_MPa"))
+    yp = {"ReH_MPa": result.get("ReH_MPa"), "Ae_pct": result.get("Ae_pct")} if result.get("yield_point") else None
+    if raw is None or eng is None or "time_s" not in raw.columns:
+        out = testing_rate({}, E_MPa=E, yield_point=bool(yp), heated=heated)
+        out["findings"].insert(0, "the record has no time column: the testing rate is not stated")
+        return out
+    if "crosshead_mm" in raw.columns:
+        channel, length = "crosshead_mm", _num(spec.get("parallel_length_mm"))
+        basis = f"ė_Lc = v_c/L_c: crosshead rate over the parallel length L_c {length:g} mm" if length else None
+        if not length:
+            length = _num(spec.get("l0_mm"))
+            basis = f"ė_Lc = v_c/L_c: crosshead rate over L0 {length:g} mm (the record gives no parallel length L_c)" if length else None
+    else:
+        channel, length = "extensometer_mm", _num(spec.get("extensometer_gauge_mm")) or _num(spec.get("l0_mm"))
+        basis = f"ė_Le: extensometer rate over its gauge length {length:g} mm (no crosshead channel)" if length else None
+    window = result.get("modulus_window_MPa") or (result.get("modulus") or {}).get("window_MPa")
+    if not length or not window or channel not in raw.columns:
+        out = testing_rate({}, E_MPa=E, yield_point=bool(yp), heated=heated)
+        out["findings"].insert(0, "no elongation channel, length or elastic line: the testing rate is not stated")
+        return out
+    stress = eng["engineering_stress_MPa"].to_numpy(dtype=float)
+    bounds = phase_bounds(eng["engineering_strain"].to_numpy(dtype=float), stress, window_MPa=window,
+                          Rp_MPa=_num(result.get("Rp02_MPa")), yield_point=yp)
+    phases = measured_phases(raw["time_s"].to_numpy(dtype=float), raw[channel].to_numpy(dtype=float), length, stress, bounds)
+    out = testing_rate(phases, E_MPa=E, yield_point=bool(yp), heated=heated)
+    out["strain_rate_definition"] = basis
+    out["findings"].insert(0, basis)
+    return out
+
+
+def assess(result: Mapping, curves: Mapping, data=None, meta: Mapping | None = None) -> dict:
+    """``methods.conformity`` of a finished identification: temperature (ISO 6892-1 room / ISO
+    6892-2 heated, "not stated" without a number) and, for tension, the testing rate measured per
+    phase (:func:`tension_testing_rate`); a compression's rate is stated, not judged."""
+    rec = result.get("record") or {}
+    temps = data["temperature_C"].to_numpy(dtype=float) if data is not None and "temperature_C" in data.columns else None
+    as_written = (meta or {}).get("nominal_temperature_as_written")
+    out = {"temperature": temperature(_num(rec.get("nominal_temperature_C")), temps, as_written=as_written)}
+    if result.get("test") != "tension":
+        out["testing_rate"] = {"conforms": None, "strain_rate_per_s": _num(rec.get("strain_rate_per_s")),
+                               "findings": ["ISO 6892-1 rates apply to tension; the compression strain rate is stated, not checked"]}
+        return out
+    out["testing_rate"] = tension_testing_rate(result, curves or {})
+    return out

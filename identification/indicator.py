@@ -195,6 +195,7 @@ class ModulusFit:
     window_MPa: tuple[float, float]
     source: str = "given window"
     quality: dict | None = None  # SDAR's data and fit quality metrics (ASTM E3076-18), when it found the line
+    sdar_failed: list[str] | None = None  # the checks SDAR's least-residual window failed, when SDAR was tried and this line replaced it
 
     def as_dict(self) -> dict:
         """The result's ``modulus`` block (keys with units)."""
@@ -202,6 +203,8 @@ class ModulusFit:
                "window_MPa": list(self.window_MPa), "source": self.source}
         if self.quality is not None:
             out["quality"] = self.quality
+        if self.sdar_failed is not None:
+            out["sdar_failed_checks"] = self.sdar_failed
         return out
 
 
@@ -351,7 +354,8 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
     if best is not None:
         _, slope, intercept, se, r2, n, window = best
         return ModulusFit(slope, se, intercept, r2, n, (float(window[0]), float(window[1])),
-                          source=f"automatic window {window[0] / reference_MPa:.2f}–{window[1] / reference_MPa:.2f} × {reference_MPa:.4g} MPa (widest linear stretch, R² ≥ {AUTO_WINDOW_R2})")
+                          source=f"automatic window {window[0] / reference_MPa:.2f}–{window[1] / reference_MPa:.2f} × {reference_MPa:.4g} MPa "
+                                 f"(flowcurve's own method, not ASTM E3076: widest linear stretch, R² ≥ {AUTO_WINDOW_R2})")
     if np.isfinite(best_r2):  # enough samples, but no stretch is straight: SDAR's linear region, else the conventional window
         try:
             by_sdar = sdar_modulus(e, s, upto_MPa=SDAR_REACH * reference_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
@@ -427,15 +431,23 @@ def elastic_modulus(method: str, strain, stress_MPa, reference_MPa: float, *, up
     ``crosshead`` strain SDAR's line when it passes its fit quality checks, else (and on an
     extensometer) the window."""
     if method == "auto":
+        sdar_failed = None
         if crosshead:
             try:
                 fit = sdar_modulus(strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
                                    strain_noise=strain_noise)
                 if fit.quality["curvature"]["passed"] and fit.quality["fit_range"]["passed"]:
                     return fit
-            except IdentificationError:
-                pass
-        method = "window"
+                sdar_failed = [k for k, v in fit.quality.items() if not v["passed"]]
+                why = f"SDAR's least-residual window failed {', '.join(sdar_failed)}"
+            except IdentificationError as exc:
+                sdar_failed, why = ["no linear region"], str(exc)
+        window_fit = auto_modulus(strain, stress_MPa, reference_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                                  strain_noise=strain_noise)
+        if sdar_failed is not None:  # the standard's method was tried and is named with its failure, not replaced silently
+            window_fit.source = f"{why} (ASTM E3076-18, not used): {window_fit.source}"
+            window_fit.sdar_failed = sdar_failed
+        return window_fit
     if method == "sdar":
         return sdar_modulus(strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
                             strain_noise=strain_noise)

@@ -114,9 +114,10 @@ class TensionResult(_ResultMapping):
     Rm_MPa: float
     Fm_N: float
     Ag_pct: float
-    Agt_pct: float
+    Agt_pct: float  # percentage total extension at maximum force (ISO 6892-1 3.6.5)
+    At_pct: float | None  # percentage total extension at fracture (3.6.6); None when the record does not reach it
     A_pct: float | None
-    A_method: str | None
+    A_method: str | None  # how A was obtained: Lu − L0 measured after fracture, or the extension at fracture less its elastic part
     Z_pct: float | None
     uniform_true_strain: float
     uniform_true_plastic_strain: float

@@ -293,6 +293,7 @@ class _IsoResults:
     i_k: int  # index of the fracture
     A: float | None
     A_method: str | None
+    At: float | None  # total extension at fracture, %
     su: float | None  # area after fracture, mm²
     su_source: str | None
     dk: float | None
@@ -369,7 +370,8 @@ def isolated_force_spikes(force_N) -> np.ndarray:
         return np.zeros(0, dtype=int)
     deviation = np.abs(f[1:-1] - 0.5 * (f[:-2] + f[2:]))
     gap = np.abs(f[2:] - f[:-2])
-    peak = float(np.max(np.abs(np.median(np.stack([f[:-2], f[1:-1], f[2:]]), axis=0))))
+    a, b, c = f[:-2], f[1:-1], f[2:]
+    peak = float(np.max(np.abs(np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c)))))  # median of three, in closed form
     threshold = max(SPIKE_NOISE_FACTOR * _stress_noise_MPa(f), SPIKE_FRACTION * peak)
     return np.flatnonzero((deviation > threshold) & (gap < 0.25 * deviation)) + 1
 
@@ -530,6 +532,7 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         mod.source = how
         if auto is not None:
             mod.quality = auto.quality
+            mod.sdar_failed = auto.sdar_failed
             mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
         E = _chosen_modulus(mod, E_MPa, handbook_E, given_window=not automatic)
         if unresolved is None and handbook_E is not None and E == mod.E_MPa and not _resolved(mod):
@@ -559,6 +562,16 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
                         scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings)
 
 
+def sdar_warnings(mod: ModulusFit) -> list[str]:
+    """The checks of ASTM E3076-18 that SDAR's least-residual window failed, as a warning: when
+    its line gives E (the failure stands beside it) or when the project's window replaced it."""
+    if mod.sdar_failed:
+        return [f"SDAR (ASTM E3076-18): the least-residual window failed {', '.join(mod.sdar_failed)}; E is from flowcurve's own "
+                "automatic window instead (not an E3076 result)"]
+    failed = [k for k, v in (mod.quality or {}).items() if not v.get("passed", True)]
+    return [f"SDAR (ASTM E3076-18): the least-residual window failed {', '.join(failed)}; E is reported from it"] if failed else []
+
+
 def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     """ISO 6892-1 results after Rp0.2: yield point (ReH, ReL, Ae), Ag, A and Z."""
     record, force, strain, eng_stress, E = inp.record, inp.force, line.strain, inp.eng_stress, line.E
@@ -570,9 +583,10 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     e_m = float(strain[inp.i_m])
     Ag = float(iso6892.plastic_extension_pct(e_m, inp.Rm, E))
     i_k = fracture_index(force)
+    At = float(100.0 * strain[i_k]) if reaches_fracture(force) else None  # ISO 6892-1 3.6.6: elastic and plastic
     if inp.lu is not None:
         A, A_method = iso6892.elongation_after_fracture_pct(inp.l0, inp.lu), "measured gauge length after fracture (post.lu_mm)"
-    elif reaches_fracture(force):
+    elif At is not None:
         A = float(iso6892.plastic_extension_pct(strain[i_k], eng_stress[i_k], E))
         A_method = f"{inp.src['source']} at fracture, elastic part removed (no post.lu_mm)"
     else:
@@ -585,7 +599,7 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     if su is None and dk is not None:
         su, su_source = math.pi * dk**2 / 4.0, "post.dk_mm"
     Z = iso6892.reduction_of_area_pct(inp.s0, su) if su is not None else None
-    return _IsoResults(yp=yp, e_m=e_m, Ag=Ag, i_k=i_k, A=A, A_method=A_method, su=su, su_source=su_source, dk=dk, Z=Z, warnings=warnings)
+    return _IsoResults(yp=yp, e_m=e_m, Ag=Ag, i_k=i_k, A=A, A_method=A_method, At=At, su=su, su_source=su_source, dk=dk, Z=Z, warnings=warnings)
 
 
 def specimen_strain(strain, eng_stress_MPa, E_line_MPa: float, E_specimen_MPa: float):
@@ -784,6 +798,7 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
         Fm_N=inp.Fm,
         Ag_pct=iso.Ag,
         Agt_pct=100.0 * iso.e_m,
+        At_pct=iso.At,
         A_pct=iso.A,
         A_method=iso.A_method,
         Z_pct=iso.Z,
@@ -879,7 +894,7 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     hard = _hardening_fits(inp, iso, true, fracture, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
                            fit_range=fit_range, fracture_point=fracture_point)
     hard, start_warnings = _strain_zero(inp, line, hard, law)
-    warnings = (inp.warnings + line.warnings + iso.warnings + true.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings
+    warnings = (inp.warnings + line.warnings + sdar_warnings(line.mod) + iso.warnings + true.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings
                 + hard.warnings + start_warnings)
     result = _result(inp, line, iso, true, fracture, hard, warnings, toe=toe, true_stress=true_stress, poisson=poisson,
                      neck=neck, law=law, hardening=hardening)

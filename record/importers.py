@@ -421,6 +421,7 @@ def read_instron(path: str | os.PathLike, *, text: Text | None = None) -> Record
         elif key == "Test temperature":
             if value.upper() == "RT":
                 meta["nominal_temperature_C"] = repr(ROOM_TEMPERATURE_C)
+                meta["nominal_temperature_as_written"] = value  # for the models a number; for conformity "not stated"
                 warnings.append(f"test temperature 'RT' taken as {ROOM_TEMPERATURE_C:g} °C")
             else:
                 number = _header_number(value, source, i + 1, key)

@@ -5,7 +5,7 @@ identified, and compared with the virtual material the rig was built from."""
 import numpy as np
 import pytest
 
-from flowcurve.demo import (demo_specs, friction_comparison, friction_comparison_lines, identify_and_write, neck_comparison,
+from flowcurve.demo import (demo_specs, demo_time_scale, friction_comparison, friction_comparison_lines, identify_and_write, neck_comparison,
                             neck_comparison_lines, summary_lines)
 from flowcurve.record.format import read_record
 from flowcurve.acquisition.session import run_virtual_test
@@ -26,7 +26,7 @@ def max_dev_pct(fit, run, lo, hi):
 def test_virtual_tension_identified_within_3_percent_up_to_the_neck(tmp_path, device_link):
     # the default rig: its neck from CalculiX runs, not from the neck corrections' own formulas
     spec = demo_specs(MATERIAL)[0]
-    run = run_virtual_test(spec, tmp_path / "t.csv", material=MATERIAL, time_scale=TIME_SCALE, **device_link)
+    run = run_virtual_test(spec, tmp_path / "t.csv", material=MATERIAL, time_scale=demo_time_scale(spec, TIME_SCALE), **device_link)
     assert run.outcome.status == "complete" and "fracture" in run.outcome.reason
     rec = read_record(run.outcome.path)
     assert rec.test == "tension" and not rec.truncated
@@ -62,7 +62,7 @@ def test_virtual_tension_on_the_bridgman_mirror_is_read_exactly_by_bridgman(tmp_
     # the analytic rig (Bridgman's factor with Le Roy's a/R, the neck radius from the same law):
     # Bridgman with the measured radius inverts exactly what made the record
     spec = demo_specs(MATERIAL)[0]
-    run = run_virtual_test(spec, tmp_path / "t.csv", material=MATERIAL, time_scale=TIME_SCALE, tension_response="bridgman",
+    run = run_virtual_test(spec, tmp_path / "t.csv", material=MATERIAL, time_scale=demo_time_scale(spec, TIME_SCALE), tension_response="bridgman",
                            **device_link)
     assert run.outcome.status == "complete" and run.tension_response == "bridgman"
     rec = read_record(run.outcome.path)
@@ -140,3 +140,18 @@ def test_virtual_compression_on_the_slab_mirror_is_read_exactly_by_the_seed(tmp_
     assert res["friction_mu"] == pytest.approx(run.friction_mu, abs=0.01)
     dev = max_dev_pct(res["hardening"], run, 0.002, reached)
     assert dev < 3.0, f"compression hardening {dev:.1f} % off (E {res.get('E_MPa')} MPa, warnings {res.get('warnings')})"
+
+
+def test_the_demo_tension_test_conforms_to_iso_6892_1(tmp_path, device_link):
+    """The demo's defaults make a conforming test: its record's rates, measured per phase from the
+    crosshead, are ISO 6892-1 method A range 2 throughout (0.05 mm/s was 'testing rate not conforming')."""
+    spec = demo_specs(MATERIAL)[0]
+    run = run_virtual_test(spec, tmp_path / "t.csv", material=MATERIAL, time_scale=demo_time_scale(spec, TIME_SCALE), **device_link)
+    assert run.outcome.status == "complete"
+    ident, _ = identify_and_write(run.outcome.path, tmp_path / "results")
+    conf = ident.result["methods"]["conformity"]
+    rate = conf["testing_rate"]
+    for phase in ("elastic", "yield", "to_Rm"):
+        assert rate["phases"][phase]["strain_rate_per_s"] == pytest.approx(0.00025, rel=0.05), phase
+    assert rate["conforms"] is True and rate["designation"] == "ISO 6892-1:2019 A222"
+    assert conf["temperature"]["conforms"] is True  # the record states 20 °C

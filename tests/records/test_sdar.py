@@ -92,3 +92,113 @@ def test_sdar_on_the_published_42CrMoS4_moduli():
     assert len(dev) == 67
     assert np.median(dev) < 0.015 and np.mean(dev <= 0.03) >= 0.9, (np.median(dev), np.sort(dev)[-5:])
     assert math.isfinite(dev.max())
+
+
+def exhaustive_least_residual(xn, yn):
+    """The reference: every start, every end (the scan the product prunes), least 1 − R² first."""
+    n = xn.size
+    n_min = max(int(math.floor(0.2 * n)), 10)
+    c = [np.concatenate([[0.0], np.cumsum(v)]) for v in (np.ones(n), xn, yn, xn * xn, xn * yn, yn * yn)]
+    best = (np.inf, -1, -1)
+    for i in range(0, n - n_min + 1):
+        j = np.arange(i + n_min, n + 1)
+        k, sx, sy, sxx, sxy, syy = (cj[j] - cj[i] for cj in c)
+        vxx, vxy, vyy = sxx - sx * sx / k, sxy - sx * sy / k, syy - sy * sy / k
+        with np.errstate(divide="ignore", invalid="ignore"):
+            res = np.where((vxx > 0) & (vyy > 0), 1.0 - vxy * vxy / (vxx * vyy), np.inf)
+        m = int(np.argmin(res))
+        if res[m] < best[0]:
+            best = (float(res[m]), i, int(j[m]) - 1)
+    return best
+
+
+def normalized_to_tangency(e, s):
+    """The normalized record SDAR searches (up to its tangency point), as :func:`sdar` makes it."""
+    from flowcurve.identification.sdar import tangency_index
+
+    x, y = e - e[0], s - s[0]
+    t = tangency_index(x, y)
+    keep = np.flatnonzero((y <= y[t]) & (x <= x[t]))
+    return x[keep] / x[t], y[keep] / y[t]
+
+
+def nt75_extensometer():
+    return _extensometer(DATA / "46NT75.csv")
+
+
+def test_46NT75_keeps_the_least_residual_window_and_reports_its_failed_check():
+    """E3076 §6.6: the window of least residual is the linear region, whatever its fit quality; the
+    old code took the 59th window (E 214.2 GPa, 'all quality checks passed')."""
+    e, s = nt75_extensometer()
+    fit = sdar(e, s)
+    xn, yn = normalized_to_tangency(e, s)
+    _, i, j = exhaustive_least_residual(xn, yn)
+    assert (fit.indices[0], fit.indices[-1]) == (i, j)  # no offset raise on this record: the same samples
+    assert fit.failed_checks() == ["fit_range"] and fit.quality["fit_range"]["normalized_y_range"] < 0.4
+    assert fit.slope == pytest.approx(np.polyfit(e[i: j + 1], s[i: j + 1], 1)[0], rel=1e-9)
+    assert fit.slope == pytest.approx(201_200.0, rel=0.005)
+    mod = sdar_modulus(e, s)
+    assert "failed quality checks: fit_range" in mod.source and "all quality checks passed" not in mod.source
+
+
+def test_auto_names_the_failed_sdar_window_it_did_not_use():
+    """On a crosshead the default tries SDAR; where its least-residual window fails, the project's own
+    window gives E and says so (never an E3076 label on it)."""
+    e, s = nt75_extensometer()
+    mod = elastic_modulus("auto", e, s, 0.5 * float(np.max(s)), crosshead=True)
+    assert mod.sdar_failed == ["fit_range"] and "ASTM E3076-18, not used" in mod.source
+    assert "flowcurve's own method, not ASTM E3076" in mod.source and mod.quality is None
+    assert mod.as_dict()["sdar_failed_checks"] == ["fit_range"]
+
+
+@pytest.mark.parametrize("n, seed", [(3000, 0), (5000, 1), (8000, 2)])
+def test_the_pruned_search_finds_the_exhaustive_window(n, seed):
+    """Above 2000 points the window search is coarse to fine: the same window as every start and end scanned."""
+    from flowcurve.identification.sdar import EXHAUSTIVE_POINTS, least_residual_window
+
+    e, s, _ = toe_line_knee(n=n, seed=seed)
+    xn, yn = normalized_to_tangency(e, s)
+    assert xn.size > EXHAUSTIVE_POINTS  # the pruned path
+    ref = exhaustive_least_residual(xn, yn)
+    got = least_residual_window(xn, yn)
+    assert got[1:] == ref[1:] and got[0] == pytest.approx(ref[0], rel=1e-9)
+
+
+@pytest.mark.parametrize("stride", [4, 8])
+def test_a_coarse_grid_on_the_short_records_keeps_the_window(stride):
+    """The coarse-to-fine search forced onto the 67 vendored extensometer records (about 100 points
+    up to the tangency point, a grid of 4 or 8 samples): the window of the exhaustive scan on every one."""
+    from flowcurve.identification.sdar import least_residual_window
+
+    files = sorted(DATA.glob("*.csv"))
+    assert len(files) == 67
+    for f in files:
+        xn, yn = normalized_to_tangency(*_extensometer(f))
+        assert least_residual_window(xn, yn, stride=stride)[1:] == exhaustive_least_residual(xn, yn)[1:], f.name
+
+
+def _extensometer(path):
+    from flowcurve.record.importers import load_record
+
+    rec = load_record(path)
+    force, ext = rec.column("force_N"), rec.column("extensometer_mm")
+    i_m = int(np.argmax(force))
+    gauge = rec.positive("specimen.extensometer_gauge_mm") or rec.positive("specimen.l0_mm")
+    return (ext[: i_m + 1] - ext[0]) / gauge, force[: i_m + 1] / rec.positive("specimen.s0_mm2", required=True)
+
+
+def test_identify_reports_the_failed_check_in_result_json_and_warnings():
+    """46NT75 with --modulus-method sdar: E from the least-residual window (201.2 GPa), its failed
+    check in the modulus block and a warning. 46NT85 crosshead-only (default auto): SDAR's window
+    fails the fit range, the project's own window gives E, and both say so."""
+    from flowcurve.identification.identify import identify
+    from flowcurve.record.importers import load_record
+
+    r = identify(load_record(DATA / "46NT75.csv"), modulus_method="sdar").result
+    assert r["E_MPa"] == pytest.approx(201_200.0, rel=0.005)
+    assert not r["modulus"]["quality"]["fit_range"]["passed"] and "failed quality checks: fit_range" in r["modulus"]["source"]
+    assert any(w.startswith("SDAR (ASTM E3076-18): the least-residual window failed fit_range; E is reported from it") for w in r["warnings"])
+    x = identify(load_record(DATA / "46NT85.csv"), use_extensometer=False, frame_stiffness_N_per_um=40.0).result
+    assert x["modulus"]["sdar_failed_checks"] == ["fit_range"] and "(ASTM E3076-18, not used)" in x["modulus"]["source"]
+    assert any("E is from flowcurve's own automatic window instead (not an E3076 result)" in w for w in x["warnings"])
+    assert "all quality checks passed" not in x["modulus"]["source"]

@@ -77,3 +77,41 @@ def test_reh_on_a_crosshead_record_whose_line_runs_up_to_it():
     assert r["modulus_window_MPa"][1] > 0.99 * REH  # the case: the line's top at ReH
     assert r["yield_point"] is True and r["ReH_MPa"] == pytest.approx(REH, rel=0.005)
     assert r["ReL_MPa"] == pytest.approx(REL, rel=0.01)
+
+
+DATA_42 = __import__("pathlib").Path(__file__).resolve().parents[1] / "data" / "42CrMoS4" / "original_data"
+
+
+@pytest.mark.parametrize("name", ["46NT71", "46NT73", "46NT75"])
+def test_the_42CrMoS4_specimens_that_drop_alike_are_classified_alike(name):
+    """46NT71/73/75 drop 0.57, 1.07 and 0.52 % after their first maximum and stay below it for about
+    0.5 % extension: each is an upper yield point (ISO 6892-1 3.10.2.1: the first decrease in force
+    observed). The old 1 % threshold classed 46NT73 alone. ReH is checked against the raw record: the
+    largest stress before it first falls 3 MPa (tens of noise σ) under its running maximum."""
+    from flowcurve.identification.identify import identify
+    from flowcurve.record.importers import load_record
+
+    rec = load_record(DATA_42 / f"{name}.csv")
+    r = identify(rec).result
+    assert r["yield_point"] is True
+    s = rec.column("force_N") / rec.positive("specimen.s0_mm2", required=True)
+    below = np.flatnonzero(np.maximum.accumulate(s) - s > 3.0)
+    assert r["ReH_MPa"] == pytest.approx(float(np.max(s[: below[0]])), rel=1e-9)
+    assert r["ReH_MPa"] - r["ReL_MPa"] > 3.0 and r["ReL_MPa"] > r["Rp02_MPa"] - 10.0
+    assert 0.3 < r["Ae_pct"] < 0.8  # the extension below the first maximum: about 0.5 %
+
+
+def test_at_is_the_total_extension_at_fracture(synthetic):
+    """At (ISO 6892-1 3.6.6): elastic and plastic extension at fracture, in % of the gauge length; A
+    from the same extension is At less the elastic part σ_k/E. The record is cut at the break."""
+    rec, info = synthetic()
+    rec.data.loc[rec.data.index[-1], "force_N"] = 0.1 * info["Fm_N"]  # the break
+    r = identify_tension(rec).result
+    e_k = rec.data["extensometer_mm"].iloc[-2] / 30.0  # the last sample before the break
+    assert r["At_pct"] == pytest.approx(100.0 * e_k, abs=1e-3)  # the toe compensation moves the zero by ~1e-6
+    sigma_k = rec.data["force_N"].iloc[-2] / info["s0_mm2"]
+    assert r["At_pct"] - r["A_pct"] == pytest.approx(100.0 * sigma_k / r["E_MPa"], rel=1e-6)
+    assert "At_pct" in r.to_json() and r["A_method"].startswith("extensometer at fracture")
+    cut, _ = synthetic()
+    cut.data = cut.data.iloc[: int(np.argmax(cut.data["force_N"].to_numpy())) + 20].reset_index(drop=True)  # stopped just past Fm
+    assert identify_tension(cut).result["At_pct"] is None  # no fracture in the record: no At

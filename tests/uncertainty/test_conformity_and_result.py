@@ -18,18 +18,24 @@ def test_method_a_ranges_are_plus_minus_20_percent(rate, expected):
     assert cf.method_a_range(rate) == expected
 
 
-def test_range_2_throughout_is_method_a2_222():
-    out = cf.testing_rate(0.00025, stress_rate_MPa_per_s=None, E_MPa=None)
-    assert out["conforms"] and out["method"] == "A2" and out["designation"] == "ISO 6892-1:2019 A222"
+def constant(rate, stress_rate=None):
+    """The three phases of a constant-rate test."""
+    return {"elastic": {"strain_rate_per_s": rate, "stress_rate_MPa_per_s": stress_rate}, "yield": {"strain_rate_per_s": rate},
+            "to_Rm": {"strain_rate_per_s": rate}}
+
+
+def test_range_2_throughout_is_method_a_222():
+    out = cf.testing_rate(constant(0.00025), E_MPa=None)
+    assert out["conforms"] and out["method"] == "A" and out["designation"] == "ISO 6892-1:2019 A222"
 
 
 def test_range_3_misses_rp_then_method_b_decides():
-    ok = cf.testing_rate(0.002, stress_rate_MPa_per_s=30.0, E_MPa=210_000.0)
+    ok = cf.testing_rate(constant(0.002, 30.0), E_MPa=210_000.0)
     assert ok["method"] == "B" and ok["designation"] == "ISO 6892-1:2019 B30"
-    assert any("not met for Rp/ReH" in f for f in ok["findings"])
-    fast = cf.testing_rate(0.002, stress_rate_MPa_per_s=144.0, E_MPa=210_000.0)
+    assert any("method A: not met in elastic, yield" in f for f in ok["findings"])
+    fast = cf.testing_rate(constant(0.002, 144.0), E_MPa=210_000.0)
     assert fast["conforms"] is False and any("6–60 MPa/s" in f for f in fast["findings"])
-    soft = cf.testing_rate(0.002, stress_rate_MPa_per_s=30.0, E_MPa=70_000.0)  # aluminium: 2–20 MPa/s
+    soft = cf.testing_rate(constant(0.002, 30.0), E_MPa=70_000.0)  # aluminium: 2–20 MPa/s
     assert soft["conforms"] is False and any("2–20 MPa/s" in f for f in soft["findings"])
 
 
@@ -83,7 +89,9 @@ def test_46NT71_result_json_has_the_rp02_budget(tmp_path):
         assert unc[key]["U"] > 0
     assert set(unc["hardening"]) == {"A_MPa", "B_MPa", "n"}
     rate = result["methods"]["conformity"]["testing_rate"]
-    assert rate["strain_rate_per_s"] == pytest.approx(0.0298304 / 30.0, rel=1e-4)  # the header's Lc = 30 mm
+    for phase in ("elastic", "yield", "to_Rm"):  # measured from the crosshead per phase: the header's constant speed over Lc = 30 mm
+        assert rate["phases"][phase]["strain_rate_per_s"] == pytest.approx(0.0298304 / 30.0, rel=0.01), phase
+    assert rate["strain_rate_definition"].startswith("ė_Lc = v_c/L_c")
     assert rate["designation"].startswith("ISO 6892-1:2019 B")
 
 
