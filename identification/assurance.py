@@ -16,6 +16,7 @@ import numpy as np
 
 from flowcurve.identification import conformity as cf
 from flowcurve.identification import uncertainty as un
+from flowcurve.identification.elastic_modulus import apparent_modulus_warning, class_modulus
 
 FLOW_STRAINS = (0.05, 0.1, 0.2, 0.3, 0.5)  # compression flow stress budgets at these true plastic strains
 CONSTANTS = (("A_MPa", "MPa"), ("B_MPa", "MPa"), ("n", "1"), ("K_MPa", "MPa"), ("eps0", "1"), ("sigma0_MPa", "MPa"), ("Q_MPa", "MPa"), ("b", "1"))
@@ -74,6 +75,14 @@ def plastic_slope_MPa(curve, E_MPa: float, at: float = un.OFFSET, half_width: fl
     return float(np.polyfit(ep[sel], s[: i_m + 1][sel], 1)[0])
 
 
+def _curve_slope(eps_p: np.ndarray, stress_MPa: np.ndarray, at: float, half_width: float = 0.01) -> float:
+    """dσ/dε_p of a curve at ``at``: the chord over ±half_width (within the curve)."""
+    lo, hi = max(at - half_width, float(np.nanmin(eps_p))), min(at + half_width, float(np.nanmax(eps_p)))
+    order = np.argsort(eps_p)
+    s_lo, s_hi = np.interp([lo, hi], eps_p[order], stress_MPa[order])
+    return float((s_hi - s_lo) / (hi - lo)) if hi > lo else 0.0
+
+
 def _hardening_slope(hard: Mapping, at: float) -> float | None:
     A, B, n = (_num(hard.get(k)) for k in ("A_MPa", "B_MPa", "n"))
     if hard.get("law") == "johnson_cook" and None not in (B, n):
@@ -83,11 +92,13 @@ def _hardening_slope(hard: Mapping, at: float) -> float | None:
 
 def _constants(hard: Mapping, stress_rel_u: float) -> dict:
     out = {}
+    shifts = ((hard.get("start_uncertainty") or {}).get("constants_shift") or {})
     for key, unit in CONSTANTS:
         value = _num(hard.get(key))
         if value is None:
             continue
-        b = un.constant_budget(value, _num(hard.get(f"{key}_stderr")), stress_rel_u, unit)
+        shift = _num(shifts.get(key.removesuffix("_MPa")))
+        b = un.constant_budget(value, _num(hard.get(f"{key}_stderr")), stress_rel_u, unit, zero_shift=shift)
         if b is not None:
             out[key] = b
     return out
@@ -184,21 +195,54 @@ def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> 
         return out
     Rp = _num(result.get("Rp02_MPa"))
     if Rp is not None:
-        out["Rp02_MPa"] = un.strength_budget(Rp, d0, inst, note="force and d0 only (mean pressure at 0.2 % plastic strain)")
+        method = _compression_rp_method(result, curves.get("nominal"))
+        out["Rp02_MPa"] = un.strength_budget(Rp, d0, inst, extra=method,
+                                             note="mean pressure at 0.2 % plastic strain: force and d0, and the method's own share "
+                                                  "(the elastic line's E and the defensible lines' spread, the strain zero and toe)")
+        out["Rp02_MPa"]["u_method"] = un.combined(method)
     curve = curves.get(f"true_{result.get('friction_correction')}")
     if curve is not None and h0 and hk and h0 > hk and mu is not None:
         eps = curve["true_plastic_strain"].to_numpy(dtype=float)
         sig = curve["true_stress_MPa"].to_numpy(dtype=float)
         u_mu = mu_b["u"] if mu_b else 0.0
+        E_method = (result.get("methods") or {}).get("elastic_modulus") or {}
+        zero = _num(((result.get("hardening") or {}).get("start_uncertainty") or {}).get("delta_eps0")) or 0.0
         flow = {}
         for at in FLOW_STRAINS:
             if eps.size and eps.min() <= at <= eps.max():
-                flow[f"{at:g}"] = un.flow_stress_budget(float(np.interp(at, eps, sig)), at, d0, h0, hk, inst, mu=mu, u_mu=u_mu)
+                sigma = float(np.interp(at, eps, sig))
+                method = un.flow_point_method_components(sigma, _curve_slope(eps, sig, at), _num(E_method.get("E_MPa")),
+                                                         _num(E_method.get("u_MPa")) or 0.0, zero)
+                flow[f"{at:g}"] = un.flow_stress_budget(sigma, at, d0, h0, hk, inst, mu=mu, u_mu=u_mu, method=method)
         if flow:
             out["flow_stress_MPa"] = flow
     stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.resolution(inst["diameter_resolution_mm"]) / d0)
     out["hardening"] = _constants(result.get("hardening") or {}, stress_rel_u)
     return out
+
+
+def _compression_rp_method(result: Mapping, nominal) -> list:
+    """The method's share of a compression Rp0.2 (:func:`.uncertainty.offset_method_components`) on
+    the nominal curve (true strain, mean pressure): the E that stripped the elastic strain, the
+    spread over the defensible lines (this E, the class's handbook E, a plausible apparent slope)
+    and the strain zero δε0 (hardening.start_uncertainty)."""
+    if nominal is None or "true_strain" not in nominal.columns:
+        return []
+    E_method = (result.get("methods") or {}).get("elastic_modulus") or {}
+    E, u_E = _num(E_method.get("E_MPa")), _num(E_method.get("u_MPa"))
+    if E is None:
+        return []
+    strain = nominal["true_strain"].to_numpy(dtype=float)
+    stress = nominal["mean_pressure_MPa"].to_numpy(dtype=float)
+    lines = {E_method.get("source", "used"): E}
+    named = class_modulus((result.get("record") or {}).get("material"))
+    if named is not None:
+        lines[f"{named[0]} class handbook"] = named[1]
+    apparent = _num(E_method.get("apparent_MPa"))
+    if apparent is not None and apparent_modulus_warning(apparent, (result.get("record") or {}).get("material")) is None:
+        lines["apparent slope"] = apparent
+    zero = _num(((result.get("hardening") or {}).get("start_uncertainty") or {}).get("delta_eps0"))
+    return un.offset_method_components(strain, stress, E, u_E or 0.0, lines, zero or 0.0, basis=E_method.get("basis", ""))
 
 
 def conformity(result: Mapping, data) -> dict:

@@ -200,6 +200,48 @@ def reduction_of_area_budget(d0_mm: float, du_mm: float, diameter_resolution_mm:
     return budget(Z, "%", comps)
 
 
+# ---- the method's own share (the elastic line, the strain zero) ---------------------------------
+
+def offset_yield_MPa(strain, stress_MPa, E_MPa: float, offset: float = OFFSET) -> float | None:
+    """Stress where ε − σ/E (the running maximum) first reaches ``offset``, interpolated; None when never."""
+    strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
+    eps_p = np.maximum.accumulate(strain - stress / E_MPa)  # ε_p = ε − σ/E
+    if not eps_p.size or eps_p[-1] < offset:
+        return None
+    i = int(np.argmax(eps_p >= offset))
+    if i == 0:
+        return float(stress[0])
+    w = 0.0 if eps_p[i] == eps_p[i - 1] else (offset - eps_p[i - 1]) / (eps_p[i] - eps_p[i - 1])
+    return float(stress[i - 1] + w * (stress[i] - stress[i - 1]))
+
+
+def offset_method_components(strain, stress_MPa, E_MPa: float, u_E_MPa: float, lines: Mapping[str, float], delta_eps0: float,
+                             *, basis: str = "") -> list[Component]:
+    """The method's share of an offset yield Rp0.2 read on (strain, stress): E of the offset line
+    (∂Rp/∂E by central difference at E ± u), the spread of Rp over the defensible elastic lines
+    (``lines``: name → E; half their range, rectangular) and the strain zero δε0 (∂Rp/∂ε0 by central
+    difference of the offset at 0.002 ± δε0). Terms that cannot be read (no yield) are left out."""
+    out = []
+    if u_E_MPa > 0:
+        hi, lo = offset_yield_MPa(strain, stress_MPa, E_MPa + u_E_MPa), offset_yield_MPa(strain, stress_MPa, E_MPa - u_E_MPa)
+        if hi is not None and lo is not None:
+            out.append(Component("method: E of the offset line", E_MPa, "MPa", u_E_MPa, (hi - lo) / (2.0 * u_E_MPa), basis or "the rule's E"))
+    rps = {name: offset_yield_MPa(strain, stress_MPa, E) for name, E in lines.items() if E and E > 0}
+    rps = {k: v for k, v in rps.items() if v is not None}
+    half = (max(rps.values()) - min(rps.values())) / 2.0 if len(rps) > 1 else 0.0
+    if half > 0:
+        out.append(Component("method: spread over the defensible elastic lines", half, "MPa", rectangular(half), 1.0,
+                             "Rp0.2 on " + ", ".join(f"{k} ({lines[k]:.0f} MPa): {v:.4g}" for k, v in rps.items()) + "; half the range, rectangular"))
+    if delta_eps0 > 0:
+        hi = offset_yield_MPa(strain, stress_MPa, E_MPa, OFFSET + delta_eps0)
+        lo = offset_yield_MPa(strain, stress_MPa, E_MPa, max(OFFSET - delta_eps0, 0.0))
+        if hi is not None and lo is not None:
+            step = OFFSET + delta_eps0 - max(OFFSET - delta_eps0, 0.0)
+            out.append(Component("method: strain zero and toe ε0", 0.0, "1", delta_eps0, (hi - lo) / step,
+                                 "δε0 of the foot of the elastic line (line fit, curvature, toe, sample spacing; docs/methods.md §2.11)"))
+    return out
+
+
 # ---- compression ------------------------------------------------------------------------------
 
 def friction_budget(mu: float, mu_range: Sequence[float] | None, *, others: Mapping[str, float] | None = None) -> dict | None:
@@ -220,7 +262,7 @@ def friction_budget(mu: float, mu_range: Sequence[float] | None, *, others: Mapp
 
 
 def flow_stress_budget(sigma_MPa: float, eps: float, d0_mm: float, h0_mm: float, hk_mm: float, inst: Mapping, *,
-                       mu: float, u_mu: float) -> dict:
+                       mu: float, u_mu: float, method: Sequence[Component] = ()) -> dict:
     """Compression flow stress σ at true strain ε: σ = F·h/(S0·h0) corrected for friction.
 
     With h = h0 − Δh = h0·e^−ε: ∂σ/∂F = h/(S0·h0), ∂σ/∂d0 = −2σ/d0, ∂σ/∂h0 = σ·Δh/(h0·h),
@@ -238,18 +280,41 @@ def flow_stress_budget(sigma_MPa: float, eps: float, d0_mm: float, h0_mm: float,
              _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * sigma_MPa / d0_mm),
              Component("initial height h0", h0_mm, "mm", resolution(res), sigma_MPa * dh / (h0_mm * h), f"resolution {res:g} mm, rectangular"),
              Component("shortening Δh (scaled to h0 − hk)", dh, "mm", scale_u, -sigma_MPa / h, f"h0 and hk at {res:g} mm"),
-             Component("friction μ", mu, "1", u_mu, -sigma_MPa * siebel / (1.0 + mu * siebel), "budget of μ; Siebel's sensitivity")]
-    return budget(sigma_MPa, "MPa", comps, note=f"at true plastic strain {eps:g}")
+             Component("friction μ", mu, "1", u_mu, -sigma_MPa * siebel / (1.0 + mu * siebel), "budget of μ; Siebel's sensitivity"),
+             *method]
+    out = budget(sigma_MPa, "MPa", comps, note=f"at true plastic strain {eps:g}")
+    out["u_method"] = combined(method)  # the method's own share (E, strain zero), stated apart
+    return out
 
 
-def constant_budget(value: float, stderr: float | None, stress_rel_u: float, unit: str) -> dict | None:
-    """A fitted constant: the fit's standard error and, for a stress (MPa), the stress scale."""
+def flow_point_method_components(sigma_MPa: float, slope_MPa: float, E_MPa: float | None, u_E_MPa: float, delta_eps0: float) -> list[Component]:
+    """The method's share of a flow-curve point σ at a plastic strain: the E that stripped the
+    elastic strain (ε_p = ε − σ/E moves by σ·δE/E², so σ by θ·σ/E²·δE) and the strain zero
+    (σ by θ·δε0), θ = dσ/dε_p there."""
+    out = []
+    if E_MPa and u_E_MPa > 0:
+        out.append(Component("method: E stripping the elastic strain", E_MPa, "MPa", u_E_MPa, slope_MPa * sigma_MPa / E_MPa ** 2, "the rule's E"))
+    if delta_eps0 > 0:
+        out.append(Component("method: strain zero ε0", 0.0, "1", delta_eps0, slope_MPa, "δε0 of the foot of the elastic line (§2.11)"))
+    return out
+
+
+def constant_budget(value: float, stderr: float | None, stress_rel_u: float, unit: str, *, zero_shift: float | None = None) -> dict | None:
+    """A fitted constant: the fit's standard error and, for a stress (MPa), the stress scale. With
+    ``zero_shift`` (the constant's move when the strain zero moves by δε0, already inside the
+    widened standard error) the method's share is stated apart: fit √(se² − shift²) and the shift."""
     if stderr is None or not math.isfinite(stderr):
         return None
-    comps = [Component("fit (standard error)", value, unit, stderr, 1.0, "least squares")]
+    method = []
+    if zero_shift is not None and math.isfinite(zero_shift) and 0.0 < zero_shift <= stderr:
+        method = [Component("method: strain zero ε0", value, unit, zero_shift, 1.0, "the constant refitted with the strain zero moved by δε0 (§2.11)")]
+        stderr = math.sqrt(stderr ** 2 - zero_shift ** 2)
+    comps = [Component("fit (standard error)", value, unit, stderr, 1.0, "least squares"), *method]
     if unit == "MPa":
         comps.append(Component("stress scale (force class, d0)", 1.0, "1", stress_rel_u, value, "relative"))
-    return budget(value, unit, comps)
+    out = budget(value, unit, comps)
+    out["u_method"] = combined(method)
+    return out
 
 
 # ---- Monte Carlo propagation (GUM Supplement 1) -------------------------------------------------
