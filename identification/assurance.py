@@ -147,6 +147,8 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
         if theta is not None:
             out["Rp02_MPa"] = un.proof_strength_budget(Rp, d0, inst, plastic_slope_MPa=theta, strain_rel_u=strain_u,
                                                        E_MPa=E, u_E_MPa=u_E, E_measured=E_measured)
+            method = _tension_rp_method(result, curves.get("engineering"), Rp, E)
+            _extend(out["Rp02_MPa"], method)
     Ag = _num(result.get("Ag_pct"))
     if Ag is not None and Rm is not None:
         e_m = Ag / 100.0 + Rm / E
@@ -221,6 +223,43 @@ def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> 
     return out
 
 
+def _extend(b: dict, method: list) -> None:
+    """A budget with the method's own components added: u, U again and ``u_method`` stated apart."""
+    old = [un.Component(**{k: c[k] for k in ("name", "value", "unit", "u", "sensitivity", "basis")}) for c in b["components"]]
+    out = un.budget(b["value"], b["unit"], old + method, note=b.get("note", ""), k=b["k"])
+    b.clear()
+    b.update(out, u_method=un.combined(method))
+
+
+def _tension_rp_method(result: Mapping, curve, Rp: float, E: float) -> list:
+    """The method's share of a tension Rp0.2 beyond E's own uncertainty: the spread over the
+    defensible lines (the line, its window's halves, the class's handbook E where the strain is the
+    specimen's), the strain zero δε0, the crosshead compliance model (no extensometer) and the
+    testing rate within the method's range."""
+    methods = result.get("methods") or {}
+    record = result.get("record") or {}
+    material = record.get("material") if isinstance(record, Mapping) else None
+    named = class_modulus(material)
+    comps: list = []
+    window = (result.get("modulus") or {}).get("window_MPa")
+    if curve is not None and "engineering_strain" in curve.columns:
+        strain = curve["engineering_strain"].to_numpy(dtype=float)
+        stress = curve["engineering_stress_MPa"].to_numpy(dtype=float)
+        lines = {"the line": E}
+        if window and window[1] > window[0]:
+            lines.update(un.line_windows_E(strain, stress, window))
+        specimen_strain = methods.get("strain_source") == "extensometer" or methods.get("frame_stiffness_N_per_um") is not None
+        if named is not None and specimen_strain:
+            lines[f"{named[0]} class handbook"] = named[1]
+        zero = _num(((result.get("hardening") or {}).get("start_uncertainty") or {}).get("delta_eps0")) or 0.0
+        comps += un.offset_method_components(strain, stress, E, 0.0, lines, zero)
+    if methods.get("strain_source") == "crosshead":
+        comps.append(un.crosshead_compliance_component(Rp))
+    rate = ((methods.get("conformity") or {}).get("testing_rate") or {}).get("method")
+    comps.append(un.rate_component(Rp, rate, named[0] if named else None))
+    return comps
+
+
 def _compression_rp_method(result: Mapping, nominal) -> list:
     """The method's share of a compression Rp0.2 (:func:`.uncertainty.offset_method_components`) on
     the nominal curve (true strain, mean pressure): the E that stripped the elastic strain, the
@@ -280,8 +319,8 @@ def attach(result, curves: Mapping, record) -> None:
     """Fill ``result['uncertainty']`` and ``result['methods']['conformity']`` (tension or compression)."""
     inst = instruments_from_meta(record.meta)
     test = result.get("test")
+    methods = result.get("methods")
+    if isinstance(methods, dict):  # first: the Rp budget's rate term takes the testing method it found
+        methods["conformity"] = conformity(result, record.data)
     budgets = (tension_uncertainty if test == "tension" else compression_uncertainty)(result, curves, inst)
     result["uncertainty"] = {"instruments": inst, **budgets}
-    methods = result.get("methods")
-    if isinstance(methods, dict):
-        methods["conformity"] = conformity(result, record.data)

@@ -37,6 +37,14 @@ INSTRUMENT_DEFAULTS = {
 EXTENSOMETER_LIMITS = {0.2: (0.2, 0.6), 0.5: (0.5, 1.5), 1.0: (1.0, 3.0), 2.0: (2.0, 6.0)}
 HANDBOOK_E_BOUND = 0.05  # a handbook E (not measured) is taken as within ±5 %
 OFFSET = 0.002  # the 0.2 % offset of Rp0.2
+# a crosshead-only Rp0.2 against the same specimen's extensometer: rms of the relative differences over the 67 pairs of
+# the 42CrMoS4 set (Machine Displacement alone, no frame stiffness; bench/crosshead_pairs_42CrMoS4.py, docs/methods.md §2.12)
+CROSSHEAD_RP_REL_U = 0.0037
+# strain-rate sensitivity m = d ln R / d ln ė of a proof strength at room temperature, per material class (ferritic steels
+# 5–15 MPa a decade on Rp 300–700 MPa; docs/methods.md §2.12); the default for a class not named: the steels'
+RATE_SENSITIVITY = {"steel": 0.008, "aluminium": 0.003, "titanium": 0.012, "copper": 0.005, "nickel": 0.005}
+# the rate range a testing method allows, as the ratio of its ends: method A ±20 % (ISO 6892-1 10.3), method B a decade (10.4)
+RATE_RANGE = {"A": 1.2 / 0.8, "B": 10.0}
 
 
 def rectangular(half_width: float) -> float:
@@ -239,6 +247,41 @@ def offset_method_components(strain, stress_MPa, E_MPa: float, u_E_MPa: float, l
             step = OFFSET + delta_eps0 - max(OFFSET - delta_eps0, 0.0)
             out.append(Component("method: strain zero and toe ε0", 0.0, "1", delta_eps0, (hi - lo) / step,
                                  "δε0 of the foot of the elastic line (line fit, curvature, toe, sample spacing; docs/methods.md §2.11)"))
+    return out
+
+
+def rate_component(value_MPa: float, method: str | None, material_class: str | None) -> Component:
+    """The testing rate within the method's allowed range: R ∝ ė^m, the rate anywhere in the range
+    (ratio r of its ends) → R within ±R·m·ln(r)/2, rectangular. ``method`` "A1"/"A2" (±20 %) or
+    "B"/unknown (a decade)."""
+    m = RATE_SENSITIVITY.get(material_class or "", RATE_SENSITIVITY["steel"])
+    kind = "A" if method and str(method).startswith("A") else "B"
+    half = value_MPa * m * math.log(RATE_RANGE[kind]) / 2.0  # ΔR = R·m·Δln ė
+    return Component(f"method: testing rate within method {kind}'s range", half, "MPa", rectangular(half), 1.0,
+                     f"m = {m:g} ({material_class or 'class not named: the steels'}), the rate anywhere in a ×{RATE_RANGE[kind]:.3g} range, rectangular")
+
+
+def crosshead_compliance_component(Rp_MPa: float) -> Component:
+    """A crosshead-only Rp0.2: the compliance model's own share, the rms relative difference from the
+    extensometer's over :data:`CROSSHEAD_RP_REL_U`'s pairs."""
+    return Component("method: crosshead compliance model", Rp_MPa, "MPa", Rp_MPa * CROSSHEAD_RP_REL_U, 1.0,
+                     f"rms {100 * CROSSHEAD_RP_REL_U:.2g} % crosshead − extensometer over 67 pairs (42CrMoS4, docs/methods.md §2.12)")
+
+
+def line_windows_E(strain, stress_MPa, window_MPa) -> dict[str, float]:
+    """The slopes of the elastic line over its window's lower and upper halves (strain regressed on
+    stress up to the largest stress): where the first loading is not linear they differ."""
+    strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
+    top = int(np.nanargmax(stress)) + 1
+    lo, hi = float(window_MPa[0]), float(window_MPa[1])
+    mid = 0.5 * (lo + hi)
+    out = {}
+    for name, (a, b) in (("the window's lower half", (lo, mid)), ("the window's upper half", (mid, hi))):
+        on = np.flatnonzero((stress[:top] >= a) & (stress[:top] <= b) & np.isfinite(strain[:top]))
+        if on.size >= 4 and np.ptp(stress[on]) > 0:
+            slope = np.polyfit(stress[on], strain[on], 1)[0]  # ε = c + σ/E
+            if slope > 0:
+                out[name] = float(1.0 / slope)
     return out
 
 
