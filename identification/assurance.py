@@ -27,7 +27,8 @@ def instruments_from_meta(meta: Mapping[str, str]) -> dict:
     the keys it lacks; ``source`` says which were defaults."""
     inst: dict = {}
     defaulted, unreadable = [], []
-    for key, default in un.INSTRUMENT_DEFAULTS.items():
+    defaults = {**un.INSTRUMENT_DEFAULTS, **un.DIMENSION_DEFAULTS}
+    for key, default in defaults.items():
         raw = meta.get(f"instruments.{key}")
         try:
             value = float(raw) if raw is not None and str(raw).strip() else None
@@ -41,7 +42,7 @@ def instruments_from_meta(meta: Mapping[str, str]) -> dict:
         inst[key] = value
     if not defaulted:
         inst["source"] = "record (instruments.*)"
-    elif len(defaulted) == len(un.INSTRUMENT_DEFAULTS) and not unreadable:
+    elif len(defaulted) == len(defaults) and not unreadable:
         inst["source"] = ("defaults: the record states no instrument classes (set [instruments] in the rig configuration, "
                           "or --set instruments.force_class=… when identifying)")
     else:
@@ -166,7 +167,7 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
     l0, lu = _num(spec.get("l0_mm")), _num(post.get("lu_mm"))
     method = str(result.get("A_method") or "")
     if A is not None and l0 and lu and "lu_mm" in method:
-        out["A_pct"] = un.elongation_from_lengths_budget(l0, lu, inst["length_resolution_mm"])
+        out["A_pct"] = un.elongation_from_lengths_budget(l0, lu, inst["length_resolution_mm"], mpe_mm=inst["caliper_mpe_mm"])
     elif A is not None and "extensometer" in method:
         gauge = _num((result.get("methods") or {}).get("strain_length_mm")) or _num(spec.get("extensometer_gauge_mm")) or l0
         if gauge:
@@ -176,8 +177,9 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
     if du is None and _num(post.get("sk_mm2")):
         du = math.sqrt(4.0 * post["sk_mm2"] / math.pi)
     if Z is not None and du:
-        out["Z_pct"] = un.reduction_of_area_budget(d0, du, inst["diameter_resolution_mm"])
-    stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.resolution(inst["diameter_resolution_mm"]) / d0)
+        out["Z_pct"] = un.reduction_of_area_budget(d0, du, inst["diameter_resolution_mm"], mpe_mm=inst["micrometer_mpe_mm"],
+                                                   fracture_rel=un.FRACTURE_DIAMETER_REL)
+    stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.dimension_u(d0, inst["diameter_resolution_mm"], inst["micrometer_mpe_mm"]) / d0)
     out["hardening"] = _constants(result.get("hardening") or {}, stress_rel_u)
     return out
 
@@ -218,15 +220,15 @@ def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> 
                 flow[f"{at:g}"] = un.flow_stress_budget(sigma, at, d0, h0, hk, inst, mu=mu, u_mu=u_mu, method=method)
         if flow:
             out["flow_stress_MPa"] = flow
-    stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.resolution(inst["diameter_resolution_mm"]) / d0)
+    stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.dimension_u(d0, inst["diameter_resolution_mm"], inst["micrometer_mpe_mm"]) / d0)
     out["hardening"] = _constants(result.get("hardening") or {}, stress_rel_u)
     return out
 
 
 def _extend(b: dict, method: list) -> None:
     """A budget with the method's own components added: u, U again and ``u_method`` stated apart."""
-    old = [un.Component(**{k: c[k] for k in ("name", "value", "unit", "u", "sensitivity", "basis")}) for c in b["components"]]
-    out = un.budget(b["value"], b["unit"], old + method, note=b.get("note", ""), k=b["k"])
+    old = [un.Component(**{k: c[k] for k in ("name", "value", "unit", "u", "sensitivity", "basis", "dof") if k in c}) for c in b["components"]]
+    out = un.budget(b["value"], b["unit"], old + method, note=b.get("note", ""))
     b.clear()
     b.update(out, u_method=un.combined(method))
 

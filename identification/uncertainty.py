@@ -33,6 +33,11 @@ INSTRUMENT_DEFAULTS = {
     "length_resolution_mm": 0.01,  # resolution of lengths and heights (L0, Lu, h0, hk)
     "crosshead_strain_error_pct": 2.0,  # bound on a strain from crosshead travel (no extensometer)
 }
+# the dimensions' instruments, read from the record's instruments.<key> like the classes above (defaults said so): the
+# maximum permissible error of the micrometer (d0, du; DIN 863-1 0–25 mm: 4 µm) and of the caliper (L0, Lu, h0, hk; ISO 13385-1
+# to 150 mm: 30 µm), each a bound, rectangular
+DIMENSION_DEFAULTS = {"micrometer_mpe_mm": 0.004, "caliper_mpe_mm": 0.03}
+FRACTURE_DIAMETER_REL = 0.01  # ISO 6892-1 20.1: Su to ±2 % (the pieces fitted together), so du to ±1 %, rectangular
 # ISO 9513 Table 2: per class, the bound on the relative extension error (%) and its absolute floor (µm)
 EXTENSOMETER_LIMITS = {0.2: (0.2, 0.6), 0.5: (0.5, 1.5), 1.0: (1.0, 3.0), 2.0: (2.0, 6.0)}
 HANDBOOK_E_BOUND = 0.05  # a handbook E (not measured) is taken as within ±5 %
@@ -67,6 +72,7 @@ class Component:
     u: float
     sensitivity: float
     basis: str
+    dof: float = math.inf  # degrees of freedom: a Type A term's n − 1; ∞ for a Type B bound
 
     @property
     def contribution(self) -> float:
@@ -74,8 +80,9 @@ class Component:
         return abs(self.sensitivity * self.u)
 
     def as_dict(self) -> dict:
-        return {"name": self.name, "value": self.value, "unit": self.unit, "u": self.u, "sensitivity": self.sensitivity,
-                "contribution": self.contribution, "basis": self.basis}
+        out = {"name": self.name, "value": self.value, "unit": self.unit, "u": self.u, "sensitivity": self.sensitivity,
+               "contribution": self.contribution, "basis": self.basis}
+        return out if math.isinf(self.dof) else {**out, "dof": self.dof}
 
 
 def combined(components: Sequence[Component]) -> float:
@@ -83,10 +90,41 @@ def combined(components: Sequence[Component]) -> float:
     return math.sqrt(sum(c.contribution ** 2 for c in components))
 
 
-def budget(value: float, unit: str, components: Sequence[Component], *, note: str = "", k: float = K_COVERAGE) -> dict:
-    """A result's budget as written to result.json: value, u, U = k·u, k and the components."""
+RECTANGULAR_DOMINANT = 0.9  # one rectangular share at least this part of u²: the output is near-rectangular
+
+
+def effective_dof(components: Sequence[Component]) -> float:
+    """ν_eff = u_c⁴ / Σ (c_i·u_i)⁴/ν_i (Welch–Satterthwaite, GUM G.4.1); ∞ when every term is Type B."""
     u = combined(components)
-    out = {"value": value, "unit": unit, "u": u, "U": k * u, "k": k,
+    tail = sum(c.contribution ** 4 / c.dof for c in components if math.isfinite(c.dof) and c.dof > 0)
+    return u ** 4 / tail if tail > 0 else math.inf
+
+
+def coverage(components: Sequence[Component]) -> tuple[float, str]:
+    """(k, what U covers): k = 2 for ≈ 95 % of a normal output; Student's t at ν_eff when a Type A
+    term has few degrees of freedom (GUM G.3); and where one rectangular share dominates u² the output
+    is near-rectangular, k = 2 covers all of it (its 95 % lies at 1.65·u, GUM G.6.5) — said, not claimed as 95 %."""
+    u2 = combined(components) ** 2
+    rect = max((c.contribution ** 2 for c in components if "rectangular" in c.basis), default=0.0)
+    if u2 > 0 and rect >= RECTANGULAR_DOMINANT * u2:
+        return K_COVERAGE, (f"k = 2 on a near-rectangular output (one rectangular term is {100 * rect / u2:.0f} % of u²): U covers it "
+                            "entirely (its 95 % interval is ±1.65·u)")
+    nu = effective_dof(components)
+    if math.isfinite(nu):
+        from scipy.stats import t
+
+        k = float(t.ppf(0.975, max(nu, 1.0)))
+        return k, f"k = {k:.2f}: Student's t at ν_eff = {nu:.1f} (Welch–Satterthwaite), ≈ 95 %"
+    return K_COVERAGE, "k = 2: ≈ 95 % for a normal output"
+
+
+def budget(value: float, unit: str, components: Sequence[Component], *, note: str = "", k: float | None = None) -> dict:
+    """A result's budget as written to result.json: value, u, U = k·u, k (:func:`coverage`, unless
+    given), what U covers and the components."""
+    u = combined(components)
+    k_rule, covers = coverage(components)
+    k = k_rule if k is None else k
+    out = {"value": value, "unit": unit, "u": u, "U": k * u, "k": k, "coverage": covers if k == k_rule else f"k = {k:g} (given)",
            "components": [c.as_dict() for c in components]}
     if note:
         out["note"] = note
@@ -128,15 +166,28 @@ def _force_component(force_N: float, force_class: float, per_N: float, name: str
                      f"±{force_class:g} % of reading, rectangular")
 
 
-def _diameter_component(d0_mm: float, res_mm: float, sensitivity: float, name: str = "diameter d0") -> Component:
-    return Component(name, d0_mm, "mm", resolution(res_mm), sensitivity, f"resolution {res_mm:g} mm, rectangular")
+def dimension_u(value_mm: float, res_mm: float, mpe_mm: float = 0.0, rel_bound: float = 0.0) -> float:
+    """Standard uncertainty of a measured dimension: the reading's resolution (r/√12), the
+    instrument's MPE and a relative bound of the method (each ±a, rectangular), combined."""
+    return math.sqrt(resolution(res_mm) ** 2 + rectangular(mpe_mm) ** 2 + rectangular(rel_bound * value_mm) ** 2)
+
+
+def _dimension_basis(res_mm: float, mpe_mm: float, rel_bound: float = 0.0) -> str:
+    return (f"resolution {res_mm:g} mm" + (f", MPE ±{mpe_mm:g} mm" if mpe_mm else "")
+            + (f", ISO 6892-1 ±{100 * rel_bound:g} %" if rel_bound else "") + ", rectangular")
+
+
+def _diameter_component(d0_mm: float, res_mm: float, sensitivity: float, name: str = "diameter d0", *, mpe_mm: float = 0.0,
+                        rel_bound: float = 0.0) -> Component:
+    return Component(name, d0_mm, "mm", dimension_u(d0_mm, res_mm, mpe_mm, rel_bound), sensitivity, _dimension_basis(res_mm, mpe_mm, rel_bound))
 
 
 def strength_budget(strength_MPa: float, d0_mm: float, inst: Mapping, *, extra: Sequence[Component] = (), note: str = "") -> dict:
     """R = F/S0, S0 = π·d0²/4 (Rm, and the force part of Rp0.2): ∂R/∂F = 1/S0, ∂R/∂d0 = −2R/d0."""
     s0 = _area_mm2(d0_mm)
     comps = [_force_component(strength_MPa * s0, inst["force_class"], 1.0 / s0),
-             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * strength_MPa / d0_mm), *extra]
+             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * strength_MPa / d0_mm, mpe_mm=inst.get("micrometer_mpe_mm", 0.0)),
+             *extra]
     return budget(strength_MPa, "MPa", comps, note=note)
 
 
@@ -162,7 +213,7 @@ def modulus_budget(E_MPa: float, d0_mm: float, inst: Mapping, *, strain_rel_u: f
     """E = slope of σ = F/S0 against e: relative force scale, d0 (−2E/d0), strain scale (−E), regression."""
     comps = [Component(f"force scale (ISO 7500-1 class {inst['force_class']:g})", 1.0, "1", force_rel_u(inst["force_class"]), E_MPa,
                        "relative, rectangular"),
-             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * E_MPa / d0_mm),
+             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * E_MPa / d0_mm, mpe_mm=inst.get("micrometer_mpe_mm", 0.0)),
              Component("strain scale", 1.0, "1", strain_rel_u, -E_MPa, "relative; extensometer class or crosshead scale")]
     if stderr_MPa is not None:
         comps.append(Component("regression of the elastic line", E_MPa, "MPa", stderr_MPa, 1.0, "standard error of the slope"))
@@ -181,12 +232,14 @@ def uniform_elongation_budget(Ag_pct: float, Rm_MPa: float, E_MPa: float, *, str
     return budget(Ag_pct, "%", comps)
 
 
-def elongation_from_lengths_budget(l0_mm: float, lu_mm: float, length_resolution_mm: float) -> dict:
-    """A = 100·(Lu − L0)/L0 (3.8): ∂A/∂Lu = 100/L0, ∂A/∂L0 = −100·Lu/L0²."""
+def elongation_from_lengths_budget(l0_mm: float, lu_mm: float, length_resolution_mm: float, *, mpe_mm: float = 0.0) -> dict:
+    """A = 100·(Lu − L0)/L0 (3.8): ∂A/∂Lu = 100/L0, ∂A/∂L0 = −100·Lu/L0² (each length read with the
+    caliper's resolution and MPE)."""
     A = 100.0 * (lu_mm - l0_mm) / l0_mm
-    basis = f"resolution {length_resolution_mm:g} mm, rectangular"
-    comps = [Component("gauge length after fracture Lu", lu_mm, "mm", resolution(length_resolution_mm), 100.0 / l0_mm, basis),
-             Component("original gauge length L0", l0_mm, "mm", resolution(length_resolution_mm), -100.0 * lu_mm / l0_mm ** 2, basis)]
+    basis = _dimension_basis(length_resolution_mm, mpe_mm)
+    u = dimension_u(l0_mm, length_resolution_mm, mpe_mm)
+    comps = [Component("gauge length after fracture Lu", lu_mm, "mm", u, 100.0 / l0_mm, basis),
+             Component("original gauge length L0", l0_mm, "mm", u, -100.0 * lu_mm / l0_mm ** 2, basis)]
     return budget(A, "%", comps)
 
 
@@ -200,11 +253,14 @@ def elongation_from_extension_budget(A_pct: float, gauge_mm: float, extensometer
     return budget(A_pct, "%", comps)
 
 
-def reduction_of_area_budget(d0_mm: float, du_mm: float, diameter_resolution_mm: float) -> dict:
-    """Z = 100·(1 − du²/d0²): ∂Z/∂du = −200·du/d0², ∂Z/∂d0 = 200·du²/d0³."""
+def reduction_of_area_budget(d0_mm: float, du_mm: float, diameter_resolution_mm: float, *, mpe_mm: float = 0.0,
+                             fracture_rel: float = 0.0) -> dict:
+    """Z = 100·(1 − du²/d0²): ∂Z/∂du = −200·du/d0², ∂Z/∂d0 = 200·du²/d0³ (micrometer resolution and
+    MPE; du also within ISO 6892-1's ±``fracture_rel`` of the pieces fitted together)."""
     Z = 100.0 * (1.0 - (du_mm / d0_mm) ** 2)
-    comps = [_diameter_component(du_mm, diameter_resolution_mm, -200.0 * du_mm / d0_mm ** 2, "smallest diameter after fracture du"),
-             _diameter_component(d0_mm, diameter_resolution_mm, 200.0 * du_mm ** 2 / d0_mm ** 3)]
+    comps = [_diameter_component(du_mm, diameter_resolution_mm, -200.0 * du_mm / d0_mm ** 2, "smallest diameter after fracture du",
+                                 mpe_mm=mpe_mm, rel_bound=fracture_rel),
+             _diameter_component(d0_mm, diameter_resolution_mm, 200.0 * du_mm ** 2 / d0_mm ** 3, mpe_mm=mpe_mm)]
     return budget(Z, "%", comps)
 
 
@@ -317,12 +373,13 @@ def flow_stress_budget(sigma_MPa: float, eps: float, d0_mm: float, h0_mm: float,
     s0 = _area_mm2(d0_mm)
     force = sigma_MPa * s0 * h0_mm / h
     siebel = d0_mm * math.sqrt(h0_mm / h) / (3.0 * h)
-    res = inst["length_resolution_mm"]
-    scale_u = dh * math.sqrt(2.0) * resolution(res) / abs(h0_mm - hk_mm)  # shortening scaled to h0 − hk (K_l)
+    res, mpe = inst["length_resolution_mm"], inst.get("caliper_mpe_mm", 0.0)
+    u_len = dimension_u(h0_mm, res, mpe)
+    scale_u = dh * math.sqrt(2.0) * u_len / abs(h0_mm - hk_mm)  # shortening scaled to h0 − hk (K_l)
     comps = [_force_component(force, inst["force_class"], h / (s0 * h0_mm)),
-             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * sigma_MPa / d0_mm),
-             Component("initial height h0", h0_mm, "mm", resolution(res), sigma_MPa * dh / (h0_mm * h), f"resolution {res:g} mm, rectangular"),
-             Component("shortening Δh (scaled to h0 − hk)", dh, "mm", scale_u, -sigma_MPa / h, f"h0 and hk at {res:g} mm"),
+             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * sigma_MPa / d0_mm, mpe_mm=inst.get("micrometer_mpe_mm", 0.0)),
+             Component("initial height h0", h0_mm, "mm", u_len, sigma_MPa * dh / (h0_mm * h), _dimension_basis(res, mpe)),
+             Component("shortening Δh (scaled to h0 − hk)", dh, "mm", scale_u, -sigma_MPa / h, f"h0 and hk: {_dimension_basis(res, mpe)}"),
              Component("friction μ", mu, "1", u_mu, -sigma_MPa * siebel / (1.0 + mu * siebel), "budget of μ; Siebel's sensitivity"),
              *method]
     out = budget(sigma_MPa, "MPa", comps, note=f"at true plastic strain {eps:g}")

@@ -55,3 +55,29 @@ def test_the_upsetting_lookalikes_flow_points_hold_the_input_law(tmp_path):
         truth = float(C1.flow(float(at)))
         assert abs(b["value"] - truth) <= b["U"], (at, b["value"], b["U"], truth)
         assert b["u_method"] > 0
+
+
+DATA_42 = HERE.parent / "data" / "42CrMoS4" / "original_data"
+
+
+@pytest.mark.parametrize("name", ["46NT71", "46NT73", "46NT75"])
+def test_the_crosshead_only_lookalike_holds_the_extensometers_Rp(name):
+    """The 42CrMoS4 record's Machine Displacement alone (the held-out 1045 record's kind): Rp0.2 within 5 %
+    of the same specimen's extensometer Rp0.2, or its U holding it — and the budget carries the
+    crosshead compliance model's share (rms over the 67 pairs) and the testing rate's, which it lacked."""
+    from flowcurve.identification.assurance import attach
+    from flowcurve.identification.tension import identify_tension
+    from flowcurve.identification.uncertainty import CROSSHEAD_RP_REL_U
+    from flowcurve.record.importers import load_record
+
+    rec = load_record(DATA_42 / f"{name}.csv")
+    reference = identify_tension(rec).result["Rp02_MPa"]  # the extensometer's
+    ident = identify_tension(rec, use_extensometer=False)
+    attach(ident.result, ident.curves, rec)
+    rp, budget = ident.result["Rp02_MPa"], ident.result["uncertainty"]["Rp02_MPa"]
+    assert abs(rp / reference - 1.0) <= 0.05 or abs(rp - reference) <= budget["U"], (rp, budget["U"], reference)
+    assert abs(rp - reference) <= budget["U"], (rp, budget["U"], reference)
+    shares = {c["name"]: c["contribution"] for c in budget["components"]}
+    assert shares["method: crosshead compliance model"] == pytest.approx(rp * CROSSHEAD_RP_REL_U)
+    assert any(k.startswith("method: testing rate") for k in shares)
+    assert budget["u_method"] > 0
