@@ -30,11 +30,12 @@ def _identify(path: Path, out: Path, *args: str) -> tuple[dict, pd.DataFrame]:
 
 
 @pytest.mark.parametrize("path", UPSETTING, ids=lambda p: p.stem)
-def test_the_upsetting_lookalike_is_stripped_by_the_class_E_and_its_Rp_holds_the_truth(tmp_path, path):
+def test_the_upsetting_lookalike_is_stripped_by_the_class_E_and_its_Rp_holds_the_truth(tmp_path, path, capsys):
     """Before: the apparent slope (49.6 / 25.6 GPa) stripped the elastic strain unnamed — Rp0.2 138.3 ± 1.6 and
     145.6 ± 1.7 MPa, the flow curve 3.2 % and 6.8 % off; now the steel class's 200 GPa (the GOST grade
     told) strips it, the apparent slope is named, Rp0.2 130.3–130.8 and the curve 1.5 % off."""
     result, curve = _identify(path, tmp_path)
+    assert "E 200000 MPa (class: handbook E of steel (GOST grade '12kh18n12m3tl'" in capsys.readouterr().out  # said on screen
     assert result["E_source"].startswith("class") and result["E_MPa"] == 200_000.0
     assert result["methods"]["elastic_modulus"]["source"] == "class"
     assert any("apparent modulus" in w and "steel class" in w for w in result["warnings"])
