@@ -34,14 +34,17 @@ RATES_HZ = (2.0, 10.0, 100.0)
 GENERATOR = SimpleNamespace(**runpy.run_path(str(Path(__file__).with_name("modulus_methods.py"))))
 
 
-def soft_frame_case(frame: float, name: str, rate_hz: float, handbook: bool, **generator) -> dict:
-    """Identify one closed-form record: Rp0.2 and the true curve against the closed form."""
+def soft_frame_case(frame: float, name: str, rate_hz: float, handbook: bool, material: str | None = None, **generator) -> dict:
+    """Identify one closed-form record: Rp0.2 and the true curve against the closed form (``material``:
+    the record's material name instead of the generator's, e.g. one naming no class)."""
     from flowcurve.identification.tension import identify_tension
 
     law = MATERIALS[name]
     rec, _, rp02 = GENERATOR.crosshead_tension(frame_N_per_um=frame, rate_hz=rate_hz, **law, **generator)
     if handbook:
         rec.meta["material.E_MPa"] = repr(E_MPa)
+    if material is not None:
+        rec.meta["material"] = material
     out = identify_tension(rec)
     res = out.result
     ep, sig = out.true_curve["true_plastic_strain"].to_numpy(), out.true_curve["true_stress_MPa"].to_numpy()

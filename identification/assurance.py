@@ -16,6 +16,7 @@ import numpy as np
 
 from flowcurve.identification import conformity as cf
 from flowcurve.identification import uncertainty as un
+from flowcurve.identification.elastic_modulus import apparent_modulus_warning, class_modulus
 
 FLOW_STRAINS = (0.05, 0.1, 0.2, 0.3, 0.5)  # compression flow stress budgets at these true plastic strains
 CONSTANTS = (("A_MPa", "MPa"), ("B_MPa", "MPa"), ("n", "1"), ("K_MPa", "MPa"), ("eps0", "1"), ("sigma0_MPa", "MPa"), ("Q_MPa", "MPa"), ("b", "1"))
@@ -26,7 +27,8 @@ def instruments_from_meta(meta: Mapping[str, str]) -> dict:
     the keys it lacks; ``source`` says which were defaults."""
     inst: dict = {}
     defaulted, unreadable = [], []
-    for key, default in un.INSTRUMENT_DEFAULTS.items():
+    defaults = {**un.INSTRUMENT_DEFAULTS, **un.DIMENSION_DEFAULTS}
+    for key, default in defaults.items():
         raw = meta.get(f"instruments.{key}")
         try:
             value = float(raw) if raw is not None and str(raw).strip() else None
@@ -40,7 +42,7 @@ def instruments_from_meta(meta: Mapping[str, str]) -> dict:
         inst[key] = value
     if not defaulted:
         inst["source"] = "record (instruments.*)"
-    elif len(defaulted) == len(un.INSTRUMENT_DEFAULTS) and not unreadable:
+    elif len(defaulted) == len(defaults) and not unreadable:
         inst["source"] = ("defaults: the record states no instrument classes (set [instruments] in the rig configuration, "
                           "or --set instruments.force_class=… when identifying)")
     else:
@@ -74,6 +76,14 @@ def plastic_slope_MPa(curve, E_MPa: float, at: float = un.OFFSET, half_width: fl
     return float(np.polyfit(ep[sel], s[: i_m + 1][sel], 1)[0])
 
 
+def _curve_slope(eps_p: np.ndarray, stress_MPa: np.ndarray, at: float, half_width: float = 0.01) -> float:
+    """dσ/dε_p of a curve at ``at``: the chord over ±half_width (within the curve)."""
+    lo, hi = max(at - half_width, float(np.nanmin(eps_p))), min(at + half_width, float(np.nanmax(eps_p)))
+    order = np.argsort(eps_p)
+    s_lo, s_hi = np.interp([lo, hi], eps_p[order], stress_MPa[order])
+    return float((s_hi - s_lo) / (hi - lo)) if hi > lo else 0.0
+
+
 def _hardening_slope(hard: Mapping, at: float) -> float | None:
     A, B, n = (_num(hard.get(k)) for k in ("A_MPa", "B_MPa", "n"))
     if hard.get("law") == "johnson_cook" and None not in (B, n):
@@ -83,11 +93,13 @@ def _hardening_slope(hard: Mapping, at: float) -> float | None:
 
 def _constants(hard: Mapping, stress_rel_u: float) -> dict:
     out = {}
+    shifts = ((hard.get("start_uncertainty") or {}).get("constants_shift") or {})
     for key, unit in CONSTANTS:
         value = _num(hard.get(key))
         if value is None:
             continue
-        b = un.constant_budget(value, _num(hard.get(f"{key}_stderr")), stress_rel_u, unit)
+        shift = _num(shifts.get(key.removesuffix("_MPa")))
+        b = un.constant_budget(value, _num(hard.get(f"{key}_stderr")), stress_rel_u, unit, zero_shift=shift)
         if b is not None:
             out[key] = b
     return out
@@ -136,6 +148,8 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
         if theta is not None:
             out["Rp02_MPa"] = un.proof_strength_budget(Rp, d0, inst, plastic_slope_MPa=theta, strain_rel_u=strain_u,
                                                        E_MPa=E, u_E_MPa=u_E, E_measured=E_measured)
+            method = _tension_rp_method(result, curves.get("engineering"), Rp, E)
+            _extend(out["Rp02_MPa"], method)
     Ag = _num(result.get("Ag_pct"))
     if Ag is not None and Rm is not None:
         e_m = Ag / 100.0 + Rm / E
@@ -153,7 +167,7 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
     l0, lu = _num(spec.get("l0_mm")), _num(post.get("lu_mm"))
     method = str(result.get("A_method") or "")
     if A is not None and l0 and lu and "lu_mm" in method:
-        out["A_pct"] = un.elongation_from_lengths_budget(l0, lu, inst["length_resolution_mm"])
+        out["A_pct"] = un.elongation_from_lengths_budget(l0, lu, inst["length_resolution_mm"], mpe_mm=inst["caliper_mpe_mm"])
     elif A is not None and "extensometer" in method:
         gauge = _num((result.get("methods") or {}).get("strain_length_mm")) or _num(spec.get("extensometer_gauge_mm")) or l0
         if gauge:
@@ -163,8 +177,9 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
     if du is None and _num(post.get("sk_mm2")):
         du = math.sqrt(4.0 * post["sk_mm2"] / math.pi)
     if Z is not None and du:
-        out["Z_pct"] = un.reduction_of_area_budget(d0, du, inst["diameter_resolution_mm"])
-    stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.resolution(inst["diameter_resolution_mm"]) / d0)
+        out["Z_pct"] = un.reduction_of_area_budget(d0, du, inst["diameter_resolution_mm"], mpe_mm=inst["micrometer_mpe_mm"],
+                                                   fracture_rel=un.FRACTURE_DIAMETER_REL)
+    stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.dimension_u(d0, inst["diameter_resolution_mm"], inst["micrometer_mpe_mm"]) / d0)
     out["hardening"] = _constants(result.get("hardening") or {}, stress_rel_u)
     return out
 
@@ -184,29 +199,99 @@ def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> 
         return out
     Rp = _num(result.get("Rp02_MPa"))
     if Rp is not None:
-        out["Rp02_MPa"] = un.strength_budget(Rp, d0, inst, note="force and d0 only (mean pressure at 0.2 % plastic strain)")
+        method = _compression_rp_method(result, curves.get("nominal"))
+        out["Rp02_MPa"] = un.strength_budget(Rp, d0, inst, extra=method,
+                                             note="mean pressure at 0.2 % plastic strain: force and d0, and the method's own share "
+                                                  "(the elastic line's E and the defensible lines' spread, the strain zero and toe)")
+        out["Rp02_MPa"]["u_method"] = un.combined(method)
     curve = curves.get(f"true_{result.get('friction_correction')}")
     if curve is not None and h0 and hk and h0 > hk and mu is not None:
         eps = curve["true_plastic_strain"].to_numpy(dtype=float)
         sig = curve["true_stress_MPa"].to_numpy(dtype=float)
         u_mu = mu_b["u"] if mu_b else 0.0
+        E_method = (result.get("methods") or {}).get("elastic_modulus") or {}
+        zero = _num(((result.get("hardening") or {}).get("start_uncertainty") or {}).get("delta_eps0")) or 0.0
         flow = {}
         for at in FLOW_STRAINS:
             if eps.size and eps.min() <= at <= eps.max():
-                flow[f"{at:g}"] = un.flow_stress_budget(float(np.interp(at, eps, sig)), at, d0, h0, hk, inst, mu=mu, u_mu=u_mu)
+                sigma = float(np.interp(at, eps, sig))
+                method = un.flow_point_method_components(sigma, _curve_slope(eps, sig, at), _num(E_method.get("E_MPa")),
+                                                         _num(E_method.get("u_MPa")) or 0.0, zero)
+                flow[f"{at:g}"] = un.flow_stress_budget(sigma, at, d0, h0, hk, inst, mu=mu, u_mu=u_mu, method=method)
         if flow:
             out["flow_stress_MPa"] = flow
-    stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.resolution(inst["diameter_resolution_mm"]) / d0)
+    stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.dimension_u(d0, inst["diameter_resolution_mm"], inst["micrometer_mpe_mm"]) / d0)
     out["hardening"] = _constants(result.get("hardening") or {}, stress_rel_u)
     return out
+
+
+def _extend(b: dict, method: list) -> None:
+    """A budget with the method's own components added: u, U again and ``u_method`` stated apart."""
+    old = [un.Component(**{k: c[k] for k in ("name", "value", "unit", "u", "sensitivity", "basis", "dof") if k in c}) for c in b["components"]]
+    out = un.budget(b["value"], b["unit"], old + method, note=b.get("note", ""))
+    b.clear()
+    b.update(out, u_method=un.combined(method))
+
+
+def _tension_rp_method(result: Mapping, curve, Rp: float, E: float) -> list:
+    """The method's share of a tension Rp0.2 beyond E's own uncertainty: the spread over the
+    defensible lines (the line, its window's halves, the class's handbook E where the strain is the
+    specimen's), the strain zero δε0, the crosshead compliance model (no extensometer) and the
+    testing rate within the method's range."""
+    methods = result.get("methods") or {}
+    record = result.get("record") or {}
+    material = record.get("material") if isinstance(record, Mapping) else None
+    named = class_modulus(material)
+    comps: list = []
+    window = (result.get("modulus") or {}).get("window_MPa")
+    if curve is not None and "engineering_strain" in curve.columns:
+        strain = curve["engineering_strain"].to_numpy(dtype=float)
+        stress = curve["engineering_stress_MPa"].to_numpy(dtype=float)
+        lines = {"the line": E}
+        if window and window[1] > window[0]:
+            lines.update(un.line_windows_E(strain, stress, window))
+        specimen_strain = methods.get("strain_source") == "extensometer" or methods.get("frame_stiffness_N_per_um") is not None
+        if named is not None and specimen_strain:
+            lines[f"{named[0]} class handbook"] = named[1]
+        zero = _num(((result.get("hardening") or {}).get("start_uncertainty") or {}).get("delta_eps0")) or 0.0
+        comps += un.offset_method_components(strain, stress, E, 0.0, lines, zero)
+    if methods.get("strain_source") == "crosshead":
+        comps.append(un.crosshead_compliance_component(Rp))
+    rate = ((methods.get("conformity") or {}).get("testing_rate") or {}).get("method")
+    comps.append(un.rate_component(Rp, rate, named[0] if named else None))
+    return comps
+
+
+def _compression_rp_method(result: Mapping, nominal) -> list:
+    """The method's share of a compression Rp0.2 (:func:`.uncertainty.offset_method_components`) on
+    the nominal curve (true strain, mean pressure): the E that stripped the elastic strain, the
+    spread over the defensible lines (this E, the class's handbook E, a plausible apparent slope)
+    and the strain zero δε0 (hardening.start_uncertainty)."""
+    if nominal is None or "true_strain" not in nominal.columns:
+        return []
+    E_method = (result.get("methods") or {}).get("elastic_modulus") or {}
+    E, u_E = _num(E_method.get("E_MPa")), _num(E_method.get("u_MPa"))
+    if E is None:
+        return []
+    strain = nominal["true_strain"].to_numpy(dtype=float)
+    stress = nominal["mean_pressure_MPa"].to_numpy(dtype=float)
+    lines = {E_method.get("source", "used"): E}
+    named = class_modulus((result.get("record") or {}).get("material"))
+    if named is not None:
+        lines[f"{named[0]} class handbook"] = named[1]
+    apparent = _num(E_method.get("apparent_MPa"))
+    if apparent is not None and apparent_modulus_warning(apparent, (result.get("record") or {}).get("material")) is None:
+        lines["apparent slope"] = apparent
+    zero = _num(((result.get("hardening") or {}).get("start_uncertainty") or {}).get("delta_eps0"))
+    return un.offset_method_components(strain, stress, E, u_E or 0.0, lines, zero or 0.0, basis=E_method.get("basis", ""))
 
 
 def attach(result, curves: Mapping, record) -> None:
     """Fill ``result['uncertainty']`` and ``result['methods']['conformity']`` (tension or compression)."""
     inst = instruments_from_meta(record.meta)
     test = result.get("test")
+    methods = result.get("methods")
+    if isinstance(methods, dict):  # first: the Rp budget's rate term takes the testing method it found
+        methods["conformity"] = cf.assess(result, curves, record.data, record.meta)
     budgets = (tension_uncertainty if test == "tension" else compression_uncertainty)(result, curves, inst)
     result["uncertainty"] = {"instruments": inst, **budgets}
-    methods = result.get("methods")
-    if isinstance(methods, dict):
-        methods["conformity"] = cf.assess(result, curves, record.data, record.meta)

@@ -34,6 +34,7 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, MissingValueError, RecordError
 from flowcurve.identification import friction as fr
 from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.elastic_modulus import METAL_E_RANGE_MPa, ModulusChoice, apparent_modulus_warning, choose_modulus
 from flowcurve.identification.hardening import RANGE_SHARE_PART, HardeningFit, fit_hardening, pattern_shift, range_shift
 from flowcurve.identification.indicator import (DEFAULT_MODULUS_METHOD, FEW_POINTS_TOP, SDAR_REACH, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
                                                 reread_if_stepped, yield_onset_from_rate)
@@ -280,6 +281,7 @@ class _Line:
     toe_mm: float
     specimen: np.ndarray
     warnings: list[str]
+    apparent_MPa: float | None = None  # the slope regressed on the first loading (frame removed), when there is one
 
 
 @dataclass
@@ -327,13 +329,15 @@ def _check_options(friction_correction: str, E_MPa: float | None) -> None:
         raise IdentificationError(f"E_MPa must be > 0, got {E_MPa!r}")
 
 
-def _handbook_modulus(record: Record, E_MPa: float | None) -> tuple[float | None, str]:
-    """The handbook modulus (the option, else the record's material.E_MPa) and its source."""
-    if E_MPa is None and record.positive("material.E_MPa") is not None:
-        # a short stiff specimen's elastic line is about one encoder count: the handbook
-        # modulus the operator entered strips elastic strain better than a regression on it
-        return record.positive("material.E_MPa"), "record (material.E_MPa)"
-    return E_MPa, "option"
+def _handbook_modulus(record: Record, E_MPa: float | None) -> tuple[float | None, str, ModulusChoice]:
+    """The modulus that strips elastic strain by the one rule (:func:`.elastic_modulus.choose_modulus`:
+    the option, else the record's material.E_MPa, else the handbook E of the class its material
+    names; a compression record has no extensometer) and its source; (None, "apparent") without one."""
+    choice = choose_modulus(given=E_MPa, handbook=record.positive("material.E_MPa"), material=record.meta.get("material"))
+    # a short stiff specimen's elastic line is about one encoder count: a handbook modulus strips elastic
+    # strain better than a regression on it (and a crosshead's slope carries the frame and the toe)
+    source = {"given": "option", "handbook": "record (material.E_MPa)", "class": f"class ({choice.basis})"}.get(choice.source, "apparent")
+    return choice.E_MPa, source, choice
 
 
 def _inputs(record: Record, frame_stiffness_N_per_um: float | None) -> _Diagram:
@@ -370,7 +374,6 @@ def _inputs(record: Record, frame_stiffness_N_per_um: float | None) -> _Diagram:
 
 
 MIN_LINE_SLOPE_FRACTION = 0.2  # a regressed line flatter than this part of the handbook E reaches past yield
-MIN_APPARENT_E_MPa = 20_000.0  # an apparent modulus (frame compliance removed) below this is no metal's elastic line
 
 
 def _yield_estimate_MPa(diagram: _Diagram, area0_mm2: float) -> float | None:
@@ -425,6 +428,7 @@ def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_
                   modulus_reference: str, toe: bool, modulus_method: str = DEFAULT_MODULUS_METHOD) -> _Line:
     """The elastic line and the toe: the linear part extended to zero force (ISO 6892-1)."""
     warnings: list[str] = []
+    apparent = None
     area0 = math.pi * geo["d0"] ** 2 / 4.0
     specimen = diagram.specimen
     try:
@@ -439,6 +443,7 @@ def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_
                                "to read its offset from: sample faster)" if E_MPa is not None
                                else "no modulus, so the elastic strain is not removed and there is no Rp0.2 — give E_MPa"))
     else:
+        apparent = line.E_MPa
         onset = _yield_estimate_MPa(diagram, area0)
         if E_MPa is not None and onset is not None and (line.window_MPa[0] > onset or line.E_MPa < MIN_LINE_SLOPE_FRACTION * E_MPa):
             known = _line_of_known_slope(diagram, area0, geo["h0"], E_MPa)
@@ -450,13 +455,14 @@ def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_
             offsets = toe_offsets(specimen, diagram.force, line.window_MPa, E_MPa=E_MPa, area0_mm2=area0, h0_mm=geo["h0"])
             toe_mm = float(np.median(offsets))  # the toe of a line of known slope E; its offsets' spread judged
             warnings += [w for w in [toe_spread_warning(offsets, line.window_MPa, E_MPa=E_MPa, h0_mm=geo["h0"])] if w]
-        elif line.E_MPa < MIN_APPARENT_E_MPa:
+        elif line.E_MPa < METAL_E_RANGE_MPa[0]:
             warnings.append(f"apparent modulus {line.E_MPa:.4g} MPa over {line.window_MPa[0]:.4g}–{line.window_MPa[1]:.4g} MPa is far below any metal's: "
-                            "the line found may be a toe or a stretch past yield, and Rp0.2 with it — give the handbook E (--E or material.E_MPa)")
+                            "the line found may be a toe or a stretch past yield, and Rp0.2 with it — give the handbook E (--E or material.E_MPa) "
+                            "or name the material's grade")
     if line is not None and toe:
         on_line = line if E_MPa is None else replace(line, E_MPa=E_MPa)  # the toe replaced by the line the offset was read on
         specimen = compensate_toe_line(specimen, diagram.force, on_line, toe_mm, area0_mm2=area0, h0_mm=geo["h0"])
-    return _Line(line=line, toe_mm=toe_mm, specimen=specimen, warnings=warnings)
+    return _Line(line=line, toe_mm=toe_mm, specimen=specimen, warnings=warnings, apparent_MPa=apparent)
 
 
 def _nominal_curve(diagram: _Diagram, geo: dict, specimen: np.ndarray, E_MPa: float | None) -> _Nominal:
@@ -788,6 +794,20 @@ def _result(record: Record, geo: dict, diagram: _Diagram, line: _Line, nominal: 
     )
 
 
+def _modulus_method(choice: ModulusChoice, yld: _Yield, line: _Line) -> dict:
+    """result.json's methods.elastic_modulus: the E that stripped the elastic strain, its standard
+    uncertainty and where it came from (the rule's class), and the first loading's apparent slope."""
+    if yld.E_source == "apparent" and yld.E_used is not None:
+        scale = yld.E_used / yld.E_fit.E_MPa if yld.E_fit is not None else math.nan  # 1/K_l: the slope on the scaled strain
+        u = yld.E_fit.E_stderr_MPa * scale if yld.E_fit is not None else math.nan
+        out = {"E_MPa": yld.E_used, "u_MPa": u if math.isfinite(u) else None, "source": "apparent",
+               "basis": "the first loading's slope (frame removed, toe and grips in it): no defensible E (no --E, material.E_MPa or class)"}
+    else:
+        out = {"E_MPa": choice.E_MPa, "u_MPa": choice.u_MPa if choice.E_MPa is not None else None, "source": choice.source, "basis": choice.basis}
+    out["apparent_MPa"] = line.apparent_MPa
+    return out
+
+
 def _mu_stderr_basis(chosen: fr.FrictionResult) -> str:
     """What μ's standard error (``friction_details[method].mu_stderr``) holds, for result.json's methods."""
     if chosen.extra.get("mu_stderr") is None:
@@ -824,12 +844,14 @@ def identify_compression(
     ``modulus_method`` ("window", "sdar", or "auto": the window, see :func:`elastic_line`).
     """
     _check_options(friction_correction, E_MPa)
-    E_MPa, E_source = _handbook_modulus(record, E_MPa)
+    E_MPa, E_source, E_choice = _handbook_modulus(record, E_MPa)
     geo = _meta_geometry(record)
     _friction_all(geo, friction_method, [])  # friction first: it needs only the post-test measurements, and bad ones should stop early
     diagram = _inputs(record, frame_stiffness_N_per_um)
     line = _elastic_line(diagram, geo, E_MPa=E_MPa, modulus_window_MPa=modulus_window_MPa, modulus_window=modulus_window,
                          modulus_reference=modulus_reference, toe=toe, modulus_method=modulus_method)
+    if E_choice.source == "class":
+        line.warnings += [w for w in [apparent_modulus_warning(line.apparent_MPa, record.meta.get("material"))] if w]
     nominal = _nominal_curve(diagram, geo, line.specimen, E_MPa)
     yld = _modulus_and_yield(nominal, line.line, E_MPa, E_source)
     friction = _friction_correction(geo, nominal, friction_method, yld.E_used)
@@ -838,6 +860,7 @@ def identify_compression(
     warnings = diagram.warnings + line.warnings + nominal.warnings + friction.warnings + fit_warnings + start_warnings
     result = _result(record, geo, diagram, line, nominal, yld, friction, fits, warnings, start=start, E_MPa=E_MPa, law=law,
                      friction_correction=friction_correction, toe=toe)
+    result.methods["elastic_modulus"] = _modulus_method(E_choice, yld, line)
     eps_def, sig_def, _ = friction.corrected[friction_correction]
     _model_form_shares(record.source, geo, nominal, yld, friction, fits[friction_correction], result, fit_range, law, friction_correction)
     uncertainty = None

@@ -21,6 +21,7 @@ from flowcurve.identification.johnson_cook import (CONVENTIONS, EQUATION, homolo
                                                   log_rate_ratio)
 from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
 from flowcurve.identification.damage import DamageFit, FracturePoint, fit_damage
+from flowcurve.identification import uncertainty as un
 from flowcurve.identification.elastic_modulus import series_modulus
 from flowcurve.identification.series_members import MAX_POINTS, SeriesMember
 
@@ -323,6 +324,7 @@ class ConditionCurve:
     strain_rate_per_s: float
     records: list[str]
     table: pd.DataFrame  # columns true_plastic_strain, true_stress_MPa
+    repeats: dict | None = None  # the Type A spread of its repeats at TYPE_A_STRAINS (:func:`repeats_type_a`), None for one record
 
     @property
     def filename(self) -> str:
@@ -353,8 +355,30 @@ def condition_curves(members: Sequence[SeriesMember], max_points: int = MAX_POIN
         out.append(ConditionCurve(float(np.mean([m.temperature_C for m in g])),
                                   float(np.exp(np.mean([np.log(m.strain_rate_per_s) for m in g]))),
                                   [m.name for m in g],
-                                  pd.DataFrame({TRUE_CURVE_COLUMNS[0]: grid, TRUE_CURVE_COLUMNS[1]: stress})))
+                                  pd.DataFrame({TRUE_CURVE_COLUMNS[0]: grid, TRUE_CURVE_COLUMNS[1]: stress}),
+                                  repeats_type_a(g, lo, hi)))
     return out
+
+
+TYPE_A_STRAINS = (0.002, 0.05, 0.1, 0.2, 0.3, 0.5)  # plastic strains the repeats' spread is stated at (within their shared range)
+
+
+def repeats_type_a(group: Sequence[SeriesMember], lo: float, hi: float) -> dict | None:
+    """The Type A uncertainty of a condition's mean curve from its repeats (GUM 4.2): at each of
+    :data:`TYPE_A_STRAINS` within [lo, hi], the mean σ̄, the repeats' standard deviation s and
+    u = s/√n with n − 1 degrees of freedom (U = t·u, Student's t); None for a single record."""
+    if len(group) < 2:
+        return None
+    n = len(group)
+    out = {}
+    for at in (a for a in TYPE_A_STRAINS if lo <= a <= hi):
+        values = np.array([float(np.interp(at, m.plastic_strain, m.stress_MPa)) for m in group])
+        s = float(values.std(ddof=1))  # the repeats' spread
+        comp = un.Component(f"repeats (Type A, {n} records)", float(values.mean()), "MPa", s / math.sqrt(n), 1.0,
+                            f"standard deviation {s:.3g} MPa of {n} repeats, of the mean s/√n", dof=n - 1.0)
+        out[f"{at:g}"] = {**un.budget(float(values.mean()), "MPa", [comp], note=f"at true plastic strain {at:g}"), "s_MPa": s, "n": n,
+                          "values_MPa": [float(v) for v in values]}
+    return out or None
 
 
 @dataclass
@@ -422,7 +446,8 @@ class SeriesFit:
         out["curves"] = [{"temperature_C": c.temperature_C, "strain_rate_per_s": c.strain_rate_per_s,
                           "file": f"curves/{c.filename}", "records": c.records,
                           "plastic_strain": [float(c.table.iloc[0, 0]), float(c.table.iloc[-1, 0])],
-                          "model_stress_at_zero_strain_MPa": float(self.fit(0.0, c.strain_rate_per_s, c.temperature_C))}
+                          "model_stress_at_zero_strain_MPa": float(self.fit(0.0, c.strain_rate_per_s, c.temperature_C)),
+                          **({"repeats_type_a": c.repeats} if c.repeats else {})}
                          for c in self.curves]
         out["global"] = self.global_fit.as_dict() if self.global_fit else None
         out["stepwise"] = self.stepwise_fit.as_dict() if self.stepwise_fit else None

@@ -19,7 +19,7 @@ from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
-from flowcurve.identification.elastic_modulus import material_modulus, tension_E_source
+from flowcurve.identification.elastic_modulus import apparent_modulus_warning, choose_modulus, tension_E_source
 from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, HardeningFit, fit_hardening, three_point_fit
 from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_SAMPLES, ModulusFit, elastic_modulus, reread_if_stepped, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
 from flowcurve.identification.necking import METHODS as NECK_METHODS
@@ -611,18 +611,23 @@ def specimen_strain(strain, eng_stress_MPa, E_line_MPa: float, E_specimen_MPa: f
 
 
 def _specimen_modulus(inp: _Inputs, line: _ElasticLine) -> tuple[float, str | None]:
-    """The specimen's E for the true curve, and a warning when it is not the line's slope: on a
-    crosshead record without the frame's stiffness the slope is apparent (frame in series); then
-    the handbook material.E_MPa, else none (∞: the specimen's elastic strain is left out)."""
-    if inp.src["source"] != "crosshead" or inp.src["stiffness"] is not None or tension_E_source(line.mod.source, "crosshead") != "apparent":
+    """The specimen's E for the true curve, and a note when it is not the line's slope: on a
+    crosshead record whose slope is apparent (the frame, grips or toe in it) the one rule's E
+    (:func:`.elastic_modulus.choose_modulus`: material.E_MPa, else the class the material names),
+    else none (∞: the specimen's elastic strain is left out)."""
+    if inp.src["source"] != "crosshead" or tension_E_source(line.mod.source, "crosshead") != "apparent":
         return line.E, None
-    handbook = inp.record.positive("material.E_MPa")
+    choice = choose_modulus(handbook=inp.record.positive("material.E_MPa"), material=inp.record.meta.get("material"))
     elastic = f"the crosshead's elastic extension is removed with the diagram's slope (apparent E = {line.E:.4g} MPa, ISO 6892-1's way for Rp)"
-    if handbook is not None and handbook > line.E:
-        return handbook, f"no frame stiffness: {elastic}; the specimen's own elastic strain is the handbook E's (material.E_MPa = {handbook:.4g} MPa)"
+    if choice.E_MPa is not None:
+        far = apparent_modulus_warning(line.E, inp.record.meta.get("material"), what="the crosshead diagram's slope")
+        return choice.E_MPa, f"{elastic}; the specimen's own elastic strain is the rule's E = {choice.E_MPa:.4g} MPa ({choice.basis})" + (
+            f"; {far}" if far and inp.src["stiffness"] is not None else "")
+    if inp.src["stiffness"] is not None:
+        return line.E, None  # the frame removed and no E to say otherwise: the line's slope
     return math.inf, (f"no frame stiffness and no handbook E: {elastic}; the specimen's own elastic strain (Rm/E, about "
                       f"{100 * inp.Rm / 2.1e5:.2g} % for a steel) is left out of the true stress, which reads that much low "
-                      "(give material.E_MPa or rig.frame_stiffness_N_per_um)")
+                      "(give material.E_MPa, name the material's grade or give rig.frame_stiffness_N_per_um)")
 
 
 def _true_curve(inp: _Inputs, line: _ElasticLine, true_stress: str, poisson: float) -> _TrueCurve:
@@ -782,8 +787,10 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
     """The typed result (result.json) of a tension identification."""
     E, mod, yp, main = line.E, line.mod, iso.yp, hard.main
     E_source = tension_E_source(mod.source, inp.src["source"])  # the E handed on, by the rule of elastic_modulus
-    E_material, E_material_source = material_modulus(E if E_source == "given" else None, inp.record.positive("material.E_MPa"),
-                                                     mod.E_MPa if inp.src["source"] == "extensometer" and _resolved(mod) else None)
+    rule = choose_modulus(given=E if E_source == "given" else None, handbook=inp.record.positive("material.E_MPa"),
+                          measured=mod.E_MPa if inp.src["source"] == "extensometer" and _resolved(mod) else None,
+                          measured_u_MPa=mod.E_stderr_MPa, material=inp.record.meta.get("material"))
+    E_material, E_material_source = rule.E_MPa, rule.source
     return TensionResult(
         E_MPa=E,
         E_stderr_MPa=mod.E_stderr_MPa if E == mod.E_MPa else None,
@@ -830,7 +837,7 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
             "Rp02": "offset method, ISO 6892-1: intersection with the 0.2 % line of slope E",
             "Ag": "plastic extension at maximum force, 100·(e_m − Rm/E)",
             "Z": "(S0 − Su)/S0" if iso.Z is not None else None,
-            "true_curve_strain": ("the specimen's: crosshead strain less σ_e/E_apparent" + (f", plus σ_e/{true.E_specimen:.4g} MPa (handbook)" if math.isfinite(true.E_specimen) else " (its own elastic strain left out)")
+            "true_curve_strain": ("the specimen's: crosshead strain less σ_e/E_apparent" + (f", plus σ_e/{true.E_specimen:.4g} MPa (the rule's E: material.E_MPa or the class's)" if math.isfinite(true.E_specimen) else " (its own elastic strain left out)")
                                   if true.warnings else "the strain source's, elastic strain σ_t/E removed for εp"),
             "true_stress": "(3.6) corrected, K = E/(3(1 − 2ν))" if true_stress == "gost_3_6" else "σ_e(1 + e), constant volume",
             "poisson": poisson,

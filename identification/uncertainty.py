@@ -33,10 +33,23 @@ INSTRUMENT_DEFAULTS = {
     "length_resolution_mm": 0.01,  # resolution of lengths and heights (L0, Lu, h0, hk)
     "crosshead_strain_error_pct": 2.0,  # bound on a strain from crosshead travel (no extensometer)
 }
+# the dimensions' instruments, read from the record's instruments.<key> like the classes above (defaults said so): the
+# maximum permissible error of the micrometer (d0, du; DIN 863-1 0–25 mm: 4 µm) and of the caliper (L0, Lu, h0, hk; ISO 13385-1
+# to 150 mm: 30 µm), each a bound, rectangular
+DIMENSION_DEFAULTS = {"micrometer_mpe_mm": 0.004, "caliper_mpe_mm": 0.03}
+FRACTURE_DIAMETER_REL = 0.01  # ISO 6892-1 20.1: Su to ±2 % (the pieces fitted together), so du to ±1 %, rectangular
 # ISO 9513 Table 2: per class, the bound on the relative extension error (%) and its absolute floor (µm)
 EXTENSOMETER_LIMITS = {0.2: (0.2, 0.6), 0.5: (0.5, 1.5), 1.0: (1.0, 3.0), 2.0: (2.0, 6.0)}
 HANDBOOK_E_BOUND = 0.05  # a handbook E (not measured) is taken as within ±5 %
 OFFSET = 0.002  # the 0.2 % offset of Rp0.2
+# a crosshead-only Rp0.2 against the same specimen's extensometer: rms of the relative differences over the 67 pairs of
+# the 42CrMoS4 set (Machine Displacement alone, no frame stiffness; bench/crosshead_pairs_42CrMoS4.py, docs/methods.md §2.12)
+CROSSHEAD_RP_REL_U = 0.0037
+# strain-rate sensitivity m = d ln R / d ln ė of a proof strength at room temperature, per material class (ferritic steels
+# 5–15 MPa a decade on Rp 300–700 MPa; docs/methods.md §2.12); the default for a class not named: the steels'
+RATE_SENSITIVITY = {"steel": 0.008, "aluminium": 0.003, "titanium": 0.012, "copper": 0.005, "nickel": 0.005}
+# the rate range a testing method allows, as the ratio of its ends: method A ±20 % (ISO 6892-1 10.3), method B a decade (10.4)
+RATE_RANGE = {"A": 1.2 / 0.8, "B": 10.0}
 
 
 def rectangular(half_width: float) -> float:
@@ -59,6 +72,7 @@ class Component:
     u: float
     sensitivity: float
     basis: str
+    dof: float = math.inf  # degrees of freedom: a Type A term's n − 1; ∞ for a Type B bound
 
     @property
     def contribution(self) -> float:
@@ -66,8 +80,9 @@ class Component:
         return abs(self.sensitivity * self.u)
 
     def as_dict(self) -> dict:
-        return {"name": self.name, "value": self.value, "unit": self.unit, "u": self.u, "sensitivity": self.sensitivity,
-                "contribution": self.contribution, "basis": self.basis}
+        out = {"name": self.name, "value": self.value, "unit": self.unit, "u": self.u, "sensitivity": self.sensitivity,
+               "contribution": self.contribution, "basis": self.basis}
+        return out if math.isinf(self.dof) else {**out, "dof": self.dof}
 
 
 def combined(components: Sequence[Component]) -> float:
@@ -75,10 +90,41 @@ def combined(components: Sequence[Component]) -> float:
     return math.sqrt(sum(c.contribution ** 2 for c in components))
 
 
-def budget(value: float, unit: str, components: Sequence[Component], *, note: str = "", k: float = K_COVERAGE) -> dict:
-    """A result's budget as written to result.json: value, u, U = k·u, k and the components."""
+RECTANGULAR_DOMINANT = 0.9  # one rectangular share at least this part of u²: the output is near-rectangular
+
+
+def effective_dof(components: Sequence[Component]) -> float:
+    """ν_eff = u_c⁴ / Σ (c_i·u_i)⁴/ν_i (Welch–Satterthwaite, GUM G.4.1); ∞ when every term is Type B."""
     u = combined(components)
-    out = {"value": value, "unit": unit, "u": u, "U": k * u, "k": k,
+    tail = sum(c.contribution ** 4 / c.dof for c in components if math.isfinite(c.dof) and c.dof > 0)
+    return u ** 4 / tail if tail > 0 else math.inf
+
+
+def coverage(components: Sequence[Component]) -> tuple[float, str]:
+    """(k, what U covers): k = 2 for ≈ 95 % of a normal output; Student's t at ν_eff when a Type A
+    term has few degrees of freedom (GUM G.3); and where one rectangular share dominates u² the output
+    is near-rectangular, k = 2 covers all of it (its 95 % lies at 1.65·u, GUM G.6.5) — said, not claimed as 95 %."""
+    u2 = combined(components) ** 2
+    rect = max((c.contribution ** 2 for c in components if "rectangular" in c.basis), default=0.0)
+    if u2 > 0 and rect >= RECTANGULAR_DOMINANT * u2:
+        return K_COVERAGE, (f"k = 2 on a near-rectangular output (one rectangular term is {100 * rect / u2:.0f} % of u²): U covers it "
+                            "entirely (its 95 % interval is ±1.65·u)")
+    nu = effective_dof(components)
+    if math.isfinite(nu):
+        from scipy.stats import t
+
+        k = float(t.ppf(0.975, max(nu, 1.0)))
+        return k, f"k = {k:.2f}: Student's t at ν_eff = {nu:.1f} (Welch–Satterthwaite), ≈ 95 %"
+    return K_COVERAGE, "k = 2: ≈ 95 % for a normal output"
+
+
+def budget(value: float, unit: str, components: Sequence[Component], *, note: str = "", k: float | None = None) -> dict:
+    """A result's budget as written to result.json: value, u, U = k·u, k (:func:`coverage`, unless
+    given), what U covers and the components."""
+    u = combined(components)
+    k_rule, covers = coverage(components)
+    k = k_rule if k is None else k
+    out = {"value": value, "unit": unit, "u": u, "U": k * u, "k": k, "coverage": covers if k == k_rule else f"k = {k:g} (given)",
            "components": [c.as_dict() for c in components]}
     if note:
         out["note"] = note
@@ -120,15 +166,28 @@ def _force_component(force_N: float, force_class: float, per_N: float, name: str
                      f"±{force_class:g} % of reading, rectangular")
 
 
-def _diameter_component(d0_mm: float, res_mm: float, sensitivity: float, name: str = "diameter d0") -> Component:
-    return Component(name, d0_mm, "mm", resolution(res_mm), sensitivity, f"resolution {res_mm:g} mm, rectangular")
+def dimension_u(value_mm: float, res_mm: float, mpe_mm: float = 0.0, rel_bound: float = 0.0) -> float:
+    """Standard uncertainty of a measured dimension: the reading's resolution (r/√12), the
+    instrument's MPE and a relative bound of the method (each ±a, rectangular), combined."""
+    return math.sqrt(resolution(res_mm) ** 2 + rectangular(mpe_mm) ** 2 + rectangular(rel_bound * value_mm) ** 2)
+
+
+def _dimension_basis(res_mm: float, mpe_mm: float, rel_bound: float = 0.0) -> str:
+    return (f"resolution {res_mm:g} mm" + (f", MPE ±{mpe_mm:g} mm" if mpe_mm else "")
+            + (f", ISO 6892-1 ±{100 * rel_bound:g} %" if rel_bound else "") + ", rectangular")
+
+
+def _diameter_component(d0_mm: float, res_mm: float, sensitivity: float, name: str = "diameter d0", *, mpe_mm: float = 0.0,
+                        rel_bound: float = 0.0) -> Component:
+    return Component(name, d0_mm, "mm", dimension_u(d0_mm, res_mm, mpe_mm, rel_bound), sensitivity, _dimension_basis(res_mm, mpe_mm, rel_bound))
 
 
 def strength_budget(strength_MPa: float, d0_mm: float, inst: Mapping, *, extra: Sequence[Component] = (), note: str = "") -> dict:
     """R = F/S0, S0 = π·d0²/4 (Rm, and the force part of Rp0.2): ∂R/∂F = 1/S0, ∂R/∂d0 = −2R/d0."""
     s0 = _area_mm2(d0_mm)
     comps = [_force_component(strength_MPa * s0, inst["force_class"], 1.0 / s0),
-             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * strength_MPa / d0_mm), *extra]
+             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * strength_MPa / d0_mm, mpe_mm=inst.get("micrometer_mpe_mm", 0.0)),
+             *extra]
     return budget(strength_MPa, "MPa", comps, note=note)
 
 
@@ -154,7 +213,7 @@ def modulus_budget(E_MPa: float, d0_mm: float, inst: Mapping, *, strain_rel_u: f
     """E = slope of σ = F/S0 against e: relative force scale, d0 (−2E/d0), strain scale (−E), regression."""
     comps = [Component(f"force scale (ISO 7500-1 class {inst['force_class']:g})", 1.0, "1", force_rel_u(inst["force_class"]), E_MPa,
                        "relative, rectangular"),
-             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * E_MPa / d0_mm),
+             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * E_MPa / d0_mm, mpe_mm=inst.get("micrometer_mpe_mm", 0.0)),
              Component("strain scale", 1.0, "1", strain_rel_u, -E_MPa, "relative; extensometer class or crosshead scale")]
     if stderr_MPa is not None:
         comps.append(Component("regression of the elastic line", E_MPa, "MPa", stderr_MPa, 1.0, "standard error of the slope"))
@@ -173,12 +232,14 @@ def uniform_elongation_budget(Ag_pct: float, Rm_MPa: float, E_MPa: float, *, str
     return budget(Ag_pct, "%", comps)
 
 
-def elongation_from_lengths_budget(l0_mm: float, lu_mm: float, length_resolution_mm: float) -> dict:
-    """A = 100·(Lu − L0)/L0 (3.8): ∂A/∂Lu = 100/L0, ∂A/∂L0 = −100·Lu/L0²."""
+def elongation_from_lengths_budget(l0_mm: float, lu_mm: float, length_resolution_mm: float, *, mpe_mm: float = 0.0) -> dict:
+    """A = 100·(Lu − L0)/L0 (3.8): ∂A/∂Lu = 100/L0, ∂A/∂L0 = −100·Lu/L0² (each length read with the
+    caliper's resolution and MPE)."""
     A = 100.0 * (lu_mm - l0_mm) / l0_mm
-    basis = f"resolution {length_resolution_mm:g} mm, rectangular"
-    comps = [Component("gauge length after fracture Lu", lu_mm, "mm", resolution(length_resolution_mm), 100.0 / l0_mm, basis),
-             Component("original gauge length L0", l0_mm, "mm", resolution(length_resolution_mm), -100.0 * lu_mm / l0_mm ** 2, basis)]
+    basis = _dimension_basis(length_resolution_mm, mpe_mm)
+    u = dimension_u(l0_mm, length_resolution_mm, mpe_mm)
+    comps = [Component("gauge length after fracture Lu", lu_mm, "mm", u, 100.0 / l0_mm, basis),
+             Component("original gauge length L0", l0_mm, "mm", u, -100.0 * lu_mm / l0_mm ** 2, basis)]
     return budget(A, "%", comps)
 
 
@@ -192,12 +253,92 @@ def elongation_from_extension_budget(A_pct: float, gauge_mm: float, extensometer
     return budget(A_pct, "%", comps)
 
 
-def reduction_of_area_budget(d0_mm: float, du_mm: float, diameter_resolution_mm: float) -> dict:
-    """Z = 100·(1 − du²/d0²): ∂Z/∂du = −200·du/d0², ∂Z/∂d0 = 200·du²/d0³."""
+def reduction_of_area_budget(d0_mm: float, du_mm: float, diameter_resolution_mm: float, *, mpe_mm: float = 0.0,
+                             fracture_rel: float = 0.0) -> dict:
+    """Z = 100·(1 − du²/d0²): ∂Z/∂du = −200·du/d0², ∂Z/∂d0 = 200·du²/d0³ (micrometer resolution and
+    MPE; du also within ISO 6892-1's ±``fracture_rel`` of the pieces fitted together)."""
     Z = 100.0 * (1.0 - (du_mm / d0_mm) ** 2)
-    comps = [_diameter_component(du_mm, diameter_resolution_mm, -200.0 * du_mm / d0_mm ** 2, "smallest diameter after fracture du"),
-             _diameter_component(d0_mm, diameter_resolution_mm, 200.0 * du_mm ** 2 / d0_mm ** 3)]
+    comps = [_diameter_component(du_mm, diameter_resolution_mm, -200.0 * du_mm / d0_mm ** 2, "smallest diameter after fracture du",
+                                 mpe_mm=mpe_mm, rel_bound=fracture_rel),
+             _diameter_component(d0_mm, diameter_resolution_mm, 200.0 * du_mm ** 2 / d0_mm ** 3, mpe_mm=mpe_mm)]
     return budget(Z, "%", comps)
+
+
+# ---- the method's own share (the elastic line, the strain zero) ---------------------------------
+
+def offset_yield_MPa(strain, stress_MPa, E_MPa: float, offset: float = OFFSET) -> float | None:
+    """Stress where ε − σ/E (the running maximum) first reaches ``offset``, interpolated; None when never."""
+    strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
+    eps_p = np.maximum.accumulate(strain - stress / E_MPa)  # ε_p = ε − σ/E
+    if not eps_p.size or eps_p[-1] < offset:
+        return None
+    i = int(np.argmax(eps_p >= offset))
+    if i == 0:
+        return float(stress[0])
+    w = 0.0 if eps_p[i] == eps_p[i - 1] else (offset - eps_p[i - 1]) / (eps_p[i] - eps_p[i - 1])
+    return float(stress[i - 1] + w * (stress[i] - stress[i - 1]))
+
+
+def offset_method_components(strain, stress_MPa, E_MPa: float, u_E_MPa: float, lines: Mapping[str, float], delta_eps0: float,
+                             *, basis: str = "") -> list[Component]:
+    """The method's share of an offset yield Rp0.2 read on (strain, stress): E of the offset line
+    (∂Rp/∂E by central difference at E ± u), the spread of Rp over the defensible elastic lines
+    (``lines``: name → E; half their range, rectangular) and the strain zero δε0 (∂Rp/∂ε0 by central
+    difference of the offset at 0.002 ± δε0). Terms that cannot be read (no yield) are left out."""
+    out = []
+    if u_E_MPa > 0:
+        hi, lo = offset_yield_MPa(strain, stress_MPa, E_MPa + u_E_MPa), offset_yield_MPa(strain, stress_MPa, E_MPa - u_E_MPa)
+        if hi is not None and lo is not None:
+            out.append(Component("method: E of the offset line", E_MPa, "MPa", u_E_MPa, (hi - lo) / (2.0 * u_E_MPa), basis or "the rule's E"))
+    rps = {name: offset_yield_MPa(strain, stress_MPa, E) for name, E in lines.items() if E and E > 0}
+    rps = {k: v for k, v in rps.items() if v is not None}
+    half = (max(rps.values()) - min(rps.values())) / 2.0 if len(rps) > 1 else 0.0
+    if half > 0:
+        out.append(Component("method: spread over the defensible elastic lines", half, "MPa", rectangular(half), 1.0,
+                             "Rp0.2 on " + ", ".join(f"{k} ({lines[k]:.0f} MPa): {v:.4g}" for k, v in rps.items()) + "; half the range, rectangular"))
+    if delta_eps0 > 0:
+        hi = offset_yield_MPa(strain, stress_MPa, E_MPa, OFFSET + delta_eps0)
+        lo = offset_yield_MPa(strain, stress_MPa, E_MPa, max(OFFSET - delta_eps0, 0.0))
+        if hi is not None and lo is not None:
+            step = OFFSET + delta_eps0 - max(OFFSET - delta_eps0, 0.0)
+            out.append(Component("method: strain zero and toe ε0", 0.0, "1", delta_eps0, (hi - lo) / step,
+                                 "δε0 of the foot of the elastic line (line fit, curvature, toe, sample spacing; docs/methods.md §2.11)"))
+    return out
+
+
+def rate_component(value_MPa: float, method: str | None, material_class: str | None) -> Component:
+    """The testing rate within the method's allowed range: R ∝ ė^m, the rate anywhere in the range
+    (ratio r of its ends) → R within ±R·m·ln(r)/2, rectangular. ``method`` "A1"/"A2" (±20 %) or
+    "B"/unknown (a decade)."""
+    m = RATE_SENSITIVITY.get(material_class or "", RATE_SENSITIVITY["steel"])
+    kind = "A" if method and str(method).startswith("A") else "B"
+    half = value_MPa * m * math.log(RATE_RANGE[kind]) / 2.0  # ΔR = R·m·Δln ė
+    return Component(f"method: testing rate within method {kind}'s range", half, "MPa", rectangular(half), 1.0,
+                     f"m = {m:g} ({material_class or 'class not named: the steels'}), the rate anywhere in a ×{RATE_RANGE[kind]:.3g} range, rectangular")
+
+
+def crosshead_compliance_component(Rp_MPa: float) -> Component:
+    """A crosshead-only Rp0.2: the compliance model's own share, the rms relative difference from the
+    extensometer's over :data:`CROSSHEAD_RP_REL_U`'s pairs."""
+    return Component("method: crosshead compliance model", Rp_MPa, "MPa", Rp_MPa * CROSSHEAD_RP_REL_U, 1.0,
+                     f"rms {100 * CROSSHEAD_RP_REL_U:.2g} % crosshead − extensometer over 67 pairs (42CrMoS4, docs/methods.md §2.12)")
+
+
+def line_windows_E(strain, stress_MPa, window_MPa) -> dict[str, float]:
+    """The slopes of the elastic line over its window's lower and upper halves (strain regressed on
+    stress up to the largest stress): where the first loading is not linear they differ."""
+    strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
+    top = int(np.nanargmax(stress)) + 1
+    lo, hi = float(window_MPa[0]), float(window_MPa[1])
+    mid = 0.5 * (lo + hi)
+    out = {}
+    for name, (a, b) in (("the window's lower half", (lo, mid)), ("the window's upper half", (mid, hi))):
+        on = np.flatnonzero((stress[:top] >= a) & (stress[:top] <= b) & np.isfinite(strain[:top]))
+        if on.size >= 4 and np.ptp(stress[on]) > 0:
+            slope = np.polyfit(stress[on], strain[on], 1)[0]  # ε = c + σ/E
+            if slope > 0:
+                out[name] = float(1.0 / slope)
+    return out
 
 
 # ---- compression ------------------------------------------------------------------------------
@@ -220,7 +361,7 @@ def friction_budget(mu: float, mu_range: Sequence[float] | None, *, others: Mapp
 
 
 def flow_stress_budget(sigma_MPa: float, eps: float, d0_mm: float, h0_mm: float, hk_mm: float, inst: Mapping, *,
-                       mu: float, u_mu: float) -> dict:
+                       mu: float, u_mu: float, method: Sequence[Component] = ()) -> dict:
     """Compression flow stress σ at true strain ε: σ = F·h/(S0·h0) corrected for friction.
 
     With h = h0 − Δh = h0·e^−ε: ∂σ/∂F = h/(S0·h0), ∂σ/∂d0 = −2σ/d0, ∂σ/∂h0 = σ·Δh/(h0·h),
@@ -232,24 +373,48 @@ def flow_stress_budget(sigma_MPa: float, eps: float, d0_mm: float, h0_mm: float,
     s0 = _area_mm2(d0_mm)
     force = sigma_MPa * s0 * h0_mm / h
     siebel = d0_mm * math.sqrt(h0_mm / h) / (3.0 * h)
-    res = inst["length_resolution_mm"]
-    scale_u = dh * math.sqrt(2.0) * resolution(res) / abs(h0_mm - hk_mm)  # shortening scaled to h0 − hk (K_l)
+    res, mpe = inst["length_resolution_mm"], inst.get("caliper_mpe_mm", 0.0)
+    u_len = dimension_u(h0_mm, res, mpe)
+    scale_u = dh * math.sqrt(2.0) * u_len / abs(h0_mm - hk_mm)  # shortening scaled to h0 − hk (K_l)
     comps = [_force_component(force, inst["force_class"], h / (s0 * h0_mm)),
-             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * sigma_MPa / d0_mm),
-             Component("initial height h0", h0_mm, "mm", resolution(res), sigma_MPa * dh / (h0_mm * h), f"resolution {res:g} mm, rectangular"),
-             Component("shortening Δh (scaled to h0 − hk)", dh, "mm", scale_u, -sigma_MPa / h, f"h0 and hk at {res:g} mm"),
-             Component("friction μ", mu, "1", u_mu, -sigma_MPa * siebel / (1.0 + mu * siebel), "budget of μ; Siebel's sensitivity")]
-    return budget(sigma_MPa, "MPa", comps, note=f"at true plastic strain {eps:g}")
+             _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * sigma_MPa / d0_mm, mpe_mm=inst.get("micrometer_mpe_mm", 0.0)),
+             Component("initial height h0", h0_mm, "mm", u_len, sigma_MPa * dh / (h0_mm * h), _dimension_basis(res, mpe)),
+             Component("shortening Δh (scaled to h0 − hk)", dh, "mm", scale_u, -sigma_MPa / h, f"h0 and hk: {_dimension_basis(res, mpe)}"),
+             Component("friction μ", mu, "1", u_mu, -sigma_MPa * siebel / (1.0 + mu * siebel), "budget of μ; Siebel's sensitivity"),
+             *method]
+    out = budget(sigma_MPa, "MPa", comps, note=f"at true plastic strain {eps:g}")
+    out["u_method"] = combined(method)  # the method's own share (E, strain zero), stated apart
+    return out
 
 
-def constant_budget(value: float, stderr: float | None, stress_rel_u: float, unit: str) -> dict | None:
-    """A fitted constant: the fit's standard error and, for a stress (MPa), the stress scale."""
+def flow_point_method_components(sigma_MPa: float, slope_MPa: float, E_MPa: float | None, u_E_MPa: float, delta_eps0: float) -> list[Component]:
+    """The method's share of a flow-curve point σ at a plastic strain: the E that stripped the
+    elastic strain (ε_p = ε − σ/E moves by σ·δE/E², so σ by θ·σ/E²·δE) and the strain zero
+    (σ by θ·δε0), θ = dσ/dε_p there."""
+    out = []
+    if E_MPa and u_E_MPa > 0:
+        out.append(Component("method: E stripping the elastic strain", E_MPa, "MPa", u_E_MPa, slope_MPa * sigma_MPa / E_MPa ** 2, "the rule's E"))
+    if delta_eps0 > 0:
+        out.append(Component("method: strain zero ε0", 0.0, "1", delta_eps0, slope_MPa, "δε0 of the foot of the elastic line (§2.11)"))
+    return out
+
+
+def constant_budget(value: float, stderr: float | None, stress_rel_u: float, unit: str, *, zero_shift: float | None = None) -> dict | None:
+    """A fitted constant: the fit's standard error and, for a stress (MPa), the stress scale. With
+    ``zero_shift`` (the constant's move when the strain zero moves by δε0, already inside the
+    widened standard error) the method's share is stated apart: fit √(se² − shift²) and the shift."""
     if stderr is None or not math.isfinite(stderr):
         return None
-    comps = [Component("fit (standard error)", value, unit, stderr, 1.0, "least squares")]
+    method = []
+    if zero_shift is not None and math.isfinite(zero_shift) and 0.0 < zero_shift <= stderr:
+        method = [Component("method: strain zero ε0", value, unit, zero_shift, 1.0, "the constant refitted with the strain zero moved by δε0 (§2.11)")]
+        stderr = math.sqrt(stderr ** 2 - zero_shift ** 2)
+    comps = [Component("fit (standard error)", value, unit, stderr, 1.0, "least squares"), *method]
     if unit == "MPa":
         comps.append(Component("stress scale (force class, d0)", 1.0, "1", stress_rel_u, value, "relative"))
-    return budget(value, unit, comps)
+    out = budget(value, unit, comps)
+    out["u_method"] = combined(method)
+    return out
 
 
 # ---- Monte Carlo propagation (GUM Supplement 1) -------------------------------------------------

@@ -63,7 +63,7 @@ def run_verify(args) -> int:
     if not args.no_plots:
         _plot(report, out / "verify.png")
     dd = report["dmax_deviation_mm"]
-    print(f"{args.record}: CalculiX, μ {report['mu']:.3f}, E {report['E_MPa']:.0f} MPa, to {report['stroke_end_mm']:.3f} mm "
+    print(f"{args.record}: CalculiX, μ {report['mu']:.3f}, E {report['E_MPa']:.0f} MPa ({report['E_source']}), to {report['stroke_end_mm']:.3f} mm "
           f"({report['solver_wall_s']:.0f} s{', cached' if report['solver_cached'] else ''})")
     print(f"  force deviation: max {report['max_force_deviation_pct']:.2f} %, rms {report['rms_force_deviation_pct']:.2f} %, "
           f"at the end {report['final_force_deviation_pct']:+.2f} %" + ("" if dd is None else f"; dmax record − FE {dd:+.3f} mm"))

@@ -295,6 +295,8 @@ def summary_lines(result: dict) -> list[str]:
 
     E_source = result_E_source(result)  # apparent: the diagram's slope, never handed to a card or an FE model
     E_note = E_source + (": the diagram's slope, not the material's E" if E_source == "apparent" else "")
+    if E_source == "class":  # the rule's last step: say which class and how it was told
+        E_note += f": {((result.get('methods') or {}).get('elastic_modulus') or {}).get('basis', 'the material class handbook value')}"
     E_material, material_source = result_material_E(result)
     if material_source != E_source and E_material is not None:
         E_note += f"; the material's E {_fmt(E_material, '.0f')} MPa is {material_source}"

@@ -19,11 +19,11 @@ from pathlib import Path
 import numpy as np
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.elastic_modulus import DEFENSIBLE, SOURCE_TEXT, choose_modulus, result_material_E
 from flowcurve.identification.fe.model_form import FOLD_OVER_BAND
 from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 
-DEFAULT_E_MPa = 200_000.0
 COMPARE_FROM_STRAIN = 0.02  # the toe and the elastic rise are left out of the deviation
 # the check's discretisation: finer than the fit's (2 rim-layer elements, 50 increments), so that a curve is not judged
 # on the model it was fitted with; where the side folds over, the two differ most (docs/methods.md §4a.5)
@@ -39,6 +39,7 @@ class FlowCurveSource:
     mu: float | None
     what: str
     diagram_options: dict | None = None  # how the inverse read the record (its E, a fitted frame stiffness)
+    E_source: str = ""  # where the curve's E came from (given, handbook, the class's, the card's *ELASTIC)
 
 
 def _table_from_function(fn, eps_max: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
@@ -57,11 +58,13 @@ def curve_from_result(result: dict, source: str = "result.json") -> FlowCurveSou
     except (KeyError, TypeError, ValueError):
         raise IdentificationError(f"{source}: hardening constants {', '.join(law.keys)} missing or not numbers") from None
     eps, sig = _table_from_function(lambda e: law.func(e, **params))
-    E = result.get("E_MPa") if result.get("E_source") in ("option", "record (material.E_MPa)") else None
+    E, E_source = result_material_E(result)  # by the one rule; an apparent slope is never the model's E
+    E, E_text = (E, f"{source}: {SOURCE_TEXT[E_source]}") if E_source in DEFENSIBLE else (None, "")
     model = (result.get("inverse_fe") or {}).get("model") or {}
-    E = model.get("E_MPa", E)  # the inverse's model E (given, handbook, a class's handbook value)
+    if model.get("E_MPa") is not None:  # the inverse's model E (given, handbook, a class's handbook value)
+        E, E_text = model["E_MPa"], f"{source}: the inverse's model E ({model.get('E_source', 'its source unstated')})"
     mu = result.get("friction_mu")
-    return FlowCurveSource(eps, sig, E, None if mu is None else float(mu), f"{source}: {h['law']} {params}", model.get("diagram_options"))
+    return FlowCurveSource(eps, sig, E, None if mu is None else float(mu), f"{source}: {h['law']} {params}", model.get("diagram_options"), E_text)
 
 
 def curve_from_card(text: str, source: str = "card") -> FlowCurveSource:
@@ -95,7 +98,7 @@ def curve_from_card(text: str, source: str = "card") -> FlowCurveSource:
     if eps.size > 100:  # keep ccx's table short (docs/calculix.md)
         grid = np.concatenate([[0.0], np.geomspace(max(eps[1], 1e-5), eps[-1], PLASTIC_ROWS)])
         sig, eps = np.interp(grid, eps, sig), grid
-    return FlowCurveSource(eps, sig, E, None, f"{source}: *PLASTIC, {eps.size} rows")
+    return FlowCurveSource(eps, sig, E, None, f"{source}: *PLASTIC, {eps.size} rows", E_source=f"{source}: *ELASTIC" if E is not None else "")
 
 
 def load_curve(path: str | Path) -> FlowCurveSource:
@@ -153,6 +156,20 @@ def _deviation(stroke, force, strain, sel, run) -> dict:
             "max_force_deviation_before_fold_over_pct": float(np.max(np.abs(dev[before]))) if before.any() else None}
 
 
+def verify_modulus(curve: FlowCurveSource, record) -> tuple[float, str]:
+    """(E, where it came from) for the check's model by the one rule (:mod:`..elastic_modulus`): the
+    curve's own (a card's *ELASTIC, a result's given/handbook/class E), else the record's
+    material.E_MPa, else the handbook E of the class its material names; else a one-line error."""
+    if curve.E_MPa is not None:
+        return float(curve.E_MPa), curve.E_source or "the curve's"
+    choice = choose_modulus(handbook=record.positive("material.E_MPa"), material=record.meta.get("material"))
+    if choice.E_MPa is None:
+        raise IdentificationError(f"{record.source}: verify needs the material's elastic modulus: the curve gives none, the record has no "
+                                  "material.E_MPa and its material names no class (steel, aluminium, titanium, copper, nickel or a grade); "
+                                  "give E in the card's *ELASTIC or as material.E_MPa")
+    return choice.E_MPa, f"{record.source}: {choice.basis}"
+
+
 def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = None, increments: int = VERIFY_INCREMENTS,
                        layers: int = VERIFY_LAYERS, timeout_s: float = 900.0) -> dict:
     """FE force–stroke of ``curve`` on ``record``'s specimen vs the record; deviations in %.
@@ -165,7 +182,7 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
     d0 = record.positive("specimen.d0_mm", required=True)
     h0 = record.positive("specimen.h0_mm", required=True)
     mu = mu if mu is not None else curve.mu if curve.mu is not None else ident.result["friction_mu"]
-    E = curve.E_MPa or record.positive("material.E_MPa") or DEFAULT_E_MPa
+    E, E_source = verify_modulus(curve, record)
     s_end = float(np.max(stroke))
     strain = -np.log(1.0 - stroke / h0)
     sel = strain >= COMPARE_FROM_STRAIN
@@ -194,7 +211,7 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
     dev = check["deviation_pct"]
     post_dmax = record.positive("post.dmax_mm")
     return {
-        "record": record.source, "curve": curve.what, "mu": float(mu), "E_MPa": float(E),
+        "record": record.source, "curve": curve.what, "mu": float(mu), "E_MPa": float(E), "E_source": E_source,
         "d0_mm": d0, "h0_mm": h0, "stroke_end_mm": s_end,
         "model": {"layers": layers, "increments": increments},
         "max_force_deviation_pct": check["max_force_deviation_pct"],

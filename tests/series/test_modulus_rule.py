@@ -16,12 +16,14 @@ TRUE_E = 205_000.0  # the synthetic records' material
 MATERIAL = ("--poisson", "0.3", "--density", "7850", "--cp", "470")  # what else a card needs and these fit files lack
 
 
-def _fit_from_crosshead_records(tmp_path, syn, capsys, *, handbook_E=None, known_frame=False):
-    """identify + fit on four crosshead-only tension records (no extensometer); the fit folder."""
+def _fit_from_crosshead_records(tmp_path, syn, capsys, *, handbook_E=None, known_frame=False, material="synthetic"):
+    """identify + fit on four crosshead-only tension records (no extensometer); the fit folder. ``material``: the
+    records' name ("synthetic": no class named, so no class E either; "4340 (synthetic)": the steels')."""
     paths = []
     for T in (25.0, 600.0):
         for speed in (0.03, 3.0):
             rec, _ = syn.tension_record(T, speed, speed / 30.0, noise_N=2.0, seed=len(paths), ref_rate_per_s=1e-3)
+            rec.meta["material"] = material
             if handbook_E is not None:
                 rec.meta["material.E_MPa"] = repr(handbook_E)
             if not known_frame:  # the frame stiffness unknown: the slope is the frame's and the specimen's together
@@ -60,6 +62,15 @@ def test_crosshead_records_card_asks_for_E_then_carries_exactly_the_given_one(tm
     assert "** elastic modulus E = 196500 MPa: given (--E)" in text
     comments = " ".join(line[2:].strip() for line in text.splitlines() if line.startswith("**"))
     assert "given on the command line, not identified: --E 196500, --poisson 0.3, --density 7850, --cp 470" in comments
+
+
+def test_a_named_grade_gives_the_card_its_class_E_and_says_so(tmp_path, syn, capsys):
+    """The same records named by their grade (4340, AISI/SAE): the rule's last step, the steels' handbook
+    200 GPa, reaches the fit and the card, labelled as the class's (issue 43)."""
+    fit, _, screen = _fit_from_crosshead_records(tmp_path, syn, capsys, material="4340 (synthetic)")
+    assert screen.count("the material's E 200000 MPa is class") == 4
+    d = json.loads(fit.read_text())
+    assert d["E_MPa"] == 200_000.0 and d["E_MPa_source"].startswith("handbook value of the material class")
 
 
 def test_a_handbook_E_in_the_records_reaches_the_card_and_says_so(tmp_path, syn, capsys):

@@ -50,12 +50,18 @@ def test_poor_fit_is_marked_and_strict_fails(tmp_path, syn, capsys):
 
 
 def test_records_without_a_modulus_are_named(tmp_path):
-    # 5 Hz on a stiff specimen: one sample on the elastic line, no handbook E → no modulus
+    # 5 Hz on a stiff specimen: one sample on the elastic line, no handbook E and no material class named → no modulus
     paths = []
     for i, temperature in enumerate(("20", "300")):
-        record, _ = make_compression(seed=30 + i, meta_extra={"nominal_temperature_C": temperature})
+        record, _ = make_compression(seed=30 + i, meta_extra={"nominal_temperature_C": temperature, "material": "synthetic"})
         paths.append(write_record(tmp_path / f"C{i}.csv", record))
     with pytest.raises(IdentificationError, match=r"C0, C1 have no elastic modulus.*--E"):
         load_members(paths)
     members = load_members(paths, E_MPa=194_000.0)
     assert all(m.E_MPa == 194_000.0 for m in members)
+
+
+def test_records_naming_a_grade_take_its_class_modulus(tmp_path):
+    """The same records under a GOST grade name: the steel class's handbook 200 GPa by the rule (issue 43)."""
+    paths = [write_record(tmp_path / f"C{i}.csv", make_compression(seed=30 + i, meta_extra={"material": "12Kh18N12M3TL"})[0]) for i in range(2)]
+    assert all(m.E_MPa == 200_000.0 for m in load_members(paths))

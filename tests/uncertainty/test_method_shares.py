@@ -1,0 +1,74 @@
+"""The budget's new terms (issue 43): dimensions with the instruments' MPE and ISO 6892-1's bound on du,
+read from the record's instruments.* keys; what U covers (near-rectangular, Student's t at ν_eff);
+the testing rate within the method's range; an offset yield's E, lines and strain zero."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from flowcurve.identification import uncertainty as un
+from flowcurve.identification.assurance import instruments_from_meta
+
+INST = dict(un.INSTRUMENT_DEFAULTS) | dict(un.DIMENSION_DEFAULTS)
+
+
+def test_z_holds_the_micrometers_mpe_and_the_fracture_bound():
+    """46NT71's dimensions (d0 5.003, du 3.34 mm): Z's U was the resolution alone (0.19 %); with the
+    micrometer's MPE and ISO 6892-1's ±2 % on Su it is about five times that, by hand."""
+    d0, du = 5.003, 3.34
+    old = un.reduction_of_area_budget(d0, du, 0.01)
+    new = un.reduction_of_area_budget(d0, du, 0.01, mpe_mm=0.004, fracture_rel=un.FRACTURE_DIAMETER_REL)
+    u_du = math.sqrt((0.01 / math.sqrt(12)) ** 2 + (0.004 / math.sqrt(3)) ** 2 + (0.01 * du / math.sqrt(3)) ** 2)
+    u_d0 = math.sqrt((0.01 / math.sqrt(12)) ** 2 + (0.004 / math.sqrt(3)) ** 2)
+    assert new["U"] == pytest.approx(2 * math.hypot(200 * du / d0 ** 2 * u_du, 200 * du ** 2 / d0 ** 3 * u_d0), rel=1e-9)
+    assert 4 < new["U"] / old["U"] < 7
+
+
+def test_the_dimension_instruments_are_read_from_the_record():
+    inst = instruments_from_meta({"instruments.micrometer_mpe_mm": "0.002", "instruments.caliper_mpe_mm": "0.02"})
+    assert (inst["micrometer_mpe_mm"], inst["caliper_mpe_mm"]) == (0.002, 0.02)
+    assert "defaults for force_class" in inst["source"]
+    assert instruments_from_meta({})["micrometer_mpe_mm"] == un.DIMENSION_DEFAULTS["micrometer_mpe_mm"]
+
+
+def test_a_dominant_rectangular_term_is_said_and_its_U_covers_it_entirely():
+    comps = [un.Component("big", 1.0, "1", 1.0, 1.0, "rectangular"), un.Component("small", 1.0, "1", 0.1, 1.0, "normal")]
+    b = un.budget(0.0, "1", comps)
+    assert b["k"] == 2 and "near-rectangular" in b["coverage"]
+    _, sd, (lo, hi) = un.monte_carlo(lambda a, b: a + b, {"a": (0.0, 1.0, "rectangular"), "b": (0.0, 0.1, "normal")}, n=200_000)
+    assert (hi - lo) / 2 < 0.85 * b["U"]  # the 95 % interval is well inside ±2u: "≈ 95 %" would be wrong
+
+
+def test_a_type_a_term_with_few_repeats_takes_students_t():
+    comps = [un.Component("repeats", 0.0, "1", 1.0, 1.0, "Type A, 3 repeats", dof=2.0), un.Component("class", 0.0, "1", 0.3, 1.0, "normal")]
+    b = un.budget(0.0, "1", comps)
+    nu = b["u"] ** 4 / (1.0 / 2.0)
+    from scipy.stats import t
+    assert b["k"] == pytest.approx(t.ppf(0.975, nu)) and "ν_eff" in b["coverage"]
+
+
+@pytest.mark.parametrize("method, ratio", [("A2", 1.5), ("B", 10.0), (None, 10.0)])
+def test_the_rate_term_spans_the_methods_range(method, ratio):
+    c = un.rate_component(500.0, method, "steel")
+    half = 500.0 * un.RATE_SENSITIVITY["steel"] * math.log(ratio) / 2.0
+    assert c.contribution == pytest.approx(half / math.sqrt(3))
+    assert 5.0 <= 2 * half <= 15.0 or method == "A2"  # method B: 5–15 MPa on a ferritic Rp of 500 MPa (the review's figure)
+
+
+def test_the_offset_method_terms_on_a_closed_form_curve():
+    """σ = E·e to 300 MPa, then 300 + 20000·e_p: Rp0.2 = 340 MPa; ∂Rp/∂E and ∂Rp/∂ε0 by hand."""
+    E = 200_000.0
+    ep = np.linspace(0, 0.01, 2001)
+    sig = np.concatenate([np.linspace(0, 300, 301), 300 + 20_000 * ep[1:]])
+    eps = np.concatenate([np.linspace(0, 300, 301) / E, (300 + 20_000 * ep[1:]) / E + ep[1:]])
+    assert un.offset_yield_MPa(eps, sig, E) == pytest.approx(340.0, abs=0.01)
+    comps = {c.name: c for c in un.offset_method_components(eps, sig, E, 2000.0, {"a": E, "b": 0.9 * E}, 1e-4)}
+    # e(σ) − σ/E = 0.002 at Rp: ∂Rp/∂E = −θ·Rp/E² (a steeper line reads more plastic strain, so yields lower); ∂Rp/∂ε0 = θ
+    assert comps["method: E of the offset line"].sensitivity == pytest.approx(-20_000 * 340 / E ** 2, rel=0.02)
+    assert comps["method: strain zero and toe ε0"].sensitivity == pytest.approx(20_000, rel=0.01)
+    spread = comps["method: spread over the defensible elastic lines"]
+    rp_b = un.offset_yield_MPa(eps, sig, 0.9 * E)
+    assert spread.value == pytest.approx(abs(340.0 - rp_b) / 2) and spread.u == pytest.approx(spread.value / math.sqrt(3))
