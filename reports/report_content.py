@@ -287,7 +287,7 @@ def specimen_table(results: list) -> Table:
 
 
 def conditions_table(results: list) -> Table:
-    cols = ["specimen", "test", "d0, mm", "L0 / h0, mm", "Lc, mm", "temperature, °C", "crosshead, mm/s", "strain rate, 1/s"]
+    cols = ["specimen", "test", "d0, mm", "L0 / h0, mm", "Lc, mm", "temperature, °C", "crosshead, mm/s", "strain rate, 1/s (tension: ė_Lc elastic / yield / to Rm, measured)"]
     rows = []
     for name, _, r in results:
         rec = _rec(r)
@@ -295,8 +295,19 @@ def conditions_table(results: list) -> Table:
         rows.append([specimen_id(name, r), str(r.get("test", "–")), format_step(_num(_spec(r, "d0_mm")), 0.001),
                      format_step(_num(length), 0.01), format_step(_num(_spec(r, "parallel_length_mm")), 0.01),
                      format_step(_num(rec.get("nominal_temperature_C")), 1.0), _short(rec.get("crosshead_speed_mm_per_s")),
-                     _short(rec.get("strain_rate_per_s"))])
+                     measured_strain_rates(r)])
     return Table(cols, rows)
+
+
+def measured_strain_rates(result: dict) -> str:
+    """The strain rates the conformity check judged (tension: ė_Lc per phase, elastic / yield / to Rm);
+    else the record's stated strain rate."""
+    rate = (((result.get("methods") or {}).get("conformity") or {}).get("testing_rate") or {})
+    phases = rate.get("phases") or {}
+    measured = [_num((phases.get(p) or {}).get("strain_rate_per_s")) for p in ("elastic", "yield", "to_Rm")]
+    if any(v is not None for v in measured):
+        return " / ".join(_short(v) for v in measured)
+    return _short(_rec(result).get("strain_rate_per_s"))
 
 
 def remarks(result: dict) -> str:

@@ -230,3 +230,15 @@ def test_report_command_checks_the_lab_files_instruments_as_the_rig_configuratio
     assert main(["report", str(crmo), "--lab", str(lab), "--no-pdf", "-o", str(tmp_path / "r.html")]) == 2
     err = capsys.readouterr().err
     assert "lab.toml: [instruments] force_class: must be one of" in err and "Traceback" not in err
+
+
+def test_the_conditions_show_the_strain_rates_the_conformity_check_judged(crmo, tmp_path):
+    """Old code: the column showed the header's v/L0 while the check used the measured v/Lc per phase."""
+    out = tmp_path / "report.html"
+    assert main(["report", str(crmo), "-o", str(out)]) == 0
+    text = html.unescape(out.read_text(encoding="utf-8"))
+    for name in SPECIMENS:
+        result = json.loads((crmo / name / "result.json").read_text())
+        phases = result["methods"]["conformity"]["testing_rate"]["phases"]
+        shown = " / ".join(f"{phases[p]['strain_rate_per_s']:.3g}" for p in ("elastic", "yield", "to_Rm"))
+        assert shown in text, (name, shown)
