@@ -274,6 +274,7 @@ class AEDAmplifier(PtyDevice):
         than CATCH_UP_S ago (more than one period without ``source_at``)."""
         period = 1.0 / OUTPUT_RATES_PER_S[self.s["icr"]]
         keep_s = CATCH_UP_S if self.source_at is not None else period
+        burst = []
         while self._remaining != 0 and self._next_due is not None and self._next_due <= now:
             if now - self._next_due > keep_s:  # held up this long: skip to the frames still known
                 skip = math.ceil((now - self._next_due - keep_s) / period)
@@ -284,7 +285,8 @@ class AEDAmplifier(PtyDevice):
             if sample is None and self.source_at is not None:
                 self.frames_skipped += 1
             else:
-                self.send(self.measured_frame(sample))
+                burst.append(self.measured_frame(sample))
                 if self._remaining > 0:
                     self._remaining -= 1
             self._next_due = self._next_due + period if self._remaining != 0 else None
+        self.send(*burst)  # late frames in one write: the host finds them buffered together

@@ -17,7 +17,7 @@ import sys
 
 import pytest
 
-from flowcurve.acquisition.procedure import StopCriteria, TestSpec, target_reached
+from flowcurve.acquisition.procedure import TARGET_TICK_MIN_S, StopCriteria, TestSpec, loop_tick_s, target_reached
 from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.clock import WALL, ModelClock
 from flowcurve.identification.identify import old_writer_warning
@@ -120,6 +120,17 @@ def test_the_target_is_judged_on_the_crosshead_reading(fault_free):
     crit = StopCriteria(target_displacement_mm=2.0)
     assert target_reached((10.0, 1.999), crit) is None and target_reached(None, crit) is None
     assert target_reached((10.0, -2.0), crit) == "target displacement 2 mm reached"  # compression: downwards
+
+
+def test_the_loop_ticks_faster_near_the_target():
+    """Half the host time left to the target, at least TARGET_TICK_MIN_S: at time scale 15 and
+    0.05 mm/s a 0.05 s tick is 0.0375 mm of crosshead, the stop's overshoot before."""
+    crit, tick = StopCriteria(target_displacement_mm=3.0), 0.05
+    assert loop_tick_s((1.0, 2.0), crit, 0.05, 15.0, tick) == tick  # 1.33 s host away
+    assert loop_tick_s((1.0, 2.985), crit, 0.05, 15.0, tick) == pytest.approx(0.5 * 0.015 / 0.75)
+    assert loop_tick_s((1.0, -2.9999), crit, 0.05, 15.0, tick) == TARGET_TICK_MIN_S  # compression: downwards
+    assert loop_tick_s(None, crit, 0.05, 15.0, tick) == tick
+    assert loop_tick_s((1.0, 2.99), StopCriteria(), 0.05, 15.0, tick) == tick
 
 
 def test_a_faster_time_scale_reads_the_same_curve(fault_free, tmp_path):
