@@ -181,6 +181,21 @@ def target_reached(crosshead_mm: tuple[float, float] | None, crit: StopCriteria)
     return f"target displacement {crit.target_displacement_mm:g} mm reached"
 
 
+TARGET_TICK_MIN_S = 0.005  # host seconds: the main loop's shortest tick, near a displacement target
+
+
+def loop_tick_s(crosshead_mm: tuple[float, float] | None, crit: StopCriteria, speed_mm_per_s: float,
+                time_scale: float, tick_s: float) -> float:
+    """The main loop's next sleep (host s): ``tick_s``, shortened near a displacement target to
+    half the host time the crosshead needs to reach it, t = (target − |x|) / (v · time_scale),
+    at least TARGET_TICK_MIN_S — the stop then runs past the target by about one encoder poll,
+    not one tick (0.05 s host is 0.0375 mm at 0.05 mm/s and time scale 15)."""
+    if crit.target_displacement_mm is None or crosshead_mm is None or not speed_mm_per_s > 0:
+        return tick_s
+    left_s = (crit.target_displacement_mm - abs(crosshead_mm[1])) / (speed_mm_per_s * time_scale)
+    return min(tick_s, max(TARGET_TICK_MIN_S, 0.5 * left_s))
+
+
 def _update_stall(rows: np.ndarray, state: StopState, crit: StopCriteria) -> bool:
     """Track crosshead motion; True once it has moved and then stood still for stall_s."""
     if crit.stall_s is None:
@@ -649,7 +664,8 @@ class Procedure:
                     rows=rows if rows.size else None,
                 ))
                 self._unshown_rows.clear()
-                self.timebase.sleep(self.tick_s)
+                last = crosshead.stream.last() if crosshead is not None else None
+                self.timebase.sleep(loop_tick_s(last, crit, spec.speed_mm_per_s, rig.time_scale, self.tick_s))
 
     def _stop_motion(self) -> None:
         try:

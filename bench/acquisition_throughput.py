@@ -60,8 +60,8 @@ class FrameCounter:
         self._lock = threading.Lock()
         device.measured_frame = self
 
-    def __call__(self) -> bytes:
-        frame = self._orig()
+    def __call__(self, *sample) -> bytes:
+        frame = self._orig(*sample)
         value = aed.decode_msv(frame, aed.output_format(self.device.s["cof"]))
         with self._lock:
             self.counts.append(value.counts)

@@ -17,6 +17,11 @@ Behaviour implemented (command names are case-insensitive, end with ``;`` or LF)
   output, ``TAS0``), ``TAS1`` gross; ``TDD1`` saves the settings that ``RES`` restores;
   ``RES`` and ``STP`` never answer;
 * ``ASF1…8`` is a first-order low-pass at the FMD0 −3 dB point, run in model time;
+* the stream keeps the amplifier's own rhythm: each frame carries the force at its due time
+  (``source_at(due)``), so a twin thread the host's CPU held up sends its late frames late, in
+  a burst, each with its own value (a real amplifier samples on its crystal whatever the line
+  does); only frames due more than ``CATCH_UP_S`` ago, or further back than the model
+  remembers, are skipped (``frames_skipped``);
 * status byte: bit0 |net| > nominal, bit1 |gross| > nominal, bit2 ADC overflow
   (|gross| > 1.25 × nominal, i.e. beyond ±2.5 mV/V on a 2 mV/V bridge; the value clamps
   there), bit3 standstill (crosshead not moving). 2-byte binary codes |net| > nominal as
@@ -45,19 +50,26 @@ ADC_LIMIT = 1.25  # ±2.5 mV/V input range on a 2 mV/V bridge, in units of nomin
 
 ESR_NONE, ESR_UNKNOWN, ESR_RANGE, ESR_BUSY = 0, 1, 2, 3
 
+CATCH_UP_S = 1.0  # host seconds of late frames a held-up twin still sends (older ones are skipped)
+
 DEFAULTS = {"cof": 3, "icr": 0, "asf": 5, "fmd": 0, "nov": 0, "tas": 0, "tare": 0.0}
 
 
 class AEDAmplifier(PtyDevice):
-    """The load-cell amplifier. ``source()`` returns (model time s, force N, standstill)."""
+    """The load-cell amplifier. ``source()`` returns (model time s, force N, standstill) now;
+    ``source_at(t)`` the same at the clock time ``t`` (the stream's due times; None: the stream
+    samples ``source()`` when it sends, or no sample is remembered that far back)."""
 
     name = "loadcell"
 
-    def __init__(self, source: Callable[[], Sample], *, nominal_load_N: float = 100e3,
+    def __init__(self, source: Callable[[], Sample], *, source_at: Callable[[float], Sample | None] | None = None,
+                 nominal_load_N: float = 100e3,
                  address: int = 31, serial: str = "1234", model: str = "AED104",
                  firmware: str = "P20", settings: dict | None = None, **kw):
         super().__init__(**kw)
         self.source = source
+        self.source_at = source_at
+        self.frames_skipped = 0  # stream frames due so long ago that the model no longer remembers them
         self.nominal_load_N = float(nominal_load_N)
         self.address = address
         self.idn = f'HBM,"{model:<15}","{serial:<7}",{firmware}\r\n'.encode("ascii")
@@ -95,9 +107,10 @@ class AEDAmplifier(PtyDevice):
         self._filtered, self._last_t = y, t
         return y
 
-    def measured_frame(self) -> bytes:
-        """One measured value in the present COF format."""
-        t, force, standstill = self.source()
+    def measured_frame(self, sample: Sample | None = None) -> bytes:
+        """One measured value in the present COF format (``sample``: the input at the frame's
+        due time; None: now)."""
+        t, force, standstill = self.source() if sample is None else sample
         corrupt, self._corrupt_N = self._corrupt_N, 0.0
         gross = (self._filter(t, force) + corrupt) / self.nominal_load_N  # in units of nominal load
         status = STATUS_STANDSTILL if standstill else 0
@@ -256,11 +269,24 @@ class AEDAmplifier(PtyDevice):
         return self._next_due if self._remaining != 0 else None
 
     def on_tick(self, now: float) -> None:
-        if self._remaining == 0 or self._next_due is None:
-            return
-        self.send(self.measured_frame())
-        if self._remaining > 0:
-            self._remaining -= 1
+        """Send every frame due by ``now``, each with the input at its due time: late frames
+        leave late, in order. Frames the input is no longer known for are skipped: due more
+        than CATCH_UP_S ago (more than one period without ``source_at``)."""
         period = 1.0 / OUTPUT_RATES_PER_S[self.s["icr"]]
-        self._next_due = max(self._next_due + period, now - period) if self._remaining != 0 else None
-
+        keep_s = CATCH_UP_S if self.source_at is not None else period
+        burst = []
+        while self._remaining != 0 and self._next_due is not None and self._next_due <= now:
+            if now - self._next_due > keep_s:  # held up this long: skip to the frames still known
+                skip = math.ceil((now - self._next_due - keep_s) / period)
+                self.frames_skipped += skip
+                self._next_due += skip * period
+                continue
+            sample = None if self.source_at is None else self.source_at(self._next_due)
+            if sample is None and self.source_at is not None:
+                self.frames_skipped += 1
+            else:
+                burst.append(self.measured_frame(sample))
+                if self._remaining > 0:
+                    self._remaining -= 1
+            self._next_due = self._next_due + period if self._remaining != 0 else None
+        self.send(*burst)  # late frames in one write: the host finds them buffered together

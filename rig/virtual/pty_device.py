@@ -94,16 +94,18 @@ class PtyDevice:
         """Periodic work (continuous output, watchdog)."""
 
     # -- output -----------------------------------------------------------------------
-    def send(self, reply: bytes) -> None:
-        """Send a reply to the host through the wire faults (called from the device's side).
+    def send(self, *replies: bytes) -> None:
+        """Send replies to the host, each through the wire faults, in one write (called from the
+        device's side; a burst of late stream frames reaches the host at once, as frames buffered
+        while it was busy do).
 
         Bytes leave in order: a reply that is due later holds back what follows it.
         In-process, bytes also take the line's time (10 bits a byte at the host port's baud
         rate; a reply counts its command too): the host's exchanges then take time on the
         clock, as on a real line.
         """
-        out = self.faults.apply(reply)
-        if out is None:
+        out = b"".join(o for o in map(self.faults.apply, replies) if o is not None)
+        if not out:
             return
         now = self.clock.now()
         due = now + self.faults.delay_s + (self._command_bytes + len(out)) * self._byte_time_s

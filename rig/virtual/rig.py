@@ -28,7 +28,9 @@ this process opens (:mod:`flowcurve.rig.virtual.protocol_virtual`) — on a
 
 from __future__ import annotations
 
+import bisect
 import threading
+from collections import deque
 
 from flowcurve.clock import WALL, Clock
 from flowcurve.errors import ConfigError
@@ -40,6 +42,7 @@ from flowcurve.rig.virtual.faults import MODEL_FAULTS, WIRE_FAULTS
 from flowcurve.rig.virtual.fault_spec import FaultSpec
 
 DEVICES = ("loadcell", "encoder", "furnace")
+HISTORY_STATES = 1024  # model states remembered for the load cell's late frames (some seconds of host time)
 
 
 class VirtualRig:
@@ -71,9 +74,11 @@ class VirtualRig:
         self._motion_start_s: float | None = None  # model time the crosshead first moved
         self._scheduled: list[FaultSpec] = []  # --fault ...@SECONDS not yet due
         self.faults_applied: list[tuple[float, FaultSpec]] = []  # (model time, spec), in order
+        self._history: deque[tuple[float, float, bool]] = deque(maxlen=HISTORY_STATES)  # (model s, true force N, moving)
         self.devices: dict = {}
         try:
-            self.devices["loadcell"] = AEDAmplifier(self._loadcell_sample, nominal_load_N=nominal_load_N,
+            self.devices["loadcell"] = AEDAmplifier(self._loadcell_sample, source_at=self._loadcell_sample_at,
+                                                    nominal_load_N=nominal_load_N,
                                                     address=loadcell_address, settings=aed_settings, seed=seed + 1,
                                                     clock=clock, link=link)
             self.devices["encoder"] = EncoderBox(self._encoder_counts, address=encoder_address,
@@ -93,14 +98,18 @@ class VirtualRig:
         """Model time in seconds."""
         return (self.clock.now() - self._t0) * self.time_scale
 
-    def sync(self) -> RigModel:
-        """Advance the model to the present model time and return it (hold :attr:`lock`);
-        scheduled faults that are due switch on."""
+    def sync(self, t: float | None = None) -> RigModel:
+        """Advance the model to the present model time (or to model time ``t``, if later than
+        the model's) and return it (hold :attr:`lock`); scheduled faults that are due switch on;
+        the state is remembered for :meth:`_loadcell_sample_at`."""
         with self._lock:
-            self.model.advance_to(self.now())
+            m = self.model
+            m.advance_to(self.now() if t is None else t)
             if self._scheduled:
                 self._apply_due()
-            return self.model
+            if not self._history or m.time_s > self._history[-1][0]:
+                self._history.append((m.time_s, m.force_N, m.moving))
+            return m
 
     def since_motion_s(self) -> float | None:
         """Model seconds since the crosshead first started (None: not yet)."""
@@ -114,6 +123,26 @@ class VirtualRig:
         with self._lock:
             m = self.sync()
             return m.time_s, m.measured_force_N(), not m.moving
+
+    def _loadcell_sample_at(self, host_t: float):
+        """The load cell's input at clock time ``host_t`` (a stream frame's due time): the model
+        advanced to it, or, when the model has already run past it, its true force interpolated
+        linearly between the remembered states around it, plus the sensor noise. None: further
+        back than the model remembers."""
+        t = (host_t - self._t0) * self.time_scale
+        with self._lock:
+            m = self.model
+            if t >= m.time_s:
+                self.sync(t)
+                return m.time_s, m.measured_force_N(), not m.moving
+            times = [h[0] for h in self._history]
+            i = bisect.bisect_right(times, t)
+            if i == 0:
+                return None
+            (t0, f0, moving), (t1, f1, _) = self._history[i - 1], self._history[min(i, len(times) - 1)]
+            force = f0 if t1 <= t0 else f0 + (f1 - f0) * (t - t0) / (t1 - t0)  # linear between the states
+            noise = m.rng.normal(0.0, m.force_noise_N) if m.force_noise_N > 0 else 0.0
+            return t, force + noise, not moving
 
     def _encoder_counts(self) -> int:
         with self._lock:
