@@ -13,6 +13,7 @@ in :attr:`Injector.hits`.
 
 from __future__ import annotations
 
+import math
 import os
 import random
 import re
@@ -243,11 +244,12 @@ class Hit:
 
 class Injector:
     """The man-in-the-middle: ``with Injector({"loadcell": Link(...), ...}) as inj:`` — the host
-    opens ``inj.ports[name]``; :meth:`mark` sets the time the rules' ``start_s`` count from."""
+    opens ``inj.ports[name]``; :meth:`mark` sets the time the rules' ``start_s`` count from
+    (``marked=False``: no rule acts before the first mark)."""
 
-    def __init__(self, links: dict[str, Link]):
+    def __init__(self, links: dict[str, Link], *, marked: bool = True):
         self.links = links
-        self.t0 = time.monotonic()
+        self.t0 = time.monotonic() if marked else math.inf
         self.hits: list[Hit] = []
         self.frames = {(name, d): 0 for name in links for d in DIRECTIONS}  # complete frames forwarded or acted on
         self._stop = threading.Event()

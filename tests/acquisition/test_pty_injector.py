@@ -163,6 +163,16 @@ def test_with_port_replaces_only_the_named_sections():
     assert with_port(text, {"loadcell": "/dev/pts/9"}) == text.replace("/dev/pts/1", "/dev/pts/9")
 
 
+def test_an_unmarked_injector_acts_only_after_its_mark(ends):
+    e = ends(Rule("to_host", "drop"))
+    e.inj.t0 = float("inf")  # as Injector(..., marked=False)
+    stream(e, 3)
+    assert e.host_reads(3 * len(FRAME)) == FRAME * 3
+    e.inj.mark()
+    stream(e, 3)
+    assert e.host_reads(timeout_s=0.3) == b""
+
+
 def test_bad_rules_are_refused():
     with pytest.raises(ValueError):
         Rule("to_host", "split", per="byte")
