@@ -528,6 +528,8 @@ class Truth:
     last_step_mm: float
     fm_N: float
     fm_step: float  # relative: how far Fm's neighbours are below it (the sampling's resolution of Fm)
+    loaded_to_mm: float  # the last crosshead with at least half Fm (before a fracture's fall)
+    step_mm: float  # the median crosshead step between rows
     values: dict  # Rm_MPa, Rp02_MPa when identified
     curve_dev_pct: float | None
 
@@ -545,16 +547,22 @@ def truth_of(r: CellRun) -> Truth | None:
     except (RecordError, OSError, TypeError):
         return None
     x, f = _rows(rec)
+    dev = curve_deviation_pct(r.result, r) if r.result else None
+    return truth_from_rows(x, f, rec.meta.get("status") == "complete", r.result, dev[0] if dev else None)
+
+
+def truth_from_rows(x: np.ndarray, f: np.ndarray, complete: bool, result: dict | None, curve_dev_pct: float | None) -> Truth | None:
+    """A :class:`Truth` from a fault-free run's |crosshead| and |force| rows and identify's result."""
     if x.size < 2:
         return None
     i = int(np.argmax(f))
     neighbours = f[max(i - 1, 0):i + 2]
     fm_step = float((f[i] - np.min(neighbours)) / f[i]) if f[i] > 0 else 0.0
-    complete = rec.meta.get("status") == "complete"
-    dev = curve_deviation_pct(r.result, r) if r.result else None
-    values = {k: float(r.result[k]) for k in VALUE_MARK if r.result and isinstance(r.result.get(k), (int, float))}
-    return Truth(x, f, float(x[-1]) if complete else None, float(x[-1] - x[-2]), float(f[i]), fm_step, values,
-                 dev[0] if dev else None)
+    values = {k: float(result[k]) for k in VALUE_MARK if result and isinstance(result.get(k), (int, float))}
+    loaded = float(x[np.flatnonzero(f >= 0.5 * f[i])[-1]])
+    step = float(np.median(np.diff(x)))
+    return Truth(x, f, float(x[-1]) if complete else None, float(x[-1] - x[-2]), float(f[i]), fm_step, loaded, step,
+                 values, curve_dev_pct)
 
 
 def _rows(rec) -> tuple[np.ndarray, np.ndarray]:
@@ -582,8 +590,9 @@ def survived(r: CellRun, rec, ref: Truth) -> list[tuple[str, str]]:
     """The numbers beyond the fault-free truth's tolerance: [(class, detail)]."""
     bad = []
     x, f = _rows(rec)
-    # the reference's force at each recorded crosshead position: |F − F_ref(x)| ≤ tol·F_ref + half its step there
-    end = min(float(ref.x_mm[-1]), float(x[-1])) if x.size else 0.0
+    # the reference's force at each recorded crosshead position: |F − F_ref(x)| ≤ tol·F_ref + half its step there,
+    # short of either run's end by two steps (the fracture's fall, the crosshead standing at a stop)
+    end = min(ref.loaded_to_mm, float(x[-1]) if x.size else 0.0) - 2 * ref.step_mm
     keep = (x >= FORCE_FROM_MM) & (x <= end)
     if np.any(keep):
         xs, fs = x[keep], f[keep]
