@@ -15,8 +15,8 @@ STEP_MM = 0.01  # 100 rows a millimetre
 
 
 def force_N(x):
-    """A tension-like F(x): an elastic rise and hardening to 5 mm."""
-    return 10_000.0 * (1.0 - np.exp(-x / 0.3)) + 2_000.0 * x
+    """A tension-like F(x): an elastic rise, hardening to Fm at 4 mm, a neck to 5 mm."""
+    return 10_000.0 * (1.0 - np.exp(-x / 0.3)) + 2_000.0 * x - 250.0 * x**2
 
 
 class Rec:
@@ -49,12 +49,12 @@ def test_forces_shifted_onto_earlier_crosshead_after_losses_are_caught():
     stamped = X[:keep.size]  # stamped as if nothing were lost: each force paired with an earlier crosshead
     bad = matrix.survived(RUN, Rec(stamped, force_N(X[keep])), TRUTH)
     assert [k for k, _ in bad][:1] == ["force against the crosshead beyond the fault-free run's"], bad
-    assert any(k == "last crosshead beyond the fault-free run's" for k, _ in bad)  # the stop: 4.0 mm for 5.0
+    assert any(k == "last crosshead beyond the fault-free run's" for k, _ in bad)  # the fracture: 4.2 mm for 5.0
 
 
 def test_a_spike_taken_as_fm_is_caught_and_the_same_spike_in_an_aborted_record_only_as_force():
     f = force_N(X)
-    f[490] += 900.0  # at 4.9 mm: above the true Fm at 5 mm
+    f[400] += 900.0  # at Fm
     bad = dict(matrix.survived(RUN, Rec(X, f), TRUTH))
     assert "Fm beyond the fault-free run's" in bad and "force against the crosshead beyond the fault-free run's" in bad
     bad = dict(matrix.survived(RUN, Rec(X, f, status="aborted"), TRUTH))
@@ -76,3 +76,13 @@ def test_the_rig_faults_warning_no_longer_excuses_a_curve_off_the_material():
         virtual_run=SimpleNamespace(material=material, strain_rate_per_s=1e-3, temperature_C=20.0))
     bad = matrix._curve_violations(run, Rec(X, force_N(X)))
     assert [k for k, _ in bad] == ["flow curve off without a warning"]
+
+
+def test_a_target_stop_judged_by_its_crosshead_not_its_rising_force():
+    rising = lambda x: 20_000.0 * (1.0 - np.exp(-x / 0.3)) + 30_000.0 * x  # noqa: E731 - compression-like, rising to the stop
+    x = np.arange(0.0, 3.1 + STEP_MM / 2, STEP_MM)
+    truth = matrix.truth_from_rows(x, rising(x), True, None, None)
+    one_more = np.append(x, x[-1] + STEP_MM * np.arange(1, 4))  # stopped 0.03 mm later (a run's jitter): Fm +0.8 %
+    assert matrix.survived(RUN, Rec(one_more, rising(one_more)), truth) == []
+    late = np.arange(0.0, 3.3 + STEP_MM / 2, STEP_MM)  # the stop 0.2 mm late
+    assert [k for k, _ in matrix.survived(RUN, Rec(late, rising(late)), truth)] == ["last crosshead beyond the fault-free run's"]
