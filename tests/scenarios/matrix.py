@@ -42,8 +42,8 @@ the force at every recorded crosshead position from :data:`FORCE_FROM_MM` within
 :data:`FORCE_TOL` of the reference's (plus half the reference's own step between the samples
 around it: its sampling resolution), and, for a record the fault did not abort, the last
 crosshead within :data:`LAST_CROSSHEAD_TOL_MM` and Fm within :data:`FM_TOL` (or their sampling
-steps; an Fm that is the force at a target stop is judged as force and stop); Rm and Rp0.2 from identify within :data:`RM_TOL` / :data:`RP02_TOL` unless a warning
-names that value; the flow curve within 3 % of the material (or, where the reference itself is
+steps; an Fm that is the force at a target stop is judged as force and stop); Rm and Rp0.2 from
+identify within :data:`RM_TOL` / :data:`RP02_TOL` unless a warning names that value; the flow curve within 3 % of the material (or, where the reference itself is
 off, within 1 % of the reference's deviation) unless the hardening is marked.
 """
 

@@ -32,6 +32,7 @@ def test_cell(cell, tmp_path):
     run = matrix.run_cell(cell, tmp_path)
     matrix.remember(run)
     ref = None if cell.fault is matrix.NO_FAULT else matrix.reference(cell, tmp_path)
+    assert ref is not None or cell.fault is matrix.NO_FAULT, f"cell {cell.id}: its fault-free run left no record to judge it by"
     bad = matrix.violations(run, ref)
     assert not bad, (f"cell {cell.id} (seed {SEED}): " + "; ".join(f"{kind}: {detail}" for kind, detail in bad)
                      + f"\nrun: {run.run_out.strip()[-400:]} {run.run_err.strip()[-400:]}\nidentify: {run.identify_err.strip()[-400:]}"
