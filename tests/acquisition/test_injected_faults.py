@@ -99,15 +99,21 @@ def identify(record, out) -> dict | str:
 
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
-    """The fault-free test through the same injector (no rule)."""
+    """The fault-free test through the same injector (no rule); tried twice, since it is the truth
+    and not what is tested (a starved machine may stop a real-time run: each try's end is shown)."""
     import os
 
     tmp = tmp_path_factory.mktemp("reference")
     lock_dir = tmp / "locks"
     lock_dir.mkdir()
     environ = {**os.environ, "MPLBACKEND": "Agg", "FLOWCURVE_LOCK_DIR": str(lock_dir)}
-    run, _, _, result = injected_run(tmp, environ, {}, name="reference")
-    assert run.code in (0, 5) and run.record.meta["status"] == "complete", run.err
+    ends = []
+    for attempt in range(2):
+        run, _, _, result = injected_run(tmp, environ, {}, name=f"reference{attempt}")
+        ends.append((run.code, run.err.strip()[-200:]))
+        if run.code in (0, 5) and run.record.meta["status"] == "complete":
+            break
+    assert run.code in (0, 5) and run.record.meta["status"] == "complete", ends
     assert isinstance(result, dict), f"identify refused the fault-free record: {result}"
     return run, result
 
