@@ -33,12 +33,24 @@ plastic range of every specimen here).
 that was injected named (its device) in the record's events and in what the operator saw;
 heater off at the end; samples lost ≤ what the events declare; the identified flow curve within
 3 % of the virtual material over the measured range it reports (the hardening's ``fit_range``),
-or a warning/quality mark that says why not, or a clean one-line refusal.
+or a warning/quality mark that says why not, or a clean one-line refusal. identify's "the record
+declares rig faults" warning is no such excuse: it comes with every fault (issue 42).
+
+**Numbers that survived a fault** (:func:`survived`, issue 42): a fault cell is judged against
+the same cell without its fault (:func:`reference`, run once per fault-free cell and cached):
+the force at every recorded crosshead position from :data:`FORCE_FROM_MM` within
+:data:`FORCE_TOL` of the reference's (plus half the reference's own step between the samples
+around it: its sampling resolution), and, for a record the fault did not abort, the last
+crosshead within :data:`LAST_CROSSHEAD_TOL_MM` and Fm within :data:`FM_TOL` (or their sampling
+steps; an Fm that is the force at a target stop is judged as force and stop); Rm and Rp0.2 from
+identify within :data:`RM_TOL` / :data:`RP02_TOL` unless a warning names that value; the flow curve within 3 % of the material (or, where the reference itself is
+off, within 1 % of the reference's deviation) unless the hardening is marked.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import io
 import itertools
@@ -67,12 +79,23 @@ SOAK_S = 5.0
 FAULT_AT_MM = 1.0  # the fault comes this much crosshead travel after the start
 CURVE_TOLERANCE_PCT = 3.0
 LOSS_SLACK_FRAMES = 2  # a frame on the wire at each end of the record's span
+FORCE_FROM_MM = 0.5  # issue 42: the force against the crosshead is compared from here (past seating and the elastic rise)
+FORCE_TOL = 0.01
+LAST_CROSSHEAD_TOL_MM = 0.05
+FM_TOL = 0.003
+RM_TOL = 0.01
+RP02_TOL = 0.02  # a proof stress moves with the modulus fit's window: twice Rm's
+CHANGES_THE_SPECIMEN = ("relay_stuck",)  # the furnace heats on: the specimen is hotter, its force truly lower (the record's temperature says so)
+CURVE_OVER_REFERENCE_PCT = 1.0  # where the fault-free cell's own curve is beyond 3 %, the faulty one may add this much
 DEFAULT_CELLS = 40
 FALLBACK_SEED = 31
 
 # warnings that do not say why a flow curve is off (what is missing past fracture, alternatives that failed)
 NOT_ABOUT_THE_CURVE = re.compile(r"without a fracture: A is not reported|no post\.dk_mm or post\.sk_mm2|"
                                  r"three-point \w+ fit failed|has a yield point")
+
+RIG_FAULTS_WARNING = re.compile(r"the record declares rig faults")  # with every fault: it excuses nothing (issue 42)
+VALUE_MARK = {"Rm_MPa": re.compile(r"\bRm\b|maximum force|\bFm\b"), "Rp02_MPa": re.compile(r"Rp0\.?2|proof stress|yield")}
 
 START_ONLY = re.compile(r"the curve's start \(εp < [^)]*\) rests on the strain zero")  # methods §2.11: excuses εp < X only
 
@@ -433,8 +456,9 @@ def curve_deviation_pct(result: dict, cell_run: CellRun, from_eps_p: float = 0.0
     return float(100.0 * np.max(np.abs(fitted / truth - 1.0))), (lo, hi)
 
 
-def violations(r: CellRun) -> list[tuple[str, str]]:
-    """The invariants this cell breaks: [(class, detail)] — empty when it passes."""
+def violations(r: CellRun, reference: "Truth | None" = None) -> list[tuple[str, str]]:
+    """The invariants this cell breaks: [(class, detail)] — empty when it passes; a fault cell
+    given its fault-free ``reference`` is also judged on the numbers that survived."""
     from flowcurve.errors import RecordError
     from flowcurve.record.format import read_record
 
@@ -482,11 +506,128 @@ def violations(r: CellRun) -> list[tuple[str, str]]:
     if sent is not None and sent - rows > declared + LOSS_SLACK_FRAMES:
         bad.append(("samples lost beyond what the events declare",
                     f"{sent} frames sent within the record's span, {rows} rows, {declared} declared lost"))
-    bad += _curve_violations(r, rec)
+    judged = reference is not None and cell.fault is not NO_FAULT and cell.fault.kind not in CHANGES_THE_SPECIMEN
+    tolerance = max(CURVE_TOLERANCE_PCT, (reference.curve_dev_pct or 0.0) + CURVE_OVER_REFERENCE_PCT) if judged else CURVE_TOLERANCE_PCT
+    bad += _curve_violations(r, rec, tolerance)
+    if judged:
+        bad += survived(r, rec, reference)
     return bad
 
 
-def _curve_violations(r: CellRun, rec) -> list[tuple[str, str]]:
+# -- the numbers that survived a fault (issue 42) ---------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Truth:
+    """What the fault-free run of a cell gave: |force| against |crosshead| (rows in order of
+    crosshead), the last crosshead, Fm and its sampling step, identify's Rm and Rp0.2, the
+    flow curve's deviation from the material."""
+
+    x_mm: np.ndarray
+    force_N: np.ndarray
+    last_x_mm: float | None
+    last_step_mm: float
+    fm_N: float
+    fm_step: float  # relative: how far Fm's neighbours are below it (the sampling's resolution of Fm)
+    loaded_to_mm: float  # the last crosshead with at least half Fm (before a fracture's fall)
+    step_mm: float  # the median crosshead step between rows
+    values: dict  # Rm_MPa, Rp02_MPa when identified
+    curve_dev_pct: float | None
+
+
+_REFERENCES: dict[str, Truth | None] = {}
+
+
+def truth_of(r: CellRun) -> Truth | None:
+    """The :class:`Truth` of a fault-free run; None when it has no readable record."""
+    from flowcurve.errors import RecordError
+    from flowcurve.record.format import read_record
+
+    try:
+        rec = read_record(r.record_path)
+    except (RecordError, OSError, TypeError):
+        return None
+    x, f = _rows(rec)
+    dev = curve_deviation_pct(r.result, r) if r.result else None
+    return truth_from_rows(x, f, rec.meta.get("status") == "complete", r.result, dev[0] if dev else None)
+
+
+def truth_from_rows(x: np.ndarray, f: np.ndarray, complete: bool, result: dict | None, curve_dev_pct: float | None) -> Truth | None:
+    """A :class:`Truth` from a fault-free run's |crosshead| and |force| rows and identify's result."""
+    if x.size < 2:
+        return None
+    i = int(np.argmax(f))
+    neighbours = f[max(i - 1, 0):i + 2]
+    fm_step = float((f[i] - np.min(neighbours)) / f[i]) if f[i] > 0 else 0.0
+    values = {k: float(result[k]) for k in VALUE_MARK if result and isinstance(result.get(k), (int, float))}
+    loaded = float(x[np.flatnonzero(f >= 0.5 * f[i])[-1]])
+    step = float(np.median(np.diff(x)))
+    return Truth(x, f, float(x[-1]) if complete else None, float(x[-1] - x[-2]), float(f[i]), fm_step, loaded, step,
+                 values, curve_dev_pct)
+
+
+def _rows(rec) -> tuple[np.ndarray, np.ndarray]:
+    """|crosshead| and |force| of the rows with both, in record order (the crosshead only advances)."""
+    x, f = np.abs(rec.column("crosshead_mm")), np.abs(rec.column("force_N"))
+    ok = np.isfinite(x) & np.isfinite(f)
+    return x[ok], f[ok]
+
+
+def reference(cell: Cell, workdir: Path) -> Truth | None:
+    """The fault-free run of ``cell``'s other axes: run once per process, then cached."""
+    ref = dataclasses.replace(cell, fault=NO_FAULT)
+    if ref.id not in _REFERENCES:
+        remember(run_cell(ref, workdir / "reference"))
+    return _REFERENCES[ref.id]
+
+
+def remember(r: CellRun) -> None:
+    """Keep a fault-free run's truth for the fault cells that share its other axes."""
+    if r.cell.fault is NO_FAULT:
+        _REFERENCES[r.cell.id] = truth_of(r)
+
+
+def survived(r: CellRun, rec, ref: Truth) -> list[tuple[str, str]]:
+    """The numbers beyond the fault-free truth's tolerance: [(class, detail)]."""
+    bad = []
+    x, f = _rows(rec)
+    # the reference's force at each recorded crosshead position: |F − F_ref(x)| ≤ tol·F_ref + half its step there,
+    # short of either run's end by two steps (the fracture's fall, the crosshead standing at a stop)
+    end = min(ref.loaded_to_mm, float(x[-1]) if x.size else 0.0) - 2 * ref.step_mm
+    keep = (x >= FORCE_FROM_MM) & (x <= end)
+    if np.any(keep):
+        xs, fs = x[keep], f[keep]
+        order = np.argsort(ref.x_mm, kind="stable")
+        rx, rf = ref.x_mm[order], ref.force_N[order]
+        j = np.clip(np.searchsorted(rx, xs), 1, rx.size - 1)
+        f_ref = np.interp(xs, rx, rf)
+        slack = FORCE_TOL * f_ref + 0.5 * np.abs(rf[j] - rf[j - 1])
+        off = np.abs(fs - f_ref) - slack
+        if np.max(off) > 0:
+            k = int(np.argmax(off))
+            rising = xs <= ref.x_mm[int(np.argmax(ref.force_N))]  # up to Fm: the hardening, no fracture step
+            before_fm = f"; up to Fm {100 * np.max(np.abs(fs[rising] / f_ref[rising] - 1)):.1f} %" if np.any(rising) else ""
+            bad.append(("force against the crosshead beyond the fault-free run's",
+                        f"{100 * (fs[k] / f_ref[k] - 1):+.1f} % at {xs[k]:.2f} mm ({int(np.sum(off > 0))} of {xs.size} rows{before_fm})"))
+    if rec.meta.get("status") == "complete" and ref.last_x_mm is not None and x.size:
+        if abs(x[-1] - ref.last_x_mm) > max(LAST_CROSSHEAD_TOL_MM, abs(ref.last_step_mm)):
+            bad.append(("last crosshead beyond the fault-free run's", f"{x[-1]:.3f} mm for {ref.last_x_mm:.3f}"))
+        fm = float(np.max(f))
+        fm_at_stop = ref.x_mm[int(np.argmax(ref.force_N))] >= ref.x_mm[-1] - 2 * ref.step_mm  # rising to a target: Fm is the stop's force
+        if not fm_at_stop and abs(fm / ref.fm_N - 1) > max(FM_TOL, ref.fm_step):
+            bad.append(("Fm beyond the fault-free run's", f"{fm:.0f} N for {ref.fm_N:.0f} ({100 * (fm / ref.fm_N - 1):+.2f} %)"))
+    if r.result and rec.meta.get("status") == "complete":
+        warnings = [w for w in (r.result.get("warnings") or []) if not RIG_FAULTS_WARNING.search(w)]
+        for key, tol in (("Rm_MPa", RM_TOL), ("Rp02_MPa", RP02_TOL)):
+            got, want = r.result.get(key), ref.values.get(key)
+            if not isinstance(got, (int, float)) or want is None or any(VALUE_MARK[key].search(w) for w in warnings):
+                continue
+            if abs(got / want - 1) > tol:
+                bad.append((f"{key.split('_')[0]} beyond the fault-free run's", f"{got:.1f} MPa for {want:.1f} ({100 * (got / want - 1):+.2f} %)"))
+    return bad
+
+
+def _curve_violations(r: CellRun, rec, tolerance_pct: float = CURVE_TOLERANCE_PCT) -> list[tuple[str, str]]:
     if r.identify_code not in (0, None) and not r.identify_exception:
         err_lines = [l for l in r.identify_err.splitlines() if l.startswith("flowcurve: error:")]
         if not err_lines:
@@ -501,15 +642,16 @@ def _curve_violations(r: CellRun, rec) -> list[tuple[str, str]]:
     if found is None:
         return [("no hardening law to compare", str((r.result.get("hardening") or {}).get("law")))]
     dev, (lo, hi) = found
-    if dev <= CURVE_TOLERANCE_PCT:
+    if dev <= tolerance_pct:
         return []
     hard = r.result.get("hardening") or {}
-    excuses = [w for w in (r.result.get("warnings") or []) + (hard.get("warnings") or []) if not NOT_ABOUT_THE_CURVE.search(w)]
+    excuses = [w for w in (r.result.get("warnings") or []) + (hard.get("warnings") or [])
+               if not NOT_ABOUT_THE_CURVE.search(w) and not RIG_FAULTS_WARNING.search(w)]
     flagged = hard.get("quality") not in (None, "good") or bool(excuses)
     beyond = (hard.get("start_uncertainty") or {}).get("below_limit_from_eps_p")
     if flagged and all(START_ONLY.search(w) for w in excuses) and hard.get("quality") == "good" and beyond is not None:
         past = curve_deviation_pct(r.result, r, from_eps_p=beyond)  # the start's warning excuses the start only
-        if past is not None and past[0] > CURVE_TOLERANCE_PCT:
+        if past is not None and past[0] > tolerance_pct:
             return [("flow curve off past the start the strain zero excuses", f"{past[0]:.1f} % over εp {past[1][0]:.3f}…{past[1][1]:.3f}")]
     if flagged:
         return []

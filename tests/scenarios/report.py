@@ -2,10 +2,13 @@
 
     python tests/scenarios/report.py cells.jsonl [subset|default|all]   # run (resumable), then the table
     python tests/scenarios/report.py cells.jsonl --table                # the table of cells already run
+    FLOWCURVE_MATRIX_CELLS=id,id python tests/scenarios/report.py cells.jsonl named   # those cells
 
 ``subset`` (the default): every fault-free cell (the whole product of the other five axes, 288)
 and each fault on test × temperature × speed (24 each), its rate and material drawn with seed 31.
-One JSON line per cell; a cell already in the file is not run again.
+One JSON line per cell; a cell already in the file is not run again. A fault cell is judged against
+the same cell without its fault (run once, cached): its violations include the numbers beyond the
+fault-free truth's tolerance (matrix.survived).
 """
 
 from __future__ import annotations
@@ -43,10 +46,12 @@ def run(out: Path, cells: list) -> None:
         for cell in (c for c in cells if c.id not in done):
             t0 = time.monotonic()
             r = M.run_cell(cell, Path(tmp) / M.cell_hash(cell))
+            M.remember(r)
+            ref = None if cell.fault is M.NO_FAULT else M.reference(cell, Path(tmp) / M.cell_hash(cell))
             dev = M.curve_deviation_pct(r.result, r) if r.result else None
             fh.write(json.dumps({"id": cell.id, "wall_s": time.monotonic() - t0, "run_code": r.run_code, "identify_code": r.identify_code,
                                  "injected_at_s": r.injected_at_s, "curve_deviation_pct": dev[0] if dev else None,
-                                 "violations": M.violations(r), "run": (r.run_out.strip().splitlines() or [""])[0][-200:],
+                                 "violations": M.violations(r, ref), "run": (r.run_out.strip().splitlines() or [""])[0][-200:],
                                  "identify_error": r.identify_err.strip()[-300:], "warnings": (r.result or {}).get("warnings")}, default=str) + "\n")
             fh.flush()
             shutil.rmtree(Path(tmp) / M.cell_hash(cell), ignore_errors=True)
@@ -91,7 +96,8 @@ def main(argv: list[str]) -> int:
     out = Path(argv[0])
     if "--table" not in argv:
         which = argv[1] if len(argv) > 1 else "subset"
-        cells = {"subset": subset_cells, "all": M.all_cells, "default": lambda: M.default_selection(M.all_cells(), M.matrix_seed())}[which]()
+        cells = {"subset": subset_cells, "all": M.all_cells, "default": lambda: M.default_selection(M.all_cells(), M.matrix_seed()),
+                 "named": lambda: [c for c in M.all_cells() if c.id in (M.cells_from_env() or ())]}[which]()
         run(out, cells)
     table(out)
     return 0

@@ -1,5 +1,6 @@
 """The scenario matrix of the whole chain, ``flowcurve run`` → ``flowcurve identify`` on model
-time (tests/scenarios/matrix.py says what a cell is and what it must hold).
+time (tests/scenarios/matrix.py says what a cell is and what it must hold). A fault cell is also
+judged against the same cell without its fault (run once per module, cached): its numbers must survive.
 
 The default selection runs :data:`matrix.DEFAULT_CELLS` cells drawn with a seed fixed per
 commit (printed at the end of the run; ``FLOWCURVE_MATRIX_SEED`` draws another set,
@@ -29,7 +30,10 @@ def _param(cell):
 @pytest.mark.parametrize("cell", [_param(c) for c in CELLS])
 def test_cell(cell, tmp_path):
     run = matrix.run_cell(cell, tmp_path)
-    bad = matrix.violations(run)
+    matrix.remember(run)
+    ref = None if cell.fault is matrix.NO_FAULT else matrix.reference(cell, tmp_path)
+    assert ref is not None or cell.fault is matrix.NO_FAULT, f"cell {cell.id}: its fault-free run left no record to judge it by"
+    bad = matrix.violations(run, ref)
     assert not bad, (f"cell {cell.id} (seed {SEED}): " + "; ".join(f"{kind}: {detail}" for kind, detail in bad)
                      + f"\nrun: {run.run_out.strip()[-400:]} {run.run_err.strip()[-400:]}\nidentify: {run.identify_err.strip()[-400:]}"
                      + (f"\n{run.run_exception or ''}{run.identify_exception or ''}"))

@@ -1,0 +1,88 @@
+"""The matrix's judge of a fault cell's numbers (matrix.survived, issue 42) on hand-made records
+with a known force law: a force shifted against the crosshead after a loss, a spike taken as Fm,
+a late stop are caught; the same rows with gaps (lost frames, nothing shifted) pass; and
+identify's rig-fault warning no longer excuses a flow curve off the material."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from . import matrix
+
+STEP_MM = 0.01  # 100 rows a millimetre
+
+
+def force_N(x):
+    """A tension-like F(x): an elastic rise, hardening to Fm at 4 mm, a neck to 5 mm."""
+    return 10_000.0 * (1.0 - np.exp(-x / 0.3)) + 2_000.0 * x - 250.0 * x**2
+
+
+class Rec:
+    def __init__(self, x, f, status="complete"):
+        self._cols = {"crosshead_mm": np.asarray(x, float), "force_N": np.asarray(f, float)}
+        self.meta = {"status": status}
+
+    def column(self, name):
+        return self._cols[name]
+
+
+X = np.arange(0.0, 5.0 + STEP_MM / 2, STEP_MM)
+TRUTH = matrix.truth_from_rows(X, force_N(X), True, {"Rm_MPa": 500.0}, None)
+RUN = SimpleNamespace(result=None)
+
+
+def lost_after(x_mm: float, every: int):
+    """Row indices kept when every ``every``-th row after ``x_mm`` is lost."""
+    idx = np.arange(X.size)
+    return idx[(X < x_mm) | (idx % every != 0)]
+
+
+def test_gaps_without_a_shift_pass():
+    keep = lost_after(1.0, 5)  # 20 % lost from 1 mm, each kept force at its own crosshead
+    assert matrix.survived(RUN, Rec(X[keep], force_N(X[keep])), TRUTH) == []
+
+
+def test_forces_shifted_onto_earlier_crosshead_after_losses_are_caught():
+    keep = lost_after(1.0, 5)
+    stamped = X[:keep.size]  # stamped as if nothing were lost: each force paired with an earlier crosshead
+    bad = matrix.survived(RUN, Rec(stamped, force_N(X[keep])), TRUTH)
+    assert [k for k, _ in bad][:1] == ["force against the crosshead beyond the fault-free run's"], bad
+    assert any(k == "last crosshead beyond the fault-free run's" for k, _ in bad)  # the fracture: 4.2 mm for 5.0
+
+
+def test_a_spike_taken_as_fm_is_caught_and_the_same_spike_in_an_aborted_record_only_as_force():
+    f = force_N(X)
+    f[400] += 900.0  # at Fm
+    bad = dict(matrix.survived(RUN, Rec(X, f), TRUTH))
+    assert "Fm beyond the fault-free run's" in bad and "force against the crosshead beyond the fault-free run's" in bad
+    bad = dict(matrix.survived(RUN, Rec(X, f, status="aborted"), TRUTH))
+    assert set(bad) == {"force against the crosshead beyond the fault-free run's"}  # no Fm of a test cut short
+
+
+def test_rm_is_compared_unless_a_warning_names_it():
+    rm_high = SimpleNamespace(result={"Rm_MPa": 520.0, "warnings": ["the record declares rig faults (data_loss, 1×): …"]})
+    assert [k for k, _ in matrix.survived(rm_high, Rec(X, force_N(X)), TRUTH)] == ["Rm beyond the fault-free run's"]
+    rm_high.result["warnings"].append("Rm is taken at a rejected reading's neighbour")
+    assert matrix.survived(rm_high, Rec(X, force_N(X)), TRUTH) == []
+
+
+def test_the_rig_faults_warning_no_longer_excuses_a_curve_off_the_material():
+    material = SimpleNamespace(flow_stress=lambda eps, rate, temperature: 300.0 + 500.0 * eps ** 0.3)
+    run = SimpleNamespace(cell=None, identify_code=0, identify_exception=None, result={
+        "hardening": {"A_MPa": 330.0, "B_MPa": 550.0, "n": 0.3, "fit_range": [0.01, 0.2], "quality": "good"},
+        "warnings": ["the record declares rig faults (frames_missing, 3×): load cell: … — the curve may carry them"]},
+        virtual_run=SimpleNamespace(material=material, strain_rate_per_s=1e-3, temperature_C=20.0))
+    bad = matrix._curve_violations(run, Rec(X, force_N(X)))
+    assert [k for k, _ in bad] == ["flow curve off without a warning"]
+
+
+def test_a_target_stop_judged_by_its_crosshead_not_its_rising_force():
+    rising = lambda x: 20_000.0 * (1.0 - np.exp(-x / 0.3)) + 30_000.0 * x  # noqa: E731 - compression-like, rising to the stop
+    x = np.arange(0.0, 3.1 + STEP_MM / 2, STEP_MM)
+    truth = matrix.truth_from_rows(x, rising(x), True, None, None)
+    one_more = np.append(x, x[-1] + STEP_MM * np.arange(1, 4))  # stopped 0.03 mm later (a run's jitter): Fm +0.8 %
+    assert matrix.survived(RUN, Rec(one_more, rising(one_more)), truth) == []
+    late = np.arange(0.0, 3.3 + STEP_MM / 2, STEP_MM)  # the stop 0.2 mm late
+    assert [k for k, _ in matrix.survived(RUN, Rec(late, rising(late)), truth)] == ["last crosshead beyond the fault-free run's"]
