@@ -214,10 +214,12 @@ def _elastic_stretch(stress_MPa: np.ndarray, window_MPa: Sequence[float], i_m: i
 def _slope(t: np.ndarray, y: np.ndarray) -> float | None:
     """Least-squares slope dy/dt over finite samples; None with fewer than 3 or no time span."""
     ok = np.isfinite(t) & np.isfinite(y)
-    if ok.sum() < MIN_PHASE_SAMPLES or np.ptp(t[ok]) <= 0:
+    if not ok.all():
+        t, y = t[ok], y[ok]
+    if t.size < MIN_PHASE_SAMPLES or np.ptp(t) <= 0:
         return None
-    dt = t[ok] - t[ok].mean()
-    return float(np.dot(dt, y[ok] - y[ok].mean()) / np.dot(dt, dt))  # least squares: Σ(t − t̄)(y − ȳ) / Σ(t − t̄)²
+    dt = t - t.mean()
+    return float(np.dot(dt, y - y.mean()) / np.dot(dt, dt))  # least squares: Σ(t − t̄)(y − ȳ) / Σ(t − t̄)²
 
 
 def elastic_stress_rate(time_s, stress_MPa, window_MPa: Sequence[float]) -> float | None:

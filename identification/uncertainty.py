@@ -269,13 +269,15 @@ def reduction_of_area_budget(d0_mm: float, du_mm: float, diameter_resolution_mm:
 def offset_yield_MPa(strain, stress_MPa, E_MPa: float, offset: float = OFFSET) -> float | None:
     """Stress where ε − σ/E (the running maximum) first reaches ``offset``, interpolated; None when never."""
     strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
-    eps_p = np.maximum.accumulate(strain - stress / E_MPa)  # ε_p = ε − σ/E
-    if not eps_p.size or eps_p[-1] < offset:
+    eps_p = strain - stress / E_MPa  # ε_p = ε − σ/E; its running maximum first reaches the offset where ε_p itself does
+    reached = eps_p >= offset
+    i = int(np.argmax(reached)) if eps_p.size else 0
+    if not eps_p.size or not reached[i]:
         return None
-    i = int(np.argmax(eps_p >= offset))
     if i == 0:
         return float(stress[0])
-    w = 0.0 if eps_p[i] == eps_p[i - 1] else (offset - eps_p[i - 1]) / (eps_p[i] - eps_p[i - 1])
+    before, at = float(np.max(eps_p[:i])), float(eps_p[i])  # the running maximum at i − 1 and at i
+    w = 0.0 if at == before else (offset - before) / (at - before)
     return float(stress[i - 1] + w * (stress[i] - stress[i - 1]))
 
 
