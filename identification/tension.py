@@ -372,6 +372,8 @@ def isolated_force_spikes(force_N) -> np.ndarray:
     gap = np.abs(f[2:] - f[:-2])
     a, b, c = f[:-2], f[1:-1], f[2:]
     peak = float(np.max(np.abs(np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c)))))  # median of three, in closed form
+    if not np.any((deviation > SPIKE_FRACTION * peak) & (gap < 0.25 * deviation)):
+        return np.zeros(0, dtype=int)  # none beyond the peak share: none beyond the larger threshold either (the noise median is not needed)
     threshold = max(SPIKE_NOISE_FACTOR * _stress_noise_MPa(f), SPIKE_FRACTION * peak)
     return np.flatnonzero((deviation > threshold) & (gap < 0.25 * deviation)) + 1
 
@@ -761,7 +763,12 @@ def _strain_zero(inp: _Inputs, line: _ElasticLine, hard: _Hardening, law: str) -
     window = line.window_MPa if line.window_MPa[1] > line.window_MPa[0] else (0.0, top)  # no line: the zero read up to Rp0.2
     zero = tension_or_compression_zero(line.strain[: inp.i_m + 1], inp.eng_stress[: inp.i_m + 1], window_MPa=window, E_line_MPa=mod.E_MPa,
                                        E_line_stderr_MPa=mod.E_stderr_MPa, E_used_MPa=line.E, line_resolved=line.E == mod.E_MPa)
-    main, start, warnings = apply_to_fit(hard.main, hard.grid, hard.fit_sig, zero, lambda e, s: fit_hardening(e, s, law))
+    done = hard.variants.get(f"least_squares_{law}_without_fracture_point")  # fit_hardening(grid, fit_sig, law) already made
+
+    def refit(e, s):
+        return done if done is not None and e is hard.grid and s is hard.fit_sig else fit_hardening(e, s, law)
+
+    main, start, warnings = apply_to_fit(hard.main, hard.grid, hard.fit_sig, zero, refit)
     return replace(hard, main=main, start=start), warnings
 
 
