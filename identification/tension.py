@@ -393,7 +393,7 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
         ok[spikes] = False
         warnings.append(f"{spikes.size} force sample(s) unlike both neighbours (a corrupt load-cell frame) left out: "
                         + ", ".join(f"sample {k + 1} ({force[k]:.6g} N)" for k in spikes[:5]) + (" …" if spikes.size > 5 else ""))
-    data = record.data[ok].reset_index(drop=True)
+    data = (record.data[ok] if not ok.all() else record.data).reset_index(drop=True)  # all kept: no copy (copy-on-write)
     force = force[ok]
     sub = Record(meta=record.meta, data=data, source=record.source)
     i_m = iso6892.max_force_index(force)
@@ -773,15 +773,16 @@ def _strain_zero(inp: _Inputs, line: _ElasticLine, hard: _Hardening, law: str) -
 
 
 def _curves(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, fracture: dict, hard: _Hardening, neck: str) -> dict[str, pd.DataFrame]:
-    """The intermediate curves for plots: raw and corrected diagram, engineering, true, fit, fracture point."""
+    """The intermediate curves for plots: raw and corrected diagram, engineering, true, fit, fracture point
+    (the record-long ones share the identification's arrays: copy=False spares stacking them into blocks)."""
     data, uni = inp.data, slice(0, inp.i_m + 1)
     eps_end = fracture.get("true_strain", float(hard.grid[-1]))
     fit_eps = np.linspace(0.0, eps_end, 200)
     curves = {
         "raw_diagram": data[[c for c in ("time_s", "force_N", "crosshead_mm", "extensometer_mm") if c in data.columns]].copy(),
-        "corrected_diagram": pd.DataFrame({"elongation_mm": line.disp, "force_N": inp.force}),
-        "engineering": pd.DataFrame({"engineering_strain": line.strain, "engineering_stress_MPa": inp.eng_stress}),
-        "true": pd.DataFrame({"true_strain": true.log_strain[uni], "true_plastic_strain": true.eps_p[uni], "true_stress_MPa": true.sig_t[uni]}),
+        "corrected_diagram": pd.DataFrame({"elongation_mm": line.disp, "force_N": inp.force}, copy=False),
+        "engineering": pd.DataFrame({"engineering_strain": line.strain, "engineering_stress_MPa": inp.eng_stress}, copy=False),
+        "true": pd.DataFrame({"true_strain": true.log_strain[uni], "true_plastic_strain": true.eps_p[uni], "true_stress_MPa": true.sig_t[uni]}, copy=False),
         "fit": pd.DataFrame({"true_plastic_strain": fit_eps, "true_stress_MPa": hard.main(fit_eps)}),
     }
     if fracture:
