@@ -27,6 +27,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from flowcurve.identification.iso6892 import nan_argmax
+
 STANDARD_TENSION = "ISO 6892-1:2019"
 STANDARD_HEATED = "ISO 6892-2:2018"
 RANGE_TOLERANCE = 0.20  # ±20 % about each method A range
@@ -233,7 +235,7 @@ def elastic_stress_rate(time_s, stress_MPa, window_MPa: Sequence[float]) -> floa
     t, s = t[finite], s[finite]
     if t.size < 3:
         return None
-    sel = _elastic_stretch(s, window_MPa, int(np.nanargmax(s)))
+    sel = _elastic_stretch(s, window_MPa, nan_argmax(s))
     return _slope(t[sel], s[sel]) if sel.size >= MIN_PHASE_SAMPLES else None
 
 
@@ -243,7 +245,7 @@ def phase_bounds(strain, stress_MPa, *, window_MPa: Sequence[float], Rp_MPa: flo
     point from ReH to the end of the yield point extension Ae) and the plastic range to Fm."""
     e = np.asarray(strain, dtype=float)
     s = np.asarray(stress_MPa, dtype=float)
-    i_m = int(np.nanargmax(s))
+    i_m = nan_argmax(s)
     stretch = _elastic_stretch(s, window_MPa, i_m)
     out: dict = {"elastic": [int(stretch[0]), int(stretch[-1])] if stretch.size else None}
     start = int(stretch[-1]) if stretch.size else 0

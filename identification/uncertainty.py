@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flowcurve.identification.iso6892 import nan_argmax
+
 K_COVERAGE = 2.0  # expanded uncertainty U = k·u_c, k = 2 (≈ 95 % for a normal output)
 
 # The defaults when a record does not state its instruments (the same values as
@@ -330,7 +332,7 @@ def line_windows_E(strain, stress_MPa, window_MPa) -> dict[str, float]:
     """The slopes of the elastic line over its window's lower and upper halves (strain regressed on
     stress up to the largest stress): where the first loading is not linear they differ."""
     strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
-    top = int(np.nanargmax(stress)) + 1
+    top = nan_argmax(stress) + 1
     lo, hi = float(window_MPa[0]), float(window_MPa[1])
     mid = 0.5 * (lo + hi)
     out = {}
