@@ -271,16 +271,28 @@ def reduction_of_area_budget(d0_mm: float, du_mm: float, diameter_resolution_mm:
 def offset_yield_MPa(strain, stress_MPa, E_MPa: float, offset: float = OFFSET) -> float | None:
     """Stress where ε − σ/E (the running maximum) first reaches ``offset``, interpolated; None when never."""
     strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
-    eps_p = strain - stress / E_MPa  # ε_p = ε − σ/E; its running maximum first reaches the offset where ε_p itself does
-    reached = eps_p >= offset
-    i = int(np.argmax(reached)) if eps_p.size else 0
-    if not eps_p.size or not reached[i]:
+    i = _first_at_least(strain, stress, E_MPa, offset)  # the running maximum of ε_p first reaches the offset where ε_p itself does
+    if i is None:
         return None
     if i == 0:
         return float(stress[0])
-    before, at = float(np.max(eps_p[:i])), float(eps_p[i])  # the running maximum at i − 1 and at i
+    before = float(np.max(strain[:i] - stress[:i] / E_MPa))  # the running maximum at i − 1
+    at = float(strain[i] - stress[i] / E_MPa)
     w = 0.0 if at == before else (offset - before) / (at - before)
     return float(stress[i - 1] + w * (stress[i] - stress[i - 1]))
+
+
+def _first_at_least(strain: np.ndarray, stress_MPa: np.ndarray, E_MPa: float, offset: float, chunk: int = 4096) -> int | None:
+    """First index where ε_p = ε − σ/E ≥ ``offset`` (None when never), read in doubling chunks:
+    Rp0.2 lies early in a long record, so most of it is never computed."""
+    start = 0
+    while start < strain.size:
+        stop = min(strain.size, start + chunk)
+        hits = np.flatnonzero(strain[start:stop] - stress_MPa[start:stop] / E_MPa >= offset)
+        if hits.size:
+            return start + int(hits[0])
+        start, chunk = stop, 2 * chunk
+    return None
 
 
 def offset_method_components(strain, stress_MPa, E_MPa: float, u_E_MPa: float, lines: Mapping[str, float], delta_eps0: float,
