@@ -14,6 +14,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from flowcurve.identification.iso6892 import nan_argmax
 from flowcurve.identification import conformity as cf
 from flowcurve.identification import uncertainty as un
 from flowcurve.identification.elastic_modulus import apparent_modulus_warning, class_modulus
@@ -68,7 +69,7 @@ def plastic_slope_MPa(curve, E_MPa: float, at: float = un.OFFSET, half_width: fl
         return None
     e = curve["engineering_strain"].to_numpy(dtype=float)
     s = curve["engineering_stress_MPa"].to_numpy(dtype=float)
-    i_m = int(np.nanargmax(s))
+    i_m = nan_argmax(s)
     ep = e[: i_m + 1] - s[: i_m + 1] / E_MPa
     sel = (ep >= at - half_width) & (ep <= at + half_width)
     if sel.sum() < 3 or np.ptp(ep[sel]) <= 0:

@@ -16,10 +16,18 @@ from flowcurve.errors import IdentificationError
 FRACTURE_DROP = 0.2
 
 
+def nan_argmax(values) -> int:
+    """np.nanargmax without its NaN-free copy of the array when there is no NaN (np.argmax
+    returns the first NaN if there is one, else the same first maximum as nanargmax)."""
+    values = np.asarray(values)
+    i = int(np.argmax(values))
+    return i if not np.isnan(values[i]) else int(np.nanargmax(values))
+
+
 def max_force_index(force_N) -> int:
     """Index of the maximum force Fm (the first one on a flat top)."""
     force = np.asarray(force_N, dtype=float)
-    return int(np.nanargmax(force))
+    return nan_argmax(force)
 
 
 def fracture_index(force_N) -> int:
@@ -31,7 +39,7 @@ def fracture_index(force_N) -> int:
     if tail.size < 2:
         return force.size - 1
     drops = tail[:-1] - tail[1:]
-    j = int(np.nanargmax(drops))
+    j = nan_argmax(drops)
     if drops[j] > FRACTURE_DROP * force[i_m]:
         return i_m + j
     return force.size - 1
@@ -42,7 +50,7 @@ def offset_yield_strength(strain, stress_MPa, E_MPa: float, offset: float = 0.00
     where the curve crosses the line σ = E·(e − offset). Returns (Rp_MPa, fractional index)."""
     e = np.asarray(strain, dtype=float)
     s = np.asarray(stress_MPa, dtype=float)
-    i_m = int(np.nanargmax(s))
+    i_m = nan_argmax(s)
     g = s[: i_m + 1] - E_MPa * (e[: i_m + 1] - offset)  # > 0 left of the offset line
     begin = int(np.argmax(s >= start_MPa)) if start_MPa > 0 else 0
     below = np.nonzero(g[begin:] <= 0)[0]
@@ -104,7 +112,7 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | No
     """
     e = np.asarray(strain, dtype=float)
     s = np.asarray(stress_MPa, dtype=float)
-    i_m = int(np.nanargmax(s))
+    i_m = nan_argmax(s)
     if E_MPa is not None and i_m + 1 < s.size and 100.0 * (e[i_m] - s[i_m] / E_MPa) <= MAX_YIELD_POINT_EXTENSION_PCT:
         i_m = fracture_index(s)  # the largest force at the onset of yield: an upper yield point, the record may end on the plateau
     head = s[: i_m + 1]

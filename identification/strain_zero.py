@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 
+from flowcurve.identification.iso6892 import nan_argmax
+
 START_LIMIT = 0.01  # u_σ/σ below which the curve's start is counted as resting on more than the strain zero
 WARN_LIMIT = 0.02  # u_σ/σ at the fit range's start above which the result warns
 HANDBOOK_E_REL_U = 0.05  # a handbook modulus (or a given one) taken as ±5 % (1 σ) of the specimen's
@@ -46,7 +48,7 @@ def line_curvature_u(strain, stress_MPa, window_MPa) -> float:
     upper halves, |ε0,low − ε0,high|/2; 0 when either half has fewer than 2 samples."""
     strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
     lo, hi = float(window_MPa[0]), float(window_MPa[1])
-    top = int(np.nanargmax(stress)) if stress.size else 0
+    top = nan_argmax(stress) if stress.size else 0
     on = np.flatnonzero((stress[: top + 1] >= lo) & (stress[: top + 1] <= hi) & np.isfinite(strain[: top + 1]))
     if on.size < 4:
         return 0.0
@@ -64,7 +66,7 @@ def top_spacing_u(strain, stress_MPa, window_MPa) -> float:
     anywhere within that step. Equation: rectangular over ±Δε, u = Δε/√3, Δε the strain between
     the last sample in the window and the next one."""
     strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
-    top = int(np.nanargmax(stress)) if stress.size else 0
+    top = nan_argmax(stress) if stress.size else 0
     on = np.flatnonzero(stress[: top + 1] <= float(window_MPa[1]))
     if on.size == 0 or on[-1] + 1 >= strain.size:
         return 0.0

@@ -372,6 +372,8 @@ def isolated_force_spikes(force_N) -> np.ndarray:
     gap = np.abs(f[2:] - f[:-2])
     a, b, c = f[:-2], f[1:-1], f[2:]
     peak = float(np.max(np.abs(np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c)))))  # median of three, in closed form
+    if not np.any((deviation > SPIKE_FRACTION * peak) & (gap < 0.25 * deviation)):
+        return np.zeros(0, dtype=int)  # none beyond the peak share: none beyond the larger threshold either (the noise median is not needed)
     threshold = max(SPIKE_NOISE_FACTOR * _stress_noise_MPa(f), SPIKE_FRACTION * peak)
     return np.flatnonzero((deviation > threshold) & (gap < 0.25 * deviation)) + 1
 
@@ -391,7 +393,7 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
         ok[spikes] = False
         warnings.append(f"{spikes.size} force sample(s) unlike both neighbours (a corrupt load-cell frame) left out: "
                         + ", ".join(f"sample {k + 1} ({force[k]:.6g} N)" for k in spikes[:5]) + (" …" if spikes.size > 5 else ""))
-    data = record.data[ok].reset_index(drop=True)
+    data = (record.data[ok] if not ok.all() else record.data).reset_index(drop=True)  # all kept: no copy (copy-on-write)
     force = force[ok]
     sub = Record(meta=record.meta, data=data, source=record.source)
     i_m = iso6892.max_force_index(force)
@@ -761,20 +763,26 @@ def _strain_zero(inp: _Inputs, line: _ElasticLine, hard: _Hardening, law: str) -
     window = line.window_MPa if line.window_MPa[1] > line.window_MPa[0] else (0.0, top)  # no line: the zero read up to Rp0.2
     zero = tension_or_compression_zero(line.strain[: inp.i_m + 1], inp.eng_stress[: inp.i_m + 1], window_MPa=window, E_line_MPa=mod.E_MPa,
                                        E_line_stderr_MPa=mod.E_stderr_MPa, E_used_MPa=line.E, line_resolved=line.E == mod.E_MPa)
-    main, start, warnings = apply_to_fit(hard.main, hard.grid, hard.fit_sig, zero, lambda e, s: fit_hardening(e, s, law))
+    done = hard.variants.get(f"least_squares_{law}_without_fracture_point")  # fit_hardening(grid, fit_sig, law) already made
+
+    def refit(e, s):
+        return done if done is not None and e is hard.grid and s is hard.fit_sig else fit_hardening(e, s, law)
+
+    main, start, warnings = apply_to_fit(hard.main, hard.grid, hard.fit_sig, zero, refit)
     return replace(hard, main=main, start=start), warnings
 
 
 def _curves(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, fracture: dict, hard: _Hardening, neck: str) -> dict[str, pd.DataFrame]:
-    """The intermediate curves for plots: raw and corrected diagram, engineering, true, fit, fracture point."""
+    """The intermediate curves for plots: raw and corrected diagram, engineering, true, fit, fracture point
+    (the record-long ones share the identification's arrays: copy=False spares stacking them into blocks)."""
     data, uni = inp.data, slice(0, inp.i_m + 1)
     eps_end = fracture.get("true_strain", float(hard.grid[-1]))
     fit_eps = np.linspace(0.0, eps_end, 200)
     curves = {
         "raw_diagram": data[[c for c in ("time_s", "force_N", "crosshead_mm", "extensometer_mm") if c in data.columns]].copy(),
-        "corrected_diagram": pd.DataFrame({"elongation_mm": line.disp, "force_N": inp.force}),
-        "engineering": pd.DataFrame({"engineering_strain": line.strain, "engineering_stress_MPa": inp.eng_stress}),
-        "true": pd.DataFrame({"true_strain": true.log_strain[uni], "true_plastic_strain": true.eps_p[uni], "true_stress_MPa": true.sig_t[uni]}),
+        "corrected_diagram": pd.DataFrame({"elongation_mm": line.disp, "force_N": inp.force}, copy=False),
+        "engineering": pd.DataFrame({"engineering_strain": line.strain, "engineering_stress_MPa": inp.eng_stress}, copy=False),
+        "true": pd.DataFrame({"true_strain": true.log_strain[uni], "true_plastic_strain": true.eps_p[uni], "true_stress_MPa": true.sig_t[uni]}, copy=False),
         "fit": pd.DataFrame({"true_plastic_strain": fit_eps, "true_stress_MPa": hard.main(fit_eps)}),
     }
     if fracture:

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flowcurve.identification.iso6892 import nan_argmax
+
 K_COVERAGE = 2.0  # expanded uncertainty U = k·u_c, k = 2 (≈ 95 % for a normal output)
 
 # The defaults when a record does not state its instruments (the same values as
@@ -269,14 +271,28 @@ def reduction_of_area_budget(d0_mm: float, du_mm: float, diameter_resolution_mm:
 def offset_yield_MPa(strain, stress_MPa, E_MPa: float, offset: float = OFFSET) -> float | None:
     """Stress where ε − σ/E (the running maximum) first reaches ``offset``, interpolated; None when never."""
     strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
-    eps_p = np.maximum.accumulate(strain - stress / E_MPa)  # ε_p = ε − σ/E
-    if not eps_p.size or eps_p[-1] < offset:
+    i = _first_at_least(strain, stress, E_MPa, offset)  # the running maximum of ε_p first reaches the offset where ε_p itself does
+    if i is None:
         return None
-    i = int(np.argmax(eps_p >= offset))
     if i == 0:
         return float(stress[0])
-    w = 0.0 if eps_p[i] == eps_p[i - 1] else (offset - eps_p[i - 1]) / (eps_p[i] - eps_p[i - 1])
+    before = float(np.max(strain[:i] - stress[:i] / E_MPa))  # the running maximum at i − 1
+    at = float(strain[i] - stress[i] / E_MPa)
+    w = 0.0 if at == before else (offset - before) / (at - before)
     return float(stress[i - 1] + w * (stress[i] - stress[i - 1]))
+
+
+def _first_at_least(strain: np.ndarray, stress_MPa: np.ndarray, E_MPa: float, offset: float, chunk: int = 4096) -> int | None:
+    """First index where ε_p = ε − σ/E ≥ ``offset`` (None when never), read in doubling chunks:
+    Rp0.2 lies early in a long record, so most of it is never computed."""
+    start = 0
+    while start < strain.size:
+        stop = min(strain.size, start + chunk)
+        hits = np.flatnonzero(strain[start:stop] - stress_MPa[start:stop] / E_MPa >= offset)
+        if hits.size:
+            return start + int(hits[0])
+        start, chunk = stop, 2 * chunk
+    return None
 
 
 def offset_method_components(strain, stress_MPa, E_MPa: float, u_E_MPa: float, lines: Mapping[str, float], delta_eps0: float,
@@ -328,7 +344,7 @@ def line_windows_E(strain, stress_MPa, window_MPa) -> dict[str, float]:
     """The slopes of the elastic line over its window's lower and upper halves (strain regressed on
     stress up to the largest stress): where the first loading is not linear they differ."""
     strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
-    top = int(np.nanargmax(stress)) + 1
+    top = nan_argmax(stress) + 1
     lo, hi = float(window_MPa[0]), float(window_MPa[1])
     mid = 0.5 * (lo + hi)
     out = {}
