@@ -29,3 +29,7 @@ KNOWN: dict[tuple[str, str], str] = {
     ("virtual rig", "johnson_cook B_MPa"): "78 % held (worst 8.8 U)",
     ("virtual rig", "johnson_cook n"): "65 % held (worst 4.2 U)",
 }
+
+# cells within a few records of 90 % on the virtual rig, whose records are not bit-for-bit repeatable
+# (its devices run in threads): xfail without strict, so a run that happens to hold is not red
+BORDERLINE: set[tuple[str, str]] = {("virtual rig", "johnson_cook A_MPa")}
