@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import functools
 import math
-import os
 import random
 import runpy
 import warnings
