@@ -288,7 +288,7 @@ def campaign_seed() -> int:
 
 # budget components that are the instruments' (classes, resolutions, gauge lengths): the rest is the method's share
 INSTRUMENT_TERMS = ("force", "diameter", "strain scale", "stress scale", "initial height", "gauge length", "original gauge length",
-                    "extensometer", "extension", "shortening")
+                    "extensometer", "extension", "shortening", "smallest diameter")
 
 
 def method_share_U(budget: dict) -> float:
