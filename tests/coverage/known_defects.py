@@ -1,0 +1,35 @@
+"""Known defects of the stated uncertainty (issue 43), one line per cell of the coverage table:
+(kind, quantity) → what misses, as measured on 1f2f484 (``python -m tests.coverage.campaign --worst``).
+tests/coverage/test_coverage.py marks these cells ``xfail(strict=True)``: a fix turns the cell red
+until its line here is removed. The default selection does not judge these cells.
+"""
+
+KNOWN: dict[tuple[str, str], str] = {
+    # over-wide: the method share of U is more than 5× the median error (never a blanket U)
+    ("CalculiX", "flow stress"): "blanket: method share 7.4× the median error (μ term)",
+    ("CalculiX", "johnson_cook A_MPa"): "blanket: method share 5.5× the median error",
+    ("CalculiX", "johnson_cook B_MPa"): "blanket: method share 12× the median error",
+    ("CalculiX", "johnson_cook n"): "blanket: method share 6.7× the median error",
+    ("tension drawn", "Ag_pct"): "59 % held (worst 57 U on a flat maximum with 0.5 % force noise) and blanket 36× elsewhere",
+    # misses: U too small for the method's error
+    ("compression closed form", "Rp02_MPa"): "69 % held: force and d0 only, the elastic line and toe not in U (worst 3.7 U)",
+    ("compression closed form", "flow stress"): "83 % held (worst 2.8 U at μ 0.2)",
+    ("compression closed form", "friction_mu"): "67 % held (worst 2.4 U at μ 0.2)",
+    ("compression closed form", "johnson_cook A_MPa"): "67 % held (worst 1.6 U)",
+    ("compression closed form", "johnson_cook n"): "67 % held (worst 1.5 U)",
+    ("tension crosshead", "Ag_pct"): "30 % held: the strain at Fm of a flat maximum not in U (worst 11 U)",
+    ("tension drawn", "johnson_cook A_MPa"): "62 % held (a stated U of 0 at the bound A = 0)",
+    ("tension drawn", "johnson_cook B_MPa"): "67 % held (worst 65 U)",
+    ("tension drawn", "johnson_cook n"): "54 % held (worst 491 U)",
+    ("virtual rig", "Rm_MPa"): "50 % held (worst 130 U: a furnace open-thermocouple drill)",
+    ("virtual rig", "Rp02_MPa"): "58 % held (worst 252 U: 600 °C tension at 2 Hz, fault-free)",
+    ("virtual rig", "flow stress"): "57–60 % held (worst 9.7 U: an encoder garble drill)",
+    ("virtual rig", "friction_mu"): "85 % held (worst 1.5 U)",
+    ("virtual rig", "johnson_cook A_MPa"): "89 % held (worst 1.2 U)",
+    ("virtual rig", "johnson_cook B_MPa"): "78 % held (worst 8.8 U)",
+    ("virtual rig", "johnson_cook n"): "65 % held (worst 4.2 U)",
+}
+
+# cells within a few records of 90 % on the virtual rig, whose records are not bit-for-bit repeatable
+# (its devices run in threads): xfail without strict, so a run that happens to hold is not red
+BORDERLINE: set[tuple[str, str]] = {("virtual rig", "johnson_cook A_MPa")}
