@@ -286,13 +286,17 @@ def campaign_seed() -> int:
 # -- the judge ------------------------------------------------------------------------------
 
 
-# budget components that are the instruments' (classes, resolutions, gauge lengths): the rest is the method's share
+# budget components that are the instruments' (classes, resolutions, gauge lengths) or the test conditions' (the
+# testing rate anywhere within the method's allowed range: the records are made at one known rate, so the truth is the
+# value at that rate) or the machine's (the crosshead compliance model's spread, measured on real extensometer pairs: the
+# records simulate a machine that follows the model): the rest is the method's share
 INSTRUMENT_TERMS = ("force", "diameter", "strain scale", "stress scale", "initial height", "gauge length", "original gauge length",
-                    "extensometer", "extension", "shortening", "smallest diameter")
+                    "extensometer", "extension", "shortening", "smallest diameter", "method: testing rate",
+                    "method: crosshead compliance")
 
 
 def method_share_U(budget: dict) -> float:
-    """U less its instrument terms: k·√(Σ contribution² of the method's components) (GUM root sum of squares)."""
+    """U less its instrument and test-condition terms: k·√(Σ contribution² of the method's components) (GUM root sum of squares)."""
     comps = [c for c in budget.get("components") or [] if not str(c.get("name", "")).lower().startswith(INSTRUMENT_TERMS)]
     k = float(budget.get("k") or 2.0)
     return k * math.sqrt(sum(float(c.get("contribution") or 0.0) ** 2 for c in comps))

@@ -1,5 +1,5 @@
 """Known defects of the stated uncertainty (issue 43), one line per cell of the coverage table:
-(kind, quantity) → what misses, as measured on 1f2f484 (``python -m tests.coverage.campaign --worst``).
+(kind, quantity) → what misses, as measured on 1f2f484 and, after the budgets' method shares merged, on main (``python -m tests.coverage.campaign --worst``).
 tests/coverage/test_coverage.py marks these cells ``xfail(strict=True)``: a fix turns the cell red
 until its line here is removed. The default selection does not judge these cells.
 """
@@ -12,8 +12,7 @@ KNOWN: dict[tuple[str, str], str] = {
     ("CalculiX", "johnson_cook n"): "blanket: method share 6.7× the median error",
     ("tension drawn", "Ag_pct"): "59 % held (worst 57 U on a flat maximum with 0.5 % force noise) and blanket 36× elsewhere",
     # misses: U too small for the method's error
-    ("compression closed form", "Rp02_MPa"): "69 % held: force and d0 only, the elastic line and toe not in U (worst 3.7 U)",
-    ("compression closed form", "flow stress"): "83 % held (worst 2.8 U at μ 0.2)",
+    ("compression closed form", "Rp02_MPa"): "holds since the method's share (issue 43) but blanket: the strain-zero share 16× the median error",
     ("compression closed form", "friction_mu"): "67 % held (worst 2.4 U at μ 0.2)",
     ("compression closed form", "johnson_cook A_MPa"): "67 % held (worst 1.6 U)",
     ("compression closed form", "johnson_cook n"): "67 % held (worst 1.5 U)",
@@ -22,7 +21,6 @@ KNOWN: dict[tuple[str, str], str] = {
     ("tension drawn", "johnson_cook B_MPa"): "67 % held (worst 65 U)",
     ("tension drawn", "johnson_cook n"): "54 % held (worst 491 U)",
     ("virtual rig", "Rm_MPa"): "50 % held (worst 130 U: a furnace open-thermocouple drill)",
-    ("virtual rig", "Rp02_MPa"): "58 % held (worst 252 U: 600 °C tension at 2 Hz, fault-free)",
     ("virtual rig", "flow stress"): "57–60 % held (worst 9.7 U: an encoder garble drill)",
     ("virtual rig", "friction_mu"): "85 % held (worst 1.5 U)",
     ("virtual rig", "johnson_cook A_MPa"): "89 % held (worst 1.2 U)",
