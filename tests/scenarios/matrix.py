@@ -287,8 +287,8 @@ def run_cell(cell: Cell, workdir: Path) -> CellRun:
             return
         start = vr.start_crosshead
 
-        def start_and_arm():
-            start()
+        def start_and_arm(*args, **kwargs):  # the rig's start takes the speed asked for
+            start(*args, **kwargs)
             injector = threading.Thread(target=inject, args=(vr,), daemon=True, name="matrix-fault")
             clock.enlist(injector)
             injector.start()
