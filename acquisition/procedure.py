@@ -181,6 +181,7 @@ def target_reached(crosshead_mm: tuple[float, float] | None, crit: StopCriteria)
     return f"target displacement {crit.target_displacement_mm:g} mm reached"
 
 
+LATENCY_NOTED_S = 0.01  # host seconds: a growth of the load cell's stream latency named as an event
 TARGET_TICK_MIN_S = 0.005  # host seconds: the main loop's shortest tick, near a displacement target
 
 
@@ -389,6 +390,7 @@ class Procedure:
         self._dropped = 0
         self._restarts_noted = 0
         self._missing_noted = 0  # the load cell's missing frames the events named so far
+        self._latency_noted = 0.0  # the load cell's stream latency the events named so far (host s)
         self._late_noted: dict[str, int] = {}
         self._rejected_noted: dict[str, int] = {}
         self._speed = SpeedMeter()
@@ -485,6 +487,10 @@ class Procedure:
                 except FlowcurveError as exc:
                     status, reason, error = STATUS_ABORTED, str(exc), exc
                 finally:
+                    lag = getattr(rig, "stream_latency_s", 0.0) if sampler is not None and error is None else 0.0
+                    if lag > 0:  # the line still holds the frames sent before the stop: stop, then let them arrive
+                        self._stop_motion()
+                        self.timebase.sleep(lag + self.tick_s)
                     if sampler is not None:  # the reading threads let go of the ports first
                         sampler.request_stop()
                     self._heater_released = True  # no control step from here on commands the heater
@@ -717,6 +723,14 @@ class Procedure:
             self._event("frames_missing", f"load cell: {_frames(missing)} missing from its stream in all (the count revised from "
                                           f"{self._missing_noted} as later frames arrived)")
             self._missing_noted = missing
+        lag = getattr(self.rig, "stream_latency_s", 0.0)
+        if lag > self._latency_noted + LATENCY_NOTED_S:
+            self._event("stream_latency", f"load cell: its frames arrive {lag:.3f} s (host) after they were sent, from here on; "
+                                          "the force's step across the gap shows no frame lost: each is stamped at its send time")
+            self._latency_noted = lag
+        if final and self._latency_noted:
+            self._alert(f"load cell: its stream arrived {self._latency_noted:.2f} s late from mid-test (the line delays it); "
+                        "the force is stamped at its send time — check the cable or converter")
         restarts = getattr(self.rig, "stream_restarts", 0)
         if restarts > self._restarts_noted:
             self._event("stream_restart", f"load cell: garbled stream restarted ({restarts - self._restarts_noted} more, {restarts} so far; frames lost meanwhile)")

@@ -165,6 +165,12 @@ class DriverRig:
         return self.loadcell.frames_lost
 
     @property
+    def stream_latency_s(self) -> float:
+        """Host seconds the load cell's line latency grew since its stream started (its frames are
+        stamped that much before they arrive: :func:`rig.loadcell.gap_is_latency`)."""
+        return self.loadcell.latency_s
+
+    @property
     def late_replies(self) -> dict[str, int]:
         """Replies discarded as stale (they came after their time-out), per device."""
         return {dev.name: dev.transport.late_replies for dev in (self.loadcell, self.encoder, self.furnace) if dev is not None}
