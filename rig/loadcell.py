@@ -28,6 +28,7 @@ REALIGN_CHECK = {"ascii": 1, "binary4": 2, "binary2": 2}  # ... where this many 
 # (an ASCII frame parses or not; a binary one has only its CR LF, which a value's bytes can hold by chance)
 LATENCY_HISTORY = 8  # good frames before a gap whose per-frame force change predicts the frame after it
 LATENCY_NOISE_SIGMAS = 6.0  # the two predictions must differ by this many σ of a frame's change to be told apart
+LATENCY_MIN_PERIODS = 5  # shorter gaps are taken as losses: a few frames in a row, or host jitter the chain heals (the force one latency period costs is small)
 LATENCY_FIT = 0.25  # ... and the step must lie within this share of their difference from one frame's change
 STREAM_WRITER = "stream-rhythm-1"  # how this driver stamps the stream (the record header's writer.stamping)
 
@@ -63,27 +64,31 @@ def stream_stamps(arrival, period: float, last: float | None = None, margin: flo
     return stamps, spans
 
 
-def gap_is_latency(recent_N, next_N: float, periods: int) -> bool:
+def gap_is_latency(recent_periods, recent_N, next_N: float, periods: int) -> bool:
     """Whether a gap of ``periods`` output periods in arrival before the frame ``next_N`` is the
     line's latency growing (no frame lost: the next frame was sent one period after the last)
     rather than ``periods`` − 1 lost frames — the *step rule*::
 
-        d = mean(Δf), σ = std(Δf) over ``recent_N``     the force's change per frame and its noise
-        Δ = next_N − recent_N[-1]                      the step across the gap
-        loss predicts Δ ≈ j·d, a latency jump Δ ≈ d
-        latency  ⇔  |(j − 1)·d| > k·σ  and  |Δ − d| < LATENCY_FIT·|(j − 1)·d|
+        f ≈ a + b·x, σ the residual    fitted to the good frames before the gap, x their stamps in
+                                        periods from the last one (gaps among them are allowed)
+        loss predicts next ≈ a + b·j, a latency jump next ≈ a + b
+        latency  ⇔  j ≥ LATENCY_MIN_PERIODS, |(j − 1)·b| > k·σ  and  |next − a − b| < LATENCY_FIT·|(j − 1)·b|
 
     k = LATENCY_NOISE_SIGMAS. Where the force changes too little to tell (under k·σ over the gap)
     the gap is taken as a loss: its stamps then err by the gap, but the force that error costs is
-    within the noise. A step far from both (a fracture, a yield drop inside the gap) is a loss too.
-    ``recent_N``: the forces of the good frames before the gap (at least 4), oldest first."""
-    f = np.asarray(recent_N, dtype=float)
-    if periods < 2 or f.size < 4:
+    within the noise. A step far from both (a fracture, a yield drop inside the gap) is a loss too,
+    and so is a gap of under LATENCY_MIN_PERIODS periods (a few frames lost in a row, whose force steps
+    differ too little from one frame's change to tell; a latency that small costs as little).
+    ``recent_periods``, ``recent_N``: stamps (in periods) and forces of the good frames before the
+    gap (at least 4), oldest first."""
+    x, f = np.asarray(recent_periods, dtype=float), np.asarray(recent_N, dtype=float)
+    if periods < LATENCY_MIN_PERIODS or f.size < 4:
         return False
-    diffs = np.diff(f)
-    d, sigma = float(diffs.mean()), float(diffs.std(ddof=1))
-    apart = abs((periods - 1) * d)
-    return apart > LATENCY_NOISE_SIGMAS * sigma and abs(next_N - f[-1] - d) < LATENCY_FIT * apart
+    x = x - x[-1]
+    b, a = np.polyfit(x, f, 1)  # f = a + b·x, least squares
+    sigma = float(np.sqrt(np.sum((f - a - b * x) ** 2) / (f.size - 2)))
+    apart = abs((periods - 1) * b)
+    return bool(apart > LATENCY_NOISE_SIGMAS * sigma and abs(next_N - a - b) < LATENCY_FIT * apart)
 
 
 @dataclass(frozen=True)
@@ -145,7 +150,7 @@ class LoadCell:
         self._phase_known = False  # after a (re)start the stream's phase is new: the chain starts again
         self.latency_s = 0.0  # the line's latency grown since the stream started (gap_is_latency): arrivals less it
         self.latency_jumps = 0  # gaps taken as a latency jump, not lost frames
-        self._recent_N: list[float] = []  # the latest good frames' forces (LATENCY_HISTORY)
+        self._recent_N: list[tuple[float, float]] = []  # the latest good frames' (stamp, force) (LATENCY_HISTORY)
         self._carry = b""  # bytes read past a realignment, framed next
         self._resyncs_in_a_row = 0
         self._last_frame_t = 0.0
@@ -447,7 +452,8 @@ class LoadCell:
                 self.latency_s -= shrunk
                 arrival += shrunk
             periods = max(1, int(round((arrival - self._last_stamp) / period)))
-            if force_N is not None and gap_is_latency(self._recent_N, force_N, periods):
+            if force_N is not None and gap_is_latency([t / period for t, _ in self._recent_N], [f for _, f in self._recent_N],
+                                                      force_N, periods):
                 grown = arrival - (self._last_stamp + period)
                 self.latency_s += grown
                 self.latency_jumps += 1
@@ -457,7 +463,7 @@ class LoadCell:
             t = float(stream_stamps([arrival], self._period_s(), last=self._last_stamp)[0][0])
         self._phase_known = True
         if force_N is not None:
-            self._recent_N = (self._recent_N + [force_N])[-LATENCY_HISTORY:]
+            self._recent_N = (self._recent_N + [(t, force_N)])[-LATENCY_HISTORY:]
         self._first_stamp = t if self._first_stamp is None else self._first_stamp
         self._last_stamp = t
         if self.output_rate_per_s:

@@ -20,19 +20,30 @@ def ramp(n, seed=0):
     return SLOPE_N * np.arange(n) + rng.normal(0.0, NOISE_N, n)
 
 
-@pytest.mark.parametrize("periods", [2, 5, 51])
+X8 = np.arange(8.0)  # the stamps of eight frames, in periods
+
+
+@pytest.mark.parametrize("periods", [5, 8, 51])
 def test_step_rule_tells_loss_from_latency(periods):
     f = ramp(8)
-    assert gap_is_latency(f, f[-1] + SLOPE_N, periods)  # one frame's change across the gap: latency
-    assert not gap_is_latency(f, f[-1] + periods * SLOPE_N, periods)  # the gap's change: frames lost
+    assert gap_is_latency(X8, f, f[-1] + SLOPE_N, periods)  # one frame's change across the gap: latency
+    assert not gap_is_latency(X8, f, f[-1] + periods * SLOPE_N, periods)  # the gap's change: frames lost
 
 
 def test_step_rule_takes_a_loss_where_the_force_cannot_tell():
     flat = np.random.default_rng(1).normal(5000.0, NOISE_N, 8)  # a plateau: the change is within the noise
-    assert not gap_is_latency(flat, flat[-1], 51)
+    assert not gap_is_latency(X8, flat, flat[-1], 51)
     loaded = 12000.0 + ramp(8)
-    assert not gap_is_latency(loaded, 0.2 * loaded[-1], 51)  # a fracture inside the gap: far from both, a loss
-    assert not gap_is_latency(ramp(3), ramp(3)[-1] + SLOPE_N, 51)  # too few frames to know the change
+    assert not gap_is_latency(X8, loaded, 0.2 * loaded[-1], 51)  # a fracture inside the gap: far from both, a loss
+    assert not gap_is_latency(X8[:3], ramp(3), ramp(3)[-1] + SLOPE_N, 51)  # too few frames to know the change
+    assert not gap_is_latency(X8, ramp(8), ramp(8)[-1] + SLOPE_N, 4)  # a short gap: a few frames lost, never latency
+
+
+def test_step_rule_counts_in_periods_across_earlier_gaps():
+    x = np.array([0, 1, 3, 4, 5, 8, 9, 10.0])  # frames lost before the gap: the change is per period
+    f = SLOPE_N * x + np.random.default_rng(4).normal(0.0, NOISE_N, x.size)
+    assert gap_is_latency(x, f, f[-1] + SLOPE_N, 51)
+    assert not gap_is_latency(x, f, f[-1] + 51 * SLOPE_N, 51)
 
 
 def stamp_all(sent, force, arrival):
