@@ -524,6 +524,10 @@ class Procedure:
                         if error is None and isinstance(late, SafetyError):  # found while stopping: still told
                             error = late
                             self._event("fault", str(late))
+                        silent = sampler.failing_at_end() if error is None and late is None else None
+                        if silent is not None:  # a device silent at the end: its values there are unknown
+                            status, error = STATUS_ABORTED, silent
+                            self._event("fault", str(silent))
                         self._unshown_rows.append(final)
                         try:
                             self._write_rows(final)
