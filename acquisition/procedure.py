@@ -173,12 +173,14 @@ def stop_reason(rows: np.ndarray, state: StopState, crit: StopCriteria) -> str |
 
 
 def target_reached(crosshead_mm: tuple[float, float] | None, crit: StopCriteria, *, now_s: float | None = None,
-                   speed_mm_per_s: float = 0.0, stale_s: float = math.inf) -> str | None:
+                   speed_mm_per_s: float = 0.0, stale_s: float = math.inf, carry_max_s: float = math.inf) -> str | None:
     """The displacement target judged on the crosshead reading itself (the encoder stream's latest,
     ``(time_s, mm)``), not on record rows: a row waits for every stream to bracket its force sample,
     so rows come later than the reading that reached the target. A reading older than ``stale_s``
     at ``now_s`` (test s: the encoder retrying a lost reply) is carried on at the crosshead's
-    speed, |x| + v·(now − t), so the stop does not wait for the next reading."""
+    speed, |x| + v·(now − t), so the stop does not wait for the next reading — up to ``carry_max_s``
+    old (longer than a retried exchange takes: the encoder has gone silent, and its silence fault ends
+    the test instead)."""
     target = crit.target_displacement_mm
     if target is None or crosshead_mm is None:
         return None
@@ -186,7 +188,7 @@ def target_reached(crosshead_mm: tuple[float, float] | None, crit: StopCriteria,
     if abs(x_mm) >= target:
         return f"target displacement {target:g} mm reached"
     age_s = (now_s - t_s) if now_s is not None else 0.0
-    if age_s > stale_s and speed_mm_per_s > 0 and abs(x_mm) + speed_mm_per_s * age_s >= target:
+    if stale_s < age_s <= carry_max_s and speed_mm_per_s > 0 and abs(x_mm) + speed_mm_per_s * age_s >= target:
         return (f"target displacement {target:g} mm reached (carried on at {speed_mm_per_s:g} mm/s from the crosshead's "
                 f"{abs(x_mm):.3f} mm read {age_s:.2f} s before: the encoder was retrying)")
     return None
@@ -194,6 +196,7 @@ def target_reached(crosshead_mm: tuple[float, float] | None, crit: StopCriteria,
 
 LATENCY_NOTED_S = 0.01  # host seconds: a growth of the load cell's stream latency named as an event
 STALE_CROSSHEAD_S = 0.1  # host seconds: an encoder reading older than this near the target is carried on at the speed
+CARRY_MAX_S = 1.0  # host seconds: ... carried on at most this long (a retried encoder read takes under 0.6 s)
 CARRY_AGREE_MM = 0.02  # the reading after such a stop must agree this well with the carried-on stop position
 STALE_WAIT_S = 2.0  # host seconds: after such a stop, the longest wait for the encoder's next reading
 TARGET_TICK_MIN_S = 0.005  # host seconds: the main loop's shortest tick, near a displacement target
@@ -663,7 +666,7 @@ class Procedure:
                 crosshead = sampler.channels.get("crosshead_mm")
                 reason = target_reached(crosshead.stream.last() if crosshead is not None else None, crit, now_s=self.clock(),
                                         speed_mm_per_s=spec.speed_mm_per_s if rig.can_drive else 0.0,
-                                        stale_s=STALE_CROSSHEAD_S * rig.time_scale)
+                                        stale_s=STALE_CROSSHEAD_S * rig.time_scale, carry_max_s=CARRY_MAX_S * rig.time_scale)
                 if reason:
                     if "carried on" in reason:  # the end waits for a crosshead reading after the stop
                         self._carried_stop = (*crosshead.stream.last(), self.clock(), spec.speed_mm_per_s)

@@ -21,3 +21,8 @@ def test_a_fresh_reading_is_never_carried_on():
     assert target_reached((50.0, 2.99), CRIT, now_s=50.9, speed_mm_per_s=SPEED, stale_s=1.0) is None
     assert target_reached((50.0, 2.99), CRIT, now_s=60.0, speed_mm_per_s=0.0, stale_s=1.0) is None  # no motion: none
     assert target_reached((50.0, 3.0), CRIT, now_s=50.0) == "target displacement 3 mm reached"
+
+
+def test_a_silent_encoder_is_never_carried_on_to_the_target():
+    # 0.96 mm read 60 s before: carried on it would reach 3 mm, but that is a silence, not a retry
+    assert target_reached((0.0, -0.96), CRIT, now_s=60.0, speed_mm_per_s=SPEED, stale_s=1.0, carry_max_s=20.0) is None
