@@ -28,7 +28,7 @@ REALIGN_CHECK = {"ascii": 1, "binary4": 2, "binary2": 2}  # ... where this many 
 # (an ASCII frame parses or not; a binary one has only its CR LF, which a value's bytes can hold by chance)
 LATENCY_HISTORY = 8  # good frames before a gap whose per-frame force change predicts the frame after it
 LATENCY_NOISE_SIGMAS = 6.0  # the two predictions must differ by this many σ of a frame's change to be told apart
-LATENCY_MIN_PERIODS = 5  # shorter gaps are taken as losses: a few frames in a row, or host jitter the chain heals (the force one latency period costs is small)
+LATENCY_MIN_S = 0.2  # host s: a gap's extra time under this is taken as lost frames (a run of them at 100 Hz, or host jitter the chain heals; a latency that small costs little force)
 LATENCY_FIT = 0.25  # ... and the step must lie within this share of their difference from one frame's change
 STREAM_WRITER = "stream-rhythm-1"  # how this driver stamps the stream (the record header's writer.stamping)
 
@@ -64,7 +64,7 @@ def stream_stamps(arrival, period: float, last: float | None = None, margin: flo
     return stamps, spans
 
 
-def gap_is_latency(recent_periods, recent_N, next_N: float, periods: int) -> bool:
+def gap_is_latency(recent_periods, recent_N, next_N: float, periods: int, min_periods: int = 2) -> bool:
     """Whether a gap of ``periods`` output periods in arrival before the frame ``next_N`` is the
     line's latency growing (no frame lost: the next frame was sent one period after the last)
     rather than ``periods`` − 1 lost frames — the *step rule*::
@@ -72,17 +72,18 @@ def gap_is_latency(recent_periods, recent_N, next_N: float, periods: int) -> boo
         f ≈ a + b·x, σ the residual    fitted to the good frames before the gap, x their stamps in
                                         periods from the last one (gaps among them are allowed)
         loss predicts next ≈ a + b·j, a latency jump next ≈ a + b
-        latency  ⇔  j ≥ LATENCY_MIN_PERIODS, |(j − 1)·b| > k·σ  and  |next − a − b| < LATENCY_FIT·|(j − 1)·b|
+        latency  ⇔  j ≥ min_periods, |(j − 1)·b| > k·σ  and  |next − a − b| < LATENCY_FIT·|(j − 1)·b|
 
     k = LATENCY_NOISE_SIGMAS. Where the force changes too little to tell (under k·σ over the gap)
     the gap is taken as a loss: its stamps then err by the gap, but the force that error costs is
     within the noise. A step far from both (a fracture, a yield drop inside the gap) is a loss too,
-    and so is a gap of under LATENCY_MIN_PERIODS periods (a few frames lost in a row, whose force steps
-    differ too little from one frame's change to tell; a latency that small costs as little).
+    and so is a gap under ``min_periods`` (the driver: 1 + LATENCY_MIN_S of periods — a few frames lost in
+    a row at a high rate, whose steps differ too little from one frame's change to tell; a latency that
+    small costs as little).
     ``recent_periods``, ``recent_N``: stamps (in periods) and forces of the good frames before the
     gap (at least 4), oldest first."""
     x, f = np.asarray(recent_periods, dtype=float), np.asarray(recent_N, dtype=float)
-    if periods < LATENCY_MIN_PERIODS or f.size < 4:
+    if periods < max(2, min_periods) or f.size < 4:
         return False
     x = x - x[-1]
     b, a = np.polyfit(x, f, 1)  # f = a + b·x, least squares
@@ -453,7 +454,7 @@ class LoadCell:
                 arrival += shrunk
             periods = max(1, int(round((arrival - self._last_stamp) / period)))
             if force_N is not None and gap_is_latency([t / period for t, _ in self._recent_N], [f for _, f in self._recent_N],
-                                                      force_N, periods):
+                                                      force_N, periods, 1 + math.ceil(LATENCY_MIN_S / period)):
                 grown = arrival - (self._last_stamp + period)
                 self.latency_s += grown
                 self.latency_jumps += 1

@@ -23,7 +23,7 @@ def ramp(n, seed=0):
 X8 = np.arange(8.0)  # the stamps of eight frames, in periods
 
 
-@pytest.mark.parametrize("periods", [5, 8, 51])
+@pytest.mark.parametrize("periods", [2, 5, 51])
 def test_step_rule_tells_loss_from_latency(periods):
     f = ramp(8)
     assert gap_is_latency(X8, f, f[-1] + SLOPE_N, periods)  # one frame's change across the gap: latency
@@ -36,7 +36,8 @@ def test_step_rule_takes_a_loss_where_the_force_cannot_tell():
     loaded = 12000.0 + ramp(8)
     assert not gap_is_latency(X8, loaded, 0.2 * loaded[-1], 51)  # a fracture inside the gap: far from both, a loss
     assert not gap_is_latency(X8[:3], ramp(3), ramp(3)[-1] + SLOPE_N, 51)  # too few frames to know the change
-    assert not gap_is_latency(X8, ramp(8), ramp(8)[-1] + SLOPE_N, 4)  # a short gap: a few frames lost, never latency
+    assert not gap_is_latency(X8, ramp(8), ramp(8)[-1] + SLOPE_N, 4, min_periods=21)  # short at 100 Hz: frames lost
+    assert gap_is_latency(X8, ramp(8), ramp(8)[-1] + SLOPE_N, 2)  # at 2 Hz a 0.5 s latency is one period: told apart
 
 
 def test_step_rule_counts_in_periods_across_earlier_gaps():
