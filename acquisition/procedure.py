@@ -172,15 +172,33 @@ def stop_reason(rows: np.ndarray, state: StopState, crit: StopCriteria) -> str |
     return None
 
 
-def target_reached(crosshead_mm: tuple[float, float] | None, crit: StopCriteria) -> str | None:
+def target_reached(crosshead_mm: tuple[float, float] | None, crit: StopCriteria, *, now_s: float | None = None,
+                   speed_mm_per_s: float = 0.0, stale_s: float = math.inf, carry_max_s: float = math.inf) -> str | None:
     """The displacement target judged on the crosshead reading itself (the encoder stream's latest,
     ``(time_s, mm)``), not on record rows: a row waits for every stream to bracket its force sample,
-    so rows come later than the reading that reached the target."""
-    if crit.target_displacement_mm is None or crosshead_mm is None or not abs(crosshead_mm[1]) >= crit.target_displacement_mm:
+    so rows come later than the reading that reached the target. A reading older than ``stale_s``
+    at ``now_s`` (test s: the encoder retrying a lost reply) is carried on at the crosshead's
+    speed, |x| + v·(now − t), so the stop does not wait for the next reading — up to ``carry_max_s``
+    old (longer than a retried exchange takes: the encoder has gone silent, and its silence fault ends
+    the test instead)."""
+    target = crit.target_displacement_mm
+    if target is None or crosshead_mm is None:
         return None
-    return f"target displacement {crit.target_displacement_mm:g} mm reached"
+    t_s, x_mm = crosshead_mm
+    if abs(x_mm) >= target:
+        return f"target displacement {target:g} mm reached"
+    age_s = (now_s - t_s) if now_s is not None else 0.0
+    if stale_s < age_s <= carry_max_s and speed_mm_per_s > 0 and abs(x_mm) + speed_mm_per_s * age_s >= target:
+        return (f"target displacement {target:g} mm reached (carried on at {speed_mm_per_s:g} mm/s from the crosshead's "
+                f"{abs(x_mm):.3f} mm read {age_s:.2f} s before: the encoder was retrying)")
+    return None
 
 
+LATENCY_NOTED_S = 0.01  # host seconds: a growth of the load cell's stream latency named as an event
+STALE_CROSSHEAD_S = 0.1  # host seconds: an encoder reading older than this near the target is carried on at the speed
+CARRY_MAX_S = 1.0  # host seconds: ... carried on at most this long (a retried encoder read takes under 0.6 s)
+CARRY_AGREE_MM = 0.02  # the reading after such a stop must agree this well with the carried-on stop position
+STALE_WAIT_S = 2.0  # host seconds: after such a stop, the longest wait for the encoder's next reading
 TARGET_TICK_MIN_S = 0.005  # host seconds: the main loop's shortest tick, near a displacement target
 
 
@@ -389,6 +407,8 @@ class Procedure:
         self._dropped = 0
         self._restarts_noted = 0
         self._missing_noted = 0  # the load cell's missing frames the events named so far
+        self._carried_stop: tuple | None = None  # (t, x of the last reading, t of the stop, speed): a stop on a carried-on position
+        self._latency_noted = 0.0  # the load cell's stream latency the events named so far (host s)
         self._late_noted: dict[str, int] = {}
         self._rejected_noted: dict[str, int] = {}
         self._speed = SpeedMeter()
@@ -485,6 +505,13 @@ class Procedure:
                 except FlowcurveError as exc:
                     status, reason, error = STATUS_ABORTED, str(exc), exc
                 finally:
+                    lag = getattr(rig, "stream_latency_s", 0.0) if sampler is not None and error is None else 0.0
+                    if lag > 0:  # the line still holds the frames sent before the stop: stop, then let them arrive
+                        self._stop_motion()
+                        self.timebase.sleep(lag + self.tick_s)
+                    if sampler is not None and error is None and self._carried_stop:
+                        self._stop_motion()  # stopped on a carried-on position: the rows wait for a reading after the stop
+                        self._await_reading(sampler.channels.get("crosshead_mm"), self.clock())
                     if sampler is not None:  # the reading threads let go of the ports first
                         sampler.request_stop()
                     self._heater_released = True  # no control step from here on commands the heater
@@ -492,7 +519,7 @@ class Procedure:
                     self._end_reason = reason
                     self._stop_motion()
                     if sampler is not None:
-                        final = self._drop_unbracketed(sampler, sampler.finish())
+                        final = self._carry_crosshead(sampler, self._drop_unbracketed(sampler, sampler.finish()))
                         if rig.has_furnace and safety.off_confirmed:  # a control step in flight at the switch-off
                             safety.switch_off(reason or "end of test")  # may have switched it on again: off once more
                         self._feed_watchdog()  # the furnace channel has stopped feeding it
@@ -500,6 +527,10 @@ class Procedure:
                         if error is None and isinstance(late, SafetyError):  # found while stopping: still told
                             error = late
                             self._event("fault", str(late))
+                        silent = sampler.failing_at_end() if error is None and late is None else None
+                        if silent is not None:  # a device silent at the end: its values there are unknown
+                            status, error = STATUS_ABORTED, silent
+                            self._event("fault", str(silent))
                         self._unshown_rows.append(final)
                         try:
                             self._write_rows(final)
@@ -633,8 +664,12 @@ class Procedure:
                     if reason:
                         return reason  # the done snapshot carries the rows to live plots
                 crosshead = sampler.channels.get("crosshead_mm")
-                reason = target_reached(crosshead.stream.last() if crosshead is not None else None, crit)
+                reason = target_reached(crosshead.stream.last() if crosshead is not None else None, crit, now_s=self.clock(),
+                                        speed_mm_per_s=spec.speed_mm_per_s if rig.can_drive else 0.0,
+                                        stale_s=STALE_CROSSHEAD_S * rig.time_scale, carry_max_s=CARRY_MAX_S * rig.time_scale)
                 if reason:
+                    if "carried on" in reason:  # the end waits for a crosshead reading after the stop
+                        self._carried_stop = (*crosshead.stream.last(), self.clock(), spec.speed_mm_per_s)
                     return reason
                 fault = sampler.fault or sampler.check_silence()
                 if fault is not None:
@@ -717,6 +752,14 @@ class Procedure:
             self._event("frames_missing", f"load cell: {_frames(missing)} missing from its stream in all (the count revised from "
                                           f"{self._missing_noted} as later frames arrived)")
             self._missing_noted = missing
+        lag = getattr(self.rig, "stream_latency_s", 0.0)
+        if lag > self._latency_noted + LATENCY_NOTED_S:
+            self._event("stream_latency", f"load cell: its frames arrive {lag:.3f} s (host) after they were sent, from here on; "
+                                          "the force's step across the gap shows no frame lost: each is stamped at its send time")
+            self._latency_noted = lag
+        if final and self._latency_noted:
+            self._alert(f"load cell: its stream arrived {self._latency_noted:.2f} s late from mid-test (the line delays it); "
+                        "the force is stamped at its send time — check the cable or converter")
         restarts = getattr(self.rig, "stream_restarts", 0)
         if restarts > self._restarts_noted:
             self._event("stream_restart", f"load cell: garbled stream restarted ({restarts - self._restarts_noted} more, {restarts} so far; frames lost meanwhile)")
@@ -744,6 +787,36 @@ class Procedure:
             for device, retried in self._retried_noted.items():
                 self._alert(f"{device}: {retried} exchanges had to be retried (silent or garbled replies; nothing lost) — "
                             f"check its cable and connector if this recurs")
+
+    def _await_reading(self, channel, after_s: float) -> None:
+        """Wait (up to STALE_WAIT_S host seconds) for ``channel``'s first reading after ``after_s`` (test s)."""
+        deadline = self.timebase.now() + STALE_WAIT_S
+        while channel is not None and channel.stream.last_time() < after_s and self.timebase.now() < deadline:
+            self.timebase.sleep(TARGET_TICK_MIN_S)
+
+    def _carry_crosshead(self, sampler: Sampler, rows: np.ndarray) -> np.ndarray:
+        """After a stop on a carried-on position: the rows between the last reading before the stop
+        and the first after it get the crosshead carried on at the speed to the stop, x = x₀ + v·(t − t₀)
+        (linear interpolation across the stop would bend it), when the reading after the stop agrees
+        with the carried-on stop within CARRY_AGREE_MM; else they are left out (an event says so)."""
+        if not self._carried_stop or not rows.size:
+            return rows
+        t0, x0, t_stop, v = self._carried_stop
+        after = sampler.channels["crosshead_mm"].stream.last()
+        gap = (rows[:, 0] > t0) & (rows[:, 0] <= (after[0] if after else np.inf))
+        direction = 1.0 if x0 >= 0 else -1.0
+        x_stop = x0 + direction * v * (t_stop - t0)  # the crosshead at the stop, carried on at the speed
+        if after is not None and after[0] > t_stop and abs(after[1] - x_stop) <= CARRY_AGREE_MM:
+            rows = rows.copy()
+            rows[gap, 2] = x0 + direction * v * (np.minimum(rows[gap, 0], t_stop) - t0)
+            self._event("carried", f"crosshead encoder: {int(gap.sum())} rows between its readings at {t0:.3f} and "
+                                   f"{after[0]:.3f} s carried on at {v:g} mm/s to the stop (the reading after it agrees "
+                                   f"within {CARRY_AGREE_MM:g} mm)")
+            return rows
+        self._dropped += int(gap.sum())
+        self._event("dropped", f"{int(gap.sum())} force samples in the crosshead encoder's gap across the stop left out "
+                               "(no reading after the stop agrees with the carried-on position)")
+        return rows[~gap]
 
     def _drop_unbracketed(self, sampler: Sampler, rows: np.ndarray) -> np.ndarray:
         """The last rows without their faulted channel's values: a held value is no reading."""

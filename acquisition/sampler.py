@@ -120,6 +120,7 @@ class Channel(threading.Thread):
         self.stream = Stream(name)
         self.guard = None  # an acquisition.plausibility.RateGuard: impossible readings rejected
         self.last_error: str | None = None  # the last failed read (for a silence fault's message)
+        self.failing = 0  # reads failed in a row since the last one that answered
         self.half_width_s = 0.0  # the widest bracket (request .. reply) of a bare value's stamp, clock units
         self.reads = 0
         self.last_data_wall_s = timebase.now()
@@ -144,6 +145,7 @@ class Channel(threading.Thread):
                 return
             except DEVICE_FAILURES as exc:  # count it, then give up
                 failures += 1
+                self.failing = failures
                 self.last_error = _one_line(exc)
                 logger.debug("%s: read %d failed: %s", self.device, failures, _one_line(exc))
                 if failures >= self.max_failures:
@@ -156,7 +158,7 @@ class Channel(threading.Thread):
                             InternalError(f"{self.device}: internal error while reading: {_one_line(exc)} "
                                           f"(a bug in flowcurve, please report it; -vv shows the traceback)"))
                 return
-            failures = 0
+            failures = self.failing = 0
             try:
                 n = self._store(got, self.clock(), asked)
             except ImplausibleReadings as exc:  # readings no machine makes, again and again
@@ -293,6 +295,16 @@ class Sampler:
             if ch.is_alive() and now - ch.last_data_wall_s > ch.silence_s:
                 last = f" (last: {ch.last_error})" if ch.last_error else ""
                 self._on_fault(ch.device, f"no answer for {now - ch.last_data_wall_s:.1f} s{last}")
+        return self._fault
+
+    def failing_at_end(self) -> FlowcurveError | None:
+        """At the end of recording: a channel whose latest reads all failed (not one answered since)
+        left the record's end without its values — a fault naming the device, as a silence is, even
+        when the test ended before the channel's silence limit (a compressed time scale)."""
+        for ch in list(self.channels.values())[1:]:
+            if ch.failing:
+                self._on_fault(ch.device, f"no answer since {ch.last_data_wall_s:.1f} s (host) when the test ended: "
+                                          f"{ch.failing} reads failed in a row (last: {ch.last_error})")
         return self._fault
 
     def request_stop(self) -> None:

@@ -165,6 +165,12 @@ class DriverRig:
         return self.loadcell.frames_lost
 
     @property
+    def stream_latency_s(self) -> float:
+        """Host seconds the load cell's line latency grew since its stream started (its frames are
+        stamped that much before they arrive: :func:`rig.loadcell.gap_is_latency`)."""
+        return self.loadcell.latency_s
+
+    @property
     def late_replies(self) -> dict[str, int]:
         """Replies discarded as stale (they came after their time-out), per device."""
         return {dev.name: dev.transport.late_replies for dev in (self.loadcell, self.encoder, self.furnace) if dev is not None}
@@ -180,7 +186,8 @@ class DriverRig:
 
     def _read_position(self) -> list[tuple[float, float]]:
         """The crosshead position stamped at the middle of its exchange: the request and the
-        reply bracket the moment the counter was read. A reading whose bracket is wider than the
+        reply bracket the moment the counter was read (after a retry, the attempt that was answered:
+        ``transport.last_request_s``). A reading whose bracket is wider than the
         narrowest one by more than BRACKET_SLACK_S (the host was held up meanwhile: its time is
         doubtful by half of that) is left out while one was kept within BRACKET_KEEP_S — the
         next comes one poll later, and the stream never falls silent. The widest half-width of a
@@ -189,6 +196,9 @@ class DriverRig:
         asked = self.timebase.now()
         mm = self.encoder.position_mm()
         answered = self.timebase.now()
+        transport = self.encoder.transport
+        if transport.clock is self.timebase and transport.last_request_s is not None:
+            asked = max(asked, transport.last_request_s)  # the attempt that got the reply
         half = 0.5 * (answered - asked)
         self._narrowest_half_s = min(self._narrowest_half_s, half)
         if half > self._narrowest_half_s + BRACKET_SLACK_S and answered - self._position_kept_at < BRACKET_KEEP_S:

@@ -26,6 +26,10 @@ PERIOD_MARGIN = 1.01  # the stamps' chain steps 1 % longer than the nominal peri
 REALIGN_FRAMES = 8  # a garbled frame: the next frame boundary is looked for this many frames' bytes on
 REALIGN_CHECK = {"ascii": 1, "binary4": 2, "binary2": 2}  # ... where this many good frames in a row line up
 # (an ASCII frame parses or not; a binary one has only its CR LF, which a value's bytes can hold by chance)
+LATENCY_HISTORY = 8  # good frames before a gap whose per-frame force change predicts the frame after it
+LATENCY_NOISE_SIGMAS = 6.0  # the two predictions must differ by this many σ of a frame's change to be told apart
+LATENCY_MIN_S = 0.2  # host s: a gap's extra time under this is taken as lost frames (a run of them at 100 Hz, or host jitter the chain heals; a latency that small costs little force)
+LATENCY_FIT = 0.25  # ... and the step must lie within this share of their difference from one frame's change
 STREAM_WRITER = "stream-rhythm-1"  # how this driver stamps the stream (the record header's writer.stamping)
 
 
@@ -58,6 +62,34 @@ def stream_stamps(arrival, period: float, last: float | None = None, margin: flo
             stamps[k] = min(ak, prev + spans[k] * margin * period)
         prev = stamps[k]
     return stamps, spans
+
+
+def gap_is_latency(recent_periods, recent_N, next_N: float, periods: int, min_periods: int = 2) -> bool:
+    """Whether a gap of ``periods`` output periods in arrival before the frame ``next_N`` is the
+    line's latency growing (no frame lost: the next frame was sent one period after the last)
+    rather than ``periods`` − 1 lost frames — the *step rule*::
+
+        f ≈ a + b·x, σ the residual    fitted to the good frames before the gap, x their stamps in
+                                        periods from the last one (gaps among them are allowed)
+        loss predicts next ≈ a + b·j, a latency jump next ≈ a + b
+        latency  ⇔  j ≥ min_periods, |(j − 1)·b| > k·σ  and  |next − a − b| < LATENCY_FIT·|(j − 1)·b|
+
+    k = LATENCY_NOISE_SIGMAS. Where the force changes too little to tell (under k·σ over the gap)
+    the gap is taken as a loss: its stamps then err by the gap, but the force that error costs is
+    within the noise. A step far from both (a fracture, a yield drop inside the gap) is a loss too,
+    and so is a gap under ``min_periods`` (the driver: 1 + LATENCY_MIN_S of periods — a few frames lost in
+    a row at a high rate, whose steps differ too little from one frame's change to tell; a latency that
+    small costs as little).
+    ``recent_periods``, ``recent_N``: stamps (in periods) and forces of the good frames before the
+    gap (at least 4), oldest first."""
+    x, f = np.asarray(recent_periods, dtype=float), np.asarray(recent_N, dtype=float)
+    if periods < max(2, min_periods) or f.size < 4:
+        return False
+    x = x - x[-1]
+    b, a = np.polyfit(x, f, 1)  # f = a + b·x, least squares
+    sigma = float(np.sqrt(np.sum((f - a - b * x) ** 2) / (f.size - 2)))
+    apart = abs((periods - 1) * b)
+    return bool(apart > LATENCY_NOISE_SIGMAS * sigma and abs(next_N - a - b) < LATENCY_FIT * apart)
 
 
 @dataclass(frozen=True)
@@ -117,6 +149,9 @@ class LoadCell:
         self._last_stamp: float | None = None
         self._frames_skipped = 0  # frames_lost: the largest count of frames the stamps' span shows missing
         self._phase_known = False  # after a (re)start the stream's phase is new: the chain starts again
+        self.latency_s = 0.0  # the line's latency grown since the stream started (gap_is_latency): arrivals less it
+        self.latency_jumps = 0  # gaps taken as a latency jump, not lost frames
+        self._recent_N: list[tuple[float, float]] = []  # the latest good frames' (stamp, force) (LATENCY_HISTORY)
         self._carry = b""  # bytes read past a realignment, framed next
         self._resyncs_in_a_row = 0
         self._last_frame_t = 0.0
@@ -228,8 +263,11 @@ class LoadCell:
             raise DeviceError(self.name, f"garbled measured value: {exc}") from None
         return self._to_sample(value, t)
 
+    def _force_N(self, value: aed.MeasuredValue) -> float:
+        return float(aed.counts_to_newtons(value.counts, self.fmt, self.nominal_load_N, self.nov))
+
     def _to_sample(self, value: aed.MeasuredValue, t: float) -> ForceSample:
-        force = float(aed.counts_to_newtons(value.counts, self.fmt, self.nominal_load_N, self.nov))
+        force = self._force_N(value)
         sample = ForceSample(t, force, value.status, value.overflow, value.counts)
         if sample.overload and self.raise_on_overload:
             raise DeviceError(self.name, f"overload: status {value.status:#04x}, {force:.0f} N")
@@ -307,7 +345,8 @@ class LoadCell:
                 continue
             self._resyncs_in_a_row = 0
             self.frames_received += 1
-            t = self._stamp(self._stream_time(now))  # its send time on the stream's rhythm
+            force_N = self._force_N(value)
+            t = self._stamp(self._stream_time(now), force_N)  # its send time on the stream's rhythm
             samples.append(self._to_sample(value, t))
             self._last_frame_t = now
         silent = self.transport.clock.now() - self._last_frame_t
@@ -398,14 +437,34 @@ class LoadCell:
         self._last_sample_t = t
         return t
 
-    def _stamp(self, arrival: float) -> float:
-        """The frame's send time on the stream's rhythm (:func:`stream_stamps`, one step); the
-        frames missing from the stamps' span so far update :attr:`frames_lost`."""
+    def _stamp(self, arrival: float, force_N: float | None = None) -> float:
+        """The frame's send time on the stream's rhythm (:func:`stream_stamps`, one step), less the
+        line's latency; a gap the force shows to be latency (:func:`gap_is_latency`) grows
+        :attr:`latency_s` instead of counting lost frames. The frames missing from the stamps' span
+        so far update :attr:`frames_lost`."""
+        arrival -= self.latency_s
         if not self.output_rate_per_s or self._last_stamp is None or not self._phase_known:
             t = arrival  # the stream (re)started: a new phase, the chain starts at this arrival
+            self._recent_N.clear()
         else:
+            period = self._period_s()
+            if self.latency_s > 0 and arrival < self._last_stamp + 0.5 * period:  # the latency shrank again
+                shrunk = min(self.latency_s, self._last_stamp + period - arrival)
+                self.latency_s -= shrunk
+                arrival += shrunk
+            periods = max(1, int(round((arrival - self._last_stamp) / period)))
+            if force_N is not None and gap_is_latency([t / period for t, _ in self._recent_N], [f for _, f in self._recent_N],
+                                                      force_N, periods, 1 + math.ceil(LATENCY_MIN_S / period)):
+                grown = arrival - (self._last_stamp + period)
+                self.latency_s += grown
+                self.latency_jumps += 1
+                arrival -= grown
+                logger.info("%s: the stream's arrivals jumped %.3f s with one frame's force change: "
+                            "latency, not lost frames (now %.3f s)", self.name, grown, self.latency_s)
             t = float(stream_stamps([arrival], self._period_s(), last=self._last_stamp)[0][0])
         self._phase_known = True
+        if force_N is not None:
+            self._recent_N = (self._recent_N + [(t, force_N)])[-LATENCY_HISTORY:]
         self._first_stamp = t if self._first_stamp is None else self._first_stamp
         self._last_stamp = t
         if self.output_rate_per_s:

@@ -87,6 +87,7 @@ class SerialTransport:
         self._unanswered: tuple[float, int | None, bytes | None] | None = None  # (sent, length, terminator)
         self.late_replies = 0  # replies that came after their time-out, discarded
         self.retried_exchanges = 0  # exchanges repeated after a silent or garbled reply (nothing lost)
+        self.last_request_s: float | None = None  # clock time the last exchange's last attempt was sent
         self.last_late_s: float | None = None  # how late the last of them was
 
     def with_line(self, *, baudrate: int, parity: str, timeout_s: float | None = None) -> "SerialTransport":
@@ -280,6 +281,7 @@ class SerialTransport:
                 last = attempt == retries
                 self._await_unanswered()
                 self.discard_input()
+                self.last_request_s = self.clock.now()  # a retried reply is bracketed by its own attempt
                 self.write(command)
                 if length is None and terminator is None:
                     return None

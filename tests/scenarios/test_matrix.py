@@ -11,7 +11,7 @@ cell re-runs by its node id: ``pytest 'tests/scenarios/test_matrix.py::test_cell
 import pytest
 
 from . import matrix
-from .known_defects import known_defect
+from .known_defects import is_strict, known_defect
 
 SEED = matrix.matrix_seed()
 CELLS = matrix.all_cells()
@@ -23,7 +23,7 @@ def _param(cell):
     marks = [] if cell.id in DEFAULT else [pytest.mark.slow, pytest.mark.matrix]
     reason = known_defect(cell)
     if reason:
-        marks.append(pytest.mark.xfail(reason=reason, strict=False))
+        marks.append(pytest.mark.xfail(reason=reason, strict=is_strict(cell)))
     return pytest.param(cell, id=cell.id, marks=marks)
 
 

@@ -1,0 +1,75 @@
+"""A gap in the load cell's stream told apart by the force (issue 42): lost frames (the force steps
+by the gap's periods × its change per frame) or the line's latency growing (it steps by one frame's
+change). Both against known send times. Before the fix every gap was a loss: after a latency jump
+every later frame was stamped the jump late and counted lost — the driver tests fail on that."""
+
+import numpy as np
+import pytest
+
+from flowcurve.rig.loadcell import LoadCell, gap_is_latency
+
+T = 0.01  # 100 values/s
+LINE_S = 0.0012  # the line's time for a frame
+JUMP_S = 0.5  # the twin's delay fault: every later frame 0.5 s late
+SLOPE_N = 12.0  # force change per frame (elastic loading)
+NOISE_N = 1.5
+
+
+def ramp(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return SLOPE_N * np.arange(n) + rng.normal(0.0, NOISE_N, n)
+
+
+X8 = np.arange(8.0)  # the stamps of eight frames, in periods
+
+
+@pytest.mark.parametrize("periods", [2, 5, 51])
+def test_step_rule_tells_loss_from_latency(periods):
+    f = ramp(8)
+    assert gap_is_latency(X8, f, f[-1] + SLOPE_N, periods)  # one frame's change across the gap: latency
+    assert not gap_is_latency(X8, f, f[-1] + periods * SLOPE_N, periods)  # the gap's change: frames lost
+
+
+def test_step_rule_takes_a_loss_where_the_force_cannot_tell():
+    flat = np.random.default_rng(1).normal(5000.0, NOISE_N, 8)  # a plateau: the change is within the noise
+    assert not gap_is_latency(X8, flat, flat[-1], 51)
+    loaded = 12000.0 + ramp(8)
+    assert not gap_is_latency(X8, loaded, 0.2 * loaded[-1], 51)  # a fracture inside the gap: far from both, a loss
+    assert not gap_is_latency(X8[:3], ramp(3), ramp(3)[-1] + SLOPE_N, 51)  # too few frames to know the change
+    assert not gap_is_latency(X8, ramp(8), ramp(8)[-1] + SLOPE_N, 4, min_periods=21)  # short at 100 Hz: frames lost
+    assert gap_is_latency(X8, ramp(8), ramp(8)[-1] + SLOPE_N, 2)  # at 2 Hz a 0.5 s latency is one period: told apart
+
+
+def test_step_rule_counts_in_periods_across_earlier_gaps():
+    x = np.array([0, 1, 3, 4, 5, 8, 9, 10.0])  # frames lost before the gap: the change is per period
+    f = SLOPE_N * x + np.random.default_rng(4).normal(0.0, NOISE_N, x.size)
+    assert gap_is_latency(x, f, f[-1] + SLOPE_N, 51)
+    assert not gap_is_latency(x, f, f[-1] + 51 * SLOPE_N, 51)
+
+
+def stamp_all(sent, force, arrival):
+    cell = LoadCell("loop://", nominal_load_N=100e3, output_rate_per_s=1.0 / T)
+    stamps = []
+    for a, f in zip(arrival, force):
+        cell.frames_received += 1
+        stamps.append(cell._stamp(a, f))
+    return cell, np.array(stamps)
+
+
+def test_a_latency_jump_shifts_no_stamp_and_loses_no_frame():
+    k = np.arange(600)
+    sent, force = k * T, ramp(600, seed=2)
+    arrival = sent + LINE_S + np.where(k >= 200, JUMP_S, 0.0)
+    cell, stamps = stamp_all(sent, force, arrival)
+    assert np.max(np.abs(stamps - sent)) <= LINE_S + 1e-9  # the old stamping: 0.5 s late from frame 200 on
+    assert cell.frames_lost == 0
+    assert cell.latency_s == pytest.approx(JUMP_S, abs=T * 0.1)
+
+
+def test_lost_frames_stay_lost_with_the_step_rule():
+    k = np.array([i for i in range(600) if not 200 <= i < 250])  # 50 frames lost: a gap of 51 periods
+    sent, force = k * T, (SLOPE_N * k + np.random.default_rng(3).normal(0.0, NOISE_N, k.size))
+    cell, stamps = stamp_all(sent, force, sent + LINE_S)
+    assert np.max(np.abs(stamps - sent)) <= LINE_S + 1e-9
+    assert cell.frames_lost == 50
+    assert cell.latency_s == 0.0
