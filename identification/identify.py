@@ -86,7 +86,7 @@ def temperature_warnings(record: Record) -> list[str]:
 
 
 # record events in which the acquisition declares a rig fault (docs/record-format.md)
-FAULT_EVENTS = ("data_loss", "frames_missing", "corrupt", "stream_restart", "late_reply", "retry", "dropped", "stream_latency", "carried")  # a retry delays a reading: the crosshead may lag
+FAULT_EVENTS = ("data_loss", "frames_missing", "corrupt", "stream_restart", "late_reply", "retry", "dropped", "stream_latency", "carried", "wrong_address")  # a retry delays a reading: the crosshead may lag
 POOR_LOSS_FRACTION = 0.05  # samples lost beyond this share of the test mark the hardening poor
 
 
