@@ -26,8 +26,8 @@ def one_stray_reply(monkeypatch, lead: str, body: str, *, loading: bool = True):
     armed, sent = [not loading], []
     real_command, real_start = I7011.command, VirtualRig.start_crosshead
 
-    def start(rig):
-        real_start(rig)
+    def start(rig, *args, **kwargs):
+        real_start(rig, *args, **kwargs)
         armed[0] = True
 
     def command(module, lead_, body_):
