@@ -26,6 +26,7 @@ from flowcurve.rig.loadcell import LoadCell
 from flowcurve.rig.virtual.fault_spec import parse_faults
 from flowcurve.rig.virtual.physics import Specimen
 from tests.acquisition.curves import compare_curves
+from tests.scenarios.matrix import _note_hits
 
 MATERIAL = "12Kh18N12M3TL"
 TARGET_MM = 3.0
@@ -43,17 +44,7 @@ def tension_to_target(path, *, time_scale=3.0, faults=(), on_model_time=True):
     hits, reads = [], []
 
     def count_hits(vr):  # the twin's frames the fault took, by host time; the driver's last frame read
-        wire = vr.devices["loadcell"].faults
-        apply = wire.apply
-
-        def counted(reply):
-            before = wire.replies_hit
-            out = apply(reply)
-            if wire.replies_hit > before:
-                hits.append(vr.clock.now())
-            return out
-
-        wire.apply = counted
+        _note_hits(vr.devices["loadcell"], hits)
         read_stream = LoadCell.read_stream
 
         def read(cell, *args, **kwargs):
