@@ -19,8 +19,9 @@ A spike smaller than ``tolerance`` passes those rules (the force's tolerance is 
 frame's capacity: a +900 N frame at 100 kN). With ``spike_sigmas`` (force) the guard also judges
 each sample by the **signal's own noise**: σ is the median absolute residual of the recent samples
 from their neighbours' chord (``noise_window`` of them, robust to the rare spike or yield drop
-among them; at least ``noise_floor``, the instrument's resolution), and a sample is a one-sample
-spike at any size when
+among them; while the window fills, its newer half, so that the knee's few large residuals on a
+sparse record leave it soon; at least ``noise_floor``, the instrument's resolution), and a sample
+is a one-sample spike at any size when
 
 * it is out of the band its two neighbours span by more than ``spike_sigmas`` σ (it leaves
   the band and comes back: a knee, a step or a fall stays within it), and
@@ -36,9 +37,11 @@ A physical event does not return, so one of these fails: at a **yield drop**, a 
 trend (the lower yield level, the reloading, the broken specimen's zero) and the peak before
 lies on the approach's trend (the elastic or hardening rise, at most up to its extension: a peak
 reached between two samples); a step or a fall stays within its neighbours' band. What no rule
-can tell: a serration whose rise to its peak takes a single sample, and (for a force) a dip
-smaller than ``max_rate`` × the sampling interval (2 kN at 0.05 mm/s on a 136 N/µm frame and
-0.15 s apart, the virtual rig at time scale 15). The guard holds two samples with this rule (one
+can tell: a spike smaller than the signal's climb between two samples (it stays within its
+neighbours' band, like a knee: a sparse record of a steep curve), a serration whose rise to its
+peak takes a single sample, and (for a force) a dip smaller than ``max_rate`` × the sampling
+interval (2 kN at 0.05 mm/s on a 136 N/µm frame and 0.15 s apart, the virtual rig at time scale
+15). The guard holds two samples with this rule (one
 without). Rejections by the noise rule are named like the others but never stop the channel
 (``persist`` counts the rules above): they are single readings judged against the signal, not a
 broken channel; the noise window takes every judged sample, rejected or not, so a channel whose
