@@ -39,6 +39,7 @@ from flowcurve.errors import FlowcurveError, RecordWriteError, SafetyError
 MOTION_MM = 0.005  # the crosshead has moved once it is this far from where recording began
 SPEED_MARGIN = 2.0  # readings may change at up to this multiple of the declared speed's rate
 FORCE_TOLERANCE_OF_CAPACITY = 0.01  # plus this fraction of the frame's capacity (noise, a jerk)
+FORCE_SPIKE_SIGMAS = 8.0  # ... and a one-sample spike at any size: this many of the signal's own noise σ (plausibility)
 CROSSHEAD_TOLERANCE_MM = 0.05
 FURNACE_MAX_RATE_C_PER_S = 10.0  # a furnace's thermocouple changes no faster than this ...
 FURNACE_TOLERANCE_C = 20.0  # ... plus this (noise, a draught)
@@ -319,6 +320,8 @@ class Procedure:
         self._ending_process = False  # the test was ended by the system stopping the program (not an operator's Ctrl-C)
         self._heater_released = False  # set at the end's switch-off: the furnace channel reads, no longer controls
         self._retried_noted: dict[str, int] = {}  # exchanges retried per device, as the record's events last said
+        self._failed_noted: dict[str, int] = {}  # ... of them failed on every retry too
+        self._wrong_noted: dict[str, int] = {}  # replies from another module's address the events named, per device
         self._unshown_rows: list[np.ndarray] = []  # recorded rows no snapshot has carried yet (the last batch)
         self._end_reason = ""
         self._storage_error: RecordWriteError | None = None
@@ -395,7 +398,8 @@ class Procedure:
                     sampler = Sampler(rig.channels(self.clock, self.to_clock))
                     self._guard(sampler)
                     if rig.has_furnace:  # keep holding the set-point (or just read), feed the watchdog
-                        sampler.channels["temperature_C"].read = self._furnace_read()
+                        furnace = sampler.channels["temperature_C"]
+                        furnace.read = self._furnace_read(lambda exc: furnace.on_fault(furnace.device, str(exc), exc))
                     sampler.start()
                     reason = self._record(sampler, state)
                 except Interrupted as exc:
@@ -428,7 +432,7 @@ class Procedure:
                             self._note_losses(sampler, final=True)
                         except RecordWriteError as exc:
                             status, reason, error = STATUS_ABORTED, reason or str(exc), error or exc
-                    error = self._after_safety_stop(error)
+                    error = self._after_safety_stop(error, safety.off_confirmed)
                     try:
                         self._note_retries(final=True)  # the furnace watch's exchanges too
                     except RecordWriteError:
@@ -497,7 +501,11 @@ class Procedure:
                 raise Interrupted(asked)
             self.timebase.sleep(tick)
 
-    def _furnace_read(self) -> Callable[[], float]:
+    def _furnace_read(self, stop: Callable[[FlowcurveError], None]) -> Callable[[], float]:
+        """The furnace channel's read: hold the set-point (or read), the stuck-relay check of an
+        unheated test, feed the watchdog. A heater command answered from another module's address
+        stops the test at once (``stop``; the heater's state is unknown, no more commands), where
+        a read's failures are counted and retried by the channel."""
         setpoint, rig = self.spec.temperature_C, self.rig
 
         from flowcurve.rig.furnace import StuckRelayCheck  # (pyserial: not on the parser's import path)
@@ -508,7 +516,13 @@ class Procedure:
 
         def guarded() -> float:
             hold = setpoint is not None and not self._heater_released
-            temp = rig.hold_temperature(setpoint) if hold else rig.read_temperature_C()
+            try:
+                temp = rig.hold_temperature(setpoint) if hold else rig.read_temperature_C()
+            except FlowcurveError as exc:
+                if getattr(exc, "commanded", False):  # rig.transport.WrongAddressError on @AADO
+                    self._heater_released = True
+                    stop(exc)
+                raise
             check_temperature(temp, rig.max_temperature_C)
             if never_heated is not None:
                 never_heated.update(temp, self.clock(), False)
@@ -604,7 +618,8 @@ class Procedure:
         if force is not None and stiffness > 0:
             force.guard = RateGuard(force.device, max_rate=stiffness * speed, tolerance=FORCE_TOLERANCE_OF_CAPACITY * capacity,
                                     unit="N", falls_freely=True, advice="check the amplifier, its cable and the load cell",
-                                    time_slack=max(slack, 2 * self.rig.loadcell_period_s * self.rig.time_scale))
+                                    time_slack=max(slack, 2 * self.rig.loadcell_period_s * self.rig.time_scale),
+                                    spike_sigmas=FORCE_SPIKE_SIGMAS, noise_floor=self._force_resolution_N())
         temp = sampler.channels.get("temperature_C")
         if temp is not None:
             temp.guard = RateGuard(temp.device, max_rate=FURNACE_MAX_RATE_C_PER_S, tolerance=FURNACE_TOLERANCE_C, unit="C",
@@ -613,6 +628,15 @@ class Procedure:
         if cross is not None:
             cross.guard = RateGuard(cross.device, max_rate=speed, tolerance=CROSSHEAD_TOLERANCE_MM, unit="mm",
                                     advice="the counter lost or gained counts: check the encoder and its cable", time_slack=slack)
+
+    def _force_resolution_N(self) -> float:
+        """One count of the load cell's output format (the noise σ's floor), 0 when unknown."""
+        cell = getattr(self.rig, "loadcell", None)
+        try:
+            counts = cell.nov if cell.fmt.kind == "ascii" and cell.nov > 0 else cell.fmt.nominal_counts
+            return float(cell.nominal_load_N) / counts
+        except (AttributeError, TypeError, ZeroDivisionError):
+            return 0.0
 
     def _note_losses(self, sampler: Sampler, final: bool = False) -> None:
         """Events for what the channels rejected, the load cell's stream restarts and the late
@@ -647,16 +671,54 @@ class Procedure:
 
     def _note_retries(self, final: bool = False) -> None:
         """A ``retry`` event per device for the exchanges repeated since the last call after a
-        silent or garbled reply; at the end one line to the operator per device that needed any."""
+        silent, garbled or wrongly addressed reply — whether the retry got the reading, or failed
+        too (the channel then counts a failed read); a ``wrong_address`` event per reply from
+        another module's address; at the end one line to the operator per device that needed any."""
+        self._note_wrong_addresses()
+        failed_now = self._failed_after_retry()
         for device, retried in (getattr(self.rig, "retried_exchanges", None) or {}).items():
             if retried > self._retried_noted.get(device, 0):
-                self._event("retry", f"{device}: {retried - self._retried_noted.get(device, 0)} exchanges retried after a silent "
-                                     f"or garbled reply ({retried} so far; the readings were taken on the retry)")
+                failed = failed_now.get(device, 0) - self._failed_noted.get(device, 0)
+                outcome = (f"{failed} exchange{'s' if failed != 1 else ''} failed on every retry too: no reading taken from "
+                           f"{'them' if failed != 1 else 'it'}" if failed > 0 else "the readings were taken on the retry")
+                new = retried - self._retried_noted.get(device, 0)
+                self._event("retry", f"{device}: {new} retr{'ies' if new != 1 else 'y'} after a silent, garbled or wrongly "
+                                     f"addressed reply ({retried} so far; {outcome})")
                 self._retried_noted[device] = retried
+                self._failed_noted[device] = failed_now.get(device, 0)
         if final:
             for device, retried in self._retried_noted.items():
-                self._alert(f"{device}: {retried} exchanges had to be retried (silent or garbled replies; nothing lost) — "
-                            f"check its cable and connector if this recurs")
+                failed = self._failed_noted.get(device, 0)
+                lost = (f"{failed} exchange{'s' if failed != 1 else ''} failed on every retry too" if failed else "nothing lost")
+                self._alert(f"{device}: {retried} retr{'ies' if retried != 1 else 'y'} after silent, garbled or wrongly "
+                            f"addressed replies ({lost}) — check its cable and connector if this recurs")
+
+    def _drivers(self) -> list:
+        """The rig's devices that keep what their transport met (the drivers; none on a fake rig)."""
+        devices = (getattr(self.rig, name, None) for name in ("loadcell", "encoder", "furnace"))
+        return [d for d in devices if d is not None and hasattr(d, "transport")]
+
+    def _failed_after_retry(self) -> dict[str, int]:
+        return {d.name: getattr(d.transport, "failed_after_retry", 0) for d in self._drivers()}
+
+    def _note_wrong_addresses(self) -> None:
+        """A ``wrong_address`` event per reply that came from another module's address than the
+        one asked (rig.transport.DconDevice.wrong_address_replies): the device, the command, the
+        address that answered, and what became of it."""
+        for dev in self._drivers():
+            replies = getattr(dev, "wrong_address_replies", None) or []
+            done = self._wrong_noted.get(dev.name, 0)
+            first_command = not any(commanded for *_, commanded in replies[:done])
+            for _, command, answered, commanded in replies[done:]:
+                ours = f"{getattr(dev, 'address', 0):02X}"
+                if commanded and first_command:
+                    then = ("a heater command: no acknowledgement of this module is believed from here on, the heater is left "
+                            "to the module's watchdog")
+                    first_command = False
+                else:
+                    then = "a heater command, not believed" if commanded else "not taken; asked again"
+                self._event("wrong_address", f"{dev.name}: reply to {command} from address {answered}, not {ours} — {then}")
+            self._wrong_noted[dev.name] = len(replies)
 
     def _drop_unbracketed(self, sampler: Sampler, rows: np.ndarray) -> np.ndarray:
         """The last rows without their faulted channel's values: a held value is no reading."""
@@ -697,7 +759,7 @@ class Procedure:
                          "readings_rejected": sum(self._rejected_noted.values()), "data_loss": self._loss_summary()})
         return meta
 
-    def _after_safety_stop(self, error: FlowcurveError | None) -> FlowcurveError | None:
+    def _after_safety_stop(self, error: FlowcurveError | None, off_confirmed: bool = True) -> FlowcurveError | None:
         """After a heated test or an over-temperature the heater is off, or must be: watch the
         furnace cool for a while; if it keeps heating, the relay is stuck (SafetyError, the
         operator cuts the power) — nothing watches the furnace once the process has ended.
@@ -710,14 +772,16 @@ class Procedure:
                     and getattr(error, "device", None) != self._furnace_name())
         if not (watch and (heated or over or unheated)):
             return error
+        # the heater-off confirmed, or only sent: then the module's own watchdog switches it off once the host is silent
+        unconfirmed = "" if off_confirmed else " — heater-off not confirmed: the module's hardware watchdog switches it off"
         if self._ending_process and not over:  # a service manager or a console shutting down will not wait the watch out
             if heated:
-                self._alert("furnace: heater off; the program is being stopped, so nothing watches the furnace cool — "
-                            "check that it does (a stuck relay keeps heating)")
+                self._alert(f"furnace: {'heater off; ' if off_confirmed else ''}the program is being stopped, so nothing "
+                            f"watches the furnace cool — check that it does (a stuck relay keeps heating){unconfirmed}")
             return error
         if heated or over:
-            self._alert(f"furnace: {'over-temperature — ' if over else ''}heater off; watching that it cools "
-                        f"({WATCH_COOLING_S:g} s test time, longer while it still rises)")
+            self._alert(f"furnace: {'over-temperature — ' if over else ''}{'heater off; ' if off_confirmed else ''}watching "
+                        f"that it cools ({WATCH_COOLING_S:g} s test time, longer while it still rises){unconfirmed}")
             seconds, settle = WATCH_COOLING_S, {}
         else:
             seconds, settle = WATCH_UNHEATED_S, {"settle_s": 0.0}

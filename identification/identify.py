@@ -85,7 +85,7 @@ def temperature_warnings(record: Record) -> list[str]:
 
 
 # record events in which the acquisition declares a rig fault (docs/record-format.md)
-FAULT_EVENTS = ("data_loss", "frames_missing", "corrupt", "stream_restart", "late_reply", "retry", "dropped")  # a retry delays a reading: the crosshead may lag
+FAULT_EVENTS = ("data_loss", "frames_missing", "corrupt", "stream_restart", "late_reply", "retry", "dropped", "wrong_address")  # a retry delays a reading: the crosshead may lag
 POOR_LOSS_FRACTION = 0.05  # samples lost beyond this share of the test mark the hardening poor
 
 

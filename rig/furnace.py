@@ -18,7 +18,7 @@ from itertools import takewhile
 
 from flowcurve.errors import DeviceError, FlowcurveError, SafetyError
 from flowcurve.rig.codecs import dcon
-from flowcurve.rig.transport import DconDevice
+from flowcurve.rig.transport import DconDevice, WrongAddressError
 
 logger = logging.getLogger(__name__)
 
@@ -35,7 +35,16 @@ class Furnace(DconDevice):
 
     ``data_format`` (engineering units, % of range or hex) is read from the module (``$AA2``)
     before the first reading unless given.
+
+    Every ``!AA``/``?AA`` reply must carry the module's address (:meth:`DconDevice.query`): a
+    reading answered by another address is asked again; a heater command (``@AADO``) answered
+    so raises :class:`~rig.transport.WrongAddressError` at once (the test stops), and from then
+    on no acknowledgement of this module is believed (:attr:`acks_trusted`): the heater is not
+    switched on again, :meth:`heater_off` still sends the command but reports it unconfirmed, so
+    the host watchdog stays armed and switches the heater off by itself.
     """
+
+    config_section = "furnace"
 
     def __init__(self, port_url, *, name: str = "furnace", address: int = 1, heater_do_bit: int = 0,
                  max_temperature_C: float = 900.0, baudrate: int = 9600, parity: str = "N",
@@ -53,6 +62,7 @@ class Furnace(DconDevice):
         self.full_scale_C = dcon.FULL_SCALE_C.get(type_code, dcon.FULL_SCALE_C[0x0F])
         self.heater_is_on = False
         self.watchdog_armed = False
+        self.acks_trusted = True  # False once a heater command was answered from another address
 
     def close(self) -> None:
         """Heater off (best effort), then release the port."""
@@ -109,9 +119,13 @@ class Furnace(DconDevice):
 
     # -- heater -----------------------------------------------------------------------
     def _write_outputs(self, outputs: int) -> None:
-        # @AADOdd is idempotent: safe to repeat after a lost reply
-        reply = self.query("@", dcon.digital_output_body(outputs))
-        self._from_this_module(reply, "'@AADO'")
+        # @AADOdd is idempotent: safe to repeat after a lost reply — not after another module's
+        # acknowledgement (which module switched what is then unknown)
+        try:
+            reply = self.query("@", dcon.digital_output_body(outputs), addressed=True, commanded=True)
+        except WrongAddressError:
+            self.acks_trusted = False
+            raise
         if reply.refused:
             if self._watchdog_tripped():
                 raise OutputsRefused(self.name, "outputs locked: the host watchdog timed out "
@@ -135,6 +149,9 @@ class Furnace(DconDevice):
             self._write_outputs(0)
             self.heater_is_on = False
             return
+        if not self.acks_trusted:
+            raise DeviceError(self.name, "heater not switched on: a heater command was answered from another "
+                                         "module's address in this session (its acknowledgements are not believed)")
         t = self.temperature_C() if reading_C is None else reading_C
         if t >= self.max_temperature_C:
             self.heater_off()
@@ -146,11 +163,16 @@ class Furnace(DconDevice):
     def heater_off(self) -> bool:
         """Heater off, best effort: retries; a device or port failure is logged, not raised.
         True if the module acknowledged, or refused but reports the heater output off (after
-        a watchdog trip)."""
+        a watchdog trip); False too after a heater command was answered from another address
+        (the command is sent, its acknowledgement not believed: the host watchdog stays armed)."""
         for attempt in range(1, HEATER_OFF_ATTEMPTS + 1):
             try:
                 self._write_outputs(0)
                 self.heater_is_on = False
+                if not self.acks_trusted:
+                    logger.warning("%s: heater off sent and acknowledged, but not believed: a heater command was answered "
+                                   "from another address; the module's host watchdog switches the heater off", self.name)
+                    return False
                 return True
             except OutputsRefused as refused:
                 try:  # the module talks but will not switch: is the output off already?
@@ -173,20 +195,11 @@ class Furnace(DconDevice):
 
     def digital_io(self) -> dict[str, int]:
         """``@AADI`` → alarm state, digital outputs, digital inputs (the reply's address checked)."""
-        reply = self.query("@", "DI")
-        if len(reply.body) == 7 or reply.refused:
-            self._from_this_module(reply, "'@AADI'")
+        reply = self.query("@", "DI", addressed=lambda r: r.refused or len(r.body) == 7)  # (!SOOII carries none)
         try:
             return dcon.parse_digital_io(reply, self.address)
         except ValueError as exc:
             raise DeviceError(self.name, f"garbled answer to '@AADI': {exc}") from None
-
-    def _from_this_module(self, reply: dcon.Reply, what: str) -> None:
-        """A ``!AA``/``?AA`` reply must come from this module's address (DCON ``>`` data carries none)."""
-        if reply.lead in "!?" and reply.body and reply.body[:2].upper() != f"{self.address:02X}":  # (a bare '!' carries none)
-            raise DeviceError(self.name, f"reply to {what} from address {reply.body[:2]}, not "
-                                         f"{self.address:02X} — another module answers on this line, or [furnace] "
-                                         f"address is wrong ('flowcurve rig check' reads the module's address)")
 
     # -- host watchdog ----------------------------------------------------------------
     def arm_watchdog(self, timeout_s: float) -> None:

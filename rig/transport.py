@@ -86,7 +86,8 @@ class SerialTransport:
         self.clock: Clock = WALL  # the port's clock once open (see the module docstring)
         self._unanswered: tuple[float, int | None, bytes | None] | None = None  # (sent, length, terminator)
         self.late_replies = 0  # replies that came after their time-out, discarded
-        self.retried_exchanges = 0  # exchanges repeated after a silent or garbled reply (nothing lost)
+        self.retried_exchanges = 0  # retries made after a silent, garbled or wrongly addressed reply
+        self.failed_after_retry = 0  # exchanges whose retries failed too (no reply taken: the caller's read failed)
         self.last_late_s: float | None = None  # how late the last of them was
 
     def with_line(self, *, baudrate: int, parity: str, timeout_s: float | None = None) -> "SerialTransport":
@@ -299,12 +300,16 @@ class SerialTransport:
                                                          f"(stale replies are never taken) — line too slow for "
                                                          f"timeout_s = {self.timeout_s:g}?")
                     if last or "disappeared" in str(exc):
+                        self.failed_after_retry += attempt > 0
                         raise exc from None
                     self.retried_exchanges += 1
                     logger.debug("%s: %s (attempt %d of %d), retrying", self.name, exc, attempt + 1, retries + 1)
                 except ValueError as exc:
                     if last:
-                        raise DeviceError(self.name, f"garbled answer to {what}: {exc}") from None
+                        self.failed_after_retry += attempt > 0
+                        failed = DeviceError(self.name, f"garbled answer to {what}: {exc}")
+                        failed.reply_error = exc  # what the last reply was refused for (a caller may say it better)
+                        raise failed from None
                     self.retried_exchanges += 1
                     logger.debug("%s: garbled answer to %s (attempt %d of %d), retrying", self.name, what, attempt + 1, retries + 1)
         raise AssertionError("unreachable")
@@ -355,8 +360,37 @@ class _Decoded:
 DCON_READ_RETRIES = 2  # reads and idempotent DCON settings may be repeated
 
 
+class WrongAddressError(DeviceError):
+    """A DCON reply that carries another module's address (``answered``) than the one asked
+    (``expected``) for ``command``. ``commanded``: the command switches an output (the heater's
+    ``@AADO``) — another module acknowledged it, so the output's state is unknown and the test
+    must stop; a read's wrongly addressed reply is never taken (the read is repeated)."""
+
+    def __init__(self, device: str, command: str, answered: str, expected: int, *, commanded: bool = False,
+                 section: str | None = None):
+        self.command = command
+        self.answered = answered
+        self.expected = expected
+        self.commanded = commanded
+        where = f"[{section}] address" if section else "its configured address"
+        super().__init__(device, f"reply to {command} from address {answered}, not {expected:02X} — another module "
+                                 f"answers on this line, or {where} is wrong ('flowcurve rig check' reads the module's "
+                                 f"address)")
+
+
+class _AnsweredByAnother(Exception):
+    """Raised through an exchange (neither a DeviceError nor a ValueError: not retried)."""
+
+    def __init__(self, wrong: dcon.WrongAddress):
+        self.wrong = wrong
+
+
 class DconDevice:
-    """What the DCON devices share: framing, checksum, silent-on-error time-outs."""
+    """What the DCON devices share: framing, checksum, silent-on-error time-outs, and every
+    reply from another module's address kept in :attr:`wrong_address_replies` as
+    ``(port clock s, command, address that answered, commanded)`` for the record's events."""
+
+    config_section: str | None = None  # the rig configuration's section, named in a wrong-address message
 
     def __init__(self, port_url, *, name: str, address: int, baudrate: int, parity: str,
                  timeout_s: float, checksum: bool, opener=None):
@@ -365,6 +399,7 @@ class DconDevice:
         self.name = name
         self.address = address
         self.checksum = checksum
+        self.wrong_address_replies: list[tuple[float, str, str, bool]] = []
         if isinstance(port_url, SerialTransport):
             self.transport = port_url
         else:
@@ -385,25 +420,52 @@ class DconDevice:
         self.close()
 
     def query(self, lead: str, body: str = "", decoder=None, *args,
-              retries: int = DCON_READ_RETRIES, timeout: float | None = None):
+              retries: int = DCON_READ_RETRIES, timeout: float | None = None,
+              addressed: bool | Callable[[dcon.Reply], bool] = False, commanded: bool = False):
         """Send one framed command; return ``decoder(reply, *args)`` (or the :class:`dcon.Reply`).
 
         Silence (the DCON answer to a wrong address, syntax or checksum) and garbled replies
         are retried ``retries`` times, then raise DeviceError; a ``?`` is a definite refusal:
         DeviceError at once (or the refused Reply when there is no decoder).
+
+        A reply from another module's address (``addressed``: the ``!AA``/``?AA`` reply carries
+        it — or a predicate saying which replies do; decoders that check it with
+        :func:`dcon.expect_ack` count too) is noted in :attr:`wrong_address_replies` and never
+        taken: a read is repeated like a garbled reply (:class:`WrongAddressError` when every
+        try was answered so); with ``commanded`` (the command switches an output) it is not
+        repeated — :class:`WrongAddressError` at once.
         """
         raw_command = dcon.frame(lead, self.address, body, use_checksum=self.checksum)
         what = "'" + raw_command.decode("ascii").strip() + "'"
 
         def parse(raw: bytes):
             reply = dcon.parse_reply(raw, use_checksum=self.checksum)
-            if reply.refused or decoder is None:
-                return reply
-            return _Decoded(decoder(reply, *args))
+            try:
+                if addressed is True or (callable(addressed) and addressed(reply)):
+                    dcon.check_address(reply, self.address, what)
+                if reply.refused or decoder is None:
+                    return reply
+                return _Decoded(decoder(reply, *args))
+            except dcon.WrongAddress as wrong:
+                self.wrong_address_replies.append((self.transport.clock.now(), what, wrong.answered, commanded))
+                logger.warning("%s: reply to %s from address %s, not %02X%s", self.name, what, wrong.answered,
+                               self.address, "" if commanded else " (not taken; asked again)")
+                if commanded:
+                    raise _AnsweredByAnother(wrong) from None
+                raise
 
         self.open()
-        got = self.transport.exchange(raw_command, terminator=dcon.CR, retries=retries,
-                                      timeout=timeout, what=what, parse=parse)
+        try:
+            got = self.transport.exchange(raw_command, terminator=dcon.CR, retries=retries,
+                                          timeout=timeout, what=what, parse=parse)
+        except _AnsweredByAnother as stop:
+            raise WrongAddressError(self.name, what, stop.wrong.answered, self.address, commanded=True,
+                                    section=self.config_section) from None
+        except DeviceError as exc:
+            wrong = getattr(exc, "reply_error", None)
+            if isinstance(wrong, dcon.WrongAddress):
+                raise WrongAddressError(self.name, what, wrong.answered, self.address, section=self.config_section) from None
+            raise
         if isinstance(got, _Decoded):
             return got.value
         if got.refused and decoder is not None:
@@ -418,7 +480,7 @@ class DconDevice:
 
     def configuration(self) -> dcon.Configuration:
         """``$AA2``: address, type, baud, format and checksum flag as the module reports them."""
-        return self.query("$", "2", dcon.parse_configuration)
+        return self.query("$", "2", dcon.parse_configuration, addressed=True)
 
     def module_name(self) -> str:
         """``$AAM`` → e.g. ``7011`` (the text after the address)."""

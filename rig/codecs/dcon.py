@@ -2,7 +2,9 @@
 
 Frame: ``<lead><AA hex address><command>[checksum]\\r``; replies start ``>`` (data), ``!``
 (acknowledged) or ``?`` (refused). On a syntax error, a framing error or a wrong address
-the module says nothing — silence is reported by the transport as a time-out.
+the module says nothing — silence is reported by the transport as a time-out. A ``!AA``/``?AA``
+reply carrying another address than the one asked (another module answering on the line, or a
+corrupted byte: DCON checksums are optional) raises :class:`WrongAddress`.
 The checksum (when enabled) is the sum of all characters before CR, modulo 256, as two
 upper-case hex digits: ``$012`` → ``$012B7``.
 """
@@ -83,8 +85,26 @@ def expect_ack(reply: Reply, address: int | None = None, what: str = "command") 
     if address is None:
         return reply.body
     if reply.body[:2].upper() != f"{address:02X}":
-        raise ProtocolError(f"{what}: reply from address {reply.body[:2]!r}, expected {address:02X}")
+        raise WrongAddress(what, reply.body[:2], address)
     return reply.body[2:]
+
+
+class WrongAddress(ProtocolError):
+    """A reply that carries another module's address (``!03`` to ``@01DO01``): ``answered`` (the
+    two characters where the address stands) and ``expected``."""
+
+    def __init__(self, what: str, answered: str, expected: int):
+        self.what = what
+        self.answered = answered.upper()
+        self.expected = expected
+        super().__init__(f"{what}: reply from address {answered!r}, expected {expected:02X}")
+
+
+def check_address(reply: Reply, address: int, what: str = "command") -> None:
+    """A ``!AA…``/``?AA…`` reply must carry ``address`` (a bare ``!`` or ``?`` carries none;
+    ``>`` data never does): :class:`WrongAddress` otherwise."""
+    if reply.lead in "!?" and reply.body and reply.body[:2].upper() != f"{address:02X}":
+        raise WrongAddress(what, reply.body[:2], address)
 
 
 @dataclass(frozen=True)

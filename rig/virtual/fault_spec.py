@@ -6,7 +6,8 @@ Pure parsing and description (no devices here): ``rig virtual``, ``run`` and ``d
 * DEVICE: ``loadcell``, ``encoder`` or ``furnace``;
 * KIND: one of :data:`KINDS` (which devices each applies to: :data:`APPLIES_TO`);
 * VALUE: a rate or a size in the unit :data:`VALUE_UNITS` gives (``loadcell:garble:0.05`` —
-  5 % of the frames; ``encoder:jump:50`` — a 50 mm counter step); :data:`DEFAULT_VALUES` when
+  5 % of the frames; ``encoder:jump:50`` — a 50 mm counter step; ``loadcell:spike:900@40`` — one
+  frame 900 N high 40 s into the test); :data:`DEFAULT_VALUES` when
   omitted; kinds without a value refuse one;
 * SECONDS: model seconds after the crosshead starts moving (``loadcell:corrupt@5``); without
   it the fault is on from the start.
@@ -31,6 +32,7 @@ KINDS: dict[str, tuple[tuple[str, ...], str]] = {
     "delay": (ALL, "replies leave VALUE seconds late"),
     "unplug": (ALL, "the port vanishes (cable pulled)"),
     "corrupt": (ALL, "one well-formed reply carries a wrong value (+VALUE)"),
+    "spike": (("loadcell",), "one frame reads VALUE N high, the next is true again (a spike)"),
     "jump": (("encoder",), "the counter steps by VALUE mm and stays stepped"),
     "wrong_address": (("furnace",), "replies come from address VALUE instead of the configured one"),
     "open_thermocouple": (("furnace",), "the thermocouple breaks (reading over range)"),
@@ -44,6 +46,7 @@ DEFAULT_VALUES: dict[str, dict[str, float]] = {
     "garble": {d: 1.0 for d in ALL},
     "delay": {d: 0.5 for d in ALL},
     "corrupt": {"loadcell": 20000.0, "encoder": 50.0, "furnace": 200.0},
+    "spike": {"loadcell": 900.0},
     "jump": {"encoder": 50.0},
     "wrong_address": {"furnace": 3.0},
 }
@@ -52,6 +55,7 @@ VALUE_UNITS = {
     "garble": {d: "fraction of replies, 0..1" for d in ALL},
     "delay": {d: "s" for d in ALL},
     "corrupt": {"loadcell": "N", "encoder": "mm", "furnace": "C"},
+    "spike": {"loadcell": "N"},
     "jump": {"encoder": "mm"},
     "wrong_address": {"furnace": "address, 0..255"},
 }
@@ -122,7 +126,7 @@ def _value(where: str, device: str, kind: str, raw: str | None) -> float | None:
         raise ConfigError(f"{where}: VALUE is a delay in s, > 0, got {value:g}")
     if kind == "wrong_address" and not (value == int(value) and 0 <= value <= 255):
         raise ConfigError(f"{where}: VALUE is an {unit}, got {value:g}")
-    if kind in ("corrupt", "jump") and value == 0:
+    if kind in ("corrupt", "spike", "jump") and value == 0:
         raise ConfigError(f"{where}: VALUE is a size in {unit}, not 0")
     return value
 

@@ -14,6 +14,10 @@ every reply it sends):
 
 Model faults (handled by :class:`rig.virtual.rig.VirtualRig`): ``open_thermocouple``
 (reading ``+9999``, ``$AAB`` → ``!AA1``) and ``relay_stuck`` (heater on whatever the DO says).
+One reply off (scheduled with ``--fault``, :mod:`rig.virtual.fault_spec`; the rig applies them
+through the device's ``corrupt_next``): ``corrupt`` on any device, and ``spike`` on the load cell —
+one frame a little high (900 N by default: below the 1 % of the frame's capacity the plausibility
+rules' tolerance allows, so only the signal's own noise tells it from the force).
 """
 
 from __future__ import annotations

@@ -187,7 +187,7 @@ class VirtualRig:
     def _switch_on(self, spec: FaultSpec) -> None:
         """Apply one due fault without waiting on any device thread (called under the rig lock)."""
         dev, kind, value = self.devices[spec.device], spec.kind, spec.value
-        if kind == "corrupt":
+        if kind in ("corrupt", "spike"):  # a spike: one load-cell frame, smaller than what the rate rules see
             dev.corrupt_next(value)
         elif kind == "jump":
             dev.jump(value)

@@ -112,7 +112,7 @@ def _wire_fault(device: str, kind: str) -> Fault:
 
 
 # kinds the matrix schedules as an operator does, ``--fault DEVICE:KIND@SECONDS`` on `flowcurve run` (their default VALUE)
-SCHEDULED_KINDS = ("corrupt", "jump", "wrong_address")
+SCHEDULED_KINDS = ("corrupt", "spike", "jump", "wrong_address")
 
 FAULTS: tuple[Fault, ...] = (
     NO_FAULT,
@@ -120,6 +120,7 @@ FAULTS: tuple[Fault, ...] = (
     Fault("furnace", "open_thermocouple"),
     Fault("furnace", "relay_stuck"),
     *(Fault(device, "corrupt") for device in ("loadcell", "encoder", "furnace")),
+    Fault("loadcell", "spike"),  # +900 N (its default): under the rate rules' 1 % of capacity, judged by the signal's noise
     Fault("encoder", "jump"),
     Fault("furnace", "wrong_address"),
 )

@@ -25,6 +25,7 @@ DEVICE_NAMES = {"loadcell": "load cell", "encoder": "crosshead encoder", "furnac
 DRILLS: dict[str, tuple[str, ...]] = {
     "`loadcell:garble:0.05`, `loadcell:drop:0.05`": ("loadcell:garble:0.05", "loadcell:drop:0.05"),
     "`…:corrupt` (one wrong but well-formed reading)": ("loadcell:corrupt@5", "encoder:corrupt@5", "furnace:corrupt@5"),
+    "`loadcell:spike:900@40` (one frame 900 N high, under the 1 % of a 100 kN frame the rate rules tolerate)": ("loadcell:spike@40",),
     "`encoder:garble:0.05`, `encoder:drop:0.05`, `furnace:garble:0.05`, `furnace:drop:0.05`":
         ("encoder:garble:0.05", "encoder:drop:0.05", "furnace:garble:0.05", "furnace:drop:0.05"),
     "`encoder:jump`": ("encoder:jump@5",),

@@ -17,6 +17,8 @@ def test_the_issue_examples():
     assert parse_fault("furnace:relay_stuck@0") == FaultSpec("furnace", "relay_stuck", None, 0.0)
     assert parse_fault(" Furnace:Wrong_Address:3 ") == FaultSpec("furnace", "wrong_address", 3.0, None)
     assert parse_faults(None) == () and len(parse_faults(["encoder:silence", "loadcell:unplug@2.5"])) == 2
+    assert parse_fault("loadcell:spike:900@40") == FaultSpec("loadcell", "spike", 900.0, 40.0)
+    assert parse_fault("loadcell:spike@40") == FaultSpec("loadcell", "spike", 900.0, 40.0)  # under 1 % of 100 kN
 
 
 @pytest.mark.parametrize("text, says", [
@@ -26,6 +28,8 @@ def test_the_issue_examples():
     ("loadcell:jump:5", "applies to encoder, not the loadcell"),
     ("encoder:relay_stuck", "applies to furnace"),
     ("encoder:wrong_address", "applies to furnace"),
+    ("furnace:spike", "applies to loadcell, not the furnace"),
+    ("loadcell:spike:0", "not 0"),
     ("loadcell:garble:5", "fraction of replies"),
     ("loadcell:garble:0", "fraction of replies"),
     ("loadcell:silence:1", "takes no VALUE"),
@@ -56,6 +60,7 @@ def test_help_lists_which_kind_applies_to_which_device():
     for kind, devices in APPLIES_TO.items():
         assert kind in text
     assert "jump [encoder]" in text and "wrong_address [furnace]" in text and "relay_stuck [furnace]" in text
+    assert "spike [loadcell]" in text and "default 900" in text
 
 
 # -- the new kinds, on the wire (in-process ports, model time) --------------------------------
@@ -110,6 +115,24 @@ def test_loadcell_corrupt_is_one_wellformed_frame_and_waits_for_motion(rig):
         assert force() > 19_000
         assert force() < 10_000  # once (the real load is ~2 kN by now)
         assert [s.describe() for _, s in rig.faults_applied] == ["loadcell:corrupt:20000@0.5"]
+
+
+def test_loadcell_spike_is_one_frame_a_little_high(rig):
+    from flowcurve.rig.codecs import aed
+
+    fmt = aed.output_format(3)
+
+    with serial.serial_for_url(rig.ports["loadcell"], timeout=0.2) as p:
+        def force():
+            p.reset_input_buffer()
+            p.write(b"MSV?;")
+            return float(aed.counts_to_newtons(aed.decode_msv(p.read(fmt.frame_length), fmt).counts, fmt, 100e3, 0))
+
+        before = force()  # the crosshead at rest: the force stays
+        rig.schedule(parse_fault("loadcell:spike:900"))
+        spiked, after = force(), force()
+        assert 850 < spiked - before < 950 and abs(after - before) < 50  # one frame, then the true force
+        assert [s.describe() for _, s in rig.faults_applied] == ["loadcell:spike:900"]
 
 
 # -- the virtual furnace module's watchdog: model time, and alive unplugged -----------------------
