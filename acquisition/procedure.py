@@ -314,6 +314,7 @@ class TestSpec:
         if rig.frame_stiffness_N_per_um:
             m["rig.frame_stiffness_N_per_um"] = rig.frame_stiffness_N_per_um
         m.update(getattr(rig, "instruments_meta", None) or {})  # instruments.force_class … (uncertainty budgets)
+        m.update(getattr(rig, "writer_meta", None) or {})  # writer.stamping: how the samples were stamped
         for key, v in self.geometry_mm.items():
             m[f"specimen.{key}"] = v
         m.update(self.extra_meta)
