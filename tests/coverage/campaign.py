@@ -7,7 +7,7 @@ generator, computed here from the generating law and never from the product's un
 
 - ``tension drawn``: tests/property/records.py (Johnson–Cook/Swift/Voce, extensometer or
   crosshead with the frame stiffness stated, toes, quanta, noise, early stops), drawn by
-  hypothesis with a fixed seed; truth from its closed forms.
+  numpy's generator with a fixed seed (hypothesis draws differ between its versions); truth from its closed forms.
 - ``tension crosshead``: bench/modulus_methods.py's crosshead-only Voce records (frames 10.8–136
   N/µm not stated, seating toes, noise); truth the material's (an extensometer's) Rp0.2, Rm, Ag;
   E against the apparent modulus of specimen and frame where the result says its E is apparent.
@@ -133,29 +133,18 @@ def _bench():
 
 
 @functools.lru_cache(maxsize=None)
-def _drawn_tension(n: int, seed: int) -> list:
-    """``n`` records of tests/property/records.py drawn by hypothesis with ``seed``."""
-    from hypothesis import HealthCheck, Phase, given, settings
-    from hypothesis import seed as hseed
+def _drawn_tension(i: int, seed: int):
+    """Record ``i`` of tests/property/records.py drawn from numpy's generator (seed ``seed``, ``i``):
+    the same population on every machine and hypothesis version."""
+    from tests.property.records import seeded_tension_record
 
-    from tests.property.records import tension_records
-
-    out: list = []
-
-    @hseed(seed)
-    @settings(max_examples=n, database=None, phases=[Phase.generate], deadline=None, suppress_health_check=list(HealthCheck))
-    @given(tension_records())
-    def collect(case):
-        out.append(case)
-
-    collect()
-    return out
+    return seeded_tension_record(seed * 100_003 + i)
 
 
 def _drawn_case(i: int, n: int, seed: int):
     from tests.property.records import D0_MM
 
-    record, t, desc = _drawn_tension(n, seed)[i]
+    record, t, desc = _drawn_tension(i, seed)
     law = lambda ep: t.law(np.maximum(np.asarray(ep) - t.hardening_start, 0.0))  # noqa: E731
     values = {"Rm_MPa": t.Rm_MPa, "E_MPa": t.E_MPa}
     if t.Rp02_MPa is not None:

@@ -39,31 +39,81 @@ class Truth:
     sample_step_MPa: float  # the stress change over one plastic sample at Rp0.2 (the curve is drawn at Δεp = 0.001)
 
 
+class HypothesisPick:
+    """The choices of :func:`tension_record` drawn by hypothesis (shrinkable, its database's examples)."""
+
+    def __init__(self, draw):
+        self.draw = draw
+
+    def floats(self, lo: float, hi: float) -> float:
+        return self.draw(st.floats(lo, hi))
+
+    def integers(self, lo: int, hi: int) -> int:
+        return self.draw(st.integers(lo, hi))
+
+    def booleans(self) -> bool:
+        return self.draw(st.booleans())
+
+    def sampled_from(self, options: list):
+        return self.draw(st.sampled_from(options))
+
+
+class SeededPick:
+    """The same choices from numpy's generator: a population that is one and the same on every
+    machine and hypothesis version (the coverage campaign judges shares of it)."""
+
+    def __init__(self, seed: int):
+        self.rng = np.random.default_rng(seed)
+
+    def floats(self, lo: float, hi: float) -> float:
+        return float(self.rng.uniform(lo, hi))
+
+    def integers(self, lo: int, hi: int) -> int:
+        return int(self.rng.integers(lo, hi, endpoint=True))
+
+    def booleans(self) -> bool:
+        return bool(self.rng.integers(0, 2))
+
+    def sampled_from(self, options: list):
+        return options[int(self.rng.integers(0, len(options)))]
+
+
 @st.composite
 def tension_records(draw):
-    """(Record, Truth, description) of one drawn tension test."""
-    E = draw(st.floats(150_000.0, 220_000.0))
-    sy = draw(st.floats(200.0, 1200.0))
-    law_name = draw(st.sampled_from(["johnson_cook", "swift", "voce"]))
+    """(Record, Truth, description) of one tension test drawn by hypothesis."""
+    return tension_record(HypothesisPick(draw))
+
+
+def seeded_tension_record(seed: int):
+    """(Record, Truth, description) of one tension test drawn from numpy's generator with ``seed``."""
+    return tension_record(SeededPick(seed))
+
+
+def tension_record(pick):
+    """(Record, Truth, description) of one tension test whose choices ``pick`` makes
+    (floats, integers, booleans, sampled_from)."""
+    E = pick.floats(150_000.0, 220_000.0)
+    sy = pick.floats(200.0, 1200.0)
+    law_name = pick.sampled_from(["johnson_cook", "swift", "voce"])
     if law_name == "johnson_cook":
-        B, n = draw(st.floats(0.3, 2.0)) * sy, draw(st.floats(0.1, 0.6))
+        B, n = pick.floats(0.3, 2.0) * sy, pick.floats(0.1, 0.6)
         law = lambda ep: johnson_cook_static(ep, sy, B, n)  # noqa: E731
     elif law_name == "swift":
-        n, e0 = draw(st.floats(0.1, 0.3)), draw(st.floats(0.002, 0.02))
+        n, e0 = pick.floats(0.1, 0.3), pick.floats(0.002, 0.02)
         law = lambda ep: swift(ep, sy / e0**n, e0, n)  # noqa: E731
     else:
-        Q, b = draw(st.floats(0.2, 1.0)) * sy, draw(st.floats(5.0, 40.0))
+        Q, b = pick.floats(0.2, 1.0) * sy, pick.floats(5.0, 40.0)
         law = lambda ep: voce(ep, sy, Q, b)  # noqa: E731
-    n_el = draw(st.integers(3, 50))
-    plateau = draw(st.booleans())
-    drop = draw(st.floats(0.03, 0.08)) if plateau else 0.0
-    ae = draw(st.floats(0.005, 0.02)) if plateau else 0.0
-    channel = draw(st.sampled_from(["extensometer", "crosshead"]))
-    toe_mm = draw(st.sampled_from([0.0, 0.02, 0.08])) if channel == "crosshead" else 0.0
-    quantum_mm = draw(st.sampled_from([0.0, 0.0005, 0.001] if channel == "extensometer" else [0.0, 0.001, 0.01]))
-    noise_frac = draw(st.sampled_from([0.0, 0.0005, 0.002, 0.005]))
-    early_stop = draw(st.sampled_from([None, 0.3, 0.6, 0.9]))
-    seed = draw(st.integers(0, 2**16))
+    n_el = pick.integers(3, 50)
+    plateau = pick.booleans()
+    drop = pick.floats(0.03, 0.08) if plateau else 0.0
+    ae = pick.floats(0.005, 0.02) if plateau else 0.0
+    channel = pick.sampled_from(["extensometer", "crosshead"])
+    toe_mm = pick.sampled_from([0.0, 0.02, 0.08]) if channel == "crosshead" else 0.0
+    quantum_mm = pick.sampled_from([0.0, 0.0005, 0.001] if channel == "extensometer" else [0.0, 0.001, 0.01])
+    noise_frac = pick.sampled_from([0.0, 0.0005, 0.002, 0.005])
+    early_stop = pick.sampled_from([None, 0.3, 0.6, 0.9])
+    seed = pick.integers(0, 2**16)
     description = dict(law=law_name, sy=round(sy), E=round(E), n_el=n_el, plateau=plateau, channel=channel, toe=toe_mm,
                        quantum=quantum_mm, noise=noise_frac, early_stop=early_stop)
 

@@ -563,7 +563,8 @@ def truth_from_rows(x: np.ndarray, f: np.ndarray, complete: bool, result: dict |
     fm_step = float((f[i] - np.min(neighbours)) / f[i]) if f[i] > 0 else 0.0
     values = {k: float(result[k]) for k in VALUE_MARK if result and isinstance(result.get(k), (int, float))}
     loaded = float(x[np.flatnonzero(f >= 0.5 * f[i])[-1]])
-    step = float(np.median(np.diff(x)))
+    moved = np.diff(x)[np.diff(x) > 0]  # an encoder's count spans several rows: the step is the one between counts
+    step = float(np.median(moved)) if moved.size else 0.0
     return Truth(x, f, float(x[-1]) if complete else None, float(x[-1] - x[-2]), float(f[i]), fm_step, loaded, step,
                  values, curve_dev_pct)
 
@@ -619,7 +620,9 @@ def survived(r: CellRun, rec, ref: Truth) -> list[tuple[str, str]]:
         if abs(x[-1] - ref.last_x_mm) > max(LAST_CROSSHEAD_TOL_MM, abs(ref.last_step_mm)):
             bad.append(("last crosshead beyond the fault-free run's", f"{x[-1]:.3f} mm for {ref.last_x_mm:.3f}"))
         fm = float(np.max(f))
-        fm_at_stop = ref.x_mm[int(np.argmax(ref.force_N))] >= ref.x_mm[-1] - 2 * ref.step_mm  # rising to a target: Fm is the stop's force
+        # rising to a target: Fm is the stop's force, where either run stopped (the force against the crosshead judges it)
+        fm_at_stop = (ref.x_mm[int(np.argmax(ref.force_N))] >= ref.x_mm[-1] - 2 * ref.step_mm
+                      or x[int(np.argmax(f))] >= x[-1] - 2 * ref.step_mm)
         if not fm_at_stop and abs(fm / ref.fm_N - 1) > max(FM_TOL, ref.fm_step):
             bad.append(("Fm beyond the fault-free run's", f"{fm:.0f} N for {ref.fm_N:.0f} ({100 * (fm / ref.fm_N - 1):+.2f} %)"))
     if r.result and rec.meta.get("status") == "complete":
