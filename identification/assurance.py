@@ -254,8 +254,7 @@ def _tension_rp_method(result: Mapping, curve, Rp: float, E: float) -> list:
         specimen_strain = methods.get("strain_source") == "extensometer" or methods.get("frame_stiffness_N_per_um") is not None
         if named is not None and specimen_strain:
             lines[f"{named[0]} class handbook"] = named[1]
-        zero = _num(((result.get("hardening") or {}).get("start_uncertainty") or {}).get("delta_eps0")) or 0.0
-        comps += un.offset_method_components(strain, stress, E, 0.0, lines, zero)
+        comps += un.offset_method_components(strain, stress, E, 0.0, lines, _offset_line_zero(result))
     if methods.get("strain_source") == "crosshead":
         comps.append(un.crosshead_compliance_component(Rp))
     rate = ((methods.get("conformity") or {}).get("testing_rate") or {}).get("method")
@@ -283,8 +282,20 @@ def _compression_rp_method(result: Mapping, nominal) -> list:
     apparent = _num(E_method.get("apparent_MPa"))
     if apparent is not None and apparent_modulus_warning(apparent, (result.get("record") or {}).get("material")) is None:
         lines["apparent slope"] = apparent
-    zero = _num(((result.get("hardening") or {}).get("start_uncertainty") or {}).get("delta_eps0"))
-    return un.offset_method_components(strain, stress, E, u_E or 0.0, lines, zero or 0.0, basis=E_method.get("basis", ""))
+    return un.offset_method_components(strain, stress, E, u_E or 0.0, lines, _offset_line_zero(result), basis=E_method.get("basis", ""))
+
+
+def _offset_line_zero(result: Mapping) -> float:
+    """δε0 of the offset line's foot. Where a regressed line places it, the sample spacing at the
+    line's top is left out (it places where the curve's plastic part starts, not the line's foot);
+    where a given or handbook E does, the spacing counts. Equation: root sum of squares of the parts
+    (hardening.start_uncertainty.components)."""
+    start = (result.get("hardening") or {}).get("start_uncertainty") or {}
+    parts = start.get("components")
+    if not isinstance(parts, Mapping):
+        return _num(start.get("delta_eps0")) or 0.0
+    regressed = (_num(parts.get("line_fit")) or 0.0) > 0.0
+    return math.sqrt(sum((_num(v) or 0.0) ** 2 for k, v in parts.items() if not (regressed and k == "sample_spacing")))
 
 
 def attach(result, curves: Mapping, record) -> None:

@@ -282,6 +282,24 @@ def offset_yield_MPa(strain, stress_MPa, E_MPa: float, offset: float = OFFSET) -
     return float(stress[i - 1] + w * (stress[i] - stress[i - 1]))
 
 
+def offset_interpolation_halfwidth_MPa(strain, stress_MPa, E_MPa: float, offset: float = OFFSET) -> float:
+    """How far the linear interpolation of :func:`offset_yield_MPa` may be off between sparse samples:
+    |σ_quad − σ_lin| at the crossing, σ_quad through the three samples about it (the next order's
+    difference estimates the interpolant's error); 0 where fewer than three samples bracket it."""
+    strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
+    i = _first_at_least(strain, stress, E_MPa, offset)
+    if i is None or i < 1 or i + 1 >= strain.size:
+        return 0.0
+    ep = strain[i - 1: i + 2] - stress[i - 1: i + 2] / E_MPa
+    sig = stress[i - 1: i + 2]
+    if not (np.all(np.isfinite(ep)) and np.all(np.isfinite(sig)) and ep[0] < ep[1] < ep[2]):
+        return 0.0
+    lin = sig[0] + (offset - ep[0]) * (sig[1] - sig[0]) / (ep[1] - ep[0])
+    # Lagrange's quadratic through the three samples, at ε_p = offset
+    w = [np.prod([(offset - ep[m]) / (ep[j] - ep[m]) for m in range(3) if m != j]) for j in range(3)]
+    return float(abs(float(np.dot(w, sig)) - lin))
+
+
 def _first_at_least(strain: np.ndarray, stress_MPa: np.ndarray, E_MPa: float, offset: float, chunk: int = 4096) -> int | None:
     """First index where ε_p = ε − σ/E ≥ ``offset`` (None when never), read in doubling chunks:
     Rp0.2 lies early in a long record, so most of it is never computed."""
@@ -312,6 +330,10 @@ def offset_method_components(strain, stress_MPa, E_MPa: float, u_E_MPa: float, l
     if half > 0:
         out.append(Component("method: spread over the defensible elastic lines", half, "MPa", rectangular(half), 1.0,
                              "Rp0.2 on " + ", ".join(f"{k} ({lines[k]:.0f} MPa): {v:.4g}" for k, v in rps.items()) + "; half the range, rectangular"))
+    half = offset_interpolation_halfwidth_MPa(strain, stress_MPa, E_MPa)
+    if half > 0:
+        out.append(Component("method: interpolation between samples at the offset", half, "MPa", rectangular(half), 1.0,
+                             "|quadratic − linear| through the three samples about the 0.2 % crossing, rectangular"))
     if delta_eps0 > 0:
         hi = offset_yield_MPa(strain, stress_MPa, E_MPa, OFFSET + delta_eps0)
         lo = offset_yield_MPa(strain, stress_MPa, E_MPa, max(OFFSET - delta_eps0, 0.0))

@@ -13,7 +13,6 @@ KNOWN: dict[tuple[str, str], str] = {
     ("CalculiX", "johnson_cook n"): "blanket: method share 6.7× the median error",
     ("tension drawn", "Ag_pct"): "21 % held (worst 17 U): the strain at Fm of a flat maximum with force noise not in U",
     # misses: U too small for the method's error
-    ("compression closed form", "Rp02_MPa"): "holds since the method's share (issue 43) but blanket: the strain-zero share 16× the median error",
     ("compression closed form", "friction_mu"): "67 % held (worst 2.4 U at μ 0.2)",
     ("compression closed form", "johnson_cook A_MPa"): "67 % held (worst 1.6 U)",
     ("compression closed form", "johnson_cook n"): "67 % held (worst 1.5 U)",

@@ -72,3 +72,35 @@ def test_the_offset_method_terms_on_a_closed_form_curve():
     spread = comps["method: spread over the defensible elastic lines"]
     rp_b = un.offset_yield_MPa(eps, sig, 0.9 * E)
     assert spread.value == pytest.approx(abs(340.0 - rp_b) / 2) and spread.u == pytest.approx(spread.value / math.sqrt(3))
+
+
+def test_the_interpolation_term_is_the_linear_error_on_a_quadratic_curve():
+    """σ(εp) = 300 + 40 000·εp − 2·10⁶·εp² sampled every 0.003 of εp: the quadratic through the three samples
+    about the 0.2 % crossing is the curve itself, so the stated half-width equals the linear
+    interpolant's true error at εp = 0.002 (by hand: the chord's sag there)."""
+    E = 200_000.0
+    ep = np.array([0.0, 0.0011, 0.0041, 0.0071, 0.0101])
+    sig = 300.0 + 40_000.0 * ep - 2e6 * ep**2
+    strain = ep + sig / E
+    true = 300.0 + 40_000.0 * 0.002 - 2e6 * 0.002**2
+    lin = un.offset_yield_MPa(strain, sig, E)
+    half = un.offset_interpolation_halfwidth_MPa(strain, sig, E)
+    assert abs(true - lin) > 1.0  # the sag is real: about 2 MPa
+    assert half == pytest.approx(abs(true - lin), rel=1e-9)
+    dense = np.linspace(0.0, 0.01, 2001)
+    s_dense = 300.0 + 40_000.0 * dense - 2e6 * dense**2
+    assert un.offset_interpolation_halfwidth_MPa(dense + s_dense / E, s_dense, E) < 1e-6  # dense samples: nothing to add
+
+
+def test_the_offset_lines_zero_leaves_the_spacing_out_only_where_a_regressed_line_places_it():
+    """A regressed line: δε0 of the offset line is √(line² + toe²); a handbook E through sparse first
+    samples: the spacing counts too (a compression record at 10× the rate showed a −2.6 % Rp0.2 that
+    only the spacing covered)."""
+    from flowcurve.identification.assurance import _offset_line_zero
+
+    def result(**parts):
+        return {"hardening": {"start_uncertainty": {"delta_eps0": math.sqrt(sum(v**2 for v in parts.values())), "components": parts}}}
+
+    assert _offset_line_zero(result(line_fit=3e-5, line_curvature=0.0, toe=4e-5, sample_spacing=1e-3, handbook_E=0.0)) == pytest.approx(5e-5)
+    assert _offset_line_zero(result(line_fit=0.0, toe=1e-4, sample_spacing=2e-3, handbook_E=6e-5)) == pytest.approx(
+        math.sqrt(1e-8 + 4e-6 + 3.6e-9))
