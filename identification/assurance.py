@@ -14,7 +14,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from flowcurve.identification.iso6892 import nan_argmax
+from flowcurve.identification.iso6892 import max_force_band, nan_argmax
 from flowcurve.identification import conformity as cf
 from flowcurve.identification import uncertainty as un
 from flowcurve.identification.elastic_modulus import apparent_modulus_warning, class_modulus
@@ -162,8 +162,11 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
             u_em = math.hypot(un.extension_u_mm(scaled * gauge, cls) / gauge, scaled * un.rectangular(cls / 100.0))
         else:
             u_em = scaled * strain_u
+        eng = curves.get("engineering")
+        band = (max_force_band(eng["engineering_strain"].to_numpy(dtype=float), eng["engineering_stress_MPa"].to_numpy(dtype=float))
+                if eng is not None and "engineering_strain" in eng.columns else (0.0, 0.0))
         out["Ag_pct"] = un.uniform_elongation_budget(Ag, Rm, E, strain_at_Fm_u=u_em, u_E_MPa=u_E,
-                                                     u_Rm_MPa=None if E_measured else out["Rm_MPa"]["u"])
+                                                     u_Rm_MPa=None if E_measured else out["Rm_MPa"]["u"], flat_halfwidth=(band[1] - band[0]) / 2.0)
     A = _num(result.get("A_pct"))
     l0, lu = _num(spec.get("l0_mm")), _num(post.get("lu_mm"))
     method = str(result.get("A_method") or "")

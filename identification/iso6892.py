@@ -68,6 +68,22 @@ def plastic_extension_pct(strain, stress_MPa, E_MPa: float):
     return 100.0 * (np.asarray(strain, dtype=float) - np.asarray(stress_MPa, dtype=float) / E_MPa)
 
 
+def max_force_band(strain, stress_MPa, *, window: int = 50) -> tuple[float, float]:
+    """(lowest, highest) strain of the samples within the noise of the maximum force: a flat
+    maximum's plateau (ISO 6892-1 §13: Ag at its mid-point). Band: σ ≥ σ_max − 2√2·s, s the stress
+    noise from third differences about the maximum, s = 1.4826·MAD(Δ³σ)/√20; noise-free, the
+    maximum's own strain twice."""
+    e, s = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
+    i_m = int(np.nanargmax(s))
+    near = s[max(i_m - window, 0): i_m + window + 1]
+    d3 = np.diff(near[np.isfinite(near)], 3)  # a smooth curve's third differences vanish, the noise's do not
+    if d3.size < 3:
+        return float(e[i_m]), float(e[i_m])
+    noise = 1.4826 * float(np.median(np.abs(d3 - np.median(d3)))) / np.sqrt(20.0)  # Δ³ of white noise: variance 20 s²
+    band = np.flatnonzero(s >= s[i_m] - 2.0 * np.sqrt(2.0) * noise)  # two noisy samples differ by √2·s
+    return float(np.nanmin(e[band])), float(np.nanmax(e[band]))
+
+
 def elongation_after_fracture_pct(l0_mm: float, lu_mm: float) -> float:
     """A = (Lu − L0)/L0 · 100 (3.8), from the gauge length measured after fracture."""
     if not lu_mm > 0 or not l0_mm > 0:

@@ -582,7 +582,7 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     if yp is not None:
         warnings.append(f"the curve has a yield point (ReH {yp['ReH_MPa']:.1f} MPa, ReL {yp['ReL_MPa']:.1f} MPa, Ae {yp['Ae_pct']:.2f} %): "
                         "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")
-    e_m = float(strain[inp.i_m])
+    e_m = float(np.mean(iso6892.max_force_band(strain, eng_stress)))  # ISO 6892-1 §13: a flat maximum's mid-point
     Ag = float(iso6892.plastic_extension_pct(e_m, inp.Rm, E))
     i_k = fracture_index(force)
     At = float(100.0 * strain[i_k]) if reaches_fracture(force) else None  # ISO 6892-1 3.6.6: elastic and plastic

@@ -223,12 +223,16 @@ def modulus_budget(E_MPa: float, d0_mm: float, inst: Mapping, *, strain_rel_u: f
 
 
 def uniform_elongation_budget(Ag_pct: float, Rm_MPa: float, E_MPa: float, *, strain_at_Fm_u: float, u_E_MPa: float,
-                              u_Rm_MPa: float | None) -> dict:
+                              u_Rm_MPa: float | None, flat_halfwidth: float = 0.0) -> dict:
     """Ag = 100·(e_m − Rm/E): ∂/∂e_m = 100, ∂/∂E = 100·Rm/E², ∂/∂Rm = −100/E (Rm left out, ``None``,
-    when E was measured on the same force and strain: their scales cancel in Rm/E)."""
+    when E was measured on the same force and strain: their scales cancel in Rm/E); on a flat
+    maximum e_m anywhere within ±``flat_halfwidth`` (half of :func:`.iso6892.max_force_band`), rectangular."""
     e_m = Ag_pct / 100.0 + Rm_MPa / E_MPa
     comps = [Component("strain at maximum force e_m", e_m, "1", strain_at_Fm_u, 100.0, "strain measurement"),
              Component("E (elastic part removed)", E_MPa, "MPa", u_E_MPa, 100.0 * Rm_MPa / E_MPa ** 2, "E's own uncertainty")]
+    if flat_halfwidth > 0:
+        comps.append(Component("method: strain at Fm on a flat maximum", e_m, "1", rectangular(flat_halfwidth), 100.0,
+                               f"the samples within the noise of Fm span ±{flat_halfwidth:.3g} of strain about its mid-point, rectangular"))
     if u_Rm_MPa is not None:
         comps.append(Component("Rm", Rm_MPa, "MPa", u_Rm_MPa, -100.0 / E_MPa, "budget of Rm"))
     return budget(Ag_pct, "%", comps)

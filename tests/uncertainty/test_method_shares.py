@@ -104,3 +104,23 @@ def test_the_offset_lines_zero_leaves_the_spacing_out_only_where_a_regressed_lin
     assert _offset_line_zero(result(line_fit=3e-5, line_curvature=0.0, toe=4e-5, sample_spacing=1e-3, handbook_E=0.0)) == pytest.approx(5e-5)
     assert _offset_line_zero(result(line_fit=0.0, toe=1e-4, sample_spacing=2e-3, handbook_E=6e-5)) == pytest.approx(
         math.sqrt(1e-8 + 4e-6 + 3.6e-9))
+
+
+def test_the_band_of_a_flat_maximum_is_where_the_noise_hides_it():
+    """σ = 500 − c·(e − 0.12)² sampled every 0.0005 with Gaussian noise s: the samples within 2√2·s of the
+    highest one reach about e0 ± √(2√2·s/c) (by hand); noise-free, the band is the maximum itself.
+    Ag's budget states half the band (rectangular) and its value is the band's mid-point (ISO 6892-1 §13)."""
+    from flowcurve.identification.iso6892 import max_force_band
+
+    c, e0, s = 20_000.0, 0.12, 0.5
+    e = np.arange(0.05, 0.2, 0.0005)
+    clean = 500.0 - c * (e - e0) ** 2
+    i = int(np.argmax(clean))
+    assert max_force_band(e, clean) == (e[i], e[i])
+    half = math.sqrt(2.0 * math.sqrt(2.0) * s / c)  # 0.0084
+    mids, widths = [], []
+    for seed in range(40):
+        lo, hi = max_force_band(e, clean + np.random.default_rng(seed).normal(0.0, s, e.size))
+        mids.append((lo + hi) / 2), widths.append((hi - lo) / 2)
+    assert np.median(widths) == pytest.approx(half, rel=0.35)
+    assert abs(np.median(mids) - e0) < 0.25 * half  # the mid-point is unbiased on a symmetric maximum
