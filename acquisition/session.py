@@ -1,9 +1,10 @@
 """The rig as a procedure sees it: the real drivers over the configured ports.
 
-:class:`DriverRig` implements :class:`acquisition.procedure.RigIO` with
-:class:`rig.loadcell.LoadCell` (streaming ``MSV?0``, stamped on arrival),
-:class:`rig.encoder.CrossheadEncoder` and :class:`rig.furnace.Furnace` with its
-:class:`rig.furnace.TemperatureController`. The same class serves the virtual rig: it then
+:class:`DriverRig` implements :class:`acquisition.procedure.RigIO` with the device of each role
+(:mod:`rig.roles`) its configuration names: a force device (default
+:class:`rig.loadcell.LoadCell`, streaming ``MSV?0``, stamped on arrival), a position device
+(:class:`rig.encoder.CrossheadEncoder`) and a temperature device (:class:`rig.furnace.Furnace`)
+with its :class:`rig.furnace.TemperatureController`. The same class serves the virtual rig: it then
 talks to the virtual devices' pseudo-terminals through the same drivers, and the optional
 ``virtual`` handle lets the procedure start the crosshead and read the post-test
 measurements the way an operator would.
@@ -19,8 +20,8 @@ from flowcurve.acquisition.sampler import Channel
 from flowcurve.clock import WALL, Clock
 from flowcurve.errors import DeviceError, SafetyError
 from flowcurve.record.format import WRITER_STAMPING, WRITER_STAMPING_KEY
-from flowcurve.rig.codecs import aed
 from flowcurve.rig.furnace import STUCK_RELAY_ADVICE, StuckRelayCheck
+from flowcurve.rig.roles import ForceDevice, PositionDevice, TemperatureDevice
 
 logger = logging.getLogger(__name__)
 
@@ -51,6 +52,10 @@ class DriverRig:
     stream: read the load cell as a ``MSV?0`` stream (True) or poll ``MSV?`` (False).
     """
 
+    loadcell: ForceDevice
+    encoder: PositionDevice
+    furnace: TemperatureDevice | None
+
     def __init__(self, config, *, time_scale: float = 1.0, virtual=None, stream: bool = True,
                  timebase: Clock | None = None):
         self.config = config
@@ -67,11 +72,10 @@ class DriverRig:
         self.instruments_meta = config.instruments.meta()  # the instruments' classes, for the results' uncertainty
         self.writer_meta = {WRITER_STAMPING_KEY: WRITER_STAMPING}  # how this driver stamps (the record's writer.stamping)
         self.max_force_N = config.frame.max_force_N
-        rate = aed.ICR_RATES_PER_S[config.loadcell.rate_code]
-        self.loadcell_period_s = 1.0 / rate
         self.loadcell = config.loadcell.create()
         self.encoder = config.encoder.create()
         self.furnace = config.furnace.create() if self.has_furnace else None
+        self.loadcell_period_s = 1.0 / self.loadcell.supported_rates_Hz()[config.loadcell.rate_code]
         self._controller = None
         self._stuck = None
         self._verified_at = -float("inf")
@@ -87,7 +91,7 @@ class DriverRig:
             self.loadcell.open()
             self.loadcell.configure(**self.config.loadcell.settings)
             self.encoder.open()
-            self.encoder.read_counts()  # answers at all?
+            self.encoder.position_mm()  # answers at all?
             if self.furnace is not None:
                 self.furnace.open()
                 self.furnace.clear_watchdog()  # a watchdog that tripped earlier blocks the outputs

@@ -32,27 +32,43 @@ def _slug(text: str) -> str:
 
 def card_blocks(fit_path: Path, material: str | None, units: str, cards_dir: Path | None, link_base: Path | None,
                 overrides: dict, report: Report) -> list:
-    """Write the LS-DYNA card into ``cards_dir`` and link it; or say what it lacks."""
-    from flowcurve.reports.cards import load_card_data, write_card
+    """Write the report's cards (the registry's ``in_report`` formats) into ``cards_dir`` and
+    link them; or say what each lacks. The other formats are named for 'flowcurve card'."""
+    from flowcurve.reports.cards import FORMATS, report_formats
 
     blocks: list = [Heading("Material card", 3)]
+    shown = report_formats()
+    written = [_card_block(fmt, fit_path, material, units, cards_dir, link_base, overrides, report) for fmt in shown]
+    blocks += [b for b, _ in written]
+    others = [name for name in FORMATS if name not in {f.name for f in shown}]
+    if cards_dir is not None and others and any(ok for _, ok in written):
+        report.for_engineer(f"Other solvers: 'flowcurve card fit.json --format {'|'.join(others)}'.")
+    return blocks
+
+
+def _card_block(fmt, fit_path: Path, material: str | None, units: str, cards_dir: Path | None, link_base: Path | None,
+                overrides: dict, report: Report):
+    """One card of format ``fmt`` (a CardFormat) written and linked: (block, written?)."""
+    from flowcurve.reports.cards import load_card_data, write_card
+
+    label = f"{fmt.display_name} card"
     try:
         data = load_card_data(fit_path, **overrides)
         if material and data.material == "material":
             data.material = material
-        text = write_card(data, "lsdyna", units)
+        text = write_card(data, fmt.name, units)
     except FlowcurveError as exc:
-        report.for_engineer(f"LS-DYNA card not written: {exc}. Give the missing constant to 'flowcurve report' "
+        report.for_engineer(f"{label} not written: {exc}. Give the missing constant to 'flowcurve report' "
                             "(e.g. --poisson, --density) or write it into fit.json; 'flowcurve card' writes the other formats.")
-        return blocks + [Para(f"LS-DYNA card not written: {customer_text(str(exc))}.", "warn")]
+        return Para(f"{label} not written: {customer_text(str(exc))}.", "warn"), False
     if cards_dir is None:
-        return blocks + [Para(f"LS-DYNA card ({units}): written beside the report file.", "note")]
+        return Para(f"{label} ({units}): written beside the report file.", "note"), False
     cards_dir.mkdir(parents=True, exist_ok=True)
-    card = cards_dir / f"{_slug(data.material)}-lsdyna-{_slug(units)}.k"
+    card = cards_dir / f"{_slug(data.material)}-{fmt.name}-{_slug(units)}.{fmt.suffix}"
     card.write_text(text, encoding="utf-8")
     href = card.relative_to(link_base).as_posix() if link_base else card.name
-    report.for_engineer("Other solvers: 'flowcurve card fit.json --format abaqus|radioss|calculix'.")
-    return blocks + [Link(f"LS-DYNA card ({units}, *MAT_JOHNSON_COOK and *MAT_PIECEWISE_LINEAR_PLASTICITY): {href}", href)]
+    contents = f", {fmt.contents}" if fmt.contents else ""
+    return Link(f"{label} ({units}{contents}): {href}", href), True
 
 
 def fit_blocks_factory(units: str, cards_dir: Path | None, link_base: Path | None, overrides: dict):

@@ -3,8 +3,9 @@
 
 Unknown keys, wrong types and out-of-range values raise :class:`ConfigError` naming the file
 and the key (``rig.toml: [furnace] max_temperature_C: must be in 0 < x <= 1370, got 2000``).
-``[furnace]`` is optional (a rig without a furnace); the others are required. See
-``rig/example-rig.toml`` for every key with its meaning.
+``[furnace]`` is optional (a rig without a furnace); the others are required. Each device
+section may name its ``model`` (:data:`rig.roles.MODELS`; default the drivers this rig was built
+with). See ``rig/example-rig.toml`` for every key with its meaning.
 """
 
 from __future__ import annotations
@@ -14,10 +15,11 @@ import math
 import tomllib
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 from flowcurve.errors import ConfigError
 from flowcurve.rig.codecs import aed
+from flowcurve.rig.roles import DEFAULT_MODELS, MODELS, driver_class
 
 # A furnace set-point must leave this much below [furnace] max_temperature_C: after a working switch-off
 # the heat already in the elements carries the furnace above its set-point, and a furnace that crosses its
@@ -58,8 +60,10 @@ def _cof(v):
 
 @dataclass(frozen=True)
 class SerialConfig:
-    """What every device section has: the port and its line settings."""
+    """What every device section has: the port and its line settings; ``role`` (rig.roles.ROLES)
+    and ``model`` (rig.roles.MODELS) choose the driver."""
 
+    role: ClassVar[str]
     port: str
     baud: int = 9600
     parity: str = "N"
@@ -69,9 +73,15 @@ class SerialConfig:
     def transport_kwargs(self, name: str) -> dict[str, Any]:
         return dict(name=name, baudrate=self.baud, parity=self.parity, timeout_s=self.timeout_s)
 
+    def create(self, **kw):
+        """The driver of this section's ``model`` built from this section (port not opened yet)."""
+        return driver_class(self.role, self.model).from_config(self, **kw)
+
 
 @dataclass(frozen=True)
 class LoadCellConfig(SerialConfig):
+    role: ClassVar[str] = "force"
+    model: str = DEFAULT_MODELS["force"]
     parity: str = "E"
     address: int = 31
     nominal_load_N: float | None = None
@@ -84,15 +94,6 @@ class LoadCellConfig(SerialConfig):
     filter: int = 2
     select_address: bool = False
 
-    def create(self, **kw):
-        """A :class:`rig.loadcell.LoadCell` for this section (port not opened yet)."""
-        from flowcurve.rig.loadcell import LoadCell
-
-        return LoadCell(self.port, address=self.address, nominal_load_N=self.nominal_load_N,
-                        calibration_N_per_count=self.calibration_N_per_count,
-                        output_format=self.output_format, select_address=self.select_address,
-                        **self.transport_kwargs("load cell"), **kw)
-
     @property
     def settings(self) -> dict[str, int]:
         """Keyword arguments of :meth:`rig.loadcell.LoadCell.configure` for this section."""
@@ -101,24 +102,19 @@ class LoadCellConfig(SerialConfig):
 
 @dataclass(frozen=True)
 class EncoderConfig(SerialConfig):
+    role: ClassVar[str] = "position"
+    model: str = DEFAULT_MODELS["position"]
     address: int = 2
     checksum: bool = False
     counts_per_rev: int = 10_000
     gear_ratio: float = 1.0
     screw_lead_mm: float = 100.0
 
-    def create(self, **kw):
-        """A :class:`rig.encoder.CrossheadEncoder` for this section."""
-        from flowcurve.rig.encoder import CrossheadEncoder
-
-        return CrossheadEncoder(self.port, address=self.address, checksum=self.checksum,
-                                counts_per_rev=self.counts_per_rev, gear_ratio=self.gear_ratio,
-                                screw_lead_mm=self.screw_lead_mm,
-                                **self.transport_kwargs("crosshead encoder"), **kw)
-
 
 @dataclass(frozen=True)
 class FurnaceConfig(SerialConfig):
+    role: ClassVar[str] = "temperature"
+    model: str = DEFAULT_MODELS["temperature"]
     address: int = 1
     timeout_s: float = 0.3
     checksum: bool = False
@@ -131,14 +127,6 @@ class FurnaceConfig(SerialConfig):
     kp_per_C: float = 0.05
     ki_per_C_s: float = 0.0005
     setpoint_margin_C: float = SETPOINT_MARGIN_C
-
-    def create(self, **kw):
-        """A :class:`rig.furnace.Furnace` for this section."""
-        from flowcurve.rig.furnace import Furnace
-
-        return Furnace(self.port, address=self.address, checksum=self.checksum,
-                       heater_do_bit=self.heater_do_bit, max_temperature_C=self.max_temperature_C,
-                       **self.transport_kwargs("furnace"), **kw)
 
     def controller(self, furnace, setpoint_C: float, **kw):
         """A :class:`rig.furnace.TemperatureController` with this section's limits and tuning."""
@@ -214,6 +202,7 @@ _SERIAL_CHECKS = {
 }
 SCHEMA: dict[str, tuple[type, dict[str, tuple[type, Any]]]] = {
     "loadcell": (LoadCellConfig, _SERIAL_CHECKS | {
+        "model": (str, _one_of(MODELS["force"])),
         "address": (int, _in(0, 99)),
         "nominal_load_N": (float, _in(0.0, 1e7, lo_open=True)),
         "calibration_N_per_count": (float, _in(0.0, 1.0, lo_open=True)),
@@ -223,6 +212,7 @@ SCHEMA: dict[str, tuple[type, dict[str, tuple[type, Any]]]] = {
         "select_address": (bool, None),
     }),
     "encoder": (EncoderConfig, _SERIAL_CHECKS | {
+        "model": (str, _one_of(MODELS["position"])),
         "address": (int, _in(0, 255)),
         "checksum": (bool, None),
         "counts_per_rev": (int, _in(1, 10**7)),
@@ -230,6 +220,7 @@ SCHEMA: dict[str, tuple[type, dict[str, tuple[type, Any]]]] = {
         "screw_lead_mm": (float, _in(0.0, 1000.0, lo_open=True)),
     }),
     "furnace": (FurnaceConfig, _SERIAL_CHECKS | {
+        "model": (str, _one_of(MODELS["temperature"])),
         "address": (int, _in(0, 255)),
         "checksum": (bool, None),
         "heater_do_bit": (int, _in(0, 1)),

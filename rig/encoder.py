@@ -30,6 +30,13 @@ class CrossheadEncoder(DconDevice):
         self.channel = channel
         self._unwrapper = codec.Unwrapper()
 
+    @classmethod
+    def from_config(cls, section, **kw) -> "CrossheadEncoder":
+        """The encoder box of a rig file's ``[encoder]`` section (:class:`rig.config.EncoderConfig`)."""
+        return cls(section.port, address=section.address, checksum=section.checksum,
+                   counts_per_rev=section.counts_per_rev, gear_ratio=section.gear_ratio,
+                   screw_lead_mm=section.screw_lead_mm, **section.transport_kwargs("crosshead encoder"), **kw)
+
     def read_raw(self) -> int:
         """``#AAN``: the raw 32-bit counter value (0 .. 2**32-1)."""
         return self.query("#", f"{self.channel}", codec.parse_count)

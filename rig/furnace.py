@@ -18,6 +18,7 @@ from itertools import takewhile
 
 from flowcurve.errors import DeviceError, FlowcurveError, SafetyError
 from flowcurve.rig.codecs import dcon
+from flowcurve.rig.roles import TemperatureDevice
 from flowcurve.rig.transport import DconDevice, WrongAddressError
 
 logger = logging.getLogger(__name__)
@@ -63,6 +64,13 @@ class Furnace(DconDevice):
         self.heater_is_on = False
         self.watchdog_armed = False
         self.acks_trusted = True  # False once a heater command was answered from another address
+
+    @classmethod
+    def from_config(cls, section, **kw) -> "Furnace":
+        """The furnace module of a rig file's ``[furnace]`` section (:class:`rig.config.FurnaceConfig`)."""
+        return cls(section.port, address=section.address, checksum=section.checksum,
+                   heater_do_bit=section.heater_do_bit, max_temperature_C=section.max_temperature_C,
+                   **section.transport_kwargs("furnace"), **kw)
 
     def close(self) -> None:
         """Heater off (best effort), then release the port."""
@@ -309,7 +317,7 @@ class TemperatureController:
     Call :meth:`step` from a loop (``now`` in monotonic s, or the ``clock`` given).
     """
 
-    def __init__(self, furnace: Furnace, setpoint_C: float, *, max_temperature_C: float,
+    def __init__(self, furnace: TemperatureDevice, setpoint_C: float, *, max_temperature_C: float,
                  max_rate_C_per_min: float, period_s: float = 2.0, kp_per_C: float = 0.05,
                  ki_per_C_s: float = 0.0005, approach_s: float = 30.0, stuck_settle_s: float = 30.0, stuck_rise_C: float = 5.0,
                  clock=time.monotonic):

@@ -158,6 +158,19 @@ class LoadCell:
         self._last_sample_t = -math.inf
         self._selected = False
 
+    @classmethod
+    def from_config(cls, section, **kw) -> "LoadCell":
+        """The amplifier of a rig file's ``[loadcell]`` section (:class:`rig.config.LoadCellConfig`)."""
+        return cls(section.port, address=section.address, nominal_load_N=section.nominal_load_N,
+                   calibration_N_per_count=section.calibration_N_per_count,
+                   output_format=section.output_format, select_address=section.select_address,
+                   **section.transport_kwargs("load cell"), **kw)
+
+    @staticmethod
+    def supported_rates_Hz() -> tuple[float, ...]:
+        """Output rates (values/s) by ``ICR`` rate code 0..7 (FMD0)."""
+        return tuple(aed.ICR_RATES_PER_S)
+
     # -- life cycle -------------------------------------------------------------------
     def open(self) -> "LoadCell":
         self.transport.open()

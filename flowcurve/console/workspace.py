@@ -199,6 +199,7 @@ class Workspace:
         from flowcurve.cli.reports import run_card
         from flowcurve.cli.series import summary, write_fit
         from flowcurve.identification.series import fit_series, load_members
+        from flowcurve.reports.cards import card_suffix
 
         if not names:
             raise FlowcurveError("fit: select at least one record")
@@ -218,7 +219,7 @@ class Workspace:
         args = _parse(build_parser(), argv)
         fmt = str(options.get("format") or "lsdyna")
         units = str(options.get("units") or "").strip()
-        card = out / f"card-{bare_name(fmt, 'format')}.{_CARD_SUFFIX.get(fmt, 'txt')}"
+        card = out / f"card-{bare_name(fmt, 'format')}.{card_suffix(fmt)}"
         card_argv = ["card", "fit.json", "--format", fmt, "-o", str(card)] + (["--units", units] if units else [])
         for key, option in CARD_FIELDS.items():
             value = str(options.get(key) or "").strip()
@@ -292,9 +293,6 @@ def _check_complete(members, args, card_args, fixed) -> None:
     if missing:
         listed = ", ".join(FIT_LABELS[k] for k in missing)
         raise FormError({**missing, "fit": f"the fit and card need {len(missing)} input(s) not given: {listed}"})
-
-
-_CARD_SUFFIX = {"lsdyna": "k", "abaqus": "inp", "radioss": "rad", "calculix": "inp"}
 
 
 def _parse(parser, argv: list[str]):

@@ -1,0 +1,123 @@
+"""The rig's device roles as :class:`typing.Protocol` s, and the models that fill each role.
+
+A role is what the acquisition layer (:mod:`acquisition.session`, the procedure through it, the
+:class:`rig.furnace.TemperatureController`) calls on a device — nothing of its wire protocol:
+
+- force: the load-cell amplifier (:class:`ForceDevice`; :class:`rig.loadcell.LoadCell`);
+- position: the crosshead encoder (:class:`PositionDevice`; :class:`rig.encoder.CrossheadEncoder`);
+- temperature: the furnace module (:class:`TemperatureDevice`; :class:`rig.furnace.Furnace`).
+
+The rig configuration names a device's model per section (``model = "hbm-aed"``); :data:`MODELS`
+maps each model name to its driver class (``"module:Class"``, imported when the rig is opened),
+which builds itself from its section with ``from_config(section, **kw)``. A new device is its
+driver's module and one entry here (docs/extending.md). This module imports only ``typing``.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any, Protocol, Sequence, runtime_checkable
+
+
+@runtime_checkable
+class Link(Protocol):
+    """What the acquisition reads of a device's line (:class:`rig.transport.SerialTransport`):
+    whether it is open, its clock, the last request's time and what it had to repeat or discard."""
+
+    is_open: bool
+    clock: Any  # flowcurve.clock.Clock: the port's host time
+    last_request_s: float | None
+    late_replies: int
+    retried_exchanges: int
+
+    def close(self) -> None: ...
+
+
+@runtime_checkable
+class Device(Protocol):
+    """Every role: a name for messages, its line, opened and closed."""
+
+    name: str
+    transport: Link
+
+    def open(self) -> Any: ...
+    def close(self) -> None: ...
+
+
+class ForceReading(Protocol):
+    """One force value stamped in host seconds on the port's clock."""
+
+    t_monotonic_s: float
+    force_N: float
+
+
+@runtime_checkable
+class ForceDevice(Device, Protocol):
+    """Force role (load-cell amplifier): polled or streamed force readings, tare, its output rates
+    (``supported_rates_Hz()[rate_code]`` is the rate its section's ``rate_code`` sets) and what its
+    stream lost (``frames_lost``, ``stream_resyncs``, ``latency_s``)."""
+
+    stream_resyncs: int
+    latency_s: float
+
+    @property
+    def frames_lost(self) -> int: ...
+    def supported_rates_Hz(self) -> Sequence[float]: ...
+    def configure(self, **settings: Any) -> None: ...
+    def tare(self) -> None: ...
+    def read(self) -> ForceReading: ...
+    def start_stream(self) -> None: ...
+    def read_stream(self, max_samples: int, timeout: float) -> Sequence[ForceReading]: ...
+
+
+@runtime_checkable
+class PositionDevice(Device, Protocol):
+    """Position role (crosshead encoder): the crosshead's travel in mm since :meth:`zero`."""
+
+    def position_mm(self) -> float: ...
+    def zero(self) -> None: ...
+
+
+@runtime_checkable
+class TemperatureDevice(Device, Protocol):
+    """Temperature role (furnace module): the reading, the heater output (never on at or above
+    ``max_temperature_C``; ``heater_off`` True when acknowledged), the address check
+    (``digital_io``) and the host watchdog that switches the heater off by itself."""
+
+    max_temperature_C: float
+    heater_is_on: bool
+    watchdog_armed: bool
+
+    def temperature_C(self) -> float: ...
+    def heater(self, on: bool, reading_C: float | None = None) -> None: ...
+    def heater_off(self) -> bool: ...
+    def digital_io(self) -> dict[str, int]: ...
+    def clear_watchdog(self) -> None: ...
+    def arm_watchdog(self, timeout_s: float) -> None: ...
+    def disarm_watchdog(self) -> None: ...
+    def host_ok(self) -> None: ...
+
+
+ROLES: dict[str, type] = {"force": ForceDevice, "position": PositionDevice, "temperature": TemperatureDevice}
+SECTION_ROLES = {"loadcell": "force", "encoder": "position", "furnace": "temperature"}  # the rig file's sections
+
+# model name -> driver class ("module:Class", or the class) per role; the first is the default
+MODELS: dict[str, dict[str, str | type]] = {
+    "force": {"hbm-aed": "flowcurve.rig.loadcell:LoadCell"},
+    "position": {"dcon-encoder": "flowcurve.rig.encoder:CrossheadEncoder"},
+    "temperature": {"dcon-i7011": "flowcurve.rig.furnace:Furnace"},
+}
+DEFAULT_MODELS = {role: next(iter(models)) for role, models in MODELS.items()}
+
+
+def driver_class(role: str, model: str) -> type:
+    """The driver class registered for ``model`` in ``role`` (imported now); KeyError naming the
+    known models when there is none."""
+    try:
+        entry = MODELS[role][model]
+    except KeyError:
+        raise KeyError(f"no {role} device model {model!r} (known: {', '.join(MODELS.get(role, ()))})") from None
+    if isinstance(entry, str):
+        module, _, name = entry.partition(":")
+        entry = getattr(importlib.import_module(module), name)
+    return entry
