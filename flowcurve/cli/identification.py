@@ -10,6 +10,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from flowcurve.cli.choices import FRICTION_CORRECTIONS, FRICTION_METHODS, NECK_METHODS, TEST_TYPES
 from flowcurve.cli.specimen import GEOMETRY_OPTIONS, add_geometry_options, add_modulus_option, check_specimen_options, measurement
 from flowcurve.errors import FlowcurveError, MissingValueError, RecordError
 
@@ -63,15 +64,6 @@ exit code is then non-zero.
 """
 
 
-def _choices(module: str, name: str):
-    """Allowed values published by another module (None → accept any, that module decides)."""
-    try:
-        mod = __import__(module, fromlist=[name])
-        return tuple(getattr(mod, name))
-    except (ImportError, AttributeError):
-        return None
-
-
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "identify",
@@ -101,7 +93,7 @@ def register(subparsers) -> None:
     b.add_argument("--force", action="store_true", help="identify every record again, even one whose result.json is current "
                    "(same flowcurve version and code, record SHA-256 and options; such a record is skipped by default)")
     g = p.add_argument_group("specimen and test (override the record's header)")
-    g.add_argument("--test", choices=("tension", "compression"), help="kind of test, for files that do not say")
+    g.add_argument("--test", choices=TEST_TYPES, help="kind of test, for files that do not say")
     add_geometry_options(g)
     g.add_argument("--le", type=float, metavar="MM", help="extensometer gauge length Le (ISO 6892-1), mm; needed to turn a strain column (%%, mm/mm, -) into elongation")
     g.add_argument("--lu", type=float, metavar="MM", help="gauge length measured after fracture (tension), mm")
@@ -117,7 +109,7 @@ def register(subparsers) -> None:
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="any other metadata key, e.g. --set nominal_temperature_C=600")
     m = p.add_argument_group("methods")
     m.add_argument("--no-extensometer", action="store_true", help="use the corrected crosshead travel even when the record has an extensometer channel")
-    m.add_argument("--neck-correction", choices=_choices("flowcurve.identification.necking", "METHODS") or ("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
+    m.add_argument("--neck-correction", choices=NECK_METHODS, help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
     m.add_argument("--hardening", choices=tuple(HARDENING_CHOICES), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
     add_modulus_option(m, "strips elastic strain with it (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
     m.add_argument("--true-stress", choices=("constant_volume", "gost_3_6"), help="true stress in the uniform part of a tension test: σ·(1 + e) at constant volume (default) or the seed's corrected (3.6) with bulk modulus, for comparison (it reads up to ~7 %% high at e = 0.4)")
@@ -127,7 +119,7 @@ def register(subparsers) -> None:
     m.add_argument("--modulus-method", choices=("auto", "window", "sdar"), help="how the elastic line is found when no --modulus-window is given: window (the widest linear stretch), sdar (ASTM E3076-18, slope determination by analysis of residuals, with its quality metrics) or auto (default: sdar on a crosshead-only tension record, else window)")
     m.add_argument("--fit-range", type=_pair, metavar="LO,HI", help="true plastic strain range of the hardening fit, e.g. 0.01,0.15 (default: from 0.2 %% offset, past a yield plateau, to the end of the uniform range)")
     m.add_argument("--fracture-point", choices=("auto", "include", "exclude"), help="the neck-corrected fracture point in the least-squares hardening fit (tension): include, exclude, or auto (default: included unless it costs the uniform range more than 2 %% max error); both variants are reported")
-    m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default fe_table: the CalculiX table; all are reported)")
+    m.add_argument("--friction-method", choices=FRICTION_METHODS, help="how μ is identified from the barrel (compression; default fe_table: the CalculiX table; all are reported)")
     m.add_argument("--method", choices=("fast", "inverse-fe"), default="fast", help="fast (default; compression: FE tables, no solver at identification time) or inverse-fe (CalculiX in the loop: compression, the hardening law and μ fitted to the force-stroke curve and dmax; tension, the hardening beyond Fm fitted to the force-elongation curve and the neck diameter dk)")
     m.add_argument("--workers", type=int, metavar="N", help="inverse-fe: solver runs side by side (default: the cores)")
     m.add_argument("--time-limit", type=float, metavar="S", help="inverse-fe (compression and tension): wall-time budget, s; the fit ends by it with its "
@@ -135,7 +127,7 @@ def register(subparsers) -> None:
                    "tension 900, its bench records' longest run count at a loaded machine's rate)")
     m.add_argument("--scheduler", metavar="ADDRESS", help="send the records as tasks to this Dask distributed scheduler (needs the 'fe' extra); "
                    "inverse-fe solver runs stay with their record's task (--workers)")
-    m.add_argument("--friction-correction", choices=_choices("flowcurve.identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default fe_table: the CalculiX force factor; all are computed)")
+    m.add_argument("--friction-correction", choices=FRICTION_CORRECTIONS, help="friction correction giving the reported true curve (compression; default fe_table: the CalculiX force factor; all are computed)")
     p.set_defaults(func=run)
 
 
