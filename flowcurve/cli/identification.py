@@ -375,10 +375,12 @@ def _record_meta(path: str, meta: dict[str, str], table) -> dict[str, str]:
 
 
 def run(args) -> int:
-    from flowcurve.record.importers import parse_column_option
-
     check_specimen_options(args)
-    columns = dict(parse_column_option(c) for c in args.column) or None
+    columns = None
+    if args.column:  # the importers (numpy, pandas) only for a plain CSV: records that are current need neither
+        from flowcurve.record.importers import parse_column_option
+
+        columns = dict(parse_column_option(c) for c in args.column)
     meta = _meta_from_args(args)
     options = _options_from_args(args)
     out = Path(args.out)
@@ -413,7 +415,9 @@ def run(args) -> int:
 def _outcomes(tasks: list[dict], jobs: int, scheduler: str | None):
     """The outcome of every task (:func:`identify_task`) in the tasks' order: one after another
     here, or side by side in ``jobs`` processes or as tasks on the Dask ``scheduler``; a
-    progress bar on standard error when there are several."""
+    progress bar on standard error when there are several. Before any pool or cluster, the
+    tasks that need no identification (:func:`outcome_without_work`) are decided here: only
+    the others go there, and none → no pool."""
     from flowcurve.cli.progress import ProgressBar
 
     bar = ProgressBar(len(tasks)) if len(tasks) > 1 else None
@@ -425,15 +429,27 @@ def _outcomes(tasks: list[dict], jobs: int, scheduler: str | None):
                     bar.update(done)
                 yield outcome
             return
-        from flowcurve.identification.fe.pool import run_many
-
-        if scheduler is None:
-            preload_identification(plots=any(task["plots"] for task in tasks))
-        yield from run_many(identify_task, tasks, workers=jobs, scheduler=scheduler,
-                            progress=(lambda done, _total, _elapsed: bar.update(done)) if bar else (lambda *_: None))
+        decided = [outcome_without_work(task) for task in tasks]
+        work = [task for task, outcome in zip(tasks, decided) if outcome is None]
+        if bar and len(work) < len(tasks):
+            bar.update(len(tasks) - len(work))
+        identified = iter(_run_in_parallel(work, jobs, scheduler, bar, len(tasks) - len(work)) if work else ())
+        for outcome in decided:
+            yield outcome if outcome is not None else next(identified)
     finally:
         if bar:
             bar.close()
+
+
+def _run_in_parallel(tasks: list[dict], jobs: int, scheduler: str | None, bar, done_before: int) -> list[dict]:
+    """identify_task over ``tasks`` in ``jobs`` processes or on the Dask ``scheduler``; the bar
+    counts on from the ``done_before`` tasks decided without work."""
+    from flowcurve.identification.fe.pool import run_many
+
+    if scheduler is None:
+        preload_identification(plots=any(task["plots"] for task in tasks))
+    return run_many(identify_task, tasks, workers=jobs, scheduler=scheduler,
+                    progress=(lambda done, _total, _elapsed: bar.update(done_before + done)) if bar else (lambda *_: None))
 
 
 def preload_identification(plots: bool = False) -> None:
@@ -452,7 +468,17 @@ def identify_task(task: dict) -> dict:
     its result.json is current (:func:`identification.provenance.same_run`), else identified and
     written. Returns a picklable outcome (path, folder, status identified/skipped/failed, the
     result as JSON, the one-line error); bad input never raises."""
-    from flowcurve.identification.outcome import to_jsonable
+    return _task_outcome(task, identify=True)
+
+
+def outcome_without_work(task: dict) -> dict | None:
+    """The outcome of a task decided without identifying its record: skipped (its result.json is
+    current) or failed on its metadata; None when the record is to be identified."""
+    return _task_outcome(task, identify=False)
+
+
+def _task_outcome(task: dict, *, identify: bool) -> dict | None:
+    """:func:`identify_task`; with ``identify`` False, None where it would identify the record."""
     from flowcurve.identification.provenance import file_sha256
 
     path, out = task["path"], Path(task["out"])
@@ -467,6 +493,8 @@ def identify_task(task: dict) -> dict:
             current = _current_result(Path(outcome["folder"]), sha, given_options(task["options"], meta, task["columns"]))
             if current is not None:
                 return {**outcome, "status": "skipped", "result": current}
+        if not identify:
+            return None
         ident, folder = identify_file(path, columns=task["columns"], meta=meta, options=task["options"], out=out,
                                       plots=task["plots"], record_sha256=sha)
     except FlowcurveError as exc:
@@ -478,6 +506,8 @@ def identify_task(task: dict) -> dict:
         logger.debug("internal error on %s", path, exc_info=exc)
         return {**outcome, "error": f"internal error on {path}: {type(exc).__name__}: {exc} (-vv or FLOWCURVE_DEBUG=1 shows the "
                                     "traceback; please report it)"}
+    from flowcurve.identification.outcome import to_jsonable  # numpy: not needed to skip a current record
+
     return {**outcome, "folder": str(folder), "status": "identified", "result": to_jsonable(ident.result)}
 
 
