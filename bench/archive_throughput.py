@@ -10,7 +10,14 @@ average before and after each run and the cores the run got (its CPU time over i
 are printed: on a machine shared with other work the figures move with them — when the other
 work already fills the cores, a second job gets no second core.
 
+``--current-only`` times only the command again over results that are all current, at --jobs 1
+and --jobs 2 (the records are identified once first): the work left is deciding that each is
+current, so --jobs 2 should cost what --jobs 1 does (no pool started). ``--against DIR`` times
+another checkout (e.g. the code before a change, ``git archive <commit> | tar -x -C DIR``) in
+the same run, in its own output folder (a result is current only for the code that made it).
+
 Run: python bench/archive_throughput.py [--records 40] [--no-plots]   (~3-6 min on 2 cores)
+     python bench/archive_throughput.py --current-only [--repeat 5] [--against DIR]   (~1 min)
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ import argparse
 import os
 import resource
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -53,24 +61,54 @@ def _children_cpu_s() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def timed_identify(records: list[str], out: Path, extra: list[str]) -> tuple[float, float, str]:
+def timed_identify(records: list[str], out: Path, extra: list[str], root: Path = ROOT) -> tuple[float, float, str]:
     """Wall time, CPU time (the command and the worker processes it waited for; not a Dask
-    cluster's workers) of one `flowcurve identify` run, and its last output line."""
+    cluster's workers) of one `flowcurve identify` run of checkout ``root``, and its last output line."""
     command = [sys.executable, "-m", "flowcurve", "identify", *records, "--out", str(out), *extra]
     cpu0, t0 = _children_cpu_s(), time.perf_counter()
-    done = subprocess.run(command, capture_output=True, text=True, env={**os.environ, "MPLBACKEND": "Agg"})
+    done = subprocess.run(command, capture_output=True, text=True, cwd=root,
+                          env={**os.environ, "MPLBACKEND": "Agg", "FLOWCURVE_DEV_ROOT": str(root)})
     wall, cpu = time.perf_counter() - t0, _children_cpu_s() - cpu0
     if done.returncode != 0:
         raise SystemExit(f"identify failed ({done.returncode}):\n{done.stderr[-2000:]}")
     return wall, cpu, done.stdout.strip().splitlines()[-1]
 
 
+def current_only(records: list[str], tmp: Path, plots: list[str], roots: dict[str, Path], repeat: int) -> None:
+    """The command again over results that are all current, --jobs 1 and 2, each checkout in
+    ``roots`` in its own output folder; the runs take turns so that load changes fall on all."""
+    for name, root in roots.items():
+        timed_identify(records, tmp / name, [*plots, "--jobs", "2"], root)  # every result current from here on
+    runs = {(name, jobs): [] for name in roots for jobs in ("1", "2")}
+    last = {}
+    for _ in range(repeat):
+        for (name, jobs), times in runs.items():
+            wall, _cpu, last[name] = timed_identify(records, tmp / name, [*plots, "--jobs", jobs], roots[name])
+            times.append(wall)
+    print(f"the same command again, every result current (median of {repeat}; {last[next(iter(roots))]})")
+    print("| checkout | --jobs 1, s | --jobs 2, s | --jobs 2 / --jobs 1 |")
+    print("|---|---|---|---|")
+    for name, root in roots.items():
+        one, two = statistics.median(runs[(name, "1")]), statistics.median(runs[(name, "2")])
+        print(f"| {name} ({root}) | {one:.2f} | {two:.2f} | {two / one:.2f} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--records", type=int, default=40)
     parser.add_argument("--no-plots", action="store_true", help="pass --no-plots to identify (the default draws the PNG plots)")
+    parser.add_argument("--current-only", action="store_true", help="time only the command again over current results, --jobs 1 and 2")
+    parser.add_argument("--repeat", type=int, default=5, help="--current-only: runs per figure (median)")
+    parser.add_argument("--against", type=Path, metavar="DIR", help="--current-only: another checkout to time beside this one")
     args = parser.parse_args()
     plots = ["--no-plots"] if args.no_plots else []
+    if args.current_only:
+        with tempfile.TemporaryDirectory(prefix="flowcurve-archive-") as tmp:
+            records = make_records(Path(tmp) / "records", args.records)
+            print(f"{len(records)} records, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}", flush=True)
+            roots = {"this": ROOT, **({"against": args.against.resolve()} if args.against else {})}
+            current_only(records, Path(tmp), plots, roots, args.repeat)
+        return
     rows = []
     with tempfile.TemporaryDirectory(prefix="flowcurve-archive-") as tmp:
         tmp = Path(tmp)
@@ -91,6 +129,7 @@ def main() -> None:
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
             run("Dask LocalCluster (2 workers x 1 thread)", "dask", ["--scheduler", cluster.scheduler_address])
         again = run("--jobs 1 again (all current)", "jobs1", ["--jobs", "1"])
+        run("--jobs 2 again (all current)", "jobs2", ["--jobs", "2"])
 
     print()
     print("| run | wall, s | records per minute | vs --jobs 1 | CPU, s | cores used (CPU / wall) | load average before / after |")

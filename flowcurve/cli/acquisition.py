@@ -13,20 +13,23 @@ import datetime as _dt
 import math
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from flowcurve.acquisition.live import LiveView
-from flowcurve.acquisition.procedure import POST_KEYS, POST_PROMPTS, TEST_GEOMETRY, Outcome, missing_post_keys, post_prompts, Procedure, ProcedureError, StopCriteria, TestSpec
-from flowcurve.record.format import amend_record, read_record, recover_record
+from flowcurve.cli.choices import TEST_TYPES
 from flowcurve.cli.specimen import add_geometry_options, add_modulus_option, check_specimen_options, measurement
 from flowcurve.errors import EXIT_COMPLETE, EXIT_DATA_LOST, EXIT_STOPPED, DeviceError, FlowcurveError, RecordError, RecordWriteError, SafetyError
 from flowcurve.rig.virtual.responses import COMPRESSION_HELP, COMPRESSION_RESPONSES, TENSION_HELP, TENSION_RESPONSES
+
+if TYPE_CHECKING:  # the acquisition and the record format import numpy: imported where a command runs, not for --help
+    from flowcurve.acquisition.live import LiveView
+    from flowcurve.acquisition.procedure import Outcome, TestSpec
 
 DEFAULT_VIRTUAL_MATERIAL = "steel45"
 
 
 def register(subparsers) -> None:
     run = subparsers.add_parser("run", help="run a tension or compression test and record it", description="Run a test on the rig (--config) or on the virtual rig (no --config), record it crash-safely, show it live.")
-    run.add_argument("test", choices=tuple(TEST_GEOMETRY), help="test type")
+    run.add_argument("test", choices=TEST_TYPES, help="test type")
     run.add_argument("--config", type=Path, help="rig configuration (TOML); without it the virtual rig runs in this process")
     run.add_argument("--out", type=Path, help="record file (default records/<test>-<date-time>.csv)")
     run.add_argument("--material", help="material name (virtual rig: also the virtual specimen's material, default steel45)")
@@ -121,7 +124,11 @@ def parse_assignments(items: list[str], *, numeric_prefix: str = "post.", known=
     return out
 
 
-RUN_POST_KEYS = {"tension": POST_KEYS["tension"] + ("post.sk_mm2",), "compression": POST_KEYS["compression"] + ("post.smax_mm2", "post.dtop_mm")}
+def run_post_keys(test: str) -> tuple[str, ...]:
+    """The post-test keys ``run --post`` takes for ``test``: the record format's and the areas."""
+    from flowcurve.acquisition.procedure import POST_KEYS
+
+    return POST_KEYS[test] + {"tension": ("post.sk_mm2",), "compression": ("post.smax_mm2", "post.dtop_mm")}[test]
 
 
 def _positive(name: str, value: float | None) -> None:
@@ -193,6 +200,8 @@ def _ask(prompt: str, default=None, cast=str):
 
 def build_spec(args, geometry_default: dict[str, float] | None = None) -> TestSpec:
     """The TestSpec from options (and prompts when interactive) — geometry in mm."""
+    from flowcurve.acquisition.procedure import TEST_GEOMETRY, ProcedureError, StopCriteria, TestSpec
+
     check_specimen_options(args)
     for name in ("speed", "target", "force_limit", "soak"):
         _positive(name.replace("_", "-"), getattr(args, name, None))
@@ -210,7 +219,7 @@ def build_spec(args, geometry_default: dict[str, float] | None = None) -> TestSp
         geometry[key] = float(value)
     material = args.material or (_ask("material", "unknown") if interactive else "unknown")
     operator = args.operator if args.operator is not None else (_ask("operator", "") if interactive else "")
-    post = {k: float(v) for k, v in parse_assignments(args.post, known=RUN_POST_KEYS[args.test], option="--post").items() if v is not None}
+    post = {k: float(v) for k, v in parse_assignments(args.post, known=run_post_keys(args.test), option="--post").items() if v is not None}
     return TestSpec(
         test=args.test,
         material=material or "unknown",
@@ -232,6 +241,9 @@ def default_out(test: str) -> Path:
 
 def report_outcome(out: Outcome, view: LiveView) -> int:
     """Print where the record went and why it ended; the exit code."""
+    from flowcurve.acquisition.procedure import POST_KEYS
+    from flowcurve.record.format import read_record
+
     line = f"record: {out.path} ({out.samples} samples, {out.duration_s:.1f} s test time, max force {out.max_force_N / 1000:.2f} kN) — {out.status}: {out.reason}"
     print(line)
     if out.post:
@@ -268,6 +280,8 @@ def advice(error: FlowcurveError) -> str:
 
 
 def cmd_run(args) -> int:
+    from flowcurve.acquisition.live import LiveView
+
     view = LiveView(quiet=args.quiet)
     out_path = args.out or default_out(args.test)
     if args.config is not None:
@@ -291,6 +305,7 @@ def configured_spec(args, config=None) -> tuple[TestSpec, float]:
 
 
 def _run_configured(args, view: LiveView, out_path: Path) -> int:
+    from flowcurve.acquisition.procedure import Procedure
     from flowcurve.acquisition.session import DriverRig
     from flowcurve.rig.config import load_config
 
@@ -334,6 +349,8 @@ def _run_virtual(args, view: LiveView, out_path: Path) -> int:
 
 
 def cmd_recover(args) -> int:
+    from flowcurve.record.format import read_record, recover_record
+
     before = read_record(args.record)
     if not before.truncated and before.meta.get("status") != "recording":
         print(f"{args.record}: complete already (status {before.meta.get('status', '?')}), nothing to recover")
@@ -354,6 +371,9 @@ def cmd_recover(args) -> int:
 
 
 def cmd_annotate(args) -> int:
+    from flowcurve.acquisition.procedure import POST_KEYS, missing_post_keys, post_prompts
+    from flowcurve.record.format import amend_record, read_record
+
     updates = parse_assignments(args.set)
     read_record(args.record)  # a clear error before touching a file that is not a record
     amend_record(args.record, updates)

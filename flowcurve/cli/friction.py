@@ -9,15 +9,13 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
-
-from flowcurve.identification.adhesion import (CONTACT_RATIO_MODELS, HERTZ_MEAN_FACTOR, HOT_FROM_C, FrictionFit, adhesion_shear,
-                                                fit_friction)
-from flowcurve.identification.outcome import to_jsonable
-from flowcurve.record.adhesion import ADHESION_COLUMNS, parse_adhesion_column_option, read_adhesion_tables, write_adhesion_table
-from flowcurve.reports.friction_cards import FRICTION_CARD_FORMATS, friction_card
+from flowcurve.cli.choices import ADHESION_COLUMNS, CONTACT_RATIO_MODELS, FRICTION_CARD_FORMATS, HOT_FROM_C
 from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
+
+if TYPE_CHECKING:  # the fit and the tables import numpy: imported where a command runs, not for --help
+    from flowcurve.identification.adhesion import FrictionFit
 
 CARD_FILES = {"abaqus": "friction_abaqus.inp", "lsdyna": "friction_lsdyna.k"}
 
@@ -83,6 +81,8 @@ def _fit_options(p, demo: bool = False) -> None:
 
 
 def _fit(table, args) -> FrictionFit:
+    from flowcurve.identification.adhesion import fit_friction
+
     if args.flow_stress is not None and args.flow_stress <= 0:
         from flowcurve.errors import IdentificationError
 
@@ -97,6 +97,8 @@ def _fit(table, args) -> FrictionFit:
 
 
 def run(args) -> int:
+    from flowcurve.record.adhesion import parse_adhesion_column_option, read_adhesion_tables
+
     columns = dict(parse_adhesion_column_option(text) for text in args.column)
     table = read_adhesion_tables(args.records, columns=columns or None)
     fit = _fit(table, args)
@@ -108,6 +110,9 @@ def run(args) -> int:
 
 
 def run_demo(args) -> int:
+    import numpy as np
+
+    from flowcurve.record.adhesion import write_adhesion_table
     from flowcurve.rig.virtual.adhesiometer import VirtualAdhesiometer
 
     device = VirtualAdhesiometer(contact=args.contact, moment_noise_rel=args.noise, radius_noise_um=args.radius_noise, seed=args.seed)
@@ -136,7 +141,9 @@ def write_friction(fit: FrictionFit, table, outdir, *, cards=(), units: str = DE
     and the cards carry the provenance (each table's SHA-256, the options as given)."""
     import pandas as pd
 
+    from flowcurve.identification.outcome import to_jsonable
     from flowcurve.identification.provenance import file_sha256, provenance
+    from flowcurve.reports.friction_cards import friction_card
 
     outdir = Path(outdir)
     (outdir / "plots").mkdir(parents=True, exist_ok=True)
@@ -159,6 +166,9 @@ def write_friction(fit: FrictionFit, table, outdir, *, cards=(), units: str = DE
 def _plots(fit: FrictionFit, folder: Path) -> list[str]:
     """Each test's adhesion stress against its mean pressure per temperature, with the model and law; residuals."""
     import matplotlib
+    import numpy as np
+
+    from flowcurve.identification.adhesion import HERTZ_MEAN_FACTOR, adhesion_shear
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -10,6 +10,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from flowcurve.cli.choices import FRICTION_CORRECTIONS, FRICTION_METHODS, NECK_METHODS, TEST_TYPES
 from flowcurve.cli.specimen import GEOMETRY_OPTIONS, add_geometry_options, add_modulus_option, check_specimen_options, measurement
 from flowcurve.errors import FlowcurveError, MissingValueError, RecordError
 
@@ -63,15 +64,6 @@ exit code is then non-zero.
 """
 
 
-def _choices(module: str, name: str):
-    """Allowed values published by another module (None → accept any, that module decides)."""
-    try:
-        mod = __import__(module, fromlist=[name])
-        return tuple(getattr(mod, name))
-    except (ImportError, AttributeError):
-        return None
-
-
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "identify",
@@ -101,7 +93,7 @@ def register(subparsers) -> None:
     b.add_argument("--force", action="store_true", help="identify every record again, even one whose result.json is current "
                    "(same flowcurve version and code, record SHA-256 and options; such a record is skipped by default)")
     g = p.add_argument_group("specimen and test (override the record's header)")
-    g.add_argument("--test", choices=("tension", "compression"), help="kind of test, for files that do not say")
+    g.add_argument("--test", choices=TEST_TYPES, help="kind of test, for files that do not say")
     add_geometry_options(g)
     g.add_argument("--le", type=float, metavar="MM", help="extensometer gauge length Le (ISO 6892-1), mm; needed to turn a strain column (%%, mm/mm, -) into elongation")
     g.add_argument("--lu", type=float, metavar="MM", help="gauge length measured after fracture (tension), mm")
@@ -117,7 +109,7 @@ def register(subparsers) -> None:
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="any other metadata key, e.g. --set nominal_temperature_C=600")
     m = p.add_argument_group("methods")
     m.add_argument("--no-extensometer", action="store_true", help="use the corrected crosshead travel even when the record has an extensometer channel")
-    m.add_argument("--neck-correction", choices=_choices("flowcurve.identification.necking", "METHODS") or ("davidenkov", "bridgman", "mirone"), help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
+    m.add_argument("--neck-correction", choices=NECK_METHODS, help="neck correction of the fracture stress (tension; default davidenkov; all are reported)")
     m.add_argument("--hardening", choices=tuple(HARDENING_CHOICES), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
     add_modulus_option(m, "strips elastic strain with it (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
     m.add_argument("--true-stress", choices=("constant_volume", "gost_3_6"), help="true stress in the uniform part of a tension test: σ·(1 + e) at constant volume (default) or the seed's corrected (3.6) with bulk modulus, for comparison (it reads up to ~7 %% high at e = 0.4)")
@@ -127,7 +119,7 @@ def register(subparsers) -> None:
     m.add_argument("--modulus-method", choices=("auto", "window", "sdar"), help="how the elastic line is found when no --modulus-window is given: window (the widest linear stretch), sdar (ASTM E3076-18, slope determination by analysis of residuals, with its quality metrics) or auto (default: sdar on a crosshead-only tension record, else window)")
     m.add_argument("--fit-range", type=_pair, metavar="LO,HI", help="true plastic strain range of the hardening fit, e.g. 0.01,0.15 (default: from 0.2 %% offset, past a yield plateau, to the end of the uniform range)")
     m.add_argument("--fracture-point", choices=("auto", "include", "exclude"), help="the neck-corrected fracture point in the least-squares hardening fit (tension): include, exclude, or auto (default: included unless it costs the uniform range more than 2 %% max error); both variants are reported")
-    m.add_argument("--friction-method", choices=_choices("flowcurve.identification.friction", "FRICTION_METHODS"), help="how μ is identified from the barrel (compression; default fe_table: the CalculiX table; all are reported)")
+    m.add_argument("--friction-method", choices=FRICTION_METHODS, help="how μ is identified from the barrel (compression; default fe_table: the CalculiX table; all are reported)")
     m.add_argument("--method", choices=("fast", "inverse-fe"), default="fast", help="fast (default; compression: FE tables, no solver at identification time) or inverse-fe (CalculiX in the loop: compression, the hardening law and μ fitted to the force-stroke curve and dmax; tension, the hardening beyond Fm fitted to the force-elongation curve and the neck diameter dk)")
     m.add_argument("--workers", type=int, metavar="N", help="inverse-fe: solver runs side by side (default: the cores)")
     m.add_argument("--time-limit", type=float, metavar="S", help="inverse-fe (compression and tension): wall-time budget, s; the fit ends by it with its "
@@ -135,7 +127,7 @@ def register(subparsers) -> None:
                    "tension 900, its bench records' longest run count at a loaded machine's rate)")
     m.add_argument("--scheduler", metavar="ADDRESS", help="send the records as tasks to this Dask distributed scheduler (needs the 'fe' extra); "
                    "inverse-fe solver runs stay with their record's task (--workers)")
-    m.add_argument("--friction-correction", choices=_choices("flowcurve.identification.friction", "CORRECTIONS"), help="friction correction giving the reported true curve (compression; default fe_table: the CalculiX force factor; all are computed)")
+    m.add_argument("--friction-correction", choices=FRICTION_CORRECTIONS, help="friction correction giving the reported true curve (compression; default fe_table: the CalculiX force factor; all are computed)")
     p.set_defaults(func=run)
 
 
@@ -383,10 +375,12 @@ def _record_meta(path: str, meta: dict[str, str], table) -> dict[str, str]:
 
 
 def run(args) -> int:
-    from flowcurve.record.importers import parse_column_option
-
     check_specimen_options(args)
-    columns = dict(parse_column_option(c) for c in args.column) or None
+    columns = None
+    if args.column:  # the importers (numpy, pandas) only for a plain CSV: records that are current need neither
+        from flowcurve.record.importers import parse_column_option
+
+        columns = dict(parse_column_option(c) for c in args.column)
     meta = _meta_from_args(args)
     options = _options_from_args(args)
     out = Path(args.out)
@@ -421,7 +415,9 @@ def run(args) -> int:
 def _outcomes(tasks: list[dict], jobs: int, scheduler: str | None):
     """The outcome of every task (:func:`identify_task`) in the tasks' order: one after another
     here, or side by side in ``jobs`` processes or as tasks on the Dask ``scheduler``; a
-    progress bar on standard error when there are several."""
+    progress bar on standard error when there are several. Before any pool or cluster, the
+    tasks that need no identification (:func:`outcome_without_work`) are decided here: only
+    the others go there, and none → no pool."""
     from flowcurve.cli.progress import ProgressBar
 
     bar = ProgressBar(len(tasks)) if len(tasks) > 1 else None
@@ -433,15 +429,27 @@ def _outcomes(tasks: list[dict], jobs: int, scheduler: str | None):
                     bar.update(done)
                 yield outcome
             return
-        from flowcurve.identification.fe.pool import run_many
-
-        if scheduler is None:
-            preload_identification(plots=any(task["plots"] for task in tasks))
-        yield from run_many(identify_task, tasks, workers=jobs, scheduler=scheduler,
-                            progress=(lambda done, _total, _elapsed: bar.update(done)) if bar else (lambda *_: None))
+        decided = [outcome_without_work(task) for task in tasks]
+        work = [task for task, outcome in zip(tasks, decided) if outcome is None]
+        if bar and len(work) < len(tasks):
+            bar.update(len(tasks) - len(work))
+        identified = iter(_run_in_parallel(work, jobs, scheduler, bar, len(tasks) - len(work)) if work else ())
+        for outcome in decided:
+            yield outcome if outcome is not None else next(identified)
     finally:
         if bar:
             bar.close()
+
+
+def _run_in_parallel(tasks: list[dict], jobs: int, scheduler: str | None, bar, done_before: int) -> list[dict]:
+    """identify_task over ``tasks`` in ``jobs`` processes or on the Dask ``scheduler``; the bar
+    counts on from the ``done_before`` tasks decided without work."""
+    from flowcurve.identification.fe.pool import run_many
+
+    if scheduler is None:
+        preload_identification(plots=any(task["plots"] for task in tasks))
+    return run_many(identify_task, tasks, workers=jobs, scheduler=scheduler,
+                    progress=(lambda done, _total, _elapsed: bar.update(done_before + done)) if bar else (lambda *_: None))
 
 
 def preload_identification(plots: bool = False) -> None:
@@ -460,7 +468,17 @@ def identify_task(task: dict) -> dict:
     its result.json is current (:func:`identification.provenance.same_run`), else identified and
     written. Returns a picklable outcome (path, folder, status identified/skipped/failed, the
     result as JSON, the one-line error); bad input never raises."""
-    from flowcurve.identification.outcome import to_jsonable
+    return _task_outcome(task, identify=True)
+
+
+def outcome_without_work(task: dict) -> dict | None:
+    """The outcome of a task decided without identifying its record: skipped (its result.json is
+    current) or failed on its metadata; None when the record is to be identified."""
+    return _task_outcome(task, identify=False)
+
+
+def _task_outcome(task: dict, *, identify: bool) -> dict | None:
+    """:func:`identify_task`; with ``identify`` False, None where it would identify the record."""
     from flowcurve.identification.provenance import file_sha256
 
     path, out = task["path"], Path(task["out"])
@@ -475,6 +493,8 @@ def identify_task(task: dict) -> dict:
             current = _current_result(Path(outcome["folder"]), sha, given_options(task["options"], meta, task["columns"]))
             if current is not None:
                 return {**outcome, "status": "skipped", "result": current}
+        if not identify:
+            return None
         ident, folder = identify_file(path, columns=task["columns"], meta=meta, options=task["options"], out=out,
                                       plots=task["plots"], record_sha256=sha)
     except FlowcurveError as exc:
@@ -486,6 +506,8 @@ def identify_task(task: dict) -> dict:
         logger.debug("internal error on %s", path, exc_info=exc)
         return {**outcome, "error": f"internal error on {path}: {type(exc).__name__}: {exc} (-vv or FLOWCURVE_DEBUG=1 shows the "
                                     "traceback; please report it)"}
+    from flowcurve.identification.outcome import to_jsonable  # numpy: not needed to skip a current record
+
     return {**outcome, "folder": str(folder), "status": "identified", "result": to_jsonable(ident.result)}
 
 

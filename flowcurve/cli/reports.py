@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from flowcurve.reports.cards import FORMATS, load_card_data, write_card
+from flowcurve.cli.choices import CARD_FORMATS
 from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
 
 
@@ -24,7 +24,7 @@ def register(subparsers) -> None:
         ),
     )
     p.add_argument("fit", metavar="FIT.json", help="fit.json written by 'flowcurve fit'")
-    p.add_argument("--format", "-f", required=True, choices=FORMATS, help="solver")
+    p.add_argument("--format", "-f", required=True, choices=CARD_FORMATS, help="solver")
     p.add_argument("--units", "-u", default=DEFAULT_UNIT_SYSTEM, choices=sorted(UNIT_SYSTEMS),
                    help=f"consistent unit system of the deck (default {DEFAULT_UNIT_SYSTEM})")
     p.add_argument("-o", "--output", metavar="FILE", help="write the card here (default: standard output)")
@@ -111,6 +111,7 @@ def missing_constants(data, fmt: str, units: str, options: dict) -> list[str]:
     order the card asks for them: the card is made on a copy, a stand-in filling each gap found."""
     import copy
 
+    from flowcurve.reports.cards import write_card
     from flowcurve.reports.cards.data import MissingConstant
 
     probe, missing = copy.copy(data), []
@@ -136,6 +137,7 @@ def missing_text(names: list[str], labels: dict[str, str] | None = None) -> str:
 
 
 def run_card(args) -> int:
+    from flowcurve.reports.cards import load_card_data, write_card
     from flowcurve.reports.cards.fields import CardError
 
     data = load_card_data(args.fit, **overrides(args))

@@ -12,10 +12,6 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
-
-from flowcurve.identification.outcome import to_jsonable
-
 if TYPE_CHECKING:  # the series fit (lmfit, pandas) is imported when a fit runs, not for --help
     from flowcurve.identification.series import SeriesFit
 
@@ -193,6 +189,7 @@ def write_fit(series: SeriesFit, outdir: str | Path, options: dict | None = None
 
     fit.json's ``provenance`` (identification.provenance) names every record's SHA-256 and the
     ``options`` as given."""
+    from flowcurve.identification.outcome import to_jsonable
     from flowcurve.identification.provenance import member_record_sha256, provenance
 
     outdir = Path(outdir)
@@ -217,6 +214,7 @@ def write_fit(series: SeriesFit, outdir: str | Path, options: dict | None = None
 def _plots(series: SeriesFit, folder: Path) -> dict[str, str]:
     """One PNG per record (measured curve, the chosen fit, the other method dashed) and an overview."""
     import matplotlib
+    import numpy as np
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -105,3 +105,49 @@ def test_records_as_tasks_on_a_dask_cluster(tmp_path, instron_file, capsys):
 def test_progress_bar_text():
     assert bar_text(12, 40, 30.0) == f"[{'#' * 9}{'.' * 21}] 12/40 records, 30 s, about 70 s left"  # 30 s / 12 · 28
     assert bar_text(40, 40, 99.6).endswith("40/40 records, 100 s")
+
+
+def _no_pool(*_args, **_kwargs):
+    raise AssertionError("a process pool was prepared though no record needs work")
+
+
+def test_jobs_start_no_pool_when_every_result_is_current(tmp_path, instron_file, capsys, monkeypatch):
+    import concurrent.futures
+
+    records = _copies(instron_file, tmp_path / "in", 3)
+    out = tmp_path / "out"
+    assert main(["identify", *records, "--out", str(out), "--no-plots"]) == 0
+    capsys.readouterr()
+    assert main(["identify", *records, "--out", str(out), "--no-plots", "--jobs", "1"]) == 0
+    one, summary_one = capsys.readouterr().out, (out / "summary.csv").read_text(encoding="utf-8")
+    monkeypatch.setattr(concurrent.futures, "ProcessPoolExecutor", _no_pool)
+    monkeypatch.setattr("flowcurve.cli.identification.preload_identification", _no_pool)
+    assert main(["identify", *records, "--out", str(out), "--no-plots", "--jobs", "2"]) == 0
+    two = capsys.readouterr().out
+    assert "0 identified, 3 skipped" in one and two == one
+    assert (out / "summary.csv").read_text(encoding="utf-8") == summary_one
+
+
+def test_jobs_send_only_the_records_that_need_work_to_the_pool(tmp_path, instron_file, capsys, monkeypatch):
+    from flowcurve.identification.fe import pool
+
+    records = _copies(instron_file, tmp_path / "in", 3)
+    out_one, out_two = tmp_path / "one", tmp_path / "two"
+    assert main(["identify", *records, "--out", str(out_one), "--no-plots"]) == 0
+    shutil.copytree(out_one, out_two)
+    with open(records[1], "a", encoding="utf-8") as f:  # one byte more: no longer current
+        f.write("\n")
+    capsys.readouterr()
+    assert main(["identify", *records, "--out", str(out_one), "--no-plots", "--jobs", "1"]) == 0
+    one = capsys.readouterr().out
+    sent, run_many = [], pool.run_many
+
+    def spy(fn, items, **kwargs):
+        sent.append([task["path"] for task in items])
+        return run_many(fn, items, **kwargs)
+
+    monkeypatch.setattr(pool, "run_many", spy)
+    assert main(["identify", *records, "--out", str(out_two), "--no-plots", "--jobs", "2"]) == 0
+    two = capsys.readouterr().out
+    assert sent == [[records[1]]]
+    assert "1 identified, 2 skipped" in one and two.replace(str(out_two), str(out_one)) == one
