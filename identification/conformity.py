@@ -140,8 +140,10 @@ def testing_rate(phases: Mapping[str, Mapping], *, E_MPa: float | None, yield_po
         findings.append("method A: every phase's rate ± U in an allowed range (±20 %)")
         out["findings"] = findings
         return out
-    not_a = [p for p in PHASE_NAMES if a[p] != CONFORMS]
-    findings.append(f"method A: {a_all} ({', '.join(f'{p} {a[p]}' for p in not_a)})")
+    bad, open_ = [p for p in PHASE_NAMES if a[p] == FAILS], [p for p in PHASE_NAMES if a[p] == UNRESOLVED]
+    findings.append("method A: " + "; ".join(([f"not met in {', '.join(bad)}"] if bad else [])
+                                            + ([f"not resolved in {', '.join(open_)} (rate ± U straddles a band's edge)"] if open_ else [])
+                                            + (["not every phase measured"] if UNMEASURED in a.values() else [])))
     b_all, b_why = (_method_b_heated(rates, Us) if heated else
                     _method_b(rates, Us, out["stress_rate_MPa_per_s"], _U(elastic, "stress_rate_u_MPa_per_s"), E_MPa, yield_point))
     findings.extend(b_why)
