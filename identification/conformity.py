@@ -55,6 +55,7 @@ HEATED_TOLERANCE_C = ((600.0, 3.0), (800.0, 4.0), (1000.0, 5.0))  # ISO 6892-2: 
 PHASE_NAMES = ("elastic", "yield", "to_Rm")
 MIN_PHASE_SAMPLES = 3
 K_RATE = 2.0  # coverage factor of a rate's U
+COVERAGE_P = 0.95  # the coverage probability U stands for
 UNRESOLVED_U_REL = RANGE_TOLERANCE  # a phase's rate whose U exceeds ±20 % of it cannot be judged against a ±20 % band
 WIDE_TARGET_U_REL = 0.05  # a wider window grows until its U is this small (a quarter of the band)
 CONFORMS, FAILS, UNRESOLVED, UNMEASURED = "conforms", "does not conform", "not resolved", "not measured"
@@ -339,12 +340,16 @@ def phase_bounds(strain, stress_MPa, *, window_MPa: Sequence[float], Rp_MPa: flo
 
 
 def measured_phases(time_s, elongation_mm, length_mm: float, stress_MPa, bounds: Mapping, *, quantum_mm: float = 0.0,
-                    time_u_s: float = 0.0, commanded_mm_per_s: float | None = None, segment: Sequence[int] | None = None) -> dict:
+                    time_u_s: float = 0.0, commanded_mm_per_s: float | None = None, segment: Sequence[int] | None = None,
+                    one_command: bool = False) -> dict:
     """Per phase: the strain rate ė = v/L (v: the least-squares slope of the elongation over time,
     L: the length it refers to) with its u (k = 1, :func:`slope_u`) and, on the elastic line, the stress
     rate dσ/dt with its u; None where a phase has fewer than 3 samples or no time span. A phase whose U
     exceeds UNRESOLVED_U_REL is, when the crosshead's ``commanded_mm_per_s`` is stated, measured over a
-    wider window of the same command (``segment``: its samples) — :func:`_widened`."""
+    wider window of the same command (``segment``: its samples) — :func:`_widened`. When the record's events
+    show the ``segment`` ran under ``one_command`` (a constant crosshead speed), u is at least the spread of
+    this slope over every window as long in that segment (:func:`window_scatter_u`): the readings' own errors,
+    correlated ones (a host's stall, an interpolated reading) too."""
     t = np.asarray(time_s, dtype=float)
     x = np.asarray(elongation_mm, dtype=float)
     s = np.asarray(stress_MPa, dtype=float)
@@ -353,12 +358,14 @@ def measured_phases(time_s, elongation_mm, length_mm: float, stress_MPa, bounds:
         span = bounds.get(phase)
         sel = slice(span[0], span[1] + 1) if span else slice(0, 0)
         fit = slope_u(t[sel], x[sel], quantum=quantum_mm, time_u_s=time_u_s)
+        if fit and one_command and segment is not None:
+            fit = (fit[0], max(fit[1], window_scatter_u(t, x, segment, span[1] - span[0] + 1)))
         out[phase] = {"samples": span, "time_s": [float(t[span[0]]), float(t[span[1]])] if span else None,
                       "strain_rate_per_s": fit[0] / length_mm if fit else None,
                       "strain_rate_u_per_s": fit[1] / length_mm if fit else None,
                       "strain_rate_U_rel_pct": _U_pct(fit)}
         if fit and not K_RATE * fit[1] <= UNRESOLVED_U_REL * abs(fit[0]):
-            out[phase].update(_widened(t, x, length_mm, span, fit, quantum_mm, time_u_s, commanded_mm_per_s, segment))
+            out[phase].update(_widened(t, x, length_mm, span, fit, quantum_mm, time_u_s, commanded_mm_per_s, segment, one_command))
         if phase == "elastic":
             stress_fit = slope_u(t[sel], s[sel], time_u_s=time_u_s)
             out[phase]["stress_rate_MPa_per_s"] = stress_fit[0] if stress_fit else None
@@ -371,7 +378,31 @@ def _U_pct(fit: tuple[float, float] | None) -> float | None:
     return 100.0 * K_RATE * fit[1] / abs(fit[0]) if fit and fit[0] else None
 
 
-def _widened(t, x, length_mm, span, fit, quantum_mm, time_u_s, commanded_mm_per_s, segment) -> dict:
+def window_scatter_u(t, x, segment: Sequence[int], n: int) -> float:
+    """The u of a least-squares slope over n consecutive samples of a constant-speed ``segment`` from the
+    readings' own errors: the slopes, over every window of n samples, of the residuals about the segment's
+    line (windows' sums from cumulative sums); u = their 95 % quantile of |slope| / k, so that U holds 95 % of
+    them whatever their distribution; 0 where the segment holds no such window."""
+    lo, hi = int(segment[0]), int(segment[1])
+    tt, xx = np.asarray(t[lo: hi + 1], dtype=float), np.asarray(x[lo: hi + 1], dtype=float)
+    ok = np.isfinite(tt) & np.isfinite(xx)
+    tt, xx = tt[ok], xx[ok]
+    line = slope_u(tt, xx)
+    if line is None or n < MIN_PHASE_SAMPLES or tt.size < n + 1:
+        return 0.0
+    tt = tt - tt.mean()
+    r = xx - xx.mean() - line[0] * tt
+
+    def window_sums(v):  # Σ over every window of n samples
+        c = np.concatenate([[0.0], np.cumsum(v)])
+        return c[n:] - c[:-n]
+
+    st, stt, sr, str_ = window_sums(tt), window_sums(tt * tt), window_sums(r), window_sums(tt * r)
+    slopes = (n * str_ - st * sr) / (n * stt - st * st)  # least squares over each window: (nΣtr − ΣtΣr)/(nΣt² − (Σt)²)
+    return float(np.quantile(np.abs(slopes), COVERAGE_P) / K_RATE)  # U = the 95 % quantile: heavy tails (stalls) held
+
+
+def _widened(t, x, length_mm, span, fit, quantum_mm, time_u_s, commanded_mm_per_s, segment, one_command) -> dict:
     """The phase's rate over a wider window of the same crosshead command: the phase's samples grown on
     both sides (doubling, within ``segment``) until U ≤ WIDE_TARGET_U_REL; taken only when it agrees
     with the commanded speed (SPEED_TOLERANCE + its U). Else the phase keeps its own rate, said not resolved."""
@@ -388,6 +419,8 @@ def _widened(t, x, length_mm, span, fit, quantum_mm, time_u_s, commanded_mm_per_
     while True:
         lo, hi = max(lo_seg, span[0] - half), min(hi_seg, span[1] + half)
         wide = slope_u(t[lo: hi + 1], x[lo: hi + 1], quantum=quantum_mm, time_u_s=time_u_s)
+        if wide and one_command:
+            wide = (wide[0], max(wide[1], window_scatter_u(t, x, segment, hi - lo + 1)))
         if wide is None or K_RATE * wide[1] <= WIDE_TARGET_U_REL * abs(wide[0]) or (lo == lo_seg and hi == hi_seg):
             break
         half *= 2
@@ -399,9 +432,10 @@ def _widened(t, x, length_mm, span, fit, quantum_mm, time_u_s, commanded_mm_per_
                   "window_note": why + f"; measured over samples {lo}–{hi} of the same crosshead command ({commanded_mm_per_s:g} mm/s)"}
 
 
-def command_segment(time_s, events, i_max: int) -> tuple[int, int]:
+def command_segment(time_s, events, i_max: int) -> tuple[int, int, bool]:
     """The samples [first, last] (to Fm, ``i_max``) run under one crosshead command: from the record's last
-    ``start`` event before Fm to its next ``start``/``stop`` event; the whole record to Fm without events."""
+    ``start`` event before Fm to its next ``start``/``stop`` event, and True; the whole record to Fm without
+    a ``start`` event, and False (one command not shown)."""
     t = np.asarray(time_s, dtype=float)
     t_m = t[i_max]
     starts = [e.time_s for e in events or () if e.name == "start" and e.time_s <= t_m]
@@ -410,7 +444,7 @@ def command_segment(time_s, events, i_max: int) -> tuple[int, int]:
     t1 = min(ends) if ends else math.inf
     inside = np.flatnonzero((t >= t0) & (t <= t1))
     inside = inside[inside <= i_max]
-    return (int(inside[0]), int(inside[-1])) if inside.size else (0, int(i_max))
+    return (int(inside[0]), int(inside[-1]), bool(starts)) if inside.size else (0, int(i_max), False)
 
 
 def _num(value) -> float | None:
@@ -422,7 +456,7 @@ def _num(value) -> float | None:
 
 
 QUANTUM_KEYS = {"crosshead_mm": "crosshead_resolution_mm", "extensometer_mm": "extensometer_resolution_mm"}  # instruments.<key>
-TIME_U_KEY = "time_stamp_u_s"  # instruments.<key>: the standard uncertainty of a sample's time stamp, if stated
+STAMP_U_KEYS = {"crosshead_mm": "crosshead_stamp_u_s", "extensometer_mm": "extensometer_stamp_u_s"}  # instruments.<key>: a reading's time stamp's u, if stated
 
 
 def tension_testing_rate(result: Mapping, curves: Mapping, events=None) -> dict:
@@ -462,10 +496,14 @@ def tension_testing_rate(result: Mapping, curves: Mapping, events=None) -> dict:
     if not quantum:
         quantum = reading_quantum(elongation)
         q_how = f"{channel} reading quantum {quantum:.3g} mm (its smallest step: the record states none)"
+    stamp_u = _num(instruments.get(STAMP_U_KEYS[channel])) or 0.0
+    if stamp_u:
+        q_how += f" and its time stamps' u {stamp_u:g} s (stated)"
     crosshead = channel == "crosshead_mm"
     commanded = _num((result.get("record") or {}).get("crosshead_speed_mm_per_s")) if crosshead else None
-    phases = measured_phases(time, elongation, length, stress, bounds, quantum_mm=quantum, time_u_s=_num(instruments.get(TIME_U_KEY)) or 0.0,
-                             commanded_mm_per_s=commanded, segment=command_segment(time, events, min(nan_argmax(stress), time.size - 1)))
+    segment = command_segment(time, events, min(nan_argmax(stress), time.size - 1))
+    phases = measured_phases(time, elongation, length, stress, bounds, quantum_mm=quantum, time_u_s=stamp_u,
+                             commanded_mm_per_s=commanded, segment=segment[:2], one_command=segment[2] and crosshead)
     out = testing_rate(phases, E_MPa=E, yield_point=bool(yp), heated=heated)
     out["strain_rate_definition"] = basis
     out["reading_quantum_mm"] = quantum
