@@ -390,16 +390,22 @@ def window_scatter_u(t, x, segment: Sequence[int], n: int) -> float:
     line = slope_u(tt, xx)
     if line is None or n < MIN_PHASE_SAMPLES or tt.size < n + 1:
         return 0.0
-    tt = tt - tt.mean()
-    r = xx - xx.mean() - line[0] * tt
+    r = xx - xx.mean() - line[0] * (tt - tt.mean())
+    chunk = max(2 * n, 2048)  # cumulative sums per chunk, its time centred: no cancellation on a long record
+    slopes = np.concatenate([_window_slopes(tt[i: i + chunk], r[i: i + chunk], n) for i in range(0, tt.size - n + 1, chunk - n + 1)])
+    return float(np.quantile(np.abs(slopes), COVERAGE_P) / K_RATE)  # U = the 95 % quantile: heavy tails (stalls) held
+
+
+def _window_slopes(t: np.ndarray, r: np.ndarray, n: int) -> np.ndarray:
+    """Least-squares slopes of r(t) over every window of n consecutive samples: (nΣtr − ΣtΣr)/(nΣt² − (Σt)²)."""
+    t = t - t.mean()
 
     def window_sums(v):  # Σ over every window of n samples
         c = np.concatenate([[0.0], np.cumsum(v)])
         return c[n:] - c[:-n]
 
-    st, stt, sr, str_ = window_sums(tt), window_sums(tt * tt), window_sums(r), window_sums(tt * r)
-    slopes = (n * str_ - st * sr) / (n * stt - st * st)  # least squares over each window: (nΣtr − ΣtΣr)/(nΣt² − (Σt)²)
-    return float(np.quantile(np.abs(slopes), COVERAGE_P) / K_RATE)  # U = the 95 % quantile: heavy tails (stalls) held
+    st, sr = window_sums(t), window_sums(r)
+    return (n * window_sums(t * r) - st * sr) / (n * window_sums(t * t) - st * st)
 
 
 def _widened(t, x, length_mm, span, fit, quantum_mm, time_u_s, commanded_mm_per_s, segment, one_command) -> dict:
