@@ -5,6 +5,10 @@ line, the yield phase (to Rp, or ReH to the end of the yield point extension) an
 range to Rm. The strain rate is the estimate over the parallel length ė_Lc = v_c/L_c from the
 crosshead (v_c: the least-squares slope of the crosshead over time in the phase), or ė_Le from
 the extensometer on a record without a crosshead; the elastic stress rate is the slope of σ(t).
+Each rate carries its u (:func:`slope_u`: residual scatter, reading quantum, stamp jitter; at least the
+spread over windows of its crosshead command, :func:`window_scatter_u`) and is judged by a guard band
+w = U (k = 2, :func:`band_verdict`): conforms, does not conform, or "not resolved"; a phase whose U
+exceeds 20 % is measured over a wider window of the same command when the record states its speed.
 
 ISO 6892-1:2019 §10.3 method A: ranges 1 0.00007, 2 0.00025, 3 0.002, 4 0.0067 s⁻¹, each
 ±20 %: Rp/ReH (the elastic and yield phases) in 1 or 2, ReL/Ae in 2 or 3, Rm/Ag/A/Z in 2, 3
