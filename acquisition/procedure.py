@@ -436,7 +436,13 @@ class Procedure:
     def _speed_meta(self) -> dict[str, object]:
         """The header's measured crosshead speed (mm/s, when the crosshead travelled far enough to tell it)."""
         measured = self._speed.speed_mm_per_s()
-        return {} if measured is None else {MEASURED_SPEED_KEY: float(f"{measured:.4g}")}
+        out: dict[str, object] = {} if measured is None else {MEASURED_SPEED_KEY: float(f"{measured:.4g}")}
+        # the crosshead's stamps: the count was read somewhere in its exchange's bracket (± the widest kept
+        # half-width, host s): a rectangular u in the record's time (the testing rate's U, identification/conformity.py)
+        half_s = getattr(self.rig, "position_half_width_s", 0.0) * getattr(self.rig, "time_scale", 1.0)
+        if half_s > 0:
+            out["instruments.crosshead_stamp_u_s"] = float(f"{half_s / math.sqrt(3.0):.3g}")
+        return out
 
     def _note_speed(self) -> None:
         """A ``speed_mismatch`` event and the operator told when the crosshead ran at another speed than commanded."""

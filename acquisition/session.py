@@ -69,7 +69,9 @@ class DriverRig:
         self.setpoint_margin_C = config.furnace.setpoint_margin_C if self.has_furnace else 0.0
         self.control_period_s = config.furnace.control_period_s if self.has_furnace else None
         self.frame_stiffness_N_per_um = config.frame.stiffness_N_per_um
-        self.instruments_meta = config.instruments.meta()  # the instruments' classes, for the results' uncertainty
+        enc = config.encoder  # one count of the encoder in mm: the crosshead readings' quantum (the testing rate's U)
+        self.instruments_meta = {**config.instruments.meta(),  # the instruments' classes, for the results' uncertainty
+                                 "instruments.crosshead_resolution_mm": enc.screw_lead_mm / enc.gear_ratio / enc.counts_per_rev}
         self.writer_meta = {WRITER_STAMPING_KEY: WRITER_STAMPING}  # how this driver stamps (the record's writer.stamping)
         self.max_force_N = config.frame.max_force_N
         self.loadcell = config.loadcell.create()

@@ -307,6 +307,6 @@ def attach(result, curves: Mapping, record) -> None:
     test = result.get("test")
     methods = result.get("methods")
     if isinstance(methods, dict):  # first: the Rp budget's rate term takes the testing method it found
-        methods["conformity"] = cf.assess(result, curves, record.data, record.meta)
+        methods["conformity"] = cf.assess(result, curves, record.data, record.meta, getattr(record, "events", None))
     budgets = (tension_uncertainty if test == "tension" else compression_uncertainty)(result, curves, inst)
     result["uncertainty"] = {"instruments": inst, **budgets}

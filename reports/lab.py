@@ -36,6 +36,10 @@ class LabFileError(FlowcurveError):
 
 
 DECISION_RULES = ("simple acceptance", "guard band")
+# the testing rate's own rule (identification/conformity.py: band_verdict), whatever the lab chose for the results
+RATE_RULE = ("The testing-rate statements are made with a guard band w = U (k = 2) of each phase's measured rate: a phase "
+             "conforms when rate ± U lies inside the method's band, does not when it lies outside, and is 'not resolved' "
+             "when it straddles the band's edge.")
 
 
 @dataclass(frozen=True)
@@ -69,11 +73,11 @@ class LabHeader:
         if self.decision_rule == "guard band":
             return (f"Decision rule (ISO/IEC 17025 7.8.6, ILAC-G8:09/2019 guarded acceptance): a statement 'conforms' needs the "
                     f"value inside its limit by at least the guard band w = {self.guard_band_U:g}·U; within w of the limit the "
-                    "statement is 'not decided'. The testing-rate and temperature statements below carry no U of their own: "
+                    "statement is 'not decided'. " + RATE_RULE + " The temperature statements carry no U of their own: "
                     "they are made on the value (w = 0).")
         return ("Decision rule (ISO/IEC 17025 7.8.6, ILAC-G8:09/2019 simple acceptance, w = 0): a value on its side of the "
                 "limit conforms; the measurement uncertainty is not deducted, so a value close to a limit carries a risk of "
-                f"a false decision of up to 50 %{chosen}.")
+                f"a false decision of up to 50 %{chosen}. " + RATE_RULE)
 
 
 _TYPES = {"revision": int, "guard_band_U": float}

@@ -151,8 +151,11 @@ def test_the_demo_tension_test_conforms_to_iso_6892_1(tmp_path, device_link):
     ident, _ = identify_and_write(run.outcome.path, tmp_path / "results")
     conf = ident.result["methods"]["conformity"]
     rate = conf["testing_rate"]
-    for phase in ("elastic", "yield", "to_Rm"):  # the yield phase spans a few tenths of a mm: a host's stall moves its slope
-        assert rate["phases"][phase]["strain_rate_per_s"] == pytest.approx(0.00025, rel=0.05 if phase != "yield" else 0.10), (
-            phase, rate["phases"][phase])
-    assert rate["conforms"] is True and rate["designation"] == "ISO 6892-1:2019 A222"
+    for phase in ("elastic", "yield", "to_Rm"):  # a rate and its U are one claim: the elastic line spans ~5 samples, ~1 encoder count
+        got = rate["phases"][phase]
+        U = 2.0 * got["strain_rate_u_per_s"]
+        assert abs(got["strain_rate_per_s"] - 0.00025) <= max(0.05 * 0.00025, U), (phase, got)
+    # the demo conforms: its verdict says so, or names the rate as not resolved — never "not conforming"
+    assert (rate["conforms"] is True and rate["designation"] == "ISO 6892-1:2019 A222") or (
+        rate["conforms"] is None and rate["designation"].endswith("(testing rate not resolved)")), rate["findings"]
     assert conf["temperature"]["conforms"] is True  # the record states 20 °C

@@ -148,8 +148,10 @@ def test_the_decision_rule_is_printed_beside_the_conformity_statements(crmo, tmp
     texts = [t for page in page_texts(report) for t in page]
     at = next(i for i, t in enumerate(texts) if t == "Conformity of the test conditions")
     assert "guard band w = 1.5·U" in " ".join(texts[at:at + 3])
+    rate_rule = "testing-rate statements are made with a guard band w = U (k = 2)"  # the rate's own U (it said w = 0)
+    assert rate_rule in " ".join(texts[at:at + 12])
     default = "\n".join(t for page in page_texts(report_content(crmo)) for t in page)
-    assert "simple acceptance" in default and "no rule chosen in the lab file" in default
+    assert "simple acceptance" in default and "no rule chosen in the lab file" in default and rate_rule in default.replace("\n", " ")
     lab.write_text('[lab]\ndecision_rule = "maybe"\n')
     with pytest.raises(LabFileError, match=r"lab.toml: \[lab\] decision_rule: must be one of"):
         load_lab(lab)
