@@ -41,7 +41,7 @@ from flowcurve.identification.indicator import (DEFAULT_MODULUS_METHOD, FEW_POIN
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
 from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
-from flowcurve.identification.tension import check_fit_range, true_plastic_strain
+from flowcurve.identification.tension_values import check_fit_range, true_plastic_strain
 
 UNLOADING_BAND = (0.1, 0.9)  # the part of the unloading (× the largest force) the spring-back is read on
 MIN_UNLOADING_SAMPLES = 10
