@@ -48,14 +48,14 @@ import numpy as np
 
 from flowcurve.errors import RecordError
 from flowcurve.record.format import parse_header_line
-from flowcurve.record.importers import (
+from flowcurve.record.importers import parse_column_option
+from flowcurve.record.importers_text import (
     UnitError,
     _check_readable,
     _found_columns_hint,
     decode_text,
     is_number,
     sniff_delimiter,
-    parse_column_option,
     unit_conversion,
 )
 
@@ -127,7 +127,7 @@ def moment_conversion(unit: str, *, source: str = "<option>", column: str | None
 
 
 def _converter(quantity: str, unit: str | None, *, source: str, column: str):
-    """value → native value for one mapped quantity (the unit table of record.importers)."""
+    """value → native value for one mapped quantity (the unit table of record.importers_text)."""
     native, kind, _ = ADHESION_COLUMNS[quantity]
     if kind == "text":
         return None
@@ -237,7 +237,7 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
     if not rows:
         raise RecordError(source, "the table has a column row but no tests", line=body_start + 1)
     numeric_idx = [names.index(mapping[q][0]) for q in mapping if q in NUMERIC]
-    # decimal comma: a ';' or tab file whose numbers are written 1,25 (as record.importers decides)
+    # decimal comma: a ';' or tab file whose numbers are written 1,25 (as record.importers_text decides)
     decimal = "."
     if delim != "," and any(re.fullmatch(r"\s*-?\d+,\d+\s*", cells[k]) for _, cells in rows for k in numeric_idx if k < len(cells)):
         decimal = ","

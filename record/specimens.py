@@ -7,7 +7,7 @@
     T600-02.csv;5,98;30;25;35,8;4,0
 
 written as labs keep it (comma, semicolon or tab separated, decimal comma with ``;`` or tab,
-UTF-8, UTF-16 or Windows-1252 as :func:`flowcurve.record.importers.decode_text` reads them).
+UTF-8, UTF-16 or Windows-1252 as :func:`flowcurve.record.importers_text.decode_text` reads them).
 Every dimension column carries its unit: in the name (``d0 (mm)``, ``d0 [in]``, ``d0_mm``)
 or in a units row right under the names. An empty cell gives no value (the record's header
 or an option may give it). The ``file`` column names the record by path, file name or stem.
@@ -21,7 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flowcurve.errors import RecordError
-from flowcurve.record.importers import MAX_MAGNITUDE, UnitError, is_number, sniff_delimiter, split_cells, decode_text, split_name_unit, to_native
+from flowcurve.record.format import MAX_MAGNITUDE
+from flowcurve.record.importers_text import UnitError, is_number, sniff_delimiter, split_cells, decode_text, split_name_unit, to_native
 
 # table column (lower case) → (metadata key, quantity of its unit); quantity None → text
 TABLE_COLUMNS: dict[str, tuple[str, str | None]] = {

@@ -16,6 +16,7 @@ from types import SimpleNamespace
 
 import pytest
 
+from flowcurve.identification.tension import identify_tension
 from flowcurve.identification.tension_elastic import _elastic_line
 from flowcurve.identification.tension_inputs import _inputs
 
@@ -55,5 +56,5 @@ def test_the_whole_identification_reports_it(bench):
     curve, the frame's 9 % elastic strain in the true-stress conversion: test_soft_frame_true_curve.py)."""
     for case in bench.CROSSHEAD_CASES:
         rec, _, rp02 = bench.crosshead_tension(**case)
-        res = tn.identify_tension(rec).result
+        res = identify_tension(rec).result
         assert res["Rp02_MPa"] == pytest.approx(rp02, rel=0.01), rec.source
