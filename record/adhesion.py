@@ -194,34 +194,8 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
     lines = _read_lines(path)
     native = bool(lines) and lines[0].replace(" ", "").lower().startswith(f"#{FORMAT_NAME}:")
     warnings: list[str] = []
-    meta: dict[str, str] = {}
-    body_start = 0
-    for i, line in enumerate(lines):
-        if not line.startswith("#"):
-            body_start = i
-            break
-        parsed = parse_header_line(line)
-        if parsed:
-            meta[parsed[0]] = parsed[1]
-    else:
-        raise RecordError(source, "the table has a header but no column row")
-    if native:
-        if columns:
-            warnings.append("the column mapping was ignored: a flowcurve-adhesion table names its own columns and units")
-        mapping = {q: spec for q, spec in NATIVE_MAPPING.items()}
-    elif columns:
-        mapping = dict(columns)
-    else:
-        raise RecordError(source, "not a flowcurve-adhesion table and no column mapping given; name the columns, e.g. "
-                          "--column normal_force=Fz:N --column moment=Mz:N*m --column imprint_radius=r:mm "
-                          "--column temperature=T:C" + _found_columns_hint(decode_text(path).head))
-    unknown = [q for q in mapping if q not in ADHESION_COLUMNS]
-    if unknown:
-        raise RecordError(source, f"unknown quantity {', '.join(map(repr, unknown))} in the column mapping (use: {', '.join(ADHESION_COLUMNS)})")
-    if not native:
-        missing = [q for q in REQUIRED if q not in mapping]
-        if missing:
-            raise RecordError(source, f"the column mapping lacks {', '.join(missing)} (give e.g. --column {missing[0]}=NAME:{ADHESION_COLUMNS[missing[0]][2]})")
+    meta, body_start = _header(lines, source)
+    mapping = _mapping(path, native, columns, warnings)
     names_line = lines[body_start]
     delim = sniff_delimiter(names_line)
     names = [c.strip().strip('"') for c in next(csv.reader([names_line], delimiter=delim))]
@@ -242,13 +216,7 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
     if delim != "," and any(re.fullmatch(r"\s*-?\d+,\d+\s*", cells[k]) for _, cells in rows for k in numeric_idx if k < len(cells)):
         decimal = ","
     # an optional units row right under the names row: no mapped numeric cell is a number
-    first_line, first_cells = rows[0]
-    file_units: dict[str, str] = {}
-    if all(k < len(first_cells) for k in numeric_idx) and not any(is_number(first_cells[k], decimal) for k in numeric_idx if first_cells[k].strip()):
-        file_units = {names[k]: first_cells[k].strip().strip('"').strip("[]() ") for k in range(min(len(names), len(first_cells)))}
-        rows = rows[1:]
-        if not rows:
-            raise RecordError(source, "the table has column and units rows but no tests", line=first_line)
+    file_units, rows = _units_row(rows, names, numeric_idx, decimal, source)
     converters = {}
     for quantity, (name, unit) in mapping.items():
         declared = file_units.get(name) or None
@@ -263,6 +231,58 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
     table = AdhesionTable(data=data, meta=meta, sources=[source], warnings=warnings)
     _attach_traces(table, path)
     return table
+
+
+def _header(lines: list[str], source: str) -> tuple[dict[str, str], int]:
+    """The ``# key: value`` header's metadata and the index of the column row after it."""
+    meta: dict[str, str] = {}
+    body_start = 0
+    for i, line in enumerate(lines):
+        if not line.startswith("#"):
+            body_start = i
+            break
+        parsed = parse_header_line(line)
+        if parsed:
+            meta[parsed[0]] = parsed[1]
+    else:
+        raise RecordError(source, "the table has a header but no column row")
+    return meta, body_start
+
+
+def _mapping(path: Path, native: bool, columns, warnings: list[str]) -> dict[str, tuple[str, str | None]]:
+    """The quantity → (column, unit) mapping: a native table's own, else the one given, checked."""
+    source = str(path)
+    if native:
+        if columns:
+            warnings.append("the column mapping was ignored: a flowcurve-adhesion table names its own columns and units")
+        mapping = {q: spec for q, spec in NATIVE_MAPPING.items()}
+    elif columns:
+        mapping = dict(columns)
+    else:
+        raise RecordError(source, "not a flowcurve-adhesion table and no column mapping given; name the columns, e.g. "
+                          "--column normal_force=Fz:N --column moment=Mz:N*m --column imprint_radius=r:mm "
+                          "--column temperature=T:C" + _found_columns_hint(decode_text(path).head))
+    unknown = [q for q in mapping if q not in ADHESION_COLUMNS]
+    if unknown:
+        raise RecordError(source, f"unknown quantity {', '.join(map(repr, unknown))} in the column mapping (use: {', '.join(ADHESION_COLUMNS)})")
+    if not native:
+        missing = [q for q in REQUIRED if q not in mapping]
+        if missing:
+            raise RecordError(source, f"the column mapping lacks {', '.join(missing)} (give e.g. --column {missing[0]}=NAME:{ADHESION_COLUMNS[missing[0]][2]})")
+    return mapping
+
+
+def _units_row(rows: list, names: list[str], numeric_idx: list[int], decimal: str, source: str) -> tuple[dict[str, str], list]:
+    """An optional units row right under the names row (no mapped numeric cell is a number):
+    (column name → unit, the rows after it)."""
+    first_line, first_cells = rows[0]
+    file_units: dict[str, str] = {}
+    if all(k < len(first_cells) for k in numeric_idx) and not any(is_number(first_cells[k], decimal) for k in numeric_idx if first_cells[k].strip()):
+        file_units = {names[k]: first_cells[k].strip().strip('"').strip("[]() ") for k in range(min(len(names), len(first_cells)))}
+        rows = rows[1:]
+        if not rows:
+            raise RecordError(source, "the table has column and units rows but no tests", line=first_line)
+    return file_units, rows
 
 
 def _read_lines(path: Path) -> list[str]:

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import pytest
 
-from flowcurve.acquisition.procedure import StopCriteria
+from flowcurve.acquisition.stopping import StopCriteria
 from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.demo import demo_specs
 from flowcurve.identification.identify import identify
