@@ -90,7 +90,7 @@ class _Inputs:
     lu: float | None
     length: float  # the length the strain refers to (l0 when scaled to a measured Lu)
     warnings: list[str]
-    unbroken: bool = False  # the record says the specimen did not break (:func:`unbroken_statement`)
+    unbroken: bool = False  # the record says the specimen did not break (:func:`.tension_values.unbroken_statement`)
 
 
 SPIKE_NOISE_FACTOR, SPIKE_FRACTION = 12.0, 0.25  # a lone force sample this far (× noise σ, × peak force) from its agreeing neighbours is corrupt: farther than an upper yield point stands

@@ -19,7 +19,8 @@
   thousands separators.
 
 The families are read in :mod:`.importers_instron` and :mod:`.importers_csv`, on the text and
-unit layer of :mod:`.importers_text`. Units are converted through its :data:`UNITS`; a unit it does not know is an error, never a guess.
+unit layer of :mod:`.importers_text`. Units are converted through its :data:`UNITS`; a unit it
+does not know is an error, never a guess.
 Crosshead-less records (force and extensometer only) come back without ``crosshead_mm``.
 """
 
