@@ -33,11 +33,12 @@ from flowcurve.record.summary import MEASURED_SPEED_KEY, speed_mismatch
 from flowcurve.acquisition.plausibility import RateGuard
 from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temperature
 from flowcurve.acquisition.sampler import Channel, Sampler
+from flowcurve.acquisition.stream_notes import StreamNotes
 from flowcurve.clock import WALL, Clock
 from flowcurve.rig.config import SETPOINT_MARGIN_C, setpoint_refusal
 from flowcurve.errors import FlowcurveError, RecordWriteError, SafetyError
+from flowcurve.acquisition.stopping import CARRY_AGREE_MM, CARRY_MAX_S, MOTION_MM, STALE_CROSSHEAD_S, STALE_WAIT_S, SpeedMeter, StopCriteria, StopState, TARGET_TICK_MIN_S, loop_tick_s, stop_reason, target_reached
 
-MOTION_MM = 0.005  # the crosshead has moved once it is this far from where recording began
 SPEED_MARGIN = 2.0  # readings may change at up to this multiple of the declared speed's rate
 FORCE_TOLERANCE_OF_CAPACITY = 0.01  # plus this fraction of the frame's capacity (noise, a jerk)
 FORCE_SPIKE_SIGMAS = 8.0  # ... and a one-sample spike at any size: this many of the signal's own noise σ (plausibility)
@@ -45,8 +46,6 @@ CROSSHEAD_TOLERANCE_MM = 0.05
 FURNACE_MAX_RATE_C_PER_S = 10.0  # a furnace's thermocouple changes no faster than this ...
 FURNACE_TOLERANCE_C = 20.0  # ... plus this (noise, a draught)
 STAMP_SLACK_S = 0.05  # host seconds two time stamps may be off by (thread scheduling)
-LOSS_NOISE_FRAMES = 5  # the load cell's lost frames are declared beyond this many ...
-LOSS_NOISE_FRACTION = 0.005  # ... and this fraction (a loaded PC's scheduling; the count is an estimate)
 WATCH_COOLING_S = 45.0  # test seconds the furnace is watched after an over-temperature
 WATCH_UNHEATED_S = 15.0  # ... and after a test it did not heat (no stored heat to wait out: a stuck relay shows in ~12 s)
 # ... and on while the furnace still rises, up to this (then named): four times the 30 s allowed for stored heat to reach
@@ -122,153 +121,6 @@ class RigIO(Protocol):
     def start_crosshead(self, speed_mm_per_s: float, direction: int) -> None: ...
     def stop_crosshead(self) -> None: ...
     def post_test_measurements(self) -> dict[str, float] | None: ...
-
-
-@dataclass
-class StopCriteria:
-    """When recording ends (whichever comes first). Forces in N, displacements in mm."""
-
-    fracture_drop_fraction: float = 0.2  # |F| below this fraction of the max after the max
-    fracture_min_force_N: float = 500.0  # ... once the max exceeded this (ignores the toe)
-    target_displacement_mm: float | None = None
-    force_limit_N: float | None = None
-    max_duration_s: float | None = None
-    stall_s: float | None = 10.0  # crosshead still (< stall_mm) this long after it moved: stopped
-    stall_mm: float = 0.005
-
-
-@dataclass
-class StopState:
-    """Running maximum for the fracture rule, updated block by block."""
-
-    max_force_N: float = 0.0
-    last_crosshead_mm: float = 0.0
-    start_crosshead_mm: float | None = None
-    moved: bool = False
-    still_since_s: float = 0.0
-    still_at_mm: float = 0.0
-
-
-def stop_reason(rows: np.ndarray, state: StopState, crit: StopCriteria) -> str | None:
-    """The first stop criterion a block of rows [time_s, force_N, crosshead_mm, ...] meets."""
-    if rows.size == 0:
-        return None
-    f = np.abs(rows[:, 1])
-    x = np.abs(rows[:, 2])
-    running_max = np.maximum.accumulate(np.concatenate([[state.max_force_N], f]))[1:]
-    state.max_force_N = float(running_max[-1])
-    state.last_crosshead_mm = float(rows[-1, 2])
-    stalled = _update_stall(rows, state, crit)
-    if crit.force_limit_N is not None and np.any(f >= crit.force_limit_N):
-        return f"force limit {crit.force_limit_N:.0f} N reached"
-    if crit.target_displacement_mm is not None and np.any(x >= crit.target_displacement_mm):
-        return f"target displacement {crit.target_displacement_mm:g} mm reached"
-    broken = (running_max >= crit.fracture_min_force_N) & (f < crit.fracture_drop_fraction * running_max)
-    if np.any(broken):
-        return f"fracture (force fell below {100 * crit.fracture_drop_fraction:.0f} % of the maximum {state.max_force_N / 1000:.2f} kN)"
-    if crit.max_duration_s is not None and rows[-1, 0] >= crit.max_duration_s:
-        return f"maximum duration {crit.max_duration_s:g} s reached"
-    if stalled:
-        return f"the crosshead stopped (still for {crit.stall_s:g} s)"
-    return None
-
-
-def target_reached(crosshead_mm: tuple[float, float] | None, crit: StopCriteria, *, now_s: float | None = None,
-                   speed_mm_per_s: float = 0.0, stale_s: float = math.inf, carry_max_s: float = math.inf) -> str | None:
-    """The displacement target judged on the crosshead reading itself (the encoder stream's latest,
-    ``(time_s, mm)``), not on record rows: a row waits for every stream to bracket its force sample,
-    so rows come later than the reading that reached the target. A reading older than ``stale_s``
-    at ``now_s`` (test s: the encoder retrying a lost reply) is carried on at the crosshead's
-    speed, |x| + v·(now − t), so the stop does not wait for the next reading — up to ``carry_max_s``
-    old (longer than a retried exchange takes: the encoder has gone silent, and its silence fault ends
-    the test instead)."""
-    target = crit.target_displacement_mm
-    if target is None or crosshead_mm is None:
-        return None
-    t_s, x_mm = crosshead_mm
-    if abs(x_mm) >= target:
-        return f"target displacement {target:g} mm reached"
-    age_s = (now_s - t_s) if now_s is not None else 0.0
-    if stale_s < age_s <= carry_max_s and speed_mm_per_s > 0 and abs(x_mm) + speed_mm_per_s * age_s >= target:
-        return (f"target displacement {target:g} mm reached (carried on at {speed_mm_per_s:g} mm/s from the crosshead's "
-                f"{abs(x_mm):.3f} mm read {age_s:.2f} s before: the encoder was retrying)")
-    return None
-
-
-LATENCY_NOTED_S = 0.01  # host seconds: a growth of the load cell's stream latency named as an event
-STALE_CROSSHEAD_S = 0.1  # host seconds: an encoder reading older than this near the target is carried on at the speed
-CARRY_MAX_S = 1.0  # host seconds: ... carried on at most this long (a retried encoder read takes under 0.6 s)
-CARRY_AGREE_MM = 0.02  # the reading after such a stop must agree this well with the carried-on stop position
-STALE_WAIT_S = 2.0  # host seconds: after such a stop, the longest wait for the encoder's next reading
-TARGET_TICK_MIN_S = 0.005  # host seconds: the main loop's shortest tick, near a displacement target
-
-
-def loop_tick_s(crosshead_mm: tuple[float, float] | None, crit: StopCriteria, speed_mm_per_s: float,
-                time_scale: float, tick_s: float) -> float:
-    """The main loop's next sleep (host s): ``tick_s``, shortened near a displacement target to
-    half the host time the crosshead needs to reach it, t = (target − |x|) / (v · time_scale),
-    at least TARGET_TICK_MIN_S — the stop then runs past the target by about one encoder poll,
-    not one tick (0.05 s host is 0.0375 mm at 0.05 mm/s and time scale 15)."""
-    if crit.target_displacement_mm is None or crosshead_mm is None or not speed_mm_per_s > 0:
-        return tick_s
-    left_s = (crit.target_displacement_mm - abs(crosshead_mm[1])) / (speed_mm_per_s * time_scale)
-    return min(tick_s, max(TARGET_TICK_MIN_S, 0.5 * left_s))
-
-
-def _update_stall(rows: np.ndarray, state: StopState, crit: StopCriteria) -> bool:
-    """Track crosshead motion; True once it has moved and then stood still for stall_s."""
-    if crit.stall_s is None:
-        return False
-    t, x = rows[:, 0], rows[:, 2]
-    if state.start_crosshead_mm is None:
-        state.start_crosshead_mm = state.still_at_mm = float(x[0])
-        state.still_since_s = float(t[0])
-    moved = np.abs(x - state.still_at_mm) > crit.stall_mm
-    if np.any(moved):
-        last = int(np.flatnonzero(moved)[-1])
-        state.moved = True
-        state.still_at_mm, state.still_since_s = float(x[last]), float(t[last])
-        # a later sample can be within stall_mm of the new rest point: that is fine
-    return state.moved and float(t[-1]) - state.still_since_s >= crit.stall_s
-
-
-SPEED_MIN_TRAVEL_MM = 1.0  # the crosshead's speed is measured over at least this travel: a count (10 µm) at each end is ≤ 2 %
-
-
-@dataclass
-class SpeedMeter:
-    """The crosshead's speed from its own readings: travel / time from the first reading away from
-    rest (MOTION_MM) to the last reading that changed — the still tail after a stop left out."""
-
-    rest_mm: float | None = None
-    first: tuple[float, float] | None = None  # (time_s, crosshead_mm) of the first reading away from rest
-    last: tuple[float, float] | None = None  # ... of the last reading that changed
-    previous_mm: float | None = None
-
-    def update(self, rows: np.ndarray) -> None:
-        """Take a block of rows [time_s, force_N, crosshead_mm, ...]."""
-        if rows.size == 0:
-            return
-        t, x = rows[:, 0], rows[:, 2]
-        if self.rest_mm is None:
-            self.rest_mm = self.previous_mm = float(x[0])
-        if self.first is None:
-            away = np.flatnonzero(np.abs(x - self.rest_mm) > MOTION_MM)
-            if away.size == 0:
-                self.previous_mm = float(x[-1])
-                return
-            self.first = self.last = (float(t[away[0]]), float(x[away[0]]))
-        changed = np.flatnonzero(x != np.concatenate([[self.previous_mm], x[:-1]]))
-        if changed.size and float(t[changed[-1]]) > self.first[0]:
-            self.last = (float(t[changed[-1]]), float(x[changed[-1]]))
-        self.previous_mm = float(x[-1])
-
-    def speed_mm_per_s(self) -> float | None:
-        """|Δx| / Δt over the motion (None below SPEED_MIN_TRAVEL_MM of travel)."""
-        if self.first is None or self.last is None:
-            return None
-        travel, span = abs(self.last[1] - self.first[1]), self.last[0] - self.first[0]
-        return travel / span if travel >= SPEED_MIN_TRAVEL_MM and span > 0 else None
 
 
 @dataclass
@@ -373,7 +225,7 @@ def heating_progress(start_C: float, now_C: float, setpoint_C: float) -> float:
     return 1.0 if abs(span) < 1e-9 else min(max((now_C - start_C) / span, 0.0), 1.0)
 
 
-class Procedure:
+class Procedure(StreamNotes):
     """One test on one rig, written to ``path``; :meth:`run` returns an :class:`Outcome`."""
 
     tick_s = 0.05  # main-loop period (host seconds)
@@ -478,16 +330,12 @@ class Procedure:
                 f"on disk. Free space, then 'flowcurve recover {self.path}'")
 
     def run(self) -> Outcome:
+        """Run the test: record created, furnace heated and soaked, load cell tared, the rows recorded
+        until a stop criterion; heater off and motion stopped on every exit path; the outcome."""
         spec, rig = self.spec, self.rig
         self._t0 = self.timebase.now()
         rig.set_clock(self.clock)
-        columns = ["time_s", "force_N", "crosshead_mm"] + (["temperature_C"] if rig.has_furnace else [])
-        try:
-            self.writer = RecordWriter(self.path, spec.meta(rig), columns)
-        except OSError as exc:  # before anything moves or heats
-            raise RecordWriteError(f"{self.path}: cannot create the record ({_os_reason(exc)}) — the test was not "
-                                   "started; give --out a folder you can write to, with free space") from None
-        self._writing = True
+        self._open_record()
         status, reason, error = STATUS_COMPLETE, "", None
         state = StopState()
         sampler: Sampler | None = None
@@ -516,56 +364,90 @@ class Procedure:
                 except FlowcurveError as exc:
                     status, reason, error = STATUS_ABORTED, str(exc), exc
                 finally:
-                    lag = getattr(rig, "stream_latency_s", 0.0) if sampler is not None and error is None else 0.0
-                    if lag > 0:  # the line still holds the frames sent before the stop: stop, then let them arrive
-                        self._stop_motion()
-                        self.timebase.sleep(lag + self.tick_s)
-                    if sampler is not None and error is None and self._carried_stop:
-                        self._stop_motion()  # stopped on a carried-on position: the rows wait for a reading after the stop
-                        self._await_reading(sampler.channels.get("crosshead_mm"), self.clock())
-                    if sampler is not None:  # the reading threads let go of the ports first
-                        sampler.request_stop()
+                    self._let_streams_finish(sampler, error)
                     self._heater_released = True  # no control step from here on commands the heater
                     safety.switch_off(reason or "end of test")
                     self._end_reason = reason
                     self._stop_motion()
                     if sampler is not None:
-                        final = self._carry_crosshead(sampler, self._drop_unbracketed(sampler, sampler.finish()))
-                        if rig.has_furnace and safety.off_confirmed:  # a control step in flight at the switch-off
-                            safety.switch_off(reason or "end of test")  # may have switched it on again: off once more
-                        self._feed_watchdog()  # the furnace channel has stopped feeding it
-                        late = sampler.fault
-                        if error is None and isinstance(late, SafetyError):  # found while stopping: still told
-                            error = late
-                            self._event("fault", str(late))
-                        silent = sampler.failing_at_end() if error is None and late is None else None
-                        if silent is not None:  # a device silent at the end: its values there are unknown
-                            status, error = STATUS_ABORTED, silent
-                            self._event("fault", str(silent))
-                        self._unshown_rows.append(final)
-                        try:
-                            self._write_rows(final)
-                            self._note_losses(sampler, final=True)
-                            self._note_speed()
-                        except RecordWriteError as exc:
-                            status, reason, error = STATUS_ABORTED, reason or str(exc), error or exc
+                        status, reason, error = self._final_rows(sampler, safety, status, reason, error)
                     error = self._after_safety_stop(error, safety.off_confirmed)
-                    try:
-                        self._note_retries(final=True)  # the furnace watch's exchanges too
-                    except RecordWriteError:
-                        pass
-                    if error is not None and reason != str(error) and isinstance(error, SafetyError):
-                        reason = str(error)
-                    if not safety.off_confirmed and rig.has_furnace:
-                        self._alert("furnace: heater-off not confirmed — the furnace module's watchdog switches it off "
-                                    "by itself; if the furnace keeps heating, switch off its mains power")
-                    try:
-                        self._event("stop", reason)
-                    except RecordWriteError:
-                        pass
+                    reason = self._stop_noted(reason, error, safety.off_confirmed)
         except BaseException as exc:  # anything unexpected: keep the record, mark it aborted
             self._close(STATUS_ABORTED, {"abort_reason": " ".join(f"{type(exc).__name__}: {exc}".split())})
             raise
+        return self._outcome(status, reason, error, state)
+
+    def _open_record(self) -> None:
+        """Create the record file before anything moves or heats (RecordWriteError if it cannot be)."""
+        rig = self.rig
+        columns = ["time_s", "force_N", "crosshead_mm"] + (["temperature_C"] if rig.has_furnace else [])
+        try:
+            self.writer = RecordWriter(self.path, self.spec.meta(rig), columns)
+        except OSError as exc:  # before anything moves or heats
+            raise RecordWriteError(f"{self.path}: cannot create the record ({_os_reason(exc)}) — the test was not "
+                                   "started; give --out a folder you can write to, with free space") from None
+        self._writing = True
+
+    def _let_streams_finish(self, sampler: Sampler | None, error: FlowcurveError | None) -> None:
+        """At the stop, before the heater goes off: the frames still on the line, or the crosshead's
+        reading after a carried-on stop, are waited for; then the reading threads let go of the ports."""
+        lag = getattr(self.rig, "stream_latency_s", 0.0) if sampler is not None and error is None else 0.0
+        if lag > 0:  # the line still holds the frames sent before the stop: stop, then let them arrive
+            self._stop_motion()
+            self.timebase.sleep(lag + self.tick_s)
+        if sampler is not None and error is None and self._carried_stop:
+            self._stop_motion()  # stopped on a carried-on position: the rows wait for a reading after the stop
+            self._await_reading(sampler.channels.get("crosshead_mm"), self.clock())
+        if sampler is not None:  # the reading threads let go of the ports first
+            sampler.request_stop()
+
+    def _final_rows(self, sampler: Sampler, safety: HeaterSafety, status: str, reason: str,
+                    error: FlowcurveError | None) -> tuple[str, str, FlowcurveError | None]:
+        """After the switch-off: the last rows written, a fault found while stopping told, the losses
+        and the speed noted; returns (status, reason, error)."""
+        final = self._carry_crosshead(sampler, self._drop_unbracketed(sampler, sampler.finish()))
+        if self.rig.has_furnace and safety.off_confirmed:  # a control step in flight at the switch-off
+            safety.switch_off(reason or "end of test")  # may have switched it on again: off once more
+        self._feed_watchdog()  # the furnace channel has stopped feeding it
+        late = sampler.fault
+        if error is None and isinstance(late, SafetyError):  # found while stopping: still told
+            error = late
+            self._event("fault", str(late))
+        silent = sampler.failing_at_end() if error is None and late is None else None
+        if silent is not None:  # a device silent at the end: its values there are unknown
+            status, error = STATUS_ABORTED, silent
+            self._event("fault", str(silent))
+        self._unshown_rows.append(final)
+        try:
+            self._write_rows(final)
+            self._note_losses(sampler, final=True)
+            self._note_speed()
+        except RecordWriteError as exc:
+            status, reason, error = STATUS_ABORTED, reason or str(exc), error or exc
+        return status, reason, error
+
+    def _stop_noted(self, reason: str, error: FlowcurveError | None, off_confirmed: bool) -> str:
+        """The retries noted, an unconfirmed heater-off told, the ``stop`` event written; the reason
+        (a safety error's, when one came after the stop)."""
+        try:
+            self._note_retries(final=True)  # the furnace watch's exchanges too
+        except RecordWriteError:
+            pass
+        if error is not None and reason != str(error) and isinstance(error, SafetyError):
+            reason = str(error)
+        if not off_confirmed and self.rig.has_furnace:
+            self._alert("furnace: heater-off not confirmed — the furnace module's watchdog switches it off "
+                        "by itself; if the furnace keeps heating, switch off its mains power")
+        try:
+            self._event("stop", reason)
+        except RecordWriteError:
+            pass
+        return reason
+
+    def _outcome(self, status: str, reason: str, error: FlowcurveError | None, state: StopState) -> Outcome:
+        """The record closed with its stop and loss keys, the post-test measurements asked and
+        amended when complete, the last snapshot shown: the test's outcome."""
         extra = {"stop_reason": reason, **self._loss_meta(), **self._speed_meta()}
         if status == STATUS_ABORTED:
             extra["abort_reason"] = reason
@@ -648,7 +530,9 @@ class Procedure:
 
         return guarded
 
-    def _record(self, sampler: Sampler, state: StopState) -> str:
+    def _start_loading(self) -> StopCriteria:
+        """The crosshead started (or the operator asked to start it); the stop criteria, with the
+        force limit at FORCE_LIMIT_OF_CAPACITY of the frame's capacity when none is given."""
         spec, rig = self.spec, self.rig
         direction = 1 if spec.test == "tension" else -1
         if rig.can_drive:
@@ -660,6 +544,29 @@ class Procedure:
         capacity = getattr(rig, "max_force_N", None)
         if crit.force_limit_N is None and capacity:
             crit = replace(crit, force_limit_N=FORCE_LIMIT_OF_CAPACITY * capacity)
+        return crit
+
+    def _show_recording(self, sampler: Sampler, now: float, moving: bool, rate: float, curve_x: list, curve_f: list,
+                        rows: np.ndarray) -> None:
+        """The live view's snapshot while recording: the latest readings, the rate, the curve so far."""
+        latest = sampler.latest()
+        self.view.show(Snapshot(
+            "recording" if moving else "waiting",
+            time_s=now,
+            force_N=latest.get("force_N", math.nan),
+            crosshead_mm=latest.get("crosshead_mm", math.nan),
+            temperature_C=latest.get("temperature_C", math.nan),
+            rate_per_s=rate,
+            samples=self.writer.rows_written,
+            curve_mm=np.concatenate(curve_x) if curve_x else None,
+            curve_N=np.concatenate(curve_f) if curve_f else None,
+            rows=rows if rows.size else None,
+        ))
+
+    def _record(self, sampler: Sampler, state: StopState) -> str:
+        """Record rows until a stop criterion, the displacement target, a fault, q or a stop request; the reason."""
+        spec, rig = self.spec, self.rig
+        crit = self._start_loading()
         moving = rig.can_drive
         rest_mm = None  # the crosshead where recording began: motion is a move away from it
         curve_x: list[np.ndarray] = []
@@ -706,19 +613,7 @@ class Procedure:
                     released = sampler.released
                     rate = (released - rate_n) / ((now - rate_t) / rig.time_scale)
                     rate_t, rate_n = now, released
-                latest = sampler.latest()
-                self.view.show(Snapshot(
-                    "recording" if moving else "waiting",
-                    time_s=now,
-                    force_N=latest.get("force_N", math.nan),
-                    crosshead_mm=latest.get("crosshead_mm", math.nan),
-                    temperature_C=latest.get("temperature_C", math.nan),
-                    rate_per_s=rate,
-                    samples=self.writer.rows_written,
-                    curve_mm=np.concatenate(curve_x) if curve_x else None,
-                    curve_N=np.concatenate(curve_f) if curve_f else None,
-                    rows=rows if rows.size else None,
-                ))
+                self._show_recording(sampler, now, moving, rate, curve_x, curve_f, rows)
                 self._unshown_rows.clear()
                 last = crosshead.stream.last() if crosshead is not None else None
                 self.timebase.sleep(loop_tick_s(last, crit, spec.speed_mm_per_s, rig.time_scale, self.tick_s))
@@ -764,99 +659,6 @@ class Procedure:
         except (AttributeError, TypeError, ZeroDivisionError):
             return 0.0
 
-    def _note_losses(self, sampler: Sampler, final: bool = False) -> None:
-        """Events for what the channels rejected, the load cell's stream restarts and the late
-        replies discarded since the last call; at the end one ``data_loss`` summary."""
-        for ch in sampler.channels.values():
-            if ch.guard is None:
-                continue
-            done = self._rejected_noted.get(ch.device, 0)
-            for t, v, why in ch.guard.rejected[done:]:
-                self._event("corrupt", f"{ch.device}: reading {v:.6g} at {t:.3f} s rejected as corrupt: {why}")
-            self._rejected_noted[ch.device] = len(ch.guard.rejected)
-        missing = getattr(self.rig, "frames_lost", 0)
-        if missing > self._missing_noted:  # every gap the stream's timing shows, named (an event, not a failure)
-            self._event("frames_missing", f"load cell: {_frames(missing - self._missing_noted)} missing from its stream ({missing} so "
-                                          "far, from the gaps in its timing: lost on the line, garbled, skipped, or late)")
-            self._missing_noted = missing
-        elif final and missing < self._missing_noted:  # the estimate came down as later frames arrived: the events say the count
-            self._event("frames_missing", f"load cell: {_frames(missing)} missing from its stream in all (the count revised from "
-                                          f"{self._missing_noted} as later frames arrived)")
-            self._missing_noted = missing
-        lag = getattr(self.rig, "stream_latency_s", 0.0)
-        if lag > self._latency_noted + LATENCY_NOTED_S:
-            self._event("stream_latency", f"load cell: its frames arrive {lag:.3f} s (host) after they were sent, from here on; "
-                                          "the force's step across the gap shows no frame lost: each is stamped at its send time")
-            self._latency_noted = lag
-        if final and self._latency_noted:
-            self._alert(f"load cell: its stream arrived {self._latency_noted:.2f} s late from mid-test (the line delays it); "
-                        "the force is stamped at its send time — check the cable or converter")
-        restarts = getattr(self.rig, "stream_restarts", 0)
-        if restarts > self._restarts_noted:
-            self._event("stream_restart", f"load cell: garbled stream restarted ({restarts - self._restarts_noted} more, {restarts} so far; frames lost meanwhile)")
-            self._restarts_noted = restarts
-        for device, late in (getattr(self.rig, "late_replies", None) or {}).items():
-            if late > self._late_noted.get(device, 0):
-                self._event("late_reply", f"{device}: {late - self._late_noted.get(device, 0)} late replies discarded ({late} so far)")
-                self._late_noted[device] = late
-        self._note_retries()
-        if final and self._loss_summary():
-            self._event("data_loss", self._loss_summary())
-        elif final and self._missing_noted:  # below the data-loss limit: no failure, but the operator hears of it
-            self._alert(f"load cell: {_frames(self._missing_noted)} missing from its stream (the record's events name them; "
-                        "below the data-loss limit) — check its cable if this recurs")
-
-    def _note_retries(self, final: bool = False) -> None:
-        """A ``retry`` event per device for the exchanges repeated since the last call after a
-        silent, garbled or wrongly addressed reply — whether the retry got the reading, or failed
-        too (the channel then counts a failed read); a ``wrong_address`` event per reply from
-        another module's address; at the end one line to the operator per device that needed any."""
-        self._note_wrong_addresses()
-        failed_now = self._failed_after_retry()
-        for device, retried in (getattr(self.rig, "retried_exchanges", None) or {}).items():
-            if retried > self._retried_noted.get(device, 0):
-                failed = failed_now.get(device, 0) - self._failed_noted.get(device, 0)
-                outcome = (f"{failed} exchange{'s' if failed != 1 else ''} failed on every retry too: no reading taken from "
-                           f"{'them' if failed != 1 else 'it'}" if failed > 0 else "the readings were taken on the retry")
-                new = retried - self._retried_noted.get(device, 0)
-                self._event("retry", f"{device}: {new} retr{'ies' if new != 1 else 'y'} after a silent, garbled or wrongly "
-                                     f"addressed reply ({retried} so far; {outcome})")
-                self._retried_noted[device] = retried
-                self._failed_noted[device] = failed_now.get(device, 0)
-        if final:
-            for device, retried in self._retried_noted.items():
-                failed = self._failed_noted.get(device, 0)
-                lost = (f"{failed} exchange{'s' if failed != 1 else ''} failed on every retry too" if failed else "nothing lost")
-                self._alert(f"{device}: {retried} retr{'ies' if retried != 1 else 'y'} after silent, garbled or wrongly "
-                            f"addressed replies ({lost}) — check its cable and connector if this recurs")
-
-    def _drivers(self) -> list:
-        """The rig's devices that keep what their transport met (the drivers; none on a fake rig)."""
-        devices = (getattr(self.rig, name, None) for name in ("loadcell", "encoder", "furnace"))
-        return [d for d in devices if d is not None and hasattr(d, "transport")]
-
-    def _failed_after_retry(self) -> dict[str, int]:
-        return {d.name: getattr(d.transport, "failed_after_retry", 0) for d in self._drivers()}
-
-    def _note_wrong_addresses(self) -> None:
-        """A ``wrong_address`` event per reply that came from another module's address than the
-        one asked (rig.transport.DconDevice.wrong_address_replies): the device, the command, the
-        address that answered, and what became of it."""
-        for dev in self._drivers():
-            replies = getattr(dev, "wrong_address_replies", None) or []
-            done = self._wrong_noted.get(dev.name, 0)
-            first_command = not any(commanded for *_, commanded in replies[:done])
-            for _, command, answered, commanded in replies[done:]:
-                ours = f"{getattr(dev, 'address', 0):02X}"
-                if commanded and first_command:
-                    then = ("a heater command: no acknowledgement of this module is believed from here on, the heater is left "
-                            "to the module's watchdog")
-                    first_command = False
-                else:
-                    then = "a heater command, not believed" if commanded else "not taken; asked again"
-                self._event("wrong_address", f"{dev.name}: reply to {command} from address {answered}, not {ours} — {then}")
-            self._wrong_noted[dev.name] = len(replies)
-
     def _await_reading(self, channel, after_s: float) -> None:
         """Wait (up to STALE_WAIT_S host seconds) for ``channel``'s first reading after ``after_s`` (test s)."""
         deadline = self.timebase.now() + STALE_WAIT_S
@@ -900,31 +702,6 @@ class Procedure:
                                            f"reading ({ch.stream.last_time():.3f} s) left out")
                 return rows[keep]
         return rows
-
-    def _loss_summary(self) -> str:
-        parts = []
-        missing = self._missing_noted  # the one count of missing frames: the events', the header's, the operator's
-        expected = (self.writer.rows_written if self.writer else 0) + missing
-        if self._restarts_noted or missing > max(LOSS_NOISE_FRAMES, LOSS_NOISE_FRACTION * expected):
-            restarts = f"{self._restarts_noted} stream restarts; " if self._restarts_noted else ""
-            parts.append(f"load cell: {restarts}{missing} of {expected} force samples lost "
-                         f"({100.0 * missing / max(expected, 1):.1f} %)")
-        rejected = [f"{device}: {n} reading{'s' if n != 1 else ''} rejected as corrupt" for device, n in self._rejected_noted.items() if n]
-        if rejected:  # each device by name: the operator's warning says where to look
-            parts.append("; ".join(rejected))
-        if self._dropped:
-            parts.append(f"{self._dropped} force samples after the fault left out")
-        return "; ".join(parts)
-
-    def _loss_meta(self) -> dict[str, object]:
-        """Header keys: the load cell's lost samples whenever any (an estimate: below the noise
-        limit no data_loss event and no exit 5), and the whole summary when there is one."""
-        missing = self._missing_noted
-        meta: dict[str, object] = {"samples_missing": missing} if missing else {}
-        if self._loss_summary():
-            meta.update({"samples_missing": missing, "stream_restarts": self._restarts_noted,
-                         "readings_rejected": sum(self._rejected_noted.values()), "data_loss": self._loss_summary()})
-        return meta
 
     def _after_safety_stop(self, error: FlowcurveError | None, off_confirmed: bool = True) -> FlowcurveError | None:
         """After a heated test or an over-temperature the heater is off, or must be: watch the
@@ -1011,10 +788,6 @@ class Procedure:
             if still:
                 self.view.say(f"still missing: {', '.join(still)} (add with 'flowcurve annotate RECORD --set KEY=VALUE')")
         return post
-
-
-def _frames(n: int) -> str:
-    return f"{n} frame{'s' if n != 1 else ''}"
 
 
 def _os_reason(exc: OSError) -> str:

@@ -126,7 +126,8 @@ def calculix_records():
 def moduli(rec: Record) -> dict[str, float | str]:
     """E by each method (MPa), or the refusal's message: tension up to its elastic line (the ISO
     results after it are not what is compared), compression through the identification."""
-    from flowcurve.identification import tension as tn
+    from flowcurve.identification.tension_elastic import _elastic_line
+    from flowcurve.identification.tension_inputs import _inputs
     from flowcurve.identification.compression import identify_compression
 
     out: dict[str, float | str] = {}
@@ -136,9 +137,9 @@ def moduli(rec: Record) -> dict[str, float | str]:
                 res = identify_compression(rec, modulus_method=method).result
                 E = (res.get("modulus") or {}).get("E_line_MPa")
             else:
-                inp = tn._inputs(rec, use_extensometer=None, frame_stiffness_N_per_um=None, crosshead_length_mm=None, scale=True)
-                E = tn._elastic_line(inp, fractions=None, window_fixed_MPa=None, modulus_reference="Rp02", E_MPa=None, toe=True,
-                                     scale=True, modulus_method=method).E
+                inp = _inputs(rec, use_extensometer=None, frame_stiffness_N_per_um=None, crosshead_length_mm=None, scale=True)
+                E = _elastic_line(inp, fractions=None, window_fixed_MPa=None, modulus_reference="Rp02", E_MPa=None, toe=True,
+                                  scale=True, modulus_method=method).E
             out[method] = float(E) if E is not None else "no modulus"
         except FlowcurveError as exc:
             out[method] = str(exc).splitlines()[0]

@@ -49,7 +49,8 @@ def full_power_rise_C(setpoint_C: float) -> float:
 def run_case(setpoint_C: float, case: str, test: str, speed: float, time_scale: float, gap_C: float | None, soak_s: float,
              workdir: Path, rate_C_per_min: float | None = None) -> dict:
     """One heated test; the readings' summary around the last switch-off."""
-    from flowcurve.acquisition.procedure import StopCriteria, TestSpec
+    from flowcurve.acquisition.procedure import TestSpec
+    from flowcurve.acquisition.stopping import StopCriteria
     from flowcurve.acquisition.safety import Interrupted
     from flowcurve.acquisition.session import run_virtual_test
     from flowcurve.clock import ModelClock

@@ -386,9 +386,7 @@ def fit_simple(table: AdhesionTable, *, mu_d: float | None = None, contact_model
     params = lmfit.Parameters()
     params.add("tau0", value=max(intercept0 / UNIFORM_SHEAR_WEIGHT, 1e-3))
     params.add("beta0", value=slope0)
-    plan, hot_source = _hot_plan(s, hot, hot_temps)
-    _add_hot_params(params, plan, slope0)
-    use = np.ones(len(p), bool) if plan["k_b"][0] else ~hot
+    plan, hot_source, use = _hot_terms(params, s, hot, hot_temps, slope0)
 
     def deviation(v, radius):
         """model − measured τ_adh (MPa) with the imprint radii ``radius``."""
@@ -408,9 +406,7 @@ def fit_simple(table: AdhesionTable, *, mu_d: float | None = None, contact_model
     fit.extra["tau0_intercept_MPa"] = float(UNIFORM_SHEAR_WEIGHT * v["tau0"])
     fit.extra["tau0_intercept_note"] = ("intercept of (3.37) on the 0.540 mean stress (3.35); tau0_MPa = intercept*9*pi/32 "
                                         "because (3.35) reads a uniform shear as 32/(9 pi) = 1.132 times itself")
-    fit.extra["weights"] = _weights_text(weights, accuracy)
-    if hot.any() and not plan["k_b"][0]:
-        fit.warnings.append(f"{np.count_nonzero(hot)} test(s) at or above {hot_from_C:g} C not used: {hot_source}")
+    _note_weights_and_hot(fit, weights, accuracy, hot, plan, hot_from_C, hot_source)
     return fit
 
 
@@ -446,9 +442,7 @@ def fit_refined(table: AdhesionTable, *, mu_d: float | None = None, contact_mode
     params.add("beta0", value=slope0)
     start_S = sigma_S_start_MPa or float(np.median(p[~hot]) / 2.0)  # mean pressure of a plastic imprint ≈ 2–3 σ_S
     params.add("sigma_S", value=start_S, min=1e-3 * start_S, vary=shared)
-    plan, hot_source = _hot_plan(s, hot, hot_temps)
-    _add_hot_params(params, plan, slope0)
-    use = np.ones(len(p), bool) if plan["k_b"][0] else ~hot
+    plan, hot_source, use = _hot_terms(params, s, hot, hot_temps, slope0)
     hot_shared = hot & ~known & use
 
     def deviation(v, radius):
@@ -471,13 +465,27 @@ def fit_refined(table: AdhesionTable, *, mu_d: float | None = None, contact_mode
     tests = _test_rows(s, p, p / kr, use, measured=s.moment_N_mm / N_MM_PER_N_M, predicted=model(v) / N_MM_PER_N_M,
                        name="moment_N_m", extra={"tau_n_MPa": tau_n, "flow_stress_MPa": flow})
     fit = _make_fit("refined", result, s, plan, hot_source, contact_model, tests, sigma_S=shared)
-    fit.extra["weights"] = _weights_text(weights, accuracy)
     if hot_shared.any() and contact_model != "none":
         fit.warnings.append(f"{np.count_nonzero(hot_shared)} hot test(s) without a known flow stress share the fitted sigma_S "
                             "of the cold tests; give flow_stress_MPa for tests at temperature")
+    _note_weights_and_hot(fit, weights, accuracy, hot, plan, hot_from_C, hot_source)
+    return fit
+
+
+def _hot_terms(params, s: _Series, hot, hot_temps, slope0: float):
+    """The hot tests' plan and its parameters (k_b, θ_k) added: (plan, how the hot tests are
+    treated, which tests the fit uses — the hot ones only when β(T) is fitted)."""
+    plan, hot_source = _hot_plan(s, hot, hot_temps)
+    _add_hot_params(params, plan, slope0)
+    use = np.ones(len(s.force_N), bool) if plan["k_b"][0] else ~hot
+    return plan, hot_source, use
+
+
+def _note_weights_and_hot(fit: FrictionFit, weights: str, accuracy, hot, plan, hot_from_C: float, hot_source: str) -> None:
+    """The weighting said in the fit's extra; the hot tests left out said in its warnings."""
+    fit.extra["weights"] = _weights_text(weights, accuracy)
     if hot.any() and not plan["k_b"][0]:
         fit.warnings.append(f"{np.count_nonzero(hot)} test(s) at or above {hot_from_C:g} C not used: {hot_source}")
-    return fit
 
 
 def _weighted_fit(deviation, params, plan, s: _Series, use, *, measured, moment_part, weights: str, accuracy):

@@ -153,20 +153,8 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
             _extend(out["Rp02_MPa"], method)
     Ag = _num(result.get("Ag_pct"))
     if Ag is not None and Rm is not None:
-        e_m = Ag / 100.0 + Rm / E
-        gauge = _num((result.get("methods") or {}).get("strain_length_mm"))
-        # measured E: the scales cancel in Rm/E and scale the plastic extension e_m − Rm/E; given E: e_m, E and Rm apart
-        scaled = Ag / 100.0 if E_measured else e_m
-        if (result.get("methods") or {}).get("strain_source") == "extensometer" and gauge:
-            cls = inst["extensometer_class"]
-            u_em = math.hypot(un.extension_u_mm(scaled * gauge, cls) / gauge, scaled * un.rectangular(cls / 100.0))
-        else:
-            u_em = scaled * strain_u
-        eng = curves.get("engineering")
-        band = (max_force_band(eng["engineering_strain"].to_numpy(dtype=float), eng["engineering_stress_MPa"].to_numpy(dtype=float))
-                if eng is not None and "engineering_strain" in eng.columns else (0.0, 0.0))
-        out["Ag_pct"] = un.uniform_elongation_budget(Ag, Rm, E, strain_at_Fm_u=u_em, u_E_MPa=u_E,
-                                                     u_Rm_MPa=None if E_measured else out["Rm_MPa"]["u"], flat_halfwidth=(band[1] - band[0]) / 2.0)
+        out["Ag_pct"] = _uniform_elongation(result, curves, inst, Ag, Rm, E, E_measured=E_measured, strain_u=strain_u, u_E=u_E,
+                                            u_Rm=None if E_measured else out["Rm_MPa"]["u"])
     A = _num(result.get("A_pct"))
     l0, lu = _num(spec.get("l0_mm")), _num(post.get("lu_mm"))
     method = str(result.get("A_method") or "")
@@ -186,6 +174,26 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
     stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.dimension_u(d0, inst["diameter_resolution_mm"], inst["micrometer_mpe_mm"]) / d0)
     out["hardening"] = _constants(result.get("hardening") or {}, stress_rel_u)
     return out
+
+
+def _uniform_elongation(result: Mapping, curves: Mapping, inst: Mapping, Ag: float, Rm: float, E: float, *, E_measured: bool,
+                        strain_u: float, u_E: float, u_Rm: float | None) -> dict:
+    """Ag's budget: the strain at Fm, e_m = Ag/100 + Rm/E, with the extensometer's class or the
+    strain scale's u; Rm's u only with a given E (a measured one moves with the force scale); half
+    the band of a flat maximum (:func:`.iso6892.max_force_band`)."""
+    e_m = Ag / 100.0 + Rm / E
+    gauge = _num((result.get("methods") or {}).get("strain_length_mm"))
+    # measured E: the scales cancel in Rm/E and scale the plastic extension e_m − Rm/E; given E: e_m, E and Rm apart
+    scaled = Ag / 100.0 if E_measured else e_m
+    if (result.get("methods") or {}).get("strain_source") == "extensometer" and gauge:
+        cls = inst["extensometer_class"]
+        u_em = math.hypot(un.extension_u_mm(scaled * gauge, cls) / gauge, scaled * un.rectangular(cls / 100.0))
+    else:
+        u_em = scaled * strain_u
+    eng = curves.get("engineering")
+    band = (max_force_band(eng["engineering_strain"].to_numpy(dtype=float), eng["engineering_stress_MPa"].to_numpy(dtype=float))
+            if eng is not None and "engineering_strain" in eng.columns else (0.0, 0.0))
+    return un.uniform_elongation_budget(Ag, Rm, E, strain_at_Fm_u=u_em, u_E_MPa=u_E, u_Rm_MPa=u_Rm, flat_halfwidth=(band[1] - band[0]) / 2.0)
 
 
 def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict:

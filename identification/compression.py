@@ -25,155 +25,22 @@ spring-back before the shortening is scaled.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
 from flowcurve.record.format import Record
-from flowcurve.errors import IdentificationError, MissingValueError, RecordError
+from flowcurve.errors import IdentificationError
 from flowcurve.identification import friction as fr
-from flowcurve.identification.fe import model_form as mf
-from flowcurve.identification.elastic_modulus import METAL_E_RANGE_MPa, ModulusChoice, apparent_modulus_warning, choose_modulus
-from flowcurve.identification.hardening import RANGE_SHARE_PART, HardeningFit, fit_hardening, pattern_shift, range_shift
-from flowcurve.identification.indicator import (DEFAULT_MODULUS_METHOD, FEW_POINTS_TOP, SDAR_REACH, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, remove_frame_compliance, scale_to_measured,
-                                                reread_if_stepped, yield_onset_from_rate)
+from flowcurve.identification.elastic_modulus import METAL_E_RANGE_MPa, ModulusChoice, apparent_modulus_warning
+from flowcurve.identification.hardening import HardeningFit, fit_hardening
+from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_POINTS_TOP, SDAR_REACH, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, scale_to_measured, yield_onset_from_rate
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
 from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
-from flowcurve.identification.tension import check_fit_range, true_plastic_strain
-
-UNLOADING_BAND = (0.1, 0.9)  # the part of the unloading (× the largest force) the spring-back is read on
-MIN_UNLOADING_SAMPLES = 10
-YIELD_OFFSET = 0.002  # 0.2 % offset for the compression yield and the start of the fit
-LOADED_FRACTION = 0.05  # samples above this fraction of the peak force belong to the test
-MAX_FIT_POINTS = 600  # the hardening fit uses at most this many points, evenly spread in strain
-FIT_CURVE_POINTS = 200
-
-
-def compression_sign(values: np.ndarray) -> float:
-    """+1 or −1: the sign that makes the larger excursion of a signal positive."""
-    return -1.0 if abs(np.nanmin(values)) > abs(np.nanmax(values)) else 1.0
-
-
-def loading_branch_end(travel_mm: np.ndarray, force_N: np.ndarray, near: float = 0.005) -> int:
-    """Index of the end of loading: the largest force among the samples at the top of travel.
-
-    The crosshead reverses at the end of loading; near the top, encoder steps make the travel
-    flat over several samples, and the unloading samples there carry a clearly lower force.
-    ``near`` is the part of the largest travel counted as "the top".
-    """
-    top = np.nanmax(travel_mm)
-    candidates = np.nonzero(travel_mm >= top * (1.0 - near))[0]
-    return int(candidates[np.nanargmax(force_N[candidates])])
-
-
-def springback_from_unloading(force_N: np.ndarray, specimen_mm: np.ndarray, end: int, *, band=UNLOADING_BAND) -> tuple[float, int] | None:
-    """(spring-back in mm, samples) the unloading branch shows, or None when it has too few samples.
-
-    The specimen's displacement (frame compliance removed) against the force over the first
-    unloading from ``band`` × the largest force (the turn and a seat re-opening at low force left
-    out): Δl = Δl_k + F·c, so the elastic spring-back from the largest force to none is F_max·c."""
-    f, d = np.asarray(force_N[end:], dtype=float), np.asarray(specimen_mm[end:], dtype=float)
-    if f.size < 2:
-        return None
-    f_max = float(force_N[end])
-    below = np.flatnonzero(f < band[0] * f_max)  # the first unloading ends where the force first leaves the band
-    stop = int(below[0]) if below.size else f.size
-    on = np.flatnonzero(f[:stop] <= band[1] * f_max)
-    if on.size < MIN_UNLOADING_SAMPLES:
-        return None
-    slope = float(np.polyfit(f[on], d[on], 1)[0])  # Δl = Δl_k + c·F → c (mm/N)
-    return (f_max * slope, int(on.size)) if slope > 0 else None
-
-
-def offset_yield(eps_p, stress_MPa, offset: float = YIELD_OFFSET) -> float | None:
-    """Stress where the plastic strain first reaches ``offset`` (running maximum, interpolated)."""
-    eps_run = np.maximum.accumulate(np.asarray(eps_p, dtype=float))
-    if eps_run[-1] < offset:
-        return None
-    i = int(np.argmax(eps_run >= offset))
-    if i == 0:
-        return float(stress_MPa[0])
-    e0, e1 = eps_run[i - 1], eps_run[i]
-    w = 0.0 if e1 == e0 else (offset - e0) / (e1 - e0)
-    return float(stress_MPa[i - 1] + w * (stress_MPa[i] - stress_MPa[i - 1]))
-
-
-def plastic_strain(strain, stress_MPa, E_MPa: float | None):
-    """Plastic part of a (compressive, positive) true strain; the total strain when E is unknown."""
-    if E_MPa is None:
-        return np.asarray(strain, dtype=float).copy()
-    return true_plastic_strain(strain, stress_MPa, E_MPa)  # (3.7) ε_p = ε − σ/E
-
-
-def _fit_subset(eps_p: np.ndarray, start: float, first: int = 0) -> np.ndarray:
-    """Indices of the plastic range (ε_p ≥ start, after the running maximum passed it, from
-    sample ``first`` on — the yield sample, so encoder jitter on the elastic line stays out), thinned."""
-    past = np.maximum.accumulate(eps_p) >= start
-    past[:first] = False
-    idx = np.nonzero(past & (eps_p >= start))[0]
-    if idx.size > MAX_FIT_POINTS:
-        # evenly in strain, so the long end of the curve does not outweigh the start
-        targets = np.linspace(eps_p[idx[0]], eps_p[idx[-1]], MAX_FIT_POINTS)
-        order = np.argsort(eps_p[idx], kind="stable")
-        pos = np.searchsorted(eps_p[idx][order], targets).clip(0, idx.size - 1)
-        idx = np.unique(idx[order][pos])
-    return idx
-
-
-def _fit_points(eps_p: np.ndarray, i_yield: int, fit_range) -> np.ndarray:
-    """Indices of the points the hardening fit uses: the plastic range from the yield sample on
-    (:func:`_fit_subset`), within ``fit_range`` (LO, HI) when given."""
-    idx = _fit_subset(eps_p, YIELD_OFFSET, i_yield)
-    checked = check_fit_range(fit_range)
-    if checked is not None:
-        idx = idx[(eps_p[idx] >= checked[0]) & (eps_p[idx] <= checked[1])]
-    return idx
-
-
-def _meta_geometry(record: Record) -> dict:
-    src = record.source
-    d0 = record.positive("specimen.d0_mm", required=True)
-    h0 = record.positive("specimen.h0_mm", required=True)
-    hk = record.positive("post.hk_mm", required=True)
-    if hk >= h0:
-        raise RecordError(src, f"'post.hk_mm' = {hk:g} mm must be below 'specimen.h0_mm' = {h0:g} mm (the specimen is shorter after compression)")
-    dmax = record.positive("post.dmax_mm")
-    smax = record.positive("post.smax_mm2")
-    if dmax is None and smax is None:
-        raise MissingValueError(src, ("post.dmax_mm", "post.smax_mm2"), what="the friction needs the bulge diameter dmax or the largest cross-section smax")
-    dtop = record.positive("post.dtop_mm")
-    dface = record.positive("post.dface_mm")  # the original end face (fe_table reads μ from it when given)
-    nu = record.number("material.nu")
-    if nu is not None and not (0.0 <= nu < 0.5):
-        raise RecordError(src, f"'material.nu' = {nu:g}: Poisson's ratio must be within [0, 0.5)")
-    return {"d0": d0, "h0": h0, "hk": hk, "dmax": dmax, "smax": smax, "dtop": dtop, "dface": dface,
-            "nu": fr.DEFAULT_POISSON if nu is None else nu, "nu_source": "assumed (metals)" if nu is None else "record (material.nu)"}
-
-
-def _check_crosshead_gaps(src: str, force: np.ndarray, cross: np.ndarray) -> None:
-    """A crosshead without values while the specimen carries load cannot be scaled to hk: stop."""
-    loaded = np.abs(np.nan_to_num(force)) > LOADED_FRACTION * np.nanmax(np.abs(force))
-    gaps = np.nonzero(loaded & ~np.isfinite(cross))[0]
-    if gaps.size:
-        raise RecordError(src, f"the crosshead channel has no value at sample {gaps[0] + 1} (and {gaps.size - 1} more) while the specimen is loaded; the shortening cannot be followed through the gap", column="crosshead_mm")
-
-
-def _friction_all(geo: dict, chosen: str, warnings: list[str], curve=None) -> tuple[fr.FrictionResult, dict[str, fr.FrictionResult | str]]:
-    if chosen not in fr.FRICTION_METHODS:
-        raise IdentificationError(f"unknown friction method {chosen!r} (choose from {', '.join(fr.FRICTION_METHODS)})")
-    results: dict[str, fr.FrictionResult | str] = {}
-    for method in fr.FRICTION_METHODS:
-        try:
-            results[method] = fr.identify_friction(method, geo["d0"], geo["h0"], geo["hk"], d_max_mm=geo["dmax"], s_max_mm2=geo["smax"], d_top_mm=geo["dtop"], curve=curve,
-                                                     d_face_mm=geo.get("dface"))
-        except IdentificationError as exc:
-            if method == chosen:
-                raise
-            results[method] = str(exc)
-            warnings.append(f"friction method {method} not applicable: {exc}")
-    return results[chosen], results
+from flowcurve.identification.compression_values import FIT_CURVE_POINTS, YIELD_OFFSET, _Diagram, _Friction, _Line, _Nominal, _Yield, _check_options, _fit_points, _handbook_modulus, _hardening_fits, _inputs, _meta_geometry, offset_yield, plastic_strain
+from flowcurve.identification.compression_friction import _dface_advice, _fe_correction_uncertainty, _friction_all, _friction_correction, _model_form_shares, _mu_stderr_basis
 
 
 def _offset_onset_MPa(strain0, stress0, line: ModulusFit, offset: float = YIELD_OFFSET) -> float | None:
@@ -256,121 +123,6 @@ def compensate_toe_line(specimen_mm, force_N, line: ModulusFit, toe_mm: float, *
     head = np.arange(on_line[0]) if on_line.size else np.arange(0)
     out[head] = np.clip(force[head], 0.0, None) / area0_mm2 / line.E_MPa * h0_mm  # the toe replaced by the line
     return out
-
-
-@dataclass
-class _Diagram:
-    """The loading branch of the indicator diagram: time, force and travel made positive, the
-    specimen's displacement (frame compliance removed when the stiffness is known)."""
-
-    t: np.ndarray
-    force: np.ndarray
-    travel: np.ndarray
-    specimen: np.ndarray
-    stiffness: float | None
-    warnings: list[str]
-    step_mm: float | None = None  # the crosshead's reading step, when it was interpolated between steps
-    springback: tuple[float, int] | None = None  # (mm, samples) the unloading branch shows
-
-
-@dataclass
-class _Line:
-    """The elastic line (None when there is none), its toe, and the toe-compensated displacement."""
-
-    line: ModulusFit | None
-    toe_mm: float
-    specimen: np.ndarray
-    warnings: list[str]
-    apparent_MPa: float | None = None  # the slope regressed on the first loading (frame removed), when there is one
-
-
-@dataclass
-class _Nominal:
-    """The shortening scaled to the measured height change, and the nominal curve it gives."""
-
-    springback: float
-    springback_source: str | None
-    measured: float  # the shortening the scaling aims at, mm
-    shortening: np.ndarray
-    K_l: float
-    h: np.ndarray
-    strain: np.ndarray
-    d_n: np.ndarray
-    pressure: np.ndarray
-    warnings: list[str]
-
-
-@dataclass
-class _Yield:
-    """The modulus that strips elastic strain, where it came from, and the compression yield."""
-
-    E_used: float | None
-    E_fit: ModulusFit | None  # the elastic line when E is its apparent modulus
-    E_source: str
-    rp02: float | None
-    i_yield: int  # the first sample at Rp0.2 (0 without one)
-
-
-@dataclass
-class _Friction:
-    """μ by every method, the chosen one, and the curve by every friction correction."""
-
-    chosen: fr.FrictionResult
-    frictions: dict
-    corrected: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]  # method → (εp, σ, ε)
-    warnings: list[str]
-
-
-def _check_options(friction_correction: str, E_MPa: float | None) -> None:
-    """The friction correction and the handbook modulus, checked."""
-    if friction_correction not in fr.CORRECTIONS:
-        raise IdentificationError(f"unknown friction correction {friction_correction!r} (choose from {', '.join(fr.CORRECTIONS)})")
-    if E_MPa is not None and not (math.isfinite(E_MPa) and E_MPa > 0):
-        raise IdentificationError(f"E_MPa must be > 0, got {E_MPa!r}")
-
-
-def _handbook_modulus(record: Record, E_MPa: float | None) -> tuple[float | None, str, ModulusChoice]:
-    """The modulus that strips elastic strain by the one rule (:func:`.elastic_modulus.choose_modulus`:
-    the option, else the record's material.E_MPa, else the handbook E of the class its material
-    names; a compression record has no extensometer) and its source; (None, "apparent") without one."""
-    choice = choose_modulus(given=E_MPa, handbook=record.positive("material.E_MPa"), material=record.meta.get("material"))
-    # a short stiff specimen's elastic line is about one encoder count: a handbook modulus strips elastic
-    # strain better than a regression on it (and a crosshead's slope carries the frame and the toe)
-    source = {"given": "option", "handbook": "record (material.E_MPa)", "class": f"class ({choice.basis})"}.get(choice.source, "apparent")
-    return choice.E_MPa, source, choice
-
-
-def _inputs(record: Record, frame_stiffness_N_per_um: float | None) -> _Diagram:
-    """The indicator diagram's loading branch, the frame compliance removed (§2.1)."""
-    src = record.source
-    warnings: list[str] = []
-    t = record.column("time_s")
-    force_raw = record.column("force_N")
-    cross_raw = record.column("crosshead_mm")
-    _check_crosshead_gaps(src, force_raw, cross_raw)
-    ok = np.isfinite(t) & np.isfinite(force_raw) & np.isfinite(cross_raw)
-    t, force_raw, cross_raw = t[ok], force_raw[ok], cross_raw[ok]
-    if t.size < 10:
-        raise RecordError(src, f"only {t.size} complete samples (time, force, crosshead); a compression identification needs more")
-    force = force_raw * compression_sign(force_raw)
-    # an encoder count spanning several samples (10 µm is 0.15 % of a 7 mm specimen): its sawtooth
-    # against the rising force would run the plastic strain backwards within each count
-    cross_raw, step = reread_if_stepped(t, cross_raw)
-    travel = cross_raw - cross_raw[0]
-    travel = travel * compression_sign(travel)
-
-    stiffness = frame_stiffness_N_per_um if frame_stiffness_N_per_um is not None else record.positive("rig.frame_stiffness_N_per_um")
-    if stiffness is not None:
-        specimen = remove_frame_compliance(travel, force, stiffness)
-    else:
-        specimen = travel.copy()
-        warnings.append("no frame stiffness ('rig.frame_stiffness_N_per_um'): the frame compliance is left to the scaling K_l")
-    end = loading_branch_end(travel, force)
-    springback = springback_from_unloading(force, specimen, end)
-    t, force, travel, specimen = t[: end + 1], force[: end + 1], travel[: end + 1], specimen[: end + 1]
-    if end < 10:
-        raise IdentificationError(f"{src}: the loading branch has only {end + 1} samples")
-    return _Diagram(t=t, force=force, travel=travel, specimen=specimen, stiffness=stiffness, warnings=warnings, step_mm=step, springback=springback)
 
 
 MIN_LINE_SLOPE_FRACTION = 0.2  # a regressed line flatter than this part of the handbook E reaches past yield
@@ -507,159 +259,6 @@ def _modulus_and_yield(nominal: _Nominal, line: ModulusFit | None, E_MPa: float 
     return _Yield(E_used=E_used, E_fit=E_fit, E_source=E_source, rp02=rp02, i_yield=i_yield)
 
 
-MU_RESOLUTION_WARN = 0.02  # μ moved by more than this by one dmax resolution step: say so
-MEASURE_THE_FACE = ", or measure the original end face's diameter (post.dface_mm), which still shrinks with μ there"
-
-
-def _fe_table_warnings(chosen: fr.FrictionResult) -> list[str]:
-    """What the FE table's μ cannot promise: a hardening beyond its axes, a barrel that no
-    longer grows with μ (near sticking: μ is then a lower bound; the force factor is as flat)."""
-    if chosen.method != "fe_table":
-        return []
-    out = [f"FE table: {w}; read at the table's edge (--method inverse-fe runs the record's own law)" for w in chosen.extra.get("outside_table", [])]
-    continued = chosen.extra.get("continued_runs_from_strain")
-    if continued is not None:
-        out.append(f"FE table: μ and the correction beyond ε {continued:.2f} rest on runs that stopped there (the side folding onto the "
-                   "platen) and were continued along the next lower μ: an estimate (--method inverse-fe runs the record itself)")
-    sensitivity = chosen.extra.get("sensitivity", {})
-    by_face = "mu_per_dface_resolution" in sensitivity
-    dmu = sensitivity.get("mu_per_dface_resolution" if by_face else "mu_per_dmax_resolution")
-    told_by = "the end face (a dface" if by_face else "the bulge (a dmax"
-    if sensitivity and dmu is None:
-        out.append(f"FE table: the bulge does not grow with μ near {chosen.mu:.3f} (the faces stick): take μ as a lower bound{MEASURE_THE_FACE}")
-    elif dmu is not None and dmu > MU_RESOLUTION_WARN:
-        out.append(f"FE table: μ {chosen.mu:.3f} is poorly told by {told_by} reading off by {fr.DIAMETER_RESOLUTION_MM} mm moves it by "
-                   f"{dmu:.2g}; the faces nearly stick): take μ as a lower bound"
-                   + ("" if by_face else MEASURE_THE_FACE))
-    return out
-
-
-def _friction_disagreement(chosen: fr.FrictionResult) -> str | None:
-    """A warning when the end face's μ and the bulge's differ beyond their combined standard
-    errors (:data:`.fe.model_form.DISAGREE_SIGMAS`), else None: the shape pulls μ two ways."""
-    z = chosen.extra.get("face_bulge_disagreement_sigmas")
-    if z is None or not z > mf.DISAGREE_SIGMAS:
-        return None
-    return (f"friction: μ from the end face {chosen.mu:.3f} ± {chosen.extra['mu_stderr']:.3f} and from the bulge "
-            f"{chosen.extra['mu_from_bulge']:.3f} ± {chosen.extra['mu_from_bulge_stderr']:.3f} disagree ({z:.1f} combined standard "
-            "errors): the upsetting model does not describe this specimen's shape; the hardening is poor")
-
-
-def _mu_share(src: str, geo: dict, nominal: _Nominal, friction: _Friction, i_yield: int, fit_range, law: str,
-              friction_correction: str, E_used: float | None) -> dict[str, float]:
-    """μ's share of the constants' standard errors: the curve corrected and fitted again at μ ∓ its
-    standard error ({} when μ has none or a refit fails)."""
-    se_mu = friction.chosen.extra.get("mu_stderr")
-    if not (se_mu and math.isfinite(se_mu) and friction_correction in fr.CORRECTIONS):
-        return {}
-    eps_p = plastic_strain(nominal.strain, nominal.pressure, E_used) if E_used is not None else None
-    elastic = None if E_used is None else (E_used, geo["nu"])
-    params = []
-    for mu in (max(friction.chosen.mu - se_mu, 0.0), friction.chosen.mu + se_mu):
-        eps_t, sig_t = fr.correct(friction_correction, nominal.strain, nominal.pressure, mu, nominal.d_n / 2.0, nominal.h, eps_p=eps_p, elastic=elastic)
-        try:
-            fits, _ = _hardening_fits(src, {friction_correction: (plastic_strain(eps_t, sig_t, E_used), sig_t, eps_t)}, i_yield, fit_range, law,
-                                      friction_correction)
-        except IdentificationError:
-            return {}
-        params.append(fits[friction_correction].params)
-    return mf.through_mu(*params)
-
-
-def _constants_stderr(src: str, geo: dict, nominal: _Nominal, friction: _Friction, fit: HardeningFit, i_yield: int, fit_range, law: str,
-                      friction_correction: str, E_used: float | None) -> dict[str, dict[str, float]]:
-    """The shares of the hardening constants' standard errors beyond the fit's: μ's (:func:`_mu_share`);
-    on the FE table's correction, the model form's force error (:func:`.fe.model_form.force_model_form`)
-    as a uniform offset and as one growing with strain, each refitted; and the fit range's (the
-    constants fitted again over the first half of the range, :func:`.hardening.range_shift`): a
-    curve whose shape departs from the law moves correlated constants (A and n) far more than the
-    curve itself moves."""
-    shares: dict[str, dict[str, float]] = {}
-    by_mu = _mu_share(src, geo, nominal, friction, i_yield, fit_range, law, friction_correction, E_used)
-    if by_mu:
-        shares["friction μ (fits at μ ∓ its standard error)"] = by_mu
-    eps_tp, sig_t, _ = friction.corrected[friction_correction]
-    idx = _fit_points(eps_tp, i_yield, fit_range)
-    eps_fit, sig_fit = eps_tp[idx], sig_t[idx]
-    if friction_correction == "fe_table":
-        u_force = mf.force_model_form(friction.chosen.mu)
-        by_pattern = [pattern_shift(eps_fit, sig_fit, u_force, g, law) for g in mf.force_patterns(eps_fit)]
-        shares[f"FE model form ({u_force:.1%} of the force at μ {friction.chosen.mu:.3f}, uniform and growing with strain)"] = {
-            k: mf.quadrature(*(b.get(k, 0.0) for b in by_pattern)) for k in fit.params}
-    by_range = range_shift(eps_fit, sig_fit, law)
-    if by_range:
-        shares[f"the fit range (fitted again over its first {RANGE_SHARE_PART:.0%})"] = by_range
-    return shares
-
-
-def trade_off_note(fit: HardeningFit, limit: float = 0.9) -> str | None:
-    """A note when two constants' correlation exceeds ``limit``: the curve is known better than either."""
-    pairs = [(abs(r), a, b, r) for a, row in fit.correlations.items() for b, r in row.items() if a < b and abs(r) > limit]
-    if not pairs:
-        return None
-    _, a, b, r = max(pairs)
-    return (f"{a} and {b} trade off (correlation {r:+.2f}): the curve is known better than either constant; "
-            "compare fits through the curve, not constant by constant")
-
-
-def _model_form_shares(src: str, geo: dict, nominal: _Nominal, yld: _Yield, friction: _Friction, fit: HardeningFit, result: CompressionResult,
-                       fit_range, law: str, friction_correction: str) -> None:
-    """The main fit's standard errors with μ's and the model form's shares (:func:`_constants_stderr`),
-    said in ``methods.hardening_stderr``; a face and bulge that disagree make it poor, with a warning."""
-    shares = _constants_stderr(src, geo, nominal, friction, fit, yld.i_yield, fit_range, law, friction_correction, yld.E_used)
-    fit.stderr = mf.combined_stderr(fit.stderr, *shares.values())
-    note = trade_off_note(fit)
-    result.methods["hardening_stderr"] = "; ".join(["the fit's standard errors", *shares]) + " (in quadrature)" + (f". {note}" if note else "")
-    disagreement = _friction_disagreement(friction.chosen)
-    if disagreement:
-        fit.doubt = disagreement
-        result.warnings.append(disagreement)
-
-
-def _dface_advice(chosen: fr.FrictionResult) -> str | None:
-    """The advice to measure dface when the FE table's μ rests on a bulge that hardly tells it, else None."""
-    sensitivity = chosen.extra.get("sensitivity", {})
-    if chosen.method != "fe_table" or "mu_per_dface_resolution" in sensitivity or not sensitivity:
-        return None
-    dmu = sensitivity.get("mu_per_dmax_resolution")
-    return fr.DFACE_ADVICE if dmu is None or dmu > MU_RESOLUTION_WARN else None
-
-
-def _friction_correction(geo: dict, nominal: _Nominal, friction_method: str, E_used: float | None) -> _Friction:
-    """μ (again, now with the curve: the FE table's μ depends on the hardening) and the curve by every correction."""
-    warnings: list[str] = []
-    eps_p = plastic_strain(nominal.strain, nominal.pressure, E_used) if E_used is not None else None
-    curve = (nominal.strain, nominal.pressure) if eps_p is None else (nominal.strain, nominal.pressure, eps_p)
-    chosen, frictions = _friction_all(geo, friction_method, warnings, curve=curve)
-    warnings += _fe_table_warnings(chosen)
-    corrected = {}
-    elastic = None if E_used is None else (E_used, geo["nu"])  # fe_table: the pressure on the loaded area
-    for method in fr.CORRECTIONS:
-        eps_t, sig_t = fr.correct(method, nominal.strain, nominal.pressure, chosen.mu, nominal.d_n / 2.0, nominal.h, eps_p=eps_p, elastic=elastic)
-        corrected[method] = (plastic_strain(eps_t, sig_t, E_used), sig_t, eps_t)
-    return _Friction(chosen=chosen, frictions=frictions, corrected=corrected, warnings=warnings)
-
-
-def _hardening_fits(src: str, corrected: dict, i_yield: int, fit_range, law: str, friction_correction: str) -> tuple[dict, list[str]]:
-    """The hardening law fitted to every corrected curve from the yield sample on: (fits, warnings)."""
-    warnings: list[str] = []
-    fits = {}
-    for method, (eps_tp, sig_t, _) in corrected.items():
-        idx = _fit_points(eps_tp, i_yield, fit_range)
-        if idx.size < 4:
-            if method == friction_correction:
-                raise IdentificationError(f"{src}: the plastic range has only {idx.size} points; nothing to fit (did the specimen yield?)")
-            continue
-        try:
-            fits[method] = fit_hardening(eps_tp[idx], sig_t[idx], law)
-        except IdentificationError as exc:
-            if method == friction_correction:
-                raise
-            warnings.append(f"hardening fit on the {method} curve failed: {exc}")
-    warnings += [f"hardening: {w}" for w in fits[friction_correction].warnings]
-    return fits, warnings
-
-
 def _strain_zero(diagram: _Diagram, geo: dict, line: _Line, nominal: _Nominal, yld: _Yield, friction: _Friction, fits: dict,
                  fit_range, law: str, friction_correction: str) -> tuple[dict, list[str]]:
     """The strain zero's uncertainty δε0 and its effect on the main fit's start and constants (§2.11);
@@ -694,32 +293,6 @@ def _flow_curve(eps_p: np.ndarray, stress_MPa: np.ndarray, i_yield: int, uncerta
     if uncertainty_pct is not None:
         curve["correction_uncertainty_pct"] = uncertainty_pct[plastic]
     return pd.DataFrame(curve)
-
-
-def _fe_correction_uncertainty(geo: dict, friction: _Friction, E_used: float | None) -> tuple[np.ndarray, str, list[str]]:
-    """Per point of the fe_table-corrected curve: its stress's σ, % (:func:`.fe.model_form.corrected_stress_uncertainty_pct`:
-    the model form's force share at μ, growing to the inverse's 3 % over the band before the table's
-    fold-over onset, :func:`.friction.fe_fold_over_onset`), what it holds, and a warning when the
-    curve reaches that band."""
-    eps_tp, sig_t, eps_t = friction.corrected["fe_table"]
-    mu, h0_d0 = friction.chosen.mu, geo["h0"] / geo["d0"]
-    ok = np.isfinite(sig_t) & (eps_t > 0)
-    onset = fr.fe_fold_over_onset(mu, h0_d0, eps_t[ok], sig_t[ok], eps_tp[ok] if E_used is not None else None)
-    u = mf.corrected_stress_uncertainty_pct(eps_t, mu, onset)
-    u_mf = 100.0 * mf.force_model_form(mu)
-    basis = (f"fe_table: per point (true_curve.csv correction_uncertainty_pct) the model form's {u_mf:.1f} % of the force at μ {mu:.3f}"
-             + (f", growing to {float(u.max()):.1f} % over ε {onset - mf.FOLD_OVER_BAND:.2f}–{onset:.2f} before the table's fold-over onset"
-                if onset is not None else "; no fold-over in the table's runs at this μ, h0/d0 and hardening"))
-    warnings = []
-    band = None if onset is None else onset - mf.FOLD_OVER_BAND
-    if band is not None and np.nanmax(eps_t) > band and float(u.max()) > u_mf + 0.05:
-        order = np.argsort(eps_t[ok])
-        eps_p_band = float(np.interp(band, eps_t[ok][order], eps_tp[ok][order]))
-        warnings.append(f"fe_table correction: the points from ε {band:.2f} (ε_p {eps_p_band:.2f}) on carry the side folding onto the platen "
-                        f"(the table's runs fold over from ε {onset:.2f} at μ {mu:.3f}, h0/d0 {h0_d0:.2g}; a finer model folds over earlier "
-                        f"and differs by up to 2 % in force there): their uncertainty grows from {u_mf:.1f} % to {float(u.max()):.1f} % "
-                        "(true_curve.csv correction_uncertainty_pct)")
-    return u, basis, warnings
 
 
 def _curves(diagram: _Diagram, nominal: _Nominal, friction: _Friction, fit: HardeningFit) -> dict[str, pd.DataFrame]:
@@ -806,14 +379,6 @@ def _modulus_method(choice: ModulusChoice, yld: _Yield, line: _Line) -> dict:
         out = {"E_MPa": choice.E_MPa, "u_MPa": choice.u_MPa if choice.E_MPa is not None else None, "source": choice.source, "basis": choice.basis}
     out["apparent_MPa"] = line.apparent_MPa
     return out
-
-
-def _mu_stderr_basis(chosen: fr.FrictionResult) -> str:
-    """What μ's standard error (``friction_details[method].mu_stderr``) holds, for result.json's methods."""
-    if chosen.extra.get("mu_stderr") is None:
-        return "none: mu has no standard error"
-    basis = chosen.extra.get("mu_stderr_basis")
-    return basis if basis else f"half mu_range ({chosen.extra.get('mu_range_basis')})"
 
 
 def identify_compression(

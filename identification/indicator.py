@@ -323,6 +323,27 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
     ok = np.isfinite(e1) & np.isfinite(s1)
     e1, s1 = e1[ok], s1[ok]
     line_samples = int(np.sum((s1 >= 0.05 * reference_MPa) & (s1 <= FEW_POINTS_TOP * reference_MPa)))
+    best, best_r2 = _widest_linear_window(e1, s1, reference_MPa, line_samples, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                                          strain_noise=strain_noise)
+    if best is not None:
+        _, slope, intercept, se, r2, n, window = best
+        return ModulusFit(slope, se, intercept, r2, n, (float(window[0]), float(window[1])),
+                          source=f"automatic window {window[0] / reference_MPa:.2f}–{window[1] / reference_MPa:.2f} × {reference_MPa:.4g} MPa "
+                                 f"(flowcurve's own method, not ASTM E3076: widest linear stretch, R² ≥ {AUTO_WINDOW_R2})")
+    if np.isfinite(best_r2):  # enough samples, but no stretch is straight: SDAR's linear region, else the conventional window
+        fallback = _no_linear_stretch(e, s, e1, s1, reference_MPa, best_r2, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                                      strain_noise=strain_noise)
+        if fallback is not None:
+            return fallback
+    return _all_line_samples(e1, s1, reference_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa, strain_noise=strain_noise)
+
+
+def _widest_linear_window(e1, s1, reference_MPa: float, line_samples: int, *, strain_on_stress: bool, noise_MPa: float,
+                          strain_noise: float) -> tuple[tuple | None, float]:
+    """The widest window lo–hi × the reference whose line is linear (R² ≥ AUTO_WINDOW_R2, no end
+    trend), of equal ones the surest slope: ((score, slope, intercept, se, r2, n, window_MPa) or
+    None, the best R² of the windows that were not linear). Windows are contiguous runs of the
+    samples sorted by stress, their sums read off cumulative sums."""
     best, best_r2 = None, -np.inf
     order = np.argsort(s1, kind="stable")
     xs, ys = e1[order], s1[order]
@@ -351,28 +372,36 @@ def auto_modulus(strain, stress_MPa, reference_MPa: float, *, strain_on_stress: 
             score = (-(hi - lo), se / slope)  # the widest linear window; of equal ones, the surest slope
             if best is None or score < best[0]:
                 best = (score, slope, intercept, se, r2, int(n), (lo * reference_MPa, hi * reference_MPa))
-    if best is not None:
-        _, slope, intercept, se, r2, n, window = best
-        return ModulusFit(slope, se, intercept, r2, n, (float(window[0]), float(window[1])),
-                          source=f"automatic window {window[0] / reference_MPa:.2f}–{window[1] / reference_MPa:.2f} × {reference_MPa:.4g} MPa "
-                                 f"(flowcurve's own method, not ASTM E3076: widest linear stretch, R² ≥ {AUTO_WINDOW_R2})")
-    if np.isfinite(best_r2):  # enough samples, but no stretch is straight: SDAR's linear region, else the conventional window
-        try:
-            by_sdar = sdar_modulus(e, s, upto_MPa=SDAR_REACH * reference_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
-                                   strain_noise=strain_noise)
-        except IdentificationError:
-            by_sdar = None
-        if by_sdar is not None and by_sdar.quality["curvature"]["passed"] and by_sdar.quality["fit_range"]["passed"]:
-            by_sdar.source = f"no stretch below {AUTO_WINDOW_TOP:g} × {reference_MPa:.4g} MPa is linear (best R² {best_r2:.5f}): {by_sdar.source}"
-            return by_sdar
-        lo, hi = CONVENTIONAL_WINDOW
-        sel = (s1 >= lo * reference_MPa) & (s1 <= hi * reference_MPa)
-        if sel.sum() >= MIN_LINE_POINTS:
-            slope, intercept, se, r2 = _line_stats(e1[sel], s1[sel], strain_on_stress)
-            if slope > 0:
-                return ModulusFit(slope, se, intercept, r2, int(sel.sum()), (lo * reference_MPa, hi * reference_MPa),
-                                  source=f"conventional window {lo:g}–{hi:g} × {reference_MPa:.4g} MPa: no stretch of the first loading is linear "
-                                         f"(best R² {best_r2:.5f} < {AUTO_WINDOW_R2})")
+    return best, best_r2
+
+
+def _no_linear_stretch(e, s, e1, s1, reference_MPa: float, best_r2: float, *, strain_on_stress: bool, noise_MPa: float,
+                       strain_noise: float) -> ModulusFit | None:
+    """No window is linear: SDAR's linear region when it passes its curvature and fit-range checks,
+    else the conventional CONVENTIONAL_WINDOW × the reference; None when neither gives a rising line."""
+    try:
+        by_sdar = sdar_modulus(e, s, upto_MPa=SDAR_REACH * reference_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                               strain_noise=strain_noise)
+    except IdentificationError:
+        by_sdar = None
+    if by_sdar is not None and by_sdar.quality["curvature"]["passed"] and by_sdar.quality["fit_range"]["passed"]:
+        by_sdar.source = f"no stretch below {AUTO_WINDOW_TOP:g} × {reference_MPa:.4g} MPa is linear (best R² {best_r2:.5f}): {by_sdar.source}"
+        return by_sdar
+    lo, hi = CONVENTIONAL_WINDOW
+    sel = (s1 >= lo * reference_MPa) & (s1 <= hi * reference_MPa)
+    if sel.sum() >= MIN_LINE_POINTS:
+        slope, intercept, se, r2 = _line_stats(e1[sel], s1[sel], strain_on_stress)
+        if slope > 0:
+            return ModulusFit(slope, se, intercept, r2, int(sel.sum()), (lo * reference_MPa, hi * reference_MPa),
+                              source=f"conventional window {lo:g}–{hi:g} × {reference_MPa:.4g} MPa: no stretch of the first loading is linear "
+                                     f"(best R² {best_r2:.5f} < {AUTO_WINDOW_R2})")
+    return None
+
+
+def _all_line_samples(e1, s1, reference_MPa: float, *, strain_on_stress: bool, noise_MPa: float, strain_noise: float) -> ModulusFit:
+    """Too few samples for a window: the line through all of the first loading's samples between
+    the toe (5 %) and FEW_POINTS_TOP of the reference, at least MIN_FEW_POINTS of them; its standard
+    error at least what the readings' noise gives, √(σn² + E²·σε²)/√Σ(ε − ε̄)²."""
     window = (0.05 * reference_MPa, FEW_POINTS_TOP * reference_MPa)
     sel = (s1 >= window[0]) & (s1 <= window[1])
     if sel.sum() < MIN_FEW_POINTS:

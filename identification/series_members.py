@@ -148,7 +148,7 @@ def _plastic_strain_history(record: Record, E_MPa: float | None) -> tuple[np.nda
         eps = -np.log(np.clip(1.0 - d / length, 1e-9, None))  # (3.31)
         sigma = force / area0 * np.exp(-eps)  # (3.30) S = F0·h0/h
     if E_MPa is not None and math.isfinite(E_MPa) and E_MPa > 0:
-        from flowcurve.identification.tension import true_plastic_strain
+        from flowcurve.identification.tension_values import true_plastic_strain
 
         return t, true_plastic_strain(eps, sigma, E_MPa)  # (3.7)
     return t, eps  # no modulus: the total strain's rate (the elastic part is small past yield)

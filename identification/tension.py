@@ -16,179 +16,22 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.record.format import Record
-from flowcurve.errors import IdentificationError, RecordError
+from flowcurve.errors import IdentificationError
 from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
 from flowcurve.identification.elastic_modulus import apparent_modulus_warning, choose_modulus, tension_E_source
-from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa, HardeningFit, fit_hardening, three_point_fit
-from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_SAMPLES, ModulusFit, elastic_modulus, reread_if_stepped, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, remove_frame_compliance, scale_to_measured
+from flowcurve.identification.hardening import HardeningFit, fit_hardening, three_point_fit
+from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD
 from flowcurve.identification.necking import METHODS as NECK_METHODS
 from flowcurve.identification.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import TensionHardening, TensionResult
 from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
+from flowcurve.identification.tension_values import FIT_POINTS, FRACTURE_POINT_MODES, HARDENING_METHODS, MIN_YIELD_OFFSET, MODULUS_REFERENCES, TRUE_STRESS_FORMS, TRUE_STRESS_SPLIT_PCT, _check_window, _increasing, bulk_modulus, check_fit_range, choose_fracture_variant, fracture_index, reaches_fracture, true_plastic_strain, true_stress_constant_volume, true_stress_gost, uniform_error_pct, without_fracture_values
+from flowcurve.identification.tension_inputs import _Inputs, _inputs
+from flowcurve.identification.tension_elastic import _ElasticLine, _elastic_line, _resolved, sdar_warnings
 
 logger = logging.getLogger(__name__)
-
-TRUE_STRESS_FORMS = ("constant_volume", "gost_3_6")  # the default first; the seed's (3.6) for comparison
-HARDENING_METHODS = ("least_squares", "three_point")
-MODULUS_REFERENCES = ("Rp02", "Rm")
-FIT_POINTS = 30  # the uniform range is resampled to this many points, evenly in εp
-MIN_YIELD_OFFSET = 0.002
-FRACTURE_POINT_MODES = ("auto", "include", "exclude")
-MAX_E_UNCERTAINTY = 0.10  # a regressed E less certain than this (relative standard error) is no modulus
-# auto: the fracture point may cost the uniform range at most this much max error (percentage points)
-FRACTURE_POINT_SLACK_PCT = 2.0
-# a record ending below this fraction of Fm, after Fm, has reached fracture (an export cut at
-# the break, as Bluehill writes it, ends at 0.68–0.86 Fm on the 42CrMoS4 records); one ending
-# above it was stopped before fracture, unless it shows the break as a force drop
-FRACTURE_END_FORCE = 0.9
-# a record ending below this fraction of Fm went on past the break (the force fell to the
-# unloaded level); its break may be spread over several samples by the amplifier's filter
-BROKEN_END_FORCE = 0.2
-# (3.6) against constant volume at Fm: a larger split is reported (≈ ε_u²/2: 2 % at ε_u 0.2)
-TRUE_STRESS_SPLIT_PCT = 2.0
-
-
-def true_stress_gost(eng_stress_MPa, log_strain, K_MPa: float):
-    """True stress with the lateral contraction of (3.4)–(3.5), the corrected (3.6):
-    σ_t = (3K/2)·[√((1 − ε)² + (4/3)·σ_e/K) − (1 − ε)]."""
-    one_minus = 1.0 - np.asarray(log_strain, dtype=float)
-    s = np.asarray(eng_stress_MPa, dtype=float)
-    # (3.6) corrected: factor 3K/2, not 2/(3K). Written as 2σ_e/(√(...) + (1 − ε)) to avoid
-    # cancellation when σ_e ≪ K (identical algebraically).
-    return 2.0 * s / (np.sqrt(one_minus**2 + (4.0 / 3.0) * s / K_MPa) + one_minus)
-
-
-def true_stress_constant_volume(eng_stress_MPa, eng_strain):
-    """True stress at constant volume: σ_t = σ_e·(1 + e)."""
-    return np.asarray(eng_stress_MPa, dtype=float) * (1.0 + np.asarray(eng_strain, dtype=float))
-
-
-def true_plastic_strain(log_strain, true_stress_MPa, E_MPa: float):
-    """True plastic strain (3.7): εp = ε − σ_t/E."""
-    return np.asarray(log_strain, dtype=float) - np.asarray(true_stress_MPa, dtype=float) / E_MPa
-
-
-def bulk_modulus(E_MPa: float, poisson: float) -> float:
-    """K = E/(3(1 − 2ν))."""
-    if not -1.0 < poisson < 0.5:
-        raise IdentificationError(f"Poisson's ratio must lie in (-1, 0.5), got {poisson!r}")
-    return E_MPa / (3.0 * (1.0 - 2.0 * poisson))
-
-
-def uniform_error_pct(fit, eps_p, stress_MPa) -> float:
-    """Max |σ_fit/σ − 1| over the uniform range only, % (the fracture point left out)."""
-    return float(100 * np.max(np.abs(fit(eps_p) / stress_MPa - 1.0)))
-
-
-def choose_fracture_variant(pair: dict, eps_p, stress_MPa, mode: str) -> tuple[str, str]:
-    """Which fit of a law to report: "with" or "without" the fracture point, and why.
-
-    auto: with it, unless its max error over the uniform range exceeds the fit without it by
-    more than FRACTURE_POINT_SLACK_PCT (the uniform range is not sacrificed to one point)."""
-    if "with" not in pair:
-        return "without", "no fracture point"
-    if mode == "include":
-        return "with", "fracture point included (option)"
-    if mode == "exclude":
-        return "without", "fracture point excluded (option)"
-    e_with = uniform_error_pct(pair["with"], eps_p, stress_MPa)
-    e_without = uniform_error_pct(pair["without"], eps_p, stress_MPa)
-    if e_with <= e_without + FRACTURE_POINT_SLACK_PCT:
-        return "with", f"included: uniform-range max error {e_with:.2f} % with it, {e_without:.2f} % without"
-    return "without", (f"excluded: with it the uniform-range max error would be {e_with:.2f} % instead of {e_without:.2f} % "
-                       "(the law cannot pass through both; see hardening_alternatives)")
-
-
-def _two_numbers(value, name: str, what: str, upper: float) -> tuple[float, float] | None:
-    """(lo, hi) with 0 ≤ lo < hi ≤ upper from an option, or None; else a one-line error naming it."""
-    if value is None:
-        return None
-    try:
-        lo, hi = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise IdentificationError(f"{name} must be two {what} LO,HI, got {value!r}") from None
-    if not (0 <= lo < hi <= upper):
-        raise IdentificationError(f"{name} must satisfy 0 ≤ LO < HI ≤ {upper:g} ({what}), got {value!r}")
-    return lo, hi
-
-
-def _check_window(window, name: str, *, fractions: bool) -> tuple[float, float] | None:
-    """A (lo, hi) modulus window: fractions 0 ≤ lo < hi ≤ 1, or MPa 0 ≤ lo < hi; or None."""
-    return _two_numbers(window, name, "fractions" if fractions else "stresses in MPa", 1.0 if fractions else MAX_STRESS_MPa)
-
-
-def check_fit_range(fit_range) -> tuple[float, float] | None:
-    """A (lo, hi) plastic-strain range with 0 ≤ lo < hi, or None."""
-    return _two_numbers(fit_range, "fit_range", "plastic strains (fractions)", MAX_STRAIN)
-
-
-def _increasing(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Keep the points where x strictly exceeds every earlier x (noise makes εp wobble)."""
-    keep = np.ones(x.size, dtype=bool)
-    keep[1:] = x[1:] > np.maximum.accumulate(x)[:-1]
-    return x[keep], y[keep]
-
-
-def fracture_index(force_N) -> int:
-    """The last sample before fracture: :func:`iso6892.fracture_index`, except for a break the
-    load cell's low-pass filter spread over several samples — no single step above 20 % of Fm,
-    the record ending below BROKEN_END_FORCE × Fm —, where it is the sample before the largest
-    step after Fm: a first-order filter's first step after a sudden drop is its largest."""
-    force = np.asarray(force_N, dtype=float)
-    i_k = iso6892.fracture_index(force)
-    i_m = iso6892.max_force_index(force)
-    if i_k < force.size - 1 or force.size - i_m < 3 or not force[-1] <= BROKEN_END_FORCE * force[i_m]:
-        return i_k
-    return i_m + int(np.nanargmax(force[i_m:-1] - force[i_m + 1:]))
-
-
-def reaches_fracture(force_N: np.ndarray) -> bool:
-    """Does the record reach fracture: a single-step drop of more than 20 % of Fm after Fm
-    (the break), or a last force below FRACTURE_END_FORCE × Fm (a necked specimen, the
-    record cut at the break)?"""
-    i_k = fracture_index(force_N)
-    Fm = float(np.nanmax(force_N))
-    return i_k < force_N.size - 1 or float(force_N[-1]) <= FRACTURE_END_FORCE * Fm
-
-
-FRACTURE_KEYS = ("post.lu_mm", "post.dk_mm", "post.sk_mm2", "post.neck_radius_mm")  # measured on the broken halves
-
-
-def unbroken_statement(record: Record) -> str | None:
-    """The record's own word that its specimen did not break, or None: a ``stop_reason`` naming
-    another end (a target, a force limit, a stop) with a force that shows no break
-    (:func:`reaches_fracture`)."""
-    reason = " ".join(str(record.meta.get("stop_reason") or "").split())
-    if not reason or "fracture" in reason.lower() or not record.has("force_N"):
-        return None
-    force = record.column("force_N")
-    force = force[np.isfinite(force)]
-    return None if force.size < 3 or reaches_fracture(force) else reason
-
-
-def without_fracture_values(record: Record) -> tuple[Record, list[str]]:
-    """An unbroken specimen has no fracture values: the record without them (post.lu_mm, dk, sk,
-    neck radius — an unbroken bar's are no A, Z or fracture point), and the warning saying why."""
-    stopped = unbroken_statement(record)
-    if stopped is None:
-        return record, []
-    given = [k for k in FRACTURE_KEYS if k in record.meta]
-    kept = replace(record, meta={k: v for k, v in record.meta.items() if k not in FRACTURE_KEYS})
-    left_out = f"; {', '.join(given)} left out (not fracture values)" if given else ""
-    return kept, [f"the specimen did not break (the test ended on: {stopped[:120]}): no A, no Z and no fracture point"
-                  f"{left_out}; the rest is reported"]
-
-
-def _check_post_dimensions(record: Record, d0: float, l0: float, lu: float | None) -> None:
-    """Measurements after fracture that no tension test can give: Lu < L0, du or dk > d0."""
-    if lu is not None and lu < l0:
-        raise RecordError(record.source, f"Lu = {lu:g} mm (post.lu_mm, --lu) is shorter than L0 = {l0:g} mm (specimen.l0_mm, --l0): a specimen does not shorten in tension")
-    for name in ("du", "dk"):
-        d = record.positive(f"post.{name}_mm")
-        if d is not None and d > d0:
-            raise RecordError(record.source, f"{name} = {d:g} mm (post.{name}_mm{', --dk' if name == 'dk' else ''}) is larger than d0 = {d0:g} mm (specimen.d0_mm, --d0): a specimen does not thicken in tension")
 
 
 def _why_no_fit(hardening: str, law: str, fracture: dict, sig_t_rp: float | None, warnings: list[str]) -> str:
@@ -199,88 +42,6 @@ def _why_no_fit(hardening: str, law: str, fracture: dict, sig_t_rp: float | None
         return "it needs Rp0.2 on the true curve, and the uniform range does not reach 0.2 % plastic strain"
     failed = [w for w in warnings if w.startswith(f"{hardening.replace('_', '-')} {law} fit failed")]
     return failed[-1] if failed else "no fit was made"
-
-
-def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndarray, l0: float, options: dict) -> dict:
-    """Displacement (mm), the length it refers to (mm) and how it was obtained."""
-    has_ext = record.has("extensometer_mm")
-    if use_extensometer and not has_ext:
-        raise RecordError(record.source, "use_extensometer was requested but the record has no extensometer channel", column="extensometer_mm")
-    warnings: list[str] = []
-    if has_ext and use_extensometer is not False:
-        ext = record.column("extensometer_mm")
-        gaps = np.nonzero(~np.isfinite(ext[: fracture_index(force) + 1]))[0]
-        if gaps.size:
-            message = f"the extensometer channel has no value from sample {gaps[0] + 1} on (removed before fracture?)"
-            if not record.has("crosshead_mm"):
-                raise RecordError(record.source, message + "; the record has no crosshead column to identify from instead", column="extensometer_mm")
-            if use_extensometer:
-                raise RecordError(record.source, message + "; identify from the crosshead instead (use_extensometer=False)", column="extensometer_mm")
-            fallback = _strain_source(record, False, force, l0, options)
-            fallback["warnings"].insert(0, message + ": the crosshead is used instead")
-            return fallback
-        gauge = record.positive("specimen.extensometer_gauge_mm", default=l0)
-        if "specimen.extensometer_gauge_mm" not in record.meta:
-            warnings.append(f"specimen.extensometer_gauge_mm missing: the extensometer gauge length is taken as l0 = {l0:g} mm")
-        return {"disp": ext - ext[0], "length": gauge, "source": "extensometer", "stiffness": None, "scalable": False, "warnings": warnings}
-    if not record.has("crosshead_mm"):
-        raise RecordError(record.source, "the record has no crosshead column: its strain can only come from the extensometer (leave out --no-extensometer)", column="crosshead_mm")
-    cross = record.column("crosshead_mm")
-    gaps = np.nonzero(~np.isfinite(cross[: fracture_index(force) + 1]))[0]
-    if gaps.size:
-        raise RecordError(record.source, f"the crosshead channel has no value at sample {gaps[0] + 1} (of {gaps.size} before fracture); the strain cannot be followed through the gap", column="crosshead_mm")
-    step = None
-    if record.has("time_s"):  # a 10 µm count is 3e-4 of a 30 mm length: re-read between counts
-        cross, step = reread_if_stepped(record.column("time_s"), cross)
-    disp = cross - cross[0]
-    stiffness = options.get("frame_stiffness_N_per_um")
-    if stiffness is None:
-        stiffness = record.positive("rig.frame_stiffness_N_per_um")
-    if stiffness is not None:
-        disp = remove_frame_compliance(disp, force - force[0], stiffness)
-    else:
-        warnings.append("no frame stiffness (rig.frame_stiffness_N_per_um): the crosshead displacement still includes the frame; strains and E are not the specimen's")
-    length = options.get("crosshead_length_mm") or record.positive("specimen.parallel_length_mm", default=l0)
-    return {"disp": disp, "length": float(length), "source": "crosshead", "stiffness": stiffness, "scalable": True, "warnings": warnings,
-            "step_mm": step}
-
-
-@dataclass
-class _Inputs:
-    """What the record gives: geometry, the force (finite samples only), stress, strain source."""
-
-    record: Record
-    d0: float
-    l0: float
-    s0: float
-    data: pd.DataFrame  # the samples with a force value
-    sub: Record  # the record of those samples
-    force: np.ndarray
-    eng_stress: np.ndarray
-    i_m: int  # index of the maximum force
-    Fm: float
-    Rm: float
-    src: dict  # :func:`_strain_source`: displacement, its length, how it was obtained
-    lu: float | None
-    length: float  # the length the strain refers to (l0 when scaled to a measured Lu)
-    warnings: list[str]
-    unbroken: bool = False  # the record says the specimen did not break (:func:`unbroken_statement`)
-
-
-@dataclass
-class _ElasticLine:
-    """E, Rp0.2 and the strain they define (toe-compensated, scaled)."""
-
-    E: float
-    mod: ModulusFit
-    Rp02: float
-    window_MPa: tuple[float, float]
-    disp: np.ndarray  # corrected elongation, mm
-    strain: np.ndarray  # engineering strain
-    toe_mm: float
-    scale_factor: float | None
-    noise_MPa: float
-    warnings: list[str]
 
 
 @dataclass
@@ -355,223 +116,6 @@ def _check_options(*, true_stress, neck, hardening, modulus_reference, fracture_
     if fractions is not None and window_fixed_MPa is not None:
         raise IdentificationError("give modulus_window (fractions) or modulus_window_MPa, not both")
     return fit_range, fractions, window_fixed_MPa
-
-
-SPIKE_NOISE_FACTOR, SPIKE_FRACTION = 12.0, 0.25  # a lone force sample this far (× noise σ, × peak force) from its agreeing neighbours is corrupt: farther than an upper yield point stands
-
-
-def isolated_force_spikes(force_N) -> np.ndarray:
-    """Indices of lone corrupt force samples: unlike both neighbours, which agree with each other
-    (no specimen's force jumps and comes back within one sample; a fracture does not come back).
-    |F_k − (F_k−1 + F_k+1)/2| > max(12 σ, 25 % of the peak of the 3-sample median) and
-    |F_k+1 − F_k−1| < a quarter of that; σ from second differences (robust)."""
-    f = np.asarray(force_N, dtype=float)
-    if f.size < 5:
-        return np.zeros(0, dtype=int)
-    deviation = np.abs(f[1:-1] - 0.5 * (f[:-2] + f[2:]))
-    gap = np.abs(f[2:] - f[:-2])
-    a, b, c = f[:-2], f[1:-1], f[2:]
-    peak = float(np.max(np.abs(np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c)))))  # median of three, in closed form
-    if not np.any((deviation > SPIKE_FRACTION * peak) & (gap < 0.25 * deviation)):
-        return np.zeros(0, dtype=int)  # none beyond the peak share: none beyond the larger threshold either (the noise median is not needed)
-    threshold = max(SPIKE_NOISE_FACTOR * _stress_noise_MPa(f), SPIKE_FRACTION * peak)
-    return np.flatnonzero((deviation > threshold) & (gap < 0.25 * deviation)) + 1
-
-
-def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, crosshead_length_mm, scale: bool) -> _Inputs:
-    """Geometry, force and engineering stress, and the strain source of a tension record."""
-    warnings: list[str] = []
-    d0 = record.positive("specimen.d0_mm", required=True)
-    l0 = record.positive("specimen.l0_mm", required=True)
-    s0 = record.positive("specimen.s0_mm2", default=math.pi * d0**2 / 4.0)  # F0 = π d0²/4
-    force = record.column("force_N")
-    ok = np.isfinite(force)
-    if not ok.all():
-        warnings.append(f"{int((~ok).sum())} samples without a force value were left out")
-    spikes = np.flatnonzero(ok)[isolated_force_spikes(force[ok])]
-    if spikes.size:
-        ok[spikes] = False
-        warnings.append(f"{spikes.size} force sample(s) unlike both neighbours (a corrupt load-cell frame) left out: "
-                        + ", ".join(f"sample {k + 1} ({force[k]:.6g} N)" for k in spikes[:5]) + (" …" if spikes.size > 5 else ""))
-    data = (record.data[ok] if not ok.all() else record.data).reset_index(drop=True)  # all kept: no copy (copy-on-write)
-    force = force[ok]
-    sub = Record(meta=record.meta, data=data, source=record.source)
-    i_m = iso6892.max_force_index(force)
-    Fm = float(force[i_m])
-    if Fm <= 0 or i_m == 0 or Fm - force[0] <= 0.05 * abs(Fm):
-        raise RecordError(record.source, "the force never rises: no tension test in this record (check the force column and its sign)", column="force_N")
-    eng_stress = force / s0
-    Rm = Fm / s0
-    if Rm > MAX_STRESS_MPa:
-        raise IdentificationError(f"{record.source}: Rm = {Rm:.4g} MPa is implausible - check units of force (N) and diameter (mm)")
-
-    src = _strain_source(sub, use_extensometer, force, l0, {"frame_stiffness_N_per_um": frame_stiffness_N_per_um, "crosshead_length_mm": crosshead_length_mm})
-    warnings += src["warnings"]
-    lu = record.positive("post.lu_mm")
-    _check_post_dimensions(record, d0, l0, lu)
-    length = src["length"]
-    if src["scalable"] and scale and lu is not None:
-        if lu <= l0:
-            raise IdentificationError(f"{record.source}: post.lu_mm = {lu:g} mm is not longer than l0 = {l0:g} mm")
-        length = l0
-    return _Inputs(record=record, d0=d0, l0=l0, s0=s0, data=data, sub=sub, force=force, eng_stress=eng_stress, i_m=i_m,
-                   Fm=Fm, Rm=Rm, src=src, lu=lu, length=length, warnings=warnings)
-
-
-def _stress_noise_MPa(stress_MPa: np.ndarray) -> float:
-    """Noise standard deviation of a stress signal from its second differences (robust MAD)."""
-    curvature = np.diff(stress_MPa, 2)  # second differences: a linear trend leaves none, white noise σ leaves σ√6
-    return float(1.4826 * np.median(np.abs(curvature - np.median(curvature))) / math.sqrt(6.0)) if curvature.size else 0.0
-
-
-def _first_guesses(inp: _Inputs, automatic: bool) -> list[float]:
-    """Yield stresses to start the automatic window from: the force rate's onset (if any), then Rm."""
-    first_guesses = [inp.Rm]  # when the first guess leaves too few samples on the elastic line
-    if automatic and inp.record.has("time_s"):
-        try:  # a yield guess from the force rate (constant speed): a sparse elastic line needs a good one
-            onset = yield_onset_from_rate(inp.data["time_s"].to_numpy(float)[: inp.i_m + 1], inp.force[: inp.i_m + 1]) / inp.s0
-            if 0 < onset <= inp.Rm:
-                first_guesses.insert(0, onset)
-        except IdentificationError as exc:
-            logger.debug("no yield estimate from the force rate: %s", exc)
-    return first_guesses
-
-
-def _modulus_window(step: int, ref: float, first_guesses: list[float], strain0, eng_stress, *, fractions, window_fixed_MPa,
-                    modulus_reference: str, noise_MPa: float, strain_noise: float, method: str = DEFAULT_MODULUS_METHOD,
-                    crosshead: bool = False):
-    """The stress window of the elastic line at one step: given (MPa, or × the reference stress) or
-    the most linear stretch; returns (window_MPa, line_points, how, auto fit or None, reference)."""
-    if window_fixed_MPa is not None:
-        return window_fixed_MPa, 5, "given window (MPa)", None, ref
-    if fractions is not None:
-        return (fractions[0] * ref, fractions[1] * ref), 5, f"given window {fractions[0]:g}–{fractions[1]:g} × {modulus_reference}", None, ref
-    try:
-        auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise, crosshead=crosshead)  # the window is the same before toe and scaling
-    except IdentificationError:
-        if step > 0 or not first_guesses:
-            raise
-        while True:  # a sparse elastic line may hold too few samples below the first guess
-            ref = first_guesses.pop(0)
-            try:
-                auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise, crosshead=crosshead)
-                break
-            except IdentificationError:
-                if not first_guesses:
-                    raise
-    return auto.window_MPa, min(auto.n_points, 5), auto.source, auto, ref
-
-
-def _resolved(mod: ModulusFit) -> bool:
-    """A regressed E known to within :data:`MAX_E_UNCERTAINTY` (relative standard error)."""
-    return bool(mod.E_stderr_MPa <= MAX_E_UNCERTAINTY * mod.E_MPa)
-
-
-def _chosen_modulus(mod: ModulusFit, E_MPa: float | None, handbook_E: float | None, given_window: bool) -> float:
-    """The E used: the option, else the handbook's when the line has few samples, else the regressed
-    one; ``mod.source`` says which."""
-    if E_MPa is not None:
-        E, mod.source = float(E_MPa), "option E_MPa"
-    elif handbook_E is not None and not given_window and mod.n_points < FEW_SAMPLES:
-        E, mod.source = handbook_E, f"handbook material.E_MPa (only {mod.n_points} samples on the elastic line)"
-    else:
-        E = mod.E_MPa
-    return E
-
-
-def _line_without_samples(inp: _Inputs, E: float, why: str, *, scale: bool, noise_MPa: float) -> _ElasticLine:
-    """No elastic line in the record (too few samples before the yield): the given or handbook E
-    strips the elastic strain, the toe is not compensated (there is no line to find it on)."""
-    disp, scale_factor = inp.src["disp"], None
-    if inp.src["scalable"] and scale and inp.lu is not None:
-        disp, scale_factor = scale_to_measured(disp, inp.lu - inp.l0)  # (3.1) K_l = Δl_p / max Δl
-    strain = disp / inp.length
-    if np.nanmax(np.abs(strain)) > MAX_STRAIN:
-        raise IdentificationError(f"{inp.record.source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
-    mod = ModulusFit(math.nan, math.nan, math.nan, math.nan, 0, (0.0, 0.0), source=f"given or handbook E (no elastic line: {why})")
-    Rp02, _ = iso6892.offset_yield_strength(strain, inp.eng_stress, E, MIN_YIELD_OFFSET)
-    warnings = [f"no elastic line ({why}): the toe is not compensated and Rp0.2 and the start of the flow curve rest on "
-                f"the given E = {E:.4g} MPa alone"]
-    return _ElasticLine(E=E, mod=mod, Rp02=Rp02, window_MPa=(0.0, 0.0), disp=disp, strain=strain, toe_mm=0.0,
-                        scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings)
-
-
-def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_reference: str, E_MPa: float | None,
-                  toe: bool, scale: bool, modulus_method: str = DEFAULT_MODULUS_METHOD) -> _ElasticLine:
-    """E, the toe and Rp0.2, which depend on each other through the window: iterated to a fixed point."""
-    record, force, eng_stress, i_m, length, src = inp.record, inp.force, inp.eng_stress, inp.i_m, inp.length, inp.src
-    automatic = fractions is None and window_fixed_MPa is None
-    ref = 0.5 * inp.Rm if modulus_reference == "Rp02" else inp.Rm
-    first_guesses = _first_guesses(inp, automatic)
-    noise_MPa = _stress_noise_MPa(eng_stress[: i_m + 1])
-    raw_channel = "extensometer_mm" if src["source"] == "extensometer" else "crosshead_mm"
-    strain_noise = strain_quantum_noise(inp.sub.column(raw_channel)[: i_m + 1] / length)  # the encoder's quantum, before the compliance
-    # the handbook E is the material's; a crosshead diagram without the frame's stiffness has the frame's compliance in its slope
-    apparent = src["source"] == "crosshead" and src["stiffness"] is None
-    handbook_E = record.positive("material.E_MPa") if E_MPa is None and not apparent else None
-    disp0 = src["disp"]
-    toe_mm, scale_factor = 0.0, None
-    unresolved = None  # the line's fit when it was not resolved and the handbook E took its place (kept from then on)
-    for step in range(6):
-        try:
-            window_MPa, line_points, how, auto, ref = _modulus_window(
-                step, ref, first_guesses, disp0 / length, eng_stress, fractions=fractions, window_fixed_MPa=window_fixed_MPa,
-                modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise, method=modulus_method,
-                crosshead=src["source"] != "extensometer")
-        except IdentificationError as exc:
-            if unresolved is None:
-                if automatic and (E_MPa is not None or handbook_E is not None):  # no line to be found: the E given
-                    return _line_without_samples(inp, E_MPa if E_MPa is not None else handbook_E, str(exc), scale=scale, noise_MPa=noise_MPa)
-                raise
-            break  # no line below the handbook E's Rp0.2 either: the last step's window and Rp0.2 stand
-        disp = disp0
-        if toe:
-            disp, toe_mm = compensate_toe(disp0, force, window_N=(window_MPa[0] * inp.s0, window_MPa[1] * inp.s0), min_points=line_points)
-        if src["scalable"] and scale and inp.lu is not None:
-            disp, scale_factor = scale_to_measured(disp, inp.lu - inp.l0)  # (3.1) K_l = Δl_p / max Δl
-        strain = disp / length
-        mod = fit_modulus(strain, eng_stress, window_MPa, min_points=line_points)
-        mod.source = how
-        if auto is not None:
-            mod.quality = auto.quality
-            mod.sdar_failed = auto.sdar_failed
-            mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
-        E = _chosen_modulus(mod, E_MPa, handbook_E, given_window=not automatic)
-        if unresolved is None and handbook_E is not None and E == mod.E_MPa and not _resolved(mod):
-            unresolved = replace(mod)
-        if unresolved is not None:
-            E, mod.source = handbook_E, (f"handbook material.E_MPa (the elastic line is not resolved: E = {unresolved.E_MPa:.4g} ± "
-                                         f"{unresolved.E_stderr_MPa:.2g} MPa from {unresolved.n_points} samples, {unresolved.source})")
-        if E == mod.E_MPa and not _resolved(mod):
-            raise IdentificationError(
-                f"{record.source}: the elastic line is not resolved: E = {E:.4g} ± {mod.E_stderr_MPa:.2g} MPa from {mod.n_points} samples "
-                f"({mod.source}); " + ("give the frame stiffness (rig.frame_stiffness_N_per_um), use an extensometer or sample faster "
-                                       "(the handbook E is not this diagram's slope: the frame is in it)" if apparent
-                                       else "give the handbook modulus (--E or material.E_MPa) or sample faster"))
-        Rp02, _ = iso6892.offset_yield_strength(strain, eng_stress, E, MIN_YIELD_OFFSET, start_MPa=window_MPa[0])
-        if window_fixed_MPa is not None or modulus_reference == "Rm" or abs(Rp02 - ref) <= 1e-6 * Rp02:
-            break
-        ref = Rp02
-    if np.nanmax(np.abs(strain)) > MAX_STRAIN:
-        raise IdentificationError(f"{record.source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
-    warnings: list[str] = []
-    if unresolved is not None:
-        warnings.append(f"the elastic line is not resolved (E = {unresolved.E_MPa:.4g} ± {unresolved.E_stderr_MPa:.2g} MPa from "
-                        f"{unresolved.n_points} samples): the handbook E = {E:.4g} MPa is used instead (sample faster to measure E)")
-    if E > 1e6 or E < 1e3:
-        warnings.append(f"apparent modulus {E:.4g} MPa is far from any metal's: check units, the frame stiffness or the window")
-    return _ElasticLine(E=E, mod=mod, Rp02=Rp02, window_MPa=window_MPa, disp=disp, strain=strain, toe_mm=toe_mm,
-                        scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings)
-
-
-def sdar_warnings(mod: ModulusFit) -> list[str]:
-    """The checks of ASTM E3076-18 that SDAR's least-residual window failed, as a warning: when
-    its line gives E (the failure stands beside it) or when the project's window replaced it."""
-    if mod.sdar_failed:
-        return [f"SDAR (ASTM E3076-18): the least-residual window failed {', '.join(mod.sdar_failed)}; E is from flowcurve's own "
-                "automatic window instead (not an E3076 result)"]
-    failed = [k for k, v in (mod.quality or {}).items() if not v.get("passed", True)]
-    return [f"SDAR (ASTM E3076-18): the least-residual window failed {', '.join(failed)}; E is reported from it"] if failed else []
 
 
 def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
@@ -790,6 +334,30 @@ def _curves(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, fracture: dict, 
     return curves
 
 
+def _methods(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve, *, toe: bool, true_stress: str, poisson: float,
+             neck: str, law: str, hardening: str) -> dict:
+    """How each result was obtained (result.json's ``methods``)."""
+    return {
+        "strain_source": inp.src["source"],
+        "strain_length_mm": inp.length,
+        "frame_stiffness_N_per_um": inp.src["stiffness"],
+        "crosshead_step_interpolated_mm": inp.src.get("step_mm"),  # a stepped reading re-read between its steps (None: as read)
+        "toe_compensation_mm": line.toe_mm if toe else None,
+        "scale_factor_Kl": line.scale_factor,
+        "modulus": line.mod.source,
+        "modulus_r2": line.mod.r2,
+        "Rp02": "offset method, ISO 6892-1: intersection with the 0.2 % line of slope E",
+        "Ag": "plastic extension at maximum force, 100·(e_m − Rm/E)",
+        "Z": "(S0 − Su)/S0" if iso.Z is not None else None,
+        "true_curve_strain": ("the specimen's: crosshead strain less σ_e/E_apparent" + (f", plus σ_e/{true.E_specimen:.4g} MPa (the rule's E: material.E_MPa or the class's)" if math.isfinite(true.E_specimen) else " (its own elastic strain left out)")
+                              if true.warnings else "the strain source's, elastic strain σ_t/E removed for εp"),
+        "true_stress": "(3.6) corrected, K = E/(3(1 − 2ν))" if true_stress == "gost_3_6" else "σ_e(1 + e), constant volume",
+        "poisson": poisson,
+        "neck_correction": neck,
+        "hardening": f"{hardening} {law}",
+    }
+
+
 def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve, fracture: dict, hard: _Hardening, warnings: list[str], *,
             toe: bool, true_stress: str, poisson: float, neck: str, law: str, hardening: str) -> TensionResult:
     """The typed result (result.json) of a tension identification."""
@@ -833,25 +401,7 @@ def _result(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurve
                                 **{k: f.as_dict() for k, f in hard.variants.items()}},
         three_points=[{"true_plastic_strain": e, "true_stress_MPa": s} for e, s in hard.three_points] if hard.three_points else None,
         modulus_window_MPa=list(line.window_MPa),
-        methods={
-            "strain_source": inp.src["source"],
-            "strain_length_mm": inp.length,
-            "frame_stiffness_N_per_um": inp.src["stiffness"],
-            "crosshead_step_interpolated_mm": inp.src.get("step_mm"),  # a stepped reading re-read between its steps (None: as read)
-            "toe_compensation_mm": line.toe_mm if toe else None,
-            "scale_factor_Kl": line.scale_factor,
-            "modulus": mod.source,
-            "modulus_r2": mod.r2,
-            "Rp02": "offset method, ISO 6892-1: intersection with the 0.2 % line of slope E",
-            "Ag": "plastic extension at maximum force, 100·(e_m − Rm/E)",
-            "Z": "(S0 − Su)/S0" if iso.Z is not None else None,
-            "true_curve_strain": ("the specimen's: crosshead strain less σ_e/E_apparent" + (f", plus σ_e/{true.E_specimen:.4g} MPa (the rule's E: material.E_MPa or the class's)" if math.isfinite(true.E_specimen) else " (its own elastic strain left out)")
-                                  if true.warnings else "the strain source's, elastic strain σ_t/E removed for εp"),
-            "true_stress": "(3.6) corrected, K = E/(3(1 − 2ν))" if true_stress == "gost_3_6" else "σ_e(1 + e), constant volume",
-            "poisson": poisson,
-            "neck_correction": neck,
-            "hardening": f"{hardening} {law}",
-        },
+        methods=_methods(inp, line, iso, true, toe=toe, true_stress=true_stress, poisson=poisson, neck=neck, law=law, hardening=hardening),
         warnings=warnings,
         record=record_summary(inp.record),
     )

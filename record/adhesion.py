@@ -48,14 +48,14 @@ import numpy as np
 
 from flowcurve.errors import RecordError
 from flowcurve.record.format import parse_header_line
-from flowcurve.record.importers import (
+from flowcurve.record.importers import parse_column_option
+from flowcurve.record.importers_text import (
     UnitError,
     _check_readable,
     _found_columns_hint,
     decode_text,
     is_number,
     sniff_delimiter,
-    parse_column_option,
     unit_conversion,
 )
 
@@ -127,7 +127,7 @@ def moment_conversion(unit: str, *, source: str = "<option>", column: str | None
 
 
 def _converter(quantity: str, unit: str | None, *, source: str, column: str):
-    """value → native value for one mapped quantity (the unit table of record.importers)."""
+    """value → native value for one mapped quantity (the unit table of record.importers_text)."""
     native, kind, _ = ADHESION_COLUMNS[quantity]
     if kind == "text":
         return None
@@ -194,6 +194,47 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
     lines = _read_lines(path)
     native = bool(lines) and lines[0].replace(" ", "").lower().startswith(f"#{FORMAT_NAME}:")
     warnings: list[str] = []
+    meta, body_start = _header(lines, source)
+    mapping = _mapping(path, native, columns, warnings)
+    names_line = lines[body_start]
+    delim = sniff_delimiter(names_line)
+    names = [c.strip().strip('"') for c in next(csv.reader([names_line], delimiter=delim))]
+    if native:
+        mapping = {q: spec for q, spec in mapping.items() if spec[0] in names}
+        missing = [ADHESION_COLUMNS[q][0] for q in REQUIRED if q not in mapping]
+        if missing:
+            raise RecordError(source, f"missing column(s) {', '.join(missing)} (found: {', '.join(names)})", line=body_start + 1)
+    absent = [spec[0] for spec in mapping.values() if spec[0] not in names]
+    if absent:
+        raise RecordError(source, f"no column named {', '.join(map(repr, absent))} (columns found: {', '.join(names)})", line=body_start + 1)
+    rows = [(j + 1, next(csv.reader([line], delimiter=delim))) for j, line in enumerate(lines) if j > body_start and line.strip() and not line.startswith("#")]
+    if not rows:
+        raise RecordError(source, "the table has a column row but no tests", line=body_start + 1)
+    numeric_idx = [names.index(mapping[q][0]) for q in mapping if q in NUMERIC]
+    # decimal comma: a ';' or tab file whose numbers are written 1,25 (as record.importers_text decides)
+    decimal = "."
+    if delim != "," and any(re.fullmatch(r"\s*-?\d+,\d+\s*", cells[k]) for _, cells in rows for k in numeric_idx if k < len(cells)):
+        decimal = ","
+    # an optional units row right under the names row: no mapped numeric cell is a number
+    file_units, rows = _units_row(rows, names, numeric_idx, decimal, source)
+    converters = {}
+    for quantity, (name, unit) in mapping.items():
+        declared = file_units.get(name) or None
+        if not native and (unit is None or unit == ""):
+            unit = declared
+        converters[quantity] = _converter(quantity, unit, source=source, column=name)
+    records = []
+    for line_no, cells in rows:
+        records.append(_parse_row(cells, names, mapping, converters, meta, source, line_no, decimal))
+    data = pd.DataFrame.from_records(records)
+    data.insert(0, "source", source)
+    table = AdhesionTable(data=data, meta=meta, sources=[source], warnings=warnings)
+    _attach_traces(table, path)
+    return table
+
+
+def _header(lines: list[str], source: str) -> tuple[dict[str, str], int]:
+    """The ``# key: value`` header's metadata and the index of the column row after it."""
     meta: dict[str, str] = {}
     body_start = 0
     for i, line in enumerate(lines):
@@ -205,6 +246,12 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
             meta[parsed[0]] = parsed[1]
     else:
         raise RecordError(source, "the table has a header but no column row")
+    return meta, body_start
+
+
+def _mapping(path: Path, native: bool, columns, warnings: list[str]) -> dict[str, tuple[str, str | None]]:
+    """The quantity → (column, unit) mapping: a native table's own, else the one given, checked."""
+    source = str(path)
     if native:
         if columns:
             warnings.append("the column mapping was ignored: a flowcurve-adhesion table names its own columns and units")
@@ -222,26 +269,12 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
         missing = [q for q in REQUIRED if q not in mapping]
         if missing:
             raise RecordError(source, f"the column mapping lacks {', '.join(missing)} (give e.g. --column {missing[0]}=NAME:{ADHESION_COLUMNS[missing[0]][2]})")
-    names_line = lines[body_start]
-    delim = sniff_delimiter(names_line)
-    names = [c.strip().strip('"') for c in next(csv.reader([names_line], delimiter=delim))]
-    if native:
-        mapping = {q: spec for q, spec in mapping.items() if spec[0] in names}
-        missing = [ADHESION_COLUMNS[q][0] for q in REQUIRED if q not in mapping]
-        if missing:
-            raise RecordError(source, f"missing column(s) {', '.join(missing)} (found: {', '.join(names)})", line=body_start + 1)
-    absent = [spec[0] for spec in mapping.values() if spec[0] not in names]
-    if absent:
-        raise RecordError(source, f"no column named {', '.join(map(repr, absent))} (columns found: {', '.join(names)})", line=body_start + 1)
-    rows = [(j + 1, next(csv.reader([line], delimiter=delim))) for j, line in enumerate(lines) if j > body_start and line.strip() and not line.startswith("#")]
-    if not rows:
-        raise RecordError(source, "the table has a column row but no tests", line=body_start + 1)
-    numeric_idx = [names.index(mapping[q][0]) for q in mapping if q in NUMERIC]
-    # decimal comma: a ';' or tab file whose numbers are written 1,25 (as record.importers decides)
-    decimal = "."
-    if delim != "," and any(re.fullmatch(r"\s*-?\d+,\d+\s*", cells[k]) for _, cells in rows for k in numeric_idx if k < len(cells)):
-        decimal = ","
-    # an optional units row right under the names row: no mapped numeric cell is a number
+    return mapping
+
+
+def _units_row(rows: list, names: list[str], numeric_idx: list[int], decimal: str, source: str) -> tuple[dict[str, str], list]:
+    """An optional units row right under the names row (no mapped numeric cell is a number):
+    (column name → unit, the rows after it)."""
     first_line, first_cells = rows[0]
     file_units: dict[str, str] = {}
     if all(k < len(first_cells) for k in numeric_idx) and not any(is_number(first_cells[k], decimal) for k in numeric_idx if first_cells[k].strip()):
@@ -249,20 +282,7 @@ def read_adhesion_table(path: str | os.PathLike, *, columns: Mapping[str, tuple[
         rows = rows[1:]
         if not rows:
             raise RecordError(source, "the table has column and units rows but no tests", line=first_line)
-    converters = {}
-    for quantity, (name, unit) in mapping.items():
-        declared = file_units.get(name) or None
-        if not native and (unit is None or unit == ""):
-            unit = declared
-        converters[quantity] = _converter(quantity, unit, source=source, column=name)
-    records = []
-    for line_no, cells in rows:
-        records.append(_parse_row(cells, names, mapping, converters, meta, source, line_no, decimal))
-    data = pd.DataFrame.from_records(records)
-    data.insert(0, "source", source)
-    table = AdhesionTable(data=data, meta=meta, sources=[source], warnings=warnings)
-    _attach_traces(table, path)
-    return table
+    return file_units, rows
 
 
 def _read_lines(path: Path) -> list[str]:

@@ -273,26 +273,8 @@ def parse_record_bytes(raw: bytes, source: str = "<memory>") -> Record:
         raw = raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
     if _NON_SPACE.search(raw) is None:
         raise RecordError(source, "the file is empty")
-    meta: dict[str, str] = {}
-    pos = 0
-    line_no = 0
     n = len(raw)
-    # header: '# key: value' lines (and blank lines) up to the column-name row
-    while pos < n:
-        end = raw.find(b"\n", pos)
-        end = n if end < 0 else end
-        line = _decode_line(raw[pos:end], source, line_no + 1)
-        line_no += 1
-        if line.startswith("#"):
-            kv = parse_header_line(line)
-            if kv is not None:
-                meta[kv[0]] = kv[1]
-            pos = end + 1
-            continue
-        if not line.strip():
-            pos = end + 1
-            continue
-        break
+    meta, pos, line_no = _header_bytes(raw, source)
     version = meta.get(FORMAT_NAME)
     if version is None:
         raise RecordError(source, f"not a {FORMAT_NAME} file (the first line must be '# {FORMAT_NAME}: {FORMAT_VERSION}')", line=1)
@@ -328,6 +310,32 @@ def parse_record_bytes(raw: bytes, source: str = "<memory>") -> Record:
     if truncated:
         warnings.append(f"the record was cut short (status '{meta.get('status', '?')}'); run 'flowcurve recover' to complete its header")
     return Record(meta=meta, data=data, source=source, events=events, truncated=truncated, warnings=warnings)
+
+
+def _header_bytes(raw: bytes, source: str) -> tuple[dict[str, str], int, int]:
+    """The header's ``# key: value`` lines (and blank lines) up to the column-name row:
+    (metadata, the byte offset of that row, its line number)."""
+    meta: dict[str, str] = {}
+    pos = 0
+    line_no = 0
+    n = len(raw)
+    # header: '# key: value' lines (and blank lines) up to the column-name row
+    while pos < n:
+        end = raw.find(b"\n", pos)
+        end = n if end < 0 else end
+        line = _decode_line(raw[pos:end], source, line_no + 1)
+        line_no += 1
+        if line.startswith("#"):
+            kv = parse_header_line(line)
+            if kv is not None:
+                meta[kv[0]] = kv[1]
+            pos = end + 1
+            continue
+        if not line.strip():
+            pos = end + 1
+            continue
+        break
+    return meta, pos, line_no
 
 
 _NON_SPACE = re.compile(rb"\S")

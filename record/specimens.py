@@ -7,7 +7,7 @@
     T600-02.csv;5,98;30;25;35,8;4,0
 
 written as labs keep it (comma, semicolon or tab separated, decimal comma with ``;`` or tab,
-UTF-8, UTF-16 or Windows-1252 as :func:`flowcurve.record.importers.decode_text` reads them).
+UTF-8, UTF-16 or Windows-1252 as :func:`flowcurve.record.importers_text.decode_text` reads them).
 Every dimension column carries its unit: in the name (``d0 (mm)``, ``d0 [in]``, ``d0_mm``)
 or in a units row right under the names. An empty cell gives no value (the record's header
 or an option may give it). The ``file`` column names the record by path, file name or stem.
@@ -21,7 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flowcurve.errors import RecordError
-from flowcurve.record.importers import MAX_MAGNITUDE, UnitError, is_number, sniff_delimiter, split_cells, decode_text, split_name_unit, to_native
+from flowcurve.record.format import MAX_MAGNITUDE
+from flowcurve.record.importers_text import UnitError, is_number, sniff_delimiter, split_cells, decode_text, split_name_unit, to_native
 
 # table column (lower case) → (metadata key, quantity of its unit); quantity None → text
 TABLE_COLUMNS: dict[str, tuple[str, str | None]] = {
@@ -126,6 +127,27 @@ def read_specimen_table(path: str | os.PathLike) -> SpecimenTable:
             units_row, body = cells, body[1:]
     if FILE_COLUMN not in [n.lower() for n in names]:
         raise RecordError(source, f"no column '{FILE_COLUMN}' naming the record of each row (columns: {', '.join(names)})", line=names_line)
+    spec, columns, file_k = _column_specs(names, units_row, source, names_line)
+    rows = []
+    seen: dict[str, int] = {}
+    for line_no, line in body:
+        cells = split_cells(line, delim)
+        file = cells[file_k] if file_k < len(cells) else ""
+        if not file:
+            raise RecordError(source, "the row names no record file", line=line_no, column=names[file_k])
+        if file in seen:
+            raise RecordError(source, f"'{file}' is named twice (also on line {seen[file]})", line=line_no, column=names[file_k])
+        seen[file] = line_no
+        meta = _row_meta(cells, spec, names, decimal, source, line_no)
+        rows.append(SpecimenRow(file=file, line=line_no, meta=meta))
+    if not rows:
+        raise RecordError(source, "the specimens table has names but no rows", line=names_line)
+    return SpecimenTable(source=source, rows=rows, columns=columns)
+
+
+def _column_specs(names: list[str], units_row: list[str] | None, source: str, names_line: int):
+    """Each column's (metadata key, quantity, unit) by index, metadata key → column name, and the
+    index of the file column; a unit from the name or the units row, checked against the table."""
     spec: dict[int, tuple[str, str, str | None]] = {}  # index → (metadata key, quantity, unit)
     columns: dict[str, str] = {}
     file_k = None
@@ -149,30 +171,22 @@ def read_specimen_table(path: str | os.PathLike) -> SpecimenTable:
                 raise UnitError(source, f"no unit: write it in the name ('{key} (mm)' or '{key}_mm') or in a units row under the names", line=names_line, column=name)
             to_native(1.0, unit, quantity, source=source, column=name)  # unknown or wrong unit → error now
         spec[k] = (meta_key, quantity, unit)
-    rows = []
-    seen: dict[str, int] = {}
-    for line_no, line in body:
-        cells = split_cells(line, delim)
-        file = cells[file_k] if file_k < len(cells) else ""
-        if not file:
-            raise RecordError(source, "the row names no record file", line=line_no, column=names[file_k])
-        if file in seen:
-            raise RecordError(source, f"'{file}' is named twice (also on line {seen[file]})", line=line_no, column=names[file_k])
-        seen[file] = line_no
-        meta = {}
-        for k, (meta_key, quantity, unit) in spec.items():
-            cell = cells[k] if k < len(cells) else ""
-            if not cell:
-                continue
-            if quantity is None:
-                meta[meta_key] = cell
-                continue
-            value = _table_number(cell, decimal, source, line_no, names[k], positive=quantity != "temperature")
-            meta[meta_key] = repr(float(to_native(value, unit, quantity, source=source, column=names[k])))
-        rows.append(SpecimenRow(file=file, line=line_no, meta=meta))
-    if not rows:
-        raise RecordError(source, "the specimens table has names but no rows", line=names_line)
-    return SpecimenTable(source=source, rows=rows, columns=columns)
+    return spec, columns, file_k
+
+
+def _row_meta(cells: list[str], spec: dict, names: list[str], decimal: str, source: str, line_no: int) -> dict[str, str]:
+    """One row's metadata: text as written, numbers converted to the native unit."""
+    meta = {}
+    for k, (meta_key, quantity, unit) in spec.items():
+        cell = cells[k] if k < len(cells) else ""
+        if not cell:
+            continue
+        if quantity is None:
+            meta[meta_key] = cell
+            continue
+        value = _table_number(cell, decimal, source, line_no, names[k], positive=quantity != "temperature")
+        meta[meta_key] = repr(float(to_native(value, unit, quantity, source=source, column=names[k])))
+    return meta
 
 
 def _column_key(name: str) -> tuple[str, str | None]:

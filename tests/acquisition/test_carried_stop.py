@@ -3,8 +3,7 @@ stale, and the stop waited for the next one — 0.5 mm past a 3 mm target in the
 cells with encoder:drop. A reading older than the stale limit is carried on at the speed. These
 fail on the old ``target_reached`` (no ``now_s``/``speed_mm_per_s``)."""
 
-from flowcurve.acquisition.procedure import StopCriteria, target_reached
-
+from flowcurve.acquisition.stopping import StopCriteria, target_reached
 CRIT = StopCriteria(target_displacement_mm=3.0)
 SPEED = 0.05  # mm/s
 

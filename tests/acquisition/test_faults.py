@@ -18,7 +18,8 @@ import time
 import numpy as np
 import pytest
 
-from flowcurve.acquisition.procedure import StopCriteria, TestSpec
+from flowcurve.acquisition.procedure import TestSpec
+from flowcurve.acquisition.stopping import StopCriteria
 from flowcurve.record.format import read_record
 from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.clock import WALL

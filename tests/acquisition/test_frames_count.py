@@ -9,7 +9,8 @@ import re
 import pytest
 
 from flowcurve.acquisition.live import LiveView
-from flowcurve.acquisition.procedure import Procedure, StopCriteria, TestSpec
+from flowcurve.acquisition.procedure import Procedure, TestSpec
+from flowcurve.acquisition.stopping import StopCriteria
 from flowcurve.identification.identify import fault_warnings
 from flowcurve.record.format import read_record
 from tests.acquisition.conftest import FakeRig

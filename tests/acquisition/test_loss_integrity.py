@@ -17,7 +17,8 @@ import sys
 
 import pytest
 
-from flowcurve.acquisition.procedure import TARGET_TICK_MIN_S, StopCriteria, TestSpec, loop_tick_s, target_reached
+from flowcurve.acquisition.procedure import TestSpec
+from flowcurve.acquisition.stopping import TARGET_TICK_MIN_S, StopCriteria, loop_tick_s, target_reached
 from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.clock import WALL, ModelClock
 from flowcurve.identification.identify import old_writer_warning

@@ -5,7 +5,8 @@ and ``flowcurve annotate`` lists it as still missing there; on a shorter one it 
 
 from __future__ import annotations
 
-from flowcurve.acquisition.procedure import Procedure, StopCriteria, TestSpec
+from flowcurve.acquisition.procedure import Procedure, TestSpec
+from flowcurve.acquisition.stopping import StopCriteria
 from flowcurve.cli import main as cli_main
 from flowcurve.record.format import read_record
 

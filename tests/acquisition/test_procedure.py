@@ -4,7 +4,8 @@ heater state; the 'q' typed on a real terminal in real time."""
 import numpy as np
 import pytest
 
-from flowcurve.acquisition.procedure import Procedure, ProcedureError, StopCriteria, StopState, TestSpec, heating_progress, stop_reason
+from flowcurve.acquisition.procedure import Procedure, ProcedureError, TestSpec, heating_progress
+from flowcurve.acquisition.stopping import StopCriteria, StopState, stop_reason
 from flowcurve.record.format import read_record
 from flowcurve.errors import DeviceError, SafetyError
 

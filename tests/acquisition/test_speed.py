@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import pytest
 
-from flowcurve.acquisition.procedure import StopCriteria
+from flowcurve.acquisition.stopping import StopCriteria
 from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.clock import ModelClock
 from flowcurve.demo import demo_specs
@@ -60,8 +60,7 @@ def test_the_speed_meter_leaves_out_the_rest_before_and_the_still_tail_after():
     """Closed form: 1 s at rest, 0.1 mm/s for 20 s on a 0.01 mm encoder, then 5 s still."""
     import numpy as np
 
-    from flowcurve.acquisition.procedure import SpeedMeter
-
+    from flowcurve.acquisition.stopping import SpeedMeter
     t = np.arange(0.0, 26.0, 0.05)
     x = np.floor(np.clip(t - 1.0, 0.0, 20.0) * 0.1 / 0.01 + 1e-9) * 0.01  # whole counts passed
     rows = np.column_stack([t, np.zeros_like(t), x])

@@ -5,7 +5,8 @@ zero is instead of reporting the start of the flow curve 20 % high as 'good'."""
 
 import numpy as np
 
-from flowcurve.acquisition.procedure import StopCriteria, TestSpec
+from flowcurve.acquisition.procedure import TestSpec
+from flowcurve.acquisition.stopping import StopCriteria
 from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.clock import ModelClock
 from flowcurve.identification.compression import toe_offsets, toe_spread_warning

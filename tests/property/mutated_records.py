@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.record.format import Record, write_record
-from flowcurve.record.importers import sniff_delimiter
+from flowcurve.record.importers_text import sniff_delimiter
 
 from ..records.lab_exports import tension_truth, write_bluehill, write_mts, write_testxpert
 

@@ -16,7 +16,9 @@ from types import SimpleNamespace
 
 import pytest
 
-from flowcurve.identification import tension as tn
+from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.tension_elastic import _elastic_line
+from flowcurve.identification.tension_inputs import _inputs
 
 BENCH = Path(__file__).resolve().parents[2] / "bench" / "modulus_methods.py"
 
@@ -27,9 +29,9 @@ def bench():
 
 
 def _line(rec, method):
-    inp = tn._inputs(rec, use_extensometer=None, frame_stiffness_N_per_um=None, crosshead_length_mm=None, scale=True)
-    return tn._elastic_line(inp, fractions=None, window_fixed_MPa=None, modulus_reference="Rp02", E_MPa=None, toe=True, scale=True,
-                            modulus_method=method)
+    inp = _inputs(rec, use_extensometer=None, frame_stiffness_N_per_um=None, crosshead_length_mm=None, scale=True)
+    return _elastic_line(inp, fractions=None, window_fixed_MPa=None, modulus_reference="Rp02", E_MPa=None, toe=True, scale=True,
+                         modulus_method=method)
 
 
 # the default (auto: SDAR on the crosshead) and SDAR within 1 %; the window alone keeps up to 1.4 %
@@ -54,5 +56,5 @@ def test_the_whole_identification_reports_it(bench):
     curve, the frame's 9 % elastic strain in the true-stress conversion: test_soft_frame_true_curve.py)."""
     for case in bench.CROSSHEAD_CASES:
         rec, _, rp02 = bench.crosshead_tension(**case)
-        res = tn.identify_tension(rec).result
+        res = identify_tension(rec).result
         assert res["Rp02_MPa"] == pytest.approx(rp02, rel=0.01), rec.source

@@ -11,7 +11,8 @@ import pytest
 
 from flowcurve.record.format import Record, write_record
 from flowcurve.errors import RecordError
-from flowcurve.record.importers import load_record, parse_column_option, to_native, unit_conversion
+from flowcurve.record.importers import load_record, parse_column_option
+from flowcurve.record.importers_text import to_native, unit_conversion
 
 INSTRON_DIR = Path(__file__).resolve().parents[1] / "data" / "42CrMoS4" / "original_data"  # in the repository, CC BY 4.0
 INSTRON_FILE = INSTRON_DIR / "46NT71.csv"

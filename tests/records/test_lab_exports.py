@@ -15,7 +15,9 @@ import numpy as np
 import pytest
 
 from flowcurve.errors import RecordError
-from flowcurve.record.importers import load_record, recognise_quantity, split_name_unit
+from flowcurve.record.importers import load_record
+from flowcurve.record.importers_csv import recognise_quantity
+from flowcurve.record.importers_text import split_name_unit
 
 from .cli_run import one_error, run_cli
 from .lab_exports import tension_truth, write_bluehill, write_mts, write_testxpert

@@ -10,7 +10,7 @@ import pytest
 
 from flowcurve.identification.hardening import johnson_cook_static
 from flowcurve.identification.identify import identify
-from flowcurve.identification.tension import fracture_index
+from flowcurve.identification.tension_values import fracture_index
 from flowcurve.record.format import Record
 
 from .conftest import TRUTH, make_record

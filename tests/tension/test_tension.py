@@ -8,9 +8,8 @@ from scipy.optimize import brentq, minimize_scalar
 
 from flowcurve.errors import FlowcurveError, IdentificationError, RecordError
 from flowcurve.identification.indicator import frame_stiffness_from_known_modulus
-from flowcurve.identification.tension import (
-    bulk_modulus, identify_tension, true_plastic_strain, true_stress_constant_volume, true_stress_gost,
-)
+from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.tension_values import bulk_modulus, true_plastic_strain, true_stress_constant_volume, true_stress_gost
 
 from flowcurve.identification.hardening import johnson_cook_static
 

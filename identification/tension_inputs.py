@@ -1,0 +1,160 @@
+"""What a tension record gives (docs/methods.md §2.1): geometry, the force (corrupt samples left out),
+the engineering stress and the strain source (extensometer, or the crosshead less the frame)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from flowcurve.record.format import Record
+from flowcurve.errors import IdentificationError, RecordError
+from flowcurve.identification import iso6892
+from flowcurve.identification.hardening import MAX_STRESS_MPa
+from flowcurve.identification.indicator import reread_if_stepped, remove_frame_compliance
+from flowcurve.identification.tension_values import fracture_index
+
+
+def _check_post_dimensions(record: Record, d0: float, l0: float, lu: float | None) -> None:
+    """Measurements after fracture that no tension test can give: Lu < L0, du or dk > d0."""
+    if lu is not None and lu < l0:
+        raise RecordError(record.source, f"Lu = {lu:g} mm (post.lu_mm, --lu) is shorter than L0 = {l0:g} mm (specimen.l0_mm, --l0): a specimen does not shorten in tension")
+    for name in ("du", "dk"):
+        d = record.positive(f"post.{name}_mm")
+        if d is not None and d > d0:
+            raise RecordError(record.source, f"{name} = {d:g} mm (post.{name}_mm{', --dk' if name == 'dk' else ''}) is larger than d0 = {d0:g} mm (specimen.d0_mm, --d0): a specimen does not thicken in tension")
+
+
+def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndarray, l0: float, options: dict) -> dict:
+    """Displacement (mm), the length it refers to (mm) and how it was obtained."""
+    has_ext = record.has("extensometer_mm")
+    if use_extensometer and not has_ext:
+        raise RecordError(record.source, "use_extensometer was requested but the record has no extensometer channel", column="extensometer_mm")
+    warnings: list[str] = []
+    if has_ext and use_extensometer is not False:
+        ext = record.column("extensometer_mm")
+        gaps = np.nonzero(~np.isfinite(ext[: fracture_index(force) + 1]))[0]
+        if gaps.size:
+            message = f"the extensometer channel has no value from sample {gaps[0] + 1} on (removed before fracture?)"
+            if not record.has("crosshead_mm"):
+                raise RecordError(record.source, message + "; the record has no crosshead column to identify from instead", column="extensometer_mm")
+            if use_extensometer:
+                raise RecordError(record.source, message + "; identify from the crosshead instead (use_extensometer=False)", column="extensometer_mm")
+            fallback = _strain_source(record, False, force, l0, options)
+            fallback["warnings"].insert(0, message + ": the crosshead is used instead")
+            return fallback
+        gauge = record.positive("specimen.extensometer_gauge_mm", default=l0)
+        if "specimen.extensometer_gauge_mm" not in record.meta:
+            warnings.append(f"specimen.extensometer_gauge_mm missing: the extensometer gauge length is taken as l0 = {l0:g} mm")
+        return {"disp": ext - ext[0], "length": gauge, "source": "extensometer", "stiffness": None, "scalable": False, "warnings": warnings}
+    if not record.has("crosshead_mm"):
+        raise RecordError(record.source, "the record has no crosshead column: its strain can only come from the extensometer (leave out --no-extensometer)", column="crosshead_mm")
+    cross = record.column("crosshead_mm")
+    gaps = np.nonzero(~np.isfinite(cross[: fracture_index(force) + 1]))[0]
+    if gaps.size:
+        raise RecordError(record.source, f"the crosshead channel has no value at sample {gaps[0] + 1} (of {gaps.size} before fracture); the strain cannot be followed through the gap", column="crosshead_mm")
+    step = None
+    if record.has("time_s"):  # a 10 µm count is 3e-4 of a 30 mm length: re-read between counts
+        cross, step = reread_if_stepped(record.column("time_s"), cross)
+    disp = cross - cross[0]
+    stiffness = options.get("frame_stiffness_N_per_um")
+    if stiffness is None:
+        stiffness = record.positive("rig.frame_stiffness_N_per_um")
+    if stiffness is not None:
+        disp = remove_frame_compliance(disp, force - force[0], stiffness)
+    else:
+        warnings.append("no frame stiffness (rig.frame_stiffness_N_per_um): the crosshead displacement still includes the frame; strains and E are not the specimen's")
+    length = options.get("crosshead_length_mm") or record.positive("specimen.parallel_length_mm", default=l0)
+    return {"disp": disp, "length": float(length), "source": "crosshead", "stiffness": stiffness, "scalable": True, "warnings": warnings,
+            "step_mm": step}
+
+
+@dataclass
+class _Inputs:
+    """What the record gives: geometry, the force (finite samples only), stress, strain source."""
+
+    record: Record
+    d0: float
+    l0: float
+    s0: float
+    data: pd.DataFrame  # the samples with a force value
+    sub: Record  # the record of those samples
+    force: np.ndarray
+    eng_stress: np.ndarray
+    i_m: int  # index of the maximum force
+    Fm: float
+    Rm: float
+    src: dict  # :func:`_strain_source`: displacement, its length, how it was obtained
+    lu: float | None
+    length: float  # the length the strain refers to (l0 when scaled to a measured Lu)
+    warnings: list[str]
+    unbroken: bool = False  # the record says the specimen did not break (:func:`.tension_values.unbroken_statement`)
+
+
+SPIKE_NOISE_FACTOR, SPIKE_FRACTION = 12.0, 0.25  # a lone force sample this far (× noise σ, × peak force) from its agreeing neighbours is corrupt: farther than an upper yield point stands
+
+
+def isolated_force_spikes(force_N) -> np.ndarray:
+    """Indices of lone corrupt force samples: unlike both neighbours, which agree with each other
+    (no specimen's force jumps and comes back within one sample; a fracture does not come back).
+    |F_k − (F_k−1 + F_k+1)/2| > max(12 σ, 25 % of the peak of the 3-sample median) and
+    |F_k+1 − F_k−1| < a quarter of that; σ from second differences (robust)."""
+    f = np.asarray(force_N, dtype=float)
+    if f.size < 5:
+        return np.zeros(0, dtype=int)
+    deviation = np.abs(f[1:-1] - 0.5 * (f[:-2] + f[2:]))
+    gap = np.abs(f[2:] - f[:-2])
+    a, b, c = f[:-2], f[1:-1], f[2:]
+    peak = float(np.max(np.abs(np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c)))))  # median of three, in closed form
+    if not np.any((deviation > SPIKE_FRACTION * peak) & (gap < 0.25 * deviation)):
+        return np.zeros(0, dtype=int)  # none beyond the peak share: none beyond the larger threshold either (the noise median is not needed)
+    threshold = max(SPIKE_NOISE_FACTOR * _stress_noise_MPa(f), SPIKE_FRACTION * peak)
+    return np.flatnonzero((deviation > threshold) & (gap < 0.25 * deviation)) + 1
+
+
+def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, crosshead_length_mm, scale: bool) -> _Inputs:
+    """Geometry, force and engineering stress, and the strain source of a tension record."""
+    warnings: list[str] = []
+    d0 = record.positive("specimen.d0_mm", required=True)
+    l0 = record.positive("specimen.l0_mm", required=True)
+    s0 = record.positive("specimen.s0_mm2", default=math.pi * d0**2 / 4.0)  # F0 = π d0²/4
+    force = record.column("force_N")
+    ok = np.isfinite(force)
+    if not ok.all():
+        warnings.append(f"{int((~ok).sum())} samples without a force value were left out")
+    spikes = np.flatnonzero(ok)[isolated_force_spikes(force[ok])]
+    if spikes.size:
+        ok[spikes] = False
+        warnings.append(f"{spikes.size} force sample(s) unlike both neighbours (a corrupt load-cell frame) left out: "
+                        + ", ".join(f"sample {k + 1} ({force[k]:.6g} N)" for k in spikes[:5]) + (" …" if spikes.size > 5 else ""))
+    data = (record.data[ok] if not ok.all() else record.data).reset_index(drop=True)  # all kept: no copy (copy-on-write)
+    force = force[ok]
+    sub = Record(meta=record.meta, data=data, source=record.source)
+    i_m = iso6892.max_force_index(force)
+    Fm = float(force[i_m])
+    if Fm <= 0 or i_m == 0 or Fm - force[0] <= 0.05 * abs(Fm):
+        raise RecordError(record.source, "the force never rises: no tension test in this record (check the force column and its sign)", column="force_N")
+    eng_stress = force / s0
+    Rm = Fm / s0
+    if Rm > MAX_STRESS_MPa:
+        raise IdentificationError(f"{record.source}: Rm = {Rm:.4g} MPa is implausible - check units of force (N) and diameter (mm)")
+
+    src = _strain_source(sub, use_extensometer, force, l0, {"frame_stiffness_N_per_um": frame_stiffness_N_per_um, "crosshead_length_mm": crosshead_length_mm})
+    warnings += src["warnings"]
+    lu = record.positive("post.lu_mm")
+    _check_post_dimensions(record, d0, l0, lu)
+    length = src["length"]
+    if src["scalable"] and scale and lu is not None:
+        if lu <= l0:
+            raise IdentificationError(f"{record.source}: post.lu_mm = {lu:g} mm is not longer than l0 = {l0:g} mm")
+        length = l0
+    return _Inputs(record=record, d0=d0, l0=l0, s0=s0, data=data, sub=sub, force=force, eng_stress=eng_stress, i_m=i_m,
+                   Fm=Fm, Rm=Rm, src=src, lu=lu, length=length, warnings=warnings)
+
+
+def _stress_noise_MPa(stress_MPa: np.ndarray) -> float:
+    """Noise standard deviation of a stress signal from its second differences (robust MAD)."""
+    curvature = np.diff(stress_MPa, 2)  # second differences: a linear trend leaves none, white noise σ leaves σ√6
+    return float(1.4826 * np.median(np.abs(curvature - np.median(curvature))) / math.sqrt(6.0)) if curvature.size else 0.0
