@@ -14,7 +14,6 @@ SOURCES = {
     "NECK_METHODS": ("flowcurve.identification.necking", "METHODS"),
     "FRICTION_METHODS": ("flowcurve.identification.friction", "FRICTION_METHODS"),
     "FRICTION_CORRECTIONS": ("flowcurve.identification.friction", "CORRECTIONS"),
-    "CARD_FORMATS": ("flowcurve.reports.cards", "FORMATS"),
     "FRICTION_CARD_FORMATS": ("flowcurve.reports.friction_cards", "FRICTION_CARD_FORMATS"),
     "CONTACT_RATIO_MODELS": ("flowcurve.identification.adhesion", "CONTACT_RATIO_MODELS"),
     "HOT_FROM_C": ("flowcurve.identification.adhesion", "HOT_FROM_C"),
@@ -25,7 +24,6 @@ TEST_TYPES = ("tension", "compression")
 NECK_METHODS = ("davidenkov", "bridgman", "mirone")
 FRICTION_METHODS = ("fe_table", "bulge_regression", "ebrahimi_najafizadeh")
 FRICTION_CORRECTIONS = ("fe_table", "k_sigma", "siebel", "slab")
-CARD_FORMATS = ("lsdyna", "abaqus", "radioss", "calculix")
 FRICTION_CARD_FORMATS = ("abaqus", "lsdyna")
 CONTACT_RATIO_MODELS = ("none", "bowden_tabor")
 HOT_FROM_C = 600.0

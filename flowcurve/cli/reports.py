@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from flowcurve.cli.choices import CARD_FORMATS
+from flowcurve.reports.card_formats import FORMATS as CARD_FORMATS  # light: the writers are imported when used
 from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
 
 
