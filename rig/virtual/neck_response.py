@@ -20,7 +20,7 @@ gets a neck (:meth:`TensionResponse.curve`):
   bracket it (clamped to the grid's ends, with a warning). Indexing by the Considère strain
   alone put the force of steel 45 (whose θ/σ falls more slowly past the maximum than a Swift
   law's) 2.3 % above an independent CalculiX run of its own law; with θ/σ, within
-  ``tests/virtual/test_neck_response.py``'s tolerances. β, λ and a/R are the weighted runs'
+  ``tests/rig/virtual/test_neck_response.py``'s tolerances. β, λ and a/R are the weighted runs'
   values at each δ (λ kept from falling: a neck does not shorten).
 * **Relative to the onset.** β is divided by its value at the run's onset and λ counted from
   there: the runs' imperfection (0.5 % of the radius) starts a little neck before the force

@@ -175,7 +175,7 @@ def test_run_tension_response_option_reaches_the_rig_and_the_header(tmp_path, ca
     a_over_R = float(rec.meta["post.dk_mm"]) / 2 / float(rec.meta["post.neck_radius_mm"])
     if response == "bridgman":  # the neck radius is Le Roy's
         assert a_over_R == pytest.approx(le_roy_smooth_a_over_R(rec), rel=3e-3)
-    else:  # the CalculiX neck is blunter (tests/virtual/test_neck_response.py)
+    else:  # the CalculiX neck is blunter (tests/rig/virtual/test_neck_response.py)
         assert a_over_R < 0.85 * le_roy_smooth_a_over_R(rec)
 
 

@@ -2,7 +2,7 @@
 
 The bases are records as they are met: the INSTRON export and the virtual rig's compression
 record of examples/data, a native tension record, and Bluehill, testXpert (UTF-16, decimal
-commas) and MTS exports of a Ramberg–Osgood test (tests/records/lab_exports.py). Each mutation is
+commas) and MTS exports of a Ramberg–Osgood test (tests/identify/lab_exports.py). Each mutation is
 a pure function of the file's bytes and a few drawn numbers, as the input campaign of issue 29
 made them: truncations, byte flips, bad header and cell values, scaled and shuffled columns,
 other encodings and line endings, junk (random bytes, lines over the csv module's 131 072
@@ -22,7 +22,7 @@ import pandas as pd
 from flowcurve.record.format import Record, write_record
 from flowcurve.record.importers_text import sniff_delimiter
 
-from ..records.lab_exports import tension_truth, write_bluehill, write_mts, write_testxpert
+from ..identify.lab_exports import tension_truth, write_bluehill, write_mts, write_testxpert
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "data"
 EXPORT_ARGS = ["--test", "tension", "--d0", "6", "--l0", "30", "--le", "25"]  # what the exports do not say about the specimen

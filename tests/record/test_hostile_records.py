@@ -1,5 +1,5 @@
 """The classes of issue 29's input campaign that ended in an internal error, each on real
-records (examples/data and the lab exports of tests/records): CR-only line endings, a line over
+records (examples/data and the lab exports of tests/identify): CR-only line endings, a line over
 the csv module's 131 072 characters, a column scaled to zero; and a record that ended during
 heating, refused with what happened. Each read gives a result or one clean line naming the file."""
 

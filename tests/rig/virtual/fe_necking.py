@@ -1,4 +1,4 @@
-"""Independent CalculiX necking runs of the virtual materials, for tests/virtual/test_neck_response.py.
+"""Independent CalculiX necking runs of the virtual materials, for tests/rig/virtual/test_neck_response.py.
 
 The same CAX8R model as the rig's table (12×40, imperfection 0.005, d0 6, l0 30, ≈ 0.05 mm
 increments) but the material's own Johnson–Cook law, E and ν — laws the table was not made

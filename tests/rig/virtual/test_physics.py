@@ -71,7 +71,7 @@ def test_force_maximum_at_considere_point(material, response):
     if response == "bridgman":  # Le Roy's smooth onset: the neck carries the Considère force at first
         assert rec[i, 1] == pytest.approx(f_max, rel=1e-5)
     else:  # the FE neck curves a little at once: its maximum comes just past Considère, as in the
-        # CalculiX runs (0.004–0.027 of neck strain later, forces 5e-5–2e-4 above, tests/virtual/test_neck_response.py)
+        # CalculiX runs (0.004–0.027 of neck strain later, forces 5e-5–2e-4 above, tests/rig/virtual/test_neck_response.py)
         assert rec[i, 3] - eps_u < 0.03 and 0.0 <= rec[i, 1] / f_max - 1.0 < 5e-4
     # after the maximum the force only falls, the neck strains, and the specimen breaks
     assert np.all(np.diff(rec[i:-1, 1]) <= 1e-9)
@@ -109,7 +109,7 @@ def test_fracture_post_measurements_are_consistent(response):
     d = eps_f - eps_u
     if response == "bridgman":  # Le Roy a/R = 1.1 (eps_f - eps_u), with the model's smooth onset δ/(δ + eps_u)
         assert a_over_R == pytest.approx(1.1 * d * d / (d + eps_u), rel=2e-3)
-    else:  # a curved neck, blunter than Le Roy's (tests/virtual/test_neck_response.py has the FE's values)
+    else:  # a curved neck, blunter than Le Roy's (tests/rig/virtual/test_neck_response.py has the FE's values)
         assert 0.05 < a_over_R < 1.1 * d
     assert l0 * math.exp(eps_u) < post["post.lu_mm"] < l0 * math.exp(eps_f)
     assert not m.moving  # the crosshead stopped at fracture
