@@ -7,7 +7,7 @@ in MPa, strains are logarithmic (true) strains.
 Friction from the barrelled specimen (each returns a :class:`FrictionResult`):
 
 * ``fe_table`` (default): the bulge ΔR/h of CalculiX upsetting runs over μ, h0/d0, strain and
-  hardening (:mod:`identification.fe.table`, package data) inverted for the Coulomb μ; the
+  hardening (:mod:`identification.fe.model.table`, package data) inverted for the Coulomb μ; the
   hardening exponent is read from the record's own curve when it is given.
 * ``bulge_regression``: the seed's FE regression (3.18) inverted for the mean
   Coulomb coefficient μ (3.19).
@@ -35,7 +35,7 @@ from typing import Callable
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.fe.model import model_form as mf
 
 FRICTION_METHODS = ("fe_table", "bulge_regression", "ebrahimi_najafizadeh")
 DEFAULT_FRICTION_METHOD = "fe_table"
@@ -324,13 +324,13 @@ FE_FIT_FROM_TOTAL_STRAIN = 0.02  # without the plastic strain, the Swift fit sta
 
 
 def _fit_start(plastic: bool) -> float:
-    from flowcurve.identification.fe.table import SWIFT_FIT_FROM
+    from flowcurve.identification.fe.model.table import SWIFT_FIT_FROM
 
     return SWIFT_FIT_FROM if plastic else FE_FIT_FROM_TOTAL_STRAIN
 
 
 def _swift_of(eps_p, sigma, plastic: bool) -> tuple[float, float]:
-    from flowcurve.identification.fe.table import swift_hardening
+    from flowcurve.identification.fe.model.table import swift_hardening
 
     return swift_hardening(eps_p, sigma, start=_fit_start(plastic))
 
@@ -340,10 +340,10 @@ def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=
     σ_f(ε_p) itself (fixed point) → (σ_f, (n, ε0)); below the table's first strain the factor is
     read on ε_p (the table's start). Without ``eps_p`` the total strain stands in, from ε = 0.02 on.
     Each point's factor is read at the curve's Swift exponent near its strain
-    (:func:`~flowcurve.identification.fe.table.local_swift_exponent`, the whole curve's ε0): the
+    (:func:`~flowcurve.identification.fe.model.table.local_swift_exponent`, the whole curve's ε0): the
     factor follows the hardening at the strain, which for a saturating law falls well below the
     whole curve's n. The returned (n, ε0) is the whole curve's."""
-    from flowcurve.identification.fe.table import local_swift_exponent
+    from flowcurve.identification.fe.model.table import local_swift_exponent
 
     strain = np.asarray(strain, dtype=float)
     pressure = np.asarray(pressure_MPa, dtype=float)
@@ -388,7 +388,7 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
     μ where the barrel has stopped growing (at h0/d0 1, μ 0.2 → 0.3: 0.56 mm against 0.04 mm of
     dmax). The bulge's μ stays in the result (``mu_from_bulge``).
     """
-    from flowcurve.identification.fe.table import UpsettingTable
+    from flowcurve.identification.fe.model.table import UpsettingTable
 
     _check_geometry(d0_mm, h0_mm, hk_mm)
     d_max, used = _measured_max_diameter(d_max_mm, s_max_mm2)
@@ -512,7 +512,7 @@ def fe_fold_over_onset(mu: float, h0_d0: float, strain, stress_MPa, eps_p=None) 
     """The FE table's fold-over onset (height strain) for a record corrected at ``mu``: read at its
     h0/d0 and the Swift (n, ε0) of its corrected curve (:meth:`.fe.table.UpsettingTable.fold_over_at`,
     the earliest of the cell's runs); None when none of them folds over."""
-    from flowcurve.identification.fe.table import UpsettingTable
+    from flowcurve.identification.fe.model.table import UpsettingTable
 
     table = UpsettingTable.load()
     n, eps0 = _swift_of(strain if eps_p is None else eps_p, stress_MPa, eps_p is not None)
@@ -529,7 +529,7 @@ def correct_fe_table(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None,
     (E MPa, ν) the pressure p = F/A is put on that area, as the table's reference was (+0.1–0.3 %
     at 300–1100 MPa; CalculiX's own homogeneous runs show it: docs/methods.md §4a.2)."""
     # σ_f = p / (factor(μ, h0/d0, n, ε)·J(σ_f)), factor from identification/fe (make_table), J one fixed-point step
-    from flowcurve.identification.fe.table import UpsettingTable, specimen_proportion
+    from flowcurve.identification.fe.model.table import UpsettingTable, specimen_proportion
 
     strain = np.atleast_1d(np.asarray(strain, dtype=float))
     radius, height = (np.broadcast_to(np.asarray(v, dtype=float), strain.shape) for v in (radius_mm, height_mm))

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from flowcurve.identification.fe import force_shape as fs
-from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.fe.model import model_form as mf
 from flowcurve.identification.fe.solver_fit import serial_inflation
 
 M = 30
@@ -110,7 +110,7 @@ def test_force_rows_that_cannot_tell_mu_from_the_law_are_undetermined():
 
 def test_the_inverse_layout_counts_the_force_model_form_on_the_force_side():
     """Force rows at strain, then dmax and dface (their σ hold the shape's model form): the force
-    side gets the shift the force model form (fe/model_form.py) makes in the force-alone fit; the
+    side gets the shift the force model form (fe/model/model_form.py) makes in the force-alone fit; the
     shape side is μ moved alone over the two rows, 1/√Σg²."""
     x_fit = np.array([1.0, 0.5, -0.2, 0.15])
     g = np.array([6.0, 3.0])
@@ -168,7 +168,7 @@ def linear_solver(monkeypatch):
 
 @pytest.mark.parametrize("mu_force, mu_shape, warned", [(0.05, 0.05, False), (0.03, 0.12, True)])
 def test_force_and_shape_pulling_mu_apart_warn_and_mark_the_hardening_poor(linear_solver, mu_force, mu_shape, warned):
-    from flowcurve.identification.fe.inverse import identify_inverse_fe
+    from flowcurve.identification.identify import identify_inverse_fe
     from flowcurve.identification.outcome import to_jsonable
     from flowcurve.record.format import read_record
 
