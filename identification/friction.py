@@ -408,18 +408,7 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
         if not (math.isfinite(d_face_mm) and 0 < d_face_mm <= d_n + DIAMETER_RESOLUTION_MM):
             raise IdentificationError(f"FE table: the end face's diameter {d_face_mm:g} mm must be positive and not above the volume-constant diameter {d_n:.4g} mm")
         face = min(d_face_mm / d_n, 1.0)
-
-    def read_mu(hardening):
-        if face is None:
-            return _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)
-        mu = table.mu_from_face(face, h0_d0, hardening[0], eps_k, eps0=hardening[1], clamp=True)
-        return mu, hardening, mu >= float(table.mu[-1]) - 1e-12
-
-    mu, hardening, clamped = read_mu(hardening)
-    if curve is not None:
-        for _ in range(FE_HARDENING_ITERATIONS):
-            _, hardening = _fe_flow_stress(table, curve[0], curve[1], mu, h0_d0, eps_p)
-            mu, hardening, clamped = read_mu(hardening)
+    mu, hardening, clamped = _fe_mu_fixed_point(table, curve, eps_p, hardening, face, delta_r / hk_mm, h0_d0, eps_k)
     n, eps0 = hardening
     inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used, **({"dface_mm": float(d_face_mm)} if face is not None else {})}
     extra = {"d_n_mm": d_n, "delta_R_mm": delta_r, "eps_p": eps_k, "hardening_n": n, "hardening_eps0": eps0,
@@ -431,35 +420,71 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
                      mu_range_basis=f"the bulge with dmax ± {DIAMETER_RESOLUTION_MM} mm and the FE model form's ± {mf.BULGE_MODEL_FORM:.0%} of it")
         extra["mu_stderr"] = mf.stderr_of_range(*extra["mu_range"])
     else:
-        def face_mu(half):
-            return [table.mu_from_face(min(face + sign * half, 1.0), h0_d0, n, eps_k, eps0=eps0, clamp=True) for sign in (1.0, -1.0)]
-
-        lo, hi = face_mu(mf.face_sigma(d_n, DIAMETER_RESOLUTION_MM))
-        lo_res, hi_res = face_mu(DIAMETER_RESOLUTION_MM / d_n)
-        try:
-            bulge_mu = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)[0]
-            bulge_range = _fe_mu_range(table, delta_r, hk_mm, h0_d0, hardening, eps_k)
-        except IdentificationError:
-            bulge_mu = bulge_range = None
-        extra.update(mu_basis="original end face (dface)", mu_from_bulge=bulge_mu, d_face_over_d_n=face,
-                     sensitivity={"mu_per_dface_resolution": max(hi_res - lo_res, 0.0) / 2.0}, mu_range=[lo, hi],
-                     mu_range_basis=f"the end face with dface ± {DIAMETER_RESOLUTION_MM} mm and the FE model form's ± {mf.FACE_MODEL_FORM} of d/d_n",
-                     mu_stderr=mf.stderr_of_range(lo, hi))
-        if bulge_range is not None:
-            se_bulge = mf.stderr_of_range(*bulge_range)
-            extra.update(mu_from_bulge_range=bulge_range, mu_from_bulge_stderr=se_bulge,
-                         face_bulge_disagreement_sigmas=mf.disagreement(mu, extra["mu_stderr"], bulge_mu, se_bulge))
+        extra.update(_fe_face_extra(table, face, mu, d_n, delta_r, hk_mm, h0_d0, hardening, eps_k))
     outside = _outside_table(table, h0_d0, n, eps0)
     if outside:
         extra["outside_table"] = outside
-    continued = table.continued_at(mu, h0_d0, n, eps_k, eps0)
-    if continued is not None:
-        extra["continued_runs_from_strain"] = continued
-        # no run of the table reached this shape above the stopped μ: what it tells is a lower bound, the range opens up
-        extra["mu_range"] = [extra["mu_range"][0], float(table.mu[-1])]
-        extra["mu_range_basis"] += f"; open to the table's largest μ (its runs stopped at ε {continued:.2f} and were continued)"
-        extra["mu_stderr"] = mf.stderr_of_range(*extra["mu_range"])
+    _open_if_continued(extra, table, mu, h0_d0, n, eps_k, eps0)
     return FrictionResult("fe_table", mu, inputs, extra)
+
+
+def _fe_mu_fixed_point(table, curve, eps_p, hardening: tuple[float, float], face: float | None, bulge_over_hk: float,
+                       h0_d0: float, eps_k: float) -> tuple[float, tuple[float, float], bool]:
+    """(μ, Swift (n, ε0), beyond the table's sticking) read from the bulge ΔR/hk or the end face d/d_n (``face``),
+    and with a ``curve`` the fixed point: the curve corrected with the table's force factor at μ, its Swift refitted,
+    μ read again (FE_HARDENING_ITERATIONS times)."""
+
+    def read_mu(hardening):
+        if face is None:
+            return _fe_mu_lowering_n(table, bulge_over_hk, h0_d0, hardening, eps_k)
+        mu = table.mu_from_face(face, h0_d0, hardening[0], eps_k, eps0=hardening[1], clamp=True)
+        return mu, hardening, mu >= float(table.mu[-1]) - 1e-12
+
+    mu, hardening, clamped = read_mu(hardening)
+    if curve is not None:
+        for _ in range(FE_HARDENING_ITERATIONS):
+            _, hardening = _fe_flow_stress(table, curve[0], curve[1], mu, h0_d0, eps_p)
+            mu, hardening, clamped = read_mu(hardening)
+    return mu, hardening, clamped
+
+
+def _fe_face_extra(table, face: float, mu: float, d_n: float, delta_r: float, hk_mm: float, h0_d0: float,
+                   hardening: tuple[float, float], eps_k: float) -> dict:
+    """What μ from the end face (d/d_n = ``face``) adds to the FE table's result: its range over the face's σ (the
+    resolution and the model form), its sensitivity, and the bulge's μ beside it with their disagreement."""
+    n, eps0 = hardening
+
+    def face_mu(half):
+        return [table.mu_from_face(min(face + sign * half, 1.0), h0_d0, n, eps_k, eps0=eps0, clamp=True) for sign in (1.0, -1.0)]
+
+    lo, hi = face_mu(mf.face_sigma(d_n, DIAMETER_RESOLUTION_MM))
+    lo_res, hi_res = face_mu(DIAMETER_RESOLUTION_MM / d_n)
+    try:
+        bulge_mu = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)[0]
+        bulge_range = _fe_mu_range(table, delta_r, hk_mm, h0_d0, hardening, eps_k)
+    except IdentificationError:
+        bulge_mu = bulge_range = None
+    extra = dict(mu_basis="original end face (dface)", mu_from_bulge=bulge_mu, d_face_over_d_n=face,
+                 sensitivity={"mu_per_dface_resolution": max(hi_res - lo_res, 0.0) / 2.0}, mu_range=[lo, hi],
+                 mu_range_basis=f"the end face with dface ± {DIAMETER_RESOLUTION_MM} mm and the FE model form's ± {mf.FACE_MODEL_FORM} of d/d_n",
+                 mu_stderr=mf.stderr_of_range(lo, hi))
+    if bulge_range is not None:
+        se_bulge = mf.stderr_of_range(*bulge_range)
+        extra.update(mu_from_bulge_range=bulge_range, mu_from_bulge_stderr=se_bulge,
+                     face_bulge_disagreement_sigmas=mf.disagreement(mu, extra["mu_stderr"], bulge_mu, se_bulge))
+    return extra
+
+
+def _open_if_continued(extra: dict, table, mu: float, h0_d0: float, n: float, eps_k: float, eps0: float) -> None:
+    """Where the table's runs above μ stopped and were continued, no run reached this shape above it: μ is a lower
+    bound, and ``extra``'s range opens to the table's largest μ (its standard error with it)."""
+    continued = table.continued_at(mu, h0_d0, n, eps_k, eps0)
+    if continued is None:
+        return
+    extra["continued_runs_from_strain"] = continued
+    extra["mu_range"] = [extra["mu_range"][0], float(table.mu[-1])]
+    extra["mu_range_basis"] += f"; open to the table's largest μ (its runs stopped at ε {continued:.2f} and were continued)"
+    extra["mu_stderr"] = mf.stderr_of_range(*extra["mu_range"])
 
 
 def _fe_mu_sensitivity(table, mu: float, h0_d0: float, hardening: tuple[float, float], eps: float, hk_mm: float) -> dict:
