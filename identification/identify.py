@@ -5,6 +5,8 @@ noise, stresses of a plausible size for the declared units and geometry), then h
 record to :func:`identification.tension.identify_tension` or
 :func:`identification.compression.identify_compression`, and completes the result's
 ``record`` block and ``warnings`` so that series fits can use the result folder alone.
+:func:`identify_inverse_fe` is the one place that chooses the compression or the tension inverse
+FE (``--method inverse-fe``); it imports them when called, so the fast path loads no FE code.
 """
 
 from __future__ import annotations
