@@ -3,9 +3,10 @@
 CalculiX is replaced by closed forms of the record (as in test_force_shape.py and
 test_time_limit.py), so the whole chain runs in seconds: the compression inverse on two vendored
 records, the tension inverse on two made-up records, and ``fit_with_solver`` alone. The reference
-(``data/inverse_reference.json``) was written by the code of commit 01c1793, before the split, with::
+(``data/inverse_reference.json``) was written by the code of commit 01c1793, before the split: this
+file copied into an export of that commit (``git archive 01c1793``) and run there with::
 
-    git checkout 01c1793 && python tests/fe/test_inverse_numbers_unchanged.py --write
+    FLOWCURVE_DEV_ROOT=<the export> python tests/fe/test_inverse_numbers_unchanged.py --write
 
 Every leaf is compared: strings, booleans and nulls exactly, numbers to a relative 1e-9; the wall
 and solver times and the record's path are left out.
@@ -28,6 +29,8 @@ REL_TOL = 1e-9
 LEFT_OUT = {"wall_s", "solver_s", "provenance", "path"}
 COMPRESSION = [("second_model_C2", 0.05, 0.05, "johnson_cook", None), ("second_model_C3", 0.03, 0.12, "auto", 0.4)]
 TENSION = [(0.7, "auto", None), (0.6, "voce", "2.1")]
+DMAX_PER_MU, DFACE_PER_MU = 1.5, -3.0  # mm per unit μ: the bulge grows with μ, the original end face shrinks
+FORCE_PER_MU = 0.5  # relative force per unit μ at the end of the stroke, growing as t³ (the law takes up 1, t, t²)
 
 
 def _entry_points():
@@ -59,15 +62,15 @@ def _identification(ident, curves) -> dict:
     return out
 
 
-def _compression(name, mu_force, mu_shape, law, fold_over) -> dict:
-    """The compression inverse with each run the record's own force scaled by the law's change and μ, the
-    diameters moved linearly with μ (test_force_shape.py's linear model), a fold-over onset where given."""
+def linear_runs(state: dict):
+    """(capture, run): stand-ins for ``verify.record_force_stroke`` (the real one, its stroke, force and header kept
+    in ``state``) and the compression inverse's ``_run``: the record's own force times 1 + (the law's constants'
+    relative change)·(1, t, t²) + 0.5·t³·(μ − state["mu_force"]) + a fixed 0.05 % misfit, dmax and dface moved by
+    +1.5 and −3 mm per unit (μ − state["mu_shape"]), the side folding over from state["fold_over"] (None: not)."""
     import flowcurve.identification.fe.inverse as inv
     import flowcurve.identification.fe.verify as verify
-    from flowcurve.record.format import read_record
 
-    identify_inverse_fe = _entry_points()[0]
-    state, real, patched = {}, verify.record_force_stroke, (verify.record_force_stroke, inv._run)
+    real = verify.record_force_stroke
 
     def capture(record, **kw):
         out = real(record, **kw)
@@ -80,12 +83,23 @@ def _compression(name, mu_force, mu_shape, law, fold_over) -> dict:
         s, f = state["stroke"], state["force"]
         t = s / s.max()
         rel = x[:-1] / x0[:-1] - 1.0
-        factor = 1.0 + rel[0] + rel[1] * t + rel[2] * t**2 + 0.5 * t**3 * (x[-1] - mu_force) + 5e-4 * np.cos(40.0 * t)
-        dmu, meta = x[-1] - mu_shape, state["meta"]
-        return inv._Run(s, f * factor, float(meta["post.dmax_mm"]) + 1.5 * dmu, float(meta.get("post.dface_mm") or 0.0) - 3.0 * dmu,
-                        wall_s=0.0, cached=True, fold_over_strain=fold_over)
+        factor = 1.0 + rel[0] + rel[1] * t + rel[2] * t**2 + FORCE_PER_MU * t**3 * (x[-1] - state["mu_force"]) + 5e-4 * np.cos(40.0 * t)
+        dmu, meta = x[-1] - state["mu_shape"], state["meta"]
+        return inv._Run(s, f * factor, float(meta["post.dmax_mm"]) + DMAX_PER_MU * dmu, float(meta["post.dface_mm"]) + DFACE_PER_MU * dmu,
+                        wall_s=0.0, cached=True, fold_over_strain=state.get("fold_over"))
 
-    verify.record_force_stroke, inv._run = capture, run
+    return capture, run
+
+
+def _compression(name, mu_force, mu_shape, law, fold_over) -> dict:
+    """The compression inverse on a vendored record with :func:`linear_runs` for CalculiX."""
+    import flowcurve.identification.fe.inverse as inv
+    import flowcurve.identification.fe.verify as verify
+    from flowcurve.record.format import read_record
+
+    identify_inverse_fe = _entry_points()[0]
+    patched = verify.record_force_stroke, inv._run
+    verify.record_force_stroke, inv._run = linear_runs({"mu_force": mu_force, "mu_shape": mu_shape, "fold_over": fold_over})
     try:
         ident = identify_inverse_fe(read_record(DATA / f"{name}.csv"), law=law, workers=1, time_limit_s=None)
     finally:
