@@ -29,7 +29,7 @@ VOCE_CASE = 3  # synthetic.VALIDATION_CASES: Voce, h0/d0 1.8, the record whose i
 
 def voce_run(args):
     from flowcurve.identification.fe.synthetic import VALIDATION_CASES, case_flow
-    from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
+    from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 
     exe, mu, nr, increments = args
     os.environ["FLOWCURVE_CCX"] = exe
@@ -45,7 +45,7 @@ def voce_run(args):
 
 def table_run(args):
     from flowcurve.identification.fe.make_table import grid_model
-    from flowcurve.identification.fe.upsetting import simulate_upsetting
+    from flowcurve.identification.fe.model.upsetting import simulate_upsetting
 
     exe, case = args
     os.environ["FLOWCURVE_CCX"] = exe
@@ -59,7 +59,7 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--stopped-every", type=int, default=3, help="run every K-th of the table's stopped runs (0: none)")
     a = ap.parse_args(argv)
-    from flowcurve.identification.fe.ccx import ccx_executable, ccx_version
+    from flowcurve.identification.fe.model.ccx import ccx_executable, ccx_version
     from flowcurve.identification.fe.pool import run_many
 
     first = ccx_executable()
@@ -86,7 +86,7 @@ def main(argv=None) -> int:
                   + " ".join(f"{f:9.0f}" for f in r["force"]) + f" {r['dmax']:8.4f} {r['wall_s']:7.1f}   {ratio}")
 
     if a.stopped_every > 0:
-        from flowcurve.identification.fe.table import PACKAGE_TABLE, table_provenance
+        from flowcurve.identification.fe.model.table import PACKAGE_TABLE, table_provenance
 
         table = table_provenance(PACKAGE_TABLE)
         stopped = table["incomplete_runs"][:: a.stopped_every]

@@ -24,7 +24,7 @@ MESHES = {"12 / d0/12 (first default)": (12, 2, 1 / 12), "18 / d0/12": (18, 3, 1
 
 
 def run(args):
-    from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
+    from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 
     mu, (nr, layers, fraction), K = args
     flow = lambda e: K * np.power(0.1 + np.clip(e, 0.0, None), 0.2)  # noqa: E731

@@ -1,6 +1,6 @@
 """The model form of the friction methods that read μ from the barrel alone (issue: the non-default
 methods' μ says how sure it is): each method fed the barrels of the CalculiX upsetting table
-(identification/fe/data, the project's own ccx runs) and its μ compared with the run's.
+(identification/fe/model/data, the project's own ccx runs) and its μ compared with the run's.
 
     python bench/friction_model_form.py
 
@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from flowcurve.errors import IdentificationError  # noqa: E402
 from flowcurve.identification import friction as fr  # noqa: E402
-from flowcurve.identification.fe.table import UpsettingTable  # noqa: E402
+from flowcurve.identification.fe.model.table import UpsettingTable  # noqa: E402
 
 MUS = (0.05, 0.2)  # the μ range measured (the table's runs within it)
 STRAINS = (0.3, 0.5, 0.7)

@@ -21,7 +21,7 @@ import numpy as np
 
 from flowcurve.cli.identification import solver_runs_text
 from flowcurve.identification.compression import identify_compression
-from flowcurve.identification.fe.inverse import identify_inverse_fe
+from flowcurve.identification.identify import identify_inverse_fe
 from flowcurve.identification.fe.synthetic import VALIDATION_CASES, case_flow, run_case, upsetting_record
 
 

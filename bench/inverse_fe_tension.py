@@ -25,7 +25,7 @@ import numpy as np
 from flowcurve.cli.identification import solver_runs_text
 from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
 from flowcurve.identification.fe.synthetic import johnson_cook_flow, swift_flow, tension_case_model, tension_record, voce_flow
-from flowcurve.identification.fe.tension import simulate_tension
+from flowcurve.identification.fe.model.tension import simulate_tension
 from flowcurve.identification.hardening import fit_hardening
 
 CASES = {  # law, the record's taper

@@ -1,9 +1,9 @@
 """The spread of the upsetting answer across meshes, settings and models at a given law, μ and
-h0/d0: the model-form error that :mod:`identification.fe.model_form` turns into σ (issue 37).
+h0/d0: the model-form error that :mod:`identification.fe.model.model_form` turns into σ (issue 37).
 
     python bench/model_form_spread.py [--only C2,C3]
 
-Per case, the product's model (identification/fe/upsetting.py) at its defaults (24 core
+Per case, the product's model (identification/fe/model/upsetting.py) at its defaults (24 core
 elements, stick slope 1e7, 50 increments) and at one setting changed each (30 core elements;
 stick slope 1e5; 200 increments), and the second model (tests/fe/second_model.py, CAX8R graded,
 node-to-surface, stick 1e5, 200 increments), all driven to the same final height. Printed
@@ -33,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "fe"))
 
 import second_model as sm  # noqa: E402
 
-from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting  # noqa: E402
+from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting  # noqa: E402
 
 CASES = {c.name: c for c in (
     sm.Case("C1", 105.0, 1392.0, 0.642, 194_000.0, 0.15, 6.0, 9.0, 4.5),  # h0/d0 1.5, μ 0.15

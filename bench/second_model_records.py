@@ -18,7 +18,7 @@ not finish (the side folding at 0.916 of the stroke): it now stops at h 5.6 mm.
 
 The coverage table (``--records tests/fe/data``, the vendored records; then the default's
 μ within how many of its reported standard errors of the truth, fe_table's ``mu_stderr``): with
-the model form's share (identification/fe/model_form.py, docs/methods.md §4a.7) and the range
+the model form's share (identification/fe/model/model_form.py, docs/methods.md §4a.7) and the range
 opened where the table's runs were continued, within 2 on 9 of 9 from the bulge (largest 1.93,
 S3) and on 9 of 9 from the end face (largest 1.43, S3). With the mesh's allowances alone
 (± 4 % of ΔR, ± 0.005 of d/d_n) the end face was within 2 on 7 of 9 (C3 3.7, S3 5.7), and S5's
@@ -83,7 +83,7 @@ def _coverage(paths: list[Path]) -> None:
 def _inverse_coverage(paths: list[Path], workers: int) -> None:
     """The inverse (--method inverse-fe, E from the record's material.E_MPa) on each record: μ, its
     reported standard error (with the model form's share), z, the curve error, runs and seconds."""
-    from flowcurve.identification.fe.inverse import identify_inverse_fe
+    from flowcurve.identification.identify import identify_inverse_fe
     from flowcurve.record.format import read_record
 
     print("inverse:  record  h0/d0  truth μ | μ      se     |μ−truth|/se  curve   runs  wall s")

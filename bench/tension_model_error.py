@@ -17,7 +17,7 @@ from functools import partial
 import numpy as np
 
 from flowcurve.identification.fe.synthetic import swift_flow, tension_case_model, voce_flow
-from flowcurve.identification.fe.tension import TensionModel, simulate_tension
+from flowcurve.identification.fe.model.tension import TensionModel, simulate_tension
 
 LAWS = {  # law, the record's taper
     "voce": (partial(voce_flow, s0=300.0, q=400.0, b=8.0), 0.004),

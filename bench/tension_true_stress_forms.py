@@ -17,7 +17,7 @@ from functools import partial
 import numpy as np
 
 from flowcurve.identification.fe.synthetic import RECORD_FIRST_INCREMENT, johnson_cook_flow, tension_record
-from flowcurve.identification.fe.tension import TensionModel, simulate_tension
+from flowcurve.identification.fe.model.tension import TensionModel, simulate_tension
 from flowcurve.identification.tension import identify_tension
 
 AUSTENITIC = partial(johnson_cook_flow, A=250.0, B=1300.0, n=0.55)  # 12Kh18N10T-like, E 200 GPa

@@ -10,7 +10,7 @@ import numpy as np
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification import friction as fr
-from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.fe.model import model_form as mf
 from flowcurve.identification.hardening import RANGE_SHARE_PART, HardeningFit, pattern_shift, range_shift
 from flowcurve.identification.results import CompressionResult
 from flowcurve.identification.compression_values import _Friction, _Nominal, _Yield, _fit_points, _hardening_fits, plastic_strain

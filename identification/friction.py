@@ -7,7 +7,7 @@ in MPa, strains are logarithmic (true) strains.
 Friction from the barrelled specimen (each returns a :class:`FrictionResult`):
 
 * ``fe_table`` (default): the bulge ΔR/h of CalculiX upsetting runs over μ, h0/d0, strain and
-  hardening (:mod:`identification.fe.table`, package data) inverted for the Coulomb μ; the
+  hardening (:mod:`identification.fe.model.table`, package data) inverted for the Coulomb μ; the
   hardening exponent is read from the record's own curve when it is given.
 * ``bulge_regression``: the seed's FE regression (3.18) inverted for the mean
   Coulomb coefficient μ (3.19).
@@ -35,7 +35,7 @@ from typing import Callable
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.fe.model import model_form as mf
 
 FRICTION_METHODS = ("fe_table", "bulge_regression", "ebrahimi_najafizadeh")
 DEFAULT_FRICTION_METHOD = "fe_table"
@@ -324,13 +324,13 @@ FE_FIT_FROM_TOTAL_STRAIN = 0.02  # without the plastic strain, the Swift fit sta
 
 
 def _fit_start(plastic: bool) -> float:
-    from flowcurve.identification.fe.table import SWIFT_FIT_FROM
+    from flowcurve.identification.fe.model.table import SWIFT_FIT_FROM
 
     return SWIFT_FIT_FROM if plastic else FE_FIT_FROM_TOTAL_STRAIN
 
 
 def _swift_of(eps_p, sigma, plastic: bool) -> tuple[float, float]:
-    from flowcurve.identification.fe.table import swift_hardening
+    from flowcurve.identification.fe.model.table import swift_hardening
 
     return swift_hardening(eps_p, sigma, start=_fit_start(plastic))
 
@@ -340,10 +340,10 @@ def _fe_flow_stress(table, strain, pressure_MPa, mu: float, h0_d0: float, eps_p=
     σ_f(ε_p) itself (fixed point) → (σ_f, (n, ε0)); below the table's first strain the factor is
     read on ε_p (the table's start). Without ``eps_p`` the total strain stands in, from ε = 0.02 on.
     Each point's factor is read at the curve's Swift exponent near its strain
-    (:func:`~flowcurve.identification.fe.table.local_swift_exponent`, the whole curve's ε0): the
+    (:func:`~flowcurve.identification.fe.model.table.local_swift_exponent`, the whole curve's ε0): the
     factor follows the hardening at the strain, which for a saturating law falls well below the
     whole curve's n. The returned (n, ε0) is the whole curve's."""
-    from flowcurve.identification.fe.table import local_swift_exponent
+    from flowcurve.identification.fe.model.table import local_swift_exponent
 
     strain = np.asarray(strain, dtype=float)
     pressure = np.asarray(pressure_MPa, dtype=float)
@@ -388,7 +388,7 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
     μ where the barrel has stopped growing (at h0/d0 1, μ 0.2 → 0.3: 0.56 mm against 0.04 mm of
     dmax). The bulge's μ stays in the result (``mu_from_bulge``).
     """
-    from flowcurve.identification.fe.table import UpsettingTable
+    from flowcurve.identification.fe.model.table import UpsettingTable
 
     _check_geometry(d0_mm, h0_mm, hk_mm)
     d_max, used = _measured_max_diameter(d_max_mm, s_max_mm2)
@@ -408,18 +408,7 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
         if not (math.isfinite(d_face_mm) and 0 < d_face_mm <= d_n + DIAMETER_RESOLUTION_MM):
             raise IdentificationError(f"FE table: the end face's diameter {d_face_mm:g} mm must be positive and not above the volume-constant diameter {d_n:.4g} mm")
         face = min(d_face_mm / d_n, 1.0)
-
-    def read_mu(hardening):
-        if face is None:
-            return _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)
-        mu = table.mu_from_face(face, h0_d0, hardening[0], eps_k, eps0=hardening[1], clamp=True)
-        return mu, hardening, mu >= float(table.mu[-1]) - 1e-12
-
-    mu, hardening, clamped = read_mu(hardening)
-    if curve is not None:
-        for _ in range(FE_HARDENING_ITERATIONS):
-            _, hardening = _fe_flow_stress(table, curve[0], curve[1], mu, h0_d0, eps_p)
-            mu, hardening, clamped = read_mu(hardening)
+    mu, hardening, clamped = _fe_mu_fixed_point(table, curve, eps_p, hardening, face, delta_r / hk_mm, h0_d0, eps_k)
     n, eps0 = hardening
     inputs = {"d0_mm": d0_mm, "h0_mm": h0_mm, "hk_mm": hk_mm, **used, **({"dface_mm": float(d_face_mm)} if face is not None else {})}
     extra = {"d_n_mm": d_n, "delta_R_mm": delta_r, "eps_p": eps_k, "hardening_n": n, "hardening_eps0": eps0,
@@ -431,35 +420,71 @@ def friction_fe_table(d0_mm: float, h0_mm: float, hk_mm: float, *, d_max_mm: flo
                      mu_range_basis=f"the bulge with dmax ± {DIAMETER_RESOLUTION_MM} mm and the FE model form's ± {mf.BULGE_MODEL_FORM:.0%} of it")
         extra["mu_stderr"] = mf.stderr_of_range(*extra["mu_range"])
     else:
-        def face_mu(half):
-            return [table.mu_from_face(min(face + sign * half, 1.0), h0_d0, n, eps_k, eps0=eps0, clamp=True) for sign in (1.0, -1.0)]
-
-        lo, hi = face_mu(mf.face_sigma(d_n, DIAMETER_RESOLUTION_MM))
-        lo_res, hi_res = face_mu(DIAMETER_RESOLUTION_MM / d_n)
-        try:
-            bulge_mu = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)[0]
-            bulge_range = _fe_mu_range(table, delta_r, hk_mm, h0_d0, hardening, eps_k)
-        except IdentificationError:
-            bulge_mu = bulge_range = None
-        extra.update(mu_basis="original end face (dface)", mu_from_bulge=bulge_mu, d_face_over_d_n=face,
-                     sensitivity={"mu_per_dface_resolution": max(hi_res - lo_res, 0.0) / 2.0}, mu_range=[lo, hi],
-                     mu_range_basis=f"the end face with dface ± {DIAMETER_RESOLUTION_MM} mm and the FE model form's ± {mf.FACE_MODEL_FORM} of d/d_n",
-                     mu_stderr=mf.stderr_of_range(lo, hi))
-        if bulge_range is not None:
-            se_bulge = mf.stderr_of_range(*bulge_range)
-            extra.update(mu_from_bulge_range=bulge_range, mu_from_bulge_stderr=se_bulge,
-                         face_bulge_disagreement_sigmas=mf.disagreement(mu, extra["mu_stderr"], bulge_mu, se_bulge))
+        extra.update(_fe_face_extra(table, face, mu, d_n, delta_r, hk_mm, h0_d0, hardening, eps_k))
     outside = _outside_table(table, h0_d0, n, eps0)
     if outside:
         extra["outside_table"] = outside
-    continued = table.continued_at(mu, h0_d0, n, eps_k, eps0)
-    if continued is not None:
-        extra["continued_runs_from_strain"] = continued
-        # no run of the table reached this shape above the stopped μ: what it tells is a lower bound, the range opens up
-        extra["mu_range"] = [extra["mu_range"][0], float(table.mu[-1])]
-        extra["mu_range_basis"] += f"; open to the table's largest μ (its runs stopped at ε {continued:.2f} and were continued)"
-        extra["mu_stderr"] = mf.stderr_of_range(*extra["mu_range"])
+    _open_if_continued(extra, table, mu, h0_d0, n, eps_k, eps0)
     return FrictionResult("fe_table", mu, inputs, extra)
+
+
+def _fe_mu_fixed_point(table, curve, eps_p, hardening: tuple[float, float], face: float | None, bulge_over_hk: float,
+                       h0_d0: float, eps_k: float) -> tuple[float, tuple[float, float], bool]:
+    """(μ, Swift (n, ε0), beyond the table's sticking) read from the bulge ΔR/hk or the end face d/d_n (``face``),
+    and with a ``curve`` the fixed point: the curve corrected with the table's force factor at μ, its Swift refitted,
+    μ read again (FE_HARDENING_ITERATIONS times)."""
+
+    def read_mu(hardening):
+        if face is None:
+            return _fe_mu_lowering_n(table, bulge_over_hk, h0_d0, hardening, eps_k)
+        mu = table.mu_from_face(face, h0_d0, hardening[0], eps_k, eps0=hardening[1], clamp=True)
+        return mu, hardening, mu >= float(table.mu[-1]) - 1e-12
+
+    mu, hardening, clamped = read_mu(hardening)
+    if curve is not None:
+        for _ in range(FE_HARDENING_ITERATIONS):
+            _, hardening = _fe_flow_stress(table, curve[0], curve[1], mu, h0_d0, eps_p)
+            mu, hardening, clamped = read_mu(hardening)
+    return mu, hardening, clamped
+
+
+def _fe_face_extra(table, face: float, mu: float, d_n: float, delta_r: float, hk_mm: float, h0_d0: float,
+                   hardening: tuple[float, float], eps_k: float) -> dict:
+    """What μ from the end face (d/d_n = ``face``) adds to the FE table's result: its range over the face's σ (the
+    resolution and the model form), its sensitivity, and the bulge's μ beside it with their disagreement."""
+    n, eps0 = hardening
+
+    def face_mu(half):
+        return [table.mu_from_face(min(face + sign * half, 1.0), h0_d0, n, eps_k, eps0=eps0, clamp=True) for sign in (1.0, -1.0)]
+
+    lo, hi = face_mu(mf.face_sigma(d_n, DIAMETER_RESOLUTION_MM))
+    lo_res, hi_res = face_mu(DIAMETER_RESOLUTION_MM / d_n)
+    try:
+        bulge_mu = _fe_mu_lowering_n(table, delta_r / hk_mm, h0_d0, hardening, eps_k)[0]
+        bulge_range = _fe_mu_range(table, delta_r, hk_mm, h0_d0, hardening, eps_k)
+    except IdentificationError:
+        bulge_mu = bulge_range = None
+    extra = dict(mu_basis="original end face (dface)", mu_from_bulge=bulge_mu, d_face_over_d_n=face,
+                 sensitivity={"mu_per_dface_resolution": max(hi_res - lo_res, 0.0) / 2.0}, mu_range=[lo, hi],
+                 mu_range_basis=f"the end face with dface ± {DIAMETER_RESOLUTION_MM} mm and the FE model form's ± {mf.FACE_MODEL_FORM} of d/d_n",
+                 mu_stderr=mf.stderr_of_range(lo, hi))
+    if bulge_range is not None:
+        se_bulge = mf.stderr_of_range(*bulge_range)
+        extra.update(mu_from_bulge_range=bulge_range, mu_from_bulge_stderr=se_bulge,
+                     face_bulge_disagreement_sigmas=mf.disagreement(mu, extra["mu_stderr"], bulge_mu, se_bulge))
+    return extra
+
+
+def _open_if_continued(extra: dict, table, mu: float, h0_d0: float, n: float, eps_k: float, eps0: float) -> None:
+    """Where the table's runs above μ stopped and were continued, no run reached this shape above it: μ is a lower
+    bound, and ``extra``'s range opens to the table's largest μ (its standard error with it)."""
+    continued = table.continued_at(mu, h0_d0, n, eps_k, eps0)
+    if continued is None:
+        return
+    extra["continued_runs_from_strain"] = continued
+    extra["mu_range"] = [extra["mu_range"][0], float(table.mu[-1])]
+    extra["mu_range_basis"] += f"; open to the table's largest μ (its runs stopped at ε {continued:.2f} and were continued)"
+    extra["mu_stderr"] = mf.stderr_of_range(*extra["mu_range"])
 
 
 def _fe_mu_sensitivity(table, mu: float, h0_d0: float, hardening: tuple[float, float], eps: float, hk_mm: float) -> dict:
@@ -510,9 +535,9 @@ def elastic_volume_ratio(stress_MPa, E_MPa: float, nu: float = DEFAULT_POISSON):
 
 def fe_fold_over_onset(mu: float, h0_d0: float, strain, stress_MPa, eps_p=None) -> float | None:
     """The FE table's fold-over onset (height strain) for a record corrected at ``mu``: read at its
-    h0/d0 and the Swift (n, ε0) of its corrected curve (:meth:`.fe.table.UpsettingTable.fold_over_at`,
+    h0/d0 and the Swift (n, ε0) of its corrected curve (:meth:`.fe.model.table.UpsettingTable.fold_over_at`,
     the earliest of the cell's runs); None when none of them folds over."""
-    from flowcurve.identification.fe.table import UpsettingTable
+    from flowcurve.identification.fe.model.table import UpsettingTable
 
     table = UpsettingTable.load()
     n, eps0 = _swift_of(strain if eps_p is None else eps_p, stress_MPa, eps_p is not None)
@@ -529,7 +554,7 @@ def correct_fe_table(strain, pressure_MPa, mu, radius_mm, height_mm, eps_p=None,
     (E MPa, ν) the pressure p = F/A is put on that area, as the table's reference was (+0.1–0.3 %
     at 300–1100 MPa; CalculiX's own homogeneous runs show it: docs/methods.md §4a.2)."""
     # σ_f = p / (factor(μ, h0/d0, n, ε)·J(σ_f)), factor from identification/fe (make_table), J one fixed-point step
-    from flowcurve.identification.fe.table import UpsettingTable, specimen_proportion
+    from flowcurve.identification.fe.model.table import UpsettingTable, specimen_proportion
 
     strain = np.atleast_1d(np.asarray(strain, dtype=float))
     radius, height = (np.broadcast_to(np.asarray(v, dtype=float), strain.shape) for v in (radius_mm, height_mm))

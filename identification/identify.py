@@ -5,6 +5,8 @@ noise, stresses of a plausible size for the declared units and geometry), then h
 record to :func:`identification.tension.identify_tension` or
 :func:`identification.compression.identify_compression`, and completes the result's
 ``record`` block and ``warnings`` so that series fits can use the result folder alone.
+:func:`identify_inverse_fe` is the one place that chooses the compression or the tension inverse
+FE (``--method inverse-fe``); it imports them when called, so the fast path loads no FE code.
 """
 
 from __future__ import annotations
@@ -241,3 +243,40 @@ def identify(record: Record, **options) -> Identification:
     old = list(result.get("warnings") or [])
     result["warnings"] = old + [w for w in warnings if w not in old]
     return ident
+
+
+def inverse_time_limit_s(test: str) -> float:
+    """The inverse FE's default wall-time budget for a ``test``'s record, s (tension's is longer: its runs are)."""
+    from flowcurve.identification.fe import inverse, inverse_tension
+
+    return inverse_tension.TIME_LIMIT_S if test == "tension" else inverse.TIME_LIMIT_S
+
+
+def identify_inverse_fe(record: Record, *, law: str = "auto", workers: int | None = None, scheduler=None, progress=None,
+                        E_MPa: float | None = None, time_limit_s: float | None | str = "default", **options) -> Identification:
+    """Identify with CalculiX in the loop (``--method inverse-fe``), dispatched on ``record.test``.
+
+    Compression: ``law`` and μ fitted to the force–stroke and dmax
+    (:func:`.fe.inverse.identify_inverse_fe_compression`; ``law="auto"``: the law that best fits the fast
+    curve). Tension: the hardening beyond Fm fitted to the force–elongation and dk
+    (:func:`.fe.inverse_tension.identify_inverse_fe_tension`; ``law="auto"``: the law that best follows
+    the FE-consistent curve). ``time_limit_s``: the wall-time budget, s (None: none; "default":
+    :func:`inverse_time_limit_s`). ``options``: the other keywords of the test's inverse. Raises
+    :class:`IdentificationError` for an unknown law or a record of another test.
+    """
+    from flowcurve.identification.fe.law_choice import check_law
+
+    check_law(law)
+    limit = {"time_limit_s": time_limit_s} if time_limit_s != "default" else {}
+    if record.test == "tension":
+        from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
+
+        return identify_inverse_fe_tension(record, workers=workers, scheduler=scheduler, progress=progress,
+                                           law="johnson_cook" if law == "auto" else law, refit_law=None if law == "auto" else law,
+                                           **({"E_MPa": E_MPa} if E_MPa is not None else {}), **limit, **options)
+    if record.test == "compression":
+        from flowcurve.identification.fe.inverse import identify_inverse_fe_compression
+
+        return identify_inverse_fe_compression(record, law=law, workers=workers, scheduler=scheduler, progress=progress,
+                                               E_MPa=E_MPa, **limit, **options)
+    raise IdentificationError(f"{record.source}: --method inverse-fe needs a compression or tension record (this is {record.test!r})")

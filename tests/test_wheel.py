@@ -52,7 +52,7 @@ def test_the_wheel_holds_flowcurve_alone(wheel):
             assert inside in names, f"{path.relative_to(ROOT)} is missing from the wheel (as {inside})"
     assert "flowcurve/rig/example-rig.toml" in names  # package data travels too
     for data in ("flowcurve/rig/virtual/data/upsetting_response.npz", "flowcurve/rig/virtual/data/upsetting_response.json",
-                 "flowcurve/identification/fe/data/upsetting_table.npz"):
+                 "flowcurve/identification/fe/model/data/upsetting_table.npz"):
         assert data in names  # the FE tables the virtual rig and the identification read
 
 

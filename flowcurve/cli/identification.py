@@ -217,13 +217,12 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
             warnings.simplefilter("error", RuntimeWarning)
         record = load_record(path, columns=columns, meta=meta)
         if method == "inverse-fe":
-            from flowcurve.identification.fe import inverse_tension
-            from flowcurve.identification.fe.inverse import TIME_LIMIT_S, identify_inverse_fe
+            from flowcurve.identification.identify import identify_inverse_fe, inverse_time_limit_s
 
             from flowcurve.cli.progress import budget_text
 
             def progress(runs, elapsed, left_s=None):
-                limit = time_limit or (inverse_tension.TIME_LIMIT_S if record.test == "tension" else TIME_LIMIT_S)
+                limit = time_limit or inverse_time_limit_s(record.test)
                 print(f"  inverse FE: {budget_text(runs, elapsed, left_s, limit_s=limit)}", file=sys.stderr, flush=True)
 
             ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, progress=progress,
@@ -236,7 +235,7 @@ def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool =
         old.extend(m for m in dict.fromkeys(caught_lines) if m not in old)
     solver = None
     if method == "inverse-fe":
-        from flowcurve.identification.fe.ccx import ccx_version
+        from flowcurve.identification.fe.model.ccx import ccx_version
 
         solver = ccx_version()
     ident.result["provenance"] = provenance(record_sha256 or file_sha256(path), given, ccx_version=solver)

@@ -1,10 +1,11 @@
-"""CalculiX (ccx) in the product: deck writers, a runner with a cache, and FE friction tables.
+"""CalculiX (ccx) in the loop: inverse FE identification and verification, above the FE model.
 
-* :mod:`.ccx` — run a deck in its own temporary folder (time-out, OMP_NUM_THREADS=1), detect
-  a failed or unconverged run, parse the ``.dat`` prints, cache by deck hash.
-* :mod:`.upsetting` — axisymmetric upsetting half model (O-grid core, boundary layer at the rim
-  corner, meshed rigid platen, surface-to-surface Coulomb contact; docs/calculix.md "Upsetting").
-* :mod:`.tension` — tension with necking, CAX8R quarter model (docs/calculix.md "Tension").
-* :mod:`.table` — the FE friction table (bulge and force factor vs μ, h0/d0, strain, n)
-  shipped as package data and made by :mod:`.make_table`.
+* :mod:`.model` — the FE model (decks, solver runner, friction table, model form); it imports
+  nothing of the identification, which may use it.
+* :mod:`.inverse`, :mod:`.inverse_tension` — the inverse FE of compression and of tension
+  (:func:`flowcurve.identification.identify.identify_inverse_fe` chooses between them);
+  :mod:`.law_choice` the law both fit when none is given; :mod:`.solver_fit` their least squares.
+* :mod:`.verify` — the identified curve run through the model against the record.
+* :mod:`.make_table`, :mod:`.make_tension_response`, :mod:`.synthetic` — tables and records made
+  with the model.
 """

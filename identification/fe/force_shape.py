@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.fe.model import model_form as mf
 from flowcurve.identification.fe.solver_fit import parameter_covariance
 
 

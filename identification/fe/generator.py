@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
-from flowcurve.identification.fe.ccx import ccx_version
+from flowcurve.identification.fe.model.ccx import ccx_version
 from flowcurve.identification.fe.pool import run_many
 
 

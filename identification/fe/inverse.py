@@ -38,19 +38,23 @@ import math
 import time
 from dataclasses import dataclass, replace
 from functools import partial
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.fe.force_shape import force_shape_check, inverse_mu_by_side
+from flowcurve.identification.fe.law_choice import best_law_for, check_law
 from flowcurve.identification.fe.machine import model_elastics
-from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.fe.model import model_form as mf
 from flowcurve.identification.fe.solver_fit import fit_time_limit, fit_with_solver, progress_on_whole_clock, serial_correlation
 from flowcurve.identification.friction import DFACE_ADVICE, DIAMETER_RESOLUTION_MM, nominal_diameter
-from flowcurve.identification.fe.ccx import timeout_by
-from flowcurve.identification.fe.model_form import FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, fold_over_ramp
-from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
-from flowcurve.identification.hardening import LAWS
+from flowcurve.identification.fe.model.ccx import timeout_by
+from flowcurve.identification.fe.model.model_form import FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, fold_over_ramp
+from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
+from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
+from flowcurve.identification.hardening import LAWS, fit_hardening
 from flowcurve.identification.outcome import Identification
 
 log = logging.getLogger(__name__)
@@ -107,7 +111,7 @@ def _run(problem: _Problem, x) -> _Run | None:
     when run again with the table's retries (:data:`.make_table.RETRY_SETTINGS`: a softer stick
     slope, other increments — where the side folds onto the platen a run stops at a strain that
     moves with the increment size)."""
-    from flowcurve.identification.fe.ccx import SolverError
+    from flowcurve.identification.fe.model.ccx import SolverError
     from flowcurve.identification.fe.make_table import RETRY_SETTINGS
 
     tried = []
@@ -185,50 +189,27 @@ def _fit_warnings(force_rms_pct: float, dmax_residual_mm: float, mu: float, sol,
     return out
 
 
-def best_law_for(true_curve: pd.DataFrame) -> tuple[str, dict[str, float]]:
-    """(law, {law: RMS error %}): the hardening law of :data:`LAWS` whose fit to the fast curve
-    has the smallest RMS error. The inverse can only be as good as its law: Johnson–Cook on a
-    saturating (Voce) material's record left a force misfit of 1.9 % RMS and the curve 3.6 % off."""
-    from flowcurve.identification.hardening import fit_hardening
+@dataclass(frozen=True)
+class _Inputs:
+    """What the compression inverse reads before its fit: the record's curve, the model's elastics and the shape."""
 
-    e, s = true_curve["true_plastic_strain"].to_numpy(), true_curve["true_stress_MPa"].to_numpy()
-    rms = {}
-    for name in LAWS:
-        try:
-            rms[name] = float(fit_hardening(e, s, name).rms_error_pct)
-        except IdentificationError:
-            continue
-    if not rms:
-        raise IdentificationError("inverse FE: no hardening law fits the fast identification's curve")
-    return min(rms, key=rms.get), rms
+    fast: Any  # the fast identification (warm start; its result is the inverse's base)
+    stroke: np.ndarray
+    force: np.ndarray
+    elastics: Any  # .machine.ModelElastics
+    diagram_options: dict
+    dmax: float
+    dface: float | None
+    law_choice: dict
+    problem: _Problem
+    strain: np.ndarray
 
 
-def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None, scheduler=None, increments: int = 50,
-                        max_runs: int = 150, progress=None, E_MPa: float | None = None, time_limit_s: float | None | str = "default") -> Identification:
-    """Fit ``law`` and μ to the record's force–stroke and dmax with CalculiX in the loop (a tension
-    record: the hardening beyond Fm, :func:`.inverse_tension.identify_inverse_fe_tension`).
-    ``law="auto"``: the law that best fits the fast identification's curve (:func:`best_law_for`);
-    on tension, the law that best fits the FE-consistent curve. The model's E and the frame's
-    stiffness: :func:`.machine.model_elastics` (E given, material.E_MPa, an extensometer's, else a
-    named material class's handbook value; k stated by the rig, else fitted by closure on hk);
-    never an apparent slope (else an error naming the inputs to give). ``time_limit_s``: the
-    wall-time budget, s (None: none; "default": :data:`TIME_LIMIT_S`, on tension
-    :data:`.inverse_tension.TIME_LIMIT_S`)."""
+def _inputs(record, law: str, E_MPa: float | None, increments: int) -> _Inputs:
+    """The record read for the fit: its force–stroke (again with the model's E and the fitted frame stiffness), the
+    geometry and the post-test shape, the law (``auto``: :func:`.law_choice.best_law_for` the fast curve)."""
     from flowcurve.identification.fe.verify import record_force_stroke
 
-    if law not in LAWS and law != "auto":
-        raise IdentificationError(f"unknown hardening law {law!r}; choose one of {', '.join(LAWS)} or auto")
-    if record.test == "tension":
-        from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
-
-        return identify_inverse_fe_tension(record, workers=workers, scheduler=scheduler, progress=progress,
-                                           law="johnson_cook" if law == "auto" else law, refit_law=None if law == "auto" else law,
-                                           **({"E_MPa": E_MPa} if E_MPa is not None else {}),
-                                           **({"time_limit_s": time_limit_s} if time_limit_s != "default" else {}))
-    time_limit_s = TIME_LIMIT_S if time_limit_s == "default" else time_limit_s
-    if record.test != "compression":
-        raise IdentificationError(f"{record.source}: --method inverse-fe needs a compression or tension record (this is {record.test!r})")
-    t0 = time.perf_counter()
     stroke, force, fast = record_force_stroke(record)
     elastics = model_elastics(record, fast.result, E_MPa)  # never an apparent slope; k stated or fitted by closure
     diagram_options = {**({"E_MPa": elastics.E_MPa} if elastics.E_basis != "the record's material.E_MPa" else {}),
@@ -241,21 +222,34 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     if dmax is None:
         raise IdentificationError(f"{record.source}: --method inverse-fe needs the bulge diameter 'post.dmax_mm'")
     dface = record.positive("post.dface_mm")  # optional: near sticking it tells μ where dmax cannot (§4a.2)
-    E = elastics.E_MPa
     law_choice = {"given": law}
     if law == "auto":
         law, rms = best_law_for(fast.true_curve)
         law_choice = {"chosen": law, "by": "the smallest RMS error of a fit to the fast (fe_table) curve", "rms_error_pct": rms}
-    problem = _Problem(law, d0, h0, h0 - float(np.max(stroke)), float(E), increments)
-    strain = -np.log(1.0 - stroke / h0)
+    problem = _Problem(law, d0, h0, h0 - float(np.max(stroke)), float(elastics.E_MPa), increments)
+    return _Inputs(fast, stroke, force, elastics, diagram_options, dmax, dface, law_choice, problem, -np.log(1.0 - stroke / h0))
 
-    # warm start: the fast identification's law (refitted in the requested law when needed)
+
+@dataclass(frozen=True)
+class _Start:
+    """The warm start (the fast identification's law refitted in the requested one, its μ) and the bounds."""
+
+    p0: list
+    mu0: float
+    x0: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    x_scale: np.ndarray
+
+
+def _warm_start(inp: _Inputs) -> _Start:
+    """The fit's start: the fast identification's law (refitted in the requested law when needed) and μ, in the bounds."""
+    law = inp.problem.law
     law_info = LAWS[law]
+    fast = inp.fast
     if fast.result["hardening"].get("law") == law:
         p0 = [fast.result["hardening"][k] for k in law_info.keys]
     else:
-        from flowcurve.identification.hardening import fit_hardening
-
         tc = fast.true_curve
         p0 = [fit_hardening(tc["true_plastic_strain"].to_numpy(), tc["true_stress_MPa"].to_numpy(), law).params[n] for n in law_info.names]
     mu0 = float(np.clip(fast.result["friction_mu"], MU_BOUNDS[0] + 0.005, MU_BOUNDS[1] - 0.01))
@@ -263,120 +257,191 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
     lo = np.array([law_info.bounds[n][0] for n in law_info.names] + [MU_BOUNDS[0]])
     hi = np.array([law_info.bounds[n][1] for n in law_info.names] + [MU_BOUNDS[1]])
     x0 = np.clip(x0, lo + 1e-9, np.where(np.isfinite(hi), hi - 1e-9, np.inf))
-    # the force is fitted up to the fold-over's onset in the warm start's run (the time limit and the model's force error
-    # both grow where the side folds onto the platen); beyond it dmax and dface speak
+    x_scale = np.maximum(np.abs(x0), 1e-3)
+    x_scale[-1] = 0.05
+    return _Start(p0, mu0, x0, lo, hi, x_scale)
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """The fit's rows: force points (strain, stroke, force, σ %) and the shape's σ (mm); the warm start's run."""
+
+    first: _Run | None
+    fold_over: float | None
+    targets: np.ndarray
+    s_pts: np.ndarray
+    f_pts: np.ndarray
+    f_sigma: np.ndarray
+    shape_sigma: dict
+    row_sigma: np.ndarray
+
+
+def _rows(record, inp: _Inputs, x0) -> _Rows:
+    """The force rows up to the fold-over's onset in the warm start's run (the time limit and the model's force error
+    both grow where the side folds onto the platen; beyond it dmax and dface speak) and the shape rows' σ."""
+    problem, stroke, strain, dmax, dface = inp.problem, inp.stroke, inp.strain, inp.dmax, inp.dface
     first = _warm_start_run(problem, x0)
     fold_over = first.fold_over_strain if first is not None else None
     force_to = force_fit_limit(float(strain.max()), fold_over)
     targets = np.linspace(max(FROM_STRAIN, strain[strain > 0].min()), force_to, FORCE_POINTS)
-    s_pts = h0 * (1.0 - np.exp(-targets))
-    f_pts = np.interp(s_pts, stroke, force)
+    s_pts = problem.h0 * (1.0 - np.exp(-targets))
+    f_pts = np.interp(s_pts, stroke, inp.force)
     f_sigma = force_sigma_pct(targets, fold_over)  # each force point's σ, %
 
     # what is known of the shape rows beforehand (diameters, mm): resolution and the model form's share (another defensible
-    # model's shape at the same law and μ, fe/model_form.py), in quadrature — the mesh's share alone let the end face, whose
+    # model's shape at the same law and μ, fe/model/model_form.py), in quadrature — the mesh's share alone let the end face, whose
     # rim corner the models place 0.01–0.02 d_n apart, pull μ 0.01–0.02 low on the second model's records (docs/methods.md §4a.7)
     hk = record.positive("post.hk_mm") or problem.h_end
-    d_n = float(nominal_diameter(d0, h0, hk))
+    d_n = float(nominal_diameter(problem.d0, problem.h0, hk))
     shape_sigma = {"dmax": 2.0 * mf.bulge_sigma_mm(max(dmax - d_n, 0.0) / 2.0, DIAMETER_RESOLUTION_MM)}
     if dface is not None:
         shape_sigma["dface"] = mf.face_sigma(d_n, DIAMETER_RESOLUTION_MM) * d_n
     # E's uncertainty in the spring-back d·ν·σ/E of the model's diameters, in quadrature (σ = F/A at the end)
-    springback_rel = 0.3 * float(np.max(force)) / (math.pi * d_n**2 / 4.0) / E * elastics.E_stderr_MPa / E
+    E = inp.elastics.E_MPa
+    springback_rel = 0.3 * float(np.max(inp.force)) / (math.pi * d_n**2 / 4.0) / E * inp.elastics.E_stderr_MPa / E
     shape_sigma = {k: math.hypot(v, springback_rel * (dmax if k == "dmax" else dface)) for k, v in shape_sigma.items()}
     # every row in units of its own σ: the force rows' is pooled from their misfit for the covariance, the diameters' known
     row_sigma = np.array([np.nan] * FORCE_POINTS + [1.0] * len(shape_sigma))
+    return _Rows(first, fold_over, targets, s_pts, f_pts, f_sigma, shape_sigma, row_sigma)
+
+
+def _residuals(rows: _Rows, dmax: float, dface: float | None):
+    """The residuals of a run: the force points' misfit in % over their σ, the diameters' in mm over theirs."""
 
     def residuals_of(out: _Run) -> np.ndarray:
-        r_f = 100.0 * (np.interp(s_pts, out.stroke_mm, out.force_N) - f_pts) / f_pts
-        shape = [(out.dmax_unloaded_mm - dmax) / shape_sigma["dmax"]]
+        r_f = 100.0 * (np.interp(rows.s_pts, out.stroke_mm, out.force_N) - rows.f_pts) / rows.f_pts
+        shape = [(out.dmax_unloaded_mm - dmax) / rows.shape_sigma["dmax"]]
         if dface is not None:
-            shape.append((out.dface_unloaded_mm - dface) / shape_sigma["dface"])
-        return np.concatenate([r_f / f_sigma, shape])
+            shape.append((out.dface_unloaded_mm - dface) / rows.shape_sigma["dface"])
+        return np.concatenate([r_f / rows.f_sigma, shape])
 
-    def steps(x):
-        h = np.maximum(np.abs(x) * REL_STEP, 1e-6)
-        h[-1] = 0.005
-        return h
+    return residuals_of
 
-    x_scale = np.maximum(np.abs(x0), 1e-3)
-    x_scale[-1] = 0.05
-    before = time.perf_counter() - t0  # the fast identification, the closure, the warm start's run: the budget's and the progress's clock
-    # a run still going at the time limit is stopped there (a batch's length is not known beforehand: where the side
-    # folds over its runs stop and are retried, and a tall record's first Jacobian ran 250 s past a mean of 90)
+
+def _steps(x):
+    """Finite-difference steps: :data:`REL_STEP` of each law constant, 0.005 of μ."""
+    h = np.maximum(np.abs(x) * REL_STEP, 1e-6)
+    h[-1] = 0.005
+    return h
+
+
+def _fit(inp: _Inputs, start: _Start, rows: _Rows, before: float, *, workers, scheduler, max_runs, progress, time_limit_s):
+    """The least-squares fit with CalculiX in the loop, within what ``before`` (the fast identification, the closure, the
+    warm start's run) left of the budget: a run still going at the time limit is stopped there (a batch's length is
+    not known beforehand: where the side folds over its runs stop and are retried, and a tall record's first Jacobian
+    ran 250 s past a mean of 90)."""
+    x0 = start.x0
     fit_limit = fit_time_limit(time_limit_s, before)
-    fit_problem = problem if fit_limit is None else replace(problem, deadline=time.time() + fit_limit)
-    sol = fit_with_solver(partial(_run, fit_problem), residuals_of, x0, lo, hi, n_residuals=FORCE_POINTS + 1 + (dface is not None), steps=steps,
-                          x_scale=x_scale, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress_on_whole_clock(progress, before, len(x0), time_limit_s),
-                          other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=row_sigma,
-                          correlated=True, time_limit_s=fit_limit)
-    r, se = sol.residuals, sol.stderr
-    if sol.jac is not None:  # the force's model-form share of the standard errors, in quadrature with the fit's (the shape's is in its σ)
-        se = np.hypot(se, mf.force_model_form_stderr(sol.jac, np.arange(FORCE_POINTS), targets, f_sigma, float(sol.x[-1])))
-    by_side = None
-    if sol.jac is not None:  # what the force alone and the shape alone tell of μ (each with its model form, fe/force_shape.py)
-        from flowcurve.identification.fe.force_shape import force_shape_check, inverse_mu_by_side
+    fit_problem = inp.problem if fit_limit is None else replace(inp.problem, deadline=time.time() + fit_limit)
+    return fit_with_solver(partial(_run, fit_problem), _residuals(rows, inp.dmax, inp.dface), x0, start.lo, start.hi,
+                           n_residuals=FORCE_POINTS + 1 + (inp.dface is not None), steps=_steps, x_scale=start.x_scale,
+                           workers=workers, scheduler=scheduler, max_runs=max_runs,
+                           progress=progress_on_whole_clock(progress, before, len(x0), time_limit_s),
+                           other_starts=[np.append(x0[:-1], x0[-1] + dmu) for dmu in START_MU_STEPS], row_sigma=rows.row_sigma,
+                           correlated=True, time_limit_s=fit_limit)
 
-        by_side = inverse_mu_by_side(sol.jac, r, sol.x, targets, f_sigma, len(shape_sigma), x_scale=x_scale)
-        # μ is no surer than the two sides' estimates combined: the force rows' pooled σ (their misfit, 0.06 % on C1) let
-        # the fit's own covariance read μ to ± 0.002 where the models' force differs by 0.3 % (C1: 0.1424 ± 0.0023 for 0.15)
+
+def _uncertainty(sol, rows: _Rows, x_scale):
+    """(standard errors, what each side tells of μ, μ's standard error from the shape alone): the fit's, with the
+    force's model-form share in quadrature, μ's no surer than the force's and the shape's estimates combined."""
+    se = sol.stderr
+    by_side = None
+    if sol.jac is not None:  # the force's model-form share of the standard errors, in quadrature with the fit's (the shape's is in its σ)
+        se = np.hypot(se, mf.force_model_form_stderr(sol.jac, np.arange(FORCE_POINTS), rows.targets, rows.f_sigma, float(sol.x[-1])))
+        # what the force alone and the shape alone tell of μ (each with its model form, fe/force_shape.py)
+        by_side = inverse_mu_by_side(sol.jac, sol.residuals, sol.x, rows.targets, rows.f_sigma, len(rows.shape_sigma), x_scale=x_scale)
+        # μ is no surer than the two sides' estimates combined: the force rows' pooled σ (their misfit) let the fit's own
+        # covariance read μ far surer than the models' force difference allows (docs/methods.md §4a.7)
         if np.isfinite(se[-1]):  # an undetermined μ stays so
             se[-1] = np.fmax(se[-1], by_side.combined_stderr)
     # what the shape alone tells of μ, beside what the fit tells with the force (information, not a bound: the force
     # curve's error is counted as serially correlated in the fit's covariance)
-    shape_rows = list(range(FORCE_POINTS, len(row_sigma)))
-    mu_se_shape = sol.stderr_from_rows(len(sol.x) - 1, shape_rows, row_sigma)
-    mu_se_shape = mu_se_shape if np.isfinite(mu_se_shape) else None
-    rho = serial_correlation(r[:FORCE_POINTS])
-    params = dict(zip(law_info.names, map(float, sol.x[:-1])))
-    mu = float(sol.x[-1])
-    wall = time.perf_counter() - t0
-    r_force = r[:FORCE_POINTS] * f_sigma
-    force_rms = float(np.sqrt(np.mean(r_force**2)))
-    d_res_mm = float(r[FORCE_POINTS] * shape_sigma["dmax"])
-    face_res_mm = float(r[FORCE_POINTS + 1] * shape_sigma["dface"]) if dface is not None else None
-    warnings = _fit_warnings(force_rms, d_res_mm, mu, sol, shape_sigma["dmax"]) + sol.failed_runs_warnings() + sol.undetermined_warnings([*law_info.keys, "μ"])
+    shape_rows = list(range(FORCE_POINTS, len(rows.row_sigma)))
+    mu_se_shape = sol.stderr_from_rows(len(sol.x) - 1, shape_rows, rows.row_sigma)
+    return se, by_side, (mu_se_shape if np.isfinite(mu_se_shape) else None)
+
+
+@dataclass(frozen=True)
+class _Misfit:
+    """The fitted model's misfit: force rows in %, their RMS, the diameters' in mm."""
+
+    r_force: np.ndarray
+    force_rms: float
+    d_res_mm: float
+    face_res_mm: float | None
+
+
+def _misfit(sol, rows: _Rows, dface: float | None) -> _Misfit:
+    r = sol.residuals
+    r_force = r[:FORCE_POINTS] * rows.f_sigma
+    return _Misfit(r_force, float(np.sqrt(np.mean(r_force**2))), float(r[FORCE_POINTS] * rows.shape_sigma["dmax"]),
+                   float(r[FORCE_POINTS + 1] * rows.shape_sigma["dface"]) if dface is not None else None)
+
+
+def _all_warnings(sol, se, misfit: _Misfit, rows: _Rows, law_keys, dface, time_limit_s) -> list[str]:
+    """The fit's warnings: misfits, μ on a bound or poorly told, failed and undetermined runs, a cut."""
+    mu, shape_sigma = float(sol.x[-1]), rows.shape_sigma
+    warnings = _fit_warnings(misfit.force_rms, misfit.d_res_mm, mu, sol, shape_sigma["dmax"]) + sol.failed_runs_warnings() \
+        + sol.undetermined_warnings([*law_keys, "μ"])
     warnings += sol.cut_warnings("inverse FE", time_limit_s)
-    if face_res_mm is not None and poor_shape_misfit(face_res_mm, shape_sigma["dface"]):
-        warnings.append(f"inverse FE: the fitted model misses the end face dface by {face_res_mm:+.3f} mm (its σ ± {shape_sigma['dface']:.3f} mm)")
+    if misfit.face_res_mm is not None and poor_shape_misfit(misfit.face_res_mm, shape_sigma["dface"]):
+        warnings.append(f"inverse FE: the fitted model misses the end face dface by {misfit.face_res_mm:+.3f} mm (its σ ± {shape_sigma['dface']:.3f} mm)")
     if se[-1] > MU_TOLD:  # NaN (undetermined) is warned above
         shape = "dmax and dface" if dface is not None else "dmax (the faces nearly stick; the original end face, post.dface_mm, would tell more)"
         known = " and ".join(f"{k} to ± {v:.3f} mm" for k, v in shape_sigma.items())
         warnings.append(f"inverse FE: μ {mu:.3f} ± {se[-1]:.3f} is poorly told by the force curve and {shape}: the model knows "
                         f"{known} (the resolution and the model form's share of the shape), and μ moves them little here")
+    return warnings
 
-    e_hi = float(fast.result["hardening"]["strain_range"][1]) if fast.result.get("hardening") else float(strain.max())
+
+def _budget(sol, rows: _Rows, inp: _Inputs, time_limit_s, wall: float) -> dict:
+    """result.json's ``inverse_fe.budget``: the limit, whether it cut the fit, what was fitted."""
+    targets, fold_over, strain, dface = rows.targets, rows.fold_over, inp.strain, inp.dface
+    return {"time_limit_s": time_limit_s, "cut": sol.cut, "solver_runs": sol.runs, "wall_s": round(wall, 1),
+            "fold_over_strain": fold_over, "force_fitted_to_strain": float(targets[-1]), "record_strain": float(strain.max()),
+            "done": (f"force fitted over strain {targets[0]:.3g}–{targets[-1]:.3g} of {strain.max():.3g} ("
+                     + (f"the side folds onto the platen from {fold_over:.3g} in the warm start's run" if fold_over is not None
+                        else "no fold-over in the warm start's run" if rows.first is not None else "the warm start's run failed")
+                     + f"); shape {', '.join(['dmax'] + (['dface'] if dface is not None else []))} at the end; {sol.runs} runs; "
+                     + ("cut by the time limit" if sol.cut else "converged or stopped by the optimiser"))}
+
+
+def _inverse_block(sol, se, mu_se_shape, misfit: _Misfit, rows: _Rows, inp: _Inputs, start: _Start, budget: dict,
+                   increments: int, wall: float) -> dict:
+    """result.json's ``inverse_fe`` block: μ and its standard errors, the misfits, the runs, the budget, the model."""
+    law_info, dface, elastics = LAWS[inp.problem.law], inp.dface, inp.elastics
+    mu = float(sol.x[-1])
+    return {
+        "law": inp.law_choice,
+        "mu": mu, "mu_stderr": float(se[-1]), "mu_stderr_shape_alone": mu_se_shape,
+        "force_residual_serial_correlation": serial_correlation(sol.residuals[:FORCE_POINTS]),
+        "shape_sigma_mm": rows.shape_sigma, "solver_runs": sol.runs, "failed_solver_runs": sol.failed_runs,
+        "retried_solver_runs": sol.retried_runs, "solver_s": round(sol.solver_s, 1),
+        "wall_s": round(wall, 1), "force_rms_residual_pct": misfit.force_rms, "force_max_residual_pct": float(np.max(np.abs(misfit.r_force))),
+        "dmax_residual_mm": misfit.d_res_mm, **({"dface_residual_mm": misfit.face_res_mm} if dface is not None else {}),
+        "shape_measured": ["hk", "dmax"] + (["dface"] if dface is not None else []), "optimizer": sol.optimizer(),
+        "budget": budget,
+        "warm_start": {"mu": start.mu0, **{k: float(v) for k, v in zip(law_info.keys, start.p0)}},
+        "model": {"increments": increments, **elastics.as_dict(), "diagram_options": inp.diagram_options, "h_end_mm": inp.problem.h_end,
+                  "force_points": FORCE_POINTS, "force_sigma_pct": FORCE_SIGMA_PCT, "force_sigma_pct_at_fold_over": float(rows.f_sigma[-1]),
+                  "from_strain": FROM_STRAIN},
+    }
+
+
+def _assemble(inp: _Inputs, sol, se, by_side, inverse_block: dict, misfit: _Misfit, rows: _Rows, warnings: list[str]) -> Identification:
+    """The identification: the fast result with the inverse's law, μ and its block, the law's curve, the force rows."""
+    law, law_info, fast, dface, elastics = inp.problem.law, LAWS[inp.problem.law], inp.fast, inp.dface, inp.elastics
+    params = dict(zip(law_info.names, map(float, sol.x[:-1])))
+    e_hi = float(fast.result["hardening"]["strain_range"][1]) if fast.result.get("hardening") else float(inp.strain.max())
     grid = np.linspace(0.002, e_hi, 200)
     true_curve = pd.DataFrame({"true_plastic_strain": grid, "true_stress_MPa": law_info.func(grid, **params)})
     hardening = {"law": law, "method": "inverse_fe", **{k: params[n] for n, k in zip(law_info.names, law_info.keys)},
                  **{f"{k}_stderr": float(se[i]) for i, k in enumerate(law_info.keys)},
-                 "fit_error_pct": float(np.max(np.abs(r_force))), "rms_error_pct": force_rms, "strain_range": [0.002, e_hi]}
+                 "fit_error_pct": float(np.max(np.abs(misfit.r_force))), "rms_error_pct": misfit.force_rms, "strain_range": [0.002, e_hi]}
     result = dict(fast.result)
-    result.update({
-        "friction_mu": mu, "friction_method": "inverse_fe", "friction_correction": "inverse_fe",
-        "hardening": hardening,
-        "inverse_fe": {
-            "law": law_choice,
-            "mu": mu, "mu_stderr": float(se[-1]), "mu_stderr_shape_alone": mu_se_shape, "force_residual_serial_correlation": rho,
-            "shape_sigma_mm": shape_sigma, "solver_runs": sol.runs, "failed_solver_runs": sol.failed_runs,
-            "retried_solver_runs": sol.retried_runs, "solver_s": round(sol.solver_s, 1),
-            "wall_s": round(wall, 1), "force_rms_residual_pct": force_rms, "force_max_residual_pct": float(np.max(np.abs(r_force))),
-            "dmax_residual_mm": d_res_mm, **({"dface_residual_mm": face_res_mm} if dface is not None else {}),
-            "shape_measured": ["hk", "dmax"] + (["dface"] if dface is not None else []), "optimizer": sol.optimizer(),
-            "budget": {"time_limit_s": time_limit_s, "cut": sol.cut, "solver_runs": sol.runs, "wall_s": round(wall, 1),
-                       "fold_over_strain": fold_over, "force_fitted_to_strain": float(targets[-1]), "record_strain": float(strain.max()),
-                       "done": (f"force fitted over strain {targets[0]:.3g}–{targets[-1]:.3g} of {strain.max():.3g} ("
-                                + (f"the side folds onto the platen from {fold_over:.3g} in the warm start's run" if fold_over is not None
-                                   else "no fold-over in the warm start's run" if first is not None else "the warm start's run failed")
-                                + f"); shape {', '.join(['dmax'] + (['dface'] if dface is not None else []))} at the end; {sol.runs} runs; "
-                                + ("cut by the time limit" if sol.cut else "converged or stopped by the optimiser"))},
-            "warm_start": {"mu": mu0, **{k: float(v) for k, v in zip(law_info.keys, p0)}},
-            "model": {"increments": increments, **elastics.as_dict(), "diagram_options": diagram_options, "h_end_mm": problem.h_end, "force_points": FORCE_POINTS,
-                      "force_sigma_pct": FORCE_SIGMA_PCT, "force_sigma_pct_at_fold_over": float(f_sigma[-1]),
-                      "from_strain": FROM_STRAIN},
-        },
-    })
-    if elastics.E_source == "handbook" and diagram_options.get("E_MPa"):  # a class's handbook value, not the fast's "option"
+    result.update({"friction_mu": float(sol.x[-1]), "friction_method": "inverse_fe", "friction_correction": "inverse_fe",
+                   "hardening": hardening, "inverse_fe": inverse_block})
+    if elastics.E_source == "handbook" and inp.diagram_options.get("E_MPa"):  # a class's handbook value, not the fast's "option"
         result.update(E_MPa=elastics.E_MPa, E_source=f"handbook ({elastics.E_basis})")
     if by_side is not None:  # the force and the shape apart beyond their combined se: a warning, poor
         found, warning = force_shape_check(by_side, "dmax and dface" if dface is not None else "dmax")
@@ -390,5 +455,35 @@ def identify_inverse_fe(record, *, law: str = "auto", workers: int | None = None
         result["warnings"] = [*result.get("warnings", []), *warnings]
         hardening["quality"] = "poor"
     curves = dict(fast.curves)
-    curves["inverse_fe_force"] = pd.DataFrame({"specimen_displacement_mm": s_pts, "force_N": f_pts, "residual_pct": r_force})
+    curves["inverse_fe_force"] = pd.DataFrame({"specimen_displacement_mm": rows.s_pts, "force_N": rows.f_pts, "residual_pct": misfit.r_force})
     return Identification(result=result, true_curve=true_curve, curves=curves)
+
+
+def identify_inverse_fe_compression(record, *, law: str = "auto", workers: int | None = None, scheduler=None, increments: int = 50,
+                                    max_runs: int = 150, progress=None, E_MPa: float | None = None,
+                                    time_limit_s: float | None | str = "default") -> Identification:
+    """Fit ``law`` and μ to a compression record's force–stroke and dmax with CalculiX in the loop.
+
+    ``law="auto"``: the law that best fits the fast identification's curve (:func:`.law_choice.best_law_for`).
+    The model's E and the frame's stiffness: :func:`.machine.model_elastics` (E given, material.E_MPa, an
+    extensometer's, else a named material class's handbook value; k stated by the rig, else fitted by closure
+    on hk); never an apparent slope (else an error naming the inputs to give). ``time_limit_s``: the wall-time
+    budget, s (None: none; "default": :data:`TIME_LIMIT_S`). Returns the :class:`Identification` whose result
+    carries the ``inverse_fe`` block (docs/methods.md §4a.3)."""
+    check_law(law)
+    time_limit_s = TIME_LIMIT_S if time_limit_s == "default" else time_limit_s
+    if record.test != "compression":
+        raise IdentificationError(f"{record.source}: the compression inverse FE needs a compression record (this is {record.test!r})")
+    t0 = time.perf_counter()
+    inp = _inputs(record, law, E_MPa, increments)
+    start = _warm_start(inp)
+    rows = _rows(record, inp, start.x0)
+    before = time.perf_counter() - t0  # the fast identification, the closure, the warm start's run: the budget's and the progress's clock
+    sol = _fit(inp, start, rows, before, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress,
+               time_limit_s=time_limit_s)
+    se, by_side, mu_se_shape = _uncertainty(sol, rows, start.x_scale)
+    wall = time.perf_counter() - t0
+    misfit = _misfit(sol, rows, inp.dface)
+    warnings = _all_warnings(sol, se, misfit, rows, LAWS[inp.problem.law].keys, inp.dface, time_limit_s)
+    block = _inverse_block(sol, se, mu_se_shape, misfit, rows, inp, start, _budget(sol, rows, inp, time_limit_s, wall), increments, wall)
+    return _assemble(inp, sol, se, by_side, block, misfit, rows, warnings)

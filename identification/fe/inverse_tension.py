@@ -33,15 +33,19 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 from dataclasses import dataclass, replace
 from functools import partial
+from typing import Any
 
 import numpy as np
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.elastic_modulus import modulus_for_model
+from flowcurve.identification.fe.law_choice import best_law_for
 from flowcurve.identification.fe.solver_fit import fit_time_limit, fit_with_solver, progress_on_whole_clock, serial_correlation
-from flowcurve.identification.fe.upsetting import PLASTIC_ROWS
+from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
+from flowcurve.identification.hardening import fit_hardening
 from flowcurve.identification.outcome import Identification
 
 log = logging.getLogger(__name__)
@@ -156,8 +160,8 @@ def plastic_rows(problem: _Problem, H_MPa: float, beta: float, c: float) -> tupl
 def _run(problem: _Problem, x) -> _Run | None:
     """Force, elongation and neck radius of one CalculiX necking run at x = (H, β, c, δ); None when it
     failed, or when the problem's deadline stopped it or came before it (:func:`.ccx.timeout_by`)."""
-    from flowcurve.identification.fe.ccx import SolverError, timeout_by
-    from flowcurve.identification.fe.tension import TensionModel, simulate_tension
+    from flowcurve.identification.fe.model.ccx import SolverError, timeout_by
+    from flowcurve.identification.fe.model.tension import TensionModel, simulate_tension
 
     eps, sig = plastic_rows(problem, float(x[0]), float(x[1]), float(x[2]))
     timeout_s = timeout_by(problem.deadline)
@@ -216,26 +220,32 @@ def family_start(eps_p, stress_MPa, eps_a: float, sigma_a: float) -> tuple[float
     return tuple(map(float, sol.x))
 
 
-def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler=None, increments: int = INCREMENTS,
-                                max_runs: int = 60, progress=None, refit_law: str | None = None, time_limit_s: float | None = TIME_LIMIT_S,
-                                **tension_options) -> Identification:
-    """The hardening beyond ε_a and the specimen's taper, fitted to the record's force from ε_a to
-    fracture and its neck diameter with CalculiX. The FE-consistent curve is refitted in
-    ``refit_law``; None: in the law that follows it best (a warning when a given law follows it
-    poorly and another well). ``time_limit_s``: the whole identification's wall-time budget (None:
-    none); no batch of runs starts that would end past it, a run still going at it is stopped there
-    (not counted failed), and a fit so cut answers with the best
-    parameter set run so far (``inverse_fe.budget.cut``, a warning, the hardening poor).
-    ``progress(runs, elapsed_s, left_s)``: the time so far and an estimate of the time left."""
-    import time
+@dataclass(frozen=True)
+class _Inputs:
+    """What the tension inverse reads before its fit: the fast identification, the necking range, the measured rows."""
 
-    import pandas as pd
+    fast: Any  # the fast identification (its result is the inverse's base)
+    elong: np.ndarray  # the frame-corrected diagram
+    force: np.ndarray
+    i_m: int  # Fm
+    i_k: int  # the last sample before fracture
+    dk: float | None
+    l0: float
+    E_source: str
+    ep_u: np.ndarray  # the record's true curve
+    sig_u: np.ndarray
+    eps_pu: float
+    eps_a: float
+    rows_e: list  # the measured curve on UNIFORM_ROWS rows, ending at ε_a
+    rows_s: list
+    problem: _Problem
 
-    from flowcurve.identification.fe.inverse import best_law_for
-    from flowcurve.identification.hardening import fit_hardening
+
+def _inputs(record, increments: int, tension_options: dict) -> _Inputs:
+    """The fast identification, the necking range (Fm to fracture), and the record's true curve up to ε_a averaged
+    onto UNIFORM_ROWS rows; an error naming what is missing when the record cannot be fitted."""
     from flowcurve.identification.tension import identify_tension, reaches_fracture
 
-    t0 = time.perf_counter()
     fast = identify_tension(record, **tension_options)
     res = fast.result
     elong, force, i_m, i_k = _necking_range(fast)
@@ -259,28 +269,65 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
                                   f"range); --method inverse-fe needs {UNIFORM_ROWS}")
     rows_e, rows_s = uniform_rows(ep_u[sel], sig_u[sel], eps_a)
     problem = _Problem(float(d0), l0, float(elong[i_k]), float(E), tuple(rows_e), tuple(rows_s), increments)
-    sigma_a = rows_s[-1]
-    sigma_u = float(np.interp(eps_pu, ep_u, sig_u))
+    return _Inputs(fast, elong, force, i_m, i_k, dk, l0, E_source, ep_u, sig_u, eps_pu, eps_a, rows_e, rows_s, problem)
 
-    # force points: ε_a to Fm, then Fm to fracture (the elongation at ε_a from its log strain)
-    e_a = l0 * math.expm1(float(uni["true_strain"].to_numpy(dtype=float)[int(np.argmax(ep_u >= eps_a))]))
+
+@dataclass(frozen=True)
+class _Rows:
+    """The fit's rows: force points ε_a to Fm, then Fm to fracture (elongation mm, force N), the neck radius's σ."""
+
+    e_pts: np.ndarray
+    f_pts: np.ndarray
+    neck_sigma: float
+    row_sigma: np.ndarray
+
+    @property
+    def n_force(self) -> int:
+        return self.e_pts.size
+
+
+def _rows(inp: _Inputs) -> _Rows:
+    """Force points from ε_a to Fm and from Fm to fracture (the elongation at ε_a from its log strain) and the rows' σ."""
+    elong, force, i_m, i_k = inp.elong, inp.force, inp.i_m, inp.i_k
+    true_strain = inp.fast.curves["true"]["true_strain"].to_numpy(dtype=float)
+    e_a = inp.l0 * math.expm1(float(true_strain[int(np.argmax(inp.ep_u >= inp.eps_a))]))
     e_pts = np.concatenate([np.linspace(e_a, elong[i_m], FORCE_POINTS_UNIFORM + 1)[1:],
                             np.linspace(elong[i_m], elong[i_k], FORCE_POINTS + 1)[1:]])
     f_pts = np.interp(e_pts, elong[: i_k + 1], force[: i_k + 1])
-    n_force = e_pts.size
-    neck_sigma = math.hypot(NECK_RESOLUTION_MM, NECK_MESH_MM)
-    row_sigma = np.array([np.nan] * n_force + ([1.0] if dk is not None else []))
+    row_sigma = np.array([np.nan] * e_pts.size + ([1.0] if inp.dk is not None else []))
+    return _Rows(e_pts, f_pts, math.hypot(NECK_RESOLUTION_MM, NECK_MESH_MM), row_sigma)
+
+
+def _residuals(rows: _Rows, dk: float | None, elongation: float):
+    """The residuals of a run: the force points' misfit in % over FORCE_SIGMA_PCT, the neck radius's in mm over its σ."""
 
     def residuals_of(out: _Run) -> np.ndarray:
-        r_f = 100.0 * (np.interp(e_pts, out.elongation_mm, out.force_N) - f_pts) / f_pts / FORCE_SIGMA_PCT
+        r_f = 100.0 * (np.interp(rows.e_pts, out.elongation_mm, out.force_N) - rows.f_pts) / rows.f_pts / FORCE_SIGMA_PCT
         if dk is None:
             return r_f
-        a_end = float(np.interp(problem.elongation, out.elongation_mm, out.neck_radius_mm))
-        return np.concatenate([r_f, [(a_end - dk / 2.0) / neck_sigma]])
+        a_end = float(np.interp(elongation, out.elongation_mm, out.neck_radius_mm))
+        return np.concatenate([r_f, [(a_end - dk / 2.0) / rows.neck_sigma]])
 
-    # warm starts: the family nearest each law fitted on the measured uniform range and extrapolated to fracture
-    # (they part beyond Fm: a saturating law against a power law); all run at once, the fit starts from the best
-    eps_f = res.get("fracture_true_strain")
+    return residuals_of
+
+
+@dataclass(frozen=True)
+class _Starts:
+    """The warm starts by law, the bounds of (H, β, c, δ) and the strain the curve is carried to."""
+
+    starts: dict
+    lo: np.ndarray
+    hi: np.ndarray
+    e_end: float  # the fracture strain (1.5·ε_pu without one)
+    sigma_u: float
+
+
+def _warm_starts(record, inp: _Inputs) -> _Starts:
+    """The family nearest each law fitted on the measured uniform range and extrapolated to fracture (they part beyond
+    Fm: a saturating law against a power law); all run at once, the fit starts from the best."""
+    ep_u, sig_u, eps_pu, eps_a = inp.ep_u, inp.sig_u, inp.eps_pu, inp.eps_a
+    sigma_u = float(np.interp(eps_pu, ep_u, sig_u))
+    eps_f = inp.fast.result.get("fracture_true_strain")
     e_end = float(eps_f) if eps_f is not None else 1.5 * eps_pu
     uniform_in = (ep_u > 0.002) & (ep_u <= eps_pu)
     reach = np.linspace(eps_a, e_end, 60)
@@ -293,95 +340,172 @@ def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler
         except IdentificationError as exc:
             log.info("inverse FE tension: no %s warm start (%s)", start_law, exc)
             continue
-        starts[start_law] = np.clip([*family_start(reach, law_fit(reach), eps_a, sigma_a), TAPER_START], lo + 1e-9, hi - 1e-9)
+        starts[start_law] = np.clip([*family_start(reach, law_fit(reach), eps_a, inp.rows_s[-1]), TAPER_START], lo + 1e-9, hi - 1e-9)
     if not starts:
         raise IdentificationError(f"{record.source}: no hardening law fits the uniform range; --method inverse-fe has no warm start")
-    x0, *others = starts.values()
+    return _Starts(starts, lo, hi, e_end, sigma_u)
 
-    def steps(x):
-        h = np.maximum(np.abs(x) * REL_STEP, 1e-3)
-        h[3] = TAPER_STEP
-        return h
 
-    before = time.perf_counter() - t0  # the fast identification: the budget's and the progress's clock start with it
-    fit_limit = fit_time_limit(time_limit_s, before)  # a run still going at the limit is stopped there (as compression's)
+def _steps(x):
+    """Finite-difference steps: :data:`REL_STEP` of H, β and c, :data:`TAPER_STEP` of δ."""
+    h = np.maximum(np.abs(x) * REL_STEP, 1e-3)
+    h[3] = TAPER_STEP
+    return h
+
+
+def _fit(inp: _Inputs, st: _Starts, rows: _Rows, before: float, *, workers, scheduler, max_runs, progress, time_limit_s):
+    """The least-squares fit with CalculiX in the loop within what ``before`` (the fast identification) left of the
+    budget; a run still going at the limit is stopped there (as compression's)."""
+    x0, *others = st.starts.values()
+    fit_limit = fit_time_limit(time_limit_s, before)
+    problem = inp.problem
     fit_problem = problem if fit_limit is None else replace(problem, deadline=time.time() + fit_limit)
-    sol = fit_with_solver(partial(_run, fit_problem), residuals_of, x0, lo, hi, n_residuals=row_sigma.size, steps=steps,
-                          x_scale=np.array([sigma_u, max(x0[1], 1.0), 1.0, TAPER_START]), workers=workers, scheduler=scheduler,
-                          max_runs=max_runs, xtol=1e-3, ftol=1e-4, progress=progress_on_whole_clock(progress, before, len(x0), time_limit_s),
-                          what="inverse FE (tension)", row_sigma=row_sigma, correlated=True, other_starts=others, best_start=True,
-                          time_limit_s=fit_limit)
-    (H, beta, c, taper), (H_se, beta_se, c_se, taper_se) = map(float, sol.x), map(float, sol.stderr)
-    r = sol.residuals
-    r_force = r[:n_force] * FORCE_SIGMA_PCT
-    names = ("H", "beta", "c", "taper")
-    # c's lower bound, 0, is Voce itself, not a limit the fit ran into
-    on_bound = [name for name, v, l_, h_ in zip(names, sol.x, lo, hi) if (v <= l_ + 1e-9 and name != "c") or v >= h_ - 1e-9]
+    return fit_with_solver(partial(_run, fit_problem), _residuals(rows, inp.dk, problem.elongation), x0, st.lo, st.hi,
+                           n_residuals=rows.row_sigma.size, steps=_steps,
+                           x_scale=np.array([st.sigma_u, max(x0[1], 1.0), 1.0, TAPER_START]), workers=workers, scheduler=scheduler,
+                           max_runs=max_runs, xtol=1e-3, ftol=1e-4, progress=progress_on_whole_clock(progress, before, len(x0), time_limit_s),
+                           what="inverse FE (tension)", row_sigma=rows.row_sigma, correlated=True, other_starts=others, best_start=True,
+                           time_limit_s=fit_limit)
+
+
+NAMES = ("H", "beta", "c", "taper")
+
+
+def _fit_problems(sol, st: _Starts, rows: _Rows, dk: float | None) -> tuple[list[str], float, float, float | None]:
+    """(what is wrong with the fit, force RMS %, force max %, neck radius misfit mm): a parameter on a bound (c's lower
+    bound, 0, is Voce itself, not a limit the fit ran into), a force or neck misfit, an optimiser that did not converge."""
+    r_force = sol.residuals[:rows.n_force] * FORCE_SIGMA_PCT
+    on_bound = [name for name, v, l_, h_ in zip(NAMES, sol.x, st.lo, st.hi) if (v <= l_ + 1e-9 and name != "c") or v >= h_ - 1e-9]
     force_rms, force_max = float(np.sqrt(np.mean(r_force**2))), float(np.max(np.abs(r_force)))
-    neck_res_mm = float(r[n_force] * neck_sigma) if dk is not None else None
+    neck_res_mm = float(sol.residuals[rows.n_force] * rows.neck_sigma) if dk is not None else None
     problems = [f"{', '.join(on_bound)} on a bound; the necking range may not be matched"] if on_bound else []
     if force_rms > POOR_FORCE_RMS_PCT or force_max > 5.0:
         problems.append(f"force residual {force_rms:.2f} % RMS, up to {force_max:.1f} % beyond ε_a: the model does not follow the record")
     if sol.status <= 0 and not sol.cut:  # a cut says so in its own warning
         problems.append(f"the optimiser stopped before converging ({sol.message})")
-    if neck_res_mm is not None and abs(neck_res_mm) > 3.0 * neck_sigma:
+    if neck_res_mm is not None and abs(neck_res_mm) > 3.0 * rows.neck_sigma:
         problems.append(f"the fitted model misses the neck radius by {neck_res_mm:+.3f} mm")
+    return problems, force_rms, force_max, neck_res_mm
 
-    grid = np.linspace(0.002, e_end, 200)
-    flow = extended_curve(grid, rows_e, rows_s, H, beta, c)
+
+@dataclass(frozen=True)
+class _Curve:
+    """The FE-consistent flow curve, the law refitted to it and the fracture stress it gives."""
+
+    grid: np.ndarray
+    e_end: float  # the grid's end: the fracture strain (1.5·ε_pu without one)
+    true_curve: Any  # pandas frame
+    refit: Any  # HardeningFit
+    law_rms: dict
+    warning_law: str | None
+    fe_fracture: float | None
+    fe_fracture_se: float | None
+
+
+def _fe_curve(sol, inp: _Inputs, st: _Starts, refit_law: str | None) -> _Curve:
+    """The measured curve to ε_a, the fitted family beyond it, to the fracture strain; refitted in ``refit_law`` (None:
+    the law that follows it best; a warning when a given law follows it poorly and another well)."""
+    import pandas as pd
+
+    H, beta, c, _ = map(float, sol.x)
+    grid = np.linspace(0.002, st.e_end, 200)
+    flow = extended_curve(grid, inp.rows_e, inp.rows_s, H, beta, c)
     true_curve = pd.DataFrame({"true_plastic_strain": grid, "true_stress_MPa": flow})
     best, law_rms = best_law_for(true_curve)
     refit = fit_hardening(grid, flow, refit_law or best)
     if refit_law and refit_law != best and law_rms.get(refit_law, 0.0) > LAW_RMS_WARN_PCT > law_rms[best]:
-        warnings_law = (f"inverse FE: {refit_law} follows the FE-consistent curve within {law_rms[refit_law]:.1f} % RMS only, {best} within "
-                        f"{law_rms[best]:.2f} % (--law {best}); true_curve.csv holds the curve itself")
+        warning_law = (f"inverse FE: {refit_law} follows the FE-consistent curve within {law_rms[refit_law]:.1f} % RMS only, {best} within "
+                       f"{law_rms[best]:.2f} % (--law {best}); true_curve.csv holds the curve itself")
     else:
-        warnings_law = None
-    fe_fracture = float(extended_curve(e_end, rows_e, rows_s, H, beta, c)) if eps_f is not None else None
-    fe_fracture_se = fracture_stress_stderr(sol.covariance, sol.x, e_end - eps_a) if eps_f is not None else None
-    necks = {m: {"stress_MPa": v["stress_MPa"], "vs_fe_pct": 100.0 * (v["stress_MPa"] / fe_fracture - 1.0)}
-             for m, v in (res.get("neck_corrections") or {}).items() if isinstance(v, dict) and fe_fracture}
-    # what is wrong with the fit itself (not with the law refitted to its curve, which has its own quality)
-    fit_warnings = (["inverse FE: " + "; ".join(problems)] if problems else []) + sol.failed_runs_warnings("inverse FE (tension)") \
-        + sol.undetermined_warnings(list(names), "inverse FE (tension)") + sol.cut_warnings("inverse FE (tension)", time_limit_s)
-    warnings = [*res.get("warnings", []), *fit_warnings, *([warnings_law] if warnings_law else [])]
-    if dk is None:
-        warnings.append("inverse FE: no post.dk_mm: only the force is fitted, not the neck diameter; the taper and the hardening "
-                        "beyond Fm are then told apart by the force curve alone")
+        warning_law = None
+    fractured = inp.fast.result.get("fracture_true_strain") is not None
+    fe_fracture = float(extended_curve(st.e_end, inp.rows_e, inp.rows_s, H, beta, c)) if fractured else None
+    fe_fracture_se = fracture_stress_stderr(sol.covariance, sol.x, st.e_end - inp.eps_a) if fractured else None
+    return _Curve(grid, st.e_end, true_curve, refit, law_rms, warning_law, fe_fracture, fe_fracture_se)
 
-    wall = time.perf_counter() - t0
-    result = dict(res)
-    result["hardening_alternatives"] = {**res.get("hardening_alternatives", {}), "fast": res["hardening"]}
-    result["hardening"] = {**refit.as_dict(), "method": "inverse_fe", "fitted_to": "the FE-consistent flow curve (measured to ε_a, CalculiX beyond)",
-                           "strain_range": [0.002, e_end]}
-    if fit_warnings:  # a card from this curve must not read "good" (as compression's inverse)
-        result["hardening"]["quality"] = "poor"
-    result["fracture_true_stress_MPa"] = fe_fracture if fe_fracture is not None else res.get("fracture_true_stress_MPa")
-    result["warnings"] = warnings
-    result["inverse_fe"] = {
+
+def _inverse_block(sol, inp: _Inputs, st: _Starts, rows: _Rows, curve: _Curve, misfit: tuple, time_limit_s, wall: float) -> dict:
+    """result.json's ``inverse_fe`` block: the family and taper with their standard errors, the fracture stress, the
+    neck corrections against it, the runs, the budget, the misfits, the model."""
+    (H, beta, c, taper), (H_se, beta_se, c_se, taper_se) = map(float, sol.x), map(float, sol.stderr)
+    _, force_rms, force_max, neck_res_mm = misfit
+    fe_fracture, dk, n_force, e_pts = curve.fe_fracture, inp.dk, rows.n_force, rows.e_pts
+    necks = {m: {"stress_MPa": v["stress_MPa"], "vs_fe_pct": 100.0 * (v["stress_MPa"] / fe_fracture - 1.0)}
+             for m, v in (inp.fast.result.get("neck_corrections") or {}).items() if isinstance(v, dict) and fe_fracture}
+    return {
         "H_MPa": H, "H_MPa_stderr": H_se, "beta": beta, "beta_stderr": beta_se, "c": c, "c_stderr": c_se, "taper": taper, "taper_stderr": taper_se,
-        "sigma_a_MPa": sigma_a, "measured_to_true_plastic_strain": eps_a, "sigma_u_MPa": sigma_u,
-        "uniform_rows": {"true_plastic_strain": rows_e, "true_stress_MPa": rows_s},
-        "uniform_true_plastic_strain": eps_pu, "fracture_true_stress_MPa": fe_fracture, "fracture_true_stress_MPa_stderr": fe_fracture_se,
+        "sigma_a_MPa": inp.rows_s[-1], "measured_to_true_plastic_strain": inp.eps_a, "sigma_u_MPa": st.sigma_u,
+        "uniform_rows": {"true_plastic_strain": inp.rows_e, "true_stress_MPa": inp.rows_s},
+        "uniform_true_plastic_strain": inp.eps_pu, "fracture_true_stress_MPa": fe_fracture, "fracture_true_stress_MPa_stderr": curve.fe_fracture_se,
         "neck_corrections_vs_fe": necks,
         "solver_runs": sol.runs, "failed_solver_runs": sol.failed_runs, "solver_s": round(sol.solver_s, 1),
         "wall_s": round(wall, 1),
         "budget": {"time_limit_s": time_limit_s, "cut": sol.cut, "solver_runs": sol.runs, "wall_s": round(wall, 1),
                    "done": (f"force fitted over elongation {e_pts[0]:.3g}–{e_pts[-1]:.3g} mm (ε_a to fracture, {n_force} points)"
-                            + (", the neck radius at fracture" if dk is not None else ", no neck diameter") + f"; {len(starts)} warm starts, "
+                            + (", the neck radius at fracture" if dk is not None else ", no neck diameter") + f"; {len(st.starts)} warm starts, "
                             + f"{sol.runs} runs; " + ("cut by the time limit" if sol.cut else "converged or stopped by the optimiser"))},
         "force_rms_residual_pct": force_rms, "force_max_residual_pct": force_max,
-        "force_residual_serial_correlation": serial_correlation(r[:n_force]),
+        "force_residual_serial_correlation": serial_correlation(sol.residuals[:n_force]),
         "neck_radius_residual_mm": neck_res_mm,
-        "law_rms_error_pct": law_rms, "optimizer": sol.optimizer(),
-        "warm_starts": {k: {"H_MPa": float(v[0]), "beta": float(v[1]), "c": float(v[2]), "taper": float(v[3])} for k, v in starts.items()},
-        "model": {"elements": "CAX8R 8x30 quarter model", "increments": increments, "E_MPa": float(E), "E_source": E_source, "l0_mm": l0,
-                  "elongation_mm": problem.elongation, "force_points": n_force, "force_sigma_pct": FORCE_SIGMA_PCT,
-                  "neck_radius_sigma_mm": neck_sigma, "uniform_fraction": UNIFORM_FRACTION},
+        "law_rms_error_pct": curve.law_rms, "optimizer": sol.optimizer(),
+        "warm_starts": {k: {"H_MPa": float(v[0]), "beta": float(v[1]), "c": float(v[2]), "taper": float(v[3])} for k, v in st.starts.items()},
+        "model": {"elements": "CAX8R 8x30 quarter model", "increments": inp.problem.increments, "E_MPa": inp.problem.E, "E_source": inp.E_source,
+                  "l0_mm": inp.l0, "elongation_mm": inp.problem.elongation, "force_points": n_force, "force_sigma_pct": FORCE_SIGMA_PCT,
+                  "neck_radius_sigma_mm": rows.neck_sigma, "uniform_fraction": UNIFORM_FRACTION},
     }
+
+
+def _assemble(sol, inp: _Inputs, rows: _Rows, curve: _Curve, fit_warnings: list[str], block: dict, force_residual_pct) -> Identification:
+    """The identification: the fast result with the refitted law, the FE fracture stress, the warnings and the
+    ``inverse_fe`` block; the FE-consistent curve, the force rows and the law's curve."""
+    import pandas as pd
+
+    res = inp.fast.result
+    warnings = [*res.get("warnings", []), *fit_warnings, *([curve.warning_law] if curve.warning_law else [])]
+    if inp.dk is None:
+        warnings.append("inverse FE: no post.dk_mm: only the force is fitted, not the neck diameter; the taper and the hardening "
+                        "beyond Fm are then told apart by the force curve alone")
+    result = dict(res)
+    result["hardening_alternatives"] = {**res.get("hardening_alternatives", {}), "fast": res["hardening"]}
+    result["hardening"] = {**curve.refit.as_dict(), "method": "inverse_fe", "fitted_to": "the FE-consistent flow curve (measured to ε_a, CalculiX beyond)",
+                           "strain_range": [0.002, curve.e_end]}
+    if fit_warnings:  # a card from this curve must not read "good" (as compression's inverse)
+        result["hardening"]["quality"] = "poor"
+    result["fracture_true_stress_MPa"] = curve.fe_fracture if curve.fe_fracture is not None else res.get("fracture_true_stress_MPa")
+    result["warnings"] = warnings
+    result["inverse_fe"] = block
     result["methods"] = {**res.get("methods", {}), "inverse": "CalculiX necking (CAX8R) in the loop beyond ε_a with the taper fitted "
                                                              "(scipy least_squares), the curve measured up to ε_a"}
-    curves = dict(fast.curves)
-    curves["inverse_fe_force"] = pd.DataFrame({"elongation_mm": e_pts, "force_N": f_pts, "residual_pct": r_force})
-    curves["fit"] = pd.DataFrame({"true_plastic_strain": grid, "true_stress_MPa": refit(grid)})
-    return Identification(result=result, true_curve=true_curve, curves=curves)
+    curves = dict(inp.fast.curves)
+    curves["inverse_fe_force"] = pd.DataFrame({"elongation_mm": rows.e_pts, "force_N": rows.f_pts, "residual_pct": force_residual_pct})
+    curves["fit"] = pd.DataFrame({"true_plastic_strain": curve.grid, "true_stress_MPa": curve.refit(curve.grid)})
+    return Identification(result=result, true_curve=curve.true_curve, curves=curves)
+
+
+def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler=None, increments: int = INCREMENTS,
+                                max_runs: int = 60, progress=None, refit_law: str | None = None, time_limit_s: float | None = TIME_LIMIT_S,
+                                **tension_options) -> Identification:
+    """The hardening beyond ε_a and the specimen's taper, fitted to the record's force from ε_a to
+    fracture and its neck diameter with CalculiX. The FE-consistent curve is refitted in
+    ``refit_law``; None: in the law that follows it best (a warning when a given law follows it
+    poorly and another well). ``time_limit_s``: the whole identification's wall-time budget (None:
+    none); no batch of runs starts that would end past it, a run still going at it is stopped there
+    (not counted failed), and a fit so cut answers with the best
+    parameter set run so far (``inverse_fe.budget.cut``, a warning, the hardening poor).
+    ``progress(runs, elapsed_s, left_s)``: the time so far and an estimate of the time left.
+    Returns the :class:`Identification` whose result carries the ``inverse_fe`` block (docs/methods.md §4a.4)."""
+    t0 = time.perf_counter()
+    inp = _inputs(record, increments, tension_options)
+    rows = _rows(inp)
+    st = _warm_starts(record, inp)
+    before = time.perf_counter() - t0  # the fast identification: the budget's and the progress's clock start with it
+    sol = _fit(inp, st, rows, before, workers=workers, scheduler=scheduler, max_runs=max_runs, progress=progress, time_limit_s=time_limit_s)
+    misfit = _fit_problems(sol, st, rows, inp.dk)
+    curve = _fe_curve(sol, inp, st, refit_law)
+    # what is wrong with the fit itself (not with the law refitted to its curve, which has its own quality)
+    problems = misfit[0]
+    fit_warnings = (["inverse FE: " + "; ".join(problems)] if problems else []) + sol.failed_runs_warnings("inverse FE (tension)") \
+        + sol.undetermined_warnings(list(NAMES), "inverse FE (tension)") + sol.cut_warnings("inverse FE (tension)", time_limit_s)
+    wall = time.perf_counter() - t0
+    block = _inverse_block(sol, inp, st, rows, curve, misfit, time_limit_s, wall)
+    return _assemble(sol, inp, rows, curve, fit_warnings, block, sol.residuals[:rows.n_force] * FORCE_SIGMA_PCT)

@@ -38,14 +38,14 @@ from pathlib import Path
 import numpy as np
 
 from flowcurve.identification.fe import generator
-from flowcurve.identification.fe.table import plastic_strain_at
-from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
+from flowcurve.identification.fe.model.table import PACKAGE_TABLE, plastic_strain_at
+from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 
 log = logging.getLogger(__name__)
 
 MODULE = "flowcurve.identification.fe.make_table"
 
-DEFAULT_OUT = Path(__file__).resolve().parent / "data" / "upsetting_table.npz"
+DEFAULT_OUT = PACKAGE_TABLE
 # the source tree's rig/virtual/data (the table is regenerated in a checkout, never in a wheel)
 VIRTUAL_RIG_COPY = Path(__file__).resolve().parents[2] / "rig" / "virtual" / "data" / "upsetting_response.npz"
 MU = (0.0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.35)
@@ -276,9 +276,9 @@ def retry_stopped(out: Path = DEFAULT_OUT, *, workers: int = 2, scheduler=None, 
 
 def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_COPY) -> dict:
     """The virtual rig's copy of the table's runs: force factor and bulge (as measured on the
-    unloaded specimen, :func:`~flowcurve.identification.fe.table.bulge_as_measured`) on a strain
+    unloaded specimen, :func:`~flowcurve.identification.fe.model.table.bulge_as_measured`) on a strain
     grid starting at 0, NaN where a run stopped; provenance beside it."""
-    from flowcurve.identification.fe.table import bulge_as_measured, table_material, table_provenance
+    from flowcurve.identification.fe.model.table import bulge_as_measured, table_material, table_provenance
 
     table, out = Path(table), Path(out)
     source = table_provenance(table)

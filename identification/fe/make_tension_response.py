@@ -40,7 +40,7 @@ import numpy as np
 
 from flowcurve.identification.fe import generator
 from flowcurve.identification.fe.synthetic import swift_flow
-from flowcurve.identification.fe.tension import TensionModel, simulate_tension
+from flowcurve.identification.fe.model.tension import TensionModel, simulate_tension
 
 log = logging.getLogger(__name__)
 

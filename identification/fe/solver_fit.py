@@ -205,6 +205,136 @@ def progress_on_whole_clock(progress, before_s: float, n_params: int, time_limit
     return shown
 
 
+class _Runs:
+    """The runs of one fit: each parameter set run once (side by side per batch), its residuals kept, the least
+    misfit so far, the last Jacobian, and the columns whose runs failed on both sides; the time limit kept."""
+
+    def __init__(self, run, residuals_of, *, n_residuals: int, n_params: int, workers, scheduler, max_runs: int, progress,
+                 what: str, time_limit_s: float | None):
+        self.run, self.residuals_of, self.n_residuals, self.n_params = run, residuals_of, n_residuals, n_params
+        self.workers, self.scheduler, self.max_runs, self.progress, self.what = workers, scheduler, max_runs, progress, what
+        self.time_limit_s = time_limit_s
+        self.t0 = time.perf_counter()
+        self.count, self.solver_s, self.failed_count, self.retried, self.longest_batch_s = 0, 0.0, 0, 0, 0.0
+        self.memo: dict[tuple, np.ndarray] = {}
+        self.best: dict = {}  # the least misfit run so far: x, residuals
+        self.last_jac: dict = {}  # x, J of the last Jacobian
+        self.blind: dict[tuple, list[int]] = {}  # at x: the Jacobian columns whose runs failed on both sides
+
+    def evaluate(self, points: list[np.ndarray]) -> list[np.ndarray]:
+        """The residuals at each point, running the sets not seen before as one batch."""
+        todo = list({tuple(p): p for p in points if tuple(p) not in self.memo}.values())
+        if todo:
+            self._batch(todo)
+        return [self.memo[tuple(p)] for p in points]
+
+    def _batch(self, todo: list[np.ndarray]) -> None:
+        if self.count + len(todo) > self.max_runs:
+            raise IdentificationError(f"{self.what}: more than {self.max_runs} solver runs without convergence")
+        elapsed = time.perf_counter() - self.t0
+        # the next batch at the longest so far: where the side folds over a batch's runs stop and are retried, and at the
+        # mean batch time a tall record's fit ended 27 s past its limit (597 s for 570)
+        if self.time_limit_s is not None and self.best and elapsed + self.longest_batch_s > self.time_limit_s:
+            raise _OutOfTime
+        t_batch = time.perf_counter()
+        outs = run_many(self.run, todo, workers=self.workers, scheduler=self.scheduler)
+        # past the limit a run that did not end was stopped by it (a ``run`` that keeps a deadline), not failed
+        over = bool(self.time_limit_s is not None and time.perf_counter() - self.t0 >= self.time_limit_s)
+        for p, out in zip(todo, outs):
+            self.count += 1
+            if out is None and over:
+                continue
+            self._keep(p, out)
+        self.longest_batch_s = max(self.longest_batch_s, time.perf_counter() - t_batch)
+        if over:
+            raise _OutOfTime
+        if self.progress:
+            elapsed = time.perf_counter() - self.t0
+            self.progress(self.count, elapsed, time_left_s(self.count, elapsed, self.n_params, self.time_limit_s))
+
+    def _keep(self, p: np.ndarray, out) -> None:
+        """One run's residuals (1e3 for a failed run) kept, its counts, the best so far."""
+        self.failed_count += out is None
+        self.retried += bool(getattr(out, "retried", False))
+        if out is not None and not out.cached:
+            self.solver_s += out.wall_s
+        r = np.full(self.n_residuals, FAILED_RUN_RESIDUAL) if out is None else self.residuals_of(out)
+        self.memo[tuple(p)] = r
+        if out is not None and (not self.best or float(r @ r) < float(self.best["r"] @ self.best["r"])):
+            self.best.update(x=np.asarray(p, float), r=r)
+
+    def fun(self, x):
+        return self.evaluate([np.asarray(x, float)])[0]
+
+    def jacobian(self, x, steps, lo, hi):
+        """Forward differences, backward at an upper bound or where the forward run failed; the runs of one Jacobian
+        go side by side. A column whose runs failed both ways is unknown, not the 1e3 of a failed run over a step: a
+        zero column keeps the optimiser from moving on it, and the parameter is reported undetermined if it stays so."""
+        x = np.asarray(x, float)
+        h = steps(x)
+        pts = []
+        for i in range(x.size):
+            xp = x.copy()
+            xp[i] = x[i] + h[i] if x[i] + h[i] <= hi[i] else x[i] - h[i]
+            pts.append(xp)
+        res = self.evaluate([x] + pts)
+        flip = [i for i in range(x.size) if _failed(res[i + 1]) and lo[i] <= 2.0 * x[i] - pts[i][i] <= hi[i]]
+        for i in flip:
+            pts[i] = pts[i].copy()
+            pts[i][i] = 2.0 * x[i] - pts[i][i]
+        if flip:
+            res = self.evaluate([x] + pts)
+        self.blind[tuple(x)] = [i for i in range(x.size) if _failed(res[i + 1])]
+        J = np.column_stack([np.zeros(len(res[0])) if i in self.blind[tuple(x)] else (res[i + 1] - res[0]) / (pts[i][i] - x[i])
+                             for i in range(x.size)])
+        self.last_jac.update(x=x, J=J)
+        return J
+
+
+def _failed(r) -> bool:
+    return bool(r[0] == FAILED_RUN_RESIDUAL)
+
+
+def _first_start(runs: _Runs, starts: list[np.ndarray], best_start: bool) -> np.ndarray:
+    """The start the fit goes from: the first whose run did not fail (no Jacobian can be formed around a failed run);
+    with ``best_start`` all run side by side first and tried in order of their misfit (a failed run's 1e3 last)."""
+    if best_start:
+        costs = [float(r @ r) for r in runs.evaluate(starts)]
+        starts = [starts[k] for k in np.argsort(costs, kind="stable")]
+    for x0 in starts:
+        if not _failed(runs.evaluate([x0])[0]):
+            return x0
+    raise IdentificationError(f"{runs.what}: the solver run failed at the warm start {np.round(starts[0], 4).tolist()} and at "
+                              f"{len(starts) - 1} other starts (see the log); the fast result is the one to use for this record")
+
+
+def _cut_solution(runs: _Runs) -> SimpleNamespace:
+    """The answer of a fit the time limit cut: the best set run so far; its covariance from the last Jacobian (at it,
+    or at the optimiser's last x); an error when the limit stopped the first runs before one ended."""
+    if not runs.best:
+        raise IdentificationError(f"{runs.what}: the time limit ({runs.time_limit_s:g} s for the fit, --time-limit) stopped the first "
+                                  f"{runs.count} solver runs before one ended; give a longer --time-limit "
+                                  "(the fast result is the one to use meanwhile)") from None
+    last_jac, best = runs.last_jac, runs.best
+    J = last_jac["J"] if last_jac else np.zeros((runs.n_residuals, runs.n_params))
+    at = ("at it" if np.array_equal(last_jac["x"], best["x"]) else "at the optimiser's last point") if last_jac else "none formed"
+    return SimpleNamespace(x=best["x"], fun=best["r"], jac=J, status=0, nfev=runs.count,
+                           message=f"cut by the time limit of {runs.time_limit_s:g} s: the best of {runs.count} runs, the Jacobian {at}")
+
+
+def _solver_fit(sol, runs: _Runs, cut: bool, x_scale, row_sigma, correlated: bool) -> SolverFit:
+    """The fit's answer with its covariance (:func:`parameter_covariance`); the parameters the residuals do not tell,
+    or whose Jacobian column failed both ways at the answer, undetermined (NaN)."""
+    cov, undetermined = parameter_covariance(sol.jac, sol.fun, x_scale, row_sigma=row_sigma, correlated=correlated)
+    undetermined = tuple(sorted({*undetermined, *runs.blind.get(tuple(sol.x), [])}))
+    cov[list(undetermined), :] = np.nan
+    cov[:, list(undetermined)] = np.nan
+    return SolverFit(x=sol.x, stderr=np.sqrt(np.diag(cov)), residuals=sol.fun, runs=runs.count, solver_s=runs.solver_s,
+                     wall_s=time.perf_counter() - runs.t0, status=int(sol.status), message=str(sol.message), nfev=int(sol.nfev),
+                     undetermined=undetermined, jac=np.asarray(sol.jac, float), covariance=cov, failed_runs=runs.failed_count,
+                     retried_runs=runs.retried, cut=cut, time_limit_s=runs.time_limit_s)
+
+
 def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[Any], np.ndarray], x0, lo, hi, *,
                     n_residuals: int, steps: Callable[[np.ndarray], np.ndarray], x_scale, workers: int | None = None,
                     scheduler=None, max_runs: int = 150, max_nfev: int = 20, xtol: float = 1e-6, ftol: float = 1e-6,
@@ -228,106 +358,15 @@ def fit_with_solver(run: Callable[[np.ndarray], Any], residuals_of: Callable[[An
     """
     from scipy.optimize import least_squares
 
-    t0 = time.perf_counter()
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    runs = {"count": 0, "solver_s": 0.0, "failed": 0, "retried": 0, "longest_batch_s": 0.0}
-    memo: dict[tuple, np.ndarray] = {}
-    best: dict = {}  # the least misfit run so far: x, residuals
-    last_jac: dict = {}  # x, J of the last Jacobian
-    blind: dict[tuple, list[int]] = {}  # at x: the Jacobian columns whose runs failed on both sides
-
-    def evaluate(points: list[np.ndarray]) -> list[np.ndarray]:
-        todo = list({tuple(p): p for p in points if tuple(p) not in memo}.values())
-        if todo:
-            if runs["count"] + len(todo) > max_runs:
-                raise IdentificationError(f"{what}: more than {max_runs} solver runs without convergence")
-            elapsed = time.perf_counter() - t0
-            # the next batch at the longest so far: where the side folds over a batch's runs stop and are retried, and at the
-            # mean batch time a tall record's fit ended 27 s past its limit (597 s for 570)
-            if time_limit_s is not None and best and elapsed + runs["longest_batch_s"] > time_limit_s:
-                raise _OutOfTime
-            t_batch = time.perf_counter()
-            outs = run_many(run, todo, workers=workers, scheduler=scheduler)
-            # past the limit a run that did not end was stopped by it (a ``run`` that keeps a deadline), not failed
-            over = bool(time_limit_s is not None and time.perf_counter() - t0 >= time_limit_s)
-            for p, out in zip(todo, outs):
-                runs["count"] += 1
-                if out is None and over:
-                    continue
-                runs["failed"] += out is None
-                runs["retried"] += bool(getattr(out, "retried", False))
-                if out is not None and not out.cached:
-                    runs["solver_s"] += out.wall_s
-                memo[tuple(p)] = np.full(n_residuals, FAILED_RUN_RESIDUAL) if out is None else residuals_of(out)
-                if out is not None and (not best or float(memo[tuple(p)] @ memo[tuple(p)]) < float(best["r"] @ best["r"])):
-                    best.update(x=np.asarray(p, float), r=memo[tuple(p)])
-            runs["longest_batch_s"] = max(runs["longest_batch_s"], time.perf_counter() - t_batch)
-            if over:
-                raise _OutOfTime
-            if progress:
-                elapsed = time.perf_counter() - t0
-                progress(runs["count"], elapsed, time_left_s(runs["count"], elapsed, len(x0), time_limit_s))
-        return [memo[tuple(p)] for p in points]
-
-    def fun(x):
-        return evaluate([np.asarray(x, float)])[0]
-
-    def failed(r) -> bool:
-        return bool(r[0] == FAILED_RUN_RESIDUAL)
-
-    def jac(x):
-        # forward differences, backward at an upper bound or where the forward run failed; the runs of one Jacobian go side by side
-        x = np.asarray(x, float)
-        h = steps(x)
-        pts = []
-        for i in range(x.size):
-            xp = x.copy()
-            xp[i] = x[i] + h[i] if x[i] + h[i] <= hi[i] else x[i] - h[i]
-            pts.append(xp)
-        res = evaluate([x] + pts)
-        flip = [i for i in range(x.size) if failed(res[i + 1]) and lo[i] <= 2.0 * x[i] - pts[i][i] <= hi[i]]
-        for i in flip:
-            pts[i] = pts[i].copy()
-            pts[i][i] = 2.0 * x[i] - pts[i][i]
-        if flip:
-            res = evaluate([x] + pts)
-        # a column whose runs failed both ways is unknown, not the 1e3 of a failed run over a step: a zero column
-        # keeps the optimiser from moving on it, and the parameter is reported undetermined if it stays so at the end
-        blind[tuple(x)] = [i for i in range(x.size) if failed(res[i + 1])]
-        J = np.column_stack([np.zeros(len(res[0])) if i in blind[tuple(x)] else (res[i + 1] - res[0]) / (pts[i][i] - x[i])
-                             for i in range(x.size)])
-        last_jac.update(x=x, J=J)
-        return J
-
+    runs = _Runs(run, residuals_of, n_residuals=n_residuals, n_params=len(x0), workers=workers, scheduler=scheduler,
+                 max_runs=max_runs, progress=progress, what=what, time_limit_s=time_limit_s)
     starts = [np.asarray(x0, float)] + [np.clip(np.asarray(s, float), lo, hi) for s in other_starts]
     try:
-        if best_start:  # all starts side by side, the least misfit first (a failed run's 1e3 residuals last)
-            costs = [float(r @ r) for r in evaluate(starts)]
-            starts = [starts[k] for k in np.argsort(costs, kind="stable")]
-        for x0 in starts:  # no Jacobian can be formed around a failed run
-            if not failed(evaluate([x0])[0]):
-                break
-        else:
-            raise IdentificationError(f"{what}: the solver run failed at the warm start {np.round(starts[0], 4).tolist()} and at "
-                                      f"{len(starts) - 1} other starts (see the log); the fast result is the one to use for this record")
-        sol = least_squares(fun, np.asarray(x0, float), jac=jac, bounds=(lo, hi), x_scale=x_scale, xtol=xtol, ftol=ftol,
-                            gtol=1e-8, max_nfev=max_nfev)
+        x0 = _first_start(runs, starts, best_start)
+        sol = least_squares(runs.fun, np.asarray(x0, float), jac=lambda x: runs.jacobian(x, steps, lo, hi), bounds=(lo, hi),
+                            x_scale=x_scale, xtol=xtol, ftol=ftol, gtol=1e-8, max_nfev=max_nfev)
         cut = False
-    except _OutOfTime:  # the best set run so far; its covariance from the last Jacobian (at it, or at the optimiser's last x)
-        if not best:  # the limit stopped the first runs before one ended: there is no answer to give
-            raise IdentificationError(f"{what}: the time limit ({time_limit_s:g} s for the fit, --time-limit) stopped the first "
-                                      f"{runs['count']} solver runs before one ended; give a longer --time-limit "
-                                      "(the fast result is the one to use meanwhile)") from None
-        J = last_jac["J"] if last_jac else np.zeros((n_residuals, len(x0)))
-        at = ("at it" if np.array_equal(last_jac["x"], best["x"]) else "at the optimiser's last point") if last_jac else "none formed"
-        sol = SimpleNamespace(x=best["x"], fun=best["r"], jac=J, status=0, nfev=runs["count"],
-                              message=f"cut by the time limit of {time_limit_s:g} s: the best of {runs['count']} runs, the Jacobian {at}")
-        cut = True
-    cov, undetermined = parameter_covariance(sol.jac, sol.fun, x_scale, row_sigma=row_sigma, correlated=correlated)
-    undetermined = tuple(sorted({*undetermined, *blind.get(tuple(sol.x), [])}))
-    cov[list(undetermined), :] = np.nan
-    cov[:, list(undetermined)] = np.nan
-    return SolverFit(x=sol.x, stderr=np.sqrt(np.diag(cov)), residuals=sol.fun, runs=runs["count"], solver_s=runs["solver_s"],
-                     wall_s=time.perf_counter() - t0, status=int(sol.status), message=str(sol.message), nfev=int(sol.nfev),
-                     undetermined=undetermined, jac=np.asarray(sol.jac, float), covariance=cov, failed_runs=runs["failed"],
-                     retried_runs=runs["retried"], cut=cut, time_limit_s=time_limit_s)
+    except _OutOfTime:
+        sol, cut = _cut_solution(runs), True
+    return _solver_fit(sol, runs, cut, x_scale, row_sigma, correlated)

@@ -19,8 +19,8 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.record.format import Record
-from flowcurve.identification.fe.upsetting import UpsettingResult
-from flowcurve.identification.fe.tension import TensionModel, TensionResult
+from flowcurve.identification.fe.model.upsetting import UpsettingResult
+from flowcurve.identification.fe.model.tension import TensionModel, TensionResult
 
 
 def upsetting_record(run: UpsettingResult, *, stiffness_N_per_um: float = 136.0, toe_mm: float = 0.03, toe_force_N: float = 300.0,
@@ -158,7 +158,7 @@ RECORD_INCREMENTS = (70, 80, 60)  # the first that runs to the end; the rest onl
 
 
 def case_model(case: dict, increments: int = RECORD_INCREMENTS[0]):
-    from flowcurve.identification.fe.upsetting import UpsettingModel
+    from flowcurve.identification.fe.model.upsetting import UpsettingModel
 
     # a finer mesh than the table's and the inverse's (30 core elements, a d0/30 rim layer), 70 increments
     # and a small first one (the elastic line and the yield resolved); the rows CalculiX realises as the law
@@ -174,7 +174,7 @@ def run_case(case: dict):
     60 and 80 run to 0.7), so a stopped run is tried with the other :data:`RECORD_INCREMENTS`;
     if none finishes, the furthest is a test the machine stopped there, if it got past ε 0.55 (the
     tests read ε_p 0.05–0.6)."""
-    from flowcurve.identification.fe.upsetting import simulate_upsetting
+    from flowcurve.identification.fe.model.upsetting import simulate_upsetting
 
     best = None
     for increments in RECORD_INCREMENTS:
@@ -184,7 +184,7 @@ def run_case(case: dict):
         if best is None or (run.strain.size and run.strain[-1] > best.strain[-1]):
             best = run
     if best.strain.size == 0 or best.strain[-1] < 0.55:
-        from flowcurve.identification.fe.ccx import SolverError
+        from flowcurve.identification.fe.model.ccx import SolverError
 
         raise SolverError(f"{case['name']}: the run stopped at ε {best.strain[-1] if best.strain.size else 0:.3g} < 0.55 ({best.message})")
     return best

@@ -20,8 +20,9 @@ import numpy as np
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.elastic_modulus import DEFENSIBLE, SOURCE_TEXT, choose_modulus, result_material_E
-from flowcurve.identification.fe.model_form import FOLD_OVER_BAND
-from flowcurve.identification.fe.upsetting import PLASTIC_ROWS, UpsettingModel, simulate_upsetting
+from flowcurve.identification.fe.model.model_form import FOLD_OVER_BAND
+from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
+from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 from flowcurve.identification.hardening import LAWS
 
 COMPARE_FROM_STRAIN = 0.02  # the toe and the elastic rise are left out of the deviation
@@ -130,7 +131,7 @@ def _simulate_with_retries(model_with, timeout_s: float):
     """(run, settings) of ``model_with(**settings)``: the model's own settings first, then the
     table's retries (:data:`.make_table.RETRY_SETTINGS`, as the inverse FE) — where the side folds
     onto the platen a run stops at a strain that moves with the stick slope and the increments."""
-    from flowcurve.identification.fe.ccx import SolverError
+    from flowcurve.identification.fe.model.ccx import SolverError
     from flowcurve.identification.fe.make_table import RETRY_SETTINGS
 
     for k, settings in enumerate(({}, *RETRY_SETTINGS)):

@@ -1,7 +1,7 @@
 """CalculiX upsetting runs as an independent check of the friction corrections.
 
 Half model (symmetry at mid-height) of a d0 = 6, h0 = 7 mm cylinder compressed to 4.2 mm,
-the product's O-grid model (:mod:`flowcurve.identification.fe.upsetting`, docs/calculix.md
+the product's O-grid model (:mod:`flowcurve.identification.fe.model.upsetting`, docs/calculix.md
 "Upsetting").
 
 Two runs, μ = 0 and μ = 0.1 (~2 s each, side by side). The μ = 0 run measures the mesh's own
@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from flowcurve.identification import friction as fr
-from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
+from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 
 pytestmark = [pytest.mark.slow, pytest.mark.solver,
               pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]

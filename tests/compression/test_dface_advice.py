@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import flowcurve.identification.fe.inverse as inverse
+from flowcurve.identification.identify import identify_inverse_fe
 from flowcurve.identification.compression import identify_compression
 from flowcurve.identification.fe.solver_fit import SolverFit
 from flowcurve.identification.outcome import to_jsonable
@@ -53,7 +54,7 @@ def test_inverse_advises_the_face_when_mu_is_poorly_told(monkeypatch, seed_like_
     record, _ = seed_like_record
     monkeypatch.setattr(inverse, "fit_with_solver", _fit_outcome(mu_stderr))
     monkeypatch.setattr(inverse, "_warm_start_run", lambda problem, x0: None)  # no solver: the fold-over's onset unknown
-    result = to_jsonable(inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result)
+    result = to_jsonable(identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result)
     assert (result.get("dface_advice") == DFACE_ADVICE) is advised
     assert any("post.dface_mm" in w for w in result.get("warnings", [])) is advised
 

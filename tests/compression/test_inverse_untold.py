@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import flowcurve.identification.fe.inverse as inverse
+from flowcurve.identification.identify import identify_inverse_fe
 from flowcurve.identification.fe.solver_fit import SolverFit
 from flowcurve.identification.outcome import to_jsonable
 
@@ -33,7 +34,7 @@ def test_an_untold_mu_is_null_with_a_warning(monkeypatch, seed_like_record):
                          status=2, message="ftol", nfev=3, undetermined=(len(x0) - 1,))
 
     monkeypatch.setattr(inverse, "fit_with_solver", outcome)
-    result = inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
+    result = identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
     assert any("does not determine μ" in w for w in result["warnings"])
     assert result["hardening"]["quality"] == "poor"
     written = to_jsonable(result)
@@ -48,7 +49,7 @@ def test_a_told_mu_has_no_such_warning(monkeypatch, seed_like_record):
                          wall_s=1.0, status=2, message="ftol", nfev=3)
 
     monkeypatch.setattr(inverse, "fit_with_solver", outcome)
-    result = inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
+    result = identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
     assert not any("does not determine" in w for w in result.get("warnings", []))
     assert to_jsonable(result)["inverse_fe"]["mu_stderr"] == 0.01
 
@@ -58,11 +59,11 @@ def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_al
     correlated, and no smaller than what the force and the shape tell apart, combined: here μ is
     told by dmax alone (the force rows do not move with it), so that floor is dmax's σ in the fit
     over ∂dmax/∂μ, σ_d/|∂dmax/∂μ| with σ_d = √(0.01² + (0.05·(dmax − d_n))²) mm (its resolution and
-    the model form's share, fe/model_form.py); the same is reported as what dmax alone tells; beyond
+    the model form's share, fe/model/model_form.py); the same is reported as what dmax alone tells; beyond
     ±0.02 a "poorly told" warning."""
     import math
 
-    from flowcurve.identification.fe.model_form import BULGE_MODEL_FORM
+    from flowcurve.identification.fe.model.model_form import BULGE_MODEL_FORM
 
     record, _ = seed_like_record
     d0, h0 = (float(record.meta[k]) for k in ("specimen.d0_mm", "specimen.h0_mm"))
@@ -86,7 +87,7 @@ def test_mu_stderr_counts_the_force_error_as_correlated_and_reports_the_shape_al
                              message="ftol", nfev=3, jac=jac)
 
         monkeypatch.setattr(inverse, "fit_with_solver", outcome)
-        result = inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
+        result = identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
         inv = result["inverse_fe"]
         assert asked["correlated"] is True
         shape_alone = sigma_d / 0.2
@@ -110,7 +111,7 @@ def test_a_fit_whose_runs_failed_often_says_so_in_the_result_and_the_summary(mon
                          wall_s=1.0, status=2, message="ftol", nfev=3, failed_runs=67)
 
     monkeypatch.setattr(inverse, "fit_with_solver", outcome)
-    result = inverse.identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
+    result = identify_inverse_fe(record, law="johnson_cook", E_MPa=RECORD_E_MPa).result
     assert result["inverse_fe"]["failed_solver_runs"] == 67
     assert any("67 of 121 solver runs did not converge" in w for w in result["warnings"])
     assert result["hardening"]["quality"] == "poor"

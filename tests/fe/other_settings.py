@@ -19,7 +19,7 @@ import math
 import time
 from pathlib import Path
 
-from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
+from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 from flowcurve.record.format import amend_record
 
 from .second_model import HELD_OUT, Case, SecondRun

@@ -1,4 +1,4 @@
-"""A second upsetting model, built apart from the product's (identification/fe/upsetting.py), to
+"""A second upsetting model, built apart from the product's (identification/fe/model/upsetting.py), to
 make compression records the product's FE table and inverse have never seen (issue 37).
 
 It shares nothing with the product's model but CalculiX itself: its own deck, mesh, contact,

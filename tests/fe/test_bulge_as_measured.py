@@ -12,7 +12,7 @@ import shutil
 import numpy as np
 import pytest
 
-from flowcurve.identification.fe.table import UpsettingTable, bulge_as_measured, swift_stress_on_grid
+from flowcurve.identification.fe.model.table import UpsettingTable, bulge_as_measured, swift_stress_on_grid
 
 K, E, NU = 1000.0, 200_000.0, 0.3
 
@@ -83,9 +83,10 @@ def test_the_package_table_reads_the_measured_bulge():
 def _radial_profile(nr: int):
     """A frictionless CalculiX run of steel 45 (d0 = h0 = 6, to ε 0.7): (r, z) of the outer
     nodes at the end, the height, d_n and σ/E."""
-    from flowcurve.identification.fe.ccx import run_deck
+    from flowcurve.identification.fe.model.ccx import run_deck
     from flowcurve.identification.fe.synthetic import VALIDATION_CASES, case_flow
-    from flowcurve.identification.fe.upsetting import SECTOR, UpsettingModel, build_mesh, upsetting_deck
+    from flowcurve.identification.fe.model.deck import SECTOR
+    from flowcurve.identification.fe.model.upsetting import UpsettingModel, build_mesh, upsetting_deck
 
     case = VALIDATION_CASES[2]
     m = UpsettingModel.from_law(6.0, 6.0, 6.0 * math.exp(-0.7), 0.0, case_flow(case), E_MPa=case["E"], nu=NU, increments=70,

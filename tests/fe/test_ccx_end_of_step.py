@@ -14,8 +14,8 @@ import textwrap
 import numpy as np
 import pytest
 
-from flowcurve.identification.fe import ccx
-from flowcurve.identification.fe.ccx import SolverError, reached_the_end, run_deck
+from flowcurve.identification.fe.model import ccx
+from flowcurve.identification.fe.model.ccx import SolverError, reached_the_end, run_deck
 
 PAST_THE_END = " *ERROR: increment size smaller than minimum"
 

@@ -31,7 +31,7 @@ pytestmark = [pytest.mark.slow, pytest.mark.solver, pytest.mark.skipif(shutil.wh
 def test_table_points_regenerate_with_ccx(tmp_path, monkeypatch):
     """Three of the shipped table's runs, run again (no cache), give the same numbers."""
     from flowcurve.identification.fe.make_table import sample_run
-    from flowcurve.identification.fe.table import PACKAGE_TABLE
+    from flowcurve.identification.fe.model.table import PACKAGE_TABLE
 
     z = np.load(PACKAGE_TABLE)
     # the last stopped with stick slope 1e7 at ε 0.41 and is in the table from its retry (1e6). That run is
@@ -58,7 +58,7 @@ def test_table_points_regenerate_with_ccx(tmp_path, monkeypatch):
 def test_table_start_points_regenerate_with_ccx(tmp_path, monkeypatch):
     """Two of the table's start runs (short, on ε_p), run again (no cache), give the same numbers."""
     from flowcurve.identification.fe.make_table import sample_start_run
-    from flowcurve.identification.fe.table import PACKAGE_TABLE
+    from flowcurve.identification.fe.model.table import PACKAGE_TABLE
 
     monkeypatch.setenv("FLOWCURVE_FE_CACHE", str(tmp_path))
     z = np.load(PACKAGE_TABLE)
@@ -157,8 +157,8 @@ def test_the_force_factor_follows_the_hardening_near_the_strain():
 
     from flowcurve.identification.fe.make_table import plastic_strain_at
     from flowcurve.identification.fe.synthetic import case_model
-    from flowcurve.identification.fe.table import UpsettingTable, local_swift_exponent, swift_hardening
-    from flowcurve.identification.fe.upsetting import simulate_upsetting
+    from flowcurve.identification.fe.model.table import UpsettingTable, local_swift_exponent, swift_hardening
+    from flowcurve.identification.fe.model.upsetting import simulate_upsetting
 
     case = VALIDATION_CASES[3]
     flow, model = case_flow(case), case_model(case)

@@ -10,7 +10,7 @@ import shutil
 import numpy as np
 import pytest
 
-from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
+from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 
 pytestmark = [pytest.mark.slow, pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from flowcurve.identification.fe import force_shape as fs
-from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.fe.model import model_form as mf
 from flowcurve.identification.fe.solver_fit import serial_inflation
 
 M = 30
@@ -110,7 +110,7 @@ def test_force_rows_that_cannot_tell_mu_from_the_law_are_undetermined():
 
 def test_the_inverse_layout_counts_the_force_model_form_on_the_force_side():
     """Force rows at strain, then dmax and dface (their σ hold the shape's model form): the force
-    side gets the shift the force model form (fe/model_form.py) makes in the force-alone fit; the
+    side gets the shift the force model form (fe/model/model_form.py) makes in the force-alone fit; the
     shape side is μ moved alone over the two rows, 1/√Σg²."""
     x_fit = np.array([1.0, 0.5, -0.2, 0.15])
     g = np.array([6.0, 3.0])
@@ -127,40 +127,20 @@ def test_the_inverse_layout_counts_the_force_model_form_on_the_force_side():
 # ---- through identify_inverse_fe, CalculiX replaced by a linear model of the record ---------------------------------
 
 DATA = Path(__file__).parent / "data"
-DMAX_PER_MU, DFACE_PER_MU = 1.5, -3.0  # mm per unit μ: the bulge grows with μ, the original end face shrinks
-FORCE_PER_MU = 0.5  # relative force per unit μ at the end of the stroke, growing as t³ (the law takes up 1, t, t²)
 
 
 @pytest.fixture
 def linear_solver(monkeypatch):
-    """``_run`` replaced: the record's own frame-corrected force (as the inverse reads it) times
-    1 + (the law's constants' relative change)·(1, t, t²) + FORCE_PER_MU·t³·(μ − mu_force) + a
-    fixed 0.05 % misfit, and the record's dmax and dface moved by DMAX_PER_MU, DFACE_PER_MU per
-    unit (μ − mu_shape); the warm start (the inverse's first run) is the law's reference."""
+    """``_run`` replaced by test_inverse_numbers_unchanged.linear_runs: the record's own frame-corrected
+    force times the law's change and 1 + 0.5·t³·(μ − mu_force), dmax and dface moved with (μ − mu_shape);
+    the warm start (the inverse's first run) is the law's reference."""
     import flowcurve.identification.fe.inverse as inv
     import flowcurve.identification.fe.verify as verify
 
+    from .test_inverse_numbers_unchanged import linear_runs
+
     state = {"mu_force": 0.05, "mu_shape": 0.05}
-    real = verify.record_force_stroke
-
-    def capture(record, **kw):
-        out = real(record, **kw)
-        state["stroke"], state["force"], state["meta"] = np.asarray(out[0], float), np.asarray(out[1], float), record.meta
-        return out
-
-    def run(problem, x):
-        x = np.asarray(x, float)
-        x0 = state.setdefault("x0", x.copy())
-        s, f = state["stroke"], state["force"]
-        t = s / s.max()
-        rel = x[:-1] / x0[:-1] - 1.0
-        factor = 1.0 + rel[0] + rel[1] * t + rel[2] * t**2 + FORCE_PER_MU * t**3 * (x[-1] - state["mu_force"]) \
-            + 5e-4 * np.cos(40.0 * t)
-        dmu = x[-1] - state["mu_shape"]
-        meta = state["meta"]
-        return inv._Run(s, f * factor, float(meta["post.dmax_mm"]) + DMAX_PER_MU * dmu, float(meta["post.dface_mm"]) + DFACE_PER_MU * dmu,
-                        wall_s=0.0, cached=True)
-
+    capture, run = linear_runs(state)
     monkeypatch.setattr(verify, "record_force_stroke", capture)
     monkeypatch.setattr(inv, "_run", run)
     return state
@@ -168,7 +148,7 @@ def linear_solver(monkeypatch):
 
 @pytest.mark.parametrize("mu_force, mu_shape, warned", [(0.05, 0.05, False), (0.03, 0.12, True)])
 def test_force_and_shape_pulling_mu_apart_warn_and_mark_the_hardening_poor(linear_solver, mu_force, mu_shape, warned):
-    from flowcurve.identification.fe.inverse import identify_inverse_fe
+    from flowcurve.identification.identify import identify_inverse_fe
     from flowcurve.identification.outcome import to_jsonable
     from flowcurve.record.format import read_record
 

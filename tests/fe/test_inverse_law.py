@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from flowcurve.identification.fe.inverse import best_law_for
+from flowcurve.identification.fe.law_choice import best_law_for
 from flowcurve.identification.fe.synthetic import johnson_cook_flow, swift_flow, voce_flow
 
 CURVES = {

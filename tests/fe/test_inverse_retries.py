@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import flowcurve.identification.fe.inverse as inv
-from flowcurve.identification.fe.ccx import SolverError
+from flowcurve.identification.fe.model.ccx import SolverError
 
 PROBLEM = inv._Problem("voce", 5.0, 9.0, 4.47, 200_000.0, 50)
 X = np.array([300.0, 400.0, 5.0, 0.2])

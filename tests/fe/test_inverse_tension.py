@@ -18,7 +18,7 @@ import pytest
 
 from flowcurve.cli import main
 from flowcurve.identification.fe.synthetic import tension_case_model, tension_record, voce_flow
-from flowcurve.identification.fe.tension import simulate_tension
+from flowcurve.identification.fe.model.tension import simulate_tension
 from flowcurve.record.format import write_record
 
 pytestmark = [pytest.mark.slow, pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.fe.inverse import identify_inverse_fe
+from flowcurve.identification.identify import identify_inverse_fe
 from flowcurve.identification.fe.inverse_tension import extended_curve
 from flowcurve.identification.fe.synthetic import tension_record
-from flowcurve.identification.fe.tension import TensionModel, TensionResult
+from flowcurve.identification.fe.model.tension import TensionModel, TensionResult
 
 
 def test_the_extension_is_voce_swift_or_the_logarithm_in_closed_form():

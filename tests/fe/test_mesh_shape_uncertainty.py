@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from flowcurve.identification.fe.synthetic import VALIDATION_CASES, case_model
-from flowcurve.identification.fe.upsetting import MESH_BULGE_UNCERTAINTY, MESH_FACE_UNCERTAINTY, simulate_upsetting
+from flowcurve.identification.fe.model.upsetting import MESH_BULGE_UNCERTAINTY, MESH_FACE_UNCERTAINTY, simulate_upsetting
 
 pytestmark = [pytest.mark.slow, pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]
 

@@ -1,4 +1,4 @@
-"""The model form's share of the uncertainty (identification/fe/model_form.py): its pure functions
+"""The model form's share of the uncertainty (identification/fe/model/model_form.py): its pure functions
 against closed forms, and what it does to the default identification (fe_table) of a record."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from flowcurve.identification import friction as fr
-from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.fe.model import model_form as mf
 
 
 def test_a_uniform_bias_shifts_the_intercept_of_a_line_fit_and_not_its_slope():
@@ -44,7 +44,7 @@ def test_shares_add_in_quadrature_and_an_undetermined_constant_stays_undetermine
 
 @pytest.fixture(scope="module")
 def table():
-    from flowcurve.identification.fe.table import UpsettingTable
+    from flowcurve.identification.fe.model.table import UpsettingTable
 
     return UpsettingTable.load()
 

@@ -48,7 +48,7 @@ def test_c3_points_past_the_fold_over_say_how_sure_they_are(tmp_path, end_face):
     form's 0.12·μ, and a warning names the strain from which the points carry the fold-over."""
     import pandas as pd
 
-    from flowcurve.identification.fe.model_form import FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, force_model_form
+    from flowcurve.identification.fe.model.model_form import FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, force_model_form
 
     result, _ = identify_default(DATA / "other_settings_C3.csv", tmp_path, end_face=end_face)
     curve = pd.read_csv(tmp_path / "other_settings_C3" / "true_curve.csv", comment="#")

@@ -14,8 +14,9 @@ import shutil
 import numpy as np
 import pytest
 
-from flowcurve.identification.fe.realised_law import realised_curve, realising_rows
-from flowcurve.identification.fe.upsetting import UpsettingModel, plastic_table
+from flowcurve.identification.fe.model.realised_law import realised_curve, realising_rows
+from flowcurve.identification.fe.model.deck import plastic_table
+from flowcurve.identification.fe.model.upsetting import UpsettingModel
 
 pytestmark = [pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]
 
@@ -61,7 +62,7 @@ def test_an_upsetting_model_realising_its_law_at_mu_0_gives_the_law_on_the_loade
     """The whole upsetting model on the records' mesh (O-grid, platen, contact) at μ = 0 with the
     realising rows: F over the loaded area is the law (measured within 0.1 %; the plain rows
     −0.5 % at ε 0.6)."""
-    from flowcurve.identification.fe.upsetting import simulate_upsetting
+    from flowcurve.identification.fe.model.upsetting import simulate_upsetting
     from flowcurve.identification.friction import elastic_volume_ratio
 
     m = UpsettingModel.from_law(6.0, H0, H_END, 0.0, seed_law, E_MPa=194_000.0, increments=INCREMENTS, first_increment=1.0 / 3000)

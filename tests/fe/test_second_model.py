@@ -10,7 +10,7 @@ off (flagged: Swift ε0 beyond the table), and from the end face μ 0.176 with a
 that excluded the truth while the range counted only the product's mesh (± 0.005 d/d_n): this
 model's rim node sits 0.1–0.2 mm wider than the product's table expects at μ 0.2 (and moves
 0.09 mm between 8 and 12 radial elements). With the model form's share (± 0.02 of d/d_n,
-identification/fe/model_form.py) the range is 0.152–0.204; the coverage test below counts it."""
+identification/fe/model/model_form.py) the range is 0.152–0.204; the coverage test below counts it."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ DATA = Path(__file__).parent / "data"
 CASES = {c.name: c for c in HELD_OUT}
 C3_CURVE = "C3 from the bulge: μ 0.2025 but the curve +2.30 % off at ε_p 0.44 (flagged 'Swift ε0 beyond the table')"
 C3_FACE = ("C3 from the end face: μ 0.176 (the curve 1.94 % off) — the second model's rim node sits 0.017 of d/d_n wider than the "
-           "product's: its range 0.152–0.204 now counts that model form (± 0.02, fe/model_form.py) and holds the truth 0.2")
+           "product's: its range 0.152–0.204 now counts that model form (± 0.02, fe/model/model_form.py) and holds the truth 0.2")
 
 
 @pytest.mark.parametrize("name", ["C2", pytest.param("C3", marks=pytest.mark.xfail(strict=True, reason=C3_CURVE))])

@@ -42,7 +42,7 @@ def plastic_rate(nominal_rate: float) -> float:
 
 
 def record_of(T: float, rate: float, E: float, seed: int):
-    from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
+    from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 
     law = partial(johnson_cook, strain_rate_per_s=plastic_rate(rate), temperature_C=T, **TRUE, **REF)
     # a small first increment resolves the elastic line and the yield (1/70 of the stroke steps over both)
@@ -122,7 +122,7 @@ def test_the_curve_starts_on_the_input_law():
     FE table's factor below ε 0.02 was read between a padded 1 at ε 0 and its value at 0.02;
     the table's start (short runs on ε_p) holds the factor the friction has from the first yield."""
     from flowcurve.identification.compression import identify_compression
-    from flowcurve.identification.fe.upsetting import UpsettingModel, simulate_upsetting
+    from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 
     T, rate, E = CONDITIONS[0]
     law = partial(johnson_cook, strain_rate_per_s=plastic_rate(rate), temperature_C=T, **TRUE, **REF)

@@ -15,9 +15,10 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from flowcurve.identification.fe.ccx import SolverError, run_deck
-from flowcurve.identification.fe.realised_law import one_element_deck
-from flowcurve.identification.fe.upsetting import UpsettingModel, plastic_table, simulate_upsetting
+from flowcurve.identification.fe.model.ccx import SolverError, run_deck
+from flowcurve.identification.fe.model.realised_law import one_element_deck
+from flowcurve.identification.fe.model.deck import plastic_table
+from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 
 pytestmark = [pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]
 
@@ -85,7 +86,7 @@ def test_a_run_stopped_before_the_end_is_reported_not_returned():
 def test_tension_force_maximum_is_at_considere_strain():
     """Before the neck F = σ_f·A0·l0/l; the maximum force where dσ/dε = σ (Considère): for
     Swift σ = K(ε0 + ε_p)^n that is ε_p = n − ε0 (0.24 here)."""
-    from flowcurve.identification.fe.tension import TensionModel, simulate_tension
+    from flowcurve.identification.fe.model.tension import TensionModel, simulate_tension
 
     m = TensionModel.from_law(6.0, 30.0, 9.0, swift, E_MPa=E, increments=60)
     r = simulate_tension(m)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from flowcurve.identification.fe.synthetic import upsetting_record
-from flowcurve.identification.fe.upsetting import UpsettingModel, UpsettingResult, upsetting_deck
+from flowcurve.identification.fe.model.upsetting import UpsettingModel, UpsettingResult, upsetting_deck
 
 E, D0, H0 = 200_000.0, 6.0, 9.0
 AREA = math.pi * D0**2 / 4.0

@@ -18,8 +18,8 @@ import pytest
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification import friction as fr
-from flowcurve.identification.fe.model_form import BULGE_MODEL_FORM
-from flowcurve.identification.fe.table import UpsettingTable, specimen_proportion, swift_hardening
+from flowcurve.identification.fe.model.model_form import BULGE_MODEL_FORM
+from flowcurve.identification.fe.model.table import UpsettingTable, specimen_proportion, swift_hardening
 
 
 @pytest.fixture(scope="module")
@@ -189,7 +189,7 @@ def test_mu_range_is_the_mu_of_the_bulge_less_and_plus_its_uncertainty(table):
 def test_a_stopped_run_is_continued_along_the_next_lower_mu_and_said():
     """continue_stopped_runs: a run that stopped after ε index 2 goes on with the increments of
     the run one μ step lower (closed form below); continued_at names the strain it stopped at."""
-    from flowcurve.identification.fe.table import UpsettingTable, continue_stopped_runs
+    from flowcurve.identification.fe.model.table import UpsettingTable, continue_stopped_runs
 
     strain = np.array([0.0, 0.2, 0.4, 0.6, 0.8])
     mu0 = np.array([0.0, 0.01, 0.02, 0.03, 0.04])
@@ -248,7 +248,7 @@ def test_near_sticking_the_end_face_tells_mu_where_the_bulge_cannot(table):
 
 @pytest.mark.parametrize("n, eps0", [(0.1, 0.002), (0.45, 0.03)])
 def test_local_exponent_of_a_swift_curve_is_its_n(n, eps0):
-    from flowcurve.identification.fe.table import local_swift_exponent
+    from flowcurve.identification.fe.model.table import local_swift_exponent
 
     e = np.linspace(0.0, 0.8, 900)
     local = local_swift_exponent(e, 700.0 * (eps0 + e) ** n, eps0, [0.002, 0.05, 0.3, 0.79])
@@ -259,7 +259,7 @@ def test_local_exponent_of_a_saturating_law_follows_its_slope():
     """Voce σ = s0 + q(1 − e^(−bε)): d ln σ / d ln(ε0 + ε) = q·b·e^(−bε)·(ε0 + ε)/σ, falling from
     0.28 at ε 0.1 to 0.09 at 0.6; the windowed fit (± 0.2) within 0.02 of it where the window
     is whole (measured 0.009–0.017), and far below the whole curve's Swift n (0.21) at ε 0.6."""
-    from flowcurve.identification.fe.table import local_swift_exponent
+    from flowcurve.identification.fe.model.table import local_swift_exponent
 
     s0, q, b = 300.0, 400.0, 5.0
     e = np.linspace(0.0, 0.9, 1200)
@@ -310,7 +310,7 @@ def test_the_force_factor_interpolates_in_d0_over_h0_and_the_bulge_in_ln_h0_over
 def test_the_fold_over_detector_on_a_made_up_run():
     """A factor declining slowly with the mesh's ±0.05 % sawtooth, then rising 1 % in one step from ε 0.5: the
     onset is 0.5; a jump below ε 0.1 is not one; a run that stopped at 0.44 folds over there at the latest."""
-    from flowcurve.identification.fe.table import fold_over_onsets
+    from flowcurve.identification.fe.model.table import fold_over_onsets
 
     strain = np.round(np.arange(0.0, 0.9001, 0.02), 4)
     rise = -0.002 + 0.0005 * (-1) ** np.arange(strain.size - 1)
@@ -343,7 +343,7 @@ def test_the_fold_over_detector_agrees_with_the_models_geometry(table, tmp_path,
     mesh; ~11 s): its side reaches the platen (UpsettingResult.fold_over_strain, 0.554) within one table step
     (0.02) of the onset the detector reads in the table's force factor (0.54)."""
     from flowcurve.identification.fe.make_table import grid_model
-    from flowcurve.identification.fe.upsetting import simulate_upsetting
+    from flowcurve.identification.fe.model.upsetting import simulate_upsetting
 
     monkeypatch.setenv("FLOWCURVE_FE_CACHE", str(tmp_path / "cache"))
     r = simulate_upsetting(grid_model(0.2, 1.0, 0.4, 0.02), require_complete=False, timeout_s=300.0)

@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flowcurve.identification.fe import table as table_module
-from flowcurve.identification.fe.table import continue_stopped_runs
+from flowcurve.identification.fe.model import table as table_module
+from flowcurve.identification.fe.model.table import continue_stopped_runs
 
 CUTS = (0.3, 0.4, 0.5)
 

@@ -97,7 +97,7 @@ def test_the_softer_stick_slope_gives_the_same_run_where_both_finish(tmp_path, m
     while a side node folds over, the model's own 1–2 % sawtooth (docs/calculix.md) comes a little
     earlier or later, so there the force may differ up to 1.5 % (measured 1.1 % near ε 0.8).
     A stick slope of 1e5 already moved dmax by 1.6 µm."""
-    from flowcurve.identification.fe.upsetting import simulate_upsetting
+    from flowcurve.identification.fe.model.upsetting import simulate_upsetting
 
     monkeypatch.setenv("FLOWCURVE_FE_CACHE", str(tmp_path))
     stiff, soft = (simulate_upsetting(make_table.grid_model(0.3, 1.0, 0.2, 0.002, stick_slope_MPa_per_mm=k)) for k in (1e7, 1e6))

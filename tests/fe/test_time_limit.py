@@ -14,7 +14,7 @@ import pytest
 import flowcurve.identification.fe.solver_fit as solver_fit
 from flowcurve.cli.progress import budget_text
 from flowcurve.identification.fe.inverse import MIN_FORCE_STRAIN, force_fit_limit, force_sigma_pct
-from flowcurve.identification.fe.model_form import FOLD_OVER_BAND, FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT
+from flowcurve.identification.fe.model.model_form import FOLD_OVER_BAND, FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT
 from flowcurve.identification.fe.solver_fit import fit_with_solver, time_left_s
 
 T = np.linspace(0.0, 1.0, 12)
@@ -204,7 +204,7 @@ def test_a_run_past_the_deadline_is_not_started_and_one_before_it_is_stopped_the
 
     import flowcurve.identification.fe.inverse as inv
 
-    from flowcurve.identification.fe.ccx import SolverError
+    from flowcurve.identification.fe.model.ccx import SolverError
 
     timeouts = []
 
@@ -255,8 +255,8 @@ def hanging_tension_solver(monkeypatch):
     (σ_end the last *PLASTIC row, * the first call's, δ* 0.008): a fit of several Jacobians."""
     import time
 
-    import flowcurve.identification.fe.tension as tension
-    from flowcurve.identification.fe.ccx import SolverError
+    import flowcurve.identification.fe.model.tension as tension
+    from flowcurve.identification.fe.model.ccx import SolverError
     from flowcurve.identification.tension import identify_tension
 
     from .test_inverse_tension_inputs import _record
@@ -291,7 +291,7 @@ def test_a_tension_run_still_going_at_the_limit_is_stopped_there_and_not_counted
     and stopped at the deadline; the runs after it are not started; the identification ends by its
     limit, cut, with the best run so far, and the stopped run is no failed one. (Before the runs
     kept the deadline, the stalled run went on to the solver's own 600 s time-out.)"""
-    from flowcurve.identification.fe.ccx import DEFAULT_TIMEOUT_S
+    from flowcurve.identification.fe.model.ccx import DEFAULT_TIMEOUT_S
     from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
 
     record, calls = hanging_tension_solver
@@ -314,7 +314,7 @@ def test_a_tension_run_still_going_at_the_limit_is_stopped_there_and_not_counted
 def test_a_tension_run_without_a_limit_keeps_the_solvers_own_time_out(hanging_tension_solver):
     """Without a time limit no deadline is set: every run has the solver's default time-out
     (the stalled one fails after it, and is a failed run)."""
-    from flowcurve.identification.fe.ccx import DEFAULT_TIMEOUT_S
+    from flowcurve.identification.fe.model.ccx import DEFAULT_TIMEOUT_S
     from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
 
     record, calls = hanging_tension_solver

@@ -15,7 +15,7 @@ import pytest
 
 from flowcurve.cli import main
 from flowcurve.identification.fe import verify
-from flowcurve.identification.fe.model_form import FOLD_OVER_BAND
+from flowcurve.identification.fe.model.model_form import FOLD_OVER_BAND
 
 RECORD = Path(__file__).parent / "data" / "other_settings_C1.csv"
 CARD = "*MATERIAL,NAME=M\n*ELASTIC\n194000.,0.3\n*PLASTIC\n105.,0.\n500.,0.1\n900.,0.5\n1200.,2.\n"

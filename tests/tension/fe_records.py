@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.identification.fe.synthetic import swift_flow, tension_case_model, voce_flow
-from flowcurve.identification.fe.tension import simulate_tension
+from flowcurve.identification.fe.model.tension import simulate_tension
 from flowcurve.record.format import Record, write_record
 
 # law, its parameters, the record's taper (the cosine imperfection that places the neck)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from flowcurve.identification.fe.synthetic import RECORD_FIRST_INCREMENT, johnson_cook_flow, tension_record
-from flowcurve.identification.fe.tension import TensionModel, simulate_tension
+from flowcurve.identification.fe.model.tension import TensionModel, simulate_tension
 from flowcurve.identification.tension import identify_tension
 
 pytestmark = [pytest.mark.slow, pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]

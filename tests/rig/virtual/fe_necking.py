@@ -18,7 +18,7 @@ NECK_ELONGATION_MM = 4.0  # beyond the uniform elongation: past the virtual mate
 
 def fe_necking_run(material, strain_rate_per_s: float, considere_strain: float, temperature_C: float = 20.0):
     """(run, ε_n per increment) of ``material`` at the rig's rate and temperature."""
-    from flowcurve.identification.fe.tension import TensionModel, simulate_tension
+    from flowcurve.identification.fe.model.tension import TensionModel, simulate_tension
 
     flow = lambda e: material.flow_stress(e, strain_rate_per_s, temperature_C)  # noqa: E731
     elongation = L0_MM * math.expm1(considere_strain) + NECK_ELONGATION_MM

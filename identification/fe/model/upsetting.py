@@ -28,10 +28,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.fe.ccx import CcxOutput, run_deck
+from flowcurve.identification.fe.model.ccx import CcxOutput, run_deck
+from flowcurve.identification.fe.model.deck import SECTOR, check_plastic_table, number_lines, plastic_lines, plastic_table, static_step
+from flowcurve.identification.fe.model.realised_law import realising_rows
 
-SECTOR = 180.0  # CAX reaction totals are for a 2° sector (docs/calculix.md)
-PLASTIC_ROWS = 70  # *PLASTIC tables over ~150 rows read ~8 % low at small strain (docs/calculix.md)
 CARBIDE_E_MPa, CARBIDE_NU = 560_000.0, 0.22
 CONTACT_SLOPE_MPa_per_mm = 1.0e8  # 1e7 left a force deficit up to 1.1 % (docs/calculix.md)
 STICK_SLOPE_MPa_per_mm = 1.0e7
@@ -42,20 +42,6 @@ STICK_SLOPE_MPa_per_mm = 1.0e7
 # above the measured changes. The table's μ range and the inverse FE's μ uncertainty count them.
 MESH_BULGE_UNCERTAINTY = 0.04  # relative, of ΔR
 MESH_FACE_UNCERTAINTY = 0.005  # of the end face's d/d_n
-
-
-def plastic_table(flow_stress, eps_max: float = 2.0, rows: int = PLASTIC_ROWS) -> tuple[np.ndarray, np.ndarray]:
-    """(ε_p, σ) rows for ``*PLASTIC`` from a flow-curve function: 0 then a geometric spacing."""
-    eps = np.concatenate([[0.0], np.geomspace(1e-4, eps_max, rows)])
-    return eps, np.asarray(flow_stress(eps), dtype=float)
-
-
-def check_plastic_table(eps_p, stress_MPa, what: str) -> None:
-    """A *PLASTIC table ccx reads right: ≥ 2 rows, the first at ε_p = 0, at most ~150 rows."""
-    if len(eps_p) != len(stress_MPa) or len(eps_p) < 2 or eps_p[0] != 0.0:
-        raise IdentificationError(f"{what}: the plastic table needs ≥ 2 rows, the first at zero plastic strain")
-    if len(eps_p) > 150:
-        raise IdentificationError(f"{what}: {len(eps_p)} plastic rows; keep the table to ~100 rows (over ~150 ccx reads stresses low, docs/calculix.md)")
 
 
 @dataclass(frozen=True)
@@ -104,8 +90,6 @@ class UpsettingModel:
         """This model with the ``*PLASTIC`` stresses CalculiX realises as the given ones in
         homogeneous compression on the same strain path (:mod:`.realised_law`): for runs whose
         force is the result (records from a law, the inverse FE, verify), not for the table."""
-        from flowcurve.identification.fe.realised_law import realising_rows
-
         rows = realising_rows(self.eps_p, self.stress_MPa, E_MPa=self.E_MPa, nu=self.nu, h0_mm=self.h0_mm, h_end_mm=self.h_end_mm,
                               increments=self.increments, first_increment=self.first_increment)
         return replace(self, stress_MPa=tuple(float(v) for v in rows))
@@ -194,24 +178,6 @@ def build_mesh(m: UpsettingModel):
     return mesh, sets
 
 
-def _lines(values, per_line: int = 12) -> list[str]:
-    values = [str(v) for v in values]
-    return [",".join(values[i:i + per_line]) for i in range(0, len(values), per_line)]
-
-
-def static_step(increments: int, first_increment: float = 0.0) -> str:
-    """The ``*STATIC`` data line: first increment (1/increments unless a smaller one is given),
-    step 1, the smallest increment, the largest 1/increments."""
-    dt = 1.0 / increments
-    dt0 = first_increment if 0.0 < first_increment < dt else dt
-    return f"{dt0:.9g},1.,{min(dt0, dt * 1e-3):.9g},{dt:.9g}"
-
-
-def plastic_lines(eps_p, stress_MPa) -> list[str]:
-    """``*PLASTIC`` data lines (stress, plastic strain)."""
-    return [f"{sig:.9g},{e:.9g}" for e, sig in zip(eps_p, stress_MPa)]
-
-
 def upsetting_deck(m: UpsettingModel) -> str:
     """The ccx input deck of one upsetting run."""
     mesh, s = build_mesh(m)
@@ -221,9 +187,9 @@ def upsetting_deck(m: UpsettingModel) -> str:
     lines += [f"{k},{r:.9g},{z:.9g}" for k, (r, z) in enumerate(mesh.nodes, start=1)]
     lines += ["*ELEMENT,TYPE=CAX4R,ELSET=SPEC"] + [f"{k},{a},{b},{c},{d}" for k, (a, b, c, d) in enumerate(mesh.elements[:es], start=1)]
     lines += ["*ELEMENT,TYPE=CAX4R,ELSET=PLAT"] + [f"{k},{a},{b},{c},{d}" for k, (a, b, c, d) in enumerate(mesh.elements[es:], start=es + 1)]
-    lines += ["*NSET,NSET=AXIS", *_lines(s["axis"]), "*NSET,NSET=BOT", *_lines(s["bottom"]),
-              "*NSET,NSET=PLN", *_lines(s["platen"]), "*NSET,NSET=OUTER", *_lines(s["outer"]),
-              "*NSET,NSET=TOPAX", *_lines(s["topaxis"])]
+    lines += ["*NSET,NSET=AXIS", *number_lines(s["axis"]), "*NSET,NSET=BOT", *number_lines(s["bottom"]),
+              "*NSET,NSET=PLN", *number_lines(s["platen"]), "*NSET,NSET=OUTER", *number_lines(s["outer"]),
+              "*NSET,NSET=TOPAX", *number_lines(s["topaxis"])]
     lines += ["*SURFACE,NAME=SSLAVE,TYPE=ELEMENT", *[f"{e},S{f}" for e, f in s["slave"]],
               "*SURFACE,NAME=SMASTER,TYPE=ELEMENT", *[f"{e},S{f}" for e, f in s["master"]]]
     lines += ["*MATERIAL,NAME=SPECIMEN", "*ELASTIC", f"{m.E_MPa:.9g},{m.nu:.9g}", "*PLASTIC",

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.fe.ccx import run_deck
-from flowcurve.identification.fe.upsetting import SECTOR, _lines, check_plastic_table, plastic_lines, plastic_table, static_step
+from flowcurve.identification.fe.model.ccx import run_deck
+from flowcurve.identification.fe.model.deck import SECTOR, check_plastic_table, number_lines, plastic_lines, plastic_table, static_step
 
 
 @dataclass(frozen=True)
@@ -74,7 +74,7 @@ def tension_deck(m: TensionModel) -> str:
     lines = ["*HEADING", f"flowcurve tension d0={m.d0_mm:g} l0={m.l0_mm:g} dl={m.elongation_mm:g}", "*NODE"]
     lines += [f"{k},{r:.9g},{z:.9g}" for k, (r, z) in enumerate(nodes, start=1)]
     lines += ["*ELEMENT,TYPE=CAX8R,ELSET=SPEC"] + [f"{k}," + ",".join(map(str, e)) for k, e in enumerate(elems, start=1)]
-    lines += ["*NSET,NSET=AXIS", *_lines(axis), "*NSET,NSET=MID", *_lines(mid_plane), "*NSET,NSET=TOP", *_lines(top),
+    lines += ["*NSET,NSET=AXIS", *number_lines(axis), "*NSET,NSET=MID", *number_lines(mid_plane), "*NSET,NSET=TOP", *number_lines(top),
               "*NSET,NSET=NECK", str(ids[nr2, 0]),
               "*MATERIAL,NAME=SPECIMEN", "*ELASTIC", f"{m.E_MPa:.9g},{m.nu:.9g}", "*PLASTIC",
               *plastic_lines(eps, sig),
@@ -86,7 +86,7 @@ def tension_deck(m: TensionModel) -> str:
     if m.surface:  # the outer surface from the neck (z = 0) to the end, corner and mid-side nodes
         surf = [ids[nr2, j] for j in range(nz2 + 1)]
         at = lines.index("*MATERIAL,NAME=SPECIMEN")
-        lines[at:at] = ["*NSET,NSET=SURF", *_lines(surf)]
+        lines[at:at] = ["*NSET,NSET=SURF", *number_lines(surf)]
         lines[-1:-1] = ["*NODE PRINT,NSET=SURF", "U"]
     return "\n".join(lines) + "\n"
 

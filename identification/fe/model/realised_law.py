@@ -19,8 +19,8 @@ import math
 
 import numpy as np
 
-from flowcurve.identification.fe.ccx import run_deck
-from flowcurve.identification.fe.upsetting import SECTOR, plastic_lines, static_step
+from flowcurve.identification.fe.model.ccx import run_deck
+from flowcurve.identification.fe.model.deck import SECTOR, plastic_lines, static_step
 
 
 def one_element_deck(eps_p, stress_MPa, *, radius_mm: float, height_mm: float, h_end_mm: float, E_MPa: float, nu: float,
