@@ -280,10 +280,10 @@ def create_app(console: Console) -> Starlette:
                 break
             await asyncio.sleep(0.05)
         if not run.running and run.error and run.outcome is None:
-            from flowcurve.console.setup_form import field_of, labelled
+            from flowcurve.console.setup_form import labelled
 
             runner.discard(run)
-            field = field_of(run.error)
+            field = run.error_field or "form"  # the field the service's FieldError names; else the test as a whole
             return _error(run.error, 400, fields={field: labelled(field, run.error)})
         return _json({"test": console.test_summary()})
 
