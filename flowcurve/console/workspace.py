@@ -176,13 +176,13 @@ class Workspace:
 
     # identification --------------------------------------------------------------------------
     def identify(self, record: Path) -> dict:
-        """``flowcurve identify`` on one record into OUT/results/<stem>/; its summary."""
-        from flowcurve.demo import identify_and_write
+        """The identify service (``flowcurve identify``'s) on one record into OUT/results/<stem>/; its summary."""
+        from flowcurve.services.identify import IdentifyRequest, identify
 
         self.within(record)
         self.result_folder(record)  # results/<stem> written only inside --out
         try:
-            identify_and_write(record, self.within(self.results))
+            identify(IdentifyRequest(record, self.within(self.results)))
         except Exception as exc:  # noqa: BLE001 — named without the record's text
             raise FlowcurveError(self.public_error(exc)) from None
         return self.result_summary(record)
