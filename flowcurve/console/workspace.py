@@ -273,12 +273,14 @@ def _requests(inputs: list[str], out: Path, options: dict):
             values[request][field] = float(text) if text else None
         except ValueError:
             errors[form] = f"not a number: {text!r}"
-    try:
-        fit_request = FitRequest(inputs, out, method=str(options.get("method") or "global"), **values["fit"]).check()
-        card_request = CardRequest("fit.json", str(options.get("format") or "lsdyna"), **values["card"],
-                                   **({"units": units} if (units := str(options.get("units") or "").strip()) else {})).check()
-    except FieldError as exc:
-        errors.update(exc.errors)
+    units = str(options.get("units") or "").strip()
+    fit_request = FitRequest(inputs, out, method=str(options.get("method") or "global"), **values["fit"])
+    card_request = CardRequest("fit.json", str(options.get("format") or "lsdyna"), **values["card"], **({"units": units} if units else {}))
+    for request in (fit_request, card_request):
+        try:
+            request.check()
+        except FieldError as exc:
+            errors.update(exc.errors)
     if errors:
         raise FormError(errors)
     return fit_request, card_request

@@ -15,8 +15,19 @@ from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM as DEFAULT_UNITS
 from flowcurve.services import choice
 
 
+@dataclass(kw_only=True)
+class Constants:
+    """The material constants a card takes beyond fit.json's (override them), in lab units."""
+
+    E_MPa: float | None = None
+    poisson: float | None = None
+    density_kg_per_m3: float | None = None
+    specific_heat_J_per_kgK: float | None = None
+    melt_temperature_C: float | None = None
+
+
 @dataclass
-class CardRequest:
+class CardRequest(Constants):
     """A card from ``fit`` (fit.json) in ``format`` and ``units``, to ``output`` (None: returned
     only); the constants (lab units: MPa, kg/m³, J/(kg K), °C, W/(m K), 1/K) override fit.json's,
     the rest are the card's options (``curves``, ``max_rows`` …, as ``flowcurve card`` names them)."""
@@ -26,11 +37,6 @@ class CardRequest:
     units: str = DEFAULT_UNITS
     output: str | None = None
     name: str | None = None
-    E_MPa: float | None = None
-    poisson: float | None = None
-    density_kg_per_m3: float | None = None
-    specific_heat_J_per_kgK: float | None = None
-    melt_temperature_C: float | None = None
     conductivity_W_per_mK: float | None = None
     expansion_per_K: float | None = None
     friction_mu: float | None = None
@@ -61,7 +67,7 @@ class CardRequest:
 
 
 @dataclass
-class ReportRequest:
+class ReportRequest(Constants):
     """A series report of the result folders under ``dir`` to ``output`` (HTML; the PDF beside it
     unless not ``pdf``), with the lab file ``lab`` and the card's ``units`` and constants."""
 
@@ -71,11 +77,6 @@ class ReportRequest:
     pdf: bool = True
     units: str = DEFAULT_UNITS
     title: str | None = None
-    E_MPa: float | None = None
-    poisson: float | None = None
-    density_kg_per_m3: float | None = None
-    specific_heat_J_per_kgK: float | None = None
-    melt_temperature_C: float | None = None
 
 
 CONSTANT_OPTIONS = ("E_MPa", "poisson", "density_kg_per_m3", "specific_heat_J_per_kgK", "melt_temperature_C",
