@@ -237,3 +237,29 @@ def test_every_package_folder_is_in_the_wheel():
     assert on_disk - listed == set(), f"package folders missing from pyproject's packages: {sorted(on_disk - listed)}"
     assert listed - on_disk == set(), f"pyproject lists packages with no folder: {sorted(listed - on_disk)}"
     assert {p.split(".")[0] for p in listed} == {"flowcurve"}
+
+
+def _imports_of_package(folder: Path, package: str) -> list[str]:
+    """Every import (module- and function-level) of ``package`` or below in ``folder``'s files."""
+    return [f"{path.relative_to(folder.parent)}:{line}: imports {module}" for path in _python_files(folder)
+            for line, module in _imports(path) if module == package or module.startswith(package + ".")]
+
+
+@pytest.mark.parametrize("folder", ["console", "services"])
+def test_the_console_and_the_services_import_nothing_of_the_cli(folder):
+    """The console builds the services' typed requests from its forms; it never parses argv with
+    the CLI's parser or borrows the CLI's helpers (issue 44). The services sit below both."""
+    bad = _imports_of_package(ROOT / "flowcurve" / folder, "flowcurve.cli")
+    assert not bad, "\n".join(bad)
+
+
+def test_the_services_import_nothing_of_the_console():
+    bad = _imports_of_package(ROOT / "flowcurve" / "services", "flowcurve.console")
+    assert not bad, "\n".join(bad)
+
+
+def test_the_import_finder_sees_function_level_imports(tmp_path):
+    """An import inside a function counts: the console's old ``from flowcurve.cli import build_parser``
+    sat in a method."""
+    (tmp_path / "m.py").write_text("def f():\n    from flowcurve.cli.reports import run_card\n", encoding="utf-8")
+    assert _imports_of_package(tmp_path, "flowcurve.cli") == [f"{tmp_path.name}/m.py:2: imports flowcurve.cli.reports"]

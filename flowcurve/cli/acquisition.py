@@ -8,24 +8,20 @@ header of a record cut short; ``annotate`` adds post-test measurements to a reco
 
 from __future__ import annotations
 
-import argparse
 import datetime as _dt
-import math
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from flowcurve.cli.choices import TEST_TYPES
-from flowcurve.cli.specimen import add_geometry_options, add_modulus_option, check_specimen_options, measurement
-from flowcurve.errors import EXIT_COMPLETE, EXIT_DATA_LOST, EXIT_STOPPED, DeviceError, FlowcurveError, RecordError, RecordWriteError, SafetyError
+from flowcurve.cli.specimen import add_geometry_options, add_modulus_option
+from flowcurve.errors import EXIT_COMPLETE, EXIT_DATA_LOST, EXIT_STOPPED, DeviceError, FlowcurveError, RecordWriteError, SafetyError
 from flowcurve.rig.virtual.responses import COMPRESSION_HELP, COMPRESSION_RESPONSES, TENSION_HELP, TENSION_RESPONSES
+from flowcurve.services.run import DEFAULT_VIRTUAL_MATERIAL, RunRequest, parse_assignments, prepare, run_test
 
 if TYPE_CHECKING:  # the acquisition and the record format import numpy: imported where a command runs, not for --help
     from flowcurve.acquisition.live import LiveView
-    from flowcurve.acquisition.procedure import Outcome, TestSpec
-
-DEFAULT_VIRTUAL_MATERIAL = "steel45"
-
+    from flowcurve.acquisition.procedure import Outcome
 
 def register(subparsers) -> None:
     run = subparsers.add_parser("run", help="run a tension or compression test and record it", description="Run a test on the rig (--config) or on the virtual rig (no --config), record it crash-safely, show it live.")
@@ -86,102 +82,15 @@ def add_fault_option(parser, note: str = "") -> None:
 
 
 def virtual_faults(args) -> tuple:
-    """The parsed ``--fault`` options (ConfigError naming a malformed one)."""
-    from flowcurve.rig.virtual.fault_spec import parse_faults
+    """The parsed ``--fault`` options (FieldError naming a malformed one)."""
+    from flowcurve.services.run import faults
 
-    return parse_faults(getattr(args, "fault", None))
+    return faults(RunRequest("tension", fault=list(getattr(args, "fault", None) or [])))
 
 
 def virtual_responses(args) -> dict[str, str]:
     """The virtual rig's responses the options ask for (fe where not given)."""
-    return {"compression_response": args.compression_response or "fe", "tension_response": args.tension_response or "fe"}
-
-
-def parse_assignments(items: list[str], *, numeric_prefix: str = "post.", known=None, option: str = "--set") -> dict[str, str | None]:
-    """``["post.hk_mm=3.55", "operator=Ivanov"]`` → dict; post.* values must be numbers; a key the
-    record format does not know (``known``: only these) is refused with the nearest known one."""
-    from flowcurve.record.format import unknown_key_message
-
-    out: dict[str, str | None] = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        key, value = key.strip(), value.strip()
-        if not sep or not key or " " in key or ":" in key:
-            raise FlowcurveError(f"'{item}': give KEY=VALUE, e.g. post.hk_mm=3.55")
-        if key in ("flowcurve-record", "status"):
-            raise FlowcurveError(f"'{key}' is managed by flowcurve and cannot be set")
-        refused = unknown_key_message(key, known)
-        if refused:
-            raise FlowcurveError(f"{option} {item}: {refused} (nothing written)")
-        if value and key.startswith(numeric_prefix):
-            try:
-                number = float(value)
-            except ValueError:
-                raise FlowcurveError(f"'{item}': {key} must be a number (mm, mm2)") from None
-            if not (math.isfinite(number) and number > 0):
-                raise FlowcurveError(f"'{item}': {key} must be > 0")
-        out[key] = value or None
-    return out
-
-
-def run_post_keys(test: str) -> tuple[str, ...]:
-    """The post-test keys ``run --post`` takes for ``test``: the record format's and the areas."""
-    from flowcurve.acquisition.procedure import POST_KEYS
-
-    return POST_KEYS[test] + {"tension": ("post.sk_mm2",), "compression": ("post.smax_mm2", "post.dtop_mm")}[test]
-
-
-def _positive(name: str, value: float | None) -> None:
-    if value is not None:
-        measurement(name, value)
-
-
-ROOM_TEMPERATURE_C = 20.0  # the record's nominal temperature without a set-point: a furnace heats above it
-MAX_SOAK_S = 86_400.0  # a day
-RANGE_OPTIONS = {"temperature": "--temperature", "soak": "--soak", "speed": "--speed", "target": "--target",
-                 "force_limit": "--force-limit", "d0": "--d0", "l0": "--l0", "h0": "--h0"}
-
-
-def out_of_range(args, config=None) -> dict[str, str]:
-    """What is wrong with each given value (``args`` dest → text after the option's name) that the
-    rig cannot do or take: the [frame] speed range, travel, largest specimen and capacity, the
-    furnace's range. ``config`` None: the virtual rig, which has the configuration's defaults."""
-    from flowcurve.rig.config import FrameConfig, FurnaceConfig, setpoint_refusal
-
-    frame = config.frame if config is not None else FrameConfig()
-    furnace = config.furnace if config is not None else FurnaceConfig(port="virtual")
-    longest = (0.0, frame.max_specimen_length_mm, "mm", "the longest specimen that fits, [frame] max_specimen_length_mm")
-    limits = {  # dest → (low, high, unit, where the high end comes from); a low of 0 is checked as > 0 elsewhere
-        "speed": (frame.min_speed_mm_per_s, frame.max_speed_mm_per_s, "mm/s", "the machine's speed range, [frame] min_speed_mm_per_s and max_speed_mm_per_s"),
-        "target": (0.0, frame.travel_mm, "mm", "the crosshead travel, [frame] travel_mm"),
-        "force_limit": (0.0, frame.max_force_N, "N", "the machine's capacity, [frame] max_force_N"),
-        "d0": (0.0, frame.max_specimen_diameter_mm, "mm", "the largest diameter the grips and platens take, [frame] max_specimen_diameter_mm"),
-        "l0": longest, "h0": longest,
-        "soak": (0.0, MAX_SOAK_S, "s", "a day"),
-    }
-    problems = {}
-    for dest, (lo, hi, unit, why) in limits.items():
-        value = getattr(args, dest, None)
-        if value is None or not math.isfinite(value) or (lo <= value <= hi and value > 0):
-            continue
-        span = f"between {lo:g} and {hi:g} {unit}" if lo > 0 else f"more than 0 and at most {hi:g} {unit}"
-        problems[dest] = f"must be {span} ({why}), got {value:g}"
-    temperature = getattr(args, "temperature", None)
-    if temperature is not None and furnace is None:
-        problems["temperature"] = f"this rig has no furnace: leave it out for a test at room temperature, got {temperature:g}"
-    elif temperature is not None and not ROOM_TEMPERATURE_C < temperature < furnace.max_temperature_C:
-        problems["temperature"] = (f"must be above {ROOM_TEMPERATURE_C:g} C (room; leave it out for a test at room temperature) and below "
-                                   f"{furnace.max_temperature_C:g} C (the furnace's [furnace] max_temperature_C), got {temperature:g}")
-    elif temperature is not None and (refusal := setpoint_refusal(temperature, furnace.max_temperature_C, furnace.setpoint_margin_C)):
-        problems["temperature"] = refusal
-    return problems
-
-
-def check_ranges(args, config=None) -> None:
-    """``run``'s one-line error naming each option outside the rig's ranges (:func:`out_of_range`)."""
-    problems = out_of_range(args, config)
-    if problems:
-        raise FlowcurveError("; ".join(f"{RANGE_OPTIONS[dest]} {text}" for dest, text in problems.items()))
+    return RunRequest("tension", compression_response=args.compression_response, tension_response=args.tension_response).responses()
 
 
 def _interactive(args) -> bool:
@@ -196,43 +105,6 @@ def _ask(prompt: str, default=None, cast=str):
         return cast(text)
     except ValueError:
         raise FlowcurveError(f"{prompt}: not a number: {text!r}") from None
-
-
-def build_spec(args, geometry_default: dict[str, float] | None = None) -> TestSpec:
-    """The TestSpec from options (and prompts when interactive) — geometry in mm."""
-    from flowcurve.acquisition.procedure import TEST_GEOMETRY, ProcedureError, StopCriteria, TestSpec
-
-    check_specimen_options(args)
-    for name in ("speed", "target", "force_limit", "soak"):
-        _positive(name.replace("_", "-"), getattr(args, name, None))
-    interactive = _interactive(args)
-    geometry: dict[str, float] = {}
-    for key in TEST_GEOMETRY[args.test]:
-        opt = key.split("_")[0]
-        value = getattr(args, opt)
-        if value is None and geometry_default:
-            value = geometry_default.get(key)
-        if value is None and interactive:
-            value = _ask(f"specimen {opt} [mm]", None, float)
-        if value is None:
-            raise ProcedureError(f"specimen geometry missing: give --{opt} (mm)")
-        geometry[key] = float(value)
-    material = args.material or (_ask("material", "unknown") if interactive else "unknown")
-    operator = args.operator if args.operator is not None else (_ask("operator", "") if interactive else "")
-    post = {k: float(v) for k, v in parse_assignments(args.post, known=run_post_keys(args.test), option="--post").items() if v is not None}
-    return TestSpec(
-        test=args.test,
-        material=material or "unknown",
-        operator=operator or "",
-        specimen_id=args.specimen_id or "",
-        geometry_mm=geometry,
-        temperature_C=args.temperature,
-        speed_mm_per_s=args.speed,
-        soak_s=args.soak,
-        stop=StopCriteria(target_displacement_mm=args.target, force_limit_N=args.force_limit),
-        post=post,
-        extra_meta={"material.E_MPa": repr(float(args.E_MPa))} if args.E_MPa else {},
-    )
 
 
 def default_out(test: str) -> Path:
@@ -279,73 +151,33 @@ def advice(error: FlowcurveError) -> str:
 # -- commands ---------------------------------------------------------------------------------
 
 
+def run_request(args) -> RunRequest:
+    """The typed request of ``flowcurve run``'s options."""
+    return RunRequest(args.test, material=args.material, E_MPa=args.E_MPa, operator=args.operator, specimen_id=args.specimen_id,
+                      temperature=args.temperature, soak=args.soak, speed=args.speed, d0=args.d0, l0=args.l0, h0=args.h0,
+                      target=args.target, force_limit=args.force_limit, post=list(args.post), time_scale=args.time_scale,
+                      fault=list(args.fault), compression_response=args.compression_response, tension_response=args.tension_response)
+
+
 def cmd_run(args) -> int:
     from flowcurve.acquisition.live import LiveView
 
     view = LiveView(quiet=args.quiet)
     out_path = args.out or default_out(args.test)
+    config = None
     if args.config is not None:
         given = [f"--{k.replace('_', '-')}" for k in ("compression_response", "tension_response") if getattr(args, k) is not None]
         given += ["--fault"] if args.fault else []
         if given:
             raise FlowcurveError(f"{' and '.join(given)}: the virtual rig in this process only; with --config the rig is the "
                                  "configured one (for 'flowcurve rig virtual' give the option there)")
-        return _run_configured(args, view, out_path)
-    return _run_virtual(args, view, out_path)
+        from flowcurve.rig.config import load_config
 
-
-def configured_spec(args, config=None) -> tuple[TestSpec, float]:
-    """A test on the configured rig as ``run`` sets it up: (spec, time scale)."""
-    scale = 1.0 if args.time_scale is None else args.time_scale
-    _positive("time-scale", scale)
-    if args.speed is None:
-        args.speed = 0.01
-    check_ranges(args, config)
-    return build_spec(args), scale
-
-
-def _run_configured(args, view: LiveView, out_path: Path) -> int:
-    from flowcurve.acquisition.procedure import Procedure
-    from flowcurve.acquisition.session import DriverRig
-    from flowcurve.rig.config import load_config
-
-    config = load_config(args.config)
-    spec, scale = configured_spec(args, config)
-    with DriverRig(config, time_scale=scale, stream=not args.poll) as rig:
-        proc = Procedure(rig, spec, out_path, view=view, interactive=_interactive(args))
-        return report_outcome(proc.run(), view)
-
-
-def virtual_spec(args, view: LiveView) -> tuple[TestSpec, str, float]:
-    """A test on the in-process virtual rig as ``run`` sets it up: (spec, virtual material, time scale)."""
-    from flowcurve.rig.virtual.materials import get_material
-    from flowcurve.rig.virtual.physics import Specimen
-
-    scale = 15.0 if args.time_scale is None else args.time_scale
-    _positive("time-scale", scale)
-    if args.speed is None:
-        args.speed = 0.05
-    name = args.material or DEFAULT_VIRTUAL_MATERIAL
-    try:
-        name = get_material(name).name  # the virtual specimen is made of what the record will say
-    except FlowcurveError as exc:
-        raise FlowcurveError(f"--material: {str(exc).split(': ', 1)[-1]} — the virtual rig makes its specimen of the "
-                             "material the record names") from None
-    base = Specimen.tension() if args.test == "tension" else Specimen.compression()
-    geometry = {"d0_mm": base.d0_mm, "l0_mm" if args.test == "tension" else "h0_mm": base.length0_mm}
-    args.material = args.material or name
-    check_ranges(args)
-    return build_spec(args, geometry), name, scale
-
-
-def _run_virtual(args, view: LiveView, out_path: Path) -> int:
-    from flowcurve.acquisition.session import run_virtual_test
-
-    faults = virtual_faults(args)
-    spec, name, scale = virtual_spec(args, view)
-    run = run_virtual_test(spec, out_path, material=name, time_scale=scale, view=view, interactive=_interactive(args), stream=not args.poll,
-                           faults=faults, **virtual_responses(args))
-    return report_outcome(run.outcome, view)
+        config = load_config(args.config)
+    interactive = _interactive(args)
+    setup = prepare(run_request(args), config=config, ask=_ask if interactive else None)
+    outcome = run_test(setup, out_path, config=config, view=view, interactive=interactive, stream=not args.poll)
+    return report_outcome(outcome, view)
 
 
 def cmd_recover(args) -> int:

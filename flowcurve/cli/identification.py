@@ -7,12 +7,12 @@ import logging
 import math
 import os
 import sys
-import warnings
 from pathlib import Path
 
 from flowcurve.cli.choices import FRICTION_CORRECTIONS, FRICTION_METHODS, NECK_METHODS, TEST_TYPES
 from flowcurve.cli.specimen import GEOMETRY_OPTIONS, add_geometry_options, add_modulus_option, check_specimen_options, measurement
 from flowcurve.errors import FlowcurveError, MissingValueError, RecordError
+from flowcurve.services.identify import IdentifyRequest, given_options, identify
 
 logger = logging.getLogger(__name__)
 
@@ -185,79 +185,11 @@ def _options_from_args(args) -> dict:
     }
 
 
-def given_options(options: dict, meta: dict, columns) -> dict:
-    """The options as given that decide a record's result (result.json's provenance.options):
-    the identification options set, the metadata given (options, --set, --specimens row) and
-    the --column mapping; not --workers/--jobs/--scheduler, which change only the speed."""
-    given = {k: v for k, v in options.items() if v is not None and k != "workers"}
-    return {**given, **({"metadata": dict(meta)} if meta else {}), **({"columns": dict(columns)} if columns else {})}
+def _inverse_progress(runs, elapsed, left_s, limit_s) -> None:
+    """The inverse FE's budget, one line on standard error."""
+    from flowcurve.cli.progress import budget_text
 
-
-def identify_file(path: str, *, columns, meta, options, out: Path, plots: bool = True, record_sha256: str | None = None):
-    """Load, identify and write one record; returns (identification, result folder).
-
-    result.json carries a ``provenance`` block (:mod:`identification.provenance`): the record
-    file's SHA-256 (``record_sha256`` when the caller has it), the options as given, the date,
-    and ccx's version when the inverse FE ran the solver.
-
-    A numerical warning (numpy's RuntimeWarning) is not printed raw: it joins the result's
-    warnings, so it is written to result.json and shown in one line under the record.
-    """
-    from flowcurve.identification.identify import identify
-    from flowcurve.identification.provenance import file_sha256, provenance
-    from flowcurve.record.importers import load_record
-
-    given = given_options(options, meta, columns)
-    options = dict(options)
-    method, workers, time_limit = options.pop("method", "fast"), options.pop("workers", None), options.pop("time_limit", None)
-    raise_runtime = _runtime_warnings_raise()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        if raise_runtime:  # '-W error::RuntimeWarning' from outside still raises (tests find the source)
-            warnings.simplefilter("error", RuntimeWarning)
-        record = load_record(path, columns=columns, meta=meta)
-        if method == "inverse-fe":
-            from flowcurve.identification.identify import identify_inverse_fe, inverse_time_limit_s
-
-            from flowcurve.cli.progress import budget_text
-
-            def progress(runs, elapsed, left_s=None):
-                limit = time_limit or inverse_time_limit_s(record.test)
-                print(f"  inverse FE: {budget_text(runs, elapsed, left_s, limit_s=limit)}", file=sys.stderr, flush=True)
-
-            ident = identify_inverse_fe(record, law=options.get("law") or "auto", workers=workers, progress=progress,
-                                        E_MPa=options.get("E_MPa"), **({"time_limit_s": time_limit} if time_limit is not None else {}))
-        else:
-            ident = identify(record, **options)
-    caught_lines = [f"{'numerical warning' if issubclass(w.category, RuntimeWarning) else w.category.__name__}: {w.message}" for w in caught]
-    if caught_lines:
-        old = ident.result.setdefault("warnings", [])
-        old.extend(m for m in dict.fromkeys(caught_lines) if m not in old)
-    solver = None
-    if method == "inverse-fe":
-        from flowcurve.identification.fe.model.ccx import ccx_version
-
-        solver = ccx_version()
-    ident.result["provenance"] = provenance(record_sha256 or file_sha256(path), given, ccx_version=solver)
-    if plots:
-        from flowcurve.reports.plots import add_plots
-
-        add_plots(ident)
-    folder = out / record.name
-    try:
-        ident.write(folder)
-    except OSError as exc:
-        raise RecordError(folder, f"cannot write the results ({exc.strerror or exc}); choose another --out") from None
-    return ident, folder
-
-
-def _runtime_warnings_raise() -> bool:
-    """Did the caller make RuntimeWarnings errors ('-W error::RuntimeWarning')? The first filter
-    that applies to them decides, as in the warnings module."""
-    for action, _message, category, _module, _line in warnings.filters:
-        if issubclass(RuntimeWarning, category):
-            return action == "error"
-    return False
+    print(f"  inverse FE: {budget_text(runs, elapsed, left_s, limit_s=limit_s)}", file=sys.stderr, flush=True)
 
 
 def _fmt(value, spec: str = ".4g") -> str:
@@ -467,17 +399,17 @@ def identify_task(task: dict) -> dict:
     its result.json is current (:func:`identification.provenance.same_run`), else identified and
     written. Returns a picklable outcome (path, folder, status identified/skipped/failed, the
     result as JSON, the one-line error); bad input never raises."""
-    return _task_outcome(task, identify=True)
+    return _task_outcome(task, work=True)
 
 
 def outcome_without_work(task: dict) -> dict | None:
     """The outcome of a task decided without identifying its record: skipped (its result.json is
     current) or failed on its metadata; None when the record is to be identified."""
-    return _task_outcome(task, identify=False)
+    return _task_outcome(task, work=False)
 
 
-def _task_outcome(task: dict, *, identify: bool) -> dict | None:
-    """:func:`identify_task`; with ``identify`` False, None where it would identify the record."""
+def _task_outcome(task: dict, *, work: bool) -> dict | None:
+    """:func:`identify_task`; with ``work`` False, None where it would identify the record."""
     from flowcurve.identification.provenance import file_sha256
 
     path, out = task["path"], Path(task["out"])
@@ -492,10 +424,10 @@ def _task_outcome(task: dict, *, identify: bool) -> dict | None:
             current = _current_result(Path(outcome["folder"]), sha, given_options(task["options"], meta, task["columns"]))
             if current is not None:
                 return {**outcome, "status": "skipped", "result": current}
-        if not identify:
+        if not work:
             return None
-        ident, folder = identify_file(path, columns=task["columns"], meta=meta, options=task["options"], out=out,
-                                      plots=task["plots"], record_sha256=sha)
+        ident, folder = identify(IdentifyRequest(path, out, columns=task["columns"], meta=meta, options=task["options"],
+                                                 plots=task["plots"], record_sha256=sha), progress=_inverse_progress)
     except FlowcurveError as exc:
         message = exc.message_with(_givers(exc.keys, task["table"])) if isinstance(exc, MissingValueError) else str(exc)
         return {**outcome, "error": message if str(path) in message else f"{path}: {message}"}  # always name the file

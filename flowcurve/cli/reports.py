@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
-from flowcurve.reports.card_formats import FORMATS as CARD_FORMATS  # light: the writers are imported when used
+from flowcurve.reports.card_formats import FORMATS  # light: the writers are imported when used
 from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
+from flowcurve.services.card import CardRequest, ReportRequest, card, report
 
 
 def register(subparsers) -> None:
@@ -24,7 +24,7 @@ def register(subparsers) -> None:
         ),
     )
     p.add_argument("fit", metavar="FIT.json", help="fit.json written by 'flowcurve fit'")
-    p.add_argument("--format", "-f", required=True, choices=CARD_FORMATS, help="solver")
+    p.add_argument("--format", "-f", required=True, choices=FORMATS, help="solver")
     p.add_argument("--units", "-u", default=DEFAULT_UNIT_SYSTEM, choices=sorted(UNIT_SYSTEMS),
                    help=f"consistent unit system of the deck (default {DEFAULT_UNIT_SYSTEM})")
     p.add_argument("-o", "--output", metavar="FILE", help="write the card here (default: standard output)")
@@ -86,83 +86,24 @@ def register(subparsers) -> None:
     r.set_defaults(func=run_report)
 
 
-CONSTANT_OPTIONS = ("E_MPa", "poisson", "density_kg_per_m3", "specific_heat_J_per_kgK", "melt_temperature_C",
-                    "conductivity_W_per_mK", "expansion_per_K", "friction_mu")
-
-
-def overrides(args) -> dict:
-    out = {k: getattr(args, k, None) for k in CONSTANT_OPTIONS}
-    if getattr(args, "name", None):
-        out["material"] = args.name
-    return {k: v for k, v in out.items() if v is not None}
-
-
-CARD_OPTIONS = ("curves", "max_rows", "strain_rate_per_s", "temperature_C", "extend_to", "temperature_tolerance_C",
-                "id_offset", "radioss_version", "fcut_hz", "erosion_strain", "damage_displacement_mm")
-
-
-# stand-ins for constants a card lacks, only to find every other one it lacks too (never written)
-_STAND_INS = {"E_MPa": 2.0e5, "poisson": 0.3, "density_kg_per_m3": 7850.0, "specific_heat_J_per_kgK": 460.0,
-              "conductivity_W_per_mK": 40.0, "expansion_per_K": 1.2e-5}
-
-
-def missing_constants(data, fmt: str, units: str, options: dict) -> list[str]:
-    """Every constant (CardData attribute) the card in ``fmt`` needs and ``data`` lacks, in the
-    order the card asks for them: the card is made on a copy, a stand-in filling each gap found."""
-    import copy
-
-    from flowcurve.reports.cards import write_card
-    from flowcurve.reports.cards.data import MissingConstant
-
-    probe, missing = copy.copy(data), []
-    while True:
-        try:
-            write_card(probe, fmt, units, **options)
-            return missing
-        except MissingConstant as exc:
-            if exc.name in missing:  # a stand-in the card refuses: name what was found so far
-                return missing
-            missing.append(exc.name)
-            stand_in = probe.ref_temperature_C + 1000.0 if exc.name == "melt_temperature_C" else _STAND_INS[exc.name]
-            setattr(probe, exc.name, stand_in)
-
-
-def missing_text(names: list[str], labels: dict[str, str] | None = None) -> str:
-    """'Poisson's ratio (--poisson), density in kg/m3 (--density)': each constant as
-    ``labels`` names it (the console's form), else with the option that gives it."""
-    from flowcurve.reports.cards.data import CONSTANTS
-
-    labels = labels or {}
-    return ", ".join(labels.get(n) or f"{CONSTANTS[n][2]} ({CONSTANTS[n][1]})" for n in names)
+def card_request(args) -> CardRequest:
+    """The typed request of ``flowcurve card``'s options."""
+    return CardRequest(**{k: getattr(args, k) for k in CardRequest.__dataclass_fields__})
 
 
 def run_card(args) -> int:
-    from flowcurve.reports.cards import load_card_data, write_card
-    from flowcurve.reports.cards.fields import CardError
-
-    data = load_card_data(args.fit, **overrides(args))
-    options = {k: getattr(args, k) for k in CARD_OPTIONS}
-    missing = missing_constants(data, args.format, args.units, options)
-    if missing:
-        why_no_E = f" (the fit file's E is {data.E_source})" if "E_MPa" in missing and getattr(data, "E_source", None) else ""
-        raise CardError(f"{args.fit}: the {args.format} card needs {len(missing)} value(s) not in the fit file: "
-                        f"{missing_text(missing)}; give them as options or as keys in the fit file{why_no_E}")
-    text = write_card(data, args.format, args.units, **options)
-    if args.output:
-        Path(args.output).write_text(text, encoding="utf-8")
-        print(f"{args.format} card ({args.units}) written to {args.output}", file=sys.stderr)
+    request = card_request(args)
+    text = card(request)
+    if request.output:
+        print(f"{request.format} card ({request.units}) written to {request.output}", file=sys.stderr)
     else:
         sys.stdout.write(text)
     return 0
 
 
 def run_report(args) -> int:
-    from flowcurve.reports.lab import load_lab
-    from flowcurve.reports.report import write_report
-    from flowcurve.rig.config import instruments_given
-
-    lab = load_lab(args.lab, check_instruments=instruments_given)  # [instruments] as the rig configuration's
-    written = write_report(args.dir, args.output, units=args.units, title=args.title, lab=lab,
-                           pdf=not args.no_pdf, **overrides(args))
+    written = report(ReportRequest(args.dir, args.output, lab=args.lab, pdf=not args.no_pdf, units=args.units, title=args.title,
+                                   **{k: getattr(args, k) for k in ("E_MPa", "poisson", "density_kg_per_m3", "specific_heat_J_per_kgK",
+                                                                    "melt_temperature_C")}))
     print(f"report written to {', '.join(map(str, written))}", file=sys.stderr)
     return 0

@@ -1,24 +1,16 @@
 """``flowcurve fit``: Johnson–Cook constants from a series of records or result folders.
 
-Writes ``fit.json`` (schema in ``docs/fit-json.md``), the tabulated true curves per
-(temperature, rate) in ``curves/`` and one plot per record (plus an overview) in ``plots/``.
+Parses the options into a :class:`~flowcurve.services.fit.FitRequest`, loads the members (side
+by side with ``--jobs``) and calls :func:`flowcurve.services.fit.fit`, which writes ``fit.json``,
+``curves/`` and ``plots/``.
 """
 
 from __future__ import annotations
 
-import json
-import re
 import sys
-from pathlib import Path
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:  # the series fit (lmfit, pandas) is imported when a fit runs, not for --help
-    from flowcurve.identification.series import SeriesFit
-
-# the series fit's MAX_POINTS, written here so that --help need not import the fit (lmfit);
-# tests/test_startup.py keeps the two equal
-DEFAULT_MAX_POINTS = 60
-DEFAULT_SHAPE_ERROR_PCT = 0.4  # series_fit.SHAPE_ERROR_PCT, likewise
+from flowcurve.services.fit import MAX_POINTS as DEFAULT_MAX_POINTS  # the series fit's, without importing it (lmfit) for --help
+from flowcurve.services.fit import SHAPE_ERROR_PCT as DEFAULT_SHAPE_ERROR_PCT
 
 
 def register(subparsers) -> None:
@@ -107,184 +99,17 @@ def load_members_in_parallel(inputs, identify_options: dict, jobs: int = 1, sche
 
 
 def run(args) -> int:
-    from flowcurve.identification.damage import read_fracture_points
-    from flowcurve.identification.series import fit_series
+    from flowcurve.services.fit import FitRequest, fit, summary
 
+    request = FitRequest(args.inputs, args.out, ref_rate=args.ref_rate, ref_temp=args.ref_temp, melt_temp=args.melt_temp,
+                         method=args.method, fix_C=args.fix_C, fix_m=args.fix_m, E_MPa=args.E_MPa,
+                         rate_per_record=getattr(args, "rate_per_record", False), max_points=args.max_points,
+                         shape_error=args.shape_error, fracture_points=args.fracture_points,
+                         options={k: v for k, v in vars(args).items() if k not in NOT_RESULT_OPTIONS and v is not None})
     members = load_members_in_parallel(args.inputs, {"E_MPa": args.E_MPa} if args.E_MPa is not None else {}, args.jobs, args.scheduler)
-    if getattr(args, "rate_per_record", False):
-        for m in members:
-            m.point_rates_per_s = None  # rates_at then gives the record's one rate
-    fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
-    missing = missing_inputs(members, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
-                             melt_temperature_C=args.melt_temp, fixed=fixed)
-    if missing:
-        from flowcurve.errors import IdentificationError
-
-        raise IdentificationError(missing_message(missing))
-    extra = read_fracture_points(args.fracture_points) if args.fracture_points else ()
-    series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
-                        melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points, fracture_points=extra,
-                        shape_error_pct=args.shape_error)
-    out = write_fit(series, args.out, options={k: v for k, v in vars(args).items() if k not in NOT_RESULT_OPTIONS and v is not None})
+    series, out = fit(request, members)
     print(summary(series, out))
     if series.quality == "poor" and args.strict:
         print(f"flowcurve: error: the fit is poor (max error {series.fit.fit_error_pct:.3g} % > 10 %); {out} is marked poor (--strict)", file=sys.stderr)
         return 2
     return 0
-
-
-# each input the fit may lack: (option, what it is, why the fit needs it)
-FIT_INPUTS = {
-    "melt_temp": ("--melt-temp", "melting temperature, °C", "T* = (T - T_ref)/(T_melt - T_ref) needs it"),
-    "fix_C": ("--fix-C", "C", "the series has one strain rate as the model sees it: fix C, or add records at other rates"),
-    "fix_m": ("--fix-m", "m", "the series has one temperature as the model sees it: fix m, or add records at other temperatures"),
-}
-
-
-def missing_inputs(members, *, ref_strain_rate_per_s=None, ref_temperature_C=None, melt_temperature_C=None,
-                   fixed=None) -> list[str]:
-    """Every input (a key of FIT_INPUTS) the fit of ``members`` lacks, found at once: the melting
-    temperature when not given, and C or m when the series cannot identify it and it is not fixed."""
-    from flowcurve.errors import IdentificationError
-    from flowcurve.identification.series import BOUNDS, check_identifiable, make_reference
-
-    fixed, missing = dict(fixed or {}), []
-    melt = melt_temperature_C
-    if melt is None:
-        missing.append("melt_temp")
-        # a stand-in above every record, only to see which of C and m the series can give
-        melt = max([m.temperature_C for m in members] + [ref_temperature_C or 0.0]) + 1000.0
-    try:
-        ref = make_reference(members, ref_strain_rate_per_s=ref_strain_rate_per_s, ref_temperature_C=ref_temperature_C,
-                             melt_temperature_C=melt)
-    except IdentificationError:
-        return missing  # the fit's own checks name what is wrong with the given values
-    for name, other in (("C", "m"), ("m", "C")):
-        if name in fixed:
-            continue
-        try:
-            check_identifiable(members, ref, {other: BOUNDS[other][0]})  # the other one fixed: this one alone is checked
-        except IdentificationError:
-            missing.append(f"fix_{name}")
-    return missing
-
-
-def missing_message(missing: list[str], labels: dict[str, str] | None = None) -> str:
-    """One line naming every input the fit lacks, as ``labels`` name them (the console's form)
-    or by option."""
-    labels = labels or {}
-    parts = [f"{labels.get(k) or FIT_INPUTS[k][1] + ' (' + FIT_INPUTS[k][0] + ')'}: {FIT_INPUTS[k][2]}" for k in missing]
-    return f"the fit needs {len(missing)} input(s) not given: " + "; ".join(parts)
-
-
-def _safe(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9._-]+", "_", name) or "record"
-
-
-POINT_RATES_FILE = "point_rates.csv"
-
-
-def write_fit(series: SeriesFit, outdir: str | Path, options: dict | None = None) -> Path:
-    """Write fit.json, curves/*.csv, point_rates.csv and plots/*.png into ``outdir``; returns the fit.json path.
-
-    fit.json's ``provenance`` (identification.provenance) names every record's SHA-256 and the
-    ``options`` as given."""
-    from flowcurve.identification.outcome import to_jsonable
-    from flowcurve.identification.provenance import member_record_sha256, provenance
-
-    outdir = Path(outdir)
-    (outdir / "curves").mkdir(parents=True, exist_ok=True)
-    (outdir / "plots").mkdir(parents=True, exist_ok=True)
-    data = series.as_dict()
-    for c in series.curves:
-        c.table.to_csv(outdir / "curves" / c.filename, index=False, float_format="%.6g", lineterminator="\n")
-    series.point_rates().to_csv(outdir / POINT_RATES_FILE, index=False, float_format="%.6g", lineterminator="\n")
-    data["point_rates_file"] = POINT_RATES_FILE  # each fitted point's own strain rate (docs/fit-json.md)
-    plots = _plots(series, outdir / "plots")
-    curve_of = {name: f"curves/{c.filename}" for c in series.curves for name in c.records}
-    for rec in data["records"]:
-        rec["curve"] = curve_of.get(rec["name"])
-        rec["plot"] = plots.get(rec["name"])
-    data["provenance"] = provenance({m.name: member_record_sha256(m.kind, m.source) for m in series.members}, options or {})
-    path = outdir / "fit.json"
-    path.write_text(json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n", encoding="utf-8")
-    return path
-
-
-def _plots(series: SeriesFit, folder: Path) -> dict[str, str]:
-    """One PNG per record (measured curve, the chosen fit, the other method dashed) and an overview."""
-    import matplotlib
-    import numpy as np
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    other = series.stepwise_fit if series.method == "global" else series.global_fit
-    written: dict[str, str] = {}
-    fig_all, ax_all = plt.subplots(figsize=(7, 5))
-    for i, m in enumerate(series.members):
-        eps = m.plastic_strain
-        grid = np.linspace(0.0, eps[-1], 200)
-        label = f"{m.temperature_C:.0f} °C, {m.strain_rate_per_s:.3g} 1/s"
-        fig, ax = plt.subplots(figsize=(6, 4.5))
-        ax.plot(eps, m.stress_MPa, ".", ms=3, color="0.3", label=f"{m.name} (measured)")
-        ax.plot(grid, series.fit(grid, m.strain_rate_per_s, m.temperature_C), "-", color="C0",
-                label=f"{series.fit.method} fit (max error {series.fit.record_errors[m.name]['fit_error_pct']:.2g} %)")
-        if other is not None:
-            ax.plot(grid, other(grid, m.strain_rate_per_s, m.temperature_C), "--", color="C1", label=f"{other.method} fit")
-        ax.set(xlabel="true plastic strain", ylabel="true stress, MPa", title=label)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-        name = f"plots/{_safe(m.name)}.png"
-        fig.tight_layout()
-        fig.savefig(folder / Path(name).name, dpi=110)
-        plt.close(fig)
-        written[m.name] = name
-        color = f"C{i % 10}"
-        ax_all.plot(eps, m.stress_MPa, ".", ms=2, color=color)
-        ax_all.plot(grid, series.fit(grid, m.strain_rate_per_s, m.temperature_C), "-", color=color, label=f"{m.name}: {label}")
-    ax_all.set(xlabel="true plastic strain", ylabel="true stress, MPa", title=f"Johnson-Cook, {series.method} fit (lines) and records (dots)")
-    ax_all.grid(alpha=0.3)
-    ax_all.legend(fontsize=7)
-    fig_all.tight_layout()
-    fig_all.savefig(folder / "all_records.png", dpi=110)
-    plt.close(fig_all)
-    return written
-
-
-def summary(series: SeriesFit, path: Path) -> str:
-    """What the terminal shows after a fit: constants ± one standard error, range, errors."""
-    f = series.fit
-    ref = f.reference
-    units = {"A": " MPa", "B": " MPa", "n": "", "C": "", "m": ""}
-    lines = [f"Johnson-Cook, {series.method} fit over {len(series.members)} records "
-             f"(ref. rate {ref.strain_rate_per_s:g} 1/s [{ref.strain_rate_source}], ref. temperature {ref.temperature_C:g} °C "
-             f"[{ref.temperature_source}], melting {ref.melt_temperature_C:g} °C)"]
-    for p, v in f.params.items():
-        se = f.stderr.get(p)
-        tag = " (fixed, not identified)" if p in f.fixed else (f" ± {se:.3g}" if se is not None else " (no uncertainty)")
-        lines.append(f"  {p} = {v:.5g}{units[p]}{tag}")
-    d = series.covered_range()
-    lines.append(f"  identified on: plastic strain {d['plastic_strain'][0]:.3g}–{d['plastic_strain'][1]:.3g}, "
-                 f"rate {d['strain_rate_per_s'][0]:.3g}–{d['strain_rate_per_s'][1]:.3g} 1/s, "
-                 f"temperature {d['temperature_C'][0]:.4g}–{d['temperature_C'][1]:.4g} °C")
-    lines.append(f"  error: max {f.fit_error_pct:.2f} %, rms {f.rms_error_pct:.2f} %, quality {series.quality}")
-    for m in series.members:
-        e = f.record_errors[m.name]
-        lines.append(f"    {m.name}: {m.temperature_C:.4g} °C, {m.strain_rate_per_s:.3g} 1/s ({m.strain_rate_source}): "
-                     f"max {e['fit_error_pct']:.2f} %, rms {e['rms_error_pct']:.2f} %")
-    other = series.stepwise_fit if series.method == "global" else series.global_fit
-    if other is not None:
-        lines.append(f"  {other.method} for comparison: " + ", ".join(f"{p} = {v:.4g}" for p, v in other.params.items())
-                     + f" (max error {other.fit_error_pct:.2f} %)")
-    elif series.stepwise_note:
-        lines.append(f"  {series.stepwise_note}")
-    if series.damage is not None:
-        d = series.damage
-        lines.append(f"  fracture (2.22) over {len(d.points)} points, triaxiality {d.covered()['triaxiality_range'][0]:.3g}-"
-                     f"{d.covered()['triaxiality_range'][1]:.3g} (positive in tension): "
-                     + ", ".join(f"{k} = {v:.4g}" + (" (fixed)" if k in d.fixed else f" ± {d.stderr[k]:.2g}" if d.stderr[k] else "")
-                                 for k, v in d.params.items()))
-    lines += [f"  warning: {w}" for w in series.warnings]
-    lines.append(f"wrote {path}")
-    return "\n".join(lines)

@@ -8,9 +8,6 @@ are the same everywhere.
 
 from __future__ import annotations
 
-
-from flowcurve.errors import FlowcurveError
-
 # option (without --) → (record metadata key, help)
 GEOMETRY_OPTIONS = {
     "d0": ("specimen.d0_mm", "initial specimen diameter, mm"),
@@ -35,13 +32,11 @@ def add_modulus_option(target, use: str) -> None:
 def measurement(option: str, value: float) -> float:
     """A number option (dimension, speed, stiffness, modulus): finite, > 0, not an overflow.
 
-    ``option`` is the option's name without dashes; the one-line error names it.
+    ``option`` is the option's name without dashes; the one-line error (a FieldError) names it.
     """
-    from flowcurve.record.format import MAX_MAGNITUDE, MIN_POSITIVE
+    from flowcurve.services import measured
 
-    if not MIN_POSITIVE <= value <= MAX_MAGNITUDE:  # NaN fails too
-        raise FlowcurveError(f"--{option.replace('_', '-')} must be a positive number of at most {MAX_MAGNITUDE:g}, got {value!r}")
-    return value
+    return measured(option, f"--{option.replace('_', '-')}", value)
 
 
 def check_specimen_options(args) -> None:

@@ -1,8 +1,7 @@
 """One test at a time on the console's rig, run in a thread with the ``run`` command's code.
 
-The test itself is :class:`flowcurve.acquisition.procedure.Procedure` — on the virtual rig
-through :func:`flowcurve.acquisition.session.run_virtual_test`, on a configured rig through
-:class:`DriverRig` — exactly as ``flowcurve run`` runs it: the same record, the same stop
+The test itself is :func:`flowcurve.services.run.run_test` — the procedure on the virtual rig
+in this process or on a configured rig — exactly as ``flowcurve run`` runs it: the same record, the same stop
 criteria, the same heater safety (the heater is switched off on every way out of the
 procedure, and the furnace's watchdog is armed while it runs). The browser only watches:
 closing or reloading it changes nothing; a stop or abort button sets a flag the procedure
@@ -22,8 +21,9 @@ from pathlib import Path
 from flowcurve.acquisition.procedure import post_prompts
 from flowcurve.acquisition.safety import Interrupted
 from flowcurve.console.live_state import ABORTED_STATE, COMPLETE_STATE, FAILED_STATE, ConsoleView
-from flowcurve.console.setup_form import TestSetup
 from flowcurve.errors import FlowcurveError
+from flowcurve.services import FieldError
+from flowcurve.services.run import RunSetup, run_test
 
 log = logging.getLogger(__name__)
 
@@ -40,7 +40,7 @@ class BusyError(FlowcurveError):
     """A test is running on this rig already."""
 
 
-def record_name(setup: TestSetup, now: _dt.datetime | None = None) -> str:
+def record_name(setup: RunSetup, now: _dt.datetime | None = None) -> str:
     """``compression-<specimen id>-<date-time>.csv``, safe as a file name."""
     now = now or _dt.datetime.now()
     sid = re.sub(r"[^A-Za-z0-9._-]+", "_", setup.spec.specimen_id).strip("._")[:40]
@@ -55,12 +55,13 @@ class TestRun:
     __test__ = False
 
     test_id: int
-    setup: TestSetup
+    setup: RunSetup
     record: Path
     view: ConsoleView
     thread: threading.Thread | None = None
     outcome: object | None = None  # acquisition.procedure.Outcome
     error: str | None = None  # a fault, named as ``run`` names it
+    error_field: str | None = None  # the request field a refusal names (services.FieldError), else None
     stop_reason: str | None = None
     abort_reason: str | None = None
     post: dict[str, float] = field(default_factory=dict)
@@ -115,7 +116,7 @@ class TestRunner:
     def virtual(self) -> bool:
         return self.config is None and self.open_rig is None
 
-    def start(self, setup: TestSetup, form: dict | None = None) -> TestRun:
+    def start(self, setup: RunSetup, form: dict | None = None) -> TestRun:
         with self._lock:
             if self.current is not None and self.current.running:
                 raise BusyError(f"a test is running on this rig already ({self.current.record.name}); stop it first")
@@ -195,30 +196,17 @@ class TestRunner:
             self._end(run)
 
     def _procedure(self, run: TestRun) -> None:
-        spec = run.setup.spec
+        def attach(rig) -> None:  # the virtual rig: its furnace's relay; a driver rig: its furnace driver
+            run.heater_source = rig.model.furnace if self.virtual else getattr(rig, "furnace", None)
+            if self.virtual and self.virtual_setup is not None:
+                self.virtual_setup(rig)
+
         try:
-            if self.virtual:
-                from flowcurve.acquisition.session import run_virtual_test
-
-                def attach(vr) -> None:
-                    run.heater_source = vr.model.furnace
-                    if self.virtual_setup is not None:
-                        self.virtual_setup(vr)
-
-                virtual = run_virtual_test(spec, run.record, material=run.setup.virtual_material, time_scale=run.setup.time_scale,
-                                           view=run.view, stop_requested=self._stop_requested(run), rig_setup=attach,
-                                           faults=run.setup.faults)
-                run.outcome = virtual.outcome
-            else:
-                from flowcurve.acquisition.procedure import Procedure
-                from flowcurve.acquisition.session import DriverRig
-
-                opened = self.open_rig(run.setup.time_scale) if self.open_rig else DriverRig(self.config, time_scale=run.setup.time_scale)
-                with opened as rig:
-                    run.heater_source = getattr(rig, "furnace", None)
-                    run.outcome = Procedure(rig, spec, run.record, view=run.view, stop_requested=self._stop_requested(run)).run()
+            run.outcome = run_test(run.setup, run.record, config=self.config, view=run.view, stop_requested=self._stop_requested(run),
+                                   on_rig=attach, open_rig=self.open_rig)
         except FlowcurveError as exc:  # could not start (a device that does not answer, a bad set-point)
             run.error = str(exc)
+            run.error_field = exc.field if isinstance(exc, FieldError) else None
         except BaseException as exc:  # the procedure closed the record as aborted and switched the heater off
             log.exception("test %s ended with an unexpected error", run.test_id)
             run.error = " ".join(f"{type(exc).__name__}: {exc}".split())

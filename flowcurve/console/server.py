@@ -236,7 +236,97 @@ async def _body(request: Request, schema: dict[str, str]) -> dict:
     return data
 
 
+async def _start(request: Request) -> Response:
+    console = request.app.state.console
+    runner, workspace = console.runner, console.workspace
+    try:
+        data = await _body(request, START_FIELDS)
+        workspace.within(workspace.records)  # the record is written only inside --out
+        setup = validate(data, virtual=runner.virtual, time_scale=console.time_scale, config=runner.config)
+        run = runner.start(setup, {k: v for k, v in data.items() if isinstance(v, (str, int, float))})
+    except FormError as exc:
+        return _error(str(exc), 400, fields=exc.errors)
+    except BusyError as exc:
+        return _error(str(exc), 409)
+    # a test the procedure refuses at once (set-point above the furnace maximum) goes back to the form
+    for _ in range(20):
+        if not run.running or run.view.state not in ("starting",):
+            break
+        await asyncio.sleep(0.05)
+    if not run.running and run.error and run.outcome is None:
+        from flowcurve.console.setup_form import labelled
+
+        runner.discard(run)
+        field = run.error_field or "form"  # the field the service's FieldError names; else the test as a whole
+        return _error(run.error, 400, fields={field: labelled(field, run.error)})
+    return _json({"test": console.test_summary()})
+
+
+async def _post(request: Request) -> Response:
+    console = request.app.state.console
+    runner, workspace = console.runner, console.workspace
+    data = await _body(request, POST_FIELDS)
+    run = runner.current
+    if run is None or run.running or getattr(run.outcome, "status", None) != "complete" or not run.record.exists():
+        return _error("no completed test to annotate (post-test values go with a test that ran to its end)", 409)
+    from flowcurve.record.format import amend_record
+
+    try:
+        values = post_values(run.setup.spec.test, data)
+    except FormError as exc:
+        return _error(str(exc), 400, fields=exc.errors)
+    spec = run.setup.spec
+    if face_asked(spec.test, spec.geometry_mm) and "post.dface_mm" not in {**run.post, **values}:
+        prompt = post_prompts(spec.test, spec.geometry_mm)["post.dface_mm"]
+        return _error("post.dface_mm: the original end face's diameter is needed on this specimen", 400,
+                      fields={"post.dface_mm": f"required — {prompt}"})
+    if values:
+        workspace.within(run.record)  # amended only inside --out (PathError: 400)
+        try:
+            amend_record(run.record, {k: repr(v) for k, v in values.items()})
+        except FlowcurveError as exc:
+            return _error(workspace.public_error(exc))
+        run.post.update(values)
+    try:
+        run.result = await asyncio.to_thread(workspace.identify, run.record)
+    except FlowcurveError as exc:
+        run.result = {"error": str(exc)}
+    run.view.set_state(run.view.state, run.view.message)  # wake the pages: the test's summary changed
+    return _json({"test": console.test_summary()})
+
+
+async def _fit(request: Request) -> Response:
+    workspace = request.app.state.console.workspace
+    data = await _body(request, FIT_FIELDS)
+    names = data.get("records") or []
+    if not isinstance(names, list):
+        return _error("records: give a list of record names")
+    try:
+        result = await asyncio.to_thread(workspace.fit_and_card, [str(n) for n in names], data)
+    except FormError as exc:  # every input the fit and card lack, each beside its field
+        return _error(exc.errors.get("fit", str(exc)), 400, fields=exc.errors)
+    except FlowcurveError as exc:
+        return _error(str(exc))
+    return _json(result)
+
+
+async def _files(request: Request) -> Response:
+    workspace = request.app.state.console.workspace
+    try:
+        path = inside(workspace.root, request.path_params["path"])
+    except PathError as exc:
+        return _error(str(exc), 404)
+    if not path.is_file():
+        return _error("no such file", 404)
+    download = request.query_params.get("download") is not None
+    return FileResponse(path, filename=path.name if download else None,
+                        content_disposition_type="attachment" if download else "inline",
+                        media_type="text/plain; charset=utf-8" if path.suffix in (".csv", ".k", ".inp", ".rad", ".txt") else None)
+
+
 def create_app(console: Console) -> Starlette:
+    """The console's web application: its pages, /api endpoints, /files and the event stream, behind
+    the guard (:class:`GuardMiddleware`); a running test is aborted when it shuts down."""
     runner, workspace = console.runner, console.workspace
 
     async def index(request: Request) -> Response:
@@ -264,29 +354,6 @@ def create_app(console: Console) -> Starlette:
         run = runner.current
         return _json({"status": run.view.status() if run else IDLE_STATUS, "test": console.test_summary()})
 
-    async def start(request: Request) -> Response:
-        try:
-            data = await _body(request, START_FIELDS)
-            workspace.within(workspace.records)  # the record is written only inside --out
-            setup = validate(data, virtual=runner.virtual, time_scale=console.time_scale, config=runner.config)
-            run = runner.start(setup, {k: v for k, v in data.items() if isinstance(v, (str, int, float))})
-        except FormError as exc:
-            return _error(str(exc), 400, fields=exc.errors)
-        except BusyError as exc:
-            return _error(str(exc), 409)
-        # a test the procedure refuses at once (set-point above the furnace maximum) goes back to the form
-        for _ in range(20):
-            if not run.running or run.view.state not in ("starting",):
-                break
-            await asyncio.sleep(0.05)
-        if not run.running and run.error and run.outcome is None:
-            from flowcurve.console.setup_form import field_of, labelled
-
-            runner.discard(run)
-            field = field_of(run.error)
-            return _error(run.error, 400, fields={field: labelled(field, run.error)})
-        return _json({"test": console.test_summary()})
-
     async def stop(request: Request) -> Response:
         await _body(request, {})
         return _json({"stopping": runner.stop()})
@@ -295,63 +362,8 @@ def create_app(console: Console) -> Starlette:
         await _body(request, {})
         return _json({"aborting": runner.abort()})
 
-    async def post(request: Request) -> Response:
-        data = await _body(request, POST_FIELDS)
-        run = runner.current
-        if run is None or run.running or getattr(run.outcome, "status", None) != "complete" or not run.record.exists():
-            return _error("no completed test to annotate (post-test values go with a test that ran to its end)", 409)
-        from flowcurve.record.format import amend_record
-
-        try:
-            values = post_values(run.setup.spec.test, data)
-        except FormError as exc:
-            return _error(str(exc), 400, fields=exc.errors)
-        spec = run.setup.spec
-        if face_asked(spec.test, spec.geometry_mm) and "post.dface_mm" not in {**run.post, **values}:
-            prompt = post_prompts(spec.test, spec.geometry_mm)["post.dface_mm"]
-            return _error("post.dface_mm: the original end face's diameter is needed on this specimen", 400,
-                          fields={"post.dface_mm": f"required — {prompt}"})
-        if values:
-            workspace.within(run.record)  # amended only inside --out (PathError: 400)
-            try:
-                amend_record(run.record, {k: repr(v) for k, v in values.items()})
-            except FlowcurveError as exc:
-                return _error(workspace.public_error(exc))
-            run.post.update(values)
-        try:
-            run.result = await asyncio.to_thread(workspace.identify, run.record)
-        except FlowcurveError as exc:
-            run.result = {"error": str(exc)}
-        run.view.set_state(run.view.state, run.view.message)  # wake the pages: the test's summary changed
-        return _json({"test": console.test_summary()})
-
     async def records(request: Request) -> Response:
         return _json({"records": await asyncio.to_thread(workspace.list_records)})
-
-    async def fit(request: Request) -> Response:
-        data = await _body(request, FIT_FIELDS)
-        names = data.get("records") or []
-        if not isinstance(names, list):
-            return _error("records: give a list of record names")
-        try:
-            result = await asyncio.to_thread(workspace.fit_and_card, [str(n) for n in names], data)
-        except FormError as exc:  # every input the fit and card lack, each beside its field
-            return _error(exc.errors.get("fit", str(exc)), 400, fields=exc.errors)
-        except FlowcurveError as exc:
-            return _error(str(exc))
-        return _json(result)
-
-    async def files(request: Request) -> Response:
-        try:
-            path = inside(workspace.root, request.path_params["path"])
-        except PathError as exc:
-            return _error(str(exc), 404)
-        if not path.is_file():
-            return _error("no such file", 404)
-        download = request.query_params.get("download") is not None
-        return FileResponse(path, filename=path.name if download else None,
-                            content_disposition_type="attachment" if download else "inline",
-                            media_type="text/plain; charset=utf-8" if path.suffix in (".csv", ".k", ".inp", ".rad", ".txt") else None)
 
     async def events(request: Request) -> Response:
         return StreamingResponse(_event_stream(console, request), media_type="text/event-stream",
@@ -369,13 +381,13 @@ def create_app(console: Console) -> Starlette:
         Route("/api/login", login, methods=["POST"]),
         Route("/api/status", status),
         Route("/api/events", events),
-        Route("/api/start", start, methods=["POST"]),
+        Route("/api/start", _start, methods=["POST"]),
         Route("/api/stop", stop, methods=["POST"]),
         Route("/api/abort", abort, methods=["POST"]),
-        Route("/api/post", post, methods=["POST"]),
+        Route("/api/post", _post, methods=["POST"]),
         Route("/api/records", records),
-        Route("/api/fit", fit, methods=["POST"]),
-        Route("/files/{path:path}", files),
+        Route("/api/fit", _fit, methods=["POST"]),
+        Route("/files/{path:path}", _files),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
     ]
 
@@ -384,8 +396,10 @@ def create_app(console: Console) -> Starlette:
             return _error(str(exc), 400, fields=exc.errors)
         return _error(str(exc), getattr(exc, "status", 400))
 
-    return Starlette(routes=routes, middleware=[Middleware(GuardMiddleware, console=console)], lifespan=lifespan,
-                     exception_handlers={FlowcurveError: flowcurve_error})
+    app = Starlette(routes=routes, middleware=[Middleware(GuardMiddleware, console=console)], lifespan=lifespan,
+                    exception_handlers={FlowcurveError: flowcurve_error})
+    app.state.console = console  # the handlers defined outside find it here
+    return app
 
 
 def _sse(event: str, data) -> bytes:

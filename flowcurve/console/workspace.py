@@ -176,30 +176,30 @@ class Workspace:
 
     # identification --------------------------------------------------------------------------
     def identify(self, record: Path) -> dict:
-        """``flowcurve identify`` on one record into OUT/results/<stem>/; its summary."""
-        from flowcurve.demo import identify_and_write
+        """The identify service (``flowcurve identify``'s) on one record into OUT/results/<stem>/; its summary."""
+        from flowcurve.services.identify import IdentifyRequest, identify
 
         self.within(record)
         self.result_folder(record)  # results/<stem> written only inside --out
         try:
-            identify_and_write(record, self.within(self.results))
+            identify(IdentifyRequest(record, self.within(self.results)))
         except Exception as exc:  # noqa: BLE001 — named without the record's text
             raise FlowcurveError(self.public_error(exc)) from None
         return self.result_summary(record)
 
     # series fit and card ----------------------------------------------------------------------
     def fit_and_card(self, names: list[str], options: dict) -> dict:
-        """``flowcurve fit`` on the named records (their result folders when identified), then
-        ``flowcurve card``: both with the command line's own parsers and functions. Every input
-        the two lack is named at once (a FormError by field) before anything is written, and a
-        fit or card that fails leaves no folder behind."""
+        """The series fit on the named records (their result folders when identified), then its
+        card: the services ``flowcurve fit`` and ``flowcurve card`` call, with requests built from
+        the form. Every input the two lack is named at once (a FormError by field) before anything
+        is written, and a fit or card that fails leaves no folder behind."""
         import shutil
 
-        from flowcurve.cli import build_parser
-        from flowcurve.cli.reports import run_card
-        from flowcurve.cli.series import summary, write_fit
-        from flowcurve.identification.series import fit_series, load_members
-        from flowcurve.reports.cards import card_suffix
+        from flowcurve.console.setup_form import FormError
+        from flowcurve.identification.series import load_members
+        from flowcurve.reports.card_formats import card_suffix
+        from flowcurve.services.card import card, missing_for_fit_and_card
+        from flowcurve.services.fit import fit, summary
 
         if not names:
             raise FlowcurveError("fit: select at least one record")
@@ -209,42 +209,27 @@ class Workspace:
             folder = self.result_folder(record)
             inputs.append(str(self.checked_folder(folder) if (folder / "result.json").is_file() else record))
         out = self.within(self.fits) / f"fit-{_dt.datetime.now():%Y%m%d-%H%M%S-%f}"
-        argv = ["fit", *inputs, "--out", str(out)]
-        for key, option in (("melt_temp", "--melt-temp"), ("fix_C", "--fix-C"), ("fix_m", "--fix-m"), ("ref_rate", "--ref-rate"), ("ref_temp", "--ref-temp")):
-            value = str(options.get(key) or "").strip()
-            if value:
-                argv += [option, value]
-        if options.get("method"):
-            argv += ["--method", str(options["method"])]
-        args = _parse(build_parser(), argv)
-        fmt = str(options.get("format") or "lsdyna")
-        units = str(options.get("units") or "").strip()
-        card = out / f"card-{bare_name(fmt, 'format')}.{card_suffix(fmt)}"
-        card_argv = ["card", "fit.json", "--format", fmt, "-o", str(card)] + (["--units", units] if units else [])
-        for key, option in CARD_FIELDS.items():
-            value = str(options.get(key) or "").strip()
-            if value:
-                card_argv += [option, value]
-        card_args = _parse(build_parser(), card_argv)
+        fit_request, card_request = _requests(inputs, out, options)
+        fmt = card_request.format
+        card_path = out / f"card-{bare_name(fmt, 'format')}.{card_suffix(fmt)}"
+        card_request.output = str(card_path)
         try:
-            members = load_members(args.inputs)
+            members = load_members(fit_request.inputs)
         except Exception as exc:  # noqa: BLE001 — a record or result named without its text
             raise FlowcurveError(self.public_error(exc)) from None
-        fixed = {k: v for k, v in (("C", args.fix_C), ("m", args.fix_m)) if v is not None}
-        _check_complete(members, args, card_args, fixed)
+        missing = {FORM_FIELD[k]: v for k, v in missing_for_fit_and_card(members, fit_request, card_request).items()}
+        if missing:
+            listed = ", ".join(FIT_LABELS[k] for k in missing)
+            raise FormError({**missing, "fit": f"the fit and card need {len(missing)} input(s) not given: {listed}"})
         try:
-            series = fit_series(members, method=args.method, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp,
-                                melt_temperature_C=args.melt_temp, fixed=fixed, max_points=args.max_points,
-                                shape_error_pct=args.shape_error)
-            fit_json = write_fit(series, out)
-            card_args.fit = str(fit_json)
-            run_card(card_args)
+            series, fit_json = fit(fit_request, members)
+            card_request.fit = str(fit_json)
+            card(card_request)
         except BaseException:
             shutil.rmtree(out, ignore_errors=True)  # a refused fit or card leaves no fits/fit-* folder
             raise
-        text = summary(series, fit_json)
         plots = sorted((out / "plots").glob("*.png"))
-        return {"summary": text, "fit": self.url(fit_json), "card": self.url(card), "card_name": card.name,
+        return {"summary": summary(series, fit_json), "fit": self.url(fit_json), "card": self.url(card_path), "card_name": card_path.name,
                 "plots": [self.url(p) for p in plots], "folder": self.url(out)}
 
 
@@ -264,46 +249,41 @@ def _inside_file(workspace: Workspace, path: Path) -> bool:
         return False
 
 
-# the fit form's card fields → card option; and how the form labels every input it may lack
-CARD_FIELDS = {"poisson": "--poisson", "density": "--density", "cp": "--cp", "E_MPa": "--E"}
+# the fit form's fields → (request, its field); how the form labels every input it may lack
+FIT_FIELDS = {"melt_temp": ("fit", "melt_temp"), "fix_C": ("fit", "fix_C"), "fix_m": ("fit", "fix_m"), "ref_rate": ("fit", "ref_rate"),
+              "ref_temp": ("fit", "ref_temp"), "poisson": ("card", "poisson"), "density": ("card", "density_kg_per_m3"),
+              "cp": ("card", "specific_heat_J_per_kgK"), "E_MPa": ("card", "E_MPa")}
+FORM_FIELD = {field: form for form, (_, field) in FIT_FIELDS.items()}  # a request's field → the form's
 FIT_LABELS = {"melt_temp": "Melting temperature, °C", "fix_C": "fix C", "fix_m": "fix m", "poisson": "Poisson's ratio",
               "density": "Density, kg/m³", "cp": "Specific heat, J/(kg K)", "E_MPa": "E, MPa"}
-FIELD_OF_CONSTANT = {"melt_temperature_C": "melt_temp", "poisson": "poisson", "density_kg_per_m3": "density",
-                     "specific_heat_J_per_kgK": "cp", "E_MPa": "E_MPa"}
 
 
-def _check_complete(members, args, card_args, fixed) -> None:
-    """Every input the fit and the card lack, by form field, in one FormError (nothing written)."""
-    from flowcurve.cli.reports import CARD_OPTIONS, missing_constants, overrides
-    from flowcurve.cli.series import FIT_INPUTS, missing_inputs
+def _requests(inputs: list[str], out: Path, options: dict):
+    """The fit's and the card's requests from the fit form (FormError: a value that is no number,
+    an unknown method, format or unit system, each by its field)."""
     from flowcurve.console.setup_form import FormError
-    from flowcurve.reports.cards.data import CONSTANTS, card_data_from_fit
+    from flowcurve.services import FieldError
+    from flowcurve.services.card import CardRequest
+    from flowcurve.services.fit import FitRequest
 
-    missing = {k: f"needed: {FIT_INPUTS[k][2]}" for k in missing_inputs(
-        members, ref_strain_rate_per_s=args.ref_rate, ref_temperature_C=args.ref_temp, melt_temperature_C=args.melt_temp, fixed=fixed)}
-    # the card's constants as fit.json will carry them (the records' mean E and Poisson's ratio), the law a stand-in
-    Es = [m.E_MPa for m in members if m.E_MPa is not None]
-    nus = [m.poisson_ratio for m in members if m.poisson_ratio is not None]
-    provisional = {"A_MPa": 1.0, "B_MPa": 1.0, "n": 0.5, "melt_temperature_C": args.melt_temp,
-                   "E_MPa": sum(Es) / len(Es) if Es else None, "poisson_ratio": sum(nus) / len(nus) if nus else None}
-    data = card_data_from_fit(provisional, "fit.json", **overrides(card_args))
-    card_options = {k: getattr(card_args, k) for k in CARD_OPTIONS}
-    for name in missing_constants(data, card_args.format, card_args.units, card_options):
-        missing.setdefault(FIELD_OF_CONSTANT[name], f"needed: the {card_args.format} card needs the {CONSTANTS[name][2]}")
-    if missing:
-        listed = ", ".join(FIT_LABELS[k] for k in missing)
-        raise FormError({**missing, "fit": f"the fit and card need {len(missing)} input(s) not given: {listed}"})
+    values: dict[str, dict] = {"fit": {}, "card": {}}
+    errors: dict[str, str] = {}
+    for form, (request, field) in FIT_FIELDS.items():
+        text = str(options.get(form) or "").strip()
+        try:
+            values[request][field] = float(text) if text else None
+        except ValueError:
+            errors[form] = f"not a number: {text!r}"
+    units = str(options.get("units") or "").strip()
+    fit_request = FitRequest(inputs, out, method=str(options.get("method") or "global"), **values["fit"])
+    card_request = CardRequest("fit.json", str(options.get("format") or "lsdyna"), **values["card"], **({"units": units} if units else {}))
+    for request in (fit_request, card_request):
+        try:
+            request.check()
+        except FieldError as exc:
+            errors.update(exc.errors)
+    if errors:
+        raise FormError(errors)
+    return fit_request, card_request
 
 
-def _parse(parser, argv: list[str]):
-    """argparse on ``argv``; its complaint (it would exit) becomes one FlowcurveError line."""
-    import contextlib
-    import io
-
-    err = io.StringIO()
-    try:
-        with contextlib.redirect_stderr(err):
-            return parser.parse_args(argv)
-    except SystemExit:
-        lines = [ln for ln in err.getvalue().splitlines() if ln.strip()]
-        raise FlowcurveError(lines[-1] if lines else f"bad options: {' '.join(argv)}") from None

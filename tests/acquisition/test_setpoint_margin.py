@@ -78,7 +78,7 @@ def test_run_on_a_configured_rig_refuses_it_with_nothing_switched_on(tmp_path, m
 
 def test_a_configured_margin_is_the_rigs_own(tmp_path):
     """[furnace] setpoint_margin_C: a furnace measured to carry less stored heat may run closer to its maximum."""
-    from flowcurve.cli.acquisition import out_of_range
+    from flowcurve.services.run import out_of_range
 
     args = argparse.Namespace(temperature=897.0)
     tight = SimpleNamespace(frame=FrameConfig(), furnace=FurnaceConfig(port="x", max_temperature_C=MAX_C, setpoint_margin_C=2.0))

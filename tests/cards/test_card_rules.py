@@ -159,7 +159,7 @@ def test_no_two_values_run_together(fit_file):
 def test_demo_like_series_gives_a_rate_dependent_mat024_and_one_temperature_block(tmp_path):
     """Two tests at two rates, one temperature that the thermocouple read as 19.9934 and
     19.9957 C: through 'flowcurve fit' (its files) to the cards."""
-    from flowcurve.cli.series import write_fit
+    from flowcurve.services.fit import write_fit
     from flowcurve.identification.series import SeriesMember, fit_series
 
     eps = np.linspace(0.002, 0.12, 60)

@@ -274,3 +274,18 @@ def test_fit_with_nothing_optional_names_every_missing_input_beside_its_field_an
                                       "E_MPa": "200000", "poisson": "0.3", "density": "7850", "cp": "460"}, headers=JSON)
     assert r.status_code == 200, r.text
     assert len(list((tmp_path / "out" / "fits").iterdir())) == 1
+
+
+def test_fit_form_values_the_service_refuses_are_tied_to_their_fields_without_reading_the_message(tmp_path):
+    """A number that is none, an unknown format or method: the request's FieldError names the form
+    field (issue 44); they came back as argparse's one line with no field."""
+    _console, client = _client(tmp_path)
+    names = identified_records(tmp_path / "out")
+    r = client.post("/api/fit", json={"records": names, "format": "nastran", "melt_temp": "hot", "density": "1e", "method": "best"},
+                    headers=JSON)
+    assert r.status_code == 400, r.text
+    fields = r.json()["fields"]
+    assert set(fields) == {"melt_temp", "density", "format", "method"}, fields
+    assert fields["melt_temp"] == "not a number: 'hot'" and fields["density"] == "not a number: '1e'"
+    assert "invalid choice: 'nastran'" in fields["format"] and "invalid choice: 'best'" in fields["method"]
+    assert not (tmp_path / "out" / "fits").exists() or not list((tmp_path / "out" / "fits").iterdir())
