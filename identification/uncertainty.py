@@ -386,13 +386,15 @@ def line_windows_E(strain, stress_MPa, window_MPa) -> dict[str, float]:
 # ---- compression ------------------------------------------------------------------------------
 
 def friction_budget(mu: float, mu_range: Sequence[float] | None, *, others: Mapping[str, float] | None = None) -> dict | None:
-    """μ: its [lo, hi] bounds (the friction method's resolution and model share) as rectangular;
-    a note when other friction methods read μ outside μ ± U (the evidence disagrees)."""
+    """μ: the friction method's range [lo, hi] is μ ± its standard error (the shape read ± its
+    resolution and the model form's σ: ``friction_details`` mu_stderr is half of it), so u(μ) is
+    half the range, normal; a note when other friction methods read μ outside μ ± U (the evidence disagrees)."""
     if not mu_range or len(mu_range) != 2 or mu_range[0] is None or mu_range[1] is None:
         return None
     lo, hi = float(mu_range[0]), float(mu_range[1])
-    comps = [Component("friction method's bounds on μ", mu, "1", (hi - lo) / math.sqrt(12.0), 1.0,
-                       f"[{lo:.4g}, {hi:.4g}], rectangular")]
+    # u(μ) = (μ_hi − μ_lo)/2: a ±1σ interval (fe.model_form.stderr_of_range), not a pair of bounds (that was u/√3)
+    comps = [Component("friction method's μ range (±1σ)", mu, "1", (hi - lo) / 2.0, 1.0,
+                       f"[{lo:.4g}, {hi:.4g}]: the shape ± its resolution and the model form's σ, ±1σ")]
     out = budget(mu, "1", comps)
     outside = {k: v for k, v in (others or {}).items() if v is not None and abs(v - mu) > out["U"]}
     if outside:
