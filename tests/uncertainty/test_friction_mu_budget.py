@@ -10,7 +10,7 @@ import pytest
 
 from flowcurve.identification import friction as fr
 from flowcurve.identification import uncertainty as un
-from flowcurve.identification.fe import model_form as mf
+from flowcurve.identification.fe.model import model_form as mf
 
 DATA = Path(__file__).resolve().parents[1] / "fe" / "data"
 
@@ -20,7 +20,7 @@ def test_mu_U_holds_95_percent_of_the_bulge_sigma_through_the_table(mu_true):
     """A barrel made by the table at μ (d0 6, h0 7, ε 0.6, the default hardening): the bulge ΔR drawn
     from N(ΔR, σ_ΔR) (dmax's resolution and the model form, the method's own σ) and read back by the
     table; μ ± U (k = 2) holds 95 % of the draws. The range read as rectangular bounds held 75 %."""
-    from flowcurve.identification.fe.table import UpsettingTable
+    from flowcurve.identification.fe.model.table import UpsettingTable
 
     table = UpsettingTable.load()
     d0, h0, eps = 6.0, 7.0, 0.6
