@@ -290,7 +290,7 @@ class Procedure(StreamNotes):
         measured = self._speed.speed_mm_per_s()
         out: dict[str, object] = {} if measured is None else {MEASURED_SPEED_KEY: float(f"{measured:.4g}")}
         # the crosshead's stamps: the count was read somewhere in its exchange's bracket (± the widest kept
-        # half-width, host s): a rectangular u in the record's time (the testing rate's U, identification/conformity.py)
+        # half-width, host s): a rectangular u in the record's time (the testing rate's U, identification/quality/conformity.py)
         half_s = getattr(self.rig, "position_half_width_s", 0.0) * getattr(self.rig, "time_scale", 1.0)
         if half_s > 0:
             out["instruments.crosshead_stamp_u_s"] = float(f"{half_s / math.sqrt(3.0):.3g}")

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flowcurve.identification.adhesion import fit_refined, fit_simple
+from flowcurve.identification.compression.adhesion import fit_refined, fit_simple
 from flowcurve.record.adhesion import read_adhesion_table, write_adhesion_table
 from flowcurve.rig.virtual.adhesiometer import FrictionTruth, VirtualAdhesiometer
 

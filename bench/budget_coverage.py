@@ -23,9 +23,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from flowcurve.identification.assurance import attach  # noqa: E402
-from flowcurve.identification.compression import identify_compression  # noqa: E402
-from flowcurve.identification.tension import identify_tension  # noqa: E402
+from flowcurve.identification.quality.assurance import attach  # noqa: E402
+from flowcurve.identification.compression.identify import identify_compression  # noqa: E402
+from flowcurve.identification.tension.identify import identify_tension  # noqa: E402
 from flowcurve.record.format import read_record  # noqa: E402
 
 MODULUS = runpy.run_path(str(ROOT / "bench" / "modulus_methods.py"))

@@ -25,9 +25,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from validation_42CrMoS4 import leave_one_out_stiffness, specimen_files  # noqa: E402
 
-from flowcurve.identification.assurance import attach  # noqa: E402
-from flowcurve.identification.tension import identify_tension  # noqa: E402
-from flowcurve.identification.uncertainty import CROSSHEAD_RP_REL_U  # noqa: E402
+from flowcurve.identification.quality.assurance import attach  # noqa: E402
+from flowcurve.identification.tension.identify import identify_tension  # noqa: E402
+from flowcurve.identification.quality.uncertainty import CROSSHEAD_RP_REL_U  # noqa: E402
 from flowcurve.record.importers import load_record  # noqa: E402
 
 

@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.fe.pool import run_many
 from flowcurve.identification.fe.synthetic import VALIDATION_CASES, case_flow, run_case, upsetting_record
 

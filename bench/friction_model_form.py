@@ -21,7 +21,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from flowcurve.errors import IdentificationError  # noqa: E402
-from flowcurve.identification import friction as fr  # noqa: E402
+from flowcurve.identification.compression import friction as fr  # noqa: E402
 from flowcurve.identification.fe.model.table import UpsettingTable  # noqa: E402
 
 MUS = (0.05, 0.2)  # the μ range measured (the table's runs within it)

@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from flowcurve.cli.identification import solver_runs_text
-from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.identify import identify_inverse_fe
 from flowcurve.identification.fe.synthetic import VALIDATION_CASES, case_flow, run_case, upsetting_record
 

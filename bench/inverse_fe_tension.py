@@ -26,7 +26,7 @@ from flowcurve.cli.identification import solver_runs_text
 from flowcurve.identification.fe.inverse_tension import identify_inverse_fe_tension
 from flowcurve.identification.fe.synthetic import johnson_cook_flow, swift_flow, tension_case_model, tension_record, voce_flow
 from flowcurve.identification.fe.model.tension import simulate_tension
-from flowcurve.identification.hardening import fit_hardening
+from flowcurve.identification.laws.hardening import fit_hardening
 
 CASES = {  # law, the record's taper
     "voce": (partial(voce_flow, s0=300.0, q=400.0, b=8.0), 0.004),

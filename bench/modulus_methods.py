@@ -126,9 +126,9 @@ def calculix_records():
 def moduli(rec: Record) -> dict[str, float | str]:
     """E by each method (MPa), or the refusal's message: tension up to its elastic line (the ISO
     results after it are not what is compared), compression through the identification."""
-    from flowcurve.identification.tension_elastic import _elastic_line
-    from flowcurve.identification.tension_inputs import _inputs
-    from flowcurve.identification.compression import identify_compression
+    from flowcurve.identification.tension.elastic import _elastic_line
+    from flowcurve.identification.tension.inputs import _inputs
+    from flowcurve.identification.compression.identify import identify_compression
 
     out: dict[str, float | str] = {}
     for method in METHODS:

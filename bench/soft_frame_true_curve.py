@@ -37,7 +37,7 @@ GENERATOR = SimpleNamespace(**runpy.run_path(str(Path(__file__).with_name("modul
 def soft_frame_case(frame: float, name: str, rate_hz: float, handbook: bool, material: str | None = None, **generator) -> dict:
     """Identify one closed-form record: Rp0.2 and the true curve against the closed form (``material``:
     the record's material name instead of the generator's, e.g. one naming no class)."""
-    from flowcurve.identification.tension import identify_tension
+    from flowcurve.identification.tension.identify import identify_tension
 
     law = MATERIALS[name]
     rec, _, rp02 = GENERATOR.crosshead_tension(frame_N_per_um=frame, rate_hz=rate_hz, **law, **generator)

@@ -18,7 +18,7 @@ import numpy as np
 
 from flowcurve.identification.fe.synthetic import RECORD_FIRST_INCREMENT, johnson_cook_flow, tension_record
 from flowcurve.identification.fe.model.tension import TensionModel, simulate_tension
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.tension.identify import identify_tension
 
 AUSTENITIC = partial(johnson_cook_flow, A=250.0, B=1300.0, n=0.55)  # 12Kh18N10T-like, E 200 GPa
 ELONGATION_MM = 18.0  # of the 30 mm gauge length: past Fm (Considère: e 0.52) into the neck

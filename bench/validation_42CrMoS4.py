@@ -24,7 +24,7 @@ import numpy as np
 from flowcurve.errors import FlowcurveError
 from flowcurve.record.importers import load_record
 from flowcurve.identification.indicator import frame_stiffness_from_known_modulus
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.tension.identify import identify_tension
 
 # the validation set travels with the repository (tests/data/42CrMoS4: its README and LICENSE)
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data" / "42CrMoS4" / "original_data"

@@ -33,7 +33,7 @@ from flowcurve.acquisition.procedure import TestSpec
 from flowcurve.record.format import read_record
 from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.errors import EXIT_DATA_LOST, IdentificationError
-from flowcurve.identification.hardening import johnson_cook_static
+from flowcurve.identification.laws.hardening import johnson_cook_static
 
 DEMO_TIME_SCALE = 15.0  # at DEMO_SPEED_MM_PER_S; the virtual load cell sends 100 values per wall second: enough
 DEMO_SPEED_MM_PER_S = 0.05  # compression: samples on the elastic line at 0.75 mm of crosshead per wall second
@@ -62,7 +62,7 @@ def friction_comparison(record, run, default=None) -> dict:
     "error_pct": {correction: %}} ...]}``; ``default`` is an identification of ``record`` with
     the default friction method, reused rather than computed again.
     """
-    from flowcurve.identification import friction as fr
+    from flowcurve.identification.compression import friction as fr
     from flowcurve.identification.identify import identify
 
     rows, reached = [], math.inf
@@ -107,7 +107,7 @@ def neck_comparison(record, ident, run) -> dict:
     Returns ``{"eps_u", "eps_f", "truth_MPa", "methods", "rows": [{"source", "a_over_R",
     "error_pct": {method: %}}], "curve_error_pct", "curve_range"}`` (empty without a fracture point).
     """
-    from flowcurve.identification.necking import METHODS, neck_corrections
+    from flowcurve.identification.tension.necking import METHODS, neck_corrections
 
     res = ident.result
     eps_f, avg = res.get("fracture_true_strain"), res.get("fracture_avg_stress_MPa")

@@ -19,10 +19,10 @@ import numpy as np
 from flowcurve.record.format import STATUS_ABORTED, WRITER_STAMPING_KEY, Record
 from flowcurve.record.summary import GAUGE_KEY, MEASURED_SPEED_KEY, record_summary, speed_mismatch
 from flowcurve.errors import IdentificationError, RecordError
-from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.outcome import Identification
-from flowcurve.identification.assurance import attach as attach_assurance
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.quality.assurance import attach as attach_assurance
+from flowcurve.identification.tension.identify import identify_tension
 
 MIN_SAMPLES = 20
 # a force rise smaller than this many noise standard deviations is no test at all

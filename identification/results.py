@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 from flowcurve.identification.outcome import to_jsonable
 
 if TYPE_CHECKING:
-    from flowcurve.identification.hardening import HardeningFit
+    from flowcurve.identification.laws.hardening import HardeningFit
 
 
 class _ResultMapping(MutableMapping):

@@ -36,7 +36,7 @@ class LabFileError(FlowcurveError):
 
 
 DECISION_RULES = ("simple acceptance", "guard band")
-# the testing rate's own rule (identification/conformity.py: band_verdict), whatever the lab chose for the results
+# the testing rate's own rule (identification/quality/conformity.py: band_verdict), whatever the lab chose for the results
 RATE_RULE = ("The testing-rate statements are made with a guard band w = U (k = 2) of each phase's measured rate: a phase "
              "conforms when rate ± U lies inside the method's band, does not when it lies outside, and is 'not resolved' "
              "when it straddles the band's edge.")

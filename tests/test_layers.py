@@ -172,7 +172,7 @@ def _layer_of_module(module: str) -> str:
 
 def _package_node(module: str, modules: dict[str, Path]) -> str:
     """A module's node in the package graph: its sub-package (identification.fe, identification.fe.model,
-    rig.virtual, flowcurve.cli …), or the module itself in a layer's own folder (flowcurve.identification.tension)."""
+    rig.virtual, flowcurve.cli …), or the module itself in a layer's own folder (flowcurve.identification.tension.identify)."""
     package = module if modules[module].name == "__init__.py" else module.rpartition(".")[0]
     return module if package == "flowcurve" or package in {f"flowcurve.{layer}" for layer in LAYER_FOLDERS} else package
 

@@ -55,7 +55,7 @@ def test_the_help_of_every_command_imports_no_heavy_library():
 
 def test_a_heavy_import_is_seen():
     """The checks above can fail: a module that imports numpy and pandas shows in sys.modules."""
-    code = ("import sys; import flowcurve.identification.tension; "
+    code = ("import sys; import flowcurve.identification.tension.identify; "
             f"print(' '.join(m for m in {HEAVY!r} if m in sys.modules))")
     assert {"numpy", "pandas"} <= set(_heavy_after(code).split())
 
@@ -74,7 +74,7 @@ def test_the_parser_shows_what_the_packages_publish(name):
 def test_the_fit_command_states_the_series_fits_default():
     """`flowcurve fit --help` names the default without importing the fit; the two agree."""
     from flowcurve.cli.series import DEFAULT_MAX_POINTS, DEFAULT_SHAPE_ERROR_PCT
-    from flowcurve.identification.series import MAX_POINTS
-    from flowcurve.identification.series_fit import SHAPE_ERROR_PCT
+    from flowcurve.identification.series.series import MAX_POINTS
+    from flowcurve.identification.series.fit import SHAPE_ERROR_PCT
 
     assert DEFAULT_MAX_POINTS == MAX_POINTS and DEFAULT_SHAPE_ERROR_PCT == SHAPE_ERROR_PCT

@@ -11,12 +11,12 @@ from __future__ import annotations
 # name here → (module, attribute) it copies
 SOURCES = {
     "TEST_TYPES": ("flowcurve.acquisition.procedure", "TEST_GEOMETRY"),
-    "NECK_METHODS": ("flowcurve.identification.necking", "METHODS"),
-    "FRICTION_METHODS": ("flowcurve.identification.friction", "FRICTION_METHODS"),
-    "FRICTION_CORRECTIONS": ("flowcurve.identification.friction", "CORRECTIONS"),
+    "NECK_METHODS": ("flowcurve.identification.tension.necking", "METHODS"),
+    "FRICTION_METHODS": ("flowcurve.identification.compression.friction", "FRICTION_METHODS"),
+    "FRICTION_CORRECTIONS": ("flowcurve.identification.compression.friction", "CORRECTIONS"),
     "FRICTION_CARD_FORMATS": ("flowcurve.reports.friction_cards", "FRICTION_CARD_FORMATS"),
-    "CONTACT_RATIO_MODELS": ("flowcurve.identification.adhesion", "CONTACT_RATIO_MODELS"),
-    "HOT_FROM_C": ("flowcurve.identification.adhesion", "HOT_FROM_C"),
+    "CONTACT_RATIO_MODELS": ("flowcurve.identification.compression.adhesion", "CONTACT_RATIO_MODELS"),
+    "HOT_FROM_C": ("flowcurve.identification.compression.adhesion", "HOT_FROM_C"),
     "ADHESION_COLUMNS": ("flowcurve.record.adhesion", "ADHESION_COLUMNS"),
 }
 

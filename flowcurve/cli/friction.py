@@ -15,7 +15,7 @@ from flowcurve.cli.choices import ADHESION_COLUMNS, CONTACT_RATIO_MODELS, FRICTI
 from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
 
 if TYPE_CHECKING:  # the fit and the tables import numpy: imported where a command runs, not for --help
-    from flowcurve.identification.adhesion import FrictionFit
+    from flowcurve.identification.compression.adhesion import FrictionFit
 
 CARD_FILES = {"abaqus": "friction_abaqus.inp", "lsdyna": "friction_lsdyna.k"}
 
@@ -81,7 +81,7 @@ def _fit_options(p, demo: bool = False) -> None:
 
 
 def _fit(table, args) -> FrictionFit:
-    from flowcurve.identification.adhesion import fit_friction
+    from flowcurve.identification.compression.adhesion import fit_friction
 
     if args.flow_stress is not None and args.flow_stress <= 0:
         from flowcurve.errors import IdentificationError
@@ -168,7 +168,7 @@ def _plots(fit: FrictionFit, folder: Path) -> list[str]:
     import matplotlib
     import numpy as np
 
-    from flowcurve.identification.adhesion import HERTZ_MEAN_FACTOR, adhesion_shear
+    from flowcurve.identification.compression.adhesion import HERTZ_MEAN_FACTOR, adhesion_shear
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

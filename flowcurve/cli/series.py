@@ -59,7 +59,7 @@ def _members_of(item: tuple[str, dict]):
     """The series members of one input (a worker's task): ("ok", members) or ("error", message)
     — a FlowcurveError's own arguments do not survive pickling, its message does."""
     from flowcurve.errors import FlowcurveError
-    from flowcurve.identification.series import load_members
+    from flowcurve.identification.series.series import load_members
 
     try:
         return "ok", load_members([item[0]], **item[1])

@@ -196,7 +196,7 @@ class Workspace:
         import shutil
 
         from flowcurve.console.setup_form import FormError
-        from flowcurve.identification.series import load_members
+        from flowcurve.identification.series.series import load_members
         from flowcurve.reports.card_formats import card_suffix
         from flowcurve.services.card import card, missing_for_fit_and_card
         from flowcurve.services.fit import fit, summary

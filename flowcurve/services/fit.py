@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 from flowcurve.services import choice
 
 if TYPE_CHECKING:  # the series fit (lmfit, pandas) is imported when a fit runs, not for --help
-    from flowcurve.identification.series import SeriesFit
+    from flowcurve.identification.series.series import SeriesFit
 
 METHODS = ("global", "stepwise")
 MAX_POINTS = 60  # the series fit's MAX_POINTS (tests/test_startup.py keeps them equal)
@@ -58,8 +58,8 @@ def fit(req: FitRequest, members):
     """Fit ``members`` (identification.series members) as ``req`` asks and write the fit folder:
     (SeriesFit, fit.json path). IdentificationError names every input the fit lacks."""
     from flowcurve.errors import IdentificationError
-    from flowcurve.identification.damage import read_fracture_points
-    from flowcurve.identification.series import fit_series
+    from flowcurve.identification.series.damage import read_fracture_points
+    from flowcurve.identification.series.series import fit_series
 
     req.check()
     if req.rate_per_record:
@@ -89,7 +89,7 @@ def missing_inputs(members, *, ref_strain_rate_per_s=None, ref_temperature_C=Non
     """Every input (a key of FIT_INPUTS) the fit of ``members`` lacks, found at once: the melting
     temperature when not given, and C or m when the series cannot identify it and it is not fixed."""
     from flowcurve.errors import IdentificationError
-    from flowcurve.identification.series import BOUNDS, check_identifiable, make_reference
+    from flowcurve.identification.series.series import BOUNDS, check_identifiable, make_reference
 
     fixed, missing = dict(fixed or {}), []
     melt = melt_temperature_C

@@ -49,12 +49,12 @@ from flowcurve.identification.fe.law_choice import best_law_for, check_law
 from flowcurve.identification.fe.machine import model_elastics
 from flowcurve.identification.fe.model import model_form as mf
 from flowcurve.identification.fe.solver_fit import fit_time_limit, fit_with_solver, progress_on_whole_clock, serial_correlation
-from flowcurve.identification.friction import DFACE_ADVICE, DIAMETER_RESOLUTION_MM, nominal_diameter
+from flowcurve.identification.compression.friction import DFACE_ADVICE, DIAMETER_RESOLUTION_MM, nominal_diameter
 from flowcurve.identification.fe.model.ccx import timeout_by
 from flowcurve.identification.fe.model.model_form import FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, fold_over_ramp
 from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
 from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
-from flowcurve.identification.hardening import LAWS, fit_hardening
+from flowcurve.identification.laws.hardening import LAWS, fit_hardening
 from flowcurve.identification.outcome import Identification
 
 log = logging.getLogger(__name__)

@@ -45,7 +45,7 @@ from flowcurve.identification.elastic_modulus import modulus_for_model
 from flowcurve.identification.fe.law_choice import best_law_for
 from flowcurve.identification.fe.solver_fit import fit_time_limit, fit_with_solver, progress_on_whole_clock, serial_correlation
 from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
-from flowcurve.identification.hardening import fit_hardening
+from flowcurve.identification.laws.hardening import fit_hardening
 from flowcurve.identification.outcome import Identification
 
 log = logging.getLogger(__name__)
@@ -244,7 +244,7 @@ class _Inputs:
 def _inputs(record, increments: int, tension_options: dict) -> _Inputs:
     """The fast identification, the necking range (Fm to fracture), and the record's true curve up to ε_a averaged
     onto UNIFORM_ROWS rows; an error naming what is missing when the record cannot be fitted."""
-    from flowcurve.identification.tension import identify_tension, reaches_fracture
+    from flowcurve.identification.tension.identify import identify_tension, reaches_fracture
 
     fast = identify_tension(record, **tension_options)
     res = fast.result

@@ -7,7 +7,7 @@ neither imports the other.
 from __future__ import annotations
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.hardening import LAWS, fit_hardening
+from flowcurve.identification.laws.hardening import LAWS, fit_hardening
 
 
 def best_law_for(true_curve) -> tuple[str, dict[str, float]]:

@@ -65,7 +65,7 @@ def model_modulus(record, fast_result: dict, E_MPa: float | None, what: str) -> 
 
 def fit_frame_stiffness(record, E_MPa: float, E_stderr_MPa: float) -> tuple[float, float]:
     """(k N/µm, its standard error) by closure on the measured height change (see the module)."""
-    from flowcurve.identification.compression import identify_compression
+    from flowcurve.identification.compression.identify import identify_compression
 
     def shortening(u_um_per_N: float) -> tuple[float, float, float]:  # (K_l, max specimen displacement mm, force there N)
         ident = identify_compression(record, E_MPa=E_MPa, frame_stiffness_N_per_um=1.0 / u_um_per_N if u_um_per_N > 0 else 1e12)

@@ -23,7 +23,7 @@ from flowcurve.identification.elastic_modulus import DEFENSIBLE, SOURCE_TEXT, ch
 from flowcurve.identification.fe.model.model_form import FOLD_OVER_BAND
 from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
 from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
-from flowcurve.identification.hardening import LAWS
+from flowcurve.identification.laws.hardening import LAWS
 
 COMPARE_FROM_STRAIN = 0.02  # the toe and the elastic rise are left out of the deviation
 # the check's discretisation: finer than the fit's (2 rim-layer elements, 50 increments), so that a curve is not judged
@@ -120,7 +120,7 @@ def record_force_stroke(record, **options):
     """(specimen shortening mm, force N) of the record's loading branch, frame-corrected and
     scaled to the measured height change by the fast identification (``options``: its E_MPa,
     frame_stiffness_N_per_um)."""
-    from flowcurve.identification.compression import identify_compression
+    from flowcurve.identification.compression.identify import identify_compression
 
     ident = identify_compression(record, **options)
     d = ident.curves["corrected_diagram"]

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from flowcurve import __version__
-from flowcurve.identification.johnson_cook import johnson_cook
+from flowcurve.identification.laws.johnson_cook import johnson_cook
 from flowcurve.identification.outcome import read_json_object
 from flowcurve.identification.provenance import comment_lines
 from flowcurve.reports.cards.fields import CardError

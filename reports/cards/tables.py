@@ -20,9 +20,9 @@ import math
 
 import numpy as np
 
-from flowcurve.identification.hardening import johnson_cook_static
-from flowcurve.identification.johnson_cook import log_rate_ratio
-from flowcurve.identification.johnson_cook import rate_factor as jc_rate_factor
+from flowcurve.identification.laws.hardening import johnson_cook_static
+from flowcurve.identification.laws.johnson_cook import log_rate_ratio
+from flowcurve.identification.laws.johnson_cook import rate_factor as jc_rate_factor
 from flowcurve.reports.cards.data import CardData, CardOptions, FlowCurve
 from flowcurve.reports.cards.fields import CardError
 

@@ -4,7 +4,7 @@ A polished sphere of tool material is pressed into the work material with the no
 N_z and turned slowly (31.5 rpm); the dynamometer reads N_z and the moment M_z, and the
 imprint radius r is measured afterwards (seed 004 section 3.2.2). This device produces those
 readings from known friction constants, so that the identification can be checked against
-the truth. It is written independently of :mod:`flowcurve.identification.adhesion` (the rig
+the truth. It is written independently of :mod:`flowcurve.identification.compression.adhesion` (the rig
 layer does not import it):
 
 * the imprint radius comes from the indentation of an elastic–plastic half-space by a sphere:

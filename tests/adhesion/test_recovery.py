@@ -10,7 +10,7 @@ import pytest
 
 from flowcurve.errors import IdentificationError
 
-from flowcurve.identification.adhesion import SEED_KB_DIVISOR, SEED_THETA_K_C, fit_refined, fit_simple
+from flowcurve.identification.compression.adhesion import SEED_KB_DIVISOR, SEED_THETA_K_C, fit_refined, fit_simple
 
 from flowcurve.record.adhesion import read_adhesion_table, write_adhesion_table
 from flowcurve.rig.virtual.adhesiometer import FrictionTruth, VirtualAdhesiometer

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from flowcurve.identification.adhesion import (
+from flowcurve.identification.compression.adhesion import (
     HERTZ_MEAN_FACTOR,
     UNIFORM_SHEAR_WEIGHT,
     beta_at,

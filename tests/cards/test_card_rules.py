@@ -160,7 +160,7 @@ def test_demo_like_series_gives_a_rate_dependent_mat024_and_one_temperature_bloc
     """Two tests at two rates, one temperature that the thermocouple read as 19.9934 and
     19.9957 C: through 'flowcurve fit' (its files) to the cards."""
     from flowcurve.services.fit import write_fit
-    from flowcurve.identification.series import SeriesMember, fit_series
+    from flowcurve.identification.series.series import SeriesMember, fit_series
 
     eps = np.linspace(0.002, 0.12, 60)
     members = [SeriesMember(name=f"t{i}", plastic_strain=eps, stress_MPa=jc_MPa(eps, rate, 20.0), strain_rate_per_s=rate,

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from flowcurve.identification.damage import fracture_strain
+from flowcurve.identification.series.damage import fracture_strain
 
 from flowcurve.reports.cards import load_card_data, write_card
 

@@ -17,7 +17,7 @@ import shutil
 import numpy as np
 import pytest
 
-from flowcurve.identification import friction as fr
+from flowcurve.identification.compression import friction as fr
 from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 
 pytestmark = [pytest.mark.slow, pytest.mark.solver,

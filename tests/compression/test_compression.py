@@ -14,8 +14,8 @@ import pytest
 
 from flowcurve.record.format import Record
 from flowcurve.errors import FlowcurveError, IdentificationError, RecordError
-from flowcurve.identification.compression import identify_compression
-from flowcurve.identification.compression_values import loading_branch_end, offset_yield
+from flowcurve.identification.compression.identify import identify_compression
+from flowcurve.identification.compression.values import loading_branch_end, offset_yield
 
 E_HANDBOOK = 194_000.0
 # the synthetic records make their bulge with the seed's (3.18): they test the seed's method (3.19),

@@ -23,8 +23,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from flowcurve.identification import friction as fr
-from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.compression import friction as fr
+from flowcurve.identification.compression.identify import identify_compression
 
 from .toe_records import make_toe_compression
 

@@ -11,10 +11,10 @@ import pytest
 
 import flowcurve.identification.fe.inverse as inverse
 from flowcurve.identification.identify import identify_inverse_fe
-from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.fe.solver_fit import SolverFit
 from flowcurve.identification.outcome import to_jsonable
-from flowcurve.identification.friction import DFACE_ADVICE
+from flowcurve.identification.compression.friction import DFACE_ADVICE
 
 from .conftest import make_compression
 

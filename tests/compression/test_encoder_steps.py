@@ -5,7 +5,7 @@ within each count."""
 import numpy as np
 import pytest
 
-from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.indicator import interpolate_steps, reread_if_stepped, stepped_fraction
 
 from .toe_records import make_toe_compression

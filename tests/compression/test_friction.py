@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import quad
 
 from flowcurve.errors import FlowcurveError, IdentificationError
-from flowcurve.identification import friction as fr
+from flowcurve.identification.compression import friction as fr
 
 
 # -- the seed's worked example (004, 3.1.4), from the post-test measurements alone -----------

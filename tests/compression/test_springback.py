@@ -4,8 +4,8 @@ shows it — without it K_l scaled the loaded shortening to the unloaded one."""
 import numpy as np
 import pytest
 
-from flowcurve.identification.compression import identify_compression
-from flowcurve.identification.compression_values import springback_from_unloading
+from flowcurve.identification.compression.identify import identify_compression
+from flowcurve.identification.compression.values import springback_from_unloading
 
 from .toe_records import make_toe_compression
 

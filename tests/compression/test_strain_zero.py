@@ -8,7 +8,7 @@ records (tests/compression/toe_records.py) over a grid of sample rates, toes and
 import numpy as np
 import pytest
 
-from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.strain_zero import line_curvature_u, line_zero_u, start_uncertainty, strain_zero_uncertainty
 
 from .conftest import flow_stress

@@ -4,7 +4,7 @@ extended to zero force (ISO 6892-1), so Rp0.2 and the true curve start where the
 import numpy as np
 import pytest
 
-from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.indicator import yield_onset_from_rate
 
 from .toe_records import make_toe_compression
@@ -61,7 +61,7 @@ def test_the_next_window_is_set_on_the_lines_rise_not_in_the_noise_before_it():
     puts the samples at zero force past the offset too, and one of them with a noise of
     −0.007 MPa once made the window's reference negative ("no elastic line" on the demo's own
     compression record)."""
-    from flowcurve.identification.compression import _offset_onset_MPa
+    from flowcurve.identification.compression.identify import _offset_onset_MPa
     from flowcurve.identification.indicator import ModulusFit
 
     E = 200_000.0

@@ -17,7 +17,7 @@ import shutil
 import numpy as np
 import pytest
 
-from flowcurve.identification.compression import identify_compression, toe_on_flattest_offsets
+from flowcurve.identification.compression.identify import identify_compression, toe_on_flattest_offsets
 
 from .toe_records import make_toe_compression
 

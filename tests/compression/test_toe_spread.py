@@ -9,7 +9,7 @@ from flowcurve.acquisition.procedure import TestSpec
 from flowcurve.acquisition.stopping import StopCriteria
 from flowcurve.acquisition.session import run_virtual_test
 from flowcurve.clock import ModelClock
-from flowcurve.identification.compression import toe_offsets, toe_spread_warning
+from flowcurve.identification.compression.identify import toe_offsets, toe_spread_warning
 from flowcurve.identification.identify import identify
 from flowcurve.record.format import read_record
 

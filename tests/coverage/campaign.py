@@ -165,7 +165,7 @@ def drawn_cases(n: int = 150, seed: int = 43) -> list[Case]:
 
 
 def _crosshead_case(kw: dict):
-    from flowcurve.identification.hardening import voce
+    from flowcurve.identification.laws.hardening import voce
     from tests.property.records import rp02_closed_form
 
     b = _bench()

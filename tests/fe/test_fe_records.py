@@ -22,7 +22,7 @@ import shutil
 import numpy as np
 import pytest
 
-from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.fe.synthetic import VALIDATION_CASES, case_flow, run_case, upsetting_record
 
 pytestmark = [pytest.mark.slow, pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]

@@ -112,7 +112,7 @@ def _tension(force_end_fraction, law, dk) -> dict:
     scaled by 1 + (H/H* − 1)·u + 10·(δ − δ*)·u² and a neck radius moving with δ (test_time_limit.py's)."""
     import flowcurve.identification.fe.inverse_tension as invt
     from flowcurve.identification.fe.synthetic import tension_record
-    from flowcurve.identification.tension import identify_tension
+    from flowcurve.identification.tension.identify import identify_tension
 
     identify_inverse_fe, TensionModel, TensionResult = _entry_points()
     t = np.linspace(0.01, 1.0, 300)

@@ -130,7 +130,7 @@ def test_a_model_that_cannot_follow_the_record_is_said_so_not_returned_quietly(m
     fracture-stress error rather than a made-up one."""
     import flowcurve.identification.fe.inverse_tension as inv
 
-    from flowcurve.identification.tension import identify_tension
+    from flowcurve.identification.tension.identify import identify_tension
 
     rec = _record(0.7)
     diagram = identify_tension(rec).curves["corrected_diagram"]

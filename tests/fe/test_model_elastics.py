@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.compression import identify_compression
+from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.elastic_modulus import class_modulus
 from flowcurve.identification.fe.machine import model_elastics
 from flowcurve.record.format import amend_record, read_record

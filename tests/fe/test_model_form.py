@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from flowcurve.identification import friction as fr
+from flowcurve.identification.compression import friction as fr
 from flowcurve.identification.fe.model import model_form as mf
 
 
@@ -72,7 +72,7 @@ def test_the_end_face_range_is_the_mu_of_the_face_less_and_plus_its_model_form_s
 def test_a_face_and_a_bulge_of_different_mu_disagree_and_make_the_hardening_poor(table):
     """The end face of μ 0.3 with the bulge of μ 0.05 (h0/d0 1.5): the μ differ by far more than
     their combined standard errors; the default says so naming both, and marks the hardening poor."""
-    from flowcurve.identification.compression_friction import _friction_disagreement
+    from flowcurve.identification.compression.friction_result import _friction_disagreement
 
     d0, h0, hk, dmax, _ = _shape(table, 0.05, 1.5)
     *_, dface = _shape(table, 0.3, 1.5)
@@ -91,7 +91,7 @@ def test_a_record_whose_face_and_bulge_disagree_has_a_poor_hardening(tmp_path):
     import shutil
     from pathlib import Path
 
-    from flowcurve.identification.compression import identify_compression
+    from flowcurve.identification.compression.identify import identify_compression
     from flowcurve.record.format import amend_record, read_record
 
     src = Path(__file__).parent / "data" / "second_model_C2.csv"

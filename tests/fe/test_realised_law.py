@@ -63,7 +63,7 @@ def test_an_upsetting_model_realising_its_law_at_mu_0_gives_the_law_on_the_loade
     realising rows: F over the loaded area is the law (measured within 0.1 %; the plain rows
     −0.5 % at ε 0.6)."""
     from flowcurve.identification.fe.model.upsetting import simulate_upsetting
-    from flowcurve.identification.friction import elastic_volume_ratio
+    from flowcurve.identification.compression.friction import elastic_volume_ratio
 
     m = UpsettingModel.from_law(6.0, H0, H_END, 0.0, seed_law, E_MPa=194_000.0, increments=INCREMENTS, first_increment=1.0 / 3000)
     errors = []

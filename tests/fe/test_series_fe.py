@@ -22,7 +22,7 @@ import pytest
 
 from flowcurve.cli import main
 from flowcurve.identification.fe.synthetic import upsetting_record
-from flowcurve.identification.johnson_cook import johnson_cook
+from flowcurve.identification.laws.johnson_cook import johnson_cook
 from flowcurve.record.format import write_record
 
 pytestmark = [pytest.mark.slow, pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]
@@ -121,7 +121,7 @@ def test_the_curve_starts_on_the_input_law():
     −0.2 % and μ read 0.107 for 0.1), within 0.3 %. It was 1.1 % higher at the start while the
     FE table's factor below ε 0.02 was read between a padded 1 at ε 0 and its value at 0.02;
     the table's start (short runs on ε_p) holds the factor the friction has from the first yield."""
-    from flowcurve.identification.compression import identify_compression
+    from flowcurve.identification.compression.identify import identify_compression
     from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 
     T, rate, E = CONDITIONS[0]

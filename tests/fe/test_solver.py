@@ -55,7 +55,7 @@ def test_loaded_area_shrinks_by_the_elastic_volume_change():
     """Plastic flow keeps the volume, the elastic strains do not: CalculiX's loaded cylinder has
     the area A·J of :func:`elastic_volume_ratio`, J = exp(−(1 − 2ν)σ/E), below the volume-constant
     A = A0·h0/h — the reference the FE table's force factor (normalised by μ = 0) was taken on."""
-    from flowcurve.identification.friction import elastic_volume_ratio
+    from flowcurve.identification.compression.friction import elastic_volume_ratio
 
     E_soft, nu = 80_000.0, 0.3  # a low modulus: J − 1 ≈ −0.5 % at 1000 MPa, well above the check's 0.02 %
     eps_rows, stress_rows = plastic_table(swift)

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification import friction as fr
+from flowcurve.identification.compression import friction as fr
 from flowcurve.identification.fe.model.model_form import BULGE_MODEL_FORM
 from flowcurve.identification.fe.model.table import UpsettingTable, specimen_proportion, swift_hardening
 
@@ -133,7 +133,7 @@ def test_fe_table_friction_reads_its_own_bulge(table):
 def test_a_high_yield_beyond_the_tables_eps0_is_said(table):
     """σ = 800·(0.5 + ε_p)^0.1 (a yield of 748 MPa hardening to 830) has a Swift ε0 of 0.5, beyond
     the table's axis: the friction result names it and the compression result warns."""
-    from flowcurve.identification.compression_friction import _fe_table_warnings
+    from flowcurve.identification.compression.friction_result import _fe_table_warnings
 
     d0, h0, hk = 6.0, 9.0, 4.5
     eps = math.log(h0 / hk)
@@ -149,7 +149,7 @@ def test_a_high_yield_beyond_the_tables_eps0_is_said(table):
 def test_mu_near_sticking_is_flagged_as_a_lower_bound(table):
     """On a squat specimen at the table's largest μ the barrel hardly grows with μ: one dmax
     resolution step (0.01 mm) moves μ by more than 0.02 there, and not at μ 0.05 on a tall one."""
-    from flowcurve.identification.compression_friction import _fe_table_warnings
+    from flowcurve.identification.compression.friction_result import _fe_table_warnings
 
     def read(mu, h0_d0):
         d0, h0 = 6.0, 6.0 * h0_d0
@@ -224,7 +224,7 @@ def test_near_sticking_the_end_face_tells_mu_where_the_bulge_cannot(table):
     range counts the FE model form's ± 0.02 of d/d_n (another model's rim node sits up to 0.017
     wider, docs/methods.md §4a.4) and holds the truth; that share, not the reading, bounds it
     (0.28–0.35, as wide as the bulge's here)."""
-    from flowcurve.identification.compression_friction import _fe_table_warnings
+    from flowcurve.identification.compression.friction_result import _fe_table_warnings
 
     d0, h0, mu, n, eps = 6.0, 6.0, 0.3, 0.2, 0.6
     hk = h0 * math.exp(-eps)

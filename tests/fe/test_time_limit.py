@@ -129,7 +129,7 @@ def slow_tension_runs(monkeypatch):
     import time
 
     import flowcurve.identification.fe.inverse_tension as inv
-    from flowcurve.identification.tension import identify_tension
+    from flowcurve.identification.tension.identify import identify_tension
 
     from .test_inverse_tension_inputs import _record
 
@@ -257,7 +257,7 @@ def hanging_tension_solver(monkeypatch):
 
     import flowcurve.identification.fe.model.tension as tension
     from flowcurve.identification.fe.model.ccx import SolverError
-    from flowcurve.identification.tension import identify_tension
+    from flowcurve.identification.tension.identify import identify_tension
 
     from .test_inverse_tension_inputs import _record
 

@@ -172,7 +172,7 @@ def test_three_point_blames_dk_only_when_it_is_missing(bluehill, tmp_path, capsy
 
 
 def test_why_no_fit_names_the_failure_when_the_input_is_there():
-    from flowcurve.identification.tension import _why_no_fit
+    from flowcurve.identification.tension.identify import _why_no_fit
 
     fracture = {"true_strain": 0.7}
     failure = "three-point voce fit failed: no root in the bracket"

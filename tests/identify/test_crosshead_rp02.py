@@ -16,9 +16,9 @@ from types import SimpleNamespace
 
 import pytest
 
-from flowcurve.identification.tension import identify_tension
-from flowcurve.identification.tension_elastic import _elastic_line
-from flowcurve.identification.tension_inputs import _inputs
+from flowcurve.identification.tension.identify import identify_tension
+from flowcurve.identification.tension.elastic import _elastic_line
+from flowcurve.identification.tension.inputs import _inputs
 
 BENCH = Path(__file__).resolve().parents[2] / "bench" / "modulus_methods.py"
 

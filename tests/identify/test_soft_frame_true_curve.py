@@ -19,7 +19,7 @@ from types import SimpleNamespace
 import pytest
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification import tension as tn
+from flowcurve.identification.tension import identify as tn
 
 BENCH = Path(__file__).resolve().parents[2] / "bench"
 

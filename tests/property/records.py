@@ -18,7 +18,7 @@ import pandas as pd
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from flowcurve.identification.hardening import johnson_cook_static, swift, voce
+from flowcurve.identification.laws.hardening import johnson_cook_static, swift, voce
 from flowcurve.record.format import Record
 
 D0_MM, L0_MM, FRAME_N_PER_UM = 6.0, 30.0, 136.0

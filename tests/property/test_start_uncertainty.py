@@ -12,7 +12,7 @@ import numpy as np
 from hypothesis import event, given
 
 from flowcurve.errors import FlowcurveError
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.tension.identify import identify_tension
 
 from .records import tension_records
 

@@ -19,8 +19,8 @@ import numpy as np
 from hypothesis import event, given
 
 from flowcurve.errors import FlowcurveError
-from flowcurve.identification.hardening import LAWS
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.laws.hardening import LAWS
+from flowcurve.identification.tension.identify import identify_tension
 
 from .records import tension_records
 

@@ -442,7 +442,7 @@ def curve_deviation_pct(result: dict, cell_run: CellRun, from_eps_p: float = 0.0
     """Max |σ_fit/σ_true − 1| in % over the hardening's measured range (``fit_range``, else
     ``strain_range``) from ``from_eps_p`` on; None when the result has no static Johnson-Cook-like
     law to compare."""
-    from flowcurve.identification.hardening import johnson_cook_static
+    from flowcurve.identification.laws.hardening import johnson_cook_static
 
     hard = result.get("hardening") or {}
     rng = hard.get("fit_range") or hard.get("strain_range")

@@ -18,7 +18,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from flowcurve.identification.johnson_cook import johnson_cook
+from flowcurve.identification.laws.johnson_cook import johnson_cook
 from flowcurve.record.format import Record
 
 LAW = {"A": 280.0, "B": 1215.0, "n": 0.43, "C": 0.031, "m": 1.0}

@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from flowcurve.identification.johnson_cook import johnson_cook
-from flowcurve.identification.series import SeriesMember
+from flowcurve.identification.laws.johnson_cook import johnson_cook
+from flowcurve.identification.series.series import SeriesMember
 
 # 4340 steel: A 792 MPa, B 510 MPa, n 0.26, C 0.014, m 1.03; T_m 1793 K, reference 1/s and 298 K
 TRUE = {"A": 792.0, "B": 510.0, "n": 0.26, "C": 0.014, "m": 1.03}

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flowcurve.identification.series import fit_series, member_from_record
-from flowcurve.identification.series_members import point_strain_rates
+from flowcurve.identification.series.series import fit_series, member_from_record
+from flowcurve.identification.series.members import point_strain_rates
 
 from .compression_series import E_MPa, LAW, REF, SERIES, compression_record, flow
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from flowcurve.errors import IdentificationError, RecordError
-from flowcurve.identification.damage import (FracturePoint, bridgman_triaxiality, fit_damage, fracture_strain_from_diameters,
+from flowcurve.identification.series.damage import (FracturePoint, bridgman_triaxiality, fit_damage, fracture_strain_from_diameters,
                                              read_fracture_points)
 
 # docs/methods.md §5, table 3.2, steel 45 (140 HB): D1..D5 = 0, 1.3, -0.17, 0.063, 2.8
@@ -163,7 +163,7 @@ def test_bad_fracture_table_is_a_one_line_error(tmp_path, syn, capsys):
 def test_notched_result_folder_carries_its_bridgman_triaxiality(tmp_path, syn):
     import json
 
-    from flowcurve.identification.series import member_from_result
+    from flowcurve.identification.series.series import member_from_result
 
     m = syn.members()[0]
     folder = syn.write_result_folder(tmp_path / "notched", m)
@@ -179,7 +179,7 @@ def test_notched_result_folder_carries_its_bridgman_triaxiality(tmp_path, syn):
 
 
 def test_record_with_a_section_after_fracture_and_a_notch_gives_its_fracture_point(syn):
-    from flowcurve.identification.series import member_from_record
+    from flowcurve.identification.series.series import member_from_record
 
     record, _ = syn.tension_record(24.85, 0.03, 1e-3)
     assert member_from_record(record).fracture is None  # no section after fracture: no point, no guess

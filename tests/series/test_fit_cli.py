@@ -8,7 +8,7 @@ import pytest
 
 from flowcurve.cli import main
 from flowcurve.errors import RecordError
-from flowcurve.identification.series import member_from_result
+from flowcurve.identification.series.series import member_from_result
 
 
 def _series_folders(tmp_path, syn, **kw):

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from flowcurve.identification.johnson_cook import homologous_temperature, johnson_cook, log_rate_ratio
+from flowcurve.identification.laws.johnson_cook import homologous_temperature, johnson_cook, log_rate_ratio
 
 P = {"A": 792.0, "B": 510.0, "n": 0.26, "C": 0.014, "m": 1.03}
 R = {"ref_strain_rate_per_s": 1.0, "ref_temperature_C": 24.85, "melt_temperature_C": 1519.85}

@@ -8,7 +8,7 @@ import pytest
 
 from flowcurve.cli import main
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.series import SeriesMember, load_members
+from flowcurve.identification.series.series import SeriesMember, load_members
 from flowcurve.record.format import write_record
 
 from ..compression.conftest import make_compression

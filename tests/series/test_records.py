@@ -9,8 +9,8 @@ import pytest
 from flowcurve.record.format import write_record
 from flowcurve.cli import main
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.johnson_cook import johnson_cook
-from flowcurve.identification.series import strain_rate_from_record
+from flowcurve.identification.laws.johnson_cook import johnson_cook
+from flowcurve.identification.series.series import strain_rate_from_record
 
 L0_MM = 30.0
 
@@ -39,7 +39,7 @@ def test_strain_rate_needs_a_plastic_range(syn):
 def test_fit_command_on_native_records(tmp_path, syn, capsys):
     """Six tension records from a known law at 3 temperatures and 2 crosshead speeds, identified
     by 'identify' and fitted: the law comes back, C and m included."""
-    import flowcurve.identification.tension  # noqa: F401
+    import flowcurve.identification.tension.identify  # noqa: F401
     ref_rate = 1e-3  # the law's reference: the slow tests (0.03 mm/s on 30 mm)
     paths, truth = [], {}
     for T in (syn.REF["ref_temperature_C"], 300.0, 600.0):
@@ -82,7 +82,7 @@ def test_fit_command_on_native_records(tmp_path, syn, capsys):
 
 def test_fit_command_on_the_result_folders_of_identify(tmp_path, syn, capsys):
     """'flowcurve identify --out DIR' then 'flowcurve fit DIR': the result folders carry enough."""
-    import flowcurve.identification.tension  # noqa: F401
+    import flowcurve.identification.tension.identify  # noqa: F401
     paths = []
     for T in (syn.REF["ref_temperature_C"], 600.0):
         for speed in (0.03, 3.0):

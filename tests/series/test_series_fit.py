@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from flowcurve.errors import FlowcurveError, IdentificationError, RecordError
-from flowcurve.identification.hardening import fit_hardening
-from flowcurve.identification.series import (SeriesMember, condition_curves, fit_global, fit_series, fit_stepwise,
+from flowcurve.identification.laws.hardening import fit_hardening
+from flowcurve.identification.series.series import (SeriesMember, condition_curves, fit_global, fit_series, fit_stepwise,
                                    make_reference)
 
 
@@ -187,7 +187,7 @@ def test_shape_uncertainty_is_what_a_shape_error_of_that_size_does_at_most(syn):
     moves A by 8 %.)"""
     from dataclasses import replace
 
-    from flowcurve.identification.series_fit import KEYS, PARAMS, _stack, shape_uncertainty
+    from flowcurve.identification.series.fit import KEYS, PARAMS, _stack, shape_uncertainty
 
     ms = syn.members(noise_MPa=0.0)
     ref = make_reference(ms, **syn.REF)
@@ -195,7 +195,7 @@ def test_shape_uncertainty_is_what_a_shape_error_of_that_size_does_at_most(syn):
     s = 0.0005
     band = shape_uncertainty(ms, ref, fit, shape_error_pct=100 * s)
     eps, _, lr, ts, idx = _stack(ms, ref, 60)
-    from flowcurve.identification.johnson_cook import johnson_cook_reduced
+    from flowcurve.identification.laws.johnson_cook import johnson_cook_reduced
 
     base = johnson_cook_reduced(eps, lr, ts, **fit.params)
     J = np.array([(johnson_cook_reduced(eps, lr, ts, **{**fit.params, p: fit.params[p] * (1 + 1e-6)}) - base) / (fit.params[p] * 1e-6 * base)

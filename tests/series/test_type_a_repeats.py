@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from scipy.stats import t
 
-from flowcurve.identification.series_fit import condition_curves
-from flowcurve.identification.series_members import SeriesMember
+from flowcurve.identification.series.fit import condition_curves
+from flowcurve.identification.series.members import SeriesMember
 
 EPS = np.linspace(0.002, 0.3, 200)
 

@@ -7,8 +7,8 @@ import pandas as pd
 import pytest
 
 from flowcurve.record.format import Record
-from flowcurve.identification.hardening import johnson_cook_static
-from flowcurve.identification.necking import davidenkov_factor, le_roy_a_over_R
+from flowcurve.identification.laws.hardening import johnson_cook_static
+from flowcurve.identification.tension.necking import davidenkov_factor, le_roy_a_over_R
 
 TRUTH = dict(E_MPa=200_000.0, A=400.0, B=600.0, n=0.3, C_N_per_um=136.0, slack_mm=0.08, slack_force_N=600.0,
              d0_mm=6.0, l0_mm=30.0, eps_f=0.8)

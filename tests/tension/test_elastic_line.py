@@ -5,7 +5,7 @@ import pytest
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.indicator import auto_modulus, fit_modulus
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.tension.identify import identify_tension
 
 from .conftest import TRUTH as T
 

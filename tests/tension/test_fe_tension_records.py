@@ -47,7 +47,7 @@ def identify_against_law(path: Path, name: str, out: Path, fracture_point: str =
     ep, sigma = curve[:, 0], curve[:, 1]
     uniform = (ep >= lo) & (ep <= hi)
     truth = fe_records.law(name)
-    from flowcurve.identification.hardening import LAWS  # the fitted law, evaluated by the product's own function
+    from flowcurve.identification.laws.hardening import LAWS  # the fitted law, evaluated by the product's own function
 
     spec = LAWS[name]
     fitted = spec.func(ep[uniform], **{n: hard[k] for n, k in zip(spec.names, spec.keys)})

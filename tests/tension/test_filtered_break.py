@@ -8,9 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from flowcurve.identification.hardening import johnson_cook_static
+from flowcurve.identification.laws.hardening import johnson_cook_static
 from flowcurve.identification.identify import identify
-from flowcurve.identification.tension_values import fracture_index
+from flowcurve.identification.tension.values import fracture_index
 from flowcurve.record.format import Record
 
 from .conftest import TRUTH, make_record
@@ -63,7 +63,7 @@ def test_identification_reads_the_fracture_point_through_a_filtered_break(extens
 def test_a_fracture_point_no_law_passes_through_leaves_the_uniform_range_fit():
     # a fracture point far below the curve (a force read off a decay's tail): the fit with it
     # fails, the one without it stays and says so — the uniform range is not lost with it
-    from flowcurve.identification.tension import _fit_laws
+    from flowcurve.identification.tension.identify import _fit_laws
 
     eps = np.linspace(0.002, 0.08, 40)
     sig = johnson_cook_static(eps, 400.0, 600.0, 0.3)

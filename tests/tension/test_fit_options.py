@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.hardening import johnson_cook_static
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.laws.hardening import johnson_cook_static
+from flowcurve.identification.tension.identify import identify_tension
 
 from .conftest import TRUTH as T
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.hardening import (
+from flowcurve.identification.laws.hardening import (
     LAWS, fit_hardening, johnson_cook_static, swift, three_point_fit, voce,
 )
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.optimize import differential_evolution
 
-from flowcurve.identification.hardening import LAWS, POOR_FIT_PCT, fit_hardening, johnson_cook_static, swift, voce
+from flowcurve.identification.laws.hardening import LAWS, POOR_FIT_PCT, fit_hardening, johnson_cook_static, swift, voce
 
 EPS = np.linspace(0.002, 0.08, 30)
 CURVES = {

@@ -10,7 +10,7 @@ from flowcurve.identification import iso6892
 from flowcurve.identification.indicator import (
     compensate_toe, fit_modulus, frame_stiffness_from_known_modulus, remove_frame_compliance, scale_to_measured,
 )
-from flowcurve.identification.necking import (
+from flowcurve.identification.tension.necking import (
     bridgman_factor, davidenkov_factor, le_roy_a_over_R, mirone_factor, neck_corrections,
 )
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.hardening import johnson_cook_static
+from flowcurve.identification.laws.hardening import johnson_cook_static
 from flowcurve.identification.identify import identify
 from flowcurve.record.format import Record
 

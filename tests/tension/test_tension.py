@@ -8,10 +8,10 @@ from scipy.optimize import brentq, minimize_scalar
 
 from flowcurve.errors import FlowcurveError, IdentificationError, RecordError
 from flowcurve.identification.indicator import frame_stiffness_from_known_modulus
-from flowcurve.identification.tension import identify_tension
-from flowcurve.identification.tension_values import bulk_modulus, true_plastic_strain, true_stress_constant_volume, true_stress_gost
+from flowcurve.identification.tension.identify import identify_tension
+from flowcurve.identification.tension.values import bulk_modulus, true_plastic_strain, true_stress_constant_volume, true_stress_gost
 
-from flowcurve.identification.hardening import johnson_cook_static
+from flowcurve.identification.laws.hardening import johnson_cook_static
 
 T = dict(E_MPa=200_000.0, A=400.0, B=600.0, n=0.3)
 

@@ -16,7 +16,7 @@ import pytest
 
 from flowcurve.identification.fe.synthetic import RECORD_FIRST_INCREMENT, johnson_cook_flow, tension_record
 from flowcurve.identification.fe.model.tension import TensionModel, simulate_tension
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.tension.identify import identify_tension
 
 pytestmark = [pytest.mark.slow, pytest.mark.solver, pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")]
 

@@ -5,7 +5,7 @@ so (issue 31's scenario matrix found it 6 % high at ε_p 0.3 on the virtual rig,
 import numpy as np
 import pytest
 
-from flowcurve.identification.hardening import johnson_cook_static
+from flowcurve.identification.laws.hardening import johnson_cook_static
 from flowcurve.identification.identify import identify
 
 from .conftest import TRUTH, make_record

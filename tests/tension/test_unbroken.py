@@ -55,7 +55,7 @@ def test_fracture_values_in_a_record_that_says_it_did_not_break_are_left_out(sto
 
 def test_a_broken_bar_keeps_its_fracture_values_whatever_the_stop_reason(stopped_at_3mm):
     """The rule needs both: a stop reason other than fracture AND a force that shows no break."""
-    from flowcurve.identification.tension_values import unbroken_statement
+    from flowcurve.identification.tension.values import unbroken_statement
 
     rec = read_record(stopped_at_3mm.outcome.path)
     assert unbroken_statement(rec) is not None

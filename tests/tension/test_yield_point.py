@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from flowcurve.identification import iso6892
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.tension.identify import identify_tension
 from flowcurve.record.format import Record
 
 E, REH, REL, AE = 200_000.0, 450.0, 398.0, 0.015  # MPa, MPa, MPa (plateau minimum), strain

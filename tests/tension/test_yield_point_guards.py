@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 from flowcurve.identification import iso6892
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.tension.identify import identify_tension
 from flowcurve.record.format import Record
 
 E = 200_000.0
@@ -88,7 +88,7 @@ def test_a_lone_low_sample_is_no_yield_point():
 
 
 def test_isolated_force_spikes_finds_lone_frames_not_a_fracture():
-    from flowcurve.identification.tension_inputs import isolated_force_spikes
+    from flowcurve.identification.tension.inputs import isolated_force_spikes
 
     rng = np.random.default_rng(2)
     force = np.concatenate([np.linspace(0.0, 14_000.0, 300), np.full(200, 14_000.0), np.zeros(5)]) + rng.normal(0.0, 15.0, 505)

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from flowcurve.identification import uncertainty as un
+from flowcurve.identification.quality import uncertainty as un
 
 INST = dict(un.INSTRUMENT_DEFAULTS)
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flowcurve.identification import conformity as cf
+from flowcurve.identification.quality import conformity as cf
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -121,7 +121,7 @@ class _Record:
 ])
 def test_attach_leaves_out_what_it_cannot_compute_and_never_raises(result):
     """Results with missing or odd inputs: the budgets that can be computed, no guessed ones, no error."""
-    from flowcurve.identification.assurance import attach
+    from flowcurve.identification.quality.assurance import attach
 
     attach(result, {}, _Record({"instruments.force_class": "not a number"}))
     unc = result["uncertainty"]

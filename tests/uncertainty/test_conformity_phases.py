@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from flowcurve.identification.assurance import attach
-from flowcurve.identification.tension import identify_tension
+from flowcurve.identification.quality.assurance import attach
+from flowcurve.identification.tension.identify import identify_tension
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests" / "tension"))

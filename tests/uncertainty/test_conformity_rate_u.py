@@ -7,7 +7,7 @@ verdict (the names below do not exist there), and a 5-sample elastic line judged
 import numpy as np
 import pytest
 
-from flowcurve.identification import conformity as cf
+from flowcurve.identification.quality import conformity as cf
 
 Q_MM = 0.01  # one encoder count
 

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flowcurve.identification import friction as fr
-from flowcurve.identification import uncertainty as un
+from flowcurve.identification.compression import friction as fr
+from flowcurve.identification.quality import uncertainty as un
 from flowcurve.identification.fe.model import model_form as mf
 
 DATA = Path(__file__).resolve().parents[1] / "fe" / "data"

@@ -66,9 +66,9 @@ def test_the_crosshead_only_lookalike_holds_the_extensometers_Rp(name):
     """The 42CrMoS4 record's Machine Displacement alone (the held-out 1045 record's kind): Rp0.2 within 5 %
     of the same specimen's extensometer Rp0.2, or its U holding it — and the budget carries the
     crosshead compliance model's share (rms over the 67 pairs) and the testing rate's, which it lacked."""
-    from flowcurve.identification.assurance import attach
-    from flowcurve.identification.tension import identify_tension
-    from flowcurve.identification.uncertainty import CROSSHEAD_RP_REL_U
+    from flowcurve.identification.quality.assurance import attach
+    from flowcurve.identification.tension.identify import identify_tension
+    from flowcurve.identification.quality.uncertainty import CROSSHEAD_RP_REL_U
     from flowcurve.record.importers import load_record
 
     rec = load_record(DATA_42 / f"{name}.csv")

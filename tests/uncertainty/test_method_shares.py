@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from flowcurve.identification import uncertainty as un
-from flowcurve.identification.assurance import instruments_from_meta
+from flowcurve.identification.quality import uncertainty as un
+from flowcurve.identification.quality.assurance import instruments_from_meta
 
 INST = dict(un.INSTRUMENT_DEFAULTS) | dict(un.DIMENSION_DEFAULTS)
 
@@ -96,7 +96,7 @@ def test_the_offset_lines_zero_leaves_the_spacing_out_only_where_a_regressed_lin
     """A regressed line: δε0 of the offset line is √(line² + toe²); a handbook E through sparse first
     samples: the spacing counts too (a compression record at 10× the rate showed a −2.6 % Rp0.2 that
     only the spacing covered)."""
-    from flowcurve.identification.assurance import _offset_line_zero
+    from flowcurve.identification.quality.assurance import _offset_line_zero
 
     def result(**parts):
         return {"hardening": {"start_uncertainty": {"delta_eps0": math.sqrt(sum(v**2 for v in parts.values())), "components": parts}}}

@@ -12,9 +12,9 @@ import pandas as pd
 from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification import iso6892
-from flowcurve.identification.hardening import MAX_STRESS_MPa
+from flowcurve.identification.laws.hardening import MAX_STRESS_MPa
 from flowcurve.identification.indicator import reread_if_stepped, remove_frame_compliance
-from flowcurve.identification.tension_values import fracture_index
+from flowcurve.identification.tension.values import fracture_index
 
 
 def _check_post_dimensions(record: Record, d0: float, l0: float, lu: float | None) -> None:

@@ -20,7 +20,7 @@ import pandas as pd
 from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
-from flowcurve.identification.damage import FracturePoint, fracture_point_from_result
+from flowcurve.identification.series.damage import FracturePoint, fracture_point_from_result
 from flowcurve.identification.elastic_modulus import result_material_E
 
 PLASTIC_START = 0.002  # εp where the plastic range starts (the 0.2 % offset)
@@ -148,7 +148,7 @@ def _plastic_strain_history(record: Record, E_MPa: float | None) -> tuple[np.nda
         eps = -np.log(np.clip(1.0 - d / length, 1e-9, None))  # (3.31)
         sigma = force / area0 * np.exp(-eps)  # (3.30) S = F0·h0/h
     if E_MPa is not None and math.isfinite(E_MPa) and E_MPa > 0:
-        from flowcurve.identification.tension_values import true_plastic_strain
+        from flowcurve.identification.tension.values import true_plastic_strain
 
         return t, true_plastic_strain(eps, sigma, E_MPa)  # (3.7)
     return t, eps  # no modulus: the total strain's rate (the elastic part is small past yield)

@@ -16,14 +16,14 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.hardening import POOR_FIT_PCT, fit_hardening
-from flowcurve.identification.johnson_cook import (CONVENTIONS, EQUATION, homologous_temperature, johnson_cook_reduced,
+from flowcurve.identification.laws.hardening import POOR_FIT_PCT, fit_hardening
+from flowcurve.identification.laws.johnson_cook import (CONVENTIONS, EQUATION, homologous_temperature, johnson_cook_reduced,
                                                   log_rate_ratio)
 from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
-from flowcurve.identification.damage import DamageFit, FracturePoint, fit_damage
-from flowcurve.identification import uncertainty as un
+from flowcurve.identification.series.damage import DamageFit, FracturePoint, fit_damage
+from flowcurve.identification.quality import uncertainty as un
 from flowcurve.identification.elastic_modulus import series_modulus
-from flowcurve.identification.series_members import MAX_POINTS, SeriesMember
+from flowcurve.identification.series.members import MAX_POINTS, SeriesMember
 
 PARAMS = ("A", "B", "n", "C", "m")
 KEYS = {"A": "A_MPa", "B": "B_MPa", "n": "n", "C": "C", "m": "m"}

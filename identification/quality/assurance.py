@@ -15,8 +15,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from flowcurve.identification.iso6892 import max_force_band, nan_argmax
-from flowcurve.identification import conformity as cf
-from flowcurve.identification import uncertainty as un
+from flowcurve.identification.quality import conformity as cf
+from flowcurve.identification.quality import uncertainty as un
 from flowcurve.identification.elastic_modulus import apparent_modulus_warning, class_modulus
 
 FLOW_STRAINS = (0.05, 0.1, 0.2, 0.3, 0.5)  # compression flow stress budgets at these true plastic strains

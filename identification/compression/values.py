@@ -12,11 +12,11 @@ import numpy as np
 
 from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError, MissingValueError, RecordError
-from flowcurve.identification import friction as fr
+from flowcurve.identification.compression import friction as fr
 from flowcurve.identification.elastic_modulus import ModulusChoice, choose_modulus
-from flowcurve.identification.hardening import fit_hardening
+from flowcurve.identification.laws.hardening import fit_hardening
 from flowcurve.identification.indicator import ModulusFit, remove_frame_compliance, reread_if_stepped
-from flowcurve.identification.tension_values import check_fit_range, true_plastic_strain
+from flowcurve.identification.tension.values import check_fit_range, true_plastic_strain
 
 
 UNLOADING_BAND = (0.1, 0.9)  # the part of the unloading (× the largest force) the spring-back is read on

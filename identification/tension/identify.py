@@ -20,16 +20,16 @@ from flowcurve.errors import IdentificationError
 from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
 from flowcurve.identification.elastic_modulus import apparent_modulus_warning, choose_modulus, tension_E_source
-from flowcurve.identification.hardening import HardeningFit, fit_hardening, three_point_fit
+from flowcurve.identification.laws.hardening import HardeningFit, fit_hardening, three_point_fit
 from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD
-from flowcurve.identification.necking import METHODS as NECK_METHODS
-from flowcurve.identification.necking import neck_corrections
+from flowcurve.identification.tension.necking import METHODS as NECK_METHODS
+from flowcurve.identification.tension.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import TensionHardening, TensionResult
 from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
-from flowcurve.identification.tension_values import FIT_POINTS, FRACTURE_POINT_MODES, HARDENING_METHODS, MIN_YIELD_OFFSET, MODULUS_REFERENCES, TRUE_STRESS_FORMS, TRUE_STRESS_SPLIT_PCT, _check_window, _increasing, bulk_modulus, check_fit_range, choose_fracture_variant, fracture_index, reaches_fracture, true_plastic_strain, true_stress_constant_volume, true_stress_gost, uniform_error_pct, without_fracture_values
-from flowcurve.identification.tension_inputs import _Inputs, _inputs
-from flowcurve.identification.tension_elastic import _ElasticLine, _elastic_line, _resolved, sdar_warnings
+from flowcurve.identification.tension.values import FIT_POINTS, FRACTURE_POINT_MODES, HARDENING_METHODS, MIN_YIELD_OFFSET, MODULUS_REFERENCES, TRUE_STRESS_FORMS, TRUE_STRESS_SPLIT_PCT, _check_window, _increasing, bulk_modulus, check_fit_range, choose_fracture_variant, fracture_index, reaches_fracture, true_plastic_strain, true_stress_constant_volume, true_stress_gost, uniform_error_pct, without_fracture_values
+from flowcurve.identification.tension.inputs import _Inputs, _inputs
+from flowcurve.identification.tension.elastic import _ElasticLine, _elastic_line, _resolved, sdar_warnings
 
 logger = logging.getLogger(__name__)
 

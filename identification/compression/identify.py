@@ -32,15 +32,15 @@ import pandas as pd
 
 from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError
-from flowcurve.identification import friction as fr
+from flowcurve.identification.compression import friction as fr
 from flowcurve.identification.elastic_modulus import METAL_E_RANGE_MPa, ModulusChoice, apparent_modulus_warning
-from flowcurve.identification.hardening import HardeningFit, fit_hardening
+from flowcurve.identification.laws.hardening import HardeningFit, fit_hardening
 from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_POINTS_TOP, SDAR_REACH, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, scale_to_measured, yield_onset_from_rate
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
 from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
-from flowcurve.identification.compression_values import FIT_CURVE_POINTS, YIELD_OFFSET, _Diagram, _Friction, _Line, _Nominal, _Yield, _check_options, _fit_points, _handbook_modulus, _hardening_fits, _inputs, _meta_geometry, offset_yield, plastic_strain
-from flowcurve.identification.compression_friction import _dface_advice, _fe_correction_uncertainty, _friction_all, _friction_correction, _model_form_shares, _mu_stderr_basis
+from flowcurve.identification.compression.values import FIT_CURVE_POINTS, YIELD_OFFSET, _Diagram, _Friction, _Line, _Nominal, _Yield, _check_options, _fit_points, _handbook_modulus, _hardening_fits, _inputs, _meta_geometry, offset_yield, plastic_strain
+from flowcurve.identification.compression.friction_result import _dface_advice, _fe_correction_uncertainty, _friction_all, _friction_correction, _model_form_shares, _mu_stderr_basis
 
 
 def _offset_onset_MPa(strain0, stress0, line: ModulusFit, offset: float = YIELD_OFFSET) -> float | None:

@@ -11,10 +11,10 @@ import numpy as np
 
 from flowcurve.errors import IdentificationError
 from flowcurve.identification import iso6892
-from flowcurve.identification.hardening import MAX_STRAIN
+from flowcurve.identification.laws.hardening import MAX_STRAIN
 from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_SAMPLES, ModulusFit, elastic_modulus, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, scale_to_measured
-from flowcurve.identification.tension_values import MAX_E_UNCERTAINTY, MIN_YIELD_OFFSET
-from flowcurve.identification.tension_inputs import _Inputs, _stress_noise_MPa
+from flowcurve.identification.tension.values import MAX_E_UNCERTAINTY, MIN_YIELD_OFFSET
+from flowcurve.identification.tension.inputs import _Inputs, _stress_noise_MPa
 
 logger = logging.getLogger(__name__)
 

@@ -18,16 +18,16 @@ The model and its conventions (T* clamped to [0, 1], no rate effect below ε̇0)
 The series is split by concern: :mod:`identification.series_members` (the members, loaded from
 records or result folders, and the strain rate of a record) and :mod:`identification.series_fit`
 (the reference, the fits, :func:`fit_series`). This module is the public facade: it re-exports
-their names, so ``from flowcurve.identification.series import fit_series`` keeps working.
+their names, so ``from flowcurve.identification.series.series import fit_series`` keeps working.
 """
 
 from __future__ import annotations
 
-from flowcurve.identification.series_fit import (BOUNDS, DISTINCT_LOG_RATE, DISTINCT_T_STAR, KEYS, MAX_POINTS, PARAMS,
+from flowcurve.identification.series.fit import (BOUNDS, DISTINCT_LOG_RATE, DISTINCT_T_STAR, KEYS, MAX_POINTS, PARAMS,
                                                  REF_RATE_FACTOR, REF_TEMPERATURE_TOL_C, SAME_RATE_REL, SAME_TEMPERATURE_C,
                                                  ConditionCurve, JohnsonCookFit, Reference, SeriesFit, check_identifiable,
                                                  condition_curves, fit_global, fit_series, fit_stepwise, make_reference)
-from flowcurve.identification.series_members import (PLASTIC_START, SeriesMember, load_members, member_from_record,
+from flowcurve.identification.series.members import (PLASTIC_START, SeriesMember, load_members, member_from_record,
                                                      member_from_result, plastic_part, strain_rate_from_record)
 
 __all__ = [

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flowcurve.identification.hardening import johnson_cook_static
+from flowcurve.identification.laws.hardening import johnson_cook_static
 
 CONVENTIONS = {
     "homologous_temperature": "Tstar = (T - T_ref)/(T_melt - T_ref) clamped to [0, 1]: no softening below T_ref, zero stress above T_melt",

@@ -29,7 +29,7 @@ from typing import Sequence
 import numpy as np
 
 from flowcurve.errors import IdentificationError, RecordError
-from flowcurve.identification.johnson_cook import homologous_temperature, log_rate_ratio
+from flowcurve.identification.laws.johnson_cook import homologous_temperature, log_rate_ratio
 
 log = logging.getLogger(__name__)
 

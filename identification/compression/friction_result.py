@@ -9,11 +9,11 @@ import math
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification import friction as fr
+from flowcurve.identification.compression import friction as fr
 from flowcurve.identification.fe.model import model_form as mf
-from flowcurve.identification.hardening import RANGE_SHARE_PART, HardeningFit, pattern_shift, range_shift
+from flowcurve.identification.laws.hardening import RANGE_SHARE_PART, HardeningFit, pattern_shift, range_shift
 from flowcurve.identification.results import CompressionResult
-from flowcurve.identification.compression_values import _Friction, _Nominal, _Yield, _fit_points, _hardening_fits, plastic_strain
+from flowcurve.identification.compression.values import _Friction, _Nominal, _Yield, _fit_points, _hardening_fits, plastic_strain
 
 
 def _friction_all(geo: dict, chosen: str, warnings: list[str], curve=None) -> tuple[fr.FrictionResult, dict[str, fr.FrictionResult | str]]:

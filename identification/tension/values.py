@@ -10,7 +10,7 @@ import numpy as np
 from flowcurve.record.format import Record
 from flowcurve.errors import IdentificationError
 from flowcurve.identification import iso6892
-from flowcurve.identification.hardening import MAX_STRAIN, MAX_STRESS_MPa
+from flowcurve.identification.laws.hardening import MAX_STRAIN, MAX_STRESS_MPa
 
 
 TRUE_STRESS_FORMS = ("constant_volume", "gost_3_6")  # the default first; the seed's (3.6) for comparison

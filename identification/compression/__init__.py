@@ -1,0 +1,1 @@
+"""Compression: the nominal curve, friction (barrelling, FE table, adhesion) and its corrections."""

@@ -1,0 +1,1 @@
+"""Hardening laws (today's three and Johnson–Cook) and their fits."""

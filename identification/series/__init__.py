@@ -1,0 +1,1 @@
+"""Series of records: Johnson–Cook rate and temperature fits, damage (fracture) fits."""
