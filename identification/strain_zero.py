@@ -179,7 +179,8 @@ def tension_or_compression_zero(strain, stress_MPa, *, window_MPa, E_line_MPa: f
 def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dict, list[str]]:
     """The strain zero's effect on a hardening fit: its constants' standard errors widened by
     their shift under εp + δε0 (in quadrature), the curve's start (:func:`start_uncertainty`) and
-    its warning. fit: HardeningFit; eps_p, stress_MPa: the points it was fitted to; zero: from
+    its warning; the constants over the fit range (``constants_lack_of_fit``,
+    :func:`.uncertainty.correlated_fit_u`: residuals correlated along the range, a constant on its bound). fit: HardeningFit; eps_p, stress_MPa: the points it was fitted to; zero: from
     :func:`strain_zero_uncertainty`; refit: eps, σ → HardeningFit. Returns (fit, block, warnings)."""
     from dataclasses import replace
 

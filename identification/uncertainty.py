@@ -455,9 +455,9 @@ def correlated_fit_u(func: Callable, params: Mapping[str, float], eps, stress_MP
     along the range (a lack of fit is a smooth residual, not independent noise).
 
     func(eps, **params): the law; eps, stress_MPa: the fitted points; on_bound: constant → +1
-    (on its lower bound) or −1 (upper). The free constants: s²·(JᵀJ)⁻¹·N/N_eff (J by central
-    differences), N_eff = N·(1 − ρ)/(1 + ρ) ≥ p + 1 from the residuals' lag-1 autocorrelation ρ (an
-    AR(1) residual), s² = SSR/(N_eff − p). A constant on its bound: the distance δ it could move
+    (on its lower bound) or −1 (upper). The free constants: (JᵀJ)⁻¹·SSR/(N_eff − p) (J by central
+    differences; the white s²·(JᵀJ)⁻¹ widened by N/N_eff), N_eff = N·(1 − ρ)/(1 + ρ) ≥ p + 1 from
+    the residuals' lag-1 autocorrelation ρ (an AR(1) residual). A constant on its bound: the distance δ it could move
     inward, the free ones refitted (linearised), before the SSR grows by the noise's variance
     σ²_n = Σ(Δr)²/(2(N − 1)) (first differences), δ²·|a⊥|² − 2δ·(a⊥·r) = σ²_n (a⊥ its column
     less its projection on the free ones'),
@@ -480,7 +480,7 @@ def correlated_fit_u(func: Callable, params: Mapping[str, float], eps, stress_MP
     rc = r - r.mean()
     rho = float(np.clip(np.dot(rc[:-1], rc[1:]) / np.dot(rc, rc), 0.0, 1.0)) if np.dot(rc, rc) > 0 else 0.0
     n_eff = max(n * (1.0 - rho) / (1.0 + rho), len(free) + 1.0)
-    threshold = float(np.dot(r, r)) / (n_eff - len(free)) * n / n_eff  # ΔSSR of one standard deviation: s²·N/N_eff
+    threshold = float(np.dot(r, r)) / (n_eff - len(free))  # s²·N/N_eff, s² = SSR·N_eff/(N·(N_eff − p)): N/N_eff points per piece
     Jf = J[:, [names.index(k) for k in free]]
     cov = np.linalg.pinv(Jf.T @ Jf) * threshold
     out = {k: float(math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(free)}
