@@ -518,6 +518,9 @@ def constant_budget(value: float, stderr: float | None, stress_rel_u: float, uni
         comps.append(Component("stress scale (force class, d0)", 1.0, "1", stress_rel_u, value, "relative"))
     out = budget(value, unit, comps)
     out["u_method"] = combined(method)
+    if method and method[-1].name == "method: constants over the fit range" and out["U"] >= abs(value):
+        out["note"] = ("over this fit range the law's constants trade off (their correlations): this one alone is not determined, "
+                       "the set of them is")
     return out
 
 

@@ -87,5 +87,7 @@ def test_constant_budget_states_the_method_term_and_never_zero_on_a_bound():
     assert math.isclose(b["u"], math.hypot(12.0, 3.0), rel_tol=1e-12)
     at_bound = un.constant_budget(0.0, None, 0.0, "MPa", lack_of_fit=4.0)
     assert at_bound is not None and math.isclose(at_bound["U"], 2.0 * 4.0, rel_tol=1e-12)
+    assert "note" not in b
+    assert "not determined" in un.constant_budget(300.0, 5.0, 0.0, "MPa", lack_of_fit=200.0)["note"]  # U = 400 ≥ the value
     unchanged = un.constant_budget(500.0, 5.0, 0.0, "MPa", lack_of_fit=2.0)  # below the standard error: no method term
     assert [c["name"] for c in unchanged["components"]] == ["fit (standard error)", "stress scale (force class, d0)"]
