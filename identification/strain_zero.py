@@ -179,14 +179,22 @@ def tension_or_compression_zero(strain, stress_MPa, *, window_MPa, E_line_MPa: f
 def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dict, list[str]]:
     """The strain zero's effect on a hardening fit: its constants' standard errors widened by
     their shift under εp + δε0 (in quadrature), the curve's start (:func:`start_uncertainty`) and
-    its warning. fit: HardeningFit; eps_p, stress_MPa: the points it was fitted to; zero: from
+    its warning; the constants over the fit range (``constants_lack_of_fit``,
+    :func:`.uncertainty.correlated_fit_u`: residuals correlated along the range, a constant on its bound). fit: HardeningFit; eps_p, stress_MPa: the points it was fitted to; zero: from
     :func:`strain_zero_uncertainty`; refit: eps, σ → HardeningFit. Returns (fit, block, warnings)."""
     from dataclasses import replace
+
+    from flowcurve.identification.hardening import LAWS, _on_bound
+    from flowcurve.identification.uncertainty import correlated_fit_u
 
     delta = zero["delta_eps0"]
     start = {**start_uncertainty(fit, fit.strain_range, delta), "components": zero["components"]}
     shift = constants_shift(refit, refit(np.asarray(eps_p, dtype=float), stress_MPa), eps_p, stress_MPa, delta) if delta > 0 else {}
     start["constants_shift"] = shift
+    law = LAWS.get(fit.law)
+    sides = {k: _on_bound(v, *law.bounds[k]) for k, v in fit.params.items()} if law else {}
+    on_bound = {k: 1.0 if side == "lower" else -1.0 for k, side in sides.items() if side}
+    start["constants_lack_of_fit"] = correlated_fit_u(law.func, fit.params, eps_p, stress_MPa, on_bound) if law else {}
     stderr = {k: (math.hypot(se, shift[k]) if se is not None and np.isfinite(se) else shift[k]) if k in shift else se
               for k, se in fit.stderr.items()}
     warning = start_warning(start)

@@ -443,21 +443,86 @@ def flow_point_method_components(sigma_MPa: float, slope_MPa: float, E_MPa: floa
     return out
 
 
-def constant_budget(value: float, stderr: float | None, stress_rel_u: float, unit: str, *, zero_shift: float | None = None) -> dict | None:
+def _jacobian(func: Callable, params: Mapping[str, float], eps: np.ndarray) -> np.ndarray:
+    """∂f/∂p_k at the points by central differences (unconstrained: a constant on its bound moves both ways)."""
+    cols = []
+    for k in params:
+        h = 1e-6 * max(abs(params[k]), 1e-3)
+        cols.append((func(eps, **{**params, k: params[k] + h}) - func(eps, **{**params, k: params[k] - h})) / (2.0 * h))
+    return np.column_stack(cols)
+
+
+def correlated_fit_u(func: Callable, params: Mapping[str, float], eps, stress_MPa, on_bound: Mapping[str, float] | None = None) -> dict[str, float]:
+    """Standard uncertainties of a least-squares fit's constants when its residuals are correlated
+    along the range (a lack of fit is a smooth residual, not independent noise).
+
+    func(eps, **params): the law; eps, stress_MPa: the fitted points; on_bound: constant → +1
+    (on its lower bound) or −1 (upper). The free constants: (JᵀJ)⁻¹·SSR/(N_eff − p) (J by central
+    differences; the white s²·(JᵀJ)⁻¹ widened by N/N_eff), N_eff = N·(1 − ρ)/(1 + ρ) ≥ p + 1 from
+    the residuals' lag-1 autocorrelation ρ (an AR(1) residual). A constant on its bound: the distance δ it could move
+    inward, the free ones refitted (linearised), before the SSR grows by the noise's variance
+    σ²_n = Σ(Δr)²/(2(N − 1)) (first differences), δ²·|a⊥|² − 2δ·(a⊥·r) = σ²_n (a⊥ its column
+    less its projection on the free ones'),
+    stated as u = δ/2 so that U = 2u spans it. {} when it cannot be formed."""
+    on_bound = dict(on_bound or {})
+    eps, sig = np.asarray(eps, dtype=float).ravel(), np.asarray(stress_MPa, dtype=float).ravel()
+    ok = np.isfinite(eps) & np.isfinite(sig)
+    order = np.argsort(eps[ok])
+    eps, sig = eps[ok][order], sig[ok][order]
+    names = list(params)
+    free = [k for k in names if k not in on_bound]
+    n = eps.size
+    if n < len(names) + 2:
+        return {}
+    with np.errstate(all="ignore"):
+        r = sig - func(eps, **params)
+        J = _jacobian(func, params, eps)
+    if not (np.all(np.isfinite(J)) and np.all(np.isfinite(r))):
+        return {}
+    rc = r - r.mean()
+    rho = float(np.clip(np.dot(rc[:-1], rc[1:]) / np.dot(rc, rc), 0.0, 1.0)) if np.dot(rc, rc) > 0 else 0.0
+    n_eff = max(n * (1.0 - rho) / (1.0 + rho), len(free) + 1.0)
+    threshold = float(np.dot(r, r)) / (n_eff - len(free))  # s²·N/N_eff, s² = SSR·N_eff/(N·(N_eff − p)): N/N_eff points per piece
+    Jf = J[:, [names.index(k) for k in free]]
+    cov = np.linalg.pinv(Jf.T @ Jf) * threshold
+    out = {k: float(math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(free)}
+    noise = float(np.sum(np.diff(r) ** 2)) / (2.0 * (n - 1))  # σ² of the noise alone: first differences cancel a smooth lack of fit (Rice 1984)
+    for k, inward in on_bound.items():
+        a = inward * J[:, names.index(k)]
+        if free:
+            a = a - Jf @ np.linalg.lstsq(Jf, a, rcond=None)[0]  # a⊥: the free constants absorb what they can
+        aa, ar = float(np.dot(a, a)), float(np.dot(a, r))
+        if aa > 0:
+            out[k] = (ar + math.sqrt(ar * ar + aa * noise)) / aa / 2.0  # δ/2, δ the root of δ²·aa − 2δ·ar = σ²_noise
+    return out
+
+
+def constant_budget(value: float, stderr: float | None, stress_rel_u: float, unit: str, *, zero_shift: float | None = None,
+                    lack_of_fit: float | None = None) -> dict | None:
     """A fitted constant: the fit's standard error and, for a stress (MPa), the stress scale. With
     ``zero_shift`` (the constant's move when the strain zero moves by δε0, already inside the
-    widened standard error) the method's share is stated apart: fit √(se² − shift²) and the shift."""
-    if stderr is None or not math.isfinite(stderr):
+    widened standard error) the method's share is stated apart: fit √(se² − shift²) and the shift.
+    With ``lack_of_fit`` (:func:`correlated_fit_u`) where it exceeds the fit's standard error, the
+    difference √(u_lof² − se²) is a method term: the standard error then reads as u_lof."""
+    if (stderr is None or not math.isfinite(stderr)) and lack_of_fit is None:
         return None
+    stderr = stderr if stderr is not None and math.isfinite(stderr) else 0.0
     method = []
     if zero_shift is not None and math.isfinite(zero_shift) and 0.0 < zero_shift <= stderr:
         method = [Component("method: strain zero ε0", value, unit, zero_shift, 1.0, "the constant refitted with the strain zero moved by δε0 (§2.11)")]
         stderr = math.sqrt(stderr ** 2 - zero_shift ** 2)
+    if lack_of_fit is not None and math.isfinite(lack_of_fit) and lack_of_fit > stderr:
+        method.append(Component("method: constants over the fit range", value, unit, math.sqrt(lack_of_fit ** 2 - stderr ** 2), 1.0,
+                                "the fit's covariance with its residuals correlated along the range (lack of fit; a constant on "
+                                "its bound as far as it could move), beyond the standard error (§2.12)"))
     comps = [Component("fit (standard error)", value, unit, stderr, 1.0, "least squares"), *method]
     if unit == "MPa":
         comps.append(Component("stress scale (force class, d0)", 1.0, "1", stress_rel_u, value, "relative"))
     out = budget(value, unit, comps)
     out["u_method"] = combined(method)
+    if method and method[-1].name == "method: constants over the fit range" and out["U"] >= abs(value):
+        out["note"] = ("over this fit range the law's constants trade off (their correlations): this one alone is not determined, "
+                       "the set of them is")
     return out
 
 
