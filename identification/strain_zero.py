@@ -184,8 +184,8 @@ def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dic
     :func:`strain_zero_uncertainty`; refit: eps, σ → HardeningFit. Returns (fit, block, warnings)."""
     from dataclasses import replace
 
-    from flowcurve.identification.hardening import LAWS, _on_bound
-    from flowcurve.identification.uncertainty import correlated_fit_u
+    from flowcurve.identification.laws.hardening import LAWS, _on_bound
+    from flowcurve.identification.quality.uncertainty import correlated_fit_u
 
     delta = zero["delta_eps0"]
     start = {**start_uncertainty(fit, fit.strain_range, delta), "components": zero["components"]}

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from flowcurve.identification import uncertainty as un
+from flowcurve.identification.quality import uncertainty as un
 
 
 def line(x, a, b):
