@@ -151,10 +151,12 @@ def test_the_demo_tension_test_conforms_to_iso_6892_1(tmp_path, device_link):
     ident, _ = identify_and_write(run.outcome.path, tmp_path / "results")
     conf = ident.result["methods"]["conformity"]
     rate = conf["testing_rate"]
-    for phase in ("elastic", "yield", "to_Rm"):  # a rate and its U are one claim: the elastic line spans ~5 samples, ~1 encoder count
+    # a rate and its u are one claim: the elastic line spans ~5 samples, ~1 encoder count. One record's three claims are
+    # judged at 3 u (a k = 2 interval misses one claim in twenty by design: three of them would fail one run in seven);
+    # the coverage of U at k = 2 over many records is tests/uncertainty/test_conformity_rate_u.py's
+    for phase in ("elastic", "yield", "to_Rm"):
         got = rate["phases"][phase]
-        U = 2.0 * got["strain_rate_u_per_s"]
-        assert abs(got["strain_rate_per_s"] - 0.00025) <= max(0.05 * 0.00025, U), (phase, got)
+        assert abs(got["strain_rate_per_s"] - 0.00025) <= max(0.05 * 0.00025, 3.0 * got["strain_rate_u_per_s"]), (phase, got)
     # the demo conforms: its verdict says so, or names the rate as not resolved — never "not conforming"
     assert (rate["conforms"] is True and rate["designation"] == "ISO 6892-1:2019 A222") or (
         rate["conforms"] is None and rate["designation"].endswith("(testing rate not resolved)")), rate["findings"]
