@@ -1,34 +1,14 @@
-"""Inverse FE identification of compression: hardening law and μ with CalculiX in the loop.
+"""Inverse FE identification of compression: the hardening law and μ with CalculiX in the loop.
 
-The frame-corrected force–stroke curve of the record (the fast identification's
-``corrected_diagram``), the measured bulge diameter dmax and, where it is measured, the original
-end face's diameter dface (``post.dface_mm``: near sticking it still tells μ) are fitted by the
-upsetting model (:mod:`.upsetting`) run to the record's shortening (so the final height hk is
-met by construction; the FE diameters are taken after the elastic spring-back d·(1 − ν·σ/E),
-the unloading run itself can fail with friction, docs/calculix.md): scipy ``least_squares`` over the
-hardening constants and μ, warm-started from the fast (``fe_table``) identification. A run that
-stops is run again with the table's softer stick slope; a fit that leaves a force or shape
-misfit, or μ on a bound, says so in ``warnings`` (hardening quality "poor"). The Jacobian's
-finite-difference runs go side by side (:func:`.pool.run_many`: ``workers`` processes or a Dask
-``scheduler``); repeated parameter sets come from the run cache. Each residual is its misfit over
-what is known of it beforehand (weighted least squares): the force at ``FORCE_POINTS`` strokes
-(ε ≥ 0.02) in units of ``FORCE_SIGMA_PCT`` (the model's own force error), dmax and dface in units of
-their resolution (0.01 mm) and the model form's share of the shape (:data:`.model_form.BULGE_MODEL_FORM`,
-:data:`.model_form.FACE_MODEL_FORM`: how far another defensible model puts them at the same law and μ), in
-quadrature. Near sticking, where dmax hardly moves
-with μ and the model's barrel is 3.5 % mesh-dependent, the force curve then tells μ as much as the
-diameter does (a dmax met to 5 µm at any price read steel 45's μ 0.225 for 0.25; weighed so, 0.256).
-Uncertainties from the weighted Gauss–Newton covariance (:func:`.solver_fit.parameter_stderr`):
-the diameters with their σ, the force points with the scatter of their own misfit, which is not
-independent from point to point (the model's force error — its mesh, the fold-over sawtooth —
-runs along the curve): its variance is inflated by (1 + ρ)/(1 − ρ), ρ the misfit's lag-1
-autocorrelation (``force_residual_serial_correlation``). On five of the six FE records μ came out
-within 1.01 of these standard errors of the truth (on the sixth, Voce, μ is undetermined at the
-fit). What dmax alone would tell of μ, σ_d/|∂dmax/∂μ|, is reported beside it
-(``mu_stderr_shape_alone``; near sticking 0.04–0.12, and as noisy as the finite difference of a
-diameter that hardly moves). A μ standard error beyond ±0.02 has a "poorly
-told" warning; a parameter the residuals do not tell at the fit has no standard error (null) and
-a warning.
+Fits the upsetting model (:mod:`.model.upsetting`, run to the record's shortening) to the record's
+frame-corrected force–stroke curve, the bulge diameter dmax and, where measured, the end face's
+dface, by weighted least squares (scipy ``least_squares``) warm-started from the fast (``fe_table``)
+identification. Residuals: force at ``FORCE_POINTS`` strokes in units of ``FORCE_SIGMA_PCT``;
+dmax and dface in units of their resolution and the model form's share
+(:data:`.model.model_form.BULGE_MODEL_FORM`, :data:`.model.model_form.FACE_MODEL_FORM`).
+Standard errors: the weighted Gauss–Newton covariance (:func:`.solver_fit.parameter_stderr`), the
+force rows' variance inflated by (1 + ρ)/(1 − ρ) for their serial correlation. Method and
+measured history: docs/methods.md §4a.3.
 """
 
 from __future__ import annotations

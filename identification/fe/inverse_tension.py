@@ -1,32 +1,14 @@
 """Inverse FE identification of tension beyond the maximum force: the necking range in CalculiX.
 
-Up to the maximum force the true curve is measured directly; beyond it the section is no
-longer uniform, and the neck corrections (Davidenkov, Bridgman, Mirone) estimate the flow
-stress at one point, the fracture, from a/R. Here the hardening beyond the uniform range is
-found instead by running the CAX8R necking model (:mod:`.tension`) and matching the record's
-frame-corrected force–elongation curve and the measured neck diameter dk:
-
-* the measured true curve up to ε_a = ``UNIFORM_FRACTION``·ε_pu (ε_pu: the plastic strain at
-  Fm), averaged onto *PLASTIC rows. Nearer Fm the "uniform" section already localizes at its
-  imperfection, and the record's true curve reads high (1.9 % at ε_pu on a 10×40 FE record with
-  a 0.4 % taper): the model, which localizes too, would count it twice;
-* beyond ε_a: σ = σ_a + ∫ H·(1 + β·c·x)^(−1/c) dx over x from 0 to ε_p − ε_a
-  (:func:`hardening_beyond`): the initial slope H, its initial relative decay β and the shape c of
-  its tail fitted — c = 0 is Voce (saturating), c = 1/(1 − n) Swift (a power law), so neither is
-  assumed. The warm starts are this family nearest each of Johnson–Cook, Swift and Voce fitted on
-  the measured uniform range and extrapolated; all three are run and the fit starts from the best;
-* the taper δ that starts the neck, r(z) = R·(1 − δ·cos(πz/l0)), fitted as well: it is the
-  specimen's, unknown, and it is the model's largest error beyond Fm — on the same law, 0.5 %
-  against 0.4 % misses the force by 1.1 % rms (2 % at most) and dk by 0.08 mm, where the mesh
-  (8×30 against 10×40) misses by 0.04 % and 0.004 mm.
-
-Residuals (weighted least squares): the force misfit in % at ``FORCE_POINTS_UNIFORM`` elongations
-from ε_a to Fm and ``FORCE_POINTS`` from Fm to fracture, in units of ``FORCE_SIGMA_PCT``, and the
-neck radius misfit in units of its σ (the caliper's 0.005 mm on the radius and the mesh's share,
-in quadrature). The covariance pools the force rows' σ from their misfit, counted as serially
-correlated (:func:`.solver_fit.parameter_covariance`), and gives the fracture stress its standard
-error. The result carries the FE-consistent flow curve to the fracture strain, the law refitted
-to it, and the neck corrections' fracture stresses against the FE one.
+Fits the CAX8R necking model (:mod:`.model.tension`) to the record's frame-corrected
+force–elongation curve and the neck diameter dk. Law: the measured true curve up to
+ε_a = ``UNIFORM_FRACTION``·ε_pu; beyond it σ = σ_a + ∫ H·(1 + β·c·x)^(−1/c) dx
+(:func:`hardening_beyond`: c = 0 Voce, c = 1/(1 − n) Swift); the taper δ that starts the neck,
+r(z) = R·(1 − δ·cos(πz/l0)), is fitted too. Residuals: the force misfit in units of
+``FORCE_SIGMA_PCT`` at ``FORCE_POINTS_UNIFORM`` + ``FORCE_POINTS`` elongations, the neck radius
+in units of its σ. Returns the FE-consistent flow curve to fracture, the law refitted to it and
+the neck corrections' fracture stresses beside the FE one. Method and measured history:
+docs/methods.md §4a.4.
 """
 
 from __future__ import annotations

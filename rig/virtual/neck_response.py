@@ -1,36 +1,14 @@
 """The virtual rig's tension neck from its own copy of CalculiX necking runs (docs/methods.md §3.6).
 
-``data/tension_response.npz`` (written by ``python -m flowcurve.identification.fe.make_tension_response``;
+``data/tension_response.npz`` (``python -m flowcurve.identification.fe.make_tension_response``;
 provenance in the ``.json`` beside it) holds, for Swift laws σ = K·(ε0 + ε_p)^n over n and the
-neck's plastic strain ε_n = 2·ln(a0/a) (d0 6, l0 30, CAX8R):
-
-* ``force_factor`` β = F/(σ_f(ε_n)·π·a²), the FE's "Bridgman factor";
-* ``neck_elongation_over_d0`` λ, the elongation beyond that of the gauge's thick end, over d0;
-* ``neck_a_over_R`` the neck profile's a/R.
-
-The rig layer may not import :mod:`flowcurve.identification`, so this module reads the copy
-and interpolates it with code of its own. How a material that is not a Swift law of the grid
-gets a neck (:meth:`TensionResponse.curve`):
-
-* **Onset.** A neck starts at the material's Considère strain ε_u (dσ/dε_p = σ); each run is
-  read at the same strain beyond its own onset, δ = ε_n − ε_u, its onset being n − ε0.
-* **Which runs.** At each δ the material's hardening ratio θ/σ = (dσ/dε_p)/σ at ε_u + δ picks
-  the runs: a Swift law (ε0 ≪ n) has θ/σ = n/(n + δ) there, so the material reads as the
-  Swift exponent n = (θ/σ)·δ/(1 − θ/σ), interpolated linearly in n between the two runs that
-  bracket it (clamped to the grid's ends, with a warning). Indexing by the Considère strain
-  alone put the force of steel 45 (whose θ/σ falls more slowly past the maximum than a Swift
-  law's) 2.3 % above an independent CalculiX run of its own law; with θ/σ, within
-  ``tests/rig/virtual/test_neck_response.py``'s tolerances. β, λ and a/R are the weighted runs'
-  values at each δ (λ kept from falling: a neck does not shorten).
-* **Relative to the onset.** β is divided by its value at the run's onset and λ counted from
-  there: the runs' imperfection (0.5 % of the radius) starts a little neck before the force
-  maximum — it lowers the FE's uniform elongation (the far end stops at ε 0.154 for n 0.2,
-  0.173 with an imperfection of 0.2 %) but moves the response *after* the onset by ≤ 1.2 % —
-  while the rig's specimen stays uniform up to ε_u, as before.
-* **Edges.** Beyond the last strain a run reached (or the table's last), every quantity
-  continues with its slope over the last ``CONTINUATION_SPAN`` of strain.
-
-Interpolation is linear in ε_n and in n: it returns a grid run's values for its own Swift law.
+neck's plastic strain ε_n = 2·ln(a0/a): the force factor β = F/(σ_f(ε_n)·π·a²), the neck
+elongation over d0 λ and the profile's a/R. :meth:`TensionResponse.curve` reads them for any
+material: the neck starts at the Considère strain ε_u (dσ/dε_p = σ); at δ = ε_n − ε_u the runs are
+picked by the material's θ/σ read as a Swift exponent n = (θ/σ)·δ/(1 − θ/σ) and interpolated
+linearly in n and ε_n; β and λ are taken relative to each run's onset, and beyond the last strain a
+run reached every quantity continues with its slope over ``CONTINUATION_SPAN``. The rig layer may
+not import :mod:`flowcurve.identification`: the interpolation is this module's own.
 """
 
 from __future__ import annotations
