@@ -331,7 +331,19 @@ class Procedure(StreamNotes):
 
     def run(self) -> Outcome:
         """Run the test: record created, furnace heated and soaked, load cell tared, the rows recorded
-        until a stop criterion; heater off and motion stopped on every exit path; the outcome."""
+        until a stop criterion; heater off and motion stopped on every exit path.
+
+        Returns
+        -------
+        Outcome
+            The record's path, status (complete, stopped, failed), the reason, samples, duration,
+            maximum force and the post-test measurements taken.
+
+        Raises
+        ------
+        DeviceError, SafetyError, RecordWriteError
+            After the heater is off and the rows so far are on disk (the record says why it ended).
+        """
         spec, rig = self.spec, self.rig
         self._t0 = self.timebase.now()
         rig.set_clock(self.clock)

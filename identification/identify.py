@@ -209,9 +209,20 @@ def route_options(test: str, options: dict) -> tuple[dict, list[str]]:
 def identify(record: Record, **options) -> Identification:
     """Identify a tension or compression record (dispatch on ``record.test``).
 
-    options: routed by :data:`OPTIONS` (``None`` values are dropped, so callers can pass every
-    command-line option); an option only the other test takes is reported in the result's
-    warnings, an option no test takes is an error.
+    Parameters
+    ----------
+    record : Record
+        The record (``flowcurve.record.format.read_record`` or ``record.importers.load_record``).
+    **options
+        Routed by :data:`OPTIONS`; ``None`` values are dropped, so callers can pass every
+        command-line option. An option only the other test takes is reported in the result's
+        warnings; an option no test takes raises IdentificationError.
+
+    Returns
+    -------
+    Identification
+        ``result`` (the JSON-able result, units in its keys, ``uncertainty`` budgets at k = 2)
+        and ``curves`` (the diagrams and true curves as DataFrames).
     """
     warnings = check_record(record)
     func = DISPATCH[record.test]

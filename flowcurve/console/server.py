@@ -326,7 +326,18 @@ async def _files(request: Request) -> Response:
 
 def create_app(console: Console) -> Starlette:
     """The console's web application: its pages, /api endpoints, /files and the event stream, behind
-    the guard (:class:`GuardMiddleware`); a running test is aborted when it shuts down."""
+    the guard (:class:`GuardMiddleware`); a running test is aborted when it shuts down.
+
+    Parameters
+    ----------
+    console : Console
+        The runner (one test at a time), the workspace (the ``--out`` folder) and the live state.
+
+    Returns
+    -------
+    Starlette
+        The ASGI application (served by uvicorn in ``flowcurve console``).
+    """
     runner, workspace = console.runner, console.workspace
 
     async def index(request: Request) -> Response:

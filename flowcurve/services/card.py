@@ -130,8 +130,26 @@ def missing_text(names: list[str], labels: dict[str, str] | None = None) -> str:
 
 
 def card(req: CardRequest) -> str:
-    """The card's text, written to ``req.output`` when given; CardError names every constant the
-    card needs that neither fit.json nor the request gives."""
+    """The material card of a fit, in the request's format and unit system.
+
+    Parameters
+    ----------
+    req : CardRequest
+        fit.json, ``format`` (a name of :data:`flowcurve.reports.card_formats.WRITERS`), ``units``,
+        constants that override or add to the fit's, the card options and ``output``.
+
+    Returns
+    -------
+    str
+        The card's text, also written to ``req.output`` when given.
+
+    Raises
+    ------
+    FieldError
+        A request value refused, naming its field.
+    CardError
+        Every constant the card needs that neither fit.json nor the request gives, at once.
+    """
     from flowcurve.reports.cards import load_card_data, write_card
     from flowcurve.reports.cards.fields import CardError
 

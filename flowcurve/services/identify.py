@@ -48,6 +48,19 @@ def identify(req: IdentifyRequest, progress: Callable | None = None):
 
     A numerical warning (numpy's RuntimeWarning) is not printed raw: it joins the result's
     warnings, so it is written to result.json and shown in one line under the record.
+
+    Parameters
+    ----------
+    req : IdentifyRequest
+        The record's path, the output folder, column mapping and header values for a foreign
+        export, the identification's options, whether to plot.
+    progress : callable, optional
+        ``progress(runs, elapsed_s, left_s, limit_s)`` while the inverse FE runs CalculiX.
+
+    Returns
+    -------
+    (Identification, Path)
+        The identification and the folder its result.json, curves and plots were written to.
     """
     from flowcurve.identification.identify import identify as identify_record
     from flowcurve.identification.provenance import file_sha256, provenance
