@@ -336,13 +336,7 @@ class Procedure(StreamNotes):
         Returns
         -------
         Outcome
-            The record's path, status (complete, stopped, failed), the reason, samples, duration,
-            maximum force and the post-test measurements taken.
-
-        Raises
-        ------
-        DeviceError, SafetyError, RecordWriteError
-            After the heater is off and the rows so far are on disk (the record says why it ended).
+            Path, status, reason, samples, duration, maximum force, post-test measurements.
         """
         spec, rig = self.spec, self.rig
         self._t0 = self.timebase.now()
