@@ -117,7 +117,7 @@ class RigIO(Protocol):
     def heater_off(self) -> None: ...
     def arm_watchdog(self) -> None: ...
     def host_ok(self) -> None: ...
-    def tare(self) -> None: ...
+    def tare(self) -> None: ...  # load cell to net zero and the crosshead counter to zero
     def start_crosshead(self, speed_mm_per_s: float, direction: int) -> None: ...
     def stop_crosshead(self) -> None: ...
     def post_test_measurements(self) -> dict[str, float] | None: ...
@@ -240,12 +240,9 @@ class Procedure(StreamNotes):
             refusal = setpoint_refusal(spec.temperature_C, rig.max_temperature_C, getattr(rig, "setpoint_margin_C", SETPOINT_MARGIN_C))
             if refusal:
                 raise ProcedureError(f"set-point {refusal}")
-        self.rig = rig
-        self.spec = spec
-        self.path = Path(path)
+        self.rig, self.spec, self.path = rig, spec, Path(path)
         self.view = view or LiveView(quiet=True)
-        self.interactive = interactive
-        self.prompt = prompt
+        self.interactive, self.prompt = interactive, prompt
         self.timebase: Clock = getattr(rig, "timebase", WALL)
         # another thread's stop button (the console): an operator-stop reason, or None; it may raise Interrupted to abort
         self.stop_requested = stop_requested or (lambda: None)
@@ -259,6 +256,7 @@ class Procedure(StreamNotes):
         self._wrong_noted: dict[str, int] = {}  # replies from another module's address the events named, per device
         self._unshown_rows: list[np.ndarray] = []  # recorded rows no snapshot has carried yet (the last batch)
         self._end_reason = ""
+        self._motion_seen = False  # the start event written (or the procedure drives the crosshead itself)
         self._storage_error: RecordWriteError | None = None
         self._dropped = 0
         self._restarts_noted = 0
@@ -331,13 +329,8 @@ class Procedure(StreamNotes):
 
     def run(self) -> Outcome:
         """Run the test: record created, furnace heated and soaked, load cell tared, the rows recorded
-        until a stop criterion; heater off and motion stopped on every exit path.
-
-        Returns
-        -------
-        Outcome
-            Path, status, reason, samples, duration, maximum force, post-test measurements.
-        """
+        until a stop criterion; heater off and motion stopped on every exit path; the Outcome (path,
+        status, reason, samples, duration, maximum force, post-test measurements)."""
         spec, rig = self.spec, self.rig
         self._t0 = self.timebase.now()
         rig.set_clock(self.clock)
@@ -408,6 +401,15 @@ class Procedure(StreamNotes):
         if sampler is not None:  # the reading threads let go of the ports first
             sampler.request_stop()
 
+    def _note_motion(self, rows: np.ndarray) -> bool:
+        """The ``start`` event at the first row :data:`MOTION_MM` from zero (tare zeroes the counter), once."""
+        if not self._motion_seen and rows.size:
+            moved = np.flatnonzero(np.abs(rows[:, 2]) > MOTION_MM)
+            if moved.size:
+                self._motion_seen = True
+                self._storing(self.writer.event, float(rows[moved[0], 0]), "start", f"crosshead motion detected ({rows[moved[0], 2]:+.3f} mm)")
+        return self._motion_seen
+
     def _final_rows(self, sampler: Sampler, safety: HeaterSafety, status: str, reason: str,
                     error: FlowcurveError | None) -> tuple[str, str, FlowcurveError | None]:
         """After the switch-off: the last rows written, a fault found while stopping told, the losses
@@ -426,6 +428,7 @@ class Procedure(StreamNotes):
             self._event("fault", str(silent))
         self._unshown_rows.append(final)
         try:
+            self._note_motion(final)  # rows taken after a target the stream's freshest reading reached
             self._write_rows(final)
             self._note_losses(sampler, final=True)
             self._note_speed()
@@ -573,8 +576,7 @@ class Procedure(StreamNotes):
         """Record rows until a stop criterion, the displacement target, a fault, q or a stop request; the reason."""
         spec, rig = self.spec, self.rig
         crit = self._start_loading()
-        moving = rig.can_drive
-        rest_mm = None  # the crosshead where recording began: motion is a move away from it
+        moving = self._motion_seen = rig.can_drive
         curve_x: list[np.ndarray] = []
         curve_f: list[np.ndarray] = []
         rate_t, rate_n = self.clock(), 0
@@ -586,12 +588,7 @@ class Procedure(StreamNotes):
                 if rows.size:
                     self._write_rows(rows)
                     self._unshown_rows.append(rows)  # until a snapshot carries them (a stop, fault or q ends the loop first)
-                    rest_mm = float(rows[0, 2]) if rest_mm is None else rest_mm
-                    moved = np.flatnonzero(np.abs(rows[:, 2] - rest_mm) > MOTION_MM)
-                    if not moving and moved.size:
-                        moving = True
-                        t_moved = float(rows[moved[0], 0])
-                        self._storing(self.writer.event, t_moved, "start", f"crosshead motion detected ({rows[moved[0], 2] - rest_mm:+.3f} mm)")
+                    moving = self._note_motion(rows)
                     curve_x.append(rows[::10, 2])
                     curve_f.append(rows[::10, 1])
                     reason = stop_reason(rows, state, crit)
