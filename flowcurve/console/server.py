@@ -344,11 +344,13 @@ def create_app(console: Console) -> Starlette:
         return FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
 
     async def info(request: Request) -> Response:
+        from flowcurve.reports.card_formats import WRITERS
         from flowcurve.rig.virtual.fault_spec import help_text
 
         return _json({"rig": console.rig_name, "virtual": runner.virtual, "out": str(workspace.root), "time_scale": console.time_scale,
                       "token_required": bool(console.token), "post": POST_KEYS, "prompts": POST_PROMPTS,
-                      "fault_help": help_text() if runner.virtual else None})
+                      "fault_help": help_text() if runner.virtual else None,
+                      "card_formats": [[f.name, f.display_name] for f in WRITERS.values()]})  # the fit form's choices
 
     async def login(request: Request) -> Response:
         data = await _body(request, LOGIN_FIELDS)

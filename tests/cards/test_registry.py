@@ -85,3 +85,20 @@ def test_a_registered_format_names_the_consoles_card_file(toy, tmp_path):
     (card,) = (tmp_path / "out" / "fits").glob("fit-*/card-toy.toy")
     assert card.read_text(encoding="utf-8").startswith("** toy card of")
     assert registry.card_format("toy") is toy
+
+
+def test_the_consoles_format_list_is_the_registrys(toy, tmp_path):
+    """/api/info hands the page the registry's formats (the page's select is built from them, not written
+    by hand): a registered format is among them with its display name, in registry order."""
+    pytest.importorskip("starlette", reason="starlette is not installed (pip install -e .[test])")
+    pytest.importorskip("httpx", reason="httpx is not installed (pip install -e .[test])")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        from starlette.testclient import TestClient
+
+    from flowcurve.console.server import Console, create_app
+
+    client = TestClient(create_app(Console(tmp_path / "out", time_scale=60.0)), base_url="http://127.0.0.1:8080")
+    formats = client.get("/api/info").json()["card_formats"]
+    assert formats == [[name, entry.display_name] for name, entry in WRITERS.items()]
+    assert ["toy", toy.display_name] in formats and formats[0] == ["lsdyna", "LS-DYNA"]

@@ -380,6 +380,14 @@ async function boot() {
     const probe = await api("/api/status");
     if (!probe.ok) return;
   }
+  if (info.card_formats) {  // the card registry's formats (reports/card_formats.py): a new one needs no edit here
+    $("#fit-format").replaceChildren(...info.card_formats.map(([name, shown]) => {
+      const option = document.createElement("option");
+      option.value = name;
+      option.textContent = `${name} (${shown})`;
+      return option;
+    }));
+  }
   $("#rig").textContent = `— ${info.rig}`;
   showScale(info.time_scale);
   $("#out").textContent = info.out;
