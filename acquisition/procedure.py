@@ -655,12 +655,8 @@ class Procedure(StreamNotes):
 
     def _force_resolution_N(self) -> float:
         """One count of the load cell's output format (the noise σ's floor), 0 when unknown."""
-        cell = getattr(self.rig, "loadcell", None)
-        try:
-            counts = cell.nov if cell.fmt.kind == "ascii" and cell.nov > 0 else cell.fmt.nominal_counts
-            return float(cell.nominal_load_N) / counts
-        except (AttributeError, TypeError, ZeroDivisionError):
-            return 0.0
+        cell = getattr(self.rig, "loadcell", None)  # a ForceDevice (rig/roles.py)
+        return float(cell.resolution_N()) if cell is not None and hasattr(cell, "resolution_N") else 0.0
 
     def _await_reading(self, channel, after_s: float) -> None:
         """Wait (up to STALE_WAIT_S host seconds) for ``channel``'s first reading after ``after_s`` (test s)."""

@@ -171,6 +171,15 @@ class LoadCell:
         """Output rates (values/s) by ``ICR`` rate code 0..7 (FMD0)."""
         return tuple(aed.ICR_RATES_PER_S)
 
+    def resolution_N(self) -> float:
+        """One count of the output format (the force's quantum, the noise σ's floor); 0 when unknown.
+        Equation: nominal load / counts at the nominal load (ASCII: ``NOV`` when set)."""
+        try:
+            counts = self.nov if self.fmt.kind == "ascii" and self.nov > 0 else self.fmt.nominal_counts
+            return float(self.nominal_load_N) / counts
+        except (AttributeError, TypeError, ZeroDivisionError):
+            return 0.0
+
     # -- life cycle -------------------------------------------------------------------
     def open(self) -> "LoadCell":
         self.transport.open()

@@ -96,3 +96,16 @@ def test_the_virtual_configuration_takes_a_model_override(monkeypatch):
     monkeypatch.setitem(roles.MODELS["force"], "toy-amp", ToyAmplifier)
     config = virtual_config(PORTS, loadcell_model="toy-amp")
     assert config.loadcell.model == "toy-amp" and config.furnace.model == "dcon-i7011"
+
+
+@pytest.mark.parametrize("cof, nominal_N, nov, expected_N", [
+    (3, 100_000.0, 0, 0.1),          # ASCII: nominal load reads 1 000 000 (the manual's COF3 range)
+    (3, 100_000.0, 50_000, 2.0),     # ASCII with NOV set: the nominal load reads NOV counts
+    (4, 10_000.0, 0, 10_000.0 / 5_120_000),  # binary 4-byte: 5 120 000 counts at the nominal load
+])
+def test_the_force_devices_resolution_is_one_count_of_its_output(cof, nominal_N, nov, expected_N):
+    """The procedure's noise floor asks the force device (``resolution_N``), not the AED driver's
+    internals: one count of the output format, by hand from the manual's nominal counts."""
+    cell = LoadCell("loop://", nominal_load_N=nominal_N, output_format=cof)
+    cell.nov = nov
+    assert cell.resolution_N() == pytest.approx(expected_N, rel=1e-12)
