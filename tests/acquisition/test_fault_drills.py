@@ -75,8 +75,11 @@ class RigProcess:
         assert self.proc.poll() is None, self.proc.stderr.read()
 
     def _collect(self):
-        for line in self.proc.stdout:
-            self.lines.append(line.rstrip("\n"))
+        try:
+            for line in self.proc.stdout:
+                self.lines.append(line.rstrip("\n"))
+        except ValueError:  # stop() closed the pipe while a line was awaited: the rig process has ended
+            pass
 
     def motor(self):
         """The operator's motor switch."""
