@@ -20,6 +20,7 @@ from flowcurve.record.format import STATUS_ABORTED, WRITER_STAMPING_KEY, Record
 from flowcurve.record.summary import GAUGE_KEY, MEASURED_SPEED_KEY, record_summary, speed_mismatch
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.compression.identify import identify_compression
+from flowcurve.identification.iso6892 import mad_sigma
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.quality.assurance import attach as attach_assurance
 from flowcurve.identification.tension.identify import identify_tension
@@ -60,7 +61,7 @@ def force_noise_N(force_N: np.ndarray) -> float:
     d = d[np.isfinite(d)]
     if d.size == 0:
         return 0.0
-    return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(2.0))
+    return mad_sigma(d) / math.sqrt(2.0)
 
 
 def temperature_warnings(record: Record) -> list[str]:

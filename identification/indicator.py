@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.iso6892 import mad_sigma
 
 UM_PER_MM = 1000.0
 
@@ -260,7 +261,7 @@ def yield_onset_from_rate(time_s, force_N, levels: int = 400) -> float:
     if f.size < 8:
         raise IdentificationError(f"only {f.size} samples of the first loading: no yield estimate")
     d = np.diff(f)
-    noise = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)  # MAD of the differences
+    noise = mad_sigma(d) / math.sqrt(2.0)  # of the successive differences: σ√2
     envelope = np.maximum.accumulate(f)
     step = max(envelope[-1] / levels, 5.0 * noise)
     level = np.arange(step, envelope[-1], step)

@@ -68,6 +68,13 @@ def plastic_extension_pct(strain, stress_MPa, E_MPa: float):
     return 100.0 * (np.asarray(strain, dtype=float) - np.asarray(stress_MPa, dtype=float) / E_MPa)
 
 
+def mad_sigma(values) -> float:
+    """A normal scatter's standard deviation from the median absolute deviation: 1.4826·MAD.
+    Of the k-th differences of white noise σ, it gives σ·√C(2k, k) (√2, √6, √20 for k = 1, 2, 3)."""
+    v = np.asarray(values, dtype=float)
+    return float(1.4826 * np.median(np.abs(v - np.median(v))))
+
+
 def max_force_band(strain, stress_MPa, *, window: int = 50) -> tuple[float, float]:
     """(lowest, highest) strain of the samples within the noise of the maximum force: a flat
     maximum's plateau (ISO 6892-1 §13: Ag at its mid-point). Band: σ ≥ σ_max − 2√2·s, s the stress
@@ -79,7 +86,7 @@ def max_force_band(strain, stress_MPa, *, window: int = 50) -> tuple[float, floa
     d3 = np.diff(near[np.isfinite(near)], 3)  # a smooth curve's third differences vanish, the noise's do not
     if d3.size < 3:
         return float(e[i_m]), float(e[i_m])
-    noise = 1.4826 * float(np.median(np.abs(d3 - np.median(d3)))) / np.sqrt(20.0)  # Δ³ of white noise: variance 20 s²
+    noise = mad_sigma(d3) / np.sqrt(20.0)  # Δ³ of white noise: variance 20 s²
     band = np.flatnonzero(s >= s[i_m] - 2.0 * np.sqrt(2.0) * noise)  # two noisy samples differ by √2·s
     return float(np.nanmin(e[band])), float(np.nanmax(e[band]))
 
