@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from flowcurve.identification.laws.base import Law, Parameter, register
 from flowcurve.identification.laws.hardening import johnson_cook_static
 
 CONVENTIONS = {
@@ -62,3 +63,45 @@ def johnson_cook(eps_p, strain_rate_per_s, temperature_C, *, A, B, n, C, m,
                                 log_rate_ratio(strain_rate_per_s, ref_strain_rate_per_s),
                                 homologous_temperature(temperature_C, ref_temperature_C, melt_temperature_C),
                                 A, B, n, C, m)
+
+
+@register
+class JohnsonCook(Law):
+    """Johnson–Cook (2.19): σ = (A + B·εp^n)(1 + C·ln ε̇*)(1 − T*^m), clamped as :data:`CONVENTIONS`."""
+
+    name = "johnson_cook"
+    display_name = "Johnson–Cook"
+    parameters = (
+        Parameter("A", "A_MPa", "MPa", 0.0, np.inf, "yield stress at the reference condition"),
+        Parameter("B", "B_MPa", "MPa", 0.0, np.inf, "hardening modulus"),
+        Parameter("n", "n", "", 1e-3, 1.5, "hardening exponent"),
+        Parameter("C", "C", "", 0.0, 5.0, "strain-rate sensitivity"),
+        Parameter("m", "m", "", 1e-3, 20.0, "thermal softening exponent"),
+    )
+    conditions = (
+        Parameter("ref_strain_rate_per_s", "ref_strain_rate_per_s", "1/s", 0.0, np.inf, "reference strain rate ε̇0"),
+        Parameter("ref_temperature_C", "ref_temperature_C", "°C", -273.15, np.inf, "reference temperature T_r"),
+        Parameter("melt_temperature_C", "melt_temperature_C", "°C", -273.15, np.inf, "melting temperature T_m"),
+    )
+    rate_dependent = True
+    temperature_dependent = True
+    equation = EQUATION
+    latex = (r"\sigma = (A + B\varepsilon_p^n)\,(1 + C\ln\max(\dot\varepsilon/\dot\varepsilon_0, 1))\,(1 - T^{*m}),"
+             r"\quad T^* = \mathrm{clamp}\big((T - T_r)/(T_m - T_r), 0, 1\big)")
+    source = "G. R. Johnson, W. H. Cook, 7th Int. Symp. on Ballistics, The Hague, 1983, pp. 541–547"
+
+    def evaluate(self, eps_p, strain_rate_per_s, temperature_C, *, A, B, n, C, m,
+                 ref_strain_rate_per_s, ref_temperature_C, melt_temperature_C):
+        # (2.19)
+        return johnson_cook(eps_p, strain_rate_per_s, temperature_C, A=A, B=B, n=n, C=C, m=m,
+                            ref_strain_rate_per_s=ref_strain_rate_per_s, ref_temperature_C=ref_temperature_C,
+                            melt_temperature_C=melt_temperature_C)
+
+    def guess(self, eps_p, stress_MPa, strain_rate_per_s=None, temperature_C=None, **conditions):
+        """A from the lowest-strain stress, B from the rise to the largest strain at n 0.3; C 0.01, m 1."""
+        eps = np.asarray(eps_p, dtype=float)
+        sig = np.asarray(stress_MPa, dtype=float)
+        A = float(0.9 * sig[np.argmin(eps)])
+        top = float(max(np.max(eps), 1e-3))
+        B = float(max(np.max(sig) - A, 0.1 * A, 1.0) / top**0.3)
+        return {"A": A, "B": B, "n": 0.3, "C": 0.01, "m": 1.0}
