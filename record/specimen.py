@@ -10,12 +10,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from flowcurve.errors import MissingValueError
-
-if TYPE_CHECKING:  # the record model imports this module; this one needs only its reader methods
-    from flowcurve.record.format import Record
 
 # field name → header key, per test; the first two of each test are required (d0 and the gauge length)
 _COMMON = {"d0_mm": "specimen.d0_mm"}
@@ -69,8 +65,9 @@ class Specimen:
     kind: str = "round"
 
     @classmethod
-    def from_record(cls, record: Record) -> Specimen:
-        """Read the specimen keys of the record's test once; the record's errors for a value that is
+    def from_record(cls, record) -> Specimen:
+        """Read the specimen keys of a :class:`~flowcurve.record.format.Record`'s test once (the record model
+        imports this module, so it is not imported back); the record's errors for a value that is
         not a positive number (file, key, value) or a required one missing (d0 and l0 or h0)."""
         test = record.test
         values = {name: record.positive(key, required=name in REQUIRED[test]) for name, key in TEST_KEYS[test].items()}
