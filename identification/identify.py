@@ -155,7 +155,7 @@ def old_writer_warning(record: Record) -> str | None:
 
 def check_record(record: Record) -> list[str]:
     """The checks every identification needs; returns warnings, raises on unusable records."""
-    test = record.test
+    record.test  # an unknown test is the first error named
     source = record.source
     n = len(record.data)
     if n < MIN_SAMPLES:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from flowcurve.errors import MissingValueError
 
-# field name → header key, per test; the first two of each test are required (d0 and the gauge length)
+# field name → header key, per test; REQUIRED names those every identification of the test needs
 _COMMON = {"d0_mm": "specimen.d0_mm"}
 TEST_KEYS: dict[str, dict[str, str]] = {
     "tension": {**_COMMON, "l0_mm": "specimen.l0_mm", "extensometer_gauge_mm": "specimen.extensometer_gauge_mm",
