@@ -115,9 +115,9 @@ def neck_comparison(record, ident, run) -> dict:
         return {}
     eps_u = float(res["uniform_true_strain"])
     truth = float(run.material.flow_stress(eps_f, run.strain_rate_per_s, run.temperature_C))
-    dk = record.positive("post.dk_mm")
+    dk = record.specimen.dk_mm
     variants = [("reported", res["neck_corrections"])]
-    if record.positive("post.neck_radius_mm") is not None:  # the same without the radius: Le Roy's a/R
+    if record.specimen.neck_radius_mm is not None:  # the same without the radius: Le Roy's a/R
         variants.append(("Le Roy", neck_corrections(avg, eps_f, eps_u, d_k_mm=dk)))
     rows = [{"source": corr["a_over_R_source"] if name == "reported" else corr["a_over_R_source"].split(":")[0],
              "a_over_R": corr["a_over_R"], "error_pct": {m: 100.0 * (corr[m]["stress_MPa"] / truth - 1.0) for m in METHODS}}

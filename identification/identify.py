@@ -17,7 +17,7 @@ import re
 import numpy as np
 
 from flowcurve.record.format import STATUS_ABORTED, WRITER_STAMPING_KEY, Record
-from flowcurve.record.summary import GAUGE_KEY, MEASURED_SPEED_KEY, record_summary, speed_mismatch
+from flowcurve.record.summary import MEASURED_SPEED_KEY, record_summary, speed_mismatch
 from flowcurve.errors import IdentificationError, RecordError
 from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.iso6892 import mad_sigma
@@ -155,7 +155,7 @@ def old_writer_warning(record: Record) -> str | None:
 
 def check_record(record: Record) -> list[str]:
     """The checks every identification needs; returns warnings, raises on unusable records."""
-    test = record.test
+    record.test  # an unknown test is the first error named
     source = record.source
     n = len(record.data)
     if n < MIN_SAMPLES:
@@ -180,9 +180,8 @@ def check_record(record: Record) -> list[str]:
     if moving and not any(spread(c) > 0 for c in moving):
         raise RecordError(source, f"the displacement never changes ({', '.join(moving)} constant): a dead channel, "
                                   "or a column scaled to zero?", column=moving[0])
-    d0 = record.positive("specimen.d0_mm", required=True)
-    record.positive(GAUGE_KEY[test], required=True)
-    area_mm2 = math.pi * d0**2 / 4.0
+    specimen = record.specimen  # d0 and l0 (or h0) required
+    d0, area_mm2 = specimen.d0_mm, specimen.area0_mm2
     peak_MPa = float(np.max(np.abs(force))) / area_mm2
     lo, hi = PLAUSIBLE_STRESS_MPa
     if not lo <= peak_MPa <= hi:

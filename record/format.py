@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 import numpy as np
 
 from flowcurve.errors import MissingValueError, RecordError
+from flowcurve.record.specimen import ALL_KEYS as SPECIMEN_HEADER_KEYS, Specimen
 
 if TYPE_CHECKING:  # pandas is imported where records are parsed, so `flowcurve --help` stays fast
     import pandas as pd
@@ -187,6 +188,16 @@ class Record:
     @property
     def name(self) -> str:
         return Path(self.source).stem if self.source != "<memory>" else self.meta.get("specimen.id", "record")
+
+    @property
+    def specimen(self) -> Specimen:
+        """The specimen's geometry and post-test measurements, parsed once (:class:`.specimen.Specimen`);
+        parsed again only when the header's specimen keys change."""
+        header = tuple(self.meta.get(k) for k in SPECIMEN_HEADER_KEYS) + (self.source,)
+        cached = self.__dict__.get("_specimen")
+        if cached is None or cached[0] != header:
+            cached = self.__dict__["_specimen"] = (header, Specimen.from_record(self))
+        return cached[1]
 
     def number(self, key: str, default: float | None = None, *, required: bool = False) -> float | None:
         """The metadata value ``key`` as a float; a clear error if required and missing."""

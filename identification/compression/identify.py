@@ -31,6 +31,7 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.record.format import Record
+from flowcurve.record.specimen import circle_area_mm2
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.compression import friction as fr
 from flowcurve.identification.elastic_modulus import METAL_E_RANGE_MPa, ModulusChoice, apparent_modulus_warning
@@ -181,7 +182,7 @@ def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_
     """The elastic line and the toe: the linear part extended to zero force (ISO 6892-1)."""
     warnings: list[str] = []
     apparent = None
-    area0 = math.pi * geo["d0"] ** 2 / 4.0
+    area0 = geo["area0"]
     specimen = diagram.specimen
     try:
         line, toe_mm = elastic_line(diagram.t, specimen, diagram.force, area0_mm2=area0, h0_mm=geo["h0"], window_MPa=modulus_window_MPa,
@@ -227,7 +228,7 @@ def _nominal_curve(diagram: _Diagram, geo: dict, specimen: np.ndarray, E_MPa: fl
     d_k = float(fr.nominal_diameter(d0, h0, hk))
     springback, source = 0.0, None
     if E_MPa is not None:
-        springback, source = hk * (force[-1] / (math.pi * d_k**2 / 4.0)) / E_MPa, "handbook E"  # elastic strain σ/E over hk
+        springback, source = hk * (force[-1] / circle_area_mm2(d_k)) / E_MPa, "handbook E"  # elastic strain σ/E over hk
     elif diagram.springback is not None and diagram.stiffness is not None:
         springback, source = diagram.springback[0], f"unloading branch ({diagram.springback[1]} samples)"
     measured = h0 - hk + springback
@@ -237,7 +238,7 @@ def _nominal_curve(diagram: _Diagram, geo: dict, specimen: np.ndarray, E_MPa: fl
     h = h0 - shortening
     strain = fr.height_strain(h, h0)  # (3.31)
     d_n = fr.nominal_diameter(d0, h0, h)  # (3.28)
-    area = math.pi * d_n**2 / 4.0  # (3.30)
+    area = circle_area_mm2(d_n)  # (3.30)
     pressure = force / area  # (3.32) σ_n = P/S_i
     return _Nominal(springback=springback, springback_source=source, measured=measured, shortening=shortening, K_l=K_l, h=h, strain=strain, d_n=d_n,
                     pressure=pressure, warnings=warnings)
@@ -263,7 +264,7 @@ def _strain_zero(diagram: _Diagram, geo: dict, line: _Line, nominal: _Nominal, y
                  fit_range, law: str, friction_correction: str) -> tuple[dict, list[str]]:
     """The strain zero's uncertainty δε0 and its effect on the main fit's start and constants (§2.11);
     the main fit in ``fits`` gets the widened standard errors."""
-    stress = diagram.force / (math.pi * geo["d0"] ** 2 / 4.0)
+    stress = diagram.force / geo["area0"]
     strain = line.specimen / geo["h0"]
     top = int(np.nanargmax(stress))
     el = line.line
@@ -274,7 +275,7 @@ def _strain_zero(diagram: _Diagram, geo: dict, line: _Line, nominal: _Nominal, y
     E_used = yld.E_used if yld.E_used is not None else E_line
     toe_spread = 0.0  # a line of known slope E: its samples' offsets Δl − h0·σ/E spread by what is not on the line
     if el is not None and yld.E_source != "apparent" and E_used is not None:
-        offsets = toe_offsets(diagram.specimen, diagram.force, window, E_MPa=E_used, area0_mm2=math.pi * geo["d0"] ** 2 / 4.0, h0_mm=geo["h0"])
+        offsets = toe_offsets(diagram.specimen, diagram.force, window, E_MPa=E_used, area0_mm2=geo["area0"], h0_mm=geo["h0"])
         toe_spread = float(np.ptp(offsets)) / 2.0 / geo["h0"]  # half the spread, as toe_spread_warning states it
     zero = tension_or_compression_zero(strain[: top + 1], stress[: top + 1], window_MPa=window, E_line_MPa=E_line, E_line_stderr_MPa=E_se,
                                        E_used_MPa=E_used, line_resolved=yld.E_source == "apparent" and np.isfinite(E_se), toe_spread=toe_spread)

@@ -109,22 +109,18 @@ def _fit_points(eps_p: np.ndarray, i_yield: int, fit_range) -> np.ndarray:
 
 
 def _meta_geometry(record: Record) -> dict:
-    src = record.source
-    d0 = record.positive("specimen.d0_mm", required=True)
-    h0 = record.positive("specimen.h0_mm", required=True)
-    hk = record.positive("post.hk_mm", required=True)
+    src, spec = record.source, record.specimen
+    d0, h0, hk = spec.d0_mm, spec.h0_mm, spec.required("hk_mm")
     if hk >= h0:
         raise RecordError(src, f"'post.hk_mm' = {hk:g} mm must be below 'specimen.h0_mm' = {h0:g} mm (the specimen is shorter after compression)")
-    dmax = record.positive("post.dmax_mm")
-    smax = record.positive("post.smax_mm2")
+    dmax, smax = spec.dmax_mm, spec.smax_mm2
     if dmax is None and smax is None:
         raise MissingValueError(src, ("post.dmax_mm", "post.smax_mm2"), what="the friction needs the bulge diameter dmax or the largest cross-section smax")
-    dtop = record.positive("post.dtop_mm")
-    dface = record.positive("post.dface_mm")  # the original end face (fe_table reads μ from it when given)
+    dtop, dface = spec.dtop_mm, spec.dface_mm  # dface: the original end face (fe_table reads μ from it when given)
     nu = record.number("material.nu")
     if nu is not None and not (0.0 <= nu < 0.5):
         raise RecordError(src, f"'material.nu' = {nu:g}: Poisson's ratio must be within [0, 0.5)")
-    return {"d0": d0, "h0": h0, "hk": hk, "dmax": dmax, "smax": smax, "dtop": dtop, "dface": dface,
+    return {"d0": d0, "h0": h0, "area0": spec.area0_mm2, "hk": hk, "dmax": dmax, "smax": smax, "dtop": dtop, "dface": dface,
             "nu": fr.DEFAULT_POISSON if nu is None else nu, "nu_source": "assumed (metals)" if nu is None else "record (material.nu)"}
 
 

@@ -36,6 +36,7 @@ from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
 from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 from flowcurve.identification.laws.hardening import LAWS, fit_hardening
 from flowcurve.identification.outcome import Identification
+from flowcurve.record.specimen import circle_area_mm2
 
 log = logging.getLogger(__name__)
 
@@ -196,12 +197,11 @@ def _inputs(record, law: str, E_MPa: float | None, increments: int) -> _Inputs:
                        **({"frame_stiffness_N_per_um": elastics.frame_stiffness_N_per_um} if elastics.frame_stiffness_stderr_N_per_um is not None else {})}
     if diagram_options:  # the record read again with the model's E and the fitted frame stiffness
         stroke, force, fast = record_force_stroke(record, **diagram_options)
-    d0 = record.positive("specimen.d0_mm", required=True)
-    h0 = record.positive("specimen.h0_mm", required=True)
-    dmax = record.positive("post.dmax_mm")
+    spec = record.specimen
+    d0, h0, dmax = spec.d0_mm, spec.h0_mm, spec.dmax_mm
     if dmax is None:
         raise IdentificationError(f"{record.source}: --method inverse-fe needs the bulge diameter 'post.dmax_mm'")
-    dface = record.positive("post.dface_mm")  # optional: near sticking it tells μ where dmax cannot (§4a.2)
+    dface = spec.dface_mm  # optional: near sticking it tells μ where dmax cannot (§4a.2)
     law_choice = {"given": law}
     if law == "auto":
         law, rms = best_law_for(fast.true_curve)
@@ -271,14 +271,14 @@ def _rows(record, inp: _Inputs, x0) -> _Rows:
     # what is known of the shape rows beforehand (diameters, mm): resolution and the model form's share (another defensible
     # model's shape at the same law and μ, fe/model/model_form.py), in quadrature — the mesh's share alone let the end face, whose
     # rim corner the models place 0.01–0.02 d_n apart, pull μ 0.01–0.02 low on the second model's records (docs/methods.md §4a.7)
-    hk = record.positive("post.hk_mm") or problem.h_end
+    hk = record.specimen.hk_mm or problem.h_end
     d_n = float(nominal_diameter(problem.d0, problem.h0, hk))
     shape_sigma = {"dmax": 2.0 * mf.bulge_sigma_mm(max(dmax - d_n, 0.0) / 2.0, DIAMETER_RESOLUTION_MM)}
     if dface is not None:
         shape_sigma["dface"] = mf.face_sigma(d_n, DIAMETER_RESOLUTION_MM) * d_n
     # E's uncertainty in the spring-back d·ν·σ/E of the model's diameters, in quadrature (σ = F/A at the end)
     E = inp.elastics.E_MPa
-    springback_rel = 0.3 * float(np.max(inp.force)) / (math.pi * d_n**2 / 4.0) / E * inp.elastics.E_stderr_MPa / E
+    springback_rel = 0.3 * float(np.max(inp.force)) / circle_area_mm2(d_n) / E * inp.elastics.E_stderr_MPa / E
     shape_sigma = {k: math.hypot(v, springback_rel * (dmax if k == "dmax" else dface)) for k, v in shape_sigma.items()}
     # every row in units of its own σ: the force rows' is pooled from their misfit for the covariance, the diameters' known
     row_sigma = np.array([np.nan] * FORCE_POINTS + [1.0] * len(shape_sigma))

@@ -235,8 +235,7 @@ def _inputs(record, increments: int, tension_options: dict) -> _Inputs:
         raise IdentificationError(f"{record.source}: --method inverse-fe needs a tension record that reaches fracture (the necking range is what it fits)")
     if i_k - i_m < 5:
         raise IdentificationError(f"{record.source}: only {i_k - i_m} samples between Fm and fracture; the necking range is too short for --method inverse-fe")
-    dk = record.positive("post.dk_mm")
-    d0 = record.positive("specimen.d0_mm", required=True)
+    dk, d0 = record.specimen.dk_mm, record.specimen.d0_mm
     l0 = float(res["methods"]["strain_length_mm"])
     E, E_source = modulus_for_model(record, res, tension_options.get("E_MPa"), what="the inverse FE model")  # never an apparent slope
 

@@ -91,7 +91,7 @@ def fit_frame_stiffness(record, E_MPa: float, E_stderr_MPa: float) -> tuple[floa
                                   f"{1.0 / u1 if u1 > 0 else float('inf'):.4g} N/µm); give rig.frame_stiffness_N_per_um")
     k = 1.0 / u1
     # δΔh: hk's resolution and the spring-back's share of E's uncertainty, hk·σ/E·δE/E = (measured − (h0 − hk))·δE/E
-    h0, hk = record.positive("specimen.h0_mm", required=True), record.positive("post.hk_mm", required=True)
+    h0, hk = record.specimen.h0_mm, record.specimen.required("hk_mm")
     springback = measured - (h0 - hk)
     d_short = (HK_RESOLUTION_MM**2 + (springback * E_stderr_MPa / E_MPa) ** 2) ** 0.5
     return k, k**2 * d_short / force * 1000.0  # δk = k²·δu, δu = δΔh/F

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.record.format import Record
+from flowcurve.record.specimen import circle_area_mm2
 from flowcurve.identification.fe.model.upsetting import UpsettingResult
 from flowcurve.identification.fe.model.tension import TensionModel, TensionResult
 
@@ -99,7 +100,7 @@ def tension_record(run: TensionResult, *, stiffness_N_per_um: float = 40.0, nois
     time = np.arange(e.size) / rate_hz
     cross = np.round((e + f / (stiffness_N_per_um * 1000.0)) / step_mm) * step_mm
     F_meas = f + rng.normal(0.0, noise_N, f.size)
-    s0 = math.pi * m.d0_mm**2 / 4.0
+    s0 = circle_area_mm2(m.d0_mm)
     lu = m.l0_mm + float(run.elongation_mm[-1]) - float(run.force_N[-1]) * m.l0_mm / (s0 * m.E_MPa)
     meta = {
         "test": "tension", "material": material, "specimen.id": specimen_id, "nominal_temperature_C": "20",

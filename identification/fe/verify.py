@@ -180,8 +180,7 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
     if record.test != "compression":
         raise IdentificationError(f"{record.source}: verify runs upsetting (compression) records; this is a {record.test} record")
     stroke, force, ident = record_force_stroke(record, **(curve.diagram_options or {}))
-    d0 = record.positive("specimen.d0_mm", required=True)
-    h0 = record.positive("specimen.h0_mm", required=True)
+    d0, h0 = record.specimen.d0_mm, record.specimen.h0_mm
     mu = mu if mu is not None else curve.mu if curve.mu is not None else ident.result["friction_mu"]
     E, E_source = verify_modulus(curve, record)
     s_end = float(np.max(stroke))
@@ -210,7 +209,7 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
             "max_force_deviation_before_fold_over_pct": fit["max_force_deviation_before_fold_over_pct"],
             "fold_over_strain": fit["fold_over_strain"], "solver_wall_s": fit_run.wall_s}
     dev = check["deviation_pct"]
-    post_dmax = record.positive("post.dmax_mm")
+    post_dmax = record.specimen.dmax_mm
     return {
         "record": record.source, "curve": curve.what, "mu": float(mu), "E_MPa": float(E), "E_source": E_source,
         "d0_mm": d0, "h0_mm": h0, "stroke_end_mm": s_end,

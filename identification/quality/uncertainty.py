@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flowcurve.identification.iso6892 import nan_argmax
+from flowcurve.record.specimen import circle_area_mm2 as _area_mm2  # S0 = π·d0²/4
 
 K_COVERAGE = 2.0  # expanded uncertainty U = k·u_c, k = 2 (≈ 95 % for a normal output)
 
@@ -158,10 +159,6 @@ def measured_length_scale_rel_u(l0_mm: float, lu_mm: float, length_resolution_mm
 
 
 # ---- budgets of the tension results (ISO 6892-1) -------------------------------------------------
-
-def _area_mm2(d0_mm: float) -> float:
-    return math.pi * d0_mm ** 2 / 4.0  # S0 = π·d0²/4
-
 
 def _force_component(force_N: float, force_class: float, per_N: float, name: str = "force") -> Component:
     return Component(f"{name} F (ISO 7500-1 class {force_class:g})", force_N, "N", force_N * force_rel_u(force_class), per_N,

@@ -128,11 +128,11 @@ def _plastic_strain_history(record: Record, E_MPa: float | None) -> tuple[np.nda
     test = record.test
     t = record.column("time_s")
     force = np.abs(record.column("force_N"))
-    area0 = math.pi * record.positive("specimen.d0_mm", required=True) ** 2 / 4.0
+    spec = record.specimen
+    area0 = spec.area0_mm2
     if test == "tension" and record.has("extensometer_mm"):
         ext = record.column("extensometer_mm")
-        l0 = record.positive("specimen.l0_mm", required=True)
-        d, length = np.abs(ext - ext[0]), record.positive("specimen.extensometer_gauge_mm", default=l0)
+        d, length = np.abs(ext - ext[0]), spec.extensometer_gauge_mm or spec.l0_mm
     else:
         d = np.abs(record.column("crosshead_mm") - record.column("crosshead_mm")[0])
         stiffness = record.positive("rig.frame_stiffness_N_per_um")
@@ -140,7 +140,7 @@ def _plastic_strain_history(record: Record, E_MPa: float | None) -> tuple[np.nda
             from flowcurve.identification.indicator import remove_frame_compliance
 
             d = np.abs(remove_frame_compliance(d, force - force[0], stiffness))
-        length = record.positive("specimen.l0_mm" if test == "tension" else "specimen.h0_mm", required=True)
+        length = spec.gauge_mm
     if test == "tension":
         eps = np.log1p(d / length)  # (3.2)
         sigma = force / area0 * np.exp(eps)  # volume constancy: F0/F = l/l0

@@ -139,11 +139,8 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
         A, A_method = None, None
         if not inp.unbroken:  # (an unbroken specimen's warning says it already)
             warnings.append(f"the record ends at {100.0 * force[-1] / inp.Fm:.0f} % of Fm without a fracture: A is not reported (measure Lu and give it: post.lu_mm, --lu)")
-    su = record.positive("post.sk_mm2")
-    dk = record.positive("post.dk_mm")
-    su_source = "post.sk_mm2" if su is not None else None
-    if su is None and dk is not None:
-        su, su_source = math.pi * dk**2 / 4.0, "post.dk_mm"
+    spec = record.specimen
+    su, su_source, dk = spec.fracture_area_mm2, spec.fracture_area_source, spec.dk_mm  # Sk, else π·dk²/4
     Z = iso6892.reduction_of_area_pct(inp.s0, su) if su is not None else None
     return _IsoResults(yp=yp, e_m=e_m, Ag=Ag, i_k=i_k, A=A, A_method=A_method, At=At, su=su, su_source=su_source, dk=dk, Z=Z, warnings=warnings)
 
@@ -217,7 +214,7 @@ def _neck_correction(inp: _Inputs, iso: _IsoResults, true: _TrueCurve) -> tuple[
     su, force_k = iso.su, float(inp.force[iso.i_k])
     eps_f = math.log(inp.s0 / su)  # (3.13) ε_f = ln(F0/Fk)
     avg = float(inp.force[iso.i_k] / su)  # P_k / F_k
-    neck_radius = inp.record.positive("post.neck_radius_mm")
+    neck_radius = inp.record.specimen.neck_radius_mm
     dk_for_neck = iso.dk if iso.dk is not None else math.sqrt(4.0 * su / math.pi)
     fracture = neck_corrections(avg, eps_f, true.eps_u, d_k_mm=dk_for_neck, neck_radius_mm=neck_radius)
     fracture.update({"true_strain": eps_f, "avg_stress_MPa": avg, "force_N": force_k, "area_source": iso.su_source})

@@ -22,7 +22,7 @@ def _check_post_dimensions(record: Record, d0: float, l0: float, lu: float | Non
     if lu is not None and lu < l0:
         raise RecordError(record.source, f"Lu = {lu:g} mm (post.lu_mm, --lu) is shorter than L0 = {l0:g} mm (specimen.l0_mm, --l0): a specimen does not shorten in tension")
     for name in ("du", "dk"):
-        d = record.positive(f"post.{name}_mm")
+        d = getattr(record.specimen, f"{name}_mm")
         if d is not None and d > d0:
             raise RecordError(record.source, f"{name} = {d:g} mm (post.{name}_mm{', --dk' if name == 'dk' else ''}) is larger than d0 = {d0:g} mm (specimen.d0_mm, --d0): a specimen does not thicken in tension")
 
@@ -45,7 +45,7 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
             fallback = _strain_source(record, False, force, l0, options)
             fallback["warnings"].insert(0, message + ": the crosshead is used instead")
             return fallback
-        gauge = record.positive("specimen.extensometer_gauge_mm", default=l0)
+        gauge = record.specimen.extensometer_gauge_mm or l0
         if "specimen.extensometer_gauge_mm" not in record.meta:
             warnings.append(f"specimen.extensometer_gauge_mm missing: the extensometer gauge length is taken as l0 = {l0:g} mm")
         return {"disp": ext - ext[0], "length": gauge, "source": "extensometer", "stiffness": None, "scalable": False, "warnings": warnings}
@@ -66,7 +66,7 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
         disp = remove_frame_compliance(disp, force - force[0], stiffness)
     else:
         warnings.append("no frame stiffness (rig.frame_stiffness_N_per_um): the crosshead displacement still includes the frame; strains and E are not the specimen's")
-    length = options.get("crosshead_length_mm") or record.positive("specimen.parallel_length_mm", default=l0)
+    length = options.get("crosshead_length_mm") or record.specimen.parallel_length_mm or l0
     return {"disp": disp, "length": float(length), "source": "crosshead", "stiffness": stiffness, "scalable": True, "warnings": warnings,
             "step_mm": step}
 
@@ -117,9 +117,8 @@ def isolated_force_spikes(force_N) -> np.ndarray:
 def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, crosshead_length_mm, scale: bool) -> _Inputs:
     """Geometry, force and engineering stress, and the strain source of a tension record."""
     warnings: list[str] = []
-    d0 = record.positive("specimen.d0_mm", required=True)
-    l0 = record.positive("specimen.l0_mm", required=True)
-    s0 = record.positive("specimen.s0_mm2", default=math.pi * d0**2 / 4.0)  # F0 = π d0²/4
+    spec = record.specimen
+    d0, l0, s0 = spec.d0_mm, spec.l0_mm, spec.s0_mm2  # F0: the stated S0, else π d0²/4
     force = record.column("force_N")
     ok = np.isfinite(force)
     if not ok.all():
@@ -143,7 +142,7 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
 
     src = _strain_source(sub, use_extensometer, force, l0, {"frame_stiffness_N_per_um": frame_stiffness_N_per_um, "crosshead_length_mm": crosshead_length_mm})
     warnings += src["warnings"]
-    lu = record.positive("post.lu_mm")
+    lu = spec.lu_mm
     _check_post_dimensions(record, d0, l0, lu)
     length = src["length"]
     if src["scalable"] and scale and lu is not None:
