@@ -96,7 +96,7 @@ def piecewise_linear_block(data: CardData, units: UnitSystem, options: CardOptio
     time_unit = units.name.split("-")[1]
     table_id, curve_id = TABLE_ID + options.id_offset, CURVE_ID + options.id_offset
     temp_text = f"{tables[0].temperature_C:.6g} C"
-    origin = origin_text(tables)
+    origin = origin_text(tables, data)
     rows = table_rows(data, units, tables) if len(tables) > 1 else [(None, tables[0])]
     several = len(rows) > 1
     if several:
