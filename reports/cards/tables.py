@@ -204,7 +204,8 @@ def rate_tables(card: CardData, options: CardOptions) -> list[FlowCurve]:
     temp = card.ref_temperature_C if options.temperature_C is None else options.temperature_C
     if source_of(card, options) == "law":
         tested = [c.strain_rate_per_s for c in card.curves] or list(card.strain_rate_range_per_s or ())
-        return [law_curve(card, temp, r, options) for r in table_rates(card, tested)]
+        rates = law_grid(card, table_rates(card, tested), options, temperature_C=temp)
+        return [law_curve(card, temp, r, options) for r in rates]
     groups = group_by_temperature(card.curves, options.temperature_tolerance_C)
     nearest, group = min(groups, key=lambda g: abs(g[0] - temp))
     if options.temperature_C is not None and abs(nearest - temp) > options.temperature_tolerance_C:
@@ -212,3 +213,37 @@ def rate_tables(card: CardData, options: CardOptions) -> list[FlowCurve]:
                         f"{', '.join(f'{t:g}' for t, _ in groups)} C); choose one of those or use the law (--curves law)")
     rates = table_rates(card, [c.strain_rate_per_s for c in group])
     return [finished(card, curve_at_rate(card, group, nearest, r), options) for r in rates]
+
+
+REFINE_REL = 2e-3  # a law table's nodes are added until linear interpolation between them is this close
+REFINE_MAX_NODES = 16
+
+
+def refine_nodes(nodes, stress_at, log: bool = False, rel: float = REFINE_REL, max_nodes: int = REFINE_MAX_NODES) -> list[float]:
+    """Nodes (rates or temperatures) between ``nodes``' ends at which a solver's linear
+    interpolation (in ln x when ``log``) between neighbouring curves ``stress_at(x)`` (MPa arrays
+    on one strain grid) stays within ``rel`` of the law: in passes, every interval whose midpoint
+    misses by more is halved (in ln x or x), until none does or ``max_nodes`` are reached."""
+    out = sorted(set(float(x) for x in nodes))
+    fwd, back = (np.log, np.exp) if log else (float, float)
+    while len(out) < max_nodes:
+        mids = []
+        for lo, hi in zip(out[:-1], out[1:]):
+            mid = float(back(0.5 * (fwd(lo) + fwd(hi))))
+            truth = stress_at(mid)
+            miss = np.abs(0.5 * (stress_at(lo) + stress_at(hi)) - truth) / np.maximum(np.abs(truth), 1e-12)
+            if np.max(miss) > rel:
+                mids.append(mid)
+        if not mids:
+            break
+        out = sorted(out + mids[: max_nodes - len(out)])
+    return out
+
+
+def law_grid(card: CardData, nodes, options: CardOptions, *, rate: float | None = None, temperature_C: float | None = None) -> list[float]:
+    """The tested rates (``temperature_C`` given) or temperatures (``rate`` given) with nodes added
+    where the fitted law bends between them (:func:`refine_nodes`); never beyond the tested ends."""
+    eps = options.extend_to * np.linspace(0.0, 1.0, 25) ** 2
+    if rate is None:
+        return refine_nodes(nodes, lambda r: np.asarray(card.flow_stress_MPa(eps, r, temperature_C), float), log=True)
+    return refine_nodes(nodes, lambda t: np.asarray(card.flow_stress_MPa(eps, rate, t), float))
