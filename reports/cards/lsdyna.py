@@ -175,6 +175,26 @@ def tabulated_jc_tables(data: CardData, options: CardOptions):
     return rate_curves, temp_curves
 
 
+def product_form_miss(data: CardData, rates, temperatures_C, extend_to: float) -> float:
+    """The largest relative miss of MAT_224's product form sigma(eps, rate, TR) sigma(eps, rate0, T)/sigma(eps, rate0, TR)
+    against the law itself over ``rates`` x ``temperatures_C`` (rate0 the slowest): 0 for a law whose rate and
+    temperature effects are factors (Johnson-Cook)."""
+    import numpy as np
+
+    eps = extend_to * np.linspace(0.0, 1.0, 25) ** 2
+    r0, t_ref = min(rates), data.ref_temperature_C
+    worst = 0.0
+    for rate in rates:
+        for temp in temperatures_C:
+            truth = np.asarray(data.flow_stress_MPa(eps, rate, temp), float)
+            product = (np.asarray(data.flow_stress_MPa(eps, rate, t_ref), float) * np.asarray(data.flow_stress_MPa(eps, r0, temp), float)
+                       / np.asarray(data.flow_stress_MPa(eps, r0, t_ref), float))
+            ok = truth > 0
+            if ok.any():
+                worst = max(worst, float(np.max(np.abs(product[ok] / truth[ok] - 1.0))))
+    return worst
+
+
 def tabulated_johnson_cook_block(data: CardData, units: UnitSystem, options: CardOptions, mid: int) -> list[str]:
     """*MAT_TABULATED_JOHNSON_COOK (MAT_224): LCK1 a *DEFINE_TABLE over ln(rate) of stress curves at
     T_R, LCKT a *DEFINE_TABLE over temperature (K) of quasi-static curves; yield
@@ -191,11 +211,16 @@ def tabulated_johnson_cook_block(data: CardData, units: UnitSystem, options: Car
     rows = table_rows(data, units, rate_curves)
     rates = ", ".join(f"{c.strain_rate_per_s:.3g}" for c in rate_curves)
     temps = ", ".join(f"{c.temperature_C:.4g}" for c in temp_curves)
+    miss = product_form_miss(data, [c.strain_rate_per_s for c in rate_curves], [c.temperature_C for c in temp_curves],
+                             options.extend_to)
     note = [
         f"MAT {mid}: tabulated Johnson-Cook (MAT_224) on {origin_text(rate_curves, data)}: yield stress "
         "sigma = k1(eps_p, rate) * kt(eps_p, T)/kt(eps_p, TR); k1 = LCK1, the curves at the reference temperature "
         f"TR = {data.ref_temperature_C:g} C over strain rates {rates} 1/s; kt = LCKT, the curves at the quasi-static rate "
         f"{rate_curves[0].strain_rate_per_s:.3g} 1/s over temperatures {temps} C (written in K).",
+        f"The product form is exact for a law whose rate and temperature effects are factors (Johnson-Cook); for the fitted "
+        f"{data.law.display_name} law it misses the law by up to {100 * miss:.2g} % over the rows' rates x temperatures"
+        + (" - use --format flow-table or MAT_024 per temperature where that matters." if miss > 0.005 else "."),
         "Interpolation and extrapolation: in plastic strain the fitted law continues each curve beyond its last measured "
         f"point to {options.extend_to:g} (then LS-DYNA extrapolates the last slope); linearly in ln(rate) and in T between "
         "the curves (a law table has nodes added where the law bends between tested conditions); beyond the slowest and "

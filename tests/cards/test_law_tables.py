@@ -100,7 +100,8 @@ def test_mat224_reads_back_and_equals_the_law(series, tmp_path, curves, temps, r
             np.testing.assert_allclose(mat224_stress(text, EPS, rate, T), jc_truth(EPS, rate, T), rtol=5e-3,
                                        err_msg=f"{T} C, {rate} 1/s")
     # the rule stated: clamped beyond the tabulated range (no rate effect beyond the fastest row)
-    assert "clamped to the tabulated" in " ".join(line[2:] for line in text.splitlines() if line.startswith("$ "))
+    comments = " ".join(line[2:].strip() for line in text.splitlines() if line.startswith("$ "))
+    assert "clamped to the tabulated" in comments and "misses the law by up to 0 %" in comments
 
 
 def read_flow_table(text):
@@ -221,3 +222,31 @@ def test_another_law_through_mat224_and_the_flow_table(toy_series, tmp_path):
     _, rows = read_flow_table(write_card(load_card_data(toy_series), "flow-table", "mm-s-t-N-MPa", curves="law"))
     eps, rate, T, sig = (np.array([float(r[k]) for r in rows]) for k in ("eps_p", "strain_rate_per_s", "temperature_C", "stress_MPa"))
     np.testing.assert_allclose(sig, toy_truth(eps, rate, T), rtol=1e-6)
+
+
+@register
+class ToyNonSeparableLaw(ToyTablesLaw):
+    """The toy law with a rate exponent that grows with temperature: MAT_224's product form cannot carry it exactly."""
+
+    name = "toy_nonseparable_law"
+    display_name = "Toy non-separable (tables test)"
+
+    def evaluate(self, eps_p, strain_rate_per_s, temperature_C, *, K, n, q0, beta, ref_strain_rate_per_s):
+        q = q0 * (1 + eps_p) * (1 + (temperature_C - 20.0) / 300.0)
+        return K * (eps_p + 0.01) ** n * (strain_rate_per_s / ref_strain_rate_per_s) ** q * np.exp(-beta * (temperature_C - 20.0))
+
+
+def test_mat224_states_how_far_its_product_form_misses_a_law(toy_series, tmp_path):
+    """A law whose rate effect depends on temperature: the card states a miss at least as large as this file's
+    reader finds at the hot, fast tested condition (Johnson–Cook's 0 % is checked with the JC card above)."""
+    fit = json.loads(toy_series.read_text())
+    fit["law"]["name"] = fit["model"] = "toy_nonseparable_law"
+    path = tmp_path / "toy" / "fit_nonsep.json"
+    path.write_text(json.dumps(fit), encoding="utf-8")
+    text = write_card(load_card_data(path), "lsdyna", "mm-ms-kg-kN-GPa", lsdyna_material="224", curves="law")
+    comments = " ".join(line[2:].strip() for line in text.splitlines() if line.startswith("$ "))
+    stated = float(comments.split("misses the law by up to ")[1].split(" %")[0]) / 100
+    truth = get_law("toy_nonseparable_law").stress(EPS, 1e-1, 300.0, **TOY)
+    found = float(np.max(np.abs(mat224_stress(text, EPS, 1e-1, 300.0) / truth - 1)))
+    assert found > 0.01  # the form does miss this law
+    assert stated >= 0.9 * found and "flow-table" in comments
