@@ -192,7 +192,7 @@ def product_form_miss(data: CardData, rates, temperatures_C, extend_to: float) -
             ok = truth > 0
             if ok.any():
                 worst = max(worst, float(np.max(np.abs(product[ok] / truth[ok] - 1.0))))
-    return worst
+    return round(worst, 6)  # float noise of an exact product is no miss
 
 
 def tabulated_johnson_cook_block(data: CardData, units: UnitSystem, options: CardOptions, mid: int) -> list[str]:
