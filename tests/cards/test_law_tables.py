@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from flowcurve.cli import main
-from flowcurve.identification.laws.base import Law, Parameter, get_law, register
+from flowcurve.identification.laws import base
+from flowcurve.identification.laws.base import Law, Parameter, get_law
 from flowcurve.reports.cards import CardError, load_card_data, write_card
 
 from .conftest import LAW, make_fit
@@ -130,7 +131,6 @@ def test_flow_table_holds_every_measured_condition_and_the_law(series, tmp_path,
 
 
 # -- a law other than Johnson–Cook ---------------------------------------------------------------
-@register
 class ToyTablesLaw(Law):
     """σ = K εp^n (ε̇/ε̇0)^q exp(−β (T − 20)) with a strain-dependent rate exponent q = q0 (1 + εp):
     not separable, not linear in ln ε̇ — the tables must carry it anyway."""
@@ -143,6 +143,8 @@ class ToyTablesLaw(Law):
     rate_dependent = True
     temperature_dependent = True
     equation = "K*(eps_p+0.01)^n*(rate/ref_rate)^(q0*(1+eps_p))*exp(-beta*(T-20))"
+    latex = r"K(\varepsilon_p+0.01)^n(\dot\varepsilon/\dot\varepsilon_0)^{q_0(1+\varepsilon_p)}e^{-\beta(T-20)}"
+    source = "a test-local law (tests/cards/test_law_tables.py)"
 
     def evaluate(self, eps_p, strain_rate_per_s, temperature_C, *, K, n, q0, beta, ref_strain_rate_per_s):
         return (K * (eps_p + 0.01) ** n * (strain_rate_per_s / ref_strain_rate_per_s) ** (q0 * (1 + eps_p))
@@ -157,6 +159,14 @@ TOY = dict(K=600.0, n=0.25, q0=0.08, beta=1.5e-3, ref_strain_rate_per_s=1e-3)
 
 def toy_truth(eps, rate, T):
     return get_law("toy_tables_law").stress(eps, rate, T, **TOY)
+
+
+@pytest.fixture(autouse=True)
+def toy_laws(monkeypatch):
+    """The test's laws registered for this file's tests only (the registry of every other test stays the product's)."""
+    base.registered_laws()  # discover the product's laws first
+    for cls in (ToyTablesLaw, ToyNonSeparableLaw):
+        monkeypatch.setitem(base._REGISTRY, cls.name, cls())
 
 
 @pytest.fixture
@@ -224,7 +234,6 @@ def test_another_law_through_mat224_and_the_flow_table(toy_series, tmp_path):
     np.testing.assert_allclose(sig, toy_truth(eps, rate, T), rtol=1e-6)
 
 
-@register
 class ToyNonSeparableLaw(ToyTablesLaw):
     """The toy law with a rate exponent that grows with temperature: MAT_224's product form cannot carry it exactly."""
 
