@@ -259,3 +259,31 @@ def test_mat224_states_how_far_its_product_form_misses_a_law(toy_series, tmp_pat
     found = float(np.max(np.abs(mat224_stress(text, EPS, 1e-1, 300.0) / truth - 1)))
     assert found > 0.01  # the form does miss this law
     assert stated >= 0.9 * found and "flow-table" in comments
+
+
+@pytest.mark.slow
+@pytest.mark.solver
+@pytest.mark.skipif(__import__("shutil").which("ccx") is None, reason="CalculiX 'ccx' is not installed")
+def test_one_element_in_ccx_carries_another_law(toy_series, tmp_path):
+    """The CalculiX temperature table of the test-local law at 1e-2 1/s: a one-element compression at 300 C in
+    ccx follows that law (not the card's rows: the law itself) within 0.5 % from eps_p 0.002."""
+    import os
+    import subprocess
+
+    from .readers import read_dat
+    from .test_calculix import ONE_ELEMENT
+
+    text = write_card(load_card_data(toy_series), "calculix", "mm-s-t-N-MPa", curves="law", strain_rate_per_s=1e-2)
+    (tmp_path / "job.inp").write_text(ONE_ELEMENT.format(material=text, name="12KH18N12M3TL", temperature=300.0))
+    run = subprocess.run(["ccx", "-i", "job"], cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                         env={**os.environ, "OMP_NUM_THREADS": "1"})
+    assert "*ERROR" not in run.stdout + run.stderr, run.stdout[-2000:]
+    dat = read_dat((tmp_path / "job.dat").read_text())
+    checked = 0
+    for (t, s), (_, p) in zip(dat["stresses"], dat["equivalent plastic strain"]):
+        eps_p = p[:, 2].mean()
+        if eps_p < 0.002:
+            continue
+        assert -s[:, 4].mean() == pytest.approx(float(toy_truth(eps_p, 1e-2, 300.0)), rel=5e-3), (t, eps_p)
+        checked += 1
+    assert checked >= 30
