@@ -328,10 +328,12 @@ def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
         n=_number(fit, "n", path, required=jc, positive=True),
         C=_number(fit, "C", path, 0.0),
         m=_number(fit, "m", path, 1.0, positive=True),
-        ref_strain_rate_per_s=law_values.get("ref_strain_rate_per_s") or _number(
-            fit, "ref_strain_rate_per_s", path, 1.0 if jc or rates is None else rates[0], positive=True),
-        ref_temperature_C=law_values.get("ref_temperature_C", _number(
-            fit, "ref_temperature_C", path, 20.0 if jc or temps is None else temps[0])),
+        # another law's reference (a table's quasi-static rate, MAT_224's TR): its own condition, else the slowest and
+        # coldest tested condition (never Johnson-Cook's top-level keys, which a v2 file may carry for another law)
+        ref_strain_rate_per_s=(_number(fit, "ref_strain_rate_per_s", path, 1.0, positive=True) if jc
+                               else law_values.get("ref_strain_rate_per_s", rates[0] if rates else 1.0)),
+        ref_temperature_C=(_number(fit, "ref_temperature_C", path, 20.0) if jc
+                           else law_values.get("ref_temperature_C", temps[0] if temps else 20.0)),
         melt_temperature_C=_number(fit, "melt_temperature_C", path),
         stderr=stderr,
         law_name=law_name,
