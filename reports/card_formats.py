@@ -46,6 +46,8 @@ WRITERS: dict[str, CardFormat] = {f.name: f for f in (
     CardFormat("abaqus", "inp", "Abaqus", f"{_CARDS}.abaqus:abaqus_card"),
     CardFormat("radioss", "rad", "OpenRadioss", f"{_CARDS}.radioss:radioss_card"),
     CardFormat("calculix", "inp", "CalculiX", f"{_CARDS}.calculix:calculix_card"),
+    CardFormat("flow-table", "csv", "Flow-stress table (CSV)", f"{_CARDS}.flow_table:flow_table_card",
+               "eps_p, strain rate, temperature, stress on every tested condition (forming codes)"),
 )}
 FORMATS = WRITERS.keys()  # a live view: a format registered later is among the CLI's choices too
 

@@ -17,7 +17,8 @@ def register(subparsers) -> None:
             "Write a material card from fit.json (the output of 'flowcurve fit'): LS-DYNA "
             "(*MAT_JOHNSON_COOK with its EOS, *MAT_PIECEWISE_LINEAR_PLASTICITY on the identified "
             "curves), Abaqus (Johnson-Cook and a temperature table), OpenRadioss (/MAT/PLAS_JOHNS) or "
-            "CalculiX (temperature table); the Johnson-Cook fracture constants D1-D5 when fit.json has "
+            "CalculiX (temperature table), a flow-stress table (flow-table: CSV for forming codes); any "
+            "registered law of fit.json through the tables, Johnson-Cook-only cards refuse another; the Johnson-Cook fracture constants D1-D5 when fit.json has "
             "them. Constants missing from fit.json are given as options, in lab units. The card states "
             "its unit system and the range it was identified on. Every tabulated curve continues beyond "
             "its last measured point with the fitted law up to --extend-to, in every format alike."
@@ -54,6 +55,9 @@ def register(subparsers) -> None:
     p.add_argument("--fcut", dest="fcut_hz", type=float, metavar="HZ", help="Radioss strain-rate filter cut-off frequency, Hz (default 10000)")
     p.add_argument("--erosion-strain", type=float, metavar="EPS",
                    help="LS-DYNA: add *MAT_ADD_EROSION with this maximum effective strain (EFFEPS) to both materials")
+    p.add_argument("--lsdyna-material", choices=("15", "24", "224"),
+                   help="LS-DYNA: only *MAT_JOHNSON_COOK (15), only *MAT_PIECEWISE_LINEAR_PLASTICITY (24, any law) or "
+                        "*MAT_TABULATED_JOHNSON_COOK (224: rate and temperature tables, any law); default 15 and 24 (Johnson-Cook)")
     p.add_argument("--damage-displacement", dest="damage_displacement_mm", type=float, metavar="MM",
                    help="Abaqus: *DAMAGE EVOLUTION, TYPE=DISPLACEMENT with this equivalent plastic displacement at failure, mm")
     p.set_defaults(func=run_card)

@@ -51,6 +51,7 @@ class CardRequest(Constants):
     fcut_hz: float | None = None
     erosion_strain: float | None = None
     damage_displacement_mm: float | None = None
+    lsdyna_material: str | None = None
 
     def check(self) -> CardRequest:
         """The request, or FieldError naming its first refused field (format, units)."""
@@ -91,7 +92,7 @@ def overrides(args) -> dict:
 
 
 CARD_OPTIONS = ("curves", "max_rows", "strain_rate_per_s", "temperature_C", "extend_to", "temperature_tolerance_C",
-                "id_offset", "radioss_version", "fcut_hz", "erosion_strain", "damage_displacement_mm")
+                "id_offset", "radioss_version", "fcut_hz", "erosion_strain", "damage_displacement_mm", "lsdyna_material")
 
 
 # stand-ins for constants a card lacks, only to find every other one it lacks too (never written)

@@ -63,21 +63,12 @@ def damage_lines(data: CardData, units: UnitSystem, options: CardOptions) -> lis
     return out
 
 
-def abaqus_card(data: CardData, units: UnitSystem, options: CardOptions) -> str:
-    """The card text with both materials (and the friction interaction if identified)."""
-    base = material_name(data)
+def johnson_cook_material(data: CardData, units: UnitSystem, options: CardOptions, base: str) -> list[str]:
+    """``<NAME>_JC``: *PLASTIC, HARDENING=JOHNSON COOK with *RATE DEPENDENT and the damage lines."""
     A, B = (units.to_system(v * 1e6, "stress") for v in (data.A_MPa, data.B_MPa))
     melt = data.require("melt_temperature_C")
     eps0 = units.to_system(data.ref_strain_rate_per_s, "strain_rate")
-    rows, tables = plastic_rows(data, units, options)
-    origin = origin_text(tables)
-    rate_text = ", ".join(sorted({f"{c.strain_rate_per_s:.3g}" for c in tables}))
-    time_unit = units.name.split("-")[1]
-    out = [comment_block(header_lines(data, units, "Abaqus", f"temperatures in C, strain rates per {time_unit}", options)
-                         + ([ABAQUS_DAMAGE_CONVENTION, f"d3 = {number(-data.fracture['D3'])} written for the identified "
-                                                            f"D3 = {number(data.fracture['D3'])}"] if data.fracture else []),
-                         "** ").rstrip("\n")]
-    out += ["**", f"** {base}_JC: Johnson-Cook; transition temperature = reference temperature."]
+    out = ["**", f"** {base}_JC: Johnson-Cook; transition temperature = reference temperature."]
     out += _common(data, units, f"{base}_JC")
     out += [
         "*PLASTIC, HARDENING=JOHNSON COOK",
@@ -85,7 +76,23 @@ def abaqus_card(data: CardData, units: UnitSystem, options: CardOptions) -> str:
         "*RATE DEPENDENT, TYPE=JOHNSON COOK",
         f"{number(data.C)}, {number(eps0)}",
     ]
-    out += damage_lines(data, units, options)
+    return out + damage_lines(data, units, options)
+
+
+def abaqus_card(data: CardData, units: UnitSystem, options: CardOptions) -> str:
+    """The card text with both materials (and the friction interaction if identified)."""
+    base = material_name(data)
+    rows, tables = plastic_rows(data, units, options)
+    origin = origin_text(tables, data)
+    rate_text = ", ".join(sorted({f"{c.strain_rate_per_s:.3g}" for c in tables}))
+    time_unit = units.name.split("-")[1]
+    out = [comment_block(header_lines(data, units, "Abaqus", f"temperatures in C, strain rates per {time_unit}", options)
+                         + ([ABAQUS_DAMAGE_CONVENTION, f"d3 = {number(-data.fracture['D3'])} written for the identified "
+                                                            f"D3 = {number(data.fracture['D3'])}"] if data.fracture else []),
+                         "** ").rstrip("\n")]
+    out += johnson_cook_material(data, units, options, base) if data.is_johnson_cook else [
+        "**", f"** no {base}_JC material: Abaqus' HARDENING=JOHNSON COOK carries only Johnson-Cook constants and the fit's "
+        f"law is {data.law.display_name}; the table below carries it"]
     out += [
         "**",
         f"** {base}_TABLE: {origin} at strain rate {rate_text} 1/s, per temperature, from zero plastic strain",

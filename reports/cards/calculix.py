@@ -43,7 +43,7 @@ def calculix_card(data: CardData, units: UnitSystem, options: CardOptions) -> st
     rho = units.to_system(data.require("density_kg_per_m3"), "density")
     rows, tables = plastic_rows(data, units, options)
     rate_text = ", ".join(sorted({f"{c.strain_rate_per_s:.3g}" for c in tables}))
-    origin = origin_text(tables)
+    origin = origin_text(tables, data)
     temps = ", ".join(f"{c.temperature_C:g}" for c in tables)
     out = [comment_block(header_lines(data, units, "CalculiX 2.20", "temperatures in C", options), "** ").rstrip("\n")]
     out += [

@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 
 from flowcurve import __version__
-from flowcurve.identification.laws.johnson_cook import johnson_cook
 from flowcurve.identification.outcome import read_json_object
 from flowcurve.identification.provenance import comment_lines
 from flowcurve.reports.cards.fields import CardError
@@ -20,6 +19,7 @@ from flowcurve.reports.units import UnitSystem
 
 MAX_TABLE_ROWS = 100  # docs/calculix.md: tables over ~150 rows gave stresses ~8 % too low
 DAMAGE_KEYS = ("D1", "D2", "D3", "D4", "D5")
+LSDYNA_MATERIALS = ("15", "24", "224")  # *MAT_JOHNSON_COOK, *MAT_PIECEWISE_LINEAR_PLASTICITY, *MAT_TABULATED_JOHNSON_COOK
 
 
 @dataclass
@@ -37,6 +37,7 @@ class CardOptions:
     filter cut-off. erosion_strain: LS-DYNA *MAT_ADD_EROSION, EFFEPS (the user's failure strain) on
     both materials.
     damage_displacement_mm: Abaqus *DAMAGE EVOLUTION, TYPE=DISPLACEMENT (linear softening).
+    lsdyna_material: the LS-DYNA material(s): None both *MAT_015 and *MAT_024; "15", "24" or "224" one.
     """
 
     curves: str = "auto"
@@ -51,6 +52,7 @@ class CardOptions:
     fcut_hz: float = 1.0e4
     erosion_strain: float | None = None
     damage_displacement_mm: float | None = None
+    lsdyna_material: str | None = None  # None: *MAT_015 and *MAT_024 (Johnson-Cook only); "15", "24" or "224": that one
 
     @classmethod
     def from_keywords(cls, **options) -> "CardOptions":
@@ -80,9 +82,15 @@ class CardOptions:
             raise CardError(f"--fcut must be a frequency > 0 Hz, got {self.fcut_hz:g}")
         if self.erosion_strain is not None and not self.erosion_strain > 0:
             raise CardError(f"--erosion-strain must be > 0, got {self.erosion_strain:g}")
+        if self.lsdyna_material is not None and str(self.lsdyna_material) not in LSDYNA_MATERIALS:
+            raise CardError(f"--lsdyna-material must be one of {', '.join(LSDYNA_MATERIALS)}, got {self.lsdyna_material!r}")
         if self.damage_displacement_mm is not None and not self.damage_displacement_mm > 0:
             raise CardError(f"--damage-displacement must be > 0 mm, got {self.damage_displacement_mm:g}")
 
+
+# the formats that carry any law as tables (named when a Johnson-Cook-only format refuses another law)
+TABLE_FORMATS = ("--format lsdyna --lsdyna-material 24 or 224, --format abaqus (its table material), "
+                 "--format calculix or --format flow-table")
 
 # fit.json's E before the one rule for E (issue 32): a mean with apparent crosshead slopes in it, never put on a card
 OLD_APPARENT_MEAN = "mean of the records' E_MPa (apparent"
@@ -115,7 +123,7 @@ class FlowCurve:
     strain_rate_per_s: float
     plastic_strain: np.ndarray
     stress_MPa: np.ndarray
-    origin: str = "measured"  # "measured" (identified true curve) or "Johnson-Cook"
+    origin: str = "measured"  # "measured" (identified true curve) or "law" (tabulated from the fitted law)
     model_stress_at_zero_MPa: float | None = None  # fit.json's value for this condition
 
 
@@ -123,9 +131,9 @@ class FlowCurve:
 class CardData:
     """Everything a card carries, in lab units (MPa, kg/m3, J/(kg K), C, 1/s)."""
 
-    A_MPa: float
-    B_MPa: float
-    n: float
+    A_MPa: float | None = None  # Johnson-Cook's constants (fit.json's top level); None for another law
+    B_MPa: float | None = None
+    n: float | None = None
     C: float = 0.0
     m: float = 1.0
     ref_strain_rate_per_s: float = 1.0
@@ -155,20 +163,44 @@ class CardData:
     curves: list[FlowCurve] = field(default_factory=list)
     source_path: str = "<memory>"
     provenance: dict | None = None  # fit.json's: versions, every record's SHA-256, options, date
+    law_name: str = "johnson_cook"  # the registered law of the fit (fit.json v2's law.name; v1: Johnson-Cook)
+    law_values: dict[str, float] = field(default_factory=dict)  # another law's parameters and conditions by name
 
     # -- the law ---------------------------------------------------------------------------
-    def flow_stress_MPa(self, eps_p, strain_rate_per_s=None, temperature_C=None):
-        """(2.19) Johnson–Cook flow stress in MPa, with the conventions of docs/methods.md §5."""
-        rate = self.ref_strain_rate_per_s if strain_rate_per_s is None else strain_rate_per_s
-        temp = self.ref_temperature_C if temperature_C is None else temperature_C
+    @property
+    def law(self):
+        """The fit's registered :class:`~flowcurve.identification.laws.base.Law`."""
+        from flowcurve.identification.laws.base import get_law
+        return get_law(self.law_name)
+
+    @property
+    def is_johnson_cook(self) -> bool:
+        return self.law_name == "johnson_cook"
+
+    def values(self, temperature_C=None) -> dict[str, float]:
+        """The law's values by name; Johnson-Cook's from the card's constants (a missing melting
+        temperature asked for only above the reference temperature, where T* needs it)."""
+        if not self.is_johnson_cook:
+            return dict(self.law_values)
         melt = self.melt_temperature_C
         if melt is None:
-            if temp > self.ref_temperature_C:
+            if temperature_C is not None and np.max(temperature_C) > self.ref_temperature_C:
                 self.require("melt_temperature_C")
             melt = self.ref_temperature_C + 1.0  # T* is clamped to 0 at or below T_ref anyway
-        return johnson_cook(eps_p, rate, temp, A=self.A_MPa, B=self.B_MPa, n=self.n, C=self.C, m=self.m,
-                            ref_strain_rate_per_s=self.ref_strain_rate_per_s,
-                            ref_temperature_C=self.ref_temperature_C, melt_temperature_C=melt)
+        return dict(A=self.A_MPa, B=self.B_MPa, n=self.n, C=self.C, m=self.m, ref_strain_rate_per_s=self.ref_strain_rate_per_s,
+                    ref_temperature_C=self.ref_temperature_C, melt_temperature_C=melt)
+
+    def flow_stress_MPa(self, eps_p, strain_rate_per_s=None, temperature_C=None):
+        """σ (MPa) of the fit's law at εp, ε̇ (1/s), T (°C); rate and temperature default to the reference."""
+        rate = self.ref_strain_rate_per_s if strain_rate_per_s is None else strain_rate_per_s
+        temp = self.ref_temperature_C if temperature_C is None else temperature_C
+        return self.law.stress(eps_p, rate, temp, **self.values(temp))
+
+    def require_johnson_cook(self, what: str) -> None:
+        """A one-line CardError when the fit's law is not Johnson-Cook: ``what`` carries JC constants only."""
+        if not self.is_johnson_cook:
+            raise CardError(f"{self.source_path}: {what} carries only Johnson-Cook constants and the fit's law is "
+                            f"{self.law.display_name}: use {TABLE_FORMATS}")
 
     def require(self, name: str) -> float:
         """A constant the card needs; a one-line error naming the option that supplies it."""
@@ -262,23 +294,53 @@ def _sources(fit: dict) -> list[str]:
     return out
 
 
+def _law(fit: dict, path) -> tuple[str, dict[str, float], dict[str, float | None]]:
+    """(law name, values by name, stderr by key): a v2 fit's "law" block read by
+    :func:`~flowcurve.identification.laws.fit_file.law_of_fit`; a v1 fit is Johnson-Cook from its
+    top-level keys (read by the card's own fields, so a missing melting temperature is asked
+    for only where a card needs it)."""
+    top_stderr = {k[: -len("_stderr")]: fit[k] for k in fit if k.endswith("_stderr")}
+    block = fit.get("law")
+    if block is None:
+        return "johnson_cook", {}, top_stderr
+    from flowcurve.errors import IdentificationError
+    from flowcurve.identification.laws.fit_file import law_of_fit
+
+    if not isinstance(block, dict):
+        raise CardError(f"{path}: 'law' must be an object (docs/fit-json.md)")
+    try:
+        law, values = law_of_fit(fit)
+    except IdentificationError as exc:
+        raise CardError(f"{path}: {exc}") from None
+    return law.name, values, {**top_stderr, **{str(k): v for k, v in (block.get("stderr") or {}).items()}}
+
+
 def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
     """A :class:`CardData` from a parsed ``fit.json``; ``overrides`` (e.g. ``E_MPa=2.1e5``) win."""
     rng = fit.get("range") or {}
-    stderr = {k[: -len("_stderr")]: fit[k] for k in fit if k.endswith("_stderr")}
+    law_name, law_values, stderr = _law(fit, path)
+    jc = law_name == "johnson_cook"
+    rates = _pair(rng.get("strain_rate_per_s"), "range.strain_rate_per_s", path)
+    temps = _pair(rng.get("temperature_C"), "range.temperature_C", path)
     data = CardData(
-        A_MPa=_number(fit, "A_MPa", path, required=True),
-        B_MPa=_number(fit, "B_MPa", path, required=True),
-        n=_number(fit, "n", path, required=True, positive=True),
+        A_MPa=_number(fit, "A_MPa", path, required=jc),
+        B_MPa=_number(fit, "B_MPa", path, required=jc),
+        n=_number(fit, "n", path, required=jc, positive=True),
         C=_number(fit, "C", path, 0.0),
         m=_number(fit, "m", path, 1.0, positive=True),
-        ref_strain_rate_per_s=_number(fit, "ref_strain_rate_per_s", path, 1.0, positive=True),
-        ref_temperature_C=_number(fit, "ref_temperature_C", path, 20.0),
+        # another law's reference (a table's quasi-static rate, MAT_224's TR): its own condition, else the slowest and
+        # coldest tested condition (never Johnson-Cook's top-level keys, which a v2 file may carry for another law)
+        ref_strain_rate_per_s=(_number(fit, "ref_strain_rate_per_s", path, 1.0, positive=True) if jc
+                               else law_values.get("ref_strain_rate_per_s", rates[0] if rates else 1.0)),
+        ref_temperature_C=(_number(fit, "ref_temperature_C", path, 20.0) if jc
+                           else law_values.get("ref_temperature_C", temps[0] if temps else 20.0)),
         melt_temperature_C=_number(fit, "melt_temperature_C", path),
         stderr=stderr,
+        law_name=law_name,
+        law_values={} if jc else law_values,
         plastic_strain_range=_pair(rng.get("plastic_strain"), "range.plastic_strain", path),
-        strain_rate_range_per_s=_pair(rng.get("strain_rate_per_s"), "range.strain_rate_per_s", path),
-        temperature_range_C=_pair(rng.get("temperature_C"), "range.temperature_C", path),
+        strain_rate_range_per_s=rates,
+        temperature_range_C=temps,
         sources=_sources(fit),
         method=str(fit.get("method", "unknown")),
         material=str(fit.get("material", "material")),
@@ -328,6 +390,21 @@ def load_card_data(path, **overrides) -> CardData:
 
 
 
+def law_line(card: CardData, pm) -> str:
+    """The fitted law and its constants (lab units) for the comment block; ``pm(key, value)`` adds ± stderr."""
+    if card.is_johnson_cook:
+        return (f"Johnson-Cook (lab units): A = {pm('A_MPa', card.A_MPa)} MPa, B = {pm('B_MPa', card.B_MPa)} MPa, "
+                f"n = {pm('n', card.n)}, C = {pm('C', card.C)}, m = {pm('m', card.m)}, "
+                f"reference strain rate {card.ref_strain_rate_per_s:.6g} 1/s, reference temperature "
+                f"{card.ref_temperature_C:.6g} C, melting temperature "
+                + (f"{card.melt_temperature_C:.6g} C" if card.melt_temperature_C is not None else "not given"))
+    law = card.law
+    params = ", ".join(f"{p.key} = {pm(p.key, card.law_values[p.name])}" for p in law.parameters if p.name in card.law_values)
+    conds = ", ".join(f"{p.key} = {card.law_values[p.name]:.6g}" for p in law.conditions if p.name in card.law_values)
+    return (f"{law.display_name} ({law.name}; lab units, temperature in C at the law's interface): {law.equation}; "
+            f"{params}" + (f"; stated conditions: {conds}" if conds else ""))
+
+
 # -- the comment block ------------------------------------------------------------------------
 def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_note: str,
                  options: CardOptions | None = None) -> list[str]:
@@ -346,11 +423,7 @@ def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_not
         *comment_lines(card.provenance, "fit file"),
         f"unit system: {units.name} (length {units.name.split('-')[0]}, time {units.name.split('-')[1]}, "
         f"mass {units.name.split('-')[2]}, force {units.force_name}, stress {units.stress_name}); {temperature_note}",
-        f"Johnson-Cook (lab units): A = {pm('A_MPa', card.A_MPa)} MPa, B = {pm('B_MPa', card.B_MPa)} MPa, "
-        f"n = {pm('n', card.n)}, C = {pm('C', card.C)}, m = {pm('m', card.m)}, "
-        f"reference strain rate {card.ref_strain_rate_per_s:.6g} 1/s, reference temperature "
-        f"{card.ref_temperature_C:.6g} C, melting temperature "
-        + (f"{card.melt_temperature_C:.6g} C" if card.melt_temperature_C is not None else "not given"),
+        law_line(card, pm),
         "identified on: " + "; ".join(card.valid_range_text()),
         "WARNING: valid only on the range above. Extrapolation beyond it (larger strains, the "
         "high strain rates and temperatures of machining) is the user's risk.",
@@ -361,8 +434,9 @@ def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_not
         lines.append(f"fit warning: {warning}")
     if card.curves:
         lines.append("tabulated curves: measured true curves; their first point (zero plastic strain) is the fitted model's")
-    lines.append(f"beyond the last measured point every tabulated curve continues with the fitted Johnson-Cook hardening, "
-                 f"scaled to meet that point, up to plastic strain {options.extend_to:g} (the same rule in every format)")
+    lines.append(f"beyond the last measured point every tabulated curve continues with the fitted {card.law.display_name} law's "
+                 f"hardening at its rate and temperature, scaled to meet that point, up to plastic strain {options.extend_to:g} "
+                 "(the same rule in every format)")
     if card.fracture:
         tri = card.fracture_triaxiality_range
         lines.append("Johnson-Cook fracture: " + ", ".join(pm(k, card.fracture[k], errors=card.fracture_stderr).join((f"{k} = ", ""))

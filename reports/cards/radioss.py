@@ -87,6 +87,7 @@ def fail_johnson(data: CardData, units: UnitSystem, options: CardOptions, mat_id
 
 def radioss_card(data: CardData, units: UnitSystem, options: CardOptions) -> str:
     """/MAT/PLAS_JOHNS (rate and temperature dependent), and /FAIL/JOHNSON when D1-D5 are known."""
+    data.require_johnson_cook("Radioss' /MAT/PLAS_JOHNS")
     time_unit = units.name.split("-")[1]
     mat_id = MAT_ID + options.id_offset
     notes = [f"OpenRadioss {options.radioss_version} input layout (--radioss-version 2023 for the layout before 2025).",

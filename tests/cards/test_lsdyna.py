@@ -75,7 +75,9 @@ def assert_read_as_written(text, deck):
 
 
 @pytest.mark.parametrize("units", sorted(FACTORS))
-@pytest.mark.parametrize("options", [{}, {"id_offset": 70, "erosion_strain": 1.2}, {"curves": "law", "extend_to": 1.5}])
+@pytest.mark.parametrize("options", [{}, {"id_offset": 70, "erosion_strain": 1.2}, {"curves": "law", "extend_to": 1.5},
+                                     {"lsdyna_material": "224", "id_offset": 7, "erosion_strain": 1.2},
+                                     {"lsdyna_material": "224", "curves": "law"}])
 def test_every_field_reads_back_as_written(fit_file, units, options):
     path = fit_file(D1=0.05, D2=3.44, D3=-2.12, D4=0.002, D5=0.61, law=dict(LAW, rate0=1.0), rates=(1.0, 30.0))
     text = write_card(load_card_data(path), "lsdyna", units, **options)

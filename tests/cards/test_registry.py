@@ -29,10 +29,10 @@ def toy(monkeypatch):
 
 
 def test_every_entry_carries_its_name_suffix_and_display_name():
-    assert list(WRITERS) == ["lsdyna", "abaqus", "radioss", "calculix"]
+    assert list(WRITERS) == ["lsdyna", "abaqus", "radioss", "calculix", "flow-table"]
     for name, entry in WRITERS.items():
         assert entry.name == name and entry.display_name and re.fullmatch(r"[a-z0-9]+", entry.suffix)
-    assert [card_suffix(f) for f in WRITERS] == ["k", "inp", "rad", "inp"]
+    assert [card_suffix(f) for f in WRITERS] == ["k", "inp", "rad", "inp", "csv"]
     assert card_suffix("nonesuch") == "txt"
 
 
