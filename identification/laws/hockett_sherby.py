@@ -40,8 +40,10 @@ class HockettSherby(StaticLaw):
         p, N = p.ravel(), (rate / span ** p).ravel()
         X = -np.exp(-N[:, None] * np.power(eps[None, :], p[:, None]))
         s_s, drop, ss = linear_on_grid(X, sig, w, nonnegative_c0=True)
-        cands = [{"sigma_s": s_s[i], "sigma0": s_s[i] - drop[i], "N": N[i], "p": p[i]} for i in range(p.size)]
-        return best_rows(ss, cands, (drop > 0) & (s_s - drop >= 0))
+        with np.errstate(invalid="ignore"):  # a row whose X is flat has no line: nan, dropped below
+            s0 = s_s - drop
+        cands = [{"sigma_s": s_s[i], "sigma0": s0[i], "N": N[i], "p": p[i]} for i in range(p.size)]
+        return best_rows(ss, cands, (drop > 0) & (s0 >= 0))
 
     def data_start(self, eps, sig):
         """Voce's start read as p = 1: σs = σ0 + Q, N = b."""
