@@ -297,10 +297,16 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
                         aic=float(best.aic))
 
 
+PARSIMONY_DELTA_AIC = 2.0  # laws this close to the lowest AIC are as good: the one with the fewest constants is kept
+
+
 def choose_law(eps_p, stress_MPa, *, weights=None, extra_points: Iterable[Sequence[float]] = ()) -> HardeningFit:
     """``--law best``: every static law (:func:`best_candidates`) fitted to the same weighted
-    points, the lowest AIC (N·ln(χ²/N) + 2k: k the law's constants) kept. The winner's
-    ``law_choice`` says which won and by how much (ΔAIC to the next) with every law's AIC."""
+    points and ranked by AIC (N·ln(χ²/N) + 2k, k the law's constants); among the laws within
+    :data:`PARSIMONY_DELTA_AIC` of the lowest, the one with the fewest constants wins (a law that
+    nests another fits the noise too). The winner's ``law_choice`` says which won, by which rule,
+    and ΔAIC to the next (the next law's AIC − the winner's; negative when parsimony chose), with
+    every law's AIC."""
     fits, failed = {}, {}
     for name in best_candidates():
         try:
@@ -310,9 +316,12 @@ def choose_law(eps_p, stress_MPa, *, weights=None, extra_points: Iterable[Sequen
     ranked = sorted((f for f in fits.values() if np.isfinite(f.aic)), key=lambda f: f.aic)
     if not ranked:
         raise IdentificationError(f"--law best: no law could be fitted ({'; '.join(f'{k}: {v}' for k, v in failed.items())})")
-    won, runner = ranked[0], (ranked[1] if len(ranked) > 1 else None)
+    close = [f for f in ranked if f.aic - ranked[0].aic <= PARSIMONY_DELTA_AIC]
+    won = min(close, key=lambda f: (len(f.params), f.aic))
+    runner = next((f for f in ranked if f is not won), None)
     won.law_choice = {
-        "by": "AIC on the same weighted points (lowest wins)", "chosen": won.law,
+        "by": f"AIC on the same weighted points; within {PARSIMONY_DELTA_AIC:g} of the lowest, the fewest constants",
+        "chosen": won.law, "lowest_aic": ranked[0].law,
         "next": None if runner is None else runner.law,
         "delta_aic_to_next": None if runner is None else float(runner.aic - won.aic),
         "aic": {f.law: float(f.aic) for f in ranked}, "failed": failed,
@@ -324,8 +333,10 @@ def law_choice_text(choice: dict) -> str:
     """One line: which law --law best chose and by how much."""
     if choice.get("next") is None:
         return f"--law best: {choice['chosen']} (the only law that could be fitted)"
-    return (f"--law best: {choice['chosen']} by AIC, {choice['delta_aic_to_next']:.1f} below the next ({choice['next']}); "
-            "ΔAIC > 10: the others have essentially no support, < 2: as good")
+    delta = choice["delta_aic_to_next"]
+    how = (f"AIC {delta:.1f} below the next ({choice['next']})" if delta >= 0 else
+           f"AIC {-delta:.1f} above {choice['next']}, within {PARSIMONY_DELTA_AIC:g}: as good with fewer constants")
+    return f"--law best: {choice['chosen']} by {how} (ΔAIC > 10: the others have essentially no support)"
 
 
 def resolve_law(law: str, eps_p, stress_MPa) -> tuple[str, dict | None]:
