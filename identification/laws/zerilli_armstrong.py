@@ -48,8 +48,16 @@ def _linear_constants(columns: list[np.ndarray], sig: np.ndarray) -> tuple[np.nd
     return c, float(np.sum((X @ c - sig) ** 2))
 
 
+class _ZerilliArmstrong(Law):
+    """What both forms share (not registered itself)."""
+
+    rate_dependent = True
+    temperature_dependent = True
+    source = SOURCE
+
+
 @register
-class ZerilliArmstrongBCC(Law):
+class ZerilliArmstrongBCC(_ZerilliArmstrong):
     """Zerilli–Armstrong, bcc: σ = C0 + C1·exp(−C3·T + C4·T·ln ε̇) + C5·εp^n (T in K)."""
 
     name = "zerilli_armstrong_bcc"
@@ -61,11 +69,8 @@ class ZerilliArmstrongBCC(Law):
         Parameter("C5", "C5_MPa", "MPa", 0.0, np.inf, "strain hardening modulus"),
         Parameter("n", "n", "", 1e-3, 2.0, "strain hardening exponent"),
     )
-    rate_dependent = True
-    temperature_dependent = True
     equation = "sigma_MPa = C0 + C1*exp(-C3*T_K + C4*T_K*ln(rate)) + C5*eps_p^n, T_K = temperature_C + 273.15"
     latex = r"\sigma = C_0 + C_1\,e^{-C_3 T + C_4 T\ln\dot\varepsilon} + C_5\,\varepsilon_p^{\,n}"
-    source = SOURCE
 
     def evaluate(self, eps_p, strain_rate_per_s, temperature_C, *, C0, C1, C3, C4, C5, n):
         # ZA (1987) bcc
@@ -82,7 +87,7 @@ class ZerilliArmstrongBCC(Law):
 
 
 @register
-class ZerilliArmstrongFCC(Law):
+class ZerilliArmstrongFCC(_ZerilliArmstrong):
     """Zerilli–Armstrong, fcc: σ = C0 + C2·εp^½·exp(−C3·T + C4·T·ln ε̇) (T in K)."""
 
     name = "zerilli_armstrong_fcc"
@@ -92,11 +97,8 @@ class ZerilliArmstrongFCC(Law):
         Parameter("C2", "C2_MPa", "MPa", 0.0, np.inf, "strain hardening modulus at 0 K"),
         C3, C4,
     )
-    rate_dependent = True
-    temperature_dependent = True
     equation = "sigma_MPa = C0 + C2*sqrt(eps_p)*exp(-C3*T_K + C4*T_K*ln(rate)), T_K = temperature_C + 273.15"
     latex = r"\sigma = C_0 + C_2\,\varepsilon_p^{1/2}\,e^{-C_3 T + C_4 T\ln\dot\varepsilon}"
-    source = SOURCE
 
     def evaluate(self, eps_p, strain_rate_per_s, temperature_C, *, C0, C2, C3, C4):
         # ZA (1987) fcc
