@@ -246,7 +246,7 @@ def _three_points(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: di
     return [first, (true.eps_p_at_Rm, float(true.sig_t[inp.i_m])), (fracture["true_strain"], fracture[neck]["stress_MPa"])]
 
 
-def _fit_laws(grid, fit_sig, extra: list, three_points: list | None, fracture_point: str, law: str) -> tuple[dict, dict, dict, list[str]]:
+def _fit_laws(grid, fit_sig, extra: list, three_points: list | None, fracture_point: str, law: str = "johnson_cook") -> tuple[dict, dict, dict, list[str]]:
     """Today's three laws and ``law`` by least squares (with and without the fracture point) and by three points:
     (fits, least-squares variants, fracture-point choices, warnings)."""
     fits: dict = {}
