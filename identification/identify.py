@@ -214,7 +214,8 @@ def identify(record: Record, **options) -> Identification:
     record : Record
         The record (``flowcurve.record.format.read_record`` or ``record.importers.load_record``).
     **options
-        Routed by :data:`OPTIONS`; ``None`` values are dropped, so callers can pass every
+        Routed by :data:`OPTIONS`; ``law`` is any law one record identifies
+        (:func:`.laws.hardening.static_law_names`) or ``best`` (the lowest AIC); ``None`` values are dropped, so callers can pass every
         command-line option. An option only the other test takes is reported in the result's
         warnings; an option no test takes raises IdentificationError.
 
@@ -227,6 +228,10 @@ def identify(record: Record, **options) -> Identification:
     warnings = check_record(record)
     func = DISPATCH[record.test]
     given = {k: v for k, v in options.items() if v is not None}
+    if given.get("law", "best") != "best":  # an unknown or a rate law: one line before any work
+        from flowcurve.identification.laws.hardening import static_form
+
+        static_form(given["law"])
     accepted, ignored = route_options(record.test, given)
     ident = func(record, **accepted)
     result = ident.result

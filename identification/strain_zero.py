@@ -184,14 +184,14 @@ def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dic
     :func:`strain_zero_uncertainty`; refit: eps, σ → HardeningFit. Returns (fit, block, warnings)."""
     from dataclasses import replace
 
-    from flowcurve.identification.laws.hardening import LAWS, _on_bound
+    from flowcurve.identification.laws.hardening import _on_bound, static_form
     from flowcurve.identification.quality.uncertainty import correlated_fit_u
 
     delta = zero["delta_eps0"]
     start = {**start_uncertainty(fit, fit.strain_range, delta), "components": zero["components"]}
     shift = constants_shift(refit, refit(np.asarray(eps_p, dtype=float), stress_MPa), eps_p, stress_MPa, delta) if delta > 0 else {}
     start["constants_shift"] = shift
-    law = LAWS.get(fit.law)
+    law = static_form(fit.law)
     sides = {k: _on_bound(v, *law.bounds[k]) for k, v in fit.params.items()} if law else {}
     on_bound = {k: 1.0 if side == "lower" else -1.0 for k, side in sides.items() if side}
     start["constants_lack_of_fit"] = correlated_fit_u(law.func, fit.params, eps_p, stress_MPa, on_bound) if law else {}

@@ -113,8 +113,9 @@ def register(subparsers) -> None:
     m.add_argument("--hardening", choices=tuple(HARDENING_CHOICES), help="hardening identification: least squares over the uniform range plus the fracture point (lsq, default) or exactly through three characteristic points (three-point)")
     add_modulus_option(m, "strips elastic strain with it (e.g. the handbook 194000 for 12Kh18N12M3TL); default: the apparent modulus regressed on the record (§2.3) — for compression records with few elastic samples give it")
     m.add_argument("--true-stress", choices=("constant_volume", "gost_3_6"), help="true stress in the uniform part of a tension test: σ·(1 + e) at constant volume (default) or the seed's corrected (3.6) with bulk modulus, for comparison (it reads up to ~7 %% high at e = 0.4)")
-    m.add_argument("--law", choices=("johnson_cook", "swift", "voce"), help="hardening law (default johnson_cook: A + B·εp^n; with --method inverse-fe on compression the law "
-                   "that best fits the fast curve)")
+    m.add_argument("--law", metavar="LAW", help="hardening law: any static law of the registry — johnson_cook (default: A + B·εp^n), hollomon, ludwik, swift, voce, "
+                   "hockett_sherby, swift_voce (docs/methods.md; checked when run, with the nearest name) — or best (every one fitted, the lowest AIC "
+                   "kept and by how much it won); with --method inverse-fe on compression the default is the law that best fits the fast curve")
     m.add_argument("--modulus-window", type=_pair, metavar="LO,HI", help="stress window of the elastic-modulus regression: MPa (e.g. 50,300), or fractions of Rm when both are ≤ 1 (e.g. 0.1,0.4); default: the widest linear stretch of the first loading, chosen automatically (all of it when it has few samples)")
     m.add_argument("--modulus-method", choices=("auto", "window", "sdar"), help="how the elastic line is found when no --modulus-window is given: window (the widest linear stretch), sdar (ASTM E3076-18, slope determination by analysis of residuals, with its quality metrics) or auto (default: sdar on a crosshead-only tension record, else window)")
     m.add_argument("--fit-range", type=_pair, metavar="LO,HI", help="true plastic strain range of the hardening fit, e.g. 0.01,0.15 (default: from 0.2 %% offset, past a yield plateau, to the end of the uniform range)")
@@ -233,9 +234,13 @@ def summary_lines(result: dict) -> list[str]:
                      f"Ae {_fmt(result.get('Ae_pct'), '.2f')} %")
     if h:
         consts = "   ".join(f"{k.removesuffix('_MPa')} {_fmt(h[k])}{' MPa' if k.endswith('_MPa') else ''}"
-                           for k in ("A_MPa", "B_MPa", "n", "K_MPa", "eps0", "sigma0_MPa", "Q_MPa", "b") if k in h)
+                           for k in h if f"{k}_stderr" in h)  # the law's constants, whichever law
         lines.append(f"  hardening {h.get('law', '?')} ({h.get('method', '?')}): {consts}   fit error {_fmt(h.get('fit_error_pct'), '.2f')} %"
                      + (f", quality {h['quality']}" if h.get("quality") else "") + _law_range_text(h))
+        if h.get("law_choice"):
+            from flowcurve.identification.laws.hardening import law_choice_text
+
+            lines.append(f"  {law_choice_text(h['law_choice'])}")
     if result.get("test") == "compression":
         methods = result.get("friction") or {}
         extra = "   ".join(f"{k} {_fmt(v, '.3f')}" for k, v in methods.items() if isinstance(v, (int, float)))

@@ -35,7 +35,7 @@ from flowcurve.record.specimen import circle_area_mm2
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.compression import friction as fr
 from flowcurve.identification.elastic_modulus import METAL_E_RANGE_MPa, ModulusChoice, apparent_modulus_warning
-from flowcurve.identification.laws.hardening import HardeningFit, fit_hardening
+from flowcurve.identification.laws.hardening import HardeningFit, fit_hardening, resolve_law
 from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_POINTS_TOP, SDAR_REACH, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, scale_to_measured, yield_onset_from_rate
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
@@ -421,12 +421,16 @@ def identify_compression(
     nominal = _nominal_curve(diagram, geo, line.specimen, E_MPa)
     yld = _modulus_and_yield(nominal, line.line, E_MPa, E_source)
     friction = _friction_correction(geo, nominal, friction_method, yld.E_used)
+    eps_c, sig_c, _ = friction.corrected[friction_correction]
+    chosen_on = _fit_points(eps_c, yld.i_yield, fit_range)
+    law, law_choice = resolve_law(law, eps_c[chosen_on], sig_c[chosen_on])  # --law best: chosen on the reported curve's fit points
     fits, fit_warnings = _hardening_fits(record.source, friction.corrected, yld.i_yield, fit_range, law, friction_correction)
     start, start_warnings = _strain_zero(diagram, geo, line, nominal, yld, friction, fits, fit_range, law, friction_correction)
     warnings = diagram.warnings + line.warnings + nominal.warnings + friction.warnings + fit_warnings + start_warnings
     result = _result(record, geo, diagram, line, nominal, yld, friction, fits, warnings, start=start, E_MPa=E_MPa, law=law,
                      friction_correction=friction_correction, toe=toe)
     result.methods["elastic_modulus"] = _modulus_method(E_choice, yld, line)
+    result.hardening.fit.law_choice = law_choice
     eps_def, sig_def, _ = friction.corrected[friction_correction]
     _model_form_shares(record.source, geo, nominal, yld, friction, fits[friction_correction], result, fit_range, law, friction_correction)
     uncertainty = None

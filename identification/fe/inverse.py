@@ -34,7 +34,7 @@ from flowcurve.identification.fe.model.ccx import timeout_by
 from flowcurve.identification.fe.model.model_form import FOLD_OVER_SIGMA_FACTOR, FORCE_SIGMA_PCT, fold_over_ramp
 from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
 from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
-from flowcurve.identification.laws.hardening import LAWS, fit_hardening
+from flowcurve.identification.laws.hardening import fit_hardening, static_form
 from flowcurve.identification.outcome import Identification
 from flowcurve.record.specimen import circle_area_mm2
 
@@ -67,7 +67,7 @@ class _Problem:
 
 def _model(problem: _Problem, x, **settings) -> UpsettingModel:
     """The run at parameters x (law…, μ); ``settings`` of a retry (another stick slope or increments)."""
-    law = LAWS[problem.law]
+    law = static_form(problem.law)
     params = dict(zip(law.names, (float(v) for v in x[:-1])))
     eps = np.concatenate([[0.0], np.geomspace(1e-4, 2.0, PLASTIC_ROWS)])
     sig = law.func(eps, **params)
@@ -225,7 +225,7 @@ class _Start:
 def _warm_start(inp: _Inputs) -> _Start:
     """The fit's start: the fast identification's law (refitted in the requested law when needed) and μ, in the bounds."""
     law = inp.problem.law
-    law_info = LAWS[law]
+    law_info = static_form(law)
     fast = inp.fast
     if fast.result["hardening"].get("law") == law:
         p0 = [fast.result["hardening"][k] for k in law_info.keys]
@@ -389,7 +389,7 @@ def _budget(sol, rows: _Rows, inp: _Inputs, time_limit_s, wall: float) -> dict:
 def _inverse_block(sol, se, mu_se_shape, misfit: _Misfit, rows: _Rows, inp: _Inputs, start: _Start, budget: dict,
                    increments: int, wall: float) -> dict:
     """result.json's ``inverse_fe`` block: μ and its standard errors, the misfits, the runs, the budget, the model."""
-    law_info, dface, elastics = LAWS[inp.problem.law], inp.dface, inp.elastics
+    law_info, dface, elastics = static_form(inp.problem.law), inp.dface, inp.elastics
     mu = float(sol.x[-1])
     return {
         "law": inp.law_choice,
@@ -410,7 +410,7 @@ def _inverse_block(sol, se, mu_se_shape, misfit: _Misfit, rows: _Rows, inp: _Inp
 
 def _assemble(inp: _Inputs, sol, se, by_side, inverse_block: dict, misfit: _Misfit, rows: _Rows, warnings: list[str]) -> Identification:
     """The identification: the fast result with the inverse's law, μ and its block, the law's curve, the force rows."""
-    law, law_info, fast, dface, elastics = inp.problem.law, LAWS[inp.problem.law], inp.fast, inp.dface, inp.elastics
+    law, law_info, fast, dface, elastics = inp.problem.law, static_form(inp.problem.law), inp.fast, inp.dface, inp.elastics
     params = dict(zip(law_info.names, map(float, sol.x[:-1])))
     e_hi = float(fast.result["hardening"]["strain_range"][1]) if fast.result.get("hardening") else float(inp.strain.max())
     grid = np.linspace(0.002, e_hi, 200)
@@ -464,6 +464,6 @@ def identify_inverse_fe_compression(record, *, law: str = "auto", workers: int |
     se, by_side, mu_se_shape = _uncertainty(sol, rows, start.x_scale)
     wall = time.perf_counter() - t0
     misfit = _misfit(sol, rows, inp.dface)
-    warnings = _all_warnings(sol, se, misfit, rows, LAWS[inp.problem.law].keys, inp.dface, time_limit_s)
+    warnings = _all_warnings(sol, se, misfit, rows, static_form(inp.problem.law).keys, inp.dface, time_limit_s)
     block = _inverse_block(sol, se, mu_se_shape, misfit, rows, inp, start, _budget(sol, rows, inp, time_limit_s, wall), increments, wall)
     return _assemble(inp, sol, se, by_side, block, misfit, rows, warnings)

@@ -23,7 +23,7 @@ from flowcurve.identification.elastic_modulus import DEFENSIBLE, SOURCE_TEXT, ch
 from flowcurve.identification.fe.model.model_form import FOLD_OVER_BAND
 from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
 from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
-from flowcurve.identification.laws.hardening import LAWS
+from flowcurve.identification.laws.hardening import static_form, static_law_names
 
 COMPARE_FROM_STRAIN = 0.02  # the toe and the elastic rise are left out of the deviation
 # the check's discretisation: finer than the fit's (2 rim-layer elements, 50 increments), so that a curve is not judged
@@ -51,9 +51,10 @@ def _table_from_function(fn, eps_max: float = 2.0) -> tuple[np.ndarray, np.ndarr
 def curve_from_result(result: dict, source: str = "result.json") -> FlowCurveSource:
     """The hardening law of a ``result.json`` (law + unit-named constants) as a *PLASTIC table."""
     h = result.get("hardening") or {}
-    law = LAWS.get(h.get("law"))
-    if law is None:
-        raise IdentificationError(f"{source}: no hardening law to verify ('hardening.law' is {h.get('law')!r}; expected one of {', '.join(LAWS)})")
+    try:
+        law = static_form(str(h.get("law")))
+    except IdentificationError:
+        raise IdentificationError(f"{source}: no hardening law to verify ('hardening.law' is {h.get('law')!r}; expected one of {', '.join(static_law_names())})") from None
     try:
         params = {name: float(h[key]) for name, key in zip(law.names, law.keys)}
     except (KeyError, TypeError, ValueError):

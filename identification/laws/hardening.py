@@ -1,10 +1,9 @@
-"""Strain-hardening laws σ(εp) and their identification from a true stress-strain curve.
+"""Strain-hardening laws σ(εp) identified from one true stress-strain curve.
 
-Three laws (docs/methods.md §3, §5):
-
-* Johnson–Cook static part ``A + B·εp^n`` (the default),
-* Swift ``K·(ε0 + εp)^n``,
-* Voce ``σ0 + Q·(1 − exp(−b·εp))``.
+Any registered static law (Hollomon, Ludwik, Swift, Voce, Hockett–Sherby, Swift–Voce: one module
+each in this package) and Johnson–Cook's static part ``A + B·εp^n`` (the default, under JC's
+names), through :func:`static_form`; ``best`` fits every one and keeps the lowest AIC
+(:func:`choose_law`). docs/methods.md has each law's equation.
 
 Two ways to identify one:
 
@@ -19,6 +18,7 @@ Both return a :class:`HardeningFit`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Callable, Iterable, Sequence
 
 import logging
@@ -26,6 +26,9 @@ import logging
 import numpy as np
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.laws.static import StaticLaw
+from flowcurve.identification.laws.swift import swift  # noqa: F401 (today's callers import the functions from here)
+from flowcurve.identification.laws.voce import voce  # noqa: F401
 
 logger = logging.getLogger(__name__)
 
@@ -40,41 +43,70 @@ def johnson_cook_static(eps_p, A, B, n):
     return A + B * np.power(eps_p, n)
 
 
-def swift(eps_p, K, eps0, n):
-    """Swift hardening: K·(ε0 + εp)^n (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
-    return K * np.power(eps0 + eps_p, n)
-
-
-def voce(eps_p, sigma0, Q, b):
-    """Voce saturation hardening: σ0 + Q·(1 − exp(−b·εp)) (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
-    return sigma0 + Q * (1.0 - np.exp(-b * eps_p))
+# a rate/temperature law one record identifies by its static part: (the static law of that form,
+# the function under the law's own names). Johnson–Cook's A + B·εp^n is Ludwik's form.
+STATIC_PARTS: dict[str, tuple[str, Callable]] = {"johnson_cook": ("ludwik", johnson_cook_static)}
 
 
 @dataclass(frozen=True)
-class _Law:
-    func: Callable
-    names: tuple[str, str, str]  # parameter names of func
-    keys: tuple[str, str, str]  # the same with units, for JSON
+class StaticForm:
+    """A registered law as one record's fit sees it: its static law (profile, data start,
+    bounds) under the names and JSON keys the result carries (Johnson–Cook: A, B, n)."""
+
+    name: str
+    law: StaticLaw
+    names: tuple[str, ...]
+    keys: tuple[str, ...]
     bounds: dict[str, tuple[float, float]]
+    func: Callable  # σ(eps_p, *constants in the order of names), MPa
+
+    def renamed(self, values: dict[str, float]) -> dict[str, float]:
+        """The static law's values under this form's names."""
+        return {mine: values[theirs] for mine, theirs in zip(self.names, self.law.names)}
+
+    def profile(self, eps, sig, w) -> tuple[np.ndarray, list[dict[str, float]]]:
+        """The static law's variable-projection profile (global stage), under this form's names."""
+        ss, cands = self.law.profile(eps, sig, w)
+        return ss, [self.renamed(c) for c in cands]
+
+    def data_start(self, eps, sig) -> dict[str, float]:
+        """The static law's start values read off the data, under this form's names."""
+        return self.renamed(self.law.data_start(eps, sig))
 
 
-LAWS: dict[str, _Law] = {
-    "johnson_cook": _Law(johnson_cook_static, ("A", "B", "n"), ("A_MPa", "B_MPa", "n"),
-                         {"A": (0.0, np.inf), "B": (0.0, np.inf), "n": (1e-4, 5.0)}),
-    "swift": _Law(swift, ("K", "eps0", "n"), ("K_MPa", "eps0", "n"),
-                  {"K": (0.0, np.inf), "eps0": (1e-9, 10.0), "n": (1e-4, 5.0)}),
-    "voce": _Law(voce, ("sigma0", "Q", "b"), ("sigma0_MPa", "Q_MPa", "b"),
-                 {"sigma0": (0.0, np.inf), "Q": (0.0, np.inf), "b": (1e-6, 1e5)}),
-}
+@lru_cache(maxsize=None)
+def static_form(name: str) -> StaticForm:
+    """The law ``name`` as one record's fit sees it; a one-line error for an unknown law (with
+    the nearest name) and for a rate or temperature law (those are fitted over a series)."""
+    from flowcurve.identification.laws.base import get_law
+
+    law = get_law(name)
+    if name in STATIC_PARTS:
+        static_name, func = STATIC_PARTS[name]
+        static = get_law(static_name)
+        names = law.names[: len(static.names)]
+        return StaticForm(name, static, names, tuple(law.parameter(n).key for n in names),
+                          {mine: (p.lower, p.upper) for mine, p in zip(names, static.parameters)}, func)
+    if law.rate_dependent or law.temperature_dependent:
+        raise IdentificationError(f"{law.display_name} ({name}) depends on the strain rate or temperature: one record cannot identify it; "
+                                  f"fit it over a series of records with `flowcurve fit --law {name}`")
+    return StaticForm(name, law, law.names, tuple(p.key for p in law.parameters),
+                      {p.name: (p.lower, p.upper) for p in law.parameters}, type(law).function)
 
 
-def _law(name: str) -> _Law:
-    try:
-        return LAWS[name]
-    except KeyError:
-        raise IdentificationError(f"unknown hardening law {name!r}; choose one of {', '.join(LAWS)}") from None
+def static_law_names() -> tuple[str, ...]:
+    """Every registered law one record can identify (static ones, and those with a static part)."""
+    from flowcurve.identification.laws.base import registered_laws
+
+    return tuple(name for name, law in registered_laws().items()
+                 if name in STATIC_PARTS or not (law.rate_dependent or law.temperature_dependent))
+
+
+def best_candidates() -> tuple[str, ...]:
+    """The laws ``--law best`` compares: every static one, a static part standing for the
+    static law of its form (johnson_cook for ludwik: one form, one AIC)."""
+    forms = {static for static, _ in STATIC_PARTS.values()}
+    return tuple(name for name in static_law_names() if name not in forms)
 
 
 @dataclass
@@ -92,6 +124,8 @@ class HardeningFit:
     report: str = ""
     warnings: list[str] = field(default_factory=list)
     doubt: str = ""  # evidence outside the fit that the curve is not to be trusted (then "poor")
+    aic: float = float("nan")  # Akaike's information criterion of a least-squares fit, N·ln(χ²/N) + 2k
+    law_choice: dict | None = None  # set when --law best chose this law: by how much (as_dict's "law_choice")
 
     @property
     def quality(self) -> str:
@@ -100,11 +134,11 @@ class HardeningFit:
 
     def __call__(self, eps_p):
         """Flow stress (MPa) of the identified law at true plastic strain ``eps_p``."""
-        return _law(self.law).func(eps_p, **self.params)
+        return static_form(self.law).func(eps_p, **self.params)
 
     def as_dict(self) -> dict:
         """JSON-able summary with unit-carrying keys (``A_MPa``, ``A_MPa_stderr`` …)."""
-        law = _law(self.law)
+        law = static_form(self.law)
         out: dict = {"law": self.law, "method": self.method}
         for name, key in zip(law.names, law.keys):
             out[key] = float(self.params[name])
@@ -116,6 +150,8 @@ class HardeningFit:
         out["strain_range"] = [float(self.strain_range[0]), float(self.strain_range[1])]
         out["quality"] = self.quality
         out["warnings"] = list(self.warnings)
+        if self.law_choice is not None:
+            out["law_choice"] = self.law_choice
         return out
 
 
@@ -146,85 +182,6 @@ def _errors_pct(fit_values: np.ndarray, stress: np.ndarray) -> tuple[float, floa
 # -- least squares -----------------------------------------------------------------------
 
 
-def _linear_on_grid(X: np.ndarray, y: np.ndarray, w: np.ndarray, *, nonnegative_c0: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Weighted least squares y ≈ c0 + c1·x for every row x of X at once (normal equations).
-
-    nonnegative_c0: where the free solution has c0 < 0, the best line with c0 = 0 instead
-    (c1 = Σw²xy/Σw²x²), so the grid search respects the bound A ≥ 0 / σ0 ≥ 0 exactly.
-    Returns c0, c1 and the weighted residual sum of squares, one value per row of X."""
-    w2 = w**2
-    sw, sy = np.sum(w2), np.sum(w2 * y)
-    sx, sxx, sxy = X @ w2, (X**2) @ w2, X @ (w2 * y)
-    det = sw * sxx - sx**2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        c1 = (sw * sxy - sx * sy) / det
-        c0 = (sy - c1 * sx) / sw
-        if nonnegative_c0:
-            through_zero = c0 < 0
-            c1 = np.where(through_zero, sxy / sxx, c1)
-            c0 = np.where(through_zero, 0.0, c0)
-        ss = ((c0[:, None] + c1[:, None] * X - y) ** 2) @ w2
-    return c0, c1, np.where(np.isfinite(ss), ss, np.inf)
-
-
-def _grid_search(law: str, eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, list[dict[str, float]]]:
-    """Global stage by variable projection: the nonlinear constant (n, b or ε0) scanned over a
-    dense log grid across its whole plausible range, the two linear ones solved exactly (weighted
-    linear least squares, the lower bound of A / σ0 respected) for every grid value.
-
-    Returns the residual sum of squares per grid value and the constants per grid value."""
-    if law == "johnson_cook":
-        grid = np.geomspace(0.005, 3.0, 240)
-        A, B, ss = _linear_on_grid(np.power(eps[None, :], grid[:, None]), sig, w, nonnegative_c0=True)
-        ok = B > 0
-        cands = [{"A": A[i], "B": B[i], "n": grid[i]} for i in range(grid.size)]
-    elif law == "voce":
-        span = max(np.max(eps), 1e-6)
-        grid = np.geomspace(0.05 / span, 2000.0 / span, 240)
-        s0, Q, ss = _linear_on_grid(-np.expm1(-grid[:, None] * eps[None, :]), sig, w, nonnegative_c0=True)
-        ok = Q > 0
-        cands = [{"sigma0": s0[i], "Q": Q[i], "b": grid[i]} for i in range(grid.size)]
-    else:  # swift, in log form: ln σ = ln K + n·ln(ε0 + εp), then scored in MPa
-        if np.min(sig) <= 0:
-            raise IdentificationError("Swift law needs positive stresses")
-        grid = np.geomspace(1e-7, 1.0, 240)
-        base = grid[:, None] + eps[None, :]
-        lnK, n, _ = _linear_on_grid(np.log(base), np.log(sig), w)
-        with np.errstate(over="ignore", invalid="ignore"):
-            pred = np.exp(lnK)[:, None] * np.power(base, n[:, None])
-        ss = np.where(np.isfinite(pred).all(axis=1), ((pred - sig) ** 2) @ (w**2), np.inf)
-        ok = n > 0
-        cands = [{"K": float(np.exp(lnK[i])), "eps0": grid[i], "n": n[i]} for i in range(grid.size)]
-    ss = np.where(ok & np.isfinite(ss), ss, np.inf)
-    return ss, [{k: float(v) for k, v in c.items()} for c in cands]
-
-
-def data_start(law: str, eps: np.ndarray, sig: np.ndarray) -> dict[str, float]:
-    """Start values read off the data: A (σ0) = the flow stress at the first plastic point
-    (≈ Rp0.2), B and n from the log–log slope of σ − A against εp (ln(σ − A) = ln B + n ln εp)."""
-    order = np.argsort(eps)
-    e, s = eps[order], sig[order]
-    first = float(s[0])
-    A = max(first - 0.05 * max(np.ptp(s), 1e-9), 0.0)  # just below the first point: σ − A > 0
-    rise = s - A
-    use = (e > 0) & (rise > 0)
-    if use.sum() >= 2 and np.ptp(np.log(e[use])) > 0:
-        n, lnB = np.polyfit(np.log(e[use]), np.log(rise[use]), 1)
-    else:
-        n, lnB = 0.5, np.log(max(np.ptp(s), 1.0) / max(np.ptp(e), 1e-6) ** 0.5)
-    n = float(np.clip(n, 0.01, 2.0))
-    B = float(np.exp(lnB))
-    if law == "johnson_cook":
-        return {"A": A, "B": B, "n": n}
-    if law == "voce":
-        top = float(np.max(s))
-        half = e[np.argmax(s >= A + 0.63 * (top - A))] if top > A else float(np.max(e))
-        return {"sigma0": A, "Q": max(top - A, 1e-3), "b": 1.0 / max(half, 1e-6)}
-    ln_e = np.log(np.clip(e, 1e-9, None))
-    n_sw, lnK = np.polyfit(ln_e, np.log(np.clip(s, 1e-9, None)), 1) if np.ptp(ln_e) > 0 else (0.2, np.log(first))
-    return {"K": float(np.exp(lnK)), "eps0": 1e-3, "n": float(np.clip(n_sw, 1e-3, 2.0))}
-
-
 def _grid_minima(ss: np.ndarray, count: int, within: float = 10.0) -> list[int]:
     """Indices of the ``count`` lowest local minima of ``ss`` along the grid (distinct basins),
     those no more than ``within`` times the lowest."""
@@ -250,7 +207,7 @@ GRID_STARTS = 4  # local fits started from the best basins of the global grid st
 MAX_EVALUATIONS = 500  # per local fit: a start crawling along a bound is cut short, the others finish
 
 
-def _polish(spec: _Law, starts: list[dict[str, float]], eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> dict[str, float]:
+def _polish(spec: StaticForm, starts: list[dict[str, float]], eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> dict[str, float]:
     """Local bounded least squares (scipy, trust region) from every start; the lowest cost wins.
 
     The winner is then refitted once with lmfit by the caller, for its uncertainties and report."""
@@ -287,14 +244,14 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     weights: per-point weights of the curve points (multiply the residuals in MPa).
 
     Global stage: the nonlinear constant scanned over its whole range with the linear ones
-    solved exactly (:func:`_grid_search`); local stage: lmfit from the best basins of that scan
-    and from start values read off the data (:func:`data_start`); the lowest residual wins.
+    solved exactly (the law's ``profile``, :mod:`.static`); local stage: lmfit from the best basins of that scan
+    and from start values read off the data (the law's ``data_start``); the lowest residual wins.
     A constant left on a bound and a fit with a max error above 10 % are reported in
     ``warnings``; the latter makes ``quality`` "poor".
     """
     import lmfit  # here, so `flowcurve --help` stays fast
 
-    spec = _law(law)
+    spec = static_form(law)
     raw_eps = np.asarray(eps_p, dtype=float).ravel()
     w = np.ones_like(raw_eps) if weights is None else np.asarray(weights, dtype=float).ravel()
     if w.shape != raw_eps.shape:
@@ -311,10 +268,10 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     if eps.size < 4 or np.ptp(eps) <= 0:
         raise IdentificationError(f"hardening fit: need at least 4 points spanning a strain range, got {eps.size}")
 
-    ss, candidates = _grid_search(law, eps, sig, w)
+    ss, candidates = spec.profile(eps, sig, w)
     if not np.any(np.isfinite(ss)):
         raise IdentificationError(f"the data do not harden (stress does not rise with strain): a {law} law cannot be fitted")
-    starts = [candidates[i] for i in _grid_minima(ss, GRID_STARTS)] + [data_start(law, eps, sig)]
+    starts = [candidates[i] for i in _grid_minima(ss, GRID_STARTS)] + [spec.data_start(eps, sig)]
     polished = _polish(spec, starts, eps, sig, w)
     model = lmfit.Model(spec.func, independent_vars=["eps_p"])
     params = model.make_params()
@@ -336,7 +293,60 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
         warnings.append(f"{law} fit is poor: max error {max_pct:.3g} % (> {POOR_FIT_PCT:g} %), rms {rms_pct:.3g} %")
     return HardeningFit(law=law, method="least_squares", params=values, stderr=stderr, correlations=correl,
                         fit_error_pct=max_pct, rms_error_pct=rms_pct,
-                        strain_range=(float(np.min(eps)), float(np.max(eps))), report=best.fit_report(), warnings=warnings)
+                        strain_range=(float(np.min(eps)), float(np.max(eps))), report=best.fit_report(), warnings=warnings,
+                        aic=float(best.aic))
+
+
+PARSIMONY_DELTA_AIC = 2.0  # laws this close to the lowest AIC are as good: the one with the fewest constants is kept
+
+
+def choose_law(eps_p, stress_MPa, *, weights=None, extra_points: Iterable[Sequence[float]] = ()) -> HardeningFit:
+    """``--law best``: every static law (:func:`best_candidates`) fitted to the same weighted
+    points and ranked by AIC (N·ln(χ²/N) + 2k, k the law's constants); among the laws within
+    :data:`PARSIMONY_DELTA_AIC` of the lowest, the one with the fewest constants wins (a law that
+    nests another fits the noise too). The winner's ``law_choice`` says which won, by which rule,
+    and ΔAIC to the next (the next law's AIC − the winner's; negative when parsimony chose), with
+    every law's AIC."""
+    fits, failed = {}, {}
+    for name in best_candidates():
+        try:
+            fits[name] = fit_hardening(eps_p, stress_MPa, name, weights=weights, extra_points=extra_points)
+        except IdentificationError as exc:
+            failed[name] = str(exc)
+    ranked = sorted((f for f in fits.values() if np.isfinite(f.aic)), key=lambda f: f.aic)
+    if not ranked:
+        raise IdentificationError(f"--law best: no law could be fitted ({'; '.join(f'{k}: {v}' for k, v in failed.items())})")
+    close = [f for f in ranked if f.aic - ranked[0].aic <= PARSIMONY_DELTA_AIC]
+    won = min(close, key=lambda f: (len(f.params), f.aic))
+    runner = next((f for f in ranked if f is not won), None)
+    won.law_choice = {
+        "by": f"AIC on the same weighted points; within {PARSIMONY_DELTA_AIC:g} of the lowest, the fewest constants",
+        "chosen": won.law, "lowest_aic": ranked[0].law,
+        "next": None if runner is None else runner.law,
+        "delta_aic_to_next": None if runner is None else float(runner.aic - won.aic),
+        "aic": {f.law: float(f.aic) for f in ranked}, "failed": failed,
+    }
+    return won
+
+
+def law_choice_text(choice: dict) -> str:
+    """One line: which law --law best chose and by how much."""
+    if choice.get("next") is None:
+        return f"--law best: {choice['chosen']} (the only law that could be fitted)"
+    delta = choice["delta_aic_to_next"]
+    how = (f"AIC {delta:.1f} below the next ({choice['next']})" if delta >= 0 else
+           f"AIC {-delta:.1f} above {choice['next']}, within {PARSIMONY_DELTA_AIC:g}: as good with fewer constants")
+    return f"--law best: {choice['chosen']} by {how} (ΔAIC > 10: the others have essentially no support)"
+
+
+def resolve_law(law: str, eps_p, stress_MPa) -> tuple[str, dict | None]:
+    """The law one record's fits use: ``law`` itself (checked: a one-line error for an unknown or
+    a rate law), or for ``best`` the winner of :func:`choose_law` on (εp, σ) with its choice."""
+    if law != "best":
+        static_form(law)
+        return law, None
+    won = choose_law(eps_p, stress_MPa)
+    return won.law, won.law_choice
 
 
 RANGE_SHARE_PART = 0.5  # the range-stability refit uses this first part of the fitted strain range
@@ -373,6 +383,9 @@ def pattern_shift(eps_p, stress_MPa, u: float, pattern, law: str = "johnson_cook
 
 
 # -- three characteristic points ------------------------------------------------------------
+
+
+THREE_POINT_LAWS = ("johnson_cook", "swift", "voce")  # the laws three_point_fit solves
 
 
 def _root(g: Callable[[float], float], lo: float, hi: float, what: str) -> float:
@@ -432,10 +445,10 @@ def three_point_fit(points: Sequence[Sequence[float]], law: str = "johnson_cook"
         n = np.log(s2 / s1) / np.log((e0 + e2) / (e0 + e1))
         params = {"K": s1 / (e0 + e1) ** n, "eps0": e0, "n": n}
     else:
-        _law(law)
-        raise AssertionError("unreachable")
+        static_form(law)  # an unknown or rate law: its own error
+        raise IdentificationError(f"three-point fit: written for {', '.join(THREE_POINT_LAWS)}, not {law}; use the least-squares fit (--hardening lsq)")
     params = {k: float(v) for k, v in params.items()}
-    func = _law(law).func
+    func = static_form(law).func
     eps_chk, sig_chk = np.array([e1, e2, e3]), np.array([s1, s2, s3])
     if curve is not None:
         ce, cs = _check_points(curve[0], curve[1], "three-point fit, curve")

@@ -20,7 +20,7 @@ from flowcurve.errors import IdentificationError
 from flowcurve.identification import iso6892
 from flowcurve.record.summary import record_summary
 from flowcurve.identification.elastic_modulus import apparent_modulus_warning, choose_modulus, tension_E_source
-from flowcurve.identification.laws.hardening import HardeningFit, fit_hardening, three_point_fit
+from flowcurve.identification.laws.hardening import THREE_POINT_LAWS, HardeningFit, fit_hardening, resolve_law, three_point_fit
 from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD
 from flowcurve.identification.tension.necking import METHODS as NECK_METHODS
 from flowcurve.identification.tension.necking import neck_corrections
@@ -243,14 +243,14 @@ def _three_points(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: di
     return [first, (true.eps_p_at_Rm, float(true.sig_t[inp.i_m])), (fracture["true_strain"], fracture[neck]["stress_MPa"])]
 
 
-def _fit_laws(grid, fit_sig, extra: list, three_points: list | None, fracture_point: str) -> tuple[dict, dict, dict, list[str]]:
-    """Every law by least squares (with and without the fracture point) and by three points:
+def _fit_laws(grid, fit_sig, extra: list, three_points: list | None, fracture_point: str, law: str = "johnson_cook") -> tuple[dict, dict, dict, list[str]]:
+    """Today's three laws and ``law`` by least squares (with and without the fracture point) and by three points:
     (fits, least-squares variants, fracture-point choices, warnings)."""
     fits: dict = {}
     variants: dict = {}
     choices: dict = {}
     warnings: list[str] = []
-    for name in ("johnson_cook", "swift", "voce"):
+    for name in dict.fromkeys((*THREE_POINT_LAWS, law)):
         try:
             pair = {"without": fit_hardening(grid, fit_sig, name)}
         except IdentificationError as exc:
@@ -267,7 +267,7 @@ def _fit_laws(grid, fit_sig, extra: list, three_points: list | None, fracture_po
             fits[f"least_squares_{name}"] = pair[chosen]
             choices[name] = (chosen, why)
             variants.update({f"least_squares_{name}_{v}_fracture_point": f for v, f in pair.items()})
-        if three_points is not None:
+        if three_points is not None and name in THREE_POINT_LAWS:
             try:
                 fits[f"three_point_{name}"] = three_point_fit(three_points, name, curve=(grid, fit_sig))
             except IdentificationError as exc:
@@ -285,7 +285,7 @@ def _hardening_fits(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: 
     if fracture_point == "include" and not extra:
         warnings.append("--fracture-point include: there is no fracture point (post.dk_mm or post.sk_mm2 missing); the uniform range alone is fitted")
     three_points = _three_points(inp, iso, true, fracture, neck, fit_lo)
-    fits, variants, choices, fit_warnings = _fit_laws(grid, fit_sig, extra, three_points, fracture_point)
+    fits, variants, choices, fit_warnings = _fit_laws(grid, fit_sig, extra, three_points, fracture_point, law)
     warnings += fit_warnings
     main_key = f"{hardening}_{law}"
     if main_key not in fits:
@@ -443,6 +443,8 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     fit_range, fractions, window_fixed_MPa = _check_options(
         true_stress=true_stress, neck=neck, hardening=hardening, modulus_reference=modulus_reference, fracture_point=fracture_point,
         fit_range=fit_range, modulus_window=modulus_window, modulus_window_MPa=modulus_window_MPa)
+    if hardening == "three_point" and law not in THREE_POINT_LAWS:
+        raise IdentificationError(f"--hardening three-point solves {', '.join(THREE_POINT_LAWS)}, not {law}; fit {law} by least squares (--hardening lsq)")
     record, unbroken = without_fracture_values(record)
     inp = _inputs(record, use_extensometer=use_extensometer, frame_stiffness_N_per_um=frame_stiffness_N_per_um,
                   crosshead_length_mm=crosshead_length_mm, scale=scale)
@@ -453,9 +455,11 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     iso = _iso_results(inp, line)
     true = _true_curve(inp, line, true_stress, poisson)
     fracture, neck_warnings = _neck_correction(inp, iso, true)
+    law, law_choice = resolve_law(law, *_fit_points(inp, iso, true, fit_range)[:2])  # --law best: chosen on the uniform range
     hard = _hardening_fits(inp, iso, true, fracture, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
                            fit_range=fit_range, fracture_point=fracture_point)
     hard, start_warnings = _strain_zero(inp, line, hard, law)
+    hard.main.law_choice = law_choice  # the main fit's copy only (result.json's hardening)
     warnings = (inp.warnings + line.warnings + sdar_warnings(line.mod) + iso.warnings + true.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings
                 + hard.warnings + start_warnings)
     result = _result(inp, line, iso, true, fracture, hard, warnings, toe=toe, true_stress=true_stress, poisson=poisson,

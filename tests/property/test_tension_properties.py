@@ -19,7 +19,7 @@ import numpy as np
 from hypothesis import event, given
 
 from flowcurve.errors import FlowcurveError
-from flowcurve.identification.laws.hardening import LAWS
+from flowcurve.identification.laws.hardening import static_form
 from flowcurve.identification.tension.identify import identify_tension
 
 from .records import tension_records
@@ -62,7 +62,7 @@ def check(result, true_curve, truth, channel: str) -> list[str]:
     lo_fit, hi_fit = h["strain_range"]
     grid = np.linspace(max(lo_fit, lo), min(hi_fit, hi), 20)
     if h["quality"] == "good" and grid[-1] > grid[0]:
-        spec = LAWS[h["law"]]
+        spec = static_form(h["law"])
         fit = spec.func(grid, **{name: h[key] for name, key in zip(spec.names, spec.keys)})
         dev = np.max(np.abs(fit / truth.law(grid - truth.hardening_start) - 1))
         if dev > 0.12:

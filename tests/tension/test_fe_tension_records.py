@@ -47,9 +47,9 @@ def identify_against_law(path: Path, name: str, out: Path, fracture_point: str =
     ep, sigma = curve[:, 0], curve[:, 1]
     uniform = (ep >= lo) & (ep <= hi)
     truth = fe_records.law(name)
-    from flowcurve.identification.laws.hardening import LAWS  # the fitted law, evaluated by the product's own function
+    from flowcurve.identification.laws.hardening import static_form  # the fitted law, evaluated by the product's own function
 
-    spec = LAWS[name]
+    spec = static_form(name)
     fitted = spec.func(ep[uniform], **{n: hard[k] for n, k in zip(spec.names, spec.keys)})
     return {"yield_point": result["yield_point"], "E_MPa": result["E_MPa"], "range": (lo, hi), "fracture_point": hard["fracture_point"],
             "curve_error": float(np.max(np.abs(sigma[uniform] / truth(ep[uniform]) - 1.0))),

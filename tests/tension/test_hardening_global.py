@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.optimize import differential_evolution
 
-from flowcurve.identification.laws.hardening import LAWS, POOR_FIT_PCT, fit_hardening, johnson_cook_static, swift, voce
+from flowcurve.identification.laws.hardening import POOR_FIT_PCT, fit_hardening, johnson_cook_static, static_form, swift, voce
 
 EPS = np.linspace(0.002, 0.08, 30)
 CURVES = {
@@ -29,7 +29,7 @@ def brute_force_rms_pct(law: str, eps, sig, extra=()) -> float:
     s = np.concatenate([sig, [p[1] for p in extra]])
     w = np.concatenate([np.ones_like(eps), [p[2] for p in extra]])
     top, span = float(np.max(s)), float(np.max(e))
-    func = LAWS[law].func
+    func = static_form(law).func
     if law == "johnson_cook":
         box, unpack = [(0, 2 * top), (0, 10 * top), (np.log(0.005), np.log(3.0))], lambda x: (x[0], x[1], np.exp(x[2]))
     elif law == "swift":
@@ -48,7 +48,7 @@ def brute_force_rms_pct(law: str, eps, sig, extra=()) -> float:
 
 
 @pytest.mark.parametrize("curve", list(CURVES))
-@pytest.mark.parametrize("law", list(LAWS))
+@pytest.mark.parametrize("law", ("johnson_cook", "swift", "voce"))  # the laws brute_force_rms_pct boxes
 def test_fit_is_as_good_as_an_independent_global_search(curve, law):
     rng = np.random.default_rng(11)
     sig = CURVES[curve](EPS) * (1 + 0.003 * rng.standard_normal(EPS.size))
