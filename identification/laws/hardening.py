@@ -234,6 +234,27 @@ def _polish(spec: StaticForm, starts: list[dict[str, float]], eps: np.ndarray, s
     return dict(zip(spec.names, (float(v) for v in best_x)))
 
 
+def _weighted_points(eps_p, stress_MPa, extra_points, weights) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The fit's points and weights: the curve's finite points (weights default 1) plus the extra
+    (εp, σ[, weight]) points; at least 4 spanning a strain range."""
+    raw_eps = np.asarray(eps_p, dtype=float).ravel()
+    w = np.ones_like(raw_eps) if weights is None else np.asarray(weights, dtype=float).ravel()
+    if w.shape != raw_eps.shape:
+        raise IdentificationError(f"hardening fit: weights must have one value per curve point ({raw_eps.size}), got {w.size}")
+    w = w[np.isfinite(raw_eps) & np.isfinite(np.asarray(stress_MPa, dtype=float).ravel())]
+    eps, sig = _check_points(raw_eps, stress_MPa, "hardening fit")
+    extra = [tuple(float(v) for v in p) for p in extra_points]
+    if extra:
+        if any(len(p) not in (2, 3) for p in extra):
+            raise IdentificationError("hardening fit: extra points are (strain, stress_MPa[, weight])")
+        e_x, s_x = _check_points([p[0] for p in extra], [p[1] for p in extra], "hardening fit, extra points")
+        w_x = np.array([p[2] if len(p) == 3 else 1.0 for p in extra])
+        eps, sig, w = np.concatenate([eps, e_x]), np.concatenate([sig, s_x]), np.concatenate([w, w_x])
+    if eps.size < 4 or np.ptp(eps) <= 0:
+        raise IdentificationError(f"hardening fit: need at least 4 points spanning a strain range, got {eps.size}")
+    return eps, sig, w
+
+
 def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points: Iterable[Sequence[float]] = (),
                   weights=None) -> HardeningFit:
     """Least-squares fit of a hardening law (lmfit) to a true curve σ(εp), global then local.
@@ -252,22 +273,7 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     import lmfit  # here, so `flowcurve --help` stays fast
 
     spec = static_form(law)
-    raw_eps = np.asarray(eps_p, dtype=float).ravel()
-    w = np.ones_like(raw_eps) if weights is None else np.asarray(weights, dtype=float).ravel()
-    if w.shape != raw_eps.shape:
-        raise IdentificationError(f"hardening fit: weights must have one value per curve point ({raw_eps.size}), got {w.size}")
-    w = w[np.isfinite(raw_eps) & np.isfinite(np.asarray(stress_MPa, dtype=float).ravel())]
-    eps, sig = _check_points(raw_eps, stress_MPa, "hardening fit")
-    extra = [tuple(float(v) for v in p) for p in extra_points]
-    if extra:
-        if any(len(p) not in (2, 3) for p in extra):
-            raise IdentificationError("hardening fit: extra points are (strain, stress_MPa[, weight])")
-        e_x, s_x = _check_points([p[0] for p in extra], [p[1] for p in extra], "hardening fit, extra points")
-        w_x = np.array([p[2] if len(p) == 3 else 1.0 for p in extra])
-        eps, sig, w = np.concatenate([eps, e_x]), np.concatenate([sig, s_x]), np.concatenate([w, w_x])
-    if eps.size < 4 or np.ptp(eps) <= 0:
-        raise IdentificationError(f"hardening fit: need at least 4 points spanning a strain range, got {eps.size}")
-
+    eps, sig, w = _weighted_points(eps_p, stress_MPa, extra_points, weights)
     ss, candidates = spec.profile(eps, sig, w)
     if not np.any(np.isfinite(ss)):
         raise IdentificationError(f"the data do not harden (stress does not rise with strain): a {law} law cannot be fitted")

@@ -98,8 +98,10 @@ class _Hardening:
     start: dict | None = None  # the curve's start as far as it rests on the strain zero (§2.11)
 
 
-def _check_options(*, true_stress, neck, hardening, modulus_reference, fracture_point, fit_range, modulus_window, modulus_window_MPa):
+def _check_options(*, true_stress, neck, law, hardening, modulus_reference, fracture_point, fit_range, modulus_window, modulus_window_MPa):
     """The options, checked: (fit_range, modulus window fractions, modulus window MPa)."""
+    if hardening == "three_point" and law not in THREE_POINT_LAWS:
+        raise IdentificationError(f"--hardening three-point solves {', '.join(THREE_POINT_LAWS)}, not {law}; fit {law} by least squares (--hardening lsq)")
     if true_stress not in TRUE_STRESS_FORMS:
         raise IdentificationError(f"true_stress must be one of {', '.join(TRUE_STRESS_FORMS)}, not {true_stress!r}")
     if neck not in NECK_METHODS:
@@ -441,10 +443,8 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         kept in ``hardening_alternatives``.
     """
     fit_range, fractions, window_fixed_MPa = _check_options(
-        true_stress=true_stress, neck=neck, hardening=hardening, modulus_reference=modulus_reference, fracture_point=fracture_point,
-        fit_range=fit_range, modulus_window=modulus_window, modulus_window_MPa=modulus_window_MPa)
-    if hardening == "three_point" and law not in THREE_POINT_LAWS:
-        raise IdentificationError(f"--hardening three-point solves {', '.join(THREE_POINT_LAWS)}, not {law}; fit {law} by least squares (--hardening lsq)")
+        true_stress=true_stress, neck=neck, law=law, hardening=hardening, modulus_reference=modulus_reference,
+        fracture_point=fracture_point, fit_range=fit_range, modulus_window=modulus_window, modulus_window_MPa=modulus_window_MPa)
     record, unbroken = without_fracture_values(record)
     inp = _inputs(record, use_extensometer=use_extensometer, frame_stiffness_N_per_um=frame_stiffness_N_per_um,
                   crosshead_length_mm=crosshead_length_mm, scale=scale)
