@@ -80,3 +80,20 @@ def test_a_jc_fit_json_v2_carries_the_law_block_that_rebuilds_the_same_law(membe
         sf.fit(m.plastic_strain, m.strain_rate_per_s, m.temperature_C), rel=1e-12)
     v1 = {k: v for k, v in d.items() if k != "law"}
     assert law_of_fit(v1)[1] == values
+
+
+def test_a_constant_on_its_bound_is_reported_as_such_never_as_a_percentage():
+    """Data that soften with rate (JC C = −0.005) drive C to its lower bound 0: stated as on the bound,
+    with no uncertainty and no percentage of zero."""
+    jc = get_law("johnson_cook")
+    ref = {"ref_strain_rate_per_s": 1.0, "ref_temperature_C": 20.0, "melt_temperature_C": 1500.0}
+    truth = {"A": 300.0, "B": 500.0, "n": 0.3, "C": -0.005, "m": 1.0}
+    eps = np.linspace(0.002, 0.4, 40)
+    members = [SeriesMember(f"T{T:g}_r{r:g}", eps, jc.evaluate(eps, np.full(eps.size, r), np.full(eps.size, T), **truth, **ref), r, T)
+               for T in (20.0, 400.0) for r in (1.0, 100.0)]
+    sf = fit_series(members, **ref)
+    assert sf.fit.at_bound == {"C": "lower"} and sf.fit.params["C"] == pytest.approx(0.0, abs=1e-12)
+    assert any("C ended on its lower bound" in w for w in sf.warnings)
+    assert not any("C by up to" in w for w in sf.warnings)
+    d = sf.as_dict()
+    assert d["total_uncertainty"]["C"] is None and d["global"]["at_bound"] == {"C": "lower"}
