@@ -102,7 +102,10 @@ def load_members_in_parallel(inputs, identify_options: dict, jobs: int = 1, sche
 
 
 def run(args) -> int:
+    from flowcurve.identification.laws.base import get_law
     from flowcurve.services.fit import FitRequest, fit, summary
+
+    get_law(args.law)  # an unknown law is refused before any record is read
 
     request = FitRequest(args.inputs, args.out, ref_rate=args.ref_rate, ref_temp=args.ref_temp, melt_temp=args.melt_temp,
                          method=args.method, fix_C=args.fix_C, fix_m=args.fix_m, E_MPa=args.E_MPa,

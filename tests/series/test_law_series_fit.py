@@ -97,3 +97,9 @@ def test_a_constant_on_its_bound_is_reported_as_such_never_as_a_percentage():
     assert not any("C by up to" in w for w in sf.warnings)
     d = sf.as_dict()
     assert d["total_uncertainty"]["C"] is None and d["global"]["at_bound"] == {"C": "lower"}
+
+
+def test_fit_refuses_an_unknown_law_in_one_line_before_reading_any_record(tmp_path, capsys):
+    assert main(["fit", str(tmp_path / "absent.csv"), "--law", "hensel_spitel", "--out", str(tmp_path / "fit")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "unknown law 'hensel_spitel' (did you mean 'hensel_spittel'?)" in err
