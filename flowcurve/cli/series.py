@@ -16,7 +16,7 @@ from flowcurve.services.fit import SHAPE_ERROR_PCT as DEFAULT_SHAPE_ERROR_PCT
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "fit",
-        help="Johnson-Cook constants (A, B, n, C, m) from a series of tests",
+        help="Johnson-Cook constants (A, B, n, C, m), or another registered law's (--law), from a series of tests",
         description=(
             "Fit the Johnson-Cook flow stress sigma = (A + B*eps_p^n)(1 + C ln(rate/ref_rate))(1 - T*^m) "
             "to the true curves of a series of tests (records, result folders of 'flowcurve identify', "
@@ -29,6 +29,9 @@ def register(subparsers) -> None:
     p.add_argument("--ref-rate", type=float, metavar="1/s", help="reference strain rate (default: the lowest rate of the series)")
     p.add_argument("--ref-temp", type=float, metavar="C", help="reference temperature, °C (default: the lowest of the series)")
     p.add_argument("--melt-temp", type=float, metavar="C", help="melting temperature of the material, °C (required)")
+    p.add_argument("--law", default="johnson_cook", metavar="NAME",
+                   help="a registered law with strain rate and temperature (default johnson_cook; e.g. hensel_spittel, T in °C); "
+                        "checked when the fit runs")
     p.add_argument("--method", choices=("global", "stepwise"), default="global",
                    help="global least squares over all curves (default) or the classic stepwise procedure; the other is reported for comparison")
     p.add_argument("--fix-C", type=float, metavar="VALUE", help="do not identify C, use this value (e.g. for a series at one rate)")
@@ -99,12 +102,15 @@ def load_members_in_parallel(inputs, identify_options: dict, jobs: int = 1, sche
 
 
 def run(args) -> int:
+    from flowcurve.identification.laws.base import get_law
     from flowcurve.services.fit import FitRequest, fit, summary
+
+    get_law(args.law)  # an unknown law is refused before any record is read
 
     request = FitRequest(args.inputs, args.out, ref_rate=args.ref_rate, ref_temp=args.ref_temp, melt_temp=args.melt_temp,
                          method=args.method, fix_C=args.fix_C, fix_m=args.fix_m, E_MPa=args.E_MPa,
                          rate_per_record=getattr(args, "rate_per_record", False), max_points=args.max_points,
-                         shape_error=args.shape_error, fracture_points=args.fracture_points,
+                         shape_error=args.shape_error, fracture_points=args.fracture_points, law=args.law,
                          options={k: v for k, v in vars(args).items() if k not in NOT_RESULT_OPTIONS and v is not None})
     members = load_members_in_parallel(args.inputs, {"E_MPa": args.E_MPa} if args.E_MPa is not None else {}, args.jobs, args.scheduler)
     series, out = fit(request, members)

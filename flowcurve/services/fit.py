@@ -42,6 +42,7 @@ class FitRequest:
     max_points: int = MAX_POINTS
     shape_error: float = SHAPE_ERROR_PCT
     fracture_points: str | None = None
+    law: str = "johnson_cook"  # a registered law with rate and temperature (validated when the fit runs)
     options: dict = field(default_factory=dict)  # as given, for fit.json's provenance
 
     def check(self) -> FitRequest:
@@ -66,13 +67,13 @@ def fit(req: FitRequest, members):
         for m in members:
             m.point_rates_per_s = None  # rates_at then gives the record's one rate
     missing = missing_inputs(members, ref_strain_rate_per_s=req.ref_rate, ref_temperature_C=req.ref_temp,
-                             melt_temperature_C=req.melt_temp, fixed=req.fixed())
+                             melt_temperature_C=req.melt_temp, fixed=req.fixed()) if req.law == "johnson_cook" else []
     if missing:
         raise IdentificationError(missing_message(missing))
     extra = read_fracture_points(req.fracture_points) if req.fracture_points else ()
     series = fit_series(members, method=req.method, ref_strain_rate_per_s=req.ref_rate, ref_temperature_C=req.ref_temp,
                         melt_temperature_C=req.melt_temp, fixed=req.fixed(), max_points=req.max_points, fracture_points=extra,
-                        shape_error_pct=req.shape_error)
+                        shape_error_pct=req.shape_error, law=req.law)
     return series, write_fit(series, req.out, options=req.options)
 
 
@@ -186,7 +187,7 @@ def _plots(series: SeriesFit, folder: Path) -> dict[str, str]:
         color = f"C{i % 10}"
         ax_all.plot(eps, m.stress_MPa, ".", ms=2, color=color)
         ax_all.plot(grid, series.fit(grid, m.strain_rate_per_s, m.temperature_C), "-", color=color, label=f"{m.name}: {label}")
-    ax_all.set(xlabel="true plastic strain", ylabel="true stress, MPa", title=f"Johnson-Cook, {series.method} fit (lines) and records (dots)")
+    ax_all.set(xlabel="true plastic strain", ylabel="true stress, MPa", title=f"{series.fit.law.display_name}, {series.method} fit (lines) and records (dots)")
     ax_all.grid(alpha=0.3)
     ax_all.legend(fontsize=7)
     fig_all.tight_layout()
@@ -198,15 +199,18 @@ def _plots(series: SeriesFit, folder: Path) -> dict[str, str]:
 def summary(series: SeriesFit, path: Path) -> str:
     """What the terminal shows after a fit: constants ± one standard error, range, errors."""
     f = series.fit
-    ref = f.reference
-    units = {"A": " MPa", "B": " MPa", "n": "", "C": "", "m": ""}
-    lines = [f"Johnson-Cook, {series.method} fit over {len(series.members)} records "
-             f"(ref. rate {ref.strain_rate_per_s:g} 1/s [{ref.strain_rate_source}], ref. temperature {ref.temperature_C:g} °C "
-             f"[{ref.temperature_source}], melting {ref.melt_temperature_C:g} °C)"]
+    ref, law = f.reference, f.law
+    head = f"{law.display_name}, {series.method} fit over {len(series.members)} records"
+    if ref is not None:
+        head += (f" (ref. rate {ref.strain_rate_per_s:g} 1/s [{ref.strain_rate_source}], ref. temperature {ref.temperature_C:g} °C "
+                 f"[{ref.temperature_source}], melting {ref.melt_temperature_C:g} °C)")
+    lines = [head]
     for p, v in f.params.items():
-        se = f.stderr.get(p)
-        tag = " (fixed, not identified)" if p in f.fixed else (f" ± {se:.3g}" if se is not None else " (no uncertainty)")
-        lines.append(f"  {p} = {v:.5g}{units[p]}{tag}")
+        se, unit = f.stderr.get(p), law.parameter(p).unit
+        tag = (f" (fixed, not identified: {f.fixed_why.get(p, 'by the user')})" if p in f.fixed
+               else f" (on its {f.at_bound[p]} bound: not identified)" if p in f.at_bound
+               else f" ± {se:.3g}" if se is not None else " (no uncertainty)")
+        lines.append(f"  {p} = {v:.5g}{' ' + unit if unit else ''}{tag}")
     d = series.covered_range()
     lines.append(f"  identified on: plastic strain {d['plastic_strain'][0]:.3g}–{d['plastic_strain'][1]:.3g}, "
                  f"rate {d['strain_rate_per_s'][0]:.3g}–{d['strain_rate_per_s'][1]:.3g} 1/s, "

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.laws.base import get_law
 from flowcurve.identification.laws.hardening import POOR_FIT_PCT, fit_hardening
 from flowcurve.identification.laws.johnson_cook import (CONVENTIONS, EQUATION, homologous_temperature, johnson_cook_reduced,
                                                   log_rate_ratio)
@@ -23,13 +24,12 @@ from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
 from flowcurve.identification.series.damage import DamageFit, FracturePoint, fit_damage
 from flowcurve.identification.quality import uncertainty as un
 from flowcurve.identification.elastic_modulus import series_modulus
+from flowcurve.identification.series.law_fit import (SHAPE_ERROR_PCT, LawFit, fill_errors, fit_law, law_shape_uncertainty,
+                                                     total_uncertainty)
 from flowcurve.identification.series.members import MAX_POINTS, SeriesMember
 
 PARAMS = ("A", "B", "n", "C", "m")
 KEYS = {"A": "A_MPa", "B": "B_MPa", "n": "n", "C": "C", "m": "m"}
-# the RMS shape error the friction correction leaves on CalculiX compression records with a known law
-# (0.40 % over the fit points of six records, docs/methods.md §5.7): how well the curves tell the constants apart
-SHAPE_ERROR_PCT = 0.4
 LOOSE_CONSTANT_PCT = 3.0  # a constant the shape error can move more than this is flagged
 BOUNDS = {"A": (0.0, np.inf), "B": (0.0, np.inf), "n": (1e-3, 1.5), "C": (0.0, 5.0), "m": (1e-3, 20.0)}
 
@@ -124,43 +124,7 @@ def check_identifiable(members: Sequence[SeriesMember], ref: Reference, fixed: d
 # -- fits ---------------------------------------------------------------------------------
 
 
-@dataclass
-class JohnsonCookFit:
-    """Identified Johnson–Cook constants with their uncertainties and the quality of fit."""
-
-    method: str
-    params: dict[str, float]
-    stderr: dict[str, float | None]
-    reference: Reference
-    fixed: dict[str, float] = field(default_factory=dict)
-    correlations: dict[str, dict[str, float]] = field(default_factory=dict)
-    fit_error_pct: float = float("nan")
-    rms_error_pct: float = float("nan")
-    record_errors: dict[str, dict[str, float]] = field(default_factory=dict)
-    report: str = ""
-
-    def __call__(self, eps_p, strain_rate_per_s, temperature_C):
-        """Flow stress (MPa) of the identified model."""
-        r = self.reference
-        return johnson_cook_reduced(eps_p, log_rate_ratio(strain_rate_per_s, r.strain_rate_per_s),
-                                    homologous_temperature(temperature_C, r.temperature_C, r.melt_temperature_C),
-                                    **self.params)
-
-    def as_dict(self) -> dict:
-        """The parameter block of fit.json (keys with units, see docs/fit-json.md)."""
-        out: dict = {"method": self.method}
-        for p in PARAMS:
-            out[KEYS[p]] = float(self.params[p])
-        for p in PARAMS:
-            se = self.stderr.get(p)
-            out[f"{KEYS[p]}_stderr"] = None if se is None or not math.isfinite(se) else float(se)
-        out["fixed"] = {p: float(v) for p, v in self.fixed.items()}
-        out["correlations"] = {KEYS[p]: {KEYS[q]: float(c) for q, c in row.items()} for p, row in self.correlations.items()}
-        out["fit_error_pct"] = float(self.fit_error_pct)
-        out["rms_error_pct"] = float(self.rms_error_pct)
-        out["record_errors"] = self.record_errors
-        out["report"] = self.report
-        return out
+JohnsonCookFit = LawFit  # a Johnson–Cook fit is a LawFit whose law is JC and whose reference is set
 
 
 def _stack(members: Sequence[SeriesMember], ref: Reference, max_points: int):
@@ -177,20 +141,6 @@ def _stack(members: Sequence[SeriesMember], ref: Reference, max_points: int):
     return eps, sig, lr, ts, idx.astype(int)
 
 
-def _errors(fit: JohnsonCookFit, members: Sequence[SeriesMember], max_points: int) -> None:
-    """Fill the overall and per-record errors (max and RMS of |σ_model/σ − 1|, %)."""
-    all_rel = []
-    for m in members:
-        eps, sig = m.fit_points(max_points)
-        rel = fit(eps, m.rates_at(eps), m.temperature_C) / sig - 1.0
-        all_rel.append(rel)
-        fit.record_errors[m.name] = {"fit_error_pct": float(100 * np.max(np.abs(rel))),
-                                     "rms_error_pct": float(100 * np.sqrt(np.mean(rel**2)))}
-    rel = np.concatenate(all_rel)
-    fit.fit_error_pct = float(100 * np.max(np.abs(rel)))
-    fit.rms_error_pct = float(100 * np.sqrt(np.mean(rel**2)))
-
-
 def _start_static(members: Sequence[SeriesMember], ref: Reference, max_points: int) -> dict[str, float]:
     """Start values of A, B, n: a hardening fit to the members nearest the reference condition."""
     reduced = [ref.reduced(m) for m in members]
@@ -202,35 +152,19 @@ def _start_static(members: Sequence[SeriesMember], ref: Reference, max_points: i
 
 
 def fit_global(members: Sequence[SeriesMember], ref: Reference, *, fixed: dict[str, float] | None = None,
-               max_points: int = MAX_POINTS) -> JohnsonCookFit:
-    """# (2.19) A, B, n, C, m in one least-squares problem over all true curves (lmfit).
-
-    Residuals in MPa; each record contributes at most ``max_points`` points evenly spaced in εp.
-    ``fixed`` holds constants that are not fitted (``{"m": 1.0}``).
+               max_points: int = MAX_POINTS, shape_error_pct: float = SHAPE_ERROR_PCT) -> LawFit:
+    """# (2.19) A, B, n, C, m in one least-squares problem over all true curves (:func:`.law_fit.fit_law`),
+    each point weighed by its stated uncertainty; each record contributes at most ``max_points`` points
+    evenly spaced in εp. ``fixed`` holds constants that are not fitted (``{"m": 1.0}``).
     """
     fixed = dict(fixed or {})
     check_identifiable(members, ref, fixed)
-    eps, sig, lr, ts, _ = _stack(members, ref, max_points)
     start = {**_start_static(members, ref, max_points), "C": 0.01, "m": 1.0}
-    params = lmfit.Parameters()
-    for p in PARAMS:
-        lo, hi = BOUNDS[p]
-        value = fixed.get(p, start[p])
-        params.add(p, value=float(np.clip(value, lo, hi)), min=lo, max=hi, vary=p not in fixed)
-
-    def residual(pars):
-        v = pars.valuesdict()
-        return johnson_cook_reduced(eps, lr, ts, v["A"], v["B"], v["n"], v["C"], v["m"]) - sig
-
-    result = lmfit.minimize(residual, params, method="least_squares")
-    if not result.success:
-        raise IdentificationError(f"the global Johnson-Cook fit did not converge: {result.message}")
-    fit = JohnsonCookFit(method="global", params={p: float(result.params[p].value) for p in PARAMS},
-                         stderr={p: (None if p in fixed or result.params[p].stderr is None else float(result.params[p].stderr)) for p in PARAMS},
-                         reference=ref, fixed=fixed,
-                         correlations={p: {q: float(c) for q, c in (result.params[p].correl or {}).items()} for p in PARAMS if p not in fixed},
-                         report=lmfit.fit_report(result))
-    _errors(fit, members, max_points)
+    conditions = {"ref_strain_rate_per_s": ref.strain_rate_per_s, "ref_temperature_C": ref.temperature_C,
+                  "melt_temperature_C": ref.melt_temperature_C}
+    fit = fit_law(members, "johnson_cook", conditions=conditions, fixed=fixed, start=start, max_points=max_points,
+                  shape_error_pct=shape_error_pct, reference=ref)
+    fit.conditions = {}  # the reference carries them
     return fit
 
 
@@ -309,7 +243,7 @@ def fit_stepwise(members: Sequence[SeriesMember], ref: Reference, *, fixed: dict
                          reference=ref, fixed=fixed,
                          correlations={p: {q: c for q, c in hf.correlations.get(p, {}).items()} for p in ("A", "B", "n")},
                          report="\n".join(reports))
-    _errors(fit, members, max_points)
+    fill_errors(fit, members, max_points)
     return fit
 
 
@@ -423,18 +357,21 @@ class SeriesFit:
 
     def as_dict(self) -> dict:
         """fit.json (docs/fit-json.md) without the file references of records and curves."""
-        ref = self.fit.reference
+        ref, law = self.fit.reference, self.fit.law
         top = self.fit.as_dict()
-        out: dict = {"schema": "flowcurve-fit/1", "model": "johnson_cook", "method": self.method,
-                     "equation": EQUATION, "conventions": CONVENTIONS}
+        out: dict = {"schema": "flowcurve-fit/2", "model": law.name, "method": self.method, "equation": law.equation}
+        if law.name == "johnson_cook":
+            out["conventions"] = CONVENTIONS
         material = " / ".join(dict.fromkeys(m.material for m in self.members if m.material))
         if material:  # absent, not null, when unknown: readers default it
             out["material"] = material
         out.update({k: v for k, v in top.items() if k not in ("method", "record_errors", "report")})
         out["quality"] = self.quality
-        out.update({"ref_strain_rate_per_s": ref.strain_rate_per_s, "ref_strain_rate_source": ref.strain_rate_source,
-                    "ref_temperature_C": ref.temperature_C, "ref_temperature_source": ref.temperature_source,
-                    "melt_temperature_C": ref.melt_temperature_C})
+        if ref is not None:
+            out.update({"ref_strain_rate_per_s": ref.strain_rate_per_s, "ref_strain_rate_source": ref.strain_rate_source,
+                        "ref_temperature_C": ref.temperature_C, "ref_temperature_source": ref.temperature_source,
+                        "melt_temperature_C": ref.melt_temperature_C})
+        out["law"] = law_block(self.fit)
         ms = self.members
         out["range"] = self.covered_range()
         out["records"] = [{"name": m.name, "source": m.source, "kind": m.kind, "test": m.test,
@@ -459,18 +396,33 @@ class SeriesFit:
         nus = [m.poisson_ratio for m in ms if m.poisson_ratio is not None]
         out["poisson_ratio"] = float(np.mean(nus)) if nus else None
         out["shape_uncertainty"] = self.shape_uncertainty
+        out["total_uncertainty"] = total_uncertainty(self.fit, self.shape_uncertainty or {})
         out["warnings"] = list(self.warnings)
         if self.damage is not None:
             out.update(self.damage.as_dict())
         return out
 
 
+def law_block(fit: LawFit) -> dict:
+    """fit.json's "law" block (flowcurve-fit/2, docs/fit-json.md): name, equation, parameters and
+    stderr by key, the stated conditions, temperature unit °C."""
+    law, values = fit.law, fit.values
+    return {"name": law.name, "display_name": law.display_name, "equation": law.equation,
+            "parameters": {p.key: float(values[p.name]) for p in law.parameters},
+            "stderr": {p.key: (None if fit.stderr.get(p.name) is None or not math.isfinite(fit.stderr[p.name])
+                               else float(fit.stderr[p.name])) for p in law.parameters},
+            "conditions": {p.key: float(values[p.name]) for p in law.conditions},
+            "temperature_unit": "C"}
+
+
 def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_strain_rate_per_s: float | None = None,
                ref_temperature_C: float | None = None, melt_temperature_C: float | None = None,
                fixed: dict[str, float] | None = None, max_points: int = MAX_POINTS,
-               fracture_points: Sequence[FracturePoint] = (), shape_error_pct: float = SHAPE_ERROR_PCT) -> SeriesFit:
-    """Fit the series by ``method`` ("global" or "stepwise") and the other one for comparison;
-    D1-D5 from the members' fractures and ``fracture_points`` (measured elsewhere) when given."""
+               fracture_points: Sequence[FracturePoint] = (), shape_error_pct: float = SHAPE_ERROR_PCT,
+               law: str = "johnson_cook") -> SeriesFit:
+    """Fit the series with the registered ``law`` (Johnson–Cook by default) by ``method`` ("global" or, JC
+    only, "stepwise") and, for JC, the other method for comparison; D1-D5 from the members' fractures and
+    ``fracture_points`` (measured elsewhere) when given (JC)."""
     if method not in ("global", "stepwise"):
         raise IdentificationError(f"unknown fit method {method!r}; choose global or stepwise")
     if max_points < 5:
@@ -478,6 +430,10 @@ def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_s
     if not (math.isfinite(shape_error_pct) and shape_error_pct >= 0):
         raise IdentificationError(f"the curves' shape error must be a finite percentage ≥ 0 (--shape-error), got {shape_error_pct:g}")
     members = list(members)
+    chosen_law = get_law(law)
+    if chosen_law.name != "johnson_cook":
+        return _fit_series_law(members, chosen_law, method=method, fixed=dict(fixed or {}), max_points=max_points,
+                               shape_error_pct=shape_error_pct, fracture_points=fracture_points)
     ref = make_reference(members, ref_strain_rate_per_s=ref_strain_rate_per_s, ref_temperature_C=ref_temperature_C,
                          melt_temperature_C=melt_temperature_C)
     fixed = dict(fixed or {})
@@ -490,27 +446,61 @@ def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_s
             stepwise = fit_stepwise(members, ref, fixed=fixed, max_points=max_points)
         except IdentificationError as exc:
             note = f"no stepwise comparison: {exc}"
-    glob = fit_global(members, ref, fixed=fixed, max_points=max_points)
+    glob = fit_global(members, ref, fixed=fixed, max_points=max_points, shape_error_pct=shape_error_pct)
     chosen = glob if method == "global" else stepwise
-    if chosen.fit_error_pct > POOR_FIT_PCT:
-        worst = sorted(chosen.record_errors.items(), key=lambda kv: -kv[1]["fit_error_pct"])[:3]
-        warnings.append(f"the {method} fit is poor: max error {chosen.fit_error_pct:.3g} % (> {POOR_FIT_PCT:g} %); worst records "
-                        + ", ".join(f"{name} {e['fit_error_pct']:.3g} %" for name, e in worst))
     band = shape_uncertainty(members, ref, chosen, max_points=max_points, shape_error_pct=shape_error_pct)
-    loose = {p: 100.0 * band[KEYS[p]] / abs(chosen.params[p]) for p in ("A", "B", "n")
-             if band.get(KEYS[p]) is not None and abs(chosen.params[p]) > 0}
-    loose = {p: v for p, v in loose.items() if v > LOOSE_CONSTANT_PCT}
-    if loose:
-        corr = chosen.correlations.get("A", {}).get("n")
-        warnings.append("the curves do not tell " + ", ".join(loose) + f" apart well{f' (A–n correlation {corr:.2f})' if corr is not None else ''}: "
-                        f"a {shape_error_pct:g} % shape error of the curves moves "
-                        + ", ".join(f"{p} by up to {v:.2g} %" for p, v in loose.items())
-                        + "; the fitted law is better determined than these constants (fit.json shape_uncertainty)")
+    warnings += _fit_warnings(chosen, band, shape_error_pct, ("A", "B", "n"))
     warnings += [law["why_different"] for law in map(identify_law_range, members) if law and "why_different" in law]
     damage = _fit_damage(members, list(fracture_points), ref, warnings)
     return SeriesFit(method=method, fit=chosen, global_fit=glob, stepwise_fit=stepwise, stepwise_note=note,
                      members=members, curves=condition_curves(members, max_points), warnings=warnings,
                      max_points=max_points, damage=damage, shape_uncertainty=band)
+
+
+def _fit_series_law(members: list[SeriesMember], law, *, method: str, fixed: dict[str, float], max_points: int,
+                    shape_error_pct: float, fracture_points: Sequence[FracturePoint]) -> SeriesFit:
+    """The global fit of a law other than Johnson–Cook (no stepwise procedure, no D1-D5)."""
+    if method != "global":
+        raise IdentificationError(f"the stepwise procedure is Johnson–Cook's own: fit {law.name} with --method global")
+    if not (law.rate_dependent and law.temperature_dependent):
+        raise IdentificationError(f"{law.display_name} carries no strain rate or temperature: a series fit takes a law with both "
+                                  f"(fit one record with 'flowcurve identify --law {law.name}')")
+    if fixed:
+        raise IdentificationError(f"--fix-{'/--fix-'.join(fixed)} fix Johnson–Cook's constants: {law.display_name} fixes the terms "
+                                  "the series cannot tell itself")
+    fit = fit_law(members, law, max_points=max_points, shape_error_pct=shape_error_pct)
+    band = law_shape_uncertainty(members, fit, max_points=max_points, shape_error_pct=shape_error_pct)
+    warnings = [f"{law.display_name}: {why}" for why in fit.fixed_why.values()]
+    warnings += _fit_warnings(fit, band, shape_error_pct, law.names)
+    if any(m.fracture is not None for m in members) or fracture_points:
+        warnings.append(f"no fracture constants: D1-D5 are Johnson–Cook's and the series was fitted with {law.display_name}")
+    return SeriesFit(method="global", fit=fit, global_fit=fit, stepwise_fit=None,
+                     stepwise_note="no stepwise comparison: the stepwise procedure is Johnson–Cook's own",
+                     members=members, curves=condition_curves(members, max_points), warnings=warnings,
+                     max_points=max_points, shape_uncertainty=band)
+
+
+def _fit_warnings(fit: LawFit, band: dict, shape_error_pct: float, names: Sequence[str]) -> list[str]:
+    """A poor fit (worst records named), constants on a bound (stated as such, no percentage), and constants
+    among ``names`` a ``shape_error_pct`` shape error moves more than LOOSE_CONSTANT_PCT."""
+    out = []
+    if fit.fit_error_pct > POOR_FIT_PCT:
+        worst = sorted(fit.record_errors.items(), key=lambda kv: -kv[1]["fit_error_pct"])[:3]
+        out.append(f"the {fit.method} fit is poor: max error {fit.fit_error_pct:.3g} % (> {POOR_FIT_PCT:g} %); worst records "
+                   + ", ".join(f"{name} {e['fit_error_pct']:.3g} %" for name, e in worst))
+    out += [f"{p} ended on its {side} bound ({fit.params[p]:g}): the series does not identify it; no uncertainty is stated"
+            for p, side in fit.at_bound.items()]
+    key = {p.name: p.key for p in fit.law.parameters}
+    loose = {p: 100.0 * band[key[p]] / abs(fit.params[p]) for p in names
+             if band.get(key[p]) is not None and abs(fit.params[p]) > 0 and p not in fit.at_bound}
+    loose = {p: v for p, v in loose.items() if v > LOOSE_CONSTANT_PCT}
+    if loose:
+        corr = fit.correlations.get("A", {}).get("n")
+        out.append("the curves do not tell " + ", ".join(loose) + f" apart well{f' (A–n correlation {corr:.2f})' if corr is not None else ''}: "
+                   f"a {shape_error_pct:g} % shape error of the curves moves "
+                   + ", ".join(f"{p} by up to {v:.2g} %" for p, v in loose.items())
+                   + "; the fitted law is better determined than these constants (fit.json shape_uncertainty)")
+    return out
 
 
 LAW_CONSTANTS = ("A_MPa", "B_MPa", "n", "K_MPa", "eps0", "sigma0_MPa", "Q_MPa", "b")
@@ -543,29 +533,11 @@ def identify_law_range(member: SeriesMember) -> dict | None:
     return out
 
 
-def shape_uncertainty(members: Sequence[SeriesMember], ref: Reference, fit: JohnsonCookFit, *,
+def shape_uncertainty(members: Sequence[SeriesMember], ref: Reference | None, fit: LawFit, *,
                       max_points: int = MAX_POINTS, shape_error_pct: float = SHAPE_ERROR_PCT) -> dict:
-    """How far each fitted constant can move when the curves carry a shape error of RMS
-    ``shape_error_pct`` (a systematic error the fit's own residual does not show): the linearised
-    least-squares bound δp = s·√N·√diag((JᵀJ)⁻¹) with J the relative sensitivities ∂σ/σ∂p at the
-    fit points. Strongly correlated constants (JC's A and n) get a wide band."""
-    # δp_max over ‖J·δp‖₂/√N ≤ s: the covariance of a residual of RMS s
-    eps, _, lr, ts, _ = _stack(members, ref, max_points)
-    free = [p for p in PARAMS if p not in fit.fixed]
-    base = johnson_cook_reduced(eps, lr, ts, **fit.params)
-    keep = np.isfinite(base) & (base > 0)  # a point at or above the melt has no relative sensitivity
-    eps, lr, ts, base = eps[keep], lr[keep], ts[keep], base[keep]
-    cols = []
-    for p in free:
-        h = 1e-6 * max(abs(fit.params[p]), 1e-3)
-        cols.append((johnson_cook_reduced(eps, lr, ts, **{**fit.params, p: fit.params[p] + h}) - base) / (h * base))
-    J = np.array(cols).T
-    try:
-        cov = np.linalg.inv(J.T @ J)
-    except np.linalg.LinAlgError:
-        return {"curve_shape_error_pct": shape_error_pct, **{KEYS[p]: None for p in free}}
-    band = shape_error_pct / 100.0 * math.sqrt(eps.size) * np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    return {"curve_shape_error_pct": shape_error_pct, **{KEYS[p]: float(v) for p, v in zip(free, band)}}
+    """How far each fitted constant can move under a curve shape error of RMS ``shape_error_pct``
+    (:func:`.law_fit.law_shape_uncertainty`; ``ref`` is kept for the callers, the fit carries it)."""
+    return law_shape_uncertainty(members, fit, max_points=max_points, shape_error_pct=shape_error_pct)
 
 
 def _fit_damage(members, extra: list[FracturePoint], ref: Reference, warnings: list[str]) -> DamageFit | None:

@@ -74,7 +74,7 @@ def test_series_fit_reports_range_records_and_both_methods(members, syn):
     TRUE, REF, synthetic_members, true_stress = syn.TRUE, syn.REF, syn.members, syn.true_stress
     sf = fit_series(members, **REF)
     d = sf.as_dict()
-    assert d["schema"] == "flowcurve-fit/1" and d["method"] == "global"
+    assert d["schema"] == "flowcurve-fit/2" and d["method"] == "global"  # v2: the law block (issue 45)
     assert d["range"] == {"plastic_strain": [0.002, 0.3], "strain_rate_per_s": [1.0, 100.0],
                           "temperature_C": [pytest.approx(24.85), 600.0]}
     assert d["A_MPa"] == d["global"]["A_MPa"] and d["stepwise"]["method"] == "stepwise"

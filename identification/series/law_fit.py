@@ -1,0 +1,233 @@
+"""The global fit of a series over any registered law with rate and temperature (docs/methods.md §5.10):
+:class:`LawFit` (the law, its constants, uncertainties, what was fixed and why, the fit errors) and
+:func:`fit_law`, a least-squares problem over every record's points weighted by each point's stated
+uncertainty (:func:`point_u`), so a record that cannot tell its strain zero does not pull the start.
+
+Part of :mod:`identification.series`; the Johnson–Cook reference, the stepwise procedure and the
+whole-series result are in :mod:`identification.series.fit`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from flowcurve.errors import IdentificationError
+from flowcurve.identification.laws.base import Law, get_law
+from flowcurve.identification.series.members import MAX_POINTS, SeriesMember
+
+# the RMS shape error the friction correction leaves on CalculiX compression records with a known law
+# (0.40 % over the fit points of six records, docs/methods.md §5.7): how well the curves tell the constants apart
+SHAPE_ERROR_PCT = 0.4
+BOUND_REL = 1e-6  # a constant within this share of its range from a bound is on it
+
+
+def strain_zero_u(member: SeriesMember) -> float:
+    """δε0 of a member (strain): its stated one (``delta_eps0``, from identify's start_uncertainty) when
+    it carries it; else, for a curve read from a record or result folder (one point per sample), one
+    sample's plastic strain at its start, uniform: Δε_first/√12; 0 for a curve given in memory."""
+    stated = getattr(member, "delta_eps0", None)
+    if stated is not None and math.isfinite(stated):
+        return float(stated)
+    eps = member.plastic_strain
+    if member.kind not in ("record", "result") or eps.size < 2:
+        return 0.0
+    return float((eps[1] - eps[0]) / math.sqrt(12.0))
+
+
+def point_u(member: SeriesMember, eps_p, floor_MPa: float) -> np.ndarray:
+    """Each fit point's standard uncertainty (MPa): the series' floor (its shape error) and the strain
+    zero's |dσ/dεp|·δε0 in quadrature, u = √(u_floor² + (σ'·δε0)²), σ' from the member's own curve."""
+    eps = np.asarray(eps_p, dtype=float)
+    delta = strain_zero_u(member)
+    if delta == 0.0:
+        return np.full(eps.shape, floor_MPa)
+    slope = np.gradient(member.stress_MPa, member.plastic_strain)
+    return np.hypot(floor_MPa, np.interp(eps, member.plastic_strain, slope) * delta)
+
+
+def stack_points(members: Sequence[SeriesMember], max_points: int, shape_error_pct: float = SHAPE_ERROR_PCT):
+    """All fit points: εp, σ, each point's own rate (1/s), T (°C), u (MPa, :func:`point_u`) and member index.
+
+    The floor of u is the shape error of the series' RMS stress, the same for every point: a series whose
+    curves state no start uncertainty is fitted as unweighted least squares."""
+    cols = [[], [], [], [], []]
+    for i, m in enumerate(members):
+        eps, sig = m.fit_points(max_points)
+        for col, values in zip(cols, (eps, sig, m.rates_at(eps), np.full(eps.size, m.temperature_C), np.full(eps.size, i))):
+            col.append(values)
+    eps, sig, rate, temp, idx = (np.concatenate(c) for c in cols)
+    idx = idx.astype(int)
+    floor = max(shape_error_pct, 1e-3) / 100.0 * float(np.sqrt(np.mean(sig**2)))  # a point is never exact
+    u = np.empty(eps.size)
+    for i, m in enumerate(members):
+        u[idx == i] = point_u(m, eps[idx == i], floor)
+    return eps, sig, rate, temp, u, idx
+
+
+@dataclass
+class LawFit:
+    """Identified constants of a registered law with their uncertainties and the quality of fit.
+
+    params/stderr by name (stderr None: fixed or not estimated); fixed: not fitted, with ``fixed_why``;
+    at_bound: the constants that ended on a bound ("lower"/"upper"); conditions: the law's stated inputs;
+    reference: Johnson–Cook's (identification.series.fit.Reference), None for other laws."""
+
+    method: str
+    params: dict[str, float]
+    stderr: dict[str, float | None]
+    reference: object | None = None
+    fixed: dict[str, float] = field(default_factory=dict)
+    correlations: dict[str, dict[str, float]] = field(default_factory=dict)
+    fit_error_pct: float = float("nan")
+    rms_error_pct: float = float("nan")
+    record_errors: dict[str, dict[str, float]] = field(default_factory=dict)
+    report: str = ""
+    law: Law = field(default_factory=lambda: get_law("johnson_cook"))
+    conditions: dict[str, float] = field(default_factory=dict)
+    fixed_why: dict[str, str] = field(default_factory=dict)
+    at_bound: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def values(self) -> dict[str, float]:
+        """Every parameter and condition by name, as ``law.stress`` takes them."""
+        ref = self.reference
+        cond = dict(self.conditions)
+        if ref is not None:
+            cond.update(ref_strain_rate_per_s=ref.strain_rate_per_s, ref_temperature_C=ref.temperature_C,
+                        melt_temperature_C=ref.melt_temperature_C)
+        return {**cond, **self.params}
+
+    def __call__(self, eps_p, strain_rate_per_s, temperature_C):
+        """Flow stress (MPa) of the identified law."""
+        return self.law.stress(eps_p, strain_rate_per_s, temperature_C, **self.values)
+
+    def as_dict(self) -> dict:
+        """The parameter block of fit.json (keys with units, see docs/fit-json.md)."""
+        key = {p.name: p.key for p in self.law.parameters}
+        out: dict = {"method": self.method}
+        out.update({key[p]: float(v) for p, v in self.params.items()})
+        for p in self.params:
+            se = self.stderr.get(p)
+            out[f"{key[p]}_stderr"] = None if se is None or not math.isfinite(se) else float(se)
+        out["fixed"] = {p: float(v) for p, v in self.fixed.items()}
+        if self.fixed_why:
+            out["fixed_why"] = dict(self.fixed_why)
+        out["at_bound"] = {key[p]: side for p, side in self.at_bound.items()}
+        out["correlations"] = {key[p]: {key[q]: float(c) for q, c in row.items()} for p, row in self.correlations.items()}
+        out["fit_error_pct"] = float(self.fit_error_pct)
+        out["rms_error_pct"] = float(self.rms_error_pct)
+        out["record_errors"] = self.record_errors
+        out["report"] = self.report
+        return out
+
+
+def fill_errors(fit: LawFit, members: Sequence[SeriesMember], max_points: int) -> None:
+    """Fill the overall and per-record errors (max and RMS of |σ_model/σ − 1|, %)."""
+    all_rel = []
+    for m in members:
+        eps, sig = m.fit_points(max_points)
+        rel = fit(eps, m.rates_at(eps), m.temperature_C) / sig - 1.0
+        all_rel.append(rel)
+        fit.record_errors[m.name] = {"fit_error_pct": float(100 * np.max(np.abs(rel))),
+                                     "rms_error_pct": float(100 * np.sqrt(np.mean(rel**2)))}
+    rel = np.concatenate(all_rel)
+    fit.fit_error_pct = float(100 * np.max(np.abs(rel)))
+    fit.rms_error_pct = float(100 * np.sqrt(np.mean(rel**2)))
+
+
+def on_bound(law: Law, params: dict[str, float], free) -> dict[str, str]:
+    """The free constants within BOUND_REL of a bound: {name: "lower"/"upper"}."""
+    out = {}
+    for p in (law.parameter(n) for n in free):
+        v, span = params[p.name], (p.upper - p.lower if math.isfinite(p.upper - p.lower) else max(abs(params[p.name]), 1.0))
+        if math.isfinite(p.lower) and v - p.lower <= BOUND_REL * span:
+            out[p.name] = "lower"
+        elif math.isfinite(p.upper) and p.upper - v <= BOUND_REL * span:
+            out[p.name] = "upper"
+    return out
+
+
+def fit_law(members: Sequence[SeriesMember], law: Law | str, *, conditions: dict[str, float] | None = None,
+            fixed: dict[str, float] | None = None, fixed_why: dict[str, str] | None = None, start: dict[str, float] | None = None,
+            max_points: int = MAX_POINTS, shape_error_pct: float = SHAPE_ERROR_PCT, reference=None) -> LawFit:
+    """# (the law) every free constant in one least-squares problem over all true curves (lmfit),
+    residuals (σ_law − σ)/u with u each point's stated uncertainty (:func:`point_u`).
+
+    Terms the law says the series cannot support (``law.unsupported``) are fixed at 0 with the reason;
+    ``start`` overrides the law's own ``guess``. Returns a :class:`LawFit` with errors filled."""
+    import lmfit
+
+    law = get_law(law) if isinstance(law, str) else law
+    conditions = dict(conditions or {})
+    fixed, why = dict(fixed or {}), dict(fixed_why or {})
+    eps, sig, rate, temp, u, _ = stack_points(members, max_points, shape_error_pct)
+    unsupported = getattr(law, "unsupported", None)
+    for name, reason in (unsupported(eps, rate, temp) if unsupported else {}).items():
+        if name not in fixed:
+            fixed[name], why[name] = 0.0, reason
+    first = start or law.guess(eps, sig, rate, temp, weights=1.0 / u, **conditions)
+    params = lmfit.Parameters()
+    for p in law.parameters:
+        value = fixed.get(p.name, first[p.name])
+        params.add(p.name, value=float(np.clip(value, p.lower, p.upper)), min=p.lower, max=p.upper, vary=p.name not in fixed)
+
+    def residual(pars):
+        return (law.stress(eps, rate, temp, **conditions, **pars.valuesdict()) - sig) / u
+
+    result = lmfit.minimize(residual, params, method="least_squares")
+    if not result.success:
+        raise IdentificationError(f"the global {law.display_name} fit did not converge: {result.message}")
+    names = law.names
+    free = [p for p in names if p not in fixed]
+    values = {p: float(result.params[p].value) for p in names}
+    fit = LawFit(method="global", params=values, law=law, conditions=conditions, reference=reference,
+                 stderr={p: (None if p in fixed or result.params[p].stderr is None else float(result.params[p].stderr)) for p in names},
+                 fixed=fixed, fixed_why=why, at_bound=on_bound(law, values, free),
+                 correlations={p: {q: float(c) for q, c in (result.params[p].correl or {}).items()} for p in free},
+                 report=lmfit.fit_report(result))
+    fill_errors(fit, members, max_points)
+    return fit
+
+
+def law_shape_uncertainty(members: Sequence[SeriesMember], fit: LawFit, *, max_points: int = MAX_POINTS,
+                          shape_error_pct: float = SHAPE_ERROR_PCT) -> dict:
+    """How far each fitted constant can move when the curves carry a shape error of RMS
+    ``shape_error_pct`` (a systematic error the fit's own residual does not show): the linearised
+    least-squares bound δp = s·√N·√diag((JᵀJ)⁻¹) with J the relative sensitivities ∂σ/σ∂p at the
+    fit points. Strongly correlated constants (JC's A and n) get a wide band. Keys are the law's."""
+    # δp_max over ‖J·δp‖₂/√N ≤ s: the covariance of a residual of RMS s
+    eps, _, rate, temp, _, _ = stack_points(members, max_points, shape_error_pct)
+    key = {p.name: p.key for p in fit.law.parameters}
+    free = [p for p in fit.law.names if p not in fit.fixed and p not in fit.at_bound]
+    values = fit.values
+    base = fit.law.stress(eps, rate, temp, **values)
+    keep = np.isfinite(base) & (base > 0)  # a point at or above the melt has no relative sensitivity
+    eps, rate, temp, base = eps[keep], rate[keep], temp[keep], base[keep]
+    cols = []
+    for p in free:
+        h = 1e-6 * max(abs(values[p]), 1e-3)
+        cols.append((fit.law.stress(eps, rate, temp, **{**values, p: values[p] + h}) - base) / (h * base))
+    J = np.array(cols).T
+    try:
+        cov = np.linalg.inv(J.T @ J)
+    except np.linalg.LinAlgError:
+        return {"curve_shape_error_pct": shape_error_pct, **{key[p]: None for p in free}}
+    band = shape_error_pct / 100.0 * math.sqrt(eps.size) * np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    return {"curve_shape_error_pct": shape_error_pct, **{key[p]: float(v) for p, v in zip(free, band)}}
+
+
+def total_uncertainty(fit: LawFit, band: dict) -> dict[str, float | None]:
+    """Each constant's total standard uncertainty by key: its statistical stderr and the shape band in
+    quadrature (None for a fixed constant or one on its bound: not identified)."""
+    out: dict[str, float | None] = {}
+    for p in fit.law.parameters:
+        se, shape = fit.stderr.get(p.name), band.get(p.key)
+        if p.name in fit.fixed or p.name in fit.at_bound or (se is None and shape is None):
+            out[p.key] = None
+        else:
+            out[p.key] = float(math.hypot(se or 0.0, shape or 0.0))
+    return out
