@@ -231,12 +231,22 @@ def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> 
                 sigma = float(np.interp(at, eps, sig))
                 method = un.flow_point_method_components(sigma, _curve_slope(eps, sig, at), _num(E_method.get("E_MPa")),
                                                          _num(E_method.get("u_MPa")) or 0.0, zero)
-                flow[f"{at:g}"] = un.flow_stress_budget(sigma, at, d0, h0, hk, inst, mu=mu, u_mu=u_mu, method=method)
+                flow[f"{at:g}"] = un.flow_stress_budget(sigma, at, d0, h0, hk, inst, mu=mu, u_mu=u_mu, method=method,
+                                                        mu_sensitivity=_at_strain(curve, "dsigma_dmu_MPa", eps, at))
         if flow:
             out["flow_stress_MPa"] = flow
     stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.dimension_u(d0, inst["diameter_resolution_mm"], inst["micrometer_mpe_mm"]) / d0)
     out["hardening"] = _constants(result.get("hardening") or {}, stress_rel_u)
     return out
+
+
+def _at_strain(curve, column: str, eps: np.ndarray, at: float) -> float | None:
+    """The curve's ``column`` at plastic strain ``at`` (linear), None where the curve has no such column."""
+    if column not in curve.columns:
+        return None
+    values = curve[column].to_numpy(dtype=float)
+    ok = np.isfinite(values) & np.isfinite(eps)
+    return float(np.interp(at, eps[ok], values[ok])) if ok.any() else None
 
 
 def _extend(b: dict, method: list) -> None:
