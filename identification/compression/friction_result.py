@@ -165,6 +165,22 @@ def _friction_correction(geo: dict, nominal: _Nominal, friction_method: str, E_u
     return _Friction(chosen=chosen, frictions=frictions, corrected=corrected, warnings=warnings)
 
 
+MU_SENSITIVITY_STEP = 0.01  # the secant's half step in μ (the FE table's μ nodes are 0.05 apart)
+
+
+def correction_mu_sensitivity(geo: dict, nominal: _Nominal, mu: float, friction_correction: str, E_used: float | None,
+                              step: float = MU_SENSITIVITY_STEP) -> np.ndarray:
+    """∂σ/∂μ, MPa per unit μ, at every point of the nominal curve, of the correction actually applied: the curve
+    corrected again at μ ± ``step`` (the lower end at μ = 0 at most), the secant between them."""
+    # ∂σ/∂μ ≈ (σ(μ + s) − σ(max(μ − s, 0))) / (μ + s − max(μ − s, 0)), σ by fr.correct on the same p(ε)
+    eps_p = plastic_strain(nominal.strain, nominal.pressure, E_used) if E_used is not None else None
+    elastic = None if E_used is None else (E_used, geo["nu"])
+    lo, hi = max(mu - step, 0.0), mu + step
+    sig_lo, sig_hi = (fr.correct(friction_correction, nominal.strain, nominal.pressure, m, nominal.d_n / 2.0, nominal.h, eps_p=eps_p,
+                                 elastic=elastic)[1] for m in (lo, hi))
+    return (np.asarray(sig_hi, dtype=float) - np.asarray(sig_lo, dtype=float)) / (hi - lo)
+
+
 def _fe_correction_uncertainty(geo: dict, friction: _Friction, E_used: float | None) -> tuple[np.ndarray, str, list[str]]:
     """Per point of the fe_table-corrected curve: its stress's σ, % (:func:`.fe.model_form.corrected_stress_uncertainty_pct`:
     the model form's force share at μ, growing to the inverse's 3 % over the band before the table's

@@ -41,7 +41,7 @@ from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
 from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
 from flowcurve.identification.compression.values import FIT_CURVE_POINTS, YIELD_OFFSET, _Diagram, _Friction, _Line, _Nominal, _Yield, _check_options, _fit_points, _handbook_modulus, _hardening_fits, _inputs, _meta_geometry, offset_yield, plastic_strain
-from flowcurve.identification.compression.friction_result import _dface_advice, _fe_correction_uncertainty, _friction_all, _friction_correction, _model_form_shares, _mu_stderr_basis
+from flowcurve.identification.compression.friction_result import _dface_advice, correction_mu_sensitivity, _fe_correction_uncertainty, _friction_all, _friction_correction, _model_form_shares, _mu_stderr_basis
 
 
 def _offset_onset_MPa(strain0, stress0, line: ModulusFit, offset: float = YIELD_OFFSET) -> float | None:
@@ -437,5 +437,8 @@ def identify_compression(
     if friction_correction == "fe_table":
         uncertainty, result.methods["correction_uncertainty"], fold_warnings = _fe_correction_uncertainty(geo, friction, yld.E_used)
         result.warnings.extend(fold_warnings)
-    return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield, uncertainty),
-                          curves=_curves(diagram, nominal, friction, fits[friction_correction]))
+    curves = _curves(diagram, nominal, friction, fits[friction_correction])
+    # the flow stress budget's μ term reads the sensitivity of this correction, not Siebel's (uncertainty.flow_stress_budget)
+    curves[f"true_{friction_correction}"]["dsigma_dmu_MPa"] = correction_mu_sensitivity(geo, nominal, friction.chosen.mu, friction_correction,
+                                                                                        yld.E_used)
+    return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield, uncertainty), curves=curves)

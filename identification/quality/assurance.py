@@ -14,7 +14,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from flowcurve.identification.iso6892 import max_force_band, nan_argmax
+from flowcurve.identification.iso6892 import mad_sigma, max_force_band, nan_argmax
 from flowcurve.identification.quality import conformity as cf
 from flowcurve.identification.quality import uncertainty as un
 from flowcurve.identification.elastic_modulus import apparent_modulus_warning, class_modulus
@@ -231,12 +231,22 @@ def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> 
                 sigma = float(np.interp(at, eps, sig))
                 method = un.flow_point_method_components(sigma, _curve_slope(eps, sig, at), _num(E_method.get("E_MPa")),
                                                          _num(E_method.get("u_MPa")) or 0.0, zero)
-                flow[f"{at:g}"] = un.flow_stress_budget(sigma, at, d0, h0, hk, inst, mu=mu, u_mu=u_mu, method=method)
+                flow[f"{at:g}"] = un.flow_stress_budget(sigma, at, d0, h0, hk, inst, mu=mu, u_mu=u_mu, method=method,
+                                                        mu_sensitivity=_at_strain(curve, "dsigma_dmu_MPa", eps, at))
         if flow:
             out["flow_stress_MPa"] = flow
     stress_rel_u = math.hypot(un.force_rel_u(inst["force_class"]), 2.0 * un.dimension_u(d0, inst["diameter_resolution_mm"], inst["micrometer_mpe_mm"]) / d0)
     out["hardening"] = _constants(result.get("hardening") or {}, stress_rel_u)
     return out
+
+
+def _at_strain(curve, column: str, eps: np.ndarray, at: float) -> float | None:
+    """The curve's ``column`` at plastic strain ``at`` (linear), None where the curve has no such column."""
+    if column not in curve.columns:
+        return None
+    values = curve[column].to_numpy(dtype=float)
+    ok = np.isfinite(values) & np.isfinite(eps)
+    return float(np.interp(at, eps[ok], values[ok])) if ok.any() else None
 
 
 def _extend(b: dict, method: list) -> None:
@@ -311,6 +321,34 @@ def _offset_line_zero(result: Mapping) -> float:
     return math.sqrt(sum((_num(v) or 0.0) ** 2 for k, v in parts.items() if not (regressed and k == "sample_spacing")))
 
 
+MAX_PASSED_IN_NOISE = 10.0  # a fall of this many noise σ after the maximum: the noise's own extremes over a record reach ±3.5σ
+
+
+def force_maximum_not_reached(record) -> str | None:
+    """Why the record's largest force is not Fm, or None: a test that ended on something other than a fracture (the
+    record's ``stop_reason``) while its force had not fallen from its maximum by :data:`MAX_PASSED_IN_NOISE` × its
+    noise σ (a test stopped on the rise, e.g. by a fault drill). A broken specimen's force falls: its maximum stands."""
+    reason = " ".join(str(record.meta.get("stop_reason") or "").split())
+    if not reason or "fracture" in reason.lower() or not record.has("force_N"):
+        return None
+    force = np.abs(record.column("force_N"))
+    force = force[np.isfinite(force)]
+    if force.size < 3:
+        return None
+    i = int(np.argmax(force))
+    drop = float(force[i] - np.min(force[i:]))  # how far the force fell after its maximum
+    noise = mad_sigma(np.diff(force, 2)) / math.sqrt(6.0)  # σ of white noise from its second differences (trend-free)
+    if drop > MAX_PASSED_IN_NOISE * noise:
+        return None
+    return f"the test stopped before the force maximum (it ended on: {reason[:80]}; the force had not fallen from its largest value)"
+
+
+def not_certifiable(budget: Mapping, why: str) -> dict:
+    """A budget replaced by the statement that its value is not certifiable: no U, the reason."""
+    return {"value": budget.get("value"), "unit": budget.get("unit"), "u": None, "U": None, "k": budget.get("k"), "components": [],
+            "certifiable": False, "note": why}
+
+
 def attach(result, curves: Mapping, record) -> None:
     """Fill ``result['uncertainty']`` and ``result['methods']['conformity']`` (tension or compression)."""
     inst = instruments_from_meta(record.meta)
@@ -319,4 +357,11 @@ def attach(result, curves: Mapping, record) -> None:
     if isinstance(methods, dict):  # first: the Rp budget's rate term takes the testing method it found
         methods["conformity"] = cf.assess(result, curves, record.data, record.meta, getattr(record, "events", None))
     budgets = (tension_uncertainty if test == "tension" else compression_uncertainty)(result, curves, inst)
+    why = force_maximum_not_reached(record) if test == "tension" else None
+    if why:  # Rm and Ag are the maximum force's: a test stopped on the rise has neither, only a lower bound of Rm
+        for key in ("Rm_MPa", "Ag_pct"):
+            if key in budgets:
+                budgets[key] = not_certifiable(budgets[key], why)
+        if isinstance(result.get("warnings"), list):
+            result["warnings"].append(f"Rm is not certifiable: {why}; the value is a lower bound (Rm ≥ it) and states no U")
     result["uncertainty"] = {"instruments": inst, **budgets}

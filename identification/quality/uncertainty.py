@@ -402,12 +402,13 @@ def friction_budget(mu: float, mu_range: Sequence[float] | None, *, others: Mapp
 
 
 def flow_stress_budget(sigma_MPa: float, eps: float, d0_mm: float, h0_mm: float, hk_mm: float, inst: Mapping, *,
-                       mu: float, u_mu: float, method: Sequence[Component] = ()) -> dict:
+                       mu: float, u_mu: float, method: Sequence[Component] = (), mu_sensitivity: float | None = None) -> dict:
     """Compression flow stress σ at true strain ε: σ = F·h/(S0·h0) corrected for friction.
 
     With h = h0 − Δh = h0·e^−ε: ∂σ/∂F = h/(S0·h0), ∂σ/∂d0 = −2σ/d0, ∂σ/∂h0 = σ·Δh/(h0·h),
     ∂σ/∂Δh = −σ/h, where Δh is scaled to the measured h0 − hk (K_l), so u(Δh) = Δh·u(h0 − hk)/(h0 − hk);
-    μ with Siebel's sensitivity ∂σ/∂μ = −σ·(d/3h)/(1 + μ·d/3h), d = d0·√(h0/h).
+    μ with ``mu_sensitivity``, ∂σ/∂μ of the correction applied (the identification's secant), else
+    Siebel's ∂σ/∂μ = −σ·(d/3h)/(1 + μ·d/3h), d = d0·√(h0/h).
     """
     h = h0_mm * math.exp(-eps)
     dh = h0_mm - h
@@ -421,7 +422,8 @@ def flow_stress_budget(sigma_MPa: float, eps: float, d0_mm: float, h0_mm: float,
              _diameter_component(d0_mm, inst["diameter_resolution_mm"], -2.0 * sigma_MPa / d0_mm, mpe_mm=inst.get("micrometer_mpe_mm", 0.0)),
              Component("initial height h0", h0_mm, "mm", u_len, sigma_MPa * dh / (h0_mm * h), _dimension_basis(res, mpe)),
              Component("shortening Δh (scaled to h0 − hk)", dh, "mm", scale_u, -sigma_MPa / h, f"h0 and hk: {_dimension_basis(res, mpe)}"),
-             Component("friction μ", mu, "1", u_mu, -sigma_MPa * siebel / (1.0 + mu * siebel), "budget of μ; Siebel's sensitivity"),
+             (Component("friction μ", mu, "1", u_mu, mu_sensitivity, "budget of μ; the applied correction's sensitivity") if mu_sensitivity is not None
+              else Component("friction μ", mu, "1", u_mu, -sigma_MPa * siebel / (1.0 + mu * siebel), "budget of μ; Siebel's sensitivity")),
              *method]
     out = budget(sigma_MPa, "MPa", comps, note=f"at true plastic strain {eps:g}")
     out["u_method"] = combined(method)  # the method's own share (E, strain zero), stated apart

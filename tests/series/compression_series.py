@@ -5,7 +5,12 @@ T_m 1420 °C, reference 20 °C and 0.005 /s), a frictionless cylinder (d0 6, h0 
 mean pressure is the flow stress and dmax the volume-constant diameter). The crosshead runs at
 constant speed v = ε̇_nominal·h0: the specimen's true strain rate ε̇ = dε/dt grows as it
 shortens (about v/h, doubled by ε = 0.7), and the flow stress of every point is the law at that
-point's own rate. crosshead = specimen shortening + P/C (136 N/µm) + seating toe (0.02 mm closing
+point's own rate. With friction (μ > 0) the force factor F/(σ_f·A) and the barrel come from one model,
+``response``: ``"fe"`` the CalculiX upsetting runs (the virtual rig's own copy and interpolation,
+rig/virtual/fe_response.py, at the law's effective Swift exponent: the relation the product's default
+fe_table method inverts, from code of the rig layer), or ``"slab"`` the seed's pair (slab Coulomb
+pressure and the (3.18) barrel: the exact mirror of the slab correction and (3.19)). The seed's
+barrel is the FE runs' at μ ≈ 0.3, not 0.2 (docs/methods.md §4.9). crosshead = specimen shortening + P/C (136 N/µm) + seating toe (0.02 mm closing
 at 600 N); 1 µm steps, 10 N force noise, sampled at ``rate_hz`` and at the stop, then an elastic
 unloading. Solved by fixed point on a fine
 plastic-strain grid: σ(εp, ε̇) → ε = εp + σ/E → h, P → crosshead → t = crosshead/v → ε̇ = dε/dt.
@@ -13,6 +18,7 @@ plastic-strain grid: σ(εp, ε̇) → ε = εp + σ/E → h, P → crosshead �
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -33,10 +39,13 @@ def flow(eps_p, rate, temperature_C):
 
 def compression_record(temperature_C: float, nominal_rate_per_s: float, *, rate_hz: float = 10.0, eps_end: float = 0.7,
                        stiffness_N_per_um: float = 136.0, toe_mm: float = 0.02, toe_force_N: float = 600.0, noise_N: float = 10.0,
-                       step_mm: float = 0.001, seed: int = 0, mu: float = 0.0) -> tuple[Record, dict]:
+                       step_mm: float = 0.001, seed: int = 0, mu: float = 0.0, response: str = "slab",
+                       reading_mm: float | None = None) -> tuple[Record, dict]:
     """(record, truth): truth holds the fine εp grid, its stress and its own strain rate ε̇(εp).
-    With ``mu`` > 0 the platens carry Coulomb friction: the mean pressure is the slab profile
-    σ·exp(2μ(R − r)/h) integrated numerically over the face, and dmax the bulge of (3.18) at μ."""
+    With ``mu`` > 0 the platens carry Coulomb friction, by ``response`` (:func:`force_factor`, :func:`bulge`):
+    ``"slab"`` the slab profile σ·exp(2μ(R − r)/h) integrated over the face and dmax the barrel of (3.18);
+    ``"fe"`` the CalculiX runs' force factor and barrel at μ. ``reading_mm``: hk and dmax as a micrometer
+    of that resolution reads them (rounded), else to 0.1 µm."""
     speed = nominal_rate_per_s * H0_MM  # mm/s
     area0 = math.pi * D0_MM**2 / 4.0
     ep = np.concatenate([[0.0], np.geomspace(1e-6, eps_end, 3000)])
@@ -45,7 +54,7 @@ def compression_record(temperature_C: float, nominal_rate_per_s: float, *, rate_
         sig = flow(ep, rate, temperature_C)
         eps = ep + sig / E_MPa
         h = H0_MM * np.exp(-eps)
-        force = sig * area0 * H0_MM / h * _pressure_factor(mu, D0_MM / 2.0 * np.sqrt(H0_MM / h) / h)  # volume constancy
+        force = sig * area0 * H0_MM / h * force_factor(mu, h, response)  # volume constancy
         seat = toe_mm * (1.0 - np.clip(1.0 - force / toe_force_N, 0.0, 1.0) ** 2)
         cross = (H0_MM - h) + force / (stiffness_N_per_um * 1000.0) + seat
         t = cross / speed
@@ -73,13 +82,48 @@ def compression_record(temperature_C: float, nominal_rate_per_s: float, *, rate_
     C = np.round(np.concatenate([c_load, c_un]) / step_mm) * step_mm
     sig_end = sig[-1]
     hk = h[-1] * (1.0 + sig_end / E_MPa)
+    dmax = D0_MM * math.sqrt(H0_MM / hk) + 2.0 * hk * bulge(math.log(H0_MM / hk), mu, response)
+    read = (lambda x: round(x / reading_mm) * reading_mm) if reading_mm else (lambda x: x)  # noqa: E731
     meta = {"test": "compression", "material": "12Kh18N10T (closed form)", "nominal_temperature_C": repr(temperature_C),
             "crosshead_speed_mm_per_s": repr(speed), "rig.frame_stiffness_N_per_um": repr(stiffness_N_per_um),
-            "specimen.d0_mm": repr(D0_MM), "specimen.h0_mm": repr(H0_MM), "post.hk_mm": f"{hk:.4f}",
-            "post.dmax_mm": f"{D0_MM * math.sqrt(H0_MM / hk) + 2.0 * hk * _bulge(math.log(H0_MM / hk), mu):.4f}"}
+            "specimen.d0_mm": repr(D0_MM), "specimen.h0_mm": repr(H0_MM), "post.hk_mm": f"{read(hk):.4f}",
+            "post.dmax_mm": f"{read(dmax):.4f}"}
     rec = Record(meta=meta, data=pd.DataFrame({"time_s": ts, "force_N": -F, "crosshead_mm": -C}),
                  source=f"T{temperature_C:g}_rate{nominal_rate_per_s * 1000:g}e-3")
     return rec, {"eps_p": ep, "stress_MPa": sig, "rate_per_s": rate, "temperature_C": temperature_C}
+
+
+RESPONSES = ("slab", "fe")
+
+
+def force_factor(mu: float, h_mm, response: str = "slab") -> np.ndarray:
+    """F/(σ_f·A) at the heights ``h_mm`` (A = π·d0²·h0/(4h)): the slab profile's, or the FE runs' at ε = ln(h0/h)."""
+    h = np.asarray(h_mm, dtype=float)
+    if response == "fe":
+        table, n = _fe_table()
+        return table.force_factor_at(mu, H0_MM / D0_MM, n, np.log(H0_MM / h)) if mu > 0 else np.ones_like(h)
+    if response != "slab":
+        raise ValueError(f"response {response!r}: one of {RESPONSES}")
+    return _pressure_factor(mu, D0_MM / 2.0 * np.sqrt(H0_MM / h) / h)
+
+
+def bulge(eps_k: float, mu: float, response: str = "slab") -> float:
+    """ΔR/h of the unloaded specimen at ε = ln(h0/hk): the seed's (3.18), or the FE runs'."""
+    if response == "fe":
+        table, n = _fe_table()
+        return float(table.bulge_at(mu, H0_MM / D0_MM, n, eps_k)) if mu > 0 else 0.0
+    if response != "slab":
+        raise ValueError(f"response {response!r}: one of {RESPONSES}")
+    return _bulge(eps_k, mu)
+
+
+@functools.lru_cache(maxsize=1)
+def _fe_table():
+    """(the virtual rig's CalculiX response, the law's effective Swift exponent d ln σ/d ln εp): rate and
+    temperature enter Johnson–Cook as factors, so one exponent serves every record."""
+    from flowcurve.rig.virtual.fe_response import UpsettingResponse, effective_hardening_exponent
+
+    return UpsettingResponse.load(), effective_hardening_exponent(lambda e: flow(e, REF["ref_strain_rate_per_s"], REF["ref_temperature_C"]))
 
 
 def _pressure_factor(mu: float, r_over_h: np.ndarray) -> np.ndarray:
