@@ -169,9 +169,9 @@ def _stack(members: Sequence[SeriesMember], ref: Reference, max_points: int):
     cols = [[], [], [], [], []]
     for i, m in enumerate(members):
         eps, sig = m.fit_points(max_points)
-        _, ts = ref.reduced(m)
+        ts = homologous_temperature(m.temperatures_at(eps), ref.temperature_C, ref.melt_temperature_C)  # each point's own T (adiabatic rise)
         lr = log_rate_ratio(m.rates_at(eps), ref.strain_rate_per_s)
-        for col, values in zip(cols, (eps, sig, lr, np.full(eps.size, ts), np.full(eps.size, i))):
+        for col, values in zip(cols, (eps, sig, lr, ts, np.full(eps.size, i))):
             col.append(values)
     eps, sig, lr, ts, idx = (np.concatenate(c) for c in cols)
     return eps, sig, lr, ts, idx.astype(int)
@@ -182,7 +182,7 @@ def _errors(fit: JohnsonCookFit, members: Sequence[SeriesMember], max_points: in
     all_rel = []
     for m in members:
         eps, sig = m.fit_points(max_points)
-        rel = fit(eps, m.rates_at(eps), m.temperature_C) / sig - 1.0
+        rel = fit(eps, m.rates_at(eps), m.temperatures_at(eps)) / sig - 1.0
         all_rel.append(rel)
         fit.record_errors[m.name] = {"fit_error_pct": float(100 * np.max(np.abs(rel))),
                                      "rms_error_pct": float(100 * np.sqrt(np.mean(rel**2)))}
@@ -410,7 +410,7 @@ class SeriesFit:
         for m in self.members:
             eps, sig = m.fit_points(self.max_points)
             parts.append(pd.DataFrame({"record": m.name, "true_plastic_strain": eps, "true_stress_MPa": sig,
-                                       "strain_rate_per_s": m.rates_at(eps), "temperature_C": m.temperature_C,
+                                       "strain_rate_per_s": m.rates_at(eps), "temperature_C": m.temperatures_at(eps),
                                        "strain_rate_source": "point" if m.point_rates_per_s is not None else "record"}))
         return pd.concat(parts, ignore_index=True)
 
