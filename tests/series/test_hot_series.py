@@ -154,3 +154,30 @@ def test_whole_hot_series_reads_in_fit(tmp_path, capsys):
     out = tmp_path / "fit"
     assert main(["fit", *map(str, paths), "--out", str(out), *FIT]) == 0, capsys.readouterr().err
     assert len(json.loads((out / "fit.json").read_text())["records"]) == len(SERIES)
+
+
+def test_jc_fit_on_heated_points_gives_the_isothermal_law(syn):
+    """Johnson–Cook curves of 4340 heated as they flow (β 0.9, T = T0 + ΔT by fixed point): the global fit
+    over each point's own temperature recovers the isothermal constants within 1 %; at the nominal
+    temperatures it does not (the heating read as softening)."""
+    from flowcurve.identification.series.series import fit_series
+
+    rho, cp, beta = 7850.0, 470.0, 0.9
+    members = []
+    for T0 in (syn.REF["ref_temperature_C"], 300.0, 600.0):
+        for rate in (1.0, 100.0):
+            eps = np.linspace(0.002, 0.3, 40)
+            T = np.full(eps.size, T0)
+            for _ in range(40):  # the generator's own fixed point, independent of adiabatic_temperature_rise_K's quadrature
+                sig = syn.true_stress(eps, rate, T)
+                work = sig[0] * eps[0] + np.concatenate([[0.0], np.cumsum(0.5 * (sig[1:] + sig[:-1]) * np.diff(eps))])
+                T = T0 + beta * work * 1e6 / (rho * cp)
+            members.append(SeriesMember(f"T{T0:g}_{rate:g}", eps, sig, rate, T0))
+    plain = fit_series([SeriesMember(m.name, m.plastic_strain, m.stress_MPa, m.strain_rate_per_s, m.temperature_C) for m in members],
+                       **syn.REF).fit.params
+    heated = fit_series([with_adiabatic_heating(m, density_kg_per_m3=rho, heat_capacity_J_per_kg_K=cp, beta=beta) for m in members],
+                        **syn.REF).fit.params
+    truth = syn.TRUE
+    assert heated["A"] == pytest.approx(truth["A"], rel=0.01) and heated["B"] == pytest.approx(truth["B"], rel=0.01)
+    assert heated["n"] == pytest.approx(truth["n"], rel=0.01) and heated["m"] == pytest.approx(truth["m"], rel=0.01)
+    assert abs(plain["n"] / truth["n"] - 1.0) > 0.05 or abs(plain["B"] / truth["B"] - 1.0) > 0.05, plain
