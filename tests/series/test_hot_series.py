@@ -181,3 +181,19 @@ def test_jc_fit_on_heated_points_gives_the_isothermal_law(syn):
     assert heated["A"] == pytest.approx(truth["A"], rel=0.01) and heated["B"] == pytest.approx(truth["B"], rel=0.01)
     assert heated["n"] == pytest.approx(truth["n"], rel=0.01) and heated["m"] == pytest.approx(truth["m"], rel=0.01)
     assert abs(plain["n"] / truth["n"] - 1.0) > 0.05 or abs(plain["B"] / truth["B"] - 1.0) > 0.05, plain
+
+
+def test_a_regressed_window_without_loading_samples_falls_back_to_the_given_E(monkeypatch):
+    """Issue 45's refusal "no sample of the first loading in the elastic window": with E given, a
+    regressed line whose window (10–20 MPa, between the fast record's first two loaded samples)
+    holds none of the first loading's samples stopped the record (and the whole series in fit).
+    Now E is placed on the first loading, as for a record without a line: the same curve."""
+    import flowcurve.identification.compression.identify as ci
+    from flowcurve.identification.indicator import ModulusFit
+
+    rec, _ = hot_record(800.0, 0.1)
+    plain = member_from_record(rec, E_MPa=E_MPa)
+    monkeypatch.setattr(ci, "elastic_line", lambda *a, **k: (ModulusFit(E_MPa, 1.0, 0.0, 0.9999, 3, (10.0, 20.0), source="test"), 0.0))
+    m = member_from_record(rec, E_MPa=E_MPa)
+    late = m.plastic_strain >= 0.02
+    assert np.interp(m.plastic_strain[late], plain.plastic_strain, plain.stress_MPa) == pytest.approx(m.stress_MPa[late], rel=0.005)
