@@ -51,7 +51,7 @@ def register(subparsers) -> None:
                         "and say how many were used)")
     p.add_argument("--adiabatic", action="store_true",
                    help="correct for adiabatic heating: each point at T0 + beta*int(sigma d eps_p)/(rho*c_p), so the fitted law is "
-                        "the isothermal one (needs --density and --heat-capacity); fit.json gives each record's largest rise")
+                        "the isothermal one (needs --density and --heat-capacity, or the records' material.density_kg_per_m3 and material.heat_capacity_J_per_kg_K); fit.json gives each record's largest rise")
     p.add_argument("--taylor-quinney", type=float, default=0.9, metavar="BETA",
                    help="part of the plastic work turned into heat, for --adiabatic (default %(default)s)")
     p.add_argument("--density", dest="density_kg_per_m3", type=float, metavar="KG/M3", help="material density for --adiabatic, kg/m³")

@@ -91,19 +91,22 @@ def adiabatic_heating(req: FitRequest, members) -> list[str]:
     from flowcurve.errors import IdentificationError
     from flowcurve.identification.series.members import with_adiabatic_heating
 
-    missing = [o for o, v in (("--density", req.density_kg_per_m3), ("--heat-capacity", req.heat_capacity_J_per_kg_K)) if v is None]
-    if missing:
-        raise IdentificationError(f"the adiabatic correction needs the material's {' and '.join(missing)} (kg/m³, J/(kg·K))")
     hot = [m for m in members if m.strain_rate_per_s >= req.adiabatic_min_rate]
+    props = {m.name: (req.density_kg_per_m3 or m.density_kg_per_m3, req.heat_capacity_J_per_kg_K or m.heat_capacity_J_per_kg_K) for m in hot}
+    lacking = [name for name, (rho, cp) in props.items() if rho is None or cp is None]
+    if lacking:
+        raise IdentificationError(f"the adiabatic correction needs the material's density and heat capacity (--density kg/m³, "
+                                  f"--heat-capacity J/(kg·K), or the records' material.density_kg_per_m3 and "
+                                  f"material.heat_capacity_J_per_kg_K): record(s) {', '.join(lacking)} lack them")
     for m in hot:
-        with_adiabatic_heating(m, density_kg_per_m3=req.density_kg_per_m3, heat_capacity_J_per_kg_K=req.heat_capacity_J_per_kg_K,
-                               beta=req.taylor_quinney)
+        with_adiabatic_heating(m, density_kg_per_m3=props[m.name][0], heat_capacity_J_per_kg_K=props[m.name][1], beta=req.taylor_quinney)
     if not hot:
         return [f"adiabatic correction: no record at or above {req.adiabatic_min_rate:g} 1/s, none corrected"]
     worst = max(hot, key=lambda m: m.temperature_rise_max_K)
+    used = ", ".join(sorted({f"ρ {rho:g} kg/m³, c_p {cp:g} J/(kg·K)" for rho, cp in props.values()}))
     return [f"adiabatic correction on {len(hot)} of {len(members)} records (rate ≥ {req.adiabatic_min_rate:g} 1/s): each point at "
-            f"T0 + β∫σ dεp/(ρ c_p) with β {req.taylor_quinney:g}, ρ {req.density_kg_per_m3:g} kg/m³, c_p {req.heat_capacity_J_per_kg_K:g} "
-            f"J/(kg·K); the law is the isothermal one; largest rise {worst.temperature_rise_max_K:.3g} K ({worst.name})"]
+            f"T0 + β∫σ dεp/(ρ c_p) with β {req.taylor_quinney:g}, {used}; the law is the isothermal one; largest rise "
+            f"{worst.temperature_rise_max_K:.3g} K ({worst.name})"]
 
 
 # each input the fit may lack: (option, what it is, why the fit needs it)

@@ -51,6 +51,8 @@ class SeriesMember:
     identified_law: dict | None = None  # result.json's hardening: the law 'flowcurve identify' fitted and its strain range
     point_rates_per_s: np.ndarray | None = None  # each curve point's own plastic strain rate (1/s), when the record gives it
     point_temperatures_C: np.ndarray | None = None  # each point's own temperature (°C): the adiabatic rise added (with_adiabatic_heating)
+    density_kg_per_m3: float | None = None  # the record's material.density_kg_per_m3 (for the adiabatic correction)
+    heat_capacity_J_per_kg_K: float | None = None  # the record's material.heat_capacity_J_per_kg_K
 
     def __post_init__(self):
         where = self.source if self.source != "<memory>" else self.name
@@ -272,6 +274,8 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
                         E_material_MPa=E_material, E_source=E_source, identified_law=_law_of(result),
                         poisson_ratio=_number(result.get("poisson_ratio")), material=record.meta.get("material"),
+                        density_kg_per_m3=record.positive("material.density_kg_per_m3"),
+                        heat_capacity_J_per_kg_K=record.positive("material.heat_capacity_J_per_kg_K"),
                         fracture=fracture_point_from_result(dict(result, test=record.test), record.meta, rate, temperature,
                                                             record.source))
 

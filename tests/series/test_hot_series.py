@@ -197,3 +197,20 @@ def test_a_regressed_window_without_loading_samples_falls_back_to_the_given_E(mo
     m = member_from_record(rec, E_MPa=E_MPa)
     late = m.plastic_strain >= 0.02
     assert np.interp(m.plastic_strain[late], plain.plastic_strain, plain.stress_MPa) == pytest.approx(m.stress_MPa[late], rel=0.005)
+
+
+def test_adiabatic_properties_from_the_record_header():
+    """ρ and c_p from the record's material.density_kg_per_m3 / material.heat_capacity_J_per_kg_K when no
+    option gives them; a record without them is named; --adiabatic-min-rate leaves the slow records isothermal."""
+    from flowcurve.errors import IdentificationError
+    from flowcurve.services.fit import FitRequest, adiabatic_heating
+
+    rec, truth = hot_record(700.0, 0.1, beta=0.9)
+    rec.meta.update({"material.density_kg_per_m3": repr(DENSITY_KG_PER_M3), "material.heat_capacity_J_per_kg_K": repr(HEAT_CAPACITY_J_PER_KG_K)})
+    bare, _ = hot_record(800.0, 0.01, source="bare")
+    fast, slow = member_from_record(rec, E_MPa=E_MPa), member_from_record(bare, E_MPa=E_MPa)
+    with pytest.raises(IdentificationError, match="record.s. bare lack them"):
+        adiabatic_heating(FitRequest([], adiabatic=True), [fast, slow])
+    lines = adiabatic_heating(FitRequest([], adiabatic=True, adiabatic_min_rate=0.05), [fast, slow])
+    assert "on 1 of 2 records" in lines[0] and slow.point_temperatures_C is None
+    assert fast.temperature_rise_max_K == pytest.approx(truth["temperature_C"][-1] - 700.0, abs=0.5)
