@@ -19,7 +19,7 @@ import pandas as pd
 
 from flowcurve.record.format import Record
 
-from .compression_series import _bulge, _pressure_factor
+from .compression_series import _bulge, _pressure_factor, unload_and_digitise
 
 LAW = {"A": 1800.0, "m1": -0.0028, "m2": 0.18, "m3": 0.13, "m7": -0.35, "eps0": 0.01}
 E_MPa = 140_000.0  # one hot modulus, given to the fit (--E)
@@ -60,13 +60,8 @@ def hot_record(temperature_C: float, rate_per_s: float, *, rate_hz: float = 50.0
     t_all = eps_all / rate_per_s
     ts = np.append(np.arange(0.0, t_all[-1], 1.0 / rate_hz), t_all[-1])
     f_load, c_load = np.interp(ts, t_all, force), np.interp(ts, t_all, cross)
-    frac = 1.0 - np.arange(1, int(2 * rate_hz) + 1) / (2 * rate_hz)  # elastic unloading in 2 s
-    f_un = force[-1] * frac
-    c_un = cross[-1] - (force[-1] - f_un) / (STIFFNESS_N_PER_UM * 1000.0) - h[-1] * sig[-1] / E_MPa * (1.0 - frac)
-    ts = np.concatenate([ts, ts[-1] + np.arange(1, frac.size + 1) / rate_hz])
-    rng = np.random.default_rng(seed)
-    F = np.concatenate([f_load, f_un]) + rng.normal(0.0, noise_N, ts.size)
-    C = np.round(np.concatenate([c_load, c_un]) / step_mm) * step_mm
+    ts, F, C = unload_and_digitise(ts, f_load, c_load, springback_mm=h[-1] * sig[-1] / E_MPa, stiffness_N_per_um=STIFFNESS_N_PER_UM,
+                                   rate_hz=rate_hz, seconds=2.0, noise_N=noise_N, step_mm=step_mm, seed=seed)
     hk = h[-1] * (1.0 + sig[-1] / E_MPa)
     meta = {"test": "compression", "material": "hot steel (Hensel-Spittel, closed form)", "nominal_temperature_C": repr(temperature_C),
             "rig.frame_stiffness_N_per_um": repr(STIFFNESS_N_PER_UM), "specimen.d0_mm": repr(D0_MM), "specimen.h0_mm": repr(H0_MM),
