@@ -49,6 +49,20 @@ def register(subparsers) -> None:
                    help="fracture points measured elsewhere for the Johnson-Cook fracture constants D1-D5 (columns triaxiality "
                         "[sigma_m/sigma_eq, positive in tension], strain_rate_per_s, temperature_C, fracture_strain); "
                         "added to the fractures of the series' tension records")
+    p.add_argument("--strict-records", action="store_true",
+                   help="refuse the series when any record cannot be read (default: skip it with a warning naming it, fit the rest "
+                        "and say how many were used)")
+    p.add_argument("--adiabatic", action="store_true",
+                   help="correct for adiabatic heating: each point at T0 + beta*int(sigma d eps_p)/(rho*c_p), so the fitted law is "
+                        "the isothermal one (needs --density and --heat-capacity, or the records' material.density_kg_per_m3 and material.heat_capacity_J_per_kg_K); fit.json gives each record's largest rise")
+    p.add_argument("--taylor-quinney", type=float, default=0.9, metavar="BETA",
+                   help="part of the plastic work turned into heat, for --adiabatic (default %(default)s)")
+    p.add_argument("--density", dest="density_kg_per_m3", type=float, metavar="KG/M3", help="material density for --adiabatic, kg/m³")
+    p.add_argument("--heat-capacity", dest="heat_capacity_J_per_kg_K", type=float, metavar="J/(KG.K)",
+                   help="specific heat capacity for --adiabatic, J/(kg·K)")
+    p.add_argument("--adiabatic-min-rate", type=float, default=0.0, metavar="1/s",
+                   help="correct only the records at or above this strain rate (default 0: every record; slow tests lose their heat "
+                        "to the platens)")
     p.add_argument("--jobs", type=int, default=1, metavar="N", help="identify N records side by side in separate processes (default 1)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="identify the records as tasks on this Dask distributed scheduler (needs the 'fe' extra)")
     p.set_defaults(func=run)
@@ -70,9 +84,12 @@ def _members_of(item: tuple[str, dict]):
         return "error", str(exc)
 
 
-def load_members_in_parallel(inputs, identify_options: dict, jobs: int = 1, scheduler: str | None = None):
+def load_members_in_parallel(inputs, identify_options: dict, jobs: int = 1, scheduler: str | None = None,
+                             skipped: list[str] | None = None):
     """load_members over the inputs, ``jobs`` at a time or as Dask tasks, with a progress bar on
-    standard error; the first input that fails (in the inputs' order) is the error."""
+    standard error. Each input that fails names itself; with a list ``skipped`` the failing inputs
+    are left out and their errors appended to it (all failing, or ``skipped`` None: the error
+    names every failing input)."""
     from flowcurve.cli.progress import ProgressBar
     from flowcurve.errors import FlowcurveError, IdentificationError
     from flowcurve.identification.fe.pool import run_many
@@ -91,9 +108,12 @@ def load_members_in_parallel(inputs, identify_options: dict, jobs: int = 1, sche
         if bar:
             bar.close()
     errors = [message for status, message in outcomes if status == "error"]
+    if errors and (skipped is None or len(errors) == len(outcomes)):
+        raise FlowcurveError(errors[0] if len(errors) == 1 else f"{len(errors)} of {len(outcomes)} inputs cannot be read: " + "; ".join(errors))
     if errors:
-        raise FlowcurveError(errors[0])
-    members = [m for _, found in outcomes for m in found]
+        skipped += [f"skipped (cannot be read): {message}" for message in errors]
+        skipped.append(f"fitted on {len(outcomes) - len(errors)} of {len(outcomes)} inputs ({len(errors)} skipped; --strict-records refuses the series instead)")
+    members = [m for status, found in outcomes if status == "ok" for m in found]
     names = [m.name for m in members]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
@@ -111,8 +131,17 @@ def run(args) -> int:
                          method=args.method, fix_C=args.fix_C, fix_m=args.fix_m, E_MPa=args.E_MPa,
                          rate_per_record=getattr(args, "rate_per_record", False), max_points=args.max_points,
                          shape_error=args.shape_error, fracture_points=args.fracture_points, law=args.law,
+                         adiabatic=getattr(args, "adiabatic", False), taylor_quinney=getattr(args, "taylor_quinney", 0.9),
+                         density_kg_per_m3=getattr(args, "density_kg_per_m3", None),
+                         heat_capacity_J_per_kg_K=getattr(args, "heat_capacity_J_per_kg_K", None),
+                         adiabatic_min_rate=getattr(args, "adiabatic_min_rate", 0.0),
                          options={k: v for k, v in vars(args).items() if k not in NOT_RESULT_OPTIONS and v is not None})
-    members = load_members_in_parallel(args.inputs, {"E_MPa": args.E_MPa} if args.E_MPa is not None else {}, args.jobs, args.scheduler)
+    skipped = None if getattr(args, "strict_records", False) else []
+    members = load_members_in_parallel(args.inputs, {"E_MPa": args.E_MPa} if args.E_MPa is not None else {}, args.jobs, args.scheduler,
+                                       skipped=skipped)
+    for line in skipped or []:
+        print(f"flowcurve: warning: {line}", file=sys.stderr)
+    request.warnings = list(skipped or [])
     series, out = fit(request, members)
     print(summary(series, out))
     if series.quality == "poor" and args.strict:

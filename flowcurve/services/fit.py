@@ -43,6 +43,12 @@ class FitRequest:
     shape_error: float = SHAPE_ERROR_PCT
     fracture_points: str | None = None
     law: str = "johnson_cook"  # a registered law with rate and temperature (validated when the fit runs)
+    adiabatic: bool = False  # each point at T0 + β∫σ dεp/(ρ c_p) (records at ≥ adiabatic_min_rate 1/s)
+    taylor_quinney: float = 0.9
+    density_kg_per_m3: float | None = None
+    heat_capacity_J_per_kg_K: float | None = None
+    adiabatic_min_rate: float = 0.0
+    warnings: list[str] = field(default_factory=list)  # found before the fit (records skipped), written first in fit.json
     options: dict = field(default_factory=dict)  # as given, for fit.json's provenance
 
     def check(self) -> FitRequest:
@@ -66,6 +72,7 @@ def fit(req: FitRequest, members):
     if req.rate_per_record:
         for m in members:
             m.point_rates_per_s = None  # rates_at then gives the record's one rate
+    heating = adiabatic_heating(req, members) if req.adiabatic else []
     missing = missing_inputs(members, ref_strain_rate_per_s=req.ref_rate, ref_temperature_C=req.ref_temp,
                              melt_temperature_C=req.melt_temp, fixed=req.fixed()) if req.law == "johnson_cook" else []
     if missing:
@@ -74,7 +81,33 @@ def fit(req: FitRequest, members):
     series = fit_series(members, method=req.method, ref_strain_rate_per_s=req.ref_rate, ref_temperature_C=req.ref_temp,
                         melt_temperature_C=req.melt_temp, fixed=req.fixed(), max_points=req.max_points, fracture_points=extra,
                         shape_error_pct=req.shape_error, law=req.law)
+    series.warnings[:0] = [*req.warnings, *heating]
     return series, write_fit(series, req.out, options=req.options)
+
+
+def adiabatic_heating(req: FitRequest, members) -> list[str]:
+    """Put each point of the members at or above ``req.adiabatic_min_rate`` at its own temperature
+    T0 + ΔT, ΔT = β∫σ dεp/(ρ c_p) (identification.series.members.with_adiabatic_heating), so the
+    fit gives the isothermal law; returns the line fit.json's warnings state it in."""
+    from flowcurve.errors import IdentificationError
+    from flowcurve.identification.series.members import with_adiabatic_heating
+
+    hot = [m for m in members if m.strain_rate_per_s >= req.adiabatic_min_rate]
+    props = {m.name: (req.density_kg_per_m3 or m.density_kg_per_m3, req.heat_capacity_J_per_kg_K or m.heat_capacity_J_per_kg_K) for m in hot}
+    lacking = [name for name, (rho, cp) in props.items() if rho is None or cp is None]
+    if lacking:
+        raise IdentificationError(f"the adiabatic correction needs the material's density and heat capacity (--density kg/m³, "
+                                  f"--heat-capacity J/(kg·K), or the records' material.density_kg_per_m3 and "
+                                  f"material.heat_capacity_J_per_kg_K): record(s) {', '.join(lacking)} lack them")
+    for m in hot:
+        with_adiabatic_heating(m, density_kg_per_m3=props[m.name][0], heat_capacity_J_per_kg_K=props[m.name][1], beta=req.taylor_quinney)
+    if not hot:
+        return [f"adiabatic correction: no record at or above {req.adiabatic_min_rate:g} 1/s, none corrected"]
+    worst = max(hot, key=lambda m: m.temperature_rise_max_K)
+    used = ", ".join(sorted({f"ρ {rho:g} kg/m³, c_p {cp:g} J/(kg·K)" for rho, cp in props.values()}))
+    return [f"adiabatic correction on {len(hot)} of {len(members)} records (rate ≥ {req.adiabatic_min_rate:g} 1/s): each point at "
+            f"T0 + β∫σ dεp/(ρ c_p) with β {req.taylor_quinney:g}, {used}; the law is the isothermal one; largest rise "
+            f"{worst.temperature_rise_max_K:.3g} K ({worst.name})"]
 
 
 # each input the fit may lack: (option, what it is, why the fit needs it)
@@ -149,6 +182,7 @@ def write_fit(series: SeriesFit, outdir: str | Path, options: dict | None = None
     for rec in data["records"]:
         rec["curve"] = curve_of.get(rec["name"])
         rec["plot"] = plots.get(rec["name"])
+        rec["temperature_rise_max_K"] = next(m.temperature_rise_max_K for m in series.members if m.name == rec["name"])
     data["provenance"] = provenance({m.name: member_record_sha256(m.kind, m.source) for m in series.members}, options or {})
     path = outdir / "fit.json"
     path.write_text(json.dumps(to_jsonable(data), indent=2, allow_nan=False) + "\n", encoding="utf-8")

@@ -205,9 +205,17 @@ def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_
                             + (f"the handbook E = {E_MPa:g} MPa is placed on the first loading instead" if known is not None else "the toe is not compensated"))
             line, toe_mm = known if known is not None else (None, 0.0)
         elif E_MPa is not None:
-            offsets = toe_offsets(specimen, diagram.force, line.window_MPa, E_MPa=E_MPa, area0_mm2=area0, h0_mm=geo["h0"])
-            toe_mm = float(np.median(offsets))  # the toe of a line of known slope E; its offsets' spread judged
-            warnings += [w for w in [toe_spread_warning(offsets, line.window_MPa, E_MPa=E_MPa, h0_mm=geo["h0"])] if w]
+            try:
+                offsets = toe_offsets(specimen, diagram.force, line.window_MPa, E_MPa=E_MPa, area0_mm2=area0, h0_mm=geo["h0"])
+            except IdentificationError as exc:  # the regressed window holds no sample of the first loading: E placed instead
+                known = _line_of_known_slope(diagram, area0, geo["h0"], E_MPa)
+                warnings.append(f"the regressed line's window {line.window_MPa[0]:.4g}–{line.window_MPa[1]:.4g} MPa ({exc}): "
+                                + (f"the handbook E = {E_MPa:g} MPa is placed on the first loading instead" if known is not None
+                                   else "the toe is not compensated"))
+                line, toe_mm = known if known is not None else (None, 0.0)
+            else:
+                toe_mm = float(np.median(offsets))  # the toe of a line of known slope E; its offsets' spread judged
+                warnings += [w for w in [toe_spread_warning(offsets, line.window_MPa, E_MPa=E_MPa, h0_mm=geo["h0"])] if w]
         elif line.E_MPa < METAL_E_RANGE_MPa[0]:
             warnings.append(f"apparent modulus {line.E_MPa:.4g} MPa over {line.window_MPa[0]:.4g}–{line.window_MPa[1]:.4g} MPa is far below any metal's: "
                             "the line found may be a toe or a stretch past yield, and Rp0.2 with it — give the handbook E (--E or material.E_MPa) "

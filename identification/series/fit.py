@@ -18,7 +18,7 @@ import pandas as pd
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.laws.base import get_law
 from flowcurve.identification.laws.hardening import POOR_FIT_PCT, fit_hardening
-from flowcurve.identification.laws.johnson_cook import (CONVENTIONS, EQUATION, homologous_temperature, johnson_cook_reduced,
+from flowcurve.identification.laws.johnson_cook import (CONVENTIONS, homologous_temperature, johnson_cook_reduced,
                                                   log_rate_ratio)
 from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
 from flowcurve.identification.series.damage import DamageFit, FracturePoint, fit_damage
@@ -133,9 +133,9 @@ def _stack(members: Sequence[SeriesMember], ref: Reference, max_points: int):
     cols = [[], [], [], [], []]
     for i, m in enumerate(members):
         eps, sig = m.fit_points(max_points)
-        _, ts = ref.reduced(m)
+        ts = homologous_temperature(m.temperatures_at(eps), ref.temperature_C, ref.melt_temperature_C)  # each point's own T (adiabatic rise)
         lr = log_rate_ratio(m.rates_at(eps), ref.strain_rate_per_s)
-        for col, values in zip(cols, (eps, sig, lr, np.full(eps.size, ts), np.full(eps.size, i))):
+        for col, values in zip(cols, (eps, sig, lr, ts, np.full(eps.size, i))):
             col.append(values)
     eps, sig, lr, ts, idx = (np.concatenate(c) for c in cols)
     return eps, sig, lr, ts, idx.astype(int)
@@ -344,7 +344,7 @@ class SeriesFit:
         for m in self.members:
             eps, sig = m.fit_points(self.max_points)
             parts.append(pd.DataFrame({"record": m.name, "true_plastic_strain": eps, "true_stress_MPa": sig,
-                                       "strain_rate_per_s": m.rates_at(eps), "temperature_C": m.temperature_C,
+                                       "strain_rate_per_s": m.rates_at(eps), "temperature_C": m.temperatures_at(eps),
                                        "strain_rate_source": "point" if m.point_rates_per_s is not None else "record"}))
         return pd.concat(parts, ignore_index=True)
 

@@ -57,7 +57,7 @@ def stack_points(members: Sequence[SeriesMember], max_points: int, shape_error_p
     cols = [[], [], [], [], []]
     for i, m in enumerate(members):
         eps, sig = m.fit_points(max_points)
-        for col, values in zip(cols, (eps, sig, m.rates_at(eps), np.full(eps.size, m.temperature_C), np.full(eps.size, i))):
+        for col, values in zip(cols, (eps, sig, m.rates_at(eps), m.temperatures_at(eps), np.full(eps.size, i))):
             col.append(values)
     eps, sig, rate, temp, idx = (np.concatenate(c) for c in cols)
     idx = idx.astype(int)
@@ -130,7 +130,7 @@ def fill_errors(fit: LawFit, members: Sequence[SeriesMember], max_points: int) -
     all_rel = []
     for m in members:
         eps, sig = m.fit_points(max_points)
-        rel = fit(eps, m.rates_at(eps), m.temperature_C) / sig - 1.0
+        rel = fit(eps, m.rates_at(eps), m.temperatures_at(eps)) / sig - 1.0
         all_rel.append(rel)
         fit.record_errors[m.name] = {"fit_error_pct": float(100 * np.max(np.abs(rel))),
                                      "rms_error_pct": float(100 * np.sqrt(np.mean(rel**2)))}

@@ -50,6 +50,9 @@ class SeriesMember:
     fracture: FracturePoint | None = None  # the test's fracture (tension with a section after fracture)
     identified_law: dict | None = None  # result.json's hardening: the law 'flowcurve identify' fitted and its strain range
     point_rates_per_s: np.ndarray | None = None  # each curve point's own plastic strain rate (1/s), when the record gives it
+    point_temperatures_C: np.ndarray | None = None  # each point's own temperature (°C): the adiabatic rise added (with_adiabatic_heating)
+    density_kg_per_m3: float | None = None  # the record's material.density_kg_per_m3 (for the adiabatic correction)
+    heat_capacity_J_per_kg_K: float | None = None  # the record's material.heat_capacity_J_per_kg_K
 
     def __post_init__(self):
         where = self.source if self.source != "<memory>" else self.name
@@ -60,11 +63,16 @@ class SeriesMember:
         rates = None if self.point_rates_per_s is None else np.asarray(self.point_rates_per_s, dtype=float).ravel()
         if rates is not None and rates.shape != eps.shape:
             raise RecordError(where, f"true curve: {eps.size} strains but {rates.size} point strain rates")
+        temps = None if self.point_temperatures_C is None else np.asarray(self.point_temperatures_C, dtype=float).ravel()
+        if temps is not None and temps.shape != eps.shape:
+            raise RecordError(where, f"true curve: {eps.size} strains but {temps.size} point temperatures")
         ok = np.isfinite(eps) & np.isfinite(sig) & (np.isfinite(rates) & (rates > 0) if rates is not None else True)
+        ok &= np.isfinite(temps) if temps is not None else True
         eps, sig = eps[ok], sig[ok]
         order = np.argsort(eps, kind="stable")
         eps, sig = eps[order], sig[order]
         self.point_rates_per_s = None if rates is None else rates[ok][order]
+        self.point_temperatures_C = None if temps is None else temps[ok][order]
         if eps.size < 4 or np.ptp(eps) <= 0:
             raise RecordError(where, f"true curve has {eps.size} usable points; a series fit needs at least 4 over a strain range")
         if np.min(eps) < 0 or np.min(sig) <= 0:
@@ -94,6 +102,52 @@ class SeriesMember:
         if self.point_rates_per_s is None:
             return np.full(eps_p.shape, self.strain_rate_per_s)
         return np.exp(np.interp(eps_p, self.plastic_strain, np.log(self.point_rates_per_s)))
+
+    def temperatures_at(self, eps_p) -> np.ndarray:
+        """The temperature (°C) at plastic strains ``eps_p``: each point's own (the adiabatic rise
+        added, interpolated) when the member has them, else the test's one temperature."""
+        eps_p = np.asarray(eps_p, dtype=float)
+        if self.point_temperatures_C is None:
+            return np.full(eps_p.shape, self.temperature_C)
+        return np.interp(eps_p, self.plastic_strain, self.point_temperatures_C)
+
+    @property
+    def temperature_rise_max_K(self) -> float | None:
+        """The largest adiabatic temperature rise over the curve (K), None when not corrected."""
+        if self.point_temperatures_C is None:
+            return None
+        return float(np.max(self.point_temperatures_C) - self.temperature_C)
+
+
+TAYLOR_QUINNEY = 0.9  # β: the part of the plastic work that turns into heat (Taylor & Quinney 1934)
+
+
+def adiabatic_temperature_rise_K(plastic_strain, stress_MPa, *, density_kg_per_m3: float, heat_capacity_J_per_kg_K: float,
+                                 beta: float = TAYLOR_QUINNEY) -> np.ndarray:
+    """The adiabatic temperature rise (K) at each point of a true curve (εp ascending, from 0):
+    ΔT = β·∫₀^εp σ dεp/(ρ·c_p), σ in MPa = 10⁶ J/m³; the integral from εp = 0 to the first point
+    at the first point's stress, then trapezoids."""
+    eps = np.asarray(plastic_strain, dtype=float)
+    sig = np.asarray(stress_MPa, dtype=float)
+    work_MJ_per_m3 = sig[0] * eps[0] + np.concatenate([[0.0], np.cumsum(0.5 * (sig[1:] + sig[:-1]) * np.diff(eps))])
+    return beta * work_MJ_per_m3 * 1e6 / (density_kg_per_m3 * heat_capacity_J_per_kg_K)  # ΔT = β∫σ dεp/(ρ c_p)
+
+
+def with_adiabatic_heating(member: SeriesMember, *, density_kg_per_m3: float, heat_capacity_J_per_kg_K: float,
+                           beta: float = TAYLOR_QUINNEY) -> SeriesMember:
+    """The member with each point's own temperature T0 + ΔT (:func:`adiabatic_temperature_rise_K`):
+    a fit over these temperatures gives the isothermal law. Refuses a non-physical β, ρ or c_p."""
+    for value, what, option in ((beta, "Taylor-Quinney coefficient β", "--taylor-quinney"),
+                                (density_kg_per_m3, "density (kg/m³)", "--density"),
+                                (heat_capacity_J_per_kg_K, "specific heat capacity (J/(kg·K))", "--heat-capacity")):
+        if value is None or not math.isfinite(float(value)) or float(value) <= 0:
+            raise IdentificationError(f"the adiabatic correction needs a {what} > 0 ({option}), got {value}")
+    if beta > 1:
+        raise IdentificationError(f"the Taylor-Quinney coefficient β is the part of the plastic work turned into heat: ≤ 1, got {beta:g}")
+    rise = adiabatic_temperature_rise_K(member.plastic_strain, member.stress_MPa, density_kg_per_m3=density_kg_per_m3,
+                                        heat_capacity_J_per_kg_K=heat_capacity_J_per_kg_K, beta=beta)
+    member.point_temperatures_C = member.temperature_C + rise
+    return member
 
 
 def strain_rate_from_record(record: Record, E_MPa: float | None, plastic_start: float = PLASTIC_START) -> tuple[float, np.ndarray]:
@@ -220,6 +274,8 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
                         E_material_MPa=E_material, E_source=E_source, identified_law=_law_of(result),
                         poisson_ratio=_number(result.get("poisson_ratio")), material=record.meta.get("material"),
+                        density_kg_per_m3=record.positive("material.density_kg_per_m3"),
+                        heat_capacity_J_per_kg_K=record.positive("material.heat_capacity_J_per_kg_K"),
                         fracture=fracture_point_from_result(dict(result, test=record.test), record.meta, rate, temperature,
                                                             record.source))
 
@@ -299,24 +355,11 @@ def _flat_specimen(block: dict) -> dict:
 
 
 def load_members(paths: Iterable[str | Path], **identify_options) -> list[SeriesMember]:
-    """Series members from record files, result folders, or folders of result folders."""
-    from flowcurve.record.importers import load_record
-
+    """Series members from record files, result folders, or folders of result folders. Any
+    error names the record (file or folder) it comes from (:func:`member_of_path`)."""
     members: list[SeriesMember] = []
     for p in paths:
-        p = Path(p)
-        if p.is_dir():
-            if (p / "result.json").exists():
-                members.append(member_from_result(p))
-                continue
-            subs = sorted(d for d in p.iterdir() if d.is_dir() and (d / "result.json").exists())
-            if not subs:
-                raise RecordError(p, "is a folder without result.json and without result folders of 'flowcurve identify'")
-            members.extend(member_from_result(d) for d in subs)
-        elif p.exists():
-            members.append(member_from_record(load_record(p), **identify_options))
-        else:
-            raise RecordError(p, "no such file or folder")
+        members.extend(member_of_path(p, **identify_options))
     no_modulus = [m.name for m in members if m.kind == "record" and m.E_MPa is None]
     if no_modulus:
         raise IdentificationError(
@@ -327,6 +370,31 @@ def load_members(paths: Iterable[str | Path], **identify_options) -> list[Series
     if dup:
         raise IdentificationError(f"two series members have the same name {', '.join(dup)}; rename one (names label the per-record errors and plots)")
     return members
+
+
+def member_of_path(path: str | Path, **identify_options) -> list[SeriesMember]:
+    """The members one input gives (a record, a result folder, a folder of them), or a
+    RecordError naming the file when it cannot give them."""
+    from flowcurve.errors import FlowcurveError
+    from flowcurve.record.importers import load_record
+
+    p = Path(path)
+    if p.is_dir():
+        if (p / "result.json").exists():
+            return [member_from_result(p)]
+        subs = sorted(d for d in p.iterdir() if d.is_dir() and (d / "result.json").exists())
+        if not subs:
+            raise RecordError(p, "is a folder without result.json and without result folders of 'flowcurve identify'")
+        return [member_from_result(d) for d in subs]
+    if not p.exists():
+        raise RecordError(p, "no such file or folder")
+    try:
+        member = member_from_record(load_record(p), **identify_options)
+    except FlowcurveError as exc:  # an identification's own message may not name the record
+        if isinstance(exc, RecordError) or p.name in str(exc) or p.stem in str(exc):
+            raise
+        raise RecordError(p, str(exc)) from None
+    return [member]
 
 
 def _number(value) -> float | None:

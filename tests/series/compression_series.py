@@ -72,14 +72,8 @@ def compression_record(temperature_C: float, nominal_rate_per_s: float, *, rate_
     ts = np.append(ts, c_all[-1] / speed)  # the controller logs the stop at the end of the stroke
     f_load = np.interp(ts * speed, c_all, f_all)
     c_load = ts * speed
-    # elastic unloading in 5 s: the force to zero, the crosshead back by the frame's and the specimen's spring-back
-    frac = 1.0 - np.arange(1, int(5 * rate_hz) + 1) / (5 * rate_hz)
-    f_un = force[-1] * frac
-    c_un = c_all[-1] - (force[-1] - f_un) / (stiffness_N_per_um * 1000.0) - h[-1] * sig[-1] / E_MPa * (1.0 - frac)
-    ts = np.concatenate([ts, ts[-1] + np.arange(1, frac.size + 1) / rate_hz])
-    rng = np.random.default_rng(seed)
-    F = np.concatenate([f_load, f_un]) + rng.normal(0.0, noise_N, ts.size)
-    C = np.round(np.concatenate([c_load, c_un]) / step_mm) * step_mm
+    ts, F, C = unload_and_digitise(ts, f_load, c_load, springback_mm=h[-1] * sig[-1] / E_MPa, stiffness_N_per_um=stiffness_N_per_um,
+                                   rate_hz=rate_hz, seconds=5.0, noise_N=noise_N, step_mm=step_mm, seed=seed)
     sig_end = sig[-1]
     hk = h[-1] * (1.0 + sig_end / E_MPa)
     dmax = D0_MM * math.sqrt(H0_MM / hk) + 2.0 * hk * bulge(math.log(H0_MM / hk), mu, response)
@@ -124,6 +118,19 @@ def _fe_table():
     from flowcurve.rig.virtual.fe_response import UpsettingResponse, effective_hardening_exponent
 
     return UpsettingResponse.load(), effective_hardening_exponent(lambda e: flow(e, REF["ref_strain_rate_per_s"], REF["ref_temperature_C"]))
+
+
+def unload_and_digitise(ts, f_load, c_load, *, springback_mm: float, stiffness_N_per_um: float, rate_hz: float, seconds: float,
+                        noise_N: float, step_mm: float, seed: int):
+    """(time s, force N, crosshead mm) of the loading and an elastic unloading in ``seconds``: the force to zero,
+    the crosshead back by the frame's F/C and the specimen's ``springback_mm``; force noise, crosshead in ``step_mm``."""
+    frac = 1.0 - np.arange(1, int(seconds * rate_hz) + 1) / (seconds * rate_hz)
+    f_un = f_load[-1] * frac
+    c_un = c_load[-1] - (f_load[-1] - f_un) / (stiffness_N_per_um * 1000.0) - springback_mm * (1.0 - frac)
+    ts = np.concatenate([ts, ts[-1] + np.arange(1, frac.size + 1) / rate_hz])
+    rng = np.random.default_rng(seed)
+    F = np.concatenate([f_load, f_un]) + rng.normal(0.0, noise_N, ts.size)
+    return ts, F, np.round(np.concatenate([c_load, c_un]) / step_mm) * step_mm
 
 
 def _pressure_factor(mu: float, r_over_h: np.ndarray) -> np.ndarray:
