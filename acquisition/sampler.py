@@ -20,7 +20,6 @@ is not retried, and faults the sampler at once with an :class:`InternalError`.
 
 from __future__ import annotations
 
-import itertools
 import logging
 import threading
 from dataclasses import dataclass, field
@@ -134,8 +133,9 @@ def merge_block(force_t: np.ndarray, force: np.ndarray, others: Sequence[tuple[n
                 stands: Sequence[bool] = ()) -> np.ndarray:
     """Rows ``[time_s, force, other_1, ...]``: one per force sample, others interpolated
     (:func:`run_or_stand_at` for the streams flagged in ``stands``, e.g. the crosshead)."""
+    flags = list(stands) + [False] * (len(others) - len(stands))
     cols = [force_t, force] + [(run_or_stand_at if flag else interpolate_at)(force_t, ts, vs)
-                               for (ts, vs), flag in itertools.zip_longest(others, stands[:len(others)], fillvalue=False)]
+                               for (ts, vs), flag in zip(others, flags)]
     return np.column_stack(cols) if force_t.size else np.empty((0, len(cols)))
 
 
