@@ -35,6 +35,8 @@ logger = logging.getLogger(__name__)
 
 # what a failing device raises: the drivers' errors, a vanished port (SerialException is an OSError)
 DEVICE_FAILURES = (DeviceError, OSError)
+GAP_FACTOR = 3.0  # an interval between a polled stream's readings wider than this × its median one is a gap
+SPEED_WINDOW = 16  # readings before a gap that give the crosshead's speed (quantized counts: a long baseline)
 
 # A read function returns one value (stamped at the middle of the read: its request and reply
 # bracket it), a list of values (a streamed block; each is stamped when the block arrives,
@@ -91,9 +93,49 @@ def releasable(force_t: np.ndarray, other_last_t: Sequence[float], final: bool) 
     return int(np.searchsorted(force_t, horizon, side="right"))
 
 
-def merge_block(force_t: np.ndarray, force: np.ndarray, others: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
-    """Rows ``[time_s, force, other_1, ...]``: one per force sample, others interpolated."""
-    cols = [force_t, force] + [interpolate_at(force_t, ts, vs) for ts, vs in others]
+def speed_before(ts: np.ndarray, vs: np.ndarray, j: int, window: int = SPEED_WINDOW) -> float:
+    """The stream's least-squares slope over its readings up to index ``j`` (at most ``window``
+    back); NaN with fewer than 3 readings."""
+    lo = max(0, j - window)
+    if j - lo < 2:
+        return float("nan")
+    t, v = ts[lo:j + 1], vs[lo:j + 1]
+    tc = t - t.mean()
+    return float(np.dot(tc, v - v.mean()) / np.dot(tc, tc))  # slope = Σ(t−t̄)(v−v̄) / Σ(t−t̄)²
+
+
+def is_gap(ts: np.ndarray) -> np.ndarray:
+    """For each interval between readings: wider than GAP_FACTOR × the stream's median interval
+    (a retried or lost poll) — one entry per ``np.diff(ts)``; none with fewer than 4 readings."""
+    dt = np.diff(ts)
+    if dt.size < 3:
+        return np.zeros(dt.shape, dtype=bool)
+    return dt > GAP_FACTOR * np.median(dt)
+
+
+def run_or_stand_at(t: np.ndarray, ts: np.ndarray, vs: np.ndarray) -> np.ndarray:
+    """A crosshead stream at times ``t``: linear between its readings, except across a gap
+    (:func:`is_gap`) that it crossed slower than it ran before: there it runs on at its speed
+    before the gap and then stands at the reading after it — a crosshead moves at its speed or
+    stands, so a stop inside the gap is not smeared over it. x(t) = x0 + sign(Δ)·min(|v|(t − t0), |Δ|)."""
+    out = interpolate_at(t, ts, vs)
+    for j in np.flatnonzero(is_gap(ts)):
+        delta, span = vs[j + 1] - vs[j], ts[j + 1] - ts[j]
+        v = speed_before(ts, vs, j)
+        if not (v * delta > 0 and abs(v) * span > abs(delta)):  # as fast as before (or no speed known): linear
+            continue
+        inside = (t > ts[j]) & (t < ts[j + 1])
+        out[inside] = vs[j] + np.sign(delta) * np.minimum(abs(v) * (t[inside] - ts[j]), abs(delta))
+    return out
+
+
+def merge_block(force_t: np.ndarray, force: np.ndarray, others: Sequence[tuple[np.ndarray, np.ndarray]],
+                stands: Sequence[bool] = ()) -> np.ndarray:
+    """Rows ``[time_s, force, other_1, ...]``: one per force sample, others interpolated
+    (:func:`run_or_stand_at` for the streams flagged in ``stands``, e.g. the crosshead)."""
+    flags = list(stands) + [False] * (len(others) - len(stands))
+    cols = [force_t, force] + [(run_or_stand_at if flag else interpolate_at)(force_t, ts, vs)
+                               for (ts, vs), flag in zip(others, flags)]
     return np.column_stack(cols) if force_t.size else np.empty((0, len(cols)))
 
 
@@ -104,9 +146,11 @@ class Channel(threading.Thread):
     ``silence_s`` fault limit are host seconds on ``timebase`` (the wall clock on a real
     rig), so a time-scaled virtual rig does not change how patient the host is. Values returned as a
     bare list are stamped ``spacing_s`` (clock units) apart, ending at the arrival time.
+    ``stands``: the value runs at a steady speed or stands (the crosshead): the rows cross a gap in
+    its readings with :func:`run_or_stand_at`, not a straight line.
     """
 
-    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, spacing_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str, Exception | None], None] | None = None, timebase: Clock = WALL):
+    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, spacing_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str, Exception | None], None] | None = None, timebase: Clock = WALL, stands: bool = False):
         super().__init__(name=f"flowcurve-{name}", daemon=True)
         self.timebase = timebase
         self.device = name
@@ -114,6 +158,7 @@ class Channel(threading.Thread):
         self.clock = clock
         self.period_s = period_s
         self.spacing_s = spacing_s
+        self.stands = stands
         self.max_failures = max_failures
         self.silence_s = silence_s
         self.on_fault = on_fault
@@ -281,11 +326,12 @@ class Sampler:
         if n == 0:
             return np.empty((0, len(self.columns) + 1))
         others = [ch.stream.snapshot(start) for ch, start in zip(self._others, self._other_start)]
-        rows = merge_block(ft[:n], fv[:n], others)
+        rows = merge_block(ft[:n], fv[:n], others, [ch.stands for ch in self._others])
         self._released += n
-        # keep only the stream tails the next force samples can need (one sample before)
+        # keep only the stream tails the next force samples can need (one sample before, and the
+        # SPEED_WINDOW before it that give the speed before a gap)
         for i, (ts, _) in enumerate(others):
-            self._other_start[i] += max(0, int(np.searchsorted(ts, ft[n - 1], side="right")) - 1)
+            self._other_start[i] += max(0, int(np.searchsorted(ts, ft[n - 1], side="right")) - 1 - SPEED_WINDOW)
         return rows
 
     def check_silence(self) -> FlowcurveError | None:

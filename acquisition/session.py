@@ -152,7 +152,7 @@ class DriverRig:
         chans = {
             # polled: once per output period (a faster poll would read the same value again)
             "force_N": Channel(cell.name, read_force, clock, period_s=0.0 if self.stream else self.loadcell_period_s, silence_s=self._silence_s(self.config.loadcell), timebase=self.timebase),
-            "crosshead_mm": Channel(self.encoder.name, self._read_position, clock, period_s=ENCODER_PERIOD_S, silence_s=self._silence_s(self.config.encoder), timebase=self.timebase),
+            "crosshead_mm": Channel(self.encoder.name, self._read_position, clock, period_s=ENCODER_PERIOD_S, silence_s=self._silence_s(self.config.encoder), timebase=self.timebase, stands=True),
         }
         if self.furnace is not None:
             per_control = self.config.furnace.control_period_s / 4.0 / self.time_scale

@@ -146,3 +146,62 @@ def test_hanging_read_is_caught_by_check_silence(tb):
     release.set()
     sampler.finish()
     assert fault is not None and str(fault).startswith("encoder: no answer")
+
+
+# -- a gap in the crosshead's readings (a retried encoder read) --------------------------------
+COUNT_MM = 0.01  # one encoder count
+
+
+def _crosshead(t, speed=0.5, t_stop=np.inf):
+    """The true crosshead: runs at ``speed`` until ``t_stop``, then stands."""
+    return speed * np.minimum(t, t_stop)
+
+
+def _polled(t_stop=np.inf, gap=(4.0, 5.26), end_s=6.0, period_s=0.04):
+    """Encoder readings every ``period_s`` (whole counts, truncated as the counter does), none
+    inside ``gap``: the dropped reply and the wait for its late reply before the retry."""
+    ts = np.arange(0.0, end_s, period_s)
+    ts = ts[(ts <= gap[0]) | (ts >= gap[1])]
+    return ts, np.floor(_crosshead(ts, t_stop=t_stop) / COUNT_MM + 1e-9) * COUNT_MM
+
+
+def test_rows_crosshead_stands_after_a_stop_inside_a_gap_of_its_readings():
+    ts, xs = _polled(t_stop=4.3)  # the fracture stops the crosshead 0.3 s into a 1.26 s gap
+    ft = np.arange(0.01, 6.0, 0.02)
+    x = merge_block(ft, np.zeros(ft.size), [(ts, xs)], stands=[True])[:, 2]
+    # within one count of the truth everywhere (a straight line across the gap was 0.11 mm short at the stop)
+    np.testing.assert_array_less(np.abs(x - _crosshead(ft, t_stop=4.3)), COUNT_MM + 1e-9)
+    after = ft > 4.3 + 0.1
+    assert np.ptp(x[after]) == 0.0, "after the stop the rows' crosshead stands"
+    # the temperature (no flag) is still a straight line across a gap
+    np.testing.assert_allclose(merge_block(ft, np.zeros(ft.size), [(ts, xs)])[:, 2], np.interp(ft, ts, xs))
+
+
+def test_rows_crosshead_crosses_a_gap_in_steady_motion_on_its_line():
+    ts, xs = _polled()
+    ft = np.arange(0.01, 5.95, 0.02)  # within the readings (the last one is held after them)
+    x = merge_block(ft, np.zeros(ft.size), [(ts, xs)], stands=[True])[:, 2]
+    np.testing.assert_array_less(np.abs(x - _crosshead(ft)), COUNT_MM + 1e-9)
+    inside = (ft > 4.0) & (ft < 5.26)
+    assert np.all(np.diff(x[inside]) > 0), "no stand invented inside a gap the crosshead ran through"
+
+
+def test_sampler_keeps_the_readings_before_a_gap_that_give_the_speed(tb):
+    """Rows taken block by block (as the procedure does): the readings before a gap are still
+    there when the reading after it comes, so the stop inside it is found."""
+    ts, xs = _polled(t_stop=4.3)
+    ft = np.arange(0.01, 6.0, 0.02)
+    force = Channel("loadcell", lambda: None, tb.now, timebase=tb)
+    enc = Channel("encoder", lambda: None, tb.now, timebase=tb, stands=True)
+    sampler = Sampler({"force_N": force, "crosshead_mm": enc})
+    rows = []
+    for lo in np.arange(0.0, 6.0, 0.2):  # 0.2 s of samples arrive between two take_rows
+        f = (ft >= lo) & (ft < lo + 0.2)
+        e = (ts >= lo) & (ts < lo + 0.2)
+        force.stream.extend(ft[f], np.zeros(f.sum()))
+        enc.stream.extend(ts[e], xs[e])
+        rows.append(sampler.take_rows())
+    rows.append(sampler.take_rows(final=True))
+    rows = np.vstack(rows)
+    np.testing.assert_array_equal(rows[:, 0], ft)
+    np.testing.assert_array_less(np.abs(rows[:, 2] - _crosshead(ft, t_stop=4.3)), COUNT_MM + 1e-9)

@@ -27,13 +27,6 @@ KNOWN: list[tuple[str, object]] = [
      "and which cannot tell a spike smaller than the force's climb between two samples from a knee (compression at 12 Hz: "
      "it stays within its neighbours' band) — there only a spike beyond 1 % of the capacity is rejected",
      lambda c: _fault(c, "loadcell", "spike") and c.rate_Hz <= 12.0),
-    # found on be4e634's draw (issue 42's class, open): the rows' crosshead lags the true one after the encoder's retried
-    # reads — 0.106 mm (2 %) at 10.5 s of tension-20C-0.5mmps-50Hz-steel45-encoder:drop:0.05, the measured speed −7 %, and
-    # after the fracture the rows' crosshead still climbs at 0.19 mm/s, where the fault-free run's stands — so the fracture's
-    # fall lies 0.1 mm early against the crosshead (force vs crosshead holds up to Fm)
-    ("encoder replies dropped at 50 Hz and faster in tension: the rows' crosshead lags after the retried reads (2 % at "
-     "the fracture, the measured speed 7 % low) and climbs on after the fracture",
-     lambda c: _fault(c, "encoder", "drop") and c.test == "tension" and c.rate_Hz >= 50.0),
 ]
 
 
