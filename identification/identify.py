@@ -136,7 +136,10 @@ def old_writer_warning(record: Record) -> str | None:
     ``writer.stamping`` in its header) that declares lost load-cell frames: that writer stamped
     the frames after a loss as if none had been lost, so from the first loss on each force may
     sit against an earlier crosshead position (docs/record-format.md, "Time stamps and losses")."""
-    if record.meta.get(WRITER_STAMPING_KEY) not in (None, ""):
+    stamping = record.meta.get(WRITER_STAMPING_KEY)
+    if stamping == "2":
+        return _straight_gap_warning(record)
+    if stamping not in (None, ""):
         return None
     try:
         missing = float(record.meta.get("samples_missing") or 0)
@@ -151,6 +154,19 @@ def old_writer_warning(record: Record) -> str | None:
             f"{WRITER_STAMPING_KEY} in its header) and declares {lost}: the force may be shifted against the "
             f"crosshead after the first loss{at} — each later force paired with an earlier crosshead position, "
             f"Fm and the curve too high while the force rises; use the curve up to the first loss, or test again")
+
+
+def _straight_gap_warning(record: Record) -> str | None:
+    """A record of writer.stamping 2 whose crosshead reads were retried: that writer drew the rows'
+    crosshead straight across the gap a retried read leaves, so a stop inside the gap (the fracture,
+    the target) reads as a climb (docs/record-format.md, "Rows across a gap")."""
+    retried = next((e for e in record.events if e.name == "retry" and "encoder" in e.text.split(":")[0]), None)
+    if retried is None:
+        return None
+    return (f"the record was written with {WRITER_STAMPING_KEY} 2 and its crosshead encoder's reads were retried (from "
+            f"{retried.time_s:.1f} s): that writer drew the crosshead straight across the gap a retried read leaves, so "
+            "where the crosshead stopped inside a gap (the fracture, the target) the rows read it still climbing — the "
+            "points after such a stop are not to be trusted; the force before it is")
 
 
 def check_record(record: Record) -> list[str]:

@@ -95,7 +95,7 @@ KNOWN_KEYS = (
 # never moves a later force against the crosshead. Records without the key were written before:
 # after their first lost frame every force may sit against an earlier crosshead position.
 WRITER_STAMPING_KEY = "writer.stamping"
-WRITER_STAMPING = 2
+WRITER_STAMPING = 3  # 3: the crosshead's rows cross a gap in its readings at the speed before it, then stand
 
 # keys flowcurve and its importers write beyond KNOWN_KEYS (docs/record-format.md), and namespaces open to any name:
 # ``annotate --set`` and ``run --post`` refuse any other key, naming the nearest known one (a typo is never written)

@@ -169,3 +169,21 @@ def test_identify_names_records_of_the_old_writer_that_lost_frames(fault_free, t
     del fault_free.meta[WRITER_STAMPING_KEY]  # an old record that lost nothing carries no shift
     assert old_writer_warning(fault_free) is None
     fault_free.meta[WRITER_STAMPING_KEY] = str(WRITER_STAMPING)
+
+
+def test_identify_names_records_of_stamping_2_whose_encoder_reads_were_retried(fault_free):
+    import copy
+
+    from flowcurve.record.format import Event
+
+    rec = copy.deepcopy(fault_free)
+    rec.meta[WRITER_STAMPING_KEY] = "2"
+    assert old_writer_warning(rec) is None  # no retried crosshead read: nothing was drawn across a gap
+    rec.events.append(Event(4.2, "retry", "crosshead encoder: 1 retry after a silent, garbled or wrongly addressed reply"))
+    said = old_writer_warning(rec)
+    assert said and "straight across the gap" in said and "from 4.2 s" in said
+    rec.events[-1] = Event(4.2, "retry", "furnace: 1 retry after a silent reply")
+    assert old_writer_warning(rec) is None  # the furnace's retries do not move the crosshead
+    rec.events[-1] = Event(4.2, "retry", "crosshead encoder: 1 retry after a silent reply")
+    rec.meta[WRITER_STAMPING_KEY] = str(WRITER_STAMPING)
+    assert old_writer_warning(rec) is None  # this writer's rows stand across the gap
