@@ -157,7 +157,7 @@ class DriverRig:
         if self.furnace is not None:
             per_control = self.config.furnace.control_period_s / 4.0 / self.time_scale
             furnace_period = max(FURNACE_MIN_PERIOD_S, min(FURNACE_PERIOD_S, per_control))  # not `period`: read_force's closure holds that name
-            chans["temperature_C"] = Channel(self.furnace.name, self.read_temperature_C, clock, period_s=furnace_period, silence_s=self._silence_s(self.config.furnace), timebase=self.timebase)
+            chans["temperature_C"] = Channel(self.furnace.name, self._read_temperature, clock, period_s=furnace_period, silence_s=self._silence_s(self.config.furnace), timebase=self.timebase)
         return chans
 
     @property
@@ -199,12 +199,7 @@ class DriverRig:
         next comes one poll later, and the stream never falls silent. The widest half-width of a
         kept reading (host seconds) is :attr:`position_half_width_s`; :attr:`positions_doubted` counts
         those left out."""
-        asked = self.timebase.now()
-        mm = self.encoder.position_mm()
-        answered = self.timebase.now()
-        transport = self.encoder.transport
-        if transport.clock is self.timebase and transport.last_request_s is not None:
-            asked = max(asked, transport.last_request_s)  # the attempt that got the reply
+        asked, mm, answered = self._bracketed(self.encoder, self.encoder.position_mm)
         half = 0.5 * (answered - asked)
         self._narrowest_half_s = min(self._narrowest_half_s, half)
         if half > self._narrowest_half_s + BRACKET_SLACK_S and answered - self._position_kept_at < BRACKET_KEEP_S:
@@ -214,11 +209,36 @@ class DriverRig:
         self.position_half_width_s = max(self.position_half_width_s, half)
         return [(self._to_clock(0.5 * (asked + answered)), mm)]
 
+    def _bracketed(self, device, read) -> tuple[float, object, float]:
+        """(asked, value, answered) on the timebase: ``read()``'s request and reply bracket the moment
+        the device took its reading; after a retry the bracket opens at the attempt that was answered
+        (``transport.last_request_s``)."""
+        asked = self.timebase.now()
+        value = read()
+        answered = self.timebase.now()
+        transport = device.transport
+        if transport.clock is self.timebase and transport.last_request_s is not None:
+            asked = max(asked, transport.last_request_s)  # the attempt that got the reply
+        return asked, value, answered
+
     # furnace ---------------------------------------------------------------------------------
+    def _read_temperature(self) -> list[tuple[float, float]]:
+        """The temperature channel's reading, stamped at the middle of its own exchange as the
+        crosshead's is (a retried read within the attempt that was answered), then the checks of
+        :meth:`read_temperature_C` (which run after the exchange, outside its bracket)."""
+        asked, t, answered = self._bracketed(self.furnace, self.furnace.temperature_C)
+        self._check_furnace(t)
+        return [(self._to_clock(0.5 * (asked + answered)), t)]
+
     def read_temperature_C(self) -> float:
         """A reading; the heater relay must follow (a rise with the heater off for long: stuck),
         and every FURNACE_VERIFY_S the module proves its address (``@AADI``: ``>`` data has none)."""
         t = self.furnace.temperature_C()
+        self._check_furnace(t)
+        return t
+
+    def _check_furnace(self, t: float) -> None:
+        """The stuck-relay check on a reading, and the module's address proof every FURNACE_VERIFY_S."""
         if self._stuck is None:
             self._stuck = StuckRelayCheck(self.furnace.name, settle_s=STUCK_SETTLE_S, max_temperature_C=self.max_temperature_C)
         self._stuck.update(t, self._clock(), self.furnace.heater_is_on)
@@ -226,7 +246,6 @@ class DriverRig:
         if now - self._verified_at >= FURNACE_VERIFY_S:
             self.furnace.digital_io()
             self._verified_at = now
-        return t
 
     def watch_heater_off(self, seconds: float, settle_s: float = STUCK_SETTLE_S, *, longest_s: float | None = None,
                          on_extend: Callable[[str], None] | None = None) -> float:
