@@ -103,3 +103,34 @@ def test_fit_refuses_an_unknown_law_in_one_line_before_reading_any_record(tmp_pa
     assert main(["fit", str(tmp_path / "absent.csv"), "--law", "hensel_spitel", "--out", str(tmp_path / "fit")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "unknown law 'hensel_spitel' (did you mean 'hensel_spittel'?)" in err
+
+
+def _members_of(name, truth, temperatures, rates, seed=1):
+    law, rng, out = get_law(name), np.random.default_rng(seed), []
+    for T in temperatures:
+        for r in rates:
+            eps = np.linspace(0.02, 0.6, 200)
+            sig = law.stress(eps, r, T, **truth) * (1.0 + rng.normal(0.0, 0.003, eps.size))
+            out.append(SeriesMember(f"T{T:g}C_rate{r:g}", eps, sig, r, T, kind="result"))
+    return out
+
+
+HOT_SINE = {**{f"{s}{i}": 0.0 for s in ("alpha", "n", "Q", "lnA") for i in range(6)},
+            "alpha0": 0.012, "alpha1": -0.004, "n0": 5.0, "n1": -2.0, "Q0": 3.2e5, "Q1": -4e4, "lnA0": 28.0, "lnA1": -3.0}
+
+
+@pytest.mark.parametrize("name, truth, temperatures, rates", [
+    # Zerilli & Armstrong (1987): Armco iron (bcc) and OFHC copper (fcc), 0.3 % noise
+    ("zerilli_armstrong_bcc", dict(C0=0.0, C1=1033.0, C3=0.00698, C4=0.000415, C5=266.0, n=0.289), (20.0, 200.0, 400.0), (0.001, 0.1, 10.0)),
+    ("zerilli_armstrong_fcc", dict(C0=65.0, C2=890.0, C3=0.0028, C4=0.000115), (20.0, 200.0, 400.0), (0.001, 0.1, 10.0)),
+    # a strain-compensated hyperbolic-sine material (Q, n, α, ln A linear in εp)
+    ("hyperbolic_sine", HOT_SINE, (900.0, 1000.0, 1100.0), (0.01, 0.1, 1.0)),
+])
+def test_the_series_fit_recovers_each_rate_and_temperature_law_from_its_own_curves(name, truth, temperatures, rates):
+    members = _members_of(name, truth, temperatures, rates)
+    sf = fit_series(members, law=name)
+    law, eps = get_law(name), np.linspace(0.05, 0.6, 40)
+    for m in members:
+        dev = law.stress(eps, m.strain_rate_per_s, m.temperature_C, **sf.fit.params) / law.stress(eps, m.strain_rate_per_s, m.temperature_C, **truth) - 1.0
+        assert np.max(np.abs(dev)) < 0.01, (name, m.name, float(np.max(np.abs(dev))))
+    assert sf.quality == "good"
