@@ -23,6 +23,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from flowcurve.identification.laws.base import display_name_of  # noqa: E402
 from flowcurve.identification.outcome import Identification  # noqa: E402
 
 # column-name unit suffix → how the axis label writes it
@@ -41,7 +42,6 @@ def axis_label(column: str) -> str:
     return column.replace("_", " ")
 
 
-LAW_NAMES = {"johnson_cook": "Johnson–Cook", "swift": "Swift", "voce": "Voce"}
 CORRECTION_NAMES = {"fe_table": "CalculiX force-factor table", "k_sigma": "K_σ/K_ε factors", "siebel": "Siebel",
                     "slab": "slab method"}
 NECK_NAMES = {"davidenkov": "Davidenkov", "bridgman": "Bridgman", "mirone": "Mirone"}
@@ -50,7 +50,7 @@ NECK_NAMES = {"davidenkov": "Davidenkov", "bridgman": "Bridgman", "mirone": "Mir
 def words(name: str) -> str:
     """A curve's code name in words for a legend (``true_fe_table`` → ``CalculiX force-factor table``)."""
     key = name.removeprefix("true_")
-    return CORRECTION_NAMES.get(key) or LAW_NAMES.get(key) or key.replace("_", " ")
+    return CORRECTION_NAMES.get(key) or display_name_of(key)
 
 
 def _thin(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -252,7 +252,7 @@ def _title(ident: Identification, what: str) -> str:
 
 def _law_name(ident: Identification) -> str:
     law = str((ident.result.get("hardening") or {}).get("law", ""))
-    return LAW_NAMES.get(law, law.replace("_", " ") or "hardening")
+    return display_name_of(law) or "hardening"
 
 
 def _fit_label(ident: Identification) -> str:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from flowcurve import __version__
 from flowcurve.errors import FlowcurveError
+from flowcurve.identification.laws.base import constant_keys, display_name_of, registered_laws
 from flowcurve.identification.outcome import read_json_object
 from flowcurve.reports import calibration as cal
 from flowcurve.reports.lab import LabHeader
@@ -102,7 +103,6 @@ def customer_text(text: str, report: Report | None = None) -> str:
 PLOT_CAPTIONS = {"diagram": "indicator diagram: force against displacement, as recorded and corrected",
                  "stress_strain": "stress–strain curves; the selected true curve with its hardening fit",
                  "corrections": "true curves by friction correction"}
-LAW_NAMES = {"johnson_cook": "Johnson–Cook", "swift": "Swift", "voce": "Voce"}
 FRICTION_METHODS = {"fe_table": "CalculiX upsetting table", "bulge_regression": "bulge regression",
                     "ebrahimi_najafizadeh": "Ebrahimi–Najafizadeh"}
 FLOW_SHOWN = ("0.1", "0.2", "0.3")  # compression flow stress columns (true plastic strain)
@@ -387,12 +387,16 @@ def hardening_table(results: list) -> Table:
         def cell(key, h=h, hu=hu):
             return value_with_U(_num(h.get(key)), _num((hu.get(key) or {}).get("U")), STEPS.get(key))
         rng = h.get("strain_range") or h.get("fit_range") or [None, None]
-        rows.append([specimen_id(n, r), LAW_NAMES.get(h.get("law"), str(h.get("law", "–"))), cell("A_MPa"), cell("B_MPa"),
-                     cell("n"), f"{format_step(_num(rng[0]), 0.001)} – {format_step(_num(rng[1]), 0.001)}",
+        law = str(h.get("law") or "–")
+        constants = ([cell("A_MPa"), cell("B_MPa"), cell("n")] if law in ("johnson_cook", "–")
+                     else ["; ".join(f"{sym} {cell(key)}{' ' + unit if unit else ''}" for sym, key, unit in constant_keys(law)), "", ""])
+        rows.append([specimen_id(n, r), display_name_of(law) if law != "–" else law, *constants,
+                     f"{format_step(_num(rng[0]), 0.001)} – {format_step(_num(rng[1]), 0.001)}",
                      f"{format_step(_num(h.get('fit_error_pct')), 0.1)} / {format_step(_num(h.get('rms_error_pct')), 0.1)}",
                      str(h.get("quality", "–"))])
     return Table(["specimen", "law", "A, MPa", "B, MPa", "n", "fitted εp range", "max / rms error, %", "quality"], rows,
-                 "per specimen: hardening law σ = A + B·εpⁿ fitted to each specimen's own curve; value ± U (k = 2) of that one "
+                 "per specimen: the hardening law fitted to each specimen's own curve (Johnson–Cook's σ = A + B·εpⁿ in the "
+                 "A, B, n columns; another law's constants in words in the first); value ± U (k = 2) of that one "
                  "fit (its statistics and the stress scale) — not the constants of the series")
 
 
@@ -471,7 +475,7 @@ def figures(name: str, folder: Path) -> list:
 
 def in_words(text: str) -> str:
     """A warning from the identification with its code names in words (johnson_cook → Johnson–Cook)."""
-    for code, word in {**LAW_NAMES, **FRICTION_METHODS}.items():
+    for code, word in {**{n: law.display_name for n, law in registered_laws().items()}, **FRICTION_METHODS}.items():
         text = text.replace(code, word)
     return text
 

@@ -172,3 +172,20 @@ def get_law(name: str) -> Law:
         near = difflib.get_close_matches(name, list(laws), n=1)
         hint = f" (did you mean {near[0]!r}?)" if near else ""
         raise IdentificationError(f"unknown law {name!r}{hint}; registered: {', '.join(laws)}") from None
+
+
+def display_name_of(name: str) -> str:
+    """A law's display name for reports and plots (``johnson_cook`` → ``Johnson–Cook``); an
+    unregistered name in words."""
+    law = registered_laws().get(name)
+    return law.display_name if law is not None else (name or "").replace("_", " ")
+
+
+def constant_keys(name: str) -> list[tuple[str, str, str]]:
+    """(symbol, JSON key, unit) of a law's fitted constants as one record's result carries them
+    (Johnson–Cook's static part A, B, n on one record); [] for an unknown law."""
+    law = registered_laws().get(name)
+    if law is None:
+        return []
+    params = law.parameters[:3] if name == "johnson_cook" else law.parameters
+    return [(p.name, p.key, p.unit) for p in params]
