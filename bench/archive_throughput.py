@@ -18,6 +18,7 @@ the same run, in its own output folder (a result is current only for the code th
 
 Run: python bench/archive_throughput.py [--records 40] [--no-plots]   (~3-6 min on 2 cores)
      python bench/archive_throughput.py --current-only [--repeat 5] [--against DIR]   (~1 min)
+     python bench/archive_throughput.py --against DIR --repeat 2 --no-plots   (the first run of two checkouts, ~6 min)
 """
 
 from __future__ import annotations
@@ -93,13 +94,32 @@ def current_only(records: list[str], tmp: Path, plots: list[str], roots: dict[st
         print(f"| {name} ({root}) | {one:.2f} | {two:.2f} | {two / one:.2f} |")
 
 
+def first_runs(records: list[str], tmp: Path, plots: list[str], roots: dict[str, Path], repeat: int) -> None:
+    """The first run (no result current) at --jobs 1 of each checkout in ``roots``, taking turns,
+    each run into an empty output folder; the median wall time and its ratio to the first checkout's."""
+    times = {name: [] for name in roots}
+    for k in range(repeat):
+        for name, root in roots.items():
+            wall, _cpu, last = timed_identify(records, tmp / f"{name}{k}", [*plots, "--jobs", "1"], root)
+            times[name].append(wall)
+            print(f"  {name}: {wall:.1f} s ({last})", flush=True)
+    reference = statistics.median(times[next(iter(roots))])
+    print(f"the first run at --jobs 1 (median of {repeat})")
+    print("| checkout | wall, s | records per minute | vs this |")
+    print("|---|---|---|---|")
+    for name, root in roots.items():
+        wall = statistics.median(times[name])
+        print(f"| {name} ({root}) | {wall:.1f} | {60.0 * len(records) / wall:.0f} | {wall / reference:.2f} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--records", type=int, default=40)
     parser.add_argument("--no-plots", action="store_true", help="pass --no-plots to identify (the default draws the PNG plots)")
     parser.add_argument("--current-only", action="store_true", help="time only the command again over current results, --jobs 1 and 2")
     parser.add_argument("--repeat", type=int, default=5, help="--current-only: runs per figure (median)")
-    parser.add_argument("--against", type=Path, metavar="DIR", help="--current-only: another checkout to time beside this one")
+    parser.add_argument("--against", type=Path, metavar="DIR", help="another checkout to time beside this one (with --current-only: the "
+                        "command again; else the first run at --jobs 1, the checkouts taking turns)")
     args = parser.parse_args()
     plots = ["--no-plots"] if args.no_plots else []
     if args.current_only:
@@ -108,6 +128,12 @@ def main() -> None:
             print(f"{len(records)} records, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}", flush=True)
             roots = {"this": ROOT, **({"against": args.against.resolve()} if args.against else {})}
             current_only(records, Path(tmp), plots, roots, args.repeat)
+        return
+    if args.against:
+        with tempfile.TemporaryDirectory(prefix="flowcurve-archive-") as tmp:
+            records = make_records(Path(tmp) / "records", args.records)
+            print(f"{len(records)} records, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}", flush=True)
+            first_runs(records, Path(tmp), plots, {"this": ROOT, "against": args.against.resolve()}, args.repeat)
         return
     rows = []
     with tempfile.TemporaryDirectory(prefix="flowcurve-archive-") as tmp:
