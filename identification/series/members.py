@@ -343,19 +343,7 @@ def member_from_result(folder: str | Path) -> SeriesMember:
     temperature = _number(block.get("nominal_temperature_C"))
     if temperature is None:
         raise RecordError(path, "record.nominal_temperature_C is missing: the temperature of this test is unknown")
-    rate = _number(block.get("strain_rate_per_s"))
-    rate_source = "result.json"
-    speed = _number(block.get("crosshead_speed_mm_per_s"))
-    specimen = block.get("specimen") or {}
-    gauge_key = "h0_mm" if test == "compression" else "l0_mm"
-    gauge = _number(specimen.get(gauge_key) if isinstance(specimen, dict) else None)
-    if gauge is None:
-        gauge = _number(block.get(f"specimen.{gauge_key}"))
-    nominal_rate = speed / gauge if speed is not None and gauge else None
-    if rate is None:
-        if speed is None or not gauge:
-            raise RecordError(path, f"the strain rate is unknown: record.strain_rate_per_s is missing and so is record.crosshead_speed_mm_per_s or the specimen {gauge_key}")
-        rate, rate_source = speed / gauge, "crosshead speed / gauge length"
+    rate, rate_source, nominal_rate = _result_rates(block, test, path)
     curve_path = folder / "true_curve.csv"
     try:
         curve = pd.read_csv(curve_path)
@@ -386,6 +374,24 @@ def member_from_result(folder: str | Path) -> SeriesMember:
                         poisson_ratio=_number(result.get("poisson_ratio")), material=block.get("material"),
                         fracture=fracture_point_from_result(dict(result, test=test), _flat_specimen(block), rate,
                                                             temperature, str(folder)))
+
+
+def _result_rates(block: dict, test: str | None, path: Path) -> tuple[float, str, float | None]:
+    """(strain rate 1/s, its source, the commanded rate 1/s or None) of result.json's record block: its
+    ``strain_rate_per_s``, else the crosshead speed / gauge length (h0 or l0), which is the commanded rate."""
+    rate = _number(block.get("strain_rate_per_s"))
+    speed = _number(block.get("crosshead_speed_mm_per_s"))
+    specimen = block.get("specimen") or {}
+    gauge_key = "h0_mm" if test == "compression" else "l0_mm"
+    gauge = _number(specimen.get(gauge_key) if isinstance(specimen, dict) else None)
+    if gauge is None:
+        gauge = _number(block.get(f"specimen.{gauge_key}"))
+    nominal_rate = speed / gauge if speed is not None and gauge else None
+    if rate is not None:
+        return rate, "result.json", nominal_rate
+    if nominal_rate is None:
+        raise RecordError(path, f"the strain rate is unknown: record.strain_rate_per_s is missing and so is record.crosshead_speed_mm_per_s or the specimen {gauge_key}")
+    return nominal_rate, "crosshead speed / gauge length", nominal_rate
 
 
 def stated_uncertainties(result, curve) -> dict:
