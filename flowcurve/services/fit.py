@@ -70,8 +70,10 @@ def fit(req: FitRequest, members):
 
     req.check()
     if req.rate_per_record:
+        from flowcurve.identification.series.members import with_one_rate
+
         for m in members:
-            m.point_rates_per_s = None  # rates_at then gives the record's one rate
+            with_one_rate(m)  # the record's one rate; the points' spread about it weighs them (docs/methods.md §5.10)
     heating = adiabatic_heating(req, members) if req.adiabatic else []
     missing = missing_inputs(members, ref_strain_rate_per_s=req.ref_rate, ref_temperature_C=req.ref_temp,
                              melt_temperature_C=req.melt_temp, fixed=req.fixed()) if req.law == "johnson_cook" else []

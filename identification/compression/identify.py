@@ -294,13 +294,17 @@ def _strain_zero(diagram: _Diagram, geo: dict, line: _Line, nominal: _Nominal, y
     return start, warnings
 
 
-def _flow_curve(eps_p: np.ndarray, stress_MPa: np.ndarray, i_yield: int, uncertainty_pct: np.ndarray | None = None) -> pd.DataFrame:
+def _flow_curve(eps_p: np.ndarray, stress_MPa: np.ndarray, i_yield: int, uncertainty_pct: np.ndarray | None = None,
+                dsigma_dmu_MPa: np.ndarray | None = None) -> pd.DataFrame:
     """The curve a card starts from: where the plastic strain has passed the 0.2 % offset (with the
-    correction's per-point uncertainty, %, where it has one)."""
+    correction's per-point uncertainty, %, where it has one, and the applied correction's ∂σ/∂μ, MPa
+    per unit μ: a series fit weighs each point by u(μ)·|∂σ/∂μ|, docs/methods.md §5.10)."""
     plastic = np.nonzero((np.maximum.accumulate(eps_p) >= YIELD_OFFSET) & (eps_p >= 0) & (np.arange(eps_p.size) >= i_yield))[0]
     curve = {"true_plastic_strain": eps_p[plastic], "true_stress_MPa": stress_MPa[plastic]}
     if uncertainty_pct is not None:
         curve["correction_uncertainty_pct"] = uncertainty_pct[plastic]
+    if dsigma_dmu_MPa is not None:
+        curve["dsigma_dmu_MPa"] = np.asarray(dsigma_dmu_MPa, dtype=float)[plastic]
     return pd.DataFrame(curve)
 
 
@@ -447,6 +451,6 @@ def identify_compression(
         result.warnings.extend(fold_warnings)
     curves = _curves(diagram, nominal, friction, fits[friction_correction])
     # the flow stress budget's μ term reads the sensitivity of this correction, not Siebel's (uncertainty.flow_stress_budget)
-    curves[f"true_{friction_correction}"]["dsigma_dmu_MPa"] = correction_mu_sensitivity(geo, nominal, friction.chosen.mu, friction_correction,
-                                                                                        yld.E_used)
-    return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield, uncertainty), curves=curves)
+    sensitivity = correction_mu_sensitivity(geo, nominal, friction.chosen.mu, friction_correction, yld.E_used)
+    curves[f"true_{friction_correction}"]["dsigma_dmu_MPa"] = sensitivity
+    return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield, uncertainty, sensitivity), curves=curves)

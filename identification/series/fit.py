@@ -405,14 +405,15 @@ class SeriesFit:
 
 def law_block(fit: LawFit) -> dict:
     """fit.json's "law" block (flowcurve-fit/2, docs/fit-json.md): name, equation, parameters and
-    stderr by key, the stated conditions, temperature unit °C."""
+    stderr by key, the stated conditions, temperature unit °C, and the uncertainty terms that weighed the
+    points (``point_u_terms``, docs/methods.md §5.10)."""
     law, values = fit.law, fit.values
     return {"name": law.name, "display_name": law.display_name, "equation": law.equation,
             "parameters": {p.key: float(values[p.name]) for p in law.parameters},
             "stderr": {p.key: (None if fit.stderr.get(p.name) is None or not math.isfinite(fit.stderr[p.name])
                                else float(fit.stderr[p.name])) for p in law.parameters},
             "conditions": {p.key: float(values[p.name]) for p in law.conditions},
-            "temperature_unit": "C"}
+            "temperature_unit": "C", "point_u_terms": list(fit.point_u_terms)}
 
 
 def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_strain_rate_per_s: float | None = None,

@@ -18,6 +18,8 @@ import numpy as np
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.laws.base import Law, get_law
 from flowcurve.identification.series.members import MAX_POINTS, SeriesMember
+from flowcurve.identification.series.point_uncertainty import (floor_u, law_slopes, effective_u, joined, member_terms,
+                                                               strain_zero_u)  # noqa: F401 - strain_zero_u: callers read it here
 
 # the RMS shape error the friction correction leaves on CalculiX compression records with a known law
 # (0.40 % over the fit points of six records, docs/methods.md §5.7): how well the curves tell the constants apart
@@ -25,35 +27,18 @@ SHAPE_ERROR_PCT = 0.4
 BOUND_REL = 1e-6  # a constant within this share of its range from a bound is on it
 
 
-def strain_zero_u(member: SeriesMember) -> float:
-    """δε0 of a member (strain): its stated one (``delta_eps0``, from identify's start_uncertainty) when
-    it carries it; else, for a curve read from a record or result folder (one point per sample), one
-    sample's plastic strain at its start, uniform: Δε_first/√12; 0 for a curve given in memory."""
-    stated = getattr(member, "delta_eps0", None)
-    if stated is not None and math.isfinite(stated):
-        return float(stated)
-    eps = member.plastic_strain
-    if member.kind not in ("record", "result") or eps.size < 2:
-        return 0.0
-    return float((eps[1] - eps[0]) / math.sqrt(12.0))
-
-
-def point_u(member: SeriesMember, eps_p, floor_MPa: float) -> np.ndarray:
-    """Each fit point's standard uncertainty (MPa): the series' floor (its shape error) and the strain
-    zero's |dσ/dεp|·δε0 in quadrature, u = √(u_floor² + (σ'·δε0)²), σ' from the member's own curve."""
+def point_u(member: SeriesMember, eps_p, floor_MPa: float, stress_MPa=None) -> np.ndarray:
+    """Each fit point's standard uncertainty on the stress (MPa): the stress terms of
+    :mod:`.point_uncertainty` in quadrature (floor, start, friction, correction form, fold-over band), at
+    the member's own stresses unless ``stress_MPa`` is given."""
     eps = np.asarray(eps_p, dtype=float)
-    delta = strain_zero_u(member)
-    if delta == 0.0:
-        return np.full(eps.shape, floor_MPa)
-    slope = np.gradient(member.stress_MPa, member.plastic_strain)
-    return np.hypot(floor_MPa, np.interp(eps, member.plastic_strain, slope) * delta)
+    sig = np.interp(eps, member.plastic_strain, member.stress_MPa) if stress_MPa is None else stress_MPa
+    return member_terms(member, eps, sig, floor_MPa).u
 
 
-def stack_points(members: Sequence[SeriesMember], max_points: int, shape_error_pct: float = SHAPE_ERROR_PCT):
-    """All fit points: εp, σ, each point's own rate (1/s), T (°C), u (MPa, :func:`point_u`) and member index.
-
-    The floor of u is the shape error of the series' RMS stress, the same for every point: a series whose
-    curves state no start uncertainty is fitted as unweighted least squares."""
+def stack_terms(members: Sequence[SeriesMember], max_points: int, shape_error_pct: float = SHAPE_ERROR_PCT):
+    """All fit points: εp, σ, each point's own rate (1/s), T (°C), member index, and their uncertainty
+    terms (:class:`.point_uncertainty.PointUncertainty`; the floor is the shape error of the series' RMS stress)."""
     cols = [[], [], [], [], []]
     for i, m in enumerate(members):
         eps, sig = m.fit_points(max_points)
@@ -61,11 +46,17 @@ def stack_points(members: Sequence[SeriesMember], max_points: int, shape_error_p
             col.append(values)
     eps, sig, rate, temp, idx = (np.concatenate(c) for c in cols)
     idx = idx.astype(int)
-    floor = max(shape_error_pct, 1e-3) / 100.0 * float(np.sqrt(np.mean(sig**2)))  # a point is never exact
-    u = np.empty(eps.size)
-    for i, m in enumerate(members):
-        u[idx == i] = point_u(m, eps[idx == i], floor)
-    return eps, sig, rate, temp, u, idx
+    floor = floor_u(sig, shape_error_pct)
+    terms = joined([member_terms(m, eps[idx == i], sig[idx == i], floor) for i, m in enumerate(members)])
+    return eps, sig, rate, temp, idx, terms
+
+
+def stack_points(members: Sequence[SeriesMember], max_points: int, shape_error_pct: float = SHAPE_ERROR_PCT):
+    """All fit points: εp, σ, each point's own rate (1/s), T (°C), u (MPa, the stress terms in quadrature,
+    :func:`point_u`) and member index. A series whose curves state nothing but the floor is fitted as
+    unweighted least squares."""
+    eps, sig, rate, temp, idx, terms = stack_terms(members, max_points, shape_error_pct)
+    return eps, sig, rate, temp, terms.u, idx
 
 
 @dataclass
@@ -90,6 +81,7 @@ class LawFit:
     conditions: dict[str, float] = field(default_factory=dict)
     fixed_why: dict[str, str] = field(default_factory=dict)
     at_bound: dict[str, str] = field(default_factory=dict)
+    point_u_terms: list[str] = field(default_factory=list)  # the uncertainty terms that weighed the points (§5.10)
 
     @property
     def values(self) -> dict[str, float]:
@@ -117,6 +109,7 @@ class LawFit:
         if self.fixed_why:
             out["fixed_why"] = dict(self.fixed_why)
         out["at_bound"] = {key[p]: side for p, side in self.at_bound.items()}
+        out["point_u_terms"] = list(self.point_u_terms)
         out["correlations"] = {key[p]: {key[q]: float(c) for q, c in row.items()} for p, row in self.correlations.items()}
         out["fit_error_pct"] = float(self.fit_error_pct)
         out["rms_error_pct"] = float(self.rms_error_pct)
@@ -164,7 +157,8 @@ def fit_law(members: Sequence[SeriesMember], law: Law | str, *, conditions: dict
     law = get_law(law) if isinstance(law, str) else law
     conditions = dict(conditions or {})
     fixed, why = dict(fixed or {}), dict(fixed_why or {})
-    eps, sig, rate, temp, u, _ = stack_points(members, max_points, shape_error_pct)
+    eps, sig, rate, temp, _, terms = stack_terms(members, max_points, shape_error_pct)
+    u = terms.u
     unsupported = getattr(law, "unsupported", None)
     for name, reason in (unsupported(eps, rate, temp) if unsupported else {}).items():
         if name not in fixed:
@@ -175,12 +169,14 @@ def fit_law(members: Sequence[SeriesMember], law: Law | str, *, conditions: dict
         value = fixed.get(p.name, first[p.name])
         params.add(p.name, value=float(np.clip(value, p.lower, p.upper)), min=p.lower, max=p.upper, vary=p.name not in fixed)
 
-    def residual(pars):
-        return (law.stress(eps, rate, temp, **conditions, **pars.valuesdict()) - sig) / u
+    def residual(pars, weights_u):
+        return (law.stress(eps, rate, temp, **conditions, **pars.valuesdict()) - sig) / weights_u
 
-    result = lmfit.minimize(residual, params, method="least_squares")
-    if not result.success:
-        raise IdentificationError(f"the global {law.display_name} fit did not converge: {result.message}")
+    result = _minimize(residual, params, u, law)
+    slopes = None
+    if terms.has_x:  # the effective variance (Orear 1982) with the law's slopes at the first pass's constants, then again
+        slopes = law_slopes(law, {**conditions, **result.params.valuesdict()}, eps, rate, temp)
+        result = _minimize(residual, result.params, effective_u(terms, slopes), law)
     names = law.names
     free = [p for p in names if p not in fixed]
     values = {p: float(result.params[p].value) for p in names}
@@ -188,9 +184,19 @@ def fit_law(members: Sequence[SeriesMember], law: Law | str, *, conditions: dict
                  stderr={p: (None if p in fixed or result.params[p].stderr is None else float(result.params[p].stderr)) for p in names},
                  fixed=fixed, fixed_why=why, at_bound=on_bound(law, values, free),
                  correlations={p: {q: float(c) for q, c in (result.params[p].correl or {}).items()} for p in free},
-                 report=lmfit.fit_report(result))
+                 report=lmfit.fit_report(result), point_u_terms=terms.terms(slopes))
     fill_errors(fit, members, max_points)
     return fit
+
+
+def _minimize(residual, params, weights_u, law):
+    """One weighted least-squares pass (lmfit, trust region); an IdentificationError when it fails."""
+    import lmfit
+
+    result = lmfit.minimize(residual, params, args=(weights_u,), method="least_squares")
+    if not result.success:
+        raise IdentificationError(f"the global {law.display_name} fit did not converge: {result.message}")
+    return result
 
 
 def law_shape_uncertainty(members: Sequence[SeriesMember], fit: LawFit, *, max_points: int = MAX_POINTS,

@@ -53,6 +53,15 @@ class SeriesMember:
     point_temperatures_C: np.ndarray | None = None  # each point's own temperature (°C): the adiabatic rise added (with_adiabatic_heating)
     density_kg_per_m3: float | None = None  # the record's material.density_kg_per_m3 (for the adiabatic correction)
     heat_capacity_J_per_kg_K: float | None = None  # the record's material.heat_capacity_J_per_kg_K
+    # what each point's uncertainty in the series fit is built from (identification.series.point_uncertainty, §5.10)
+    delta_eps0: float | None = None  # the strain zero's stated uncertainty (identify's hardening.start_uncertainty.delta_eps0)
+    friction_mu_u: float | None = None  # u(μ): half the friction method's μ range (result.json friction_mu_range)
+    dsigma_dmu_MPa: np.ndarray | None = None  # each point's ∂σ/∂μ of the applied friction correction (true_curve.csv)
+    correction_u_pct: np.ndarray | None = None  # each point's correction uncertainty, % (true_curve.csv correction_uncertainty_pct)
+    strain_rate_u_ln: float | None = None  # a stated standard uncertainty of ln ε̇ of every point
+    strain_rate_u_source: str | None = None  # what strain_rate_u_ln holds
+    nominal_strain_rate_per_s: float | None = None  # the commanded rate: crosshead speed / gauge length (h0 or l0)
+    temperature_u_C: float | None = None  # a stated standard uncertainty of each point's T: the measured T's spread over the plastic range
 
     def __post_init__(self):
         where = self.source if self.source != "<memory>" else self.name
@@ -73,6 +82,13 @@ class SeriesMember:
         eps, sig = eps[order], sig[order]
         self.point_rates_per_s = None if rates is None else rates[ok][order]
         self.point_temperatures_C = None if temps is None else temps[ok][order]
+        for name in ("dsigma_dmu_MPa", "correction_u_pct"):  # a cell that is not a number states nothing: 0
+            values = getattr(self, name)
+            if values is not None:
+                values = np.nan_to_num(np.asarray(values, dtype=float).ravel(), nan=0.0, posinf=0.0, neginf=0.0)
+                if values.shape != ok.shape:
+                    raise RecordError(where, f"true curve: {ok.size} strains but {values.size} values of {name}")
+                setattr(self, name, values[ok][order])
         if eps.size < 4 or np.ptp(eps) <= 0:
             raise RecordError(where, f"true curve has {eps.size} usable points; a series fit needs at least 4 over a strain range")
         if np.min(eps) < 0 or np.min(sig) <= 0:
@@ -111,6 +127,14 @@ class SeriesMember:
             return np.full(eps_p.shape, self.temperature_C)
         return np.interp(eps_p, self.plastic_strain, self.point_temperatures_C)
 
+    def along_curve(self, name: str, eps_p) -> np.ndarray | None:
+        """A per-point column of the member (``dsigma_dmu_MPa``, ``correction_u_pct``) at plastic strains
+        ``eps_p`` (linear), None when the member has none."""
+        values = getattr(self, name)
+        if values is None:
+            return None
+        return np.interp(np.asarray(eps_p, dtype=float), self.plastic_strain, values)
+
     @property
     def temperature_rise_max_K(self) -> float | None:
         """The largest adiabatic temperature rise over the curve (K), None when not corrected."""
@@ -147,6 +171,17 @@ def with_adiabatic_heating(member: SeriesMember, *, density_kg_per_m3: float, he
     rise = adiabatic_temperature_rise_K(member.plastic_strain, member.stress_MPa, density_kg_per_m3=density_kg_per_m3,
                                         heat_capacity_J_per_kg_K=heat_capacity_J_per_kg_K, beta=beta)
     member.point_temperatures_C = member.temperature_C + rise
+    return member
+
+
+def with_one_rate(member: SeriesMember) -> SeriesMember:
+    """The member fitted at its one rate (``fit --rate-per-record``): its points' own rates dropped, their
+    spread about that rate kept as each point's u(ln ε̇) unless the member states one (docs/methods.md §5.10)."""
+    rates = member.point_rates_per_s
+    if rates is not None and member.strain_rate_u_ln is None:
+        member.strain_rate_u_ln = float(np.sqrt(np.mean(np.log(rates / member.strain_rate_per_s) ** 2)))  # RMS of ln(ε̇_i/ε̇)
+        member.strain_rate_u_source = "the spread of the points' own rates about the record's rate"
+    member.point_rates_per_s = None  # rates_at then gives the record's one rate
     return member
 
 
@@ -257,14 +292,18 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
     ident = identify(record, **identify_options)
     result = ident.result
     rate, mask = strain_rate_from_record(record, result.get("E_MPa"))
+    temperature_u = None
     if record.has("temperature_C") and np.isfinite(record.column("temperature_C")[mask]).any():
         temperature, t_source = float(np.nanmean(record.column("temperature_C")[mask])), "data"
+        temperature_u = float(np.nanstd(record.column("temperature_C")[mask]))  # the readings' spread over the plastic range
     else:
         temperature = record.number("nominal_temperature_C")
         t_source = "nominal"
         if temperature is None:
             raise RecordError(record.source, "the test temperature is unknown: add '# nominal_temperature_C: <value>' to the header or a temperature_C column")
     eps, sig = plastic_part(ident.true_curve[TRUE_CURVE_COLUMNS[0]], ident.true_curve[TRUE_CURVE_COLUMNS[1]])
+    stated = stated_uncertainties(result, ident.true_curve)
+    speed, gauge = record.number("crosshead_speed_mm_per_s"), _gauge_of(record)
     E_material, E_source = result_material_E(result)
     point_rates = point_strain_rates(record, result.get("E_MPa"), eps) if eps.size else None
     return SeriesMember(name=record.name, plastic_strain=eps, stress_MPa=sig, strain_rate_per_s=rate, point_rates_per_s=point_rates,
@@ -276,6 +315,7 @@ def member_from_record(record: Record, **identify_options) -> SeriesMember:
                         poisson_ratio=_number(result.get("poisson_ratio")), material=record.meta.get("material"),
                         density_kg_per_m3=record.positive("material.density_kg_per_m3"),
                         heat_capacity_J_per_kg_K=record.positive("material.heat_capacity_J_per_kg_K"),
+                        temperature_u_C=temperature_u, nominal_strain_rate_per_s=speed / gauge if speed and gauge else None, **stated,
                         fracture=fracture_point_from_result(dict(result, test=record.test), record.meta, rate, temperature,
                                                             record.source))
 
@@ -303,18 +343,7 @@ def member_from_result(folder: str | Path) -> SeriesMember:
     temperature = _number(block.get("nominal_temperature_C"))
     if temperature is None:
         raise RecordError(path, "record.nominal_temperature_C is missing: the temperature of this test is unknown")
-    rate = _number(block.get("strain_rate_per_s"))
-    rate_source = "result.json"
-    if rate is None:
-        speed = _number(block.get("crosshead_speed_mm_per_s"))
-        specimen = block.get("specimen") or {}
-        gauge_key = "h0_mm" if test == "compression" else "l0_mm"
-        gauge = _number(specimen.get(gauge_key) if isinstance(specimen, dict) else None)
-        if gauge is None:
-            gauge = _number(block.get(f"specimen.{gauge_key}"))
-        if speed is None or not gauge:
-            raise RecordError(path, f"the strain rate is unknown: record.strain_rate_per_s is missing and so is record.crosshead_speed_mm_per_s or the specimen {gauge_key}")
-        rate, rate_source = speed / gauge, "crosshead speed / gauge length"
+    rate, rate_source, nominal_rate = _result_rates(block, test, path)
     curve_path = folder / "true_curve.csv"
     try:
         curve = pd.read_csv(curve_path)
@@ -331,8 +360,13 @@ def member_from_result(folder: str | Path) -> SeriesMember:
     except ValueError:
         raise RecordError(curve_path, "the curve holds cells that are not numbers") from None
     eps, sig = plastic_part(eps, sig)
+    try:
+        stated = stated_uncertainties(result, curve)
+    except (TypeError, ValueError):
+        raise RecordError(curve_path, "the curve holds cells that are not numbers") from None
     E_material, E_source = result_material_E(result)
-    return SeriesMember(name=str(block.get("name") or folder.name), plastic_strain=eps, stress_MPa=sig,
+    return SeriesMember(name=str(block.get("name") or folder.name), plastic_strain=eps, stress_MPa=sig, **stated,
+                        nominal_strain_rate_per_s=nominal_rate,
                         strain_rate_per_s=rate, temperature_C=temperature, source=str(folder), kind="result",
                         test=test, strain_rate_source=rate_source, temperature_source="nominal",
                         friction_mu=_number(result.get("friction_mu")), E_MPa=_number(result.get("E_MPa")),
@@ -340,6 +374,47 @@ def member_from_result(folder: str | Path) -> SeriesMember:
                         poisson_ratio=_number(result.get("poisson_ratio")), material=block.get("material"),
                         fracture=fracture_point_from_result(dict(result, test=test), _flat_specimen(block), rate,
                                                             temperature, str(folder)))
+
+
+def _result_rates(block: dict, test: str | None, path: Path) -> tuple[float, str, float | None]:
+    """(strain rate 1/s, its source, the commanded rate 1/s or None) of result.json's record block: its
+    ``strain_rate_per_s``, else the crosshead speed / gauge length (h0 or l0), which is the commanded rate."""
+    rate = _number(block.get("strain_rate_per_s"))
+    speed = _number(block.get("crosshead_speed_mm_per_s"))
+    specimen = block.get("specimen") or {}
+    gauge_key = "h0_mm" if test == "compression" else "l0_mm"
+    gauge = _number(specimen.get(gauge_key) if isinstance(specimen, dict) else None)
+    if gauge is None:
+        gauge = _number(block.get(f"specimen.{gauge_key}"))
+    nominal_rate = speed / gauge if speed is not None and gauge else None
+    if rate is not None:
+        return rate, "result.json", nominal_rate
+    if nominal_rate is None:
+        raise RecordError(path, f"the strain rate is unknown: record.strain_rate_per_s is missing and so is record.crosshead_speed_mm_per_s or the specimen {gauge_key}")
+    return nominal_rate, "crosshead speed / gauge length", nominal_rate
+
+
+def stated_uncertainties(result, curve) -> dict:
+    """What an identification states about its curve's points, as :class:`SeriesMember` fields: the strain
+    zero's δε0 (hardening.start_uncertainty.delta_eps0), u(μ) = half the friction method's μ range
+    (friction_mu_range, ±1σ: quality.uncertainty.friction_budget), and the plastic part's (εp ≥ 0.2 %)
+    per-point ∂σ/∂μ and correction uncertainty % (true_curve columns ``dsigma_dmu_MPa``,
+    ``correction_uncertainty_pct``). Absent ones are None."""
+    start = ((_law_of(result) or {}).get("start_uncertainty") or {})
+    mu_range = result.get("friction_mu_range")
+    u_mu = None
+    if isinstance(mu_range, (list, tuple)) and len(mu_range) == 2 and all(_number(v) is not None for v in mu_range):
+        u_mu = abs(float(mu_range[1]) - float(mu_range[0])) / 2.0  # u(μ) = (μ_hi − μ_lo)/2
+    eps = np.asarray(curve[TRUE_CURVE_COLUMNS[0]], dtype=float)
+    keep = eps >= PLASTIC_START  # as plastic_part
+    columns = {name: (np.asarray(curve[column], dtype=float)[keep] if column in curve.columns else None)
+               for name, column in (("dsigma_dmu_MPa", "dsigma_dmu_MPa"), ("correction_u_pct", "correction_uncertainty_pct"))}
+    return {"delta_eps0": _number(start.get("delta_eps0") if isinstance(start, dict) else None), "friction_mu_u": u_mu, **columns}
+
+
+def _gauge_of(record: Record) -> float | None:
+    """The length the nominal strain refers to (l0 or h0, mm), None when the record does not state it."""
+    return _number(getattr(record.specimen, "gauge_mm", None))  # parsed already: the identification read it
 
 
 def _law_of(result: dict) -> dict | None:

@@ -32,7 +32,9 @@ def test_identify_command_writes_the_compression_result(tmp_path, make_record, c
         assert key in rec, key
     assert rec["specimen"]["h0_mm"] == pytest.approx(6.982)
     curve = pd.read_csv(folder / "true_curve.csv")
-    assert list(curve.columns) == ["true_plastic_strain", "true_stress_MPa"]
+    # the applied correction's ∂σ/∂μ per point: a series fit weighs each point by u(μ)·|∂σ/∂μ| (docs/methods.md §5.10)
+    assert list(curve.columns) == ["true_plastic_strain", "true_stress_MPa", "dsigma_dmu_MPa"]
+    assert (curve["dsigma_dmu_MPa"] < 0).all()  # more friction: a lower flow stress from the same pressure
     assert curve["true_plastic_strain"].max() == pytest.approx(truth["eps_p_end"], abs=0.02)  # no E via CLI: total strain
     pngs = sorted(p.name for p in folder.glob("*.png"))
     assert "corrections.png" in pngs and "diagram.png" in pngs and "stress_strain.png" in pngs
