@@ -24,6 +24,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flowcurve.identification.outcome import to_jsonable
+
 sys.path.insert(0, str(Path(__file__).parent))
 import test_inverse_numbers_unchanged as stand_ins  # noqa: E402  (the stand-in runs, shared with the numbers guard)
 
@@ -106,6 +108,56 @@ def test_result_json_is_the_file_it_was_before_the_typed_blocks(case, tmp_path):
     want = json.loads(REFERENCE.read_text(encoding="utf-8"))[case]
     differences = _differences(_without_clock(written(identification(case), tmp_path)), want)
     assert not differences, f"{len(differences)} differences:\n" + "\n".join(differences[:20])
+
+
+@pytest.mark.parametrize("case", ["compression C2 johnson_cook", UNTOLD, "tension voce, dk 2.1"])
+def test_the_inverse_returns_the_typed_result_and_its_mapping_is_its_json(case, tmp_path):
+    """The result stays a CompressionResult or TensionResult; its inverse_fe block, budget and hardening are typed; the
+    mapping access, as_dict() and to_json() give what Identification.write writes."""
+    from flowcurve.identification.fe.force_shape import MuBySide
+    from flowcurve.identification.laws.hardening import HardeningFit
+    from flowcurve.identification.results import (CompressionBudget, CompressionInverseFE, CompressionResult, InverseBudget,
+                                                  InverseHardening, TensionInverseFE, TensionInverseHardening, TensionResult)
+
+    ident = identification(case)
+    result = ident.result
+    if case in TENSION:
+        assert type(result) is TensionResult and type(result.inverse_fe) is TensionInverseFE
+        assert type(result.inverse_fe.budget) is InverseBudget
+        assert type(result.hardening) is TensionInverseHardening and isinstance(result.hardening.fit, HardeningFit)
+    else:
+        assert type(result) is CompressionResult and type(result.inverse_fe) is CompressionInverseFE
+        assert type(result.inverse_fe.budget) is CompressionBudget and type(result.hardening) is InverseHardening
+        # the fit's Jacobian tells what the force and the shape alone say of μ; the untold stand-in has none
+        assert isinstance(result.inverse_fe.by_side, MuBySide) is (case != UNTOLD)
+        assert ("mu_force_alone" in result["inverse_fe"]) is (case != UNTOLD)
+    assert result["inverse_fe"] == result.inverse_fe.as_dict() and result["hardening"] == result.hardening.as_dict()
+    text = (ident.write(tmp_path) / "result.json").read_text(encoding="utf-8")
+    assert result.to_json() == text
+    assert json.loads(text) == json.loads(json.dumps(to_jsonable(result.as_dict()), allow_nan=False))
+
+
+def test_the_compression_inverse_hardening_is_its_law_in_closed_form():
+    """InverseHardening(ε_p) is Johnson–Cook's A + B·ε_p^n with the constants result.json gives, and the true curve is it."""
+    ident = identification("compression C2 johnson_cook")
+    h = to_jsonable(ident.result)["hardening"]
+    eps = ident.true_curve["true_plastic_strain"].to_numpy()
+    closed_form = h["A_MPa"] + h["B_MPa"] * eps ** h["n"]  # σ = A + B·ε_p^n
+    np.testing.assert_allclose(ident.result.hardening(eps), closed_form, rtol=1e-12)
+    np.testing.assert_allclose(ident.true_curve["true_stress_MPa"].to_numpy(), closed_form, rtol=1e-12)
+
+
+def test_readers_of_the_typed_result_work(tmp_path):
+    """The command line's summary and the plots read the typed inverse results as they read the dicts."""
+    from flowcurve.cli.identification import summary_lines
+    from flowcurve.reports.plots import add_plots
+
+    for case, said in (("compression C3 auto, fold-over, force and shape apart", "inverse FE: μ"), ("tension voce, dk 2.1", "inverse FE beyond")):
+        ident = identification(case)
+        assert any(said in line for line in summary_lines(ident.result)), case
+        add_plots(ident)
+        folder = ident.write(tmp_path / case.split()[0])
+        assert ident.plots and all((folder / f"{name}.png").stat().st_size > 0 for name in ident.plots)
 
 
 if __name__ == "__main__" and "--write" in sys.argv:
