@@ -28,7 +28,8 @@ class Identification:
 
     result: what is written to ``result.json`` (keys carry units: ``Rm_MPa``): a
         :class:`identification.results.TensionResult` or ``CompressionResult`` (typed, and
-        readable as a mapping), or a plain dict (the inverse-FE identification's).
+        readable as a mapping; the inverse-FE identification's with its typed ``inverse_fe``
+        block), or a plain dict.
     true_curve: DataFrame with at least the columns of :data:`TRUE_CURVE_COLUMNS`.
     curves: named intermediate curves for plots and comparison (e.g. "raw_diagram",
         "corrected_diagram", "engineering", "true", "fit", one per correction method), each a
@@ -37,7 +38,7 @@ class Identification:
         ``reports`` (identification does not import reports) and :meth:`write` calls them.
     """
 
-    result: Mapping  # TensionResult | CompressionResult | dict
+    result: Mapping  # TensionResult | CompressionResult (| dict)
     true_curve: pd.DataFrame
     curves: dict[str, pd.DataFrame] = field(default_factory=dict)
     plots: dict[str, Callable[[Path], None]] = field(default_factory=dict)

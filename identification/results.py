@@ -5,7 +5,10 @@
 top-level key of ``result.json`` (the keys carry units: ``Rm_MPa``), in the order the file
 lists them. :meth:`as_dict` is the ``result.json`` object, :meth:`to_json` its text; the main
 hardening fit is a small dataclass of its own that keeps the fitted law callable
-(``result.hardening.fit(eps_p)``).
+(``result.hardening.fit(eps_p)``). The inverse FE identifications (``--method inverse-fe``)
+return the same two results with an ``inverse_fe`` block (:class:`CompressionInverseFE`,
+:class:`TensionInverseFE`) and their own hardening (:class:`InverseHardening`,
+:class:`TensionInverseHardening`).
 
 Transition aid: both results also read like the dict they replace (``result["E_MPa"]``,
 ``.get``, ``.keys()``, ``in``, ``dict(result)``) and accept assignment to their own keys
@@ -96,11 +99,175 @@ class CompressionHardening:
         return {**self.fit.as_dict(), "correlations": correlations, "correction": self.correction, "start_uncertainty": self.start_uncertainty}
 
 
+class _Block:
+    """A block of result.json as a dataclass: :meth:`as_dict` gives its fields as the keys, in field order."""
+
+    _optional: tuple[str, ...] = ()  # keys left out while their value is None
+    _spread: tuple[str, ...] = ()  # fields whose own keys stand in the block in their place
+
+    def as_dict(self) -> dict:
+        """The block's JSON object (nested blocks as dicts; numbers not yet made JSON-able)."""
+        out = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if value is None and f.name in self._optional:
+                continue
+            if f.name in self._spread:
+                out.update(value.as_dict())
+            else:
+                out[f.name] = value.as_dict() if hasattr(value, "as_dict") else value
+        return out
+
+
+@dataclass
+class InverseHardening:
+    """The law an inverse FE fit of compression identified (constants fitted with CalculiX in the loop).
+
+    ``params`` and ``stderr`` by the law's parameter names; result.json names them by its keys
+    (``A_MPa``, ``A_MPa_stderr``); ``fit_error_pct`` and ``rms_error_pct`` are the fitted model's
+    force misfit (max and RMS, %); ``quality`` is "poor" when the fit warned, else not written.
+    """
+
+    law: str
+    params: dict[str, float]
+    stderr: dict[str, float]  # NaN where the record does not determine a constant (null in result.json)
+    fit_error_pct: float
+    rms_error_pct: float
+    strain_range: list[float]  # true plastic strain of the law's curve
+    quality: str | None = None
+    method: str = "inverse_fe"
+
+    def __call__(self, eps_p):
+        """σ_true(ε_p), MPa, of the identified law."""
+        from flowcurve.identification.laws.hardening import static_form
+
+        return static_form(self.law).func(eps_p, **self.params)
+
+    def as_dict(self) -> dict:
+        from flowcurve.identification.laws.hardening import static_form
+
+        law = static_form(self.law)
+        return {"law": self.law, "method": self.method, **{k: self.params[n] for n, k in zip(law.names, law.keys)},
+                **{f"{k}_stderr": self.stderr[n] for n, k in zip(law.names, law.keys)}, "fit_error_pct": self.fit_error_pct,
+                "rms_error_pct": self.rms_error_pct, "strain_range": self.strain_range, **({"quality": self.quality} if self.quality else {})}
+
+
+@dataclass
+class TensionInverseHardening:
+    """A law refitted to the FE-consistent flow curve of an inverse FE fit of tension (measured to ε_a, CalculiX beyond)."""
+
+    fit: HardeningFit
+    strain_range: list[float]  # [0.002, the fracture strain]
+    fit_poor: bool = False  # the inverse fit itself warned: quality "poor", whatever the refit's own
+    fitted_to: str = "the FE-consistent flow curve (measured to ε_a, CalculiX beyond)"
+    method: str = "inverse_fe"
+
+    def as_dict(self) -> dict:
+        out = {**self.fit.as_dict(), "method": self.method, "fitted_to": self.fitted_to, "strain_range": self.strain_range}
+        if self.fit_poor:
+            out["quality"] = "poor"
+        return out
+
+
+@dataclass
+class InverseBudget(_Block):
+    """``inverse_fe.budget`` of tension: the wall-time limit, whether it cut the fit, what was fitted (in words)."""
+
+    time_limit_s: float | None  # None: no limit
+    cut: bool
+    solver_runs: int
+    wall_s: float
+    done: str
+
+
+@dataclass
+class CompressionBudget(_Block):
+    """``inverse_fe.budget`` of compression: the tension's, and how far the force was fitted (the fold-over's onset)."""
+
+    time_limit_s: float | None
+    cut: bool
+    solver_runs: int
+    wall_s: float
+    fold_over_strain: float | None  # where the side folds onto the platen in the warm start's run (None: it does not)
+    force_fitted_to_strain: float
+    record_strain: float
+    done: str
+
+
+@dataclass
+class CompressionInverseFE(_Block):
+    """result.json's ``inverse_fe`` block of compression: μ and its standard errors, the misfits, the runs, the budget,
+    the warm start and the model; what the force and the shape alone tell of μ (``by_side``) where the fit has a Jacobian."""
+
+    _optional = ("dface_residual_mm", "by_side", "force_shape_check")
+    _spread = ("by_side",)
+
+    law: dict  # the law given, or chosen and why
+    mu: float
+    mu_stderr: float  # NaN: undetermined
+    mu_stderr_shape_alone: float | None
+    force_residual_serial_correlation: float
+    shape_sigma_mm: dict  # dmax (and dface): the σ each diameter row is weighed by
+    solver_runs: int
+    failed_solver_runs: int
+    retried_solver_runs: int
+    solver_s: float
+    wall_s: float
+    force_rms_residual_pct: float
+    force_max_residual_pct: float
+    dmax_residual_mm: float
+    dface_residual_mm: float | None  # not written without a measured end face
+    shape_measured: list[str]
+    optimizer: dict  # status, message, nfev
+    budget: CompressionBudget
+    warm_start: dict  # μ and the law's constants the fit started from
+    model: dict  # increments, the model's elastics, the diagram's options, the force rows' settings
+    by_side: Any = None  # a .fe.force_shape.MuBySide: written as mu_force_alone, mu_shape_alone, force_shape_disagreement_sigmas
+    force_shape_check: str | None = None  # what comparing the two sides found
+
+
+@dataclass
+class TensionInverseFE(_Block):
+    """result.json's ``inverse_fe`` block of tension: the family beyond ε_a (H, β, c; :func:`.fe.inverse_tension.hardening_beyond`)
+    and the taper δ with their standard errors, the FE fracture stress, the neck corrections against it, the runs, the
+    budget, the misfits, the warm starts and the model."""
+
+    H_MPa: float
+    H_MPa_stderr: float
+    beta: float
+    beta_stderr: float
+    c: float
+    c_stderr: float
+    taper: float
+    taper_stderr: float
+    sigma_a_MPa: float  # the measured curve's stress at ε_a
+    measured_to_true_plastic_strain: float  # ε_a
+    sigma_u_MPa: float
+    uniform_rows: dict  # the measured curve's *PLASTIC rows up to ε_a
+    uniform_true_plastic_strain: float
+    fracture_true_stress_MPa: float | None  # the FE-consistent curve's at the fracture strain (None: no fracture)
+    fracture_true_stress_MPa_stderr: float | None
+    neck_corrections_vs_fe: dict  # method → its stress and how far it is from the FE one, %
+    solver_runs: int
+    failed_solver_runs: int
+    solver_s: float
+    wall_s: float
+    budget: InverseBudget
+    force_rms_residual_pct: float
+    force_max_residual_pct: float
+    force_residual_serial_correlation: float
+    neck_radius_residual_mm: float | None  # None: no neck diameter measured
+    law_rms_error_pct: dict  # law → its RMS error against the FE-consistent curve, %
+    optimizer: dict
+    warm_starts: dict  # law → the family's H, β, c and the taper it started from
+    model: dict
+
+
 @dataclass(kw_only=True)
 class TensionResult(_ResultMapping):
     """A tension identification: ISO 6892-1 results, true curve points, neck corrections, hardening."""
 
-    _optional = ("uncertainty", "provenance")
+    _optional = ("uncertainty", "inverse_fe", "provenance")
 
     test: str = "tension"
     E_MPa: float
@@ -125,7 +292,7 @@ class TensionResult(_ResultMapping):
     fracture_true_stress_MPa: float | None
     fracture_avg_stress_MPa: float | None
     neck_corrections: dict
-    hardening: TensionHardening
+    hardening: TensionHardening | TensionInverseHardening
     hardening_alternatives: dict  # name → the other fits' dicts
     three_points: list | None
     modulus_window_MPa: list[float]
@@ -133,6 +300,7 @@ class TensionResult(_ResultMapping):
     warnings: list[str]
     uncertainty: dict | None = None  # GUM budget per result (identification.assurance)
     record: dict = field(default_factory=dict)  # where the record came from (record.summary)
+    inverse_fe: TensionInverseFE | None = None  # only from the inverse FE identification
     provenance: dict | None = None  # version, record_sha256, options, date (identification.provenance); set by the writer
 
 
@@ -140,7 +308,7 @@ class TensionResult(_ResultMapping):
 class CompressionResult(_ResultMapping):
     """A compression identification: friction by every method, corrected curves, hardening."""
 
-    _optional = ("E_apparent_stderr_MPa", "modulus", "friction_mu_range", "uncertainty", "dface_advice", "provenance")
+    _optional = ("E_apparent_stderr_MPa", "modulus", "friction_mu_range", "uncertainty", "inverse_fe", "dface_advice", "provenance")
 
     test: str = "compression"
     E_MPa: float | None
@@ -160,7 +328,7 @@ class CompressionResult(_ResultMapping):
     friction: dict  # method → μ (None where not applicable)
     friction_details: dict
     friction_correction: str
-    hardening: CompressionHardening
+    hardening: CompressionHardening | InverseHardening
     hardening_by_correction: dict  # correction → fit dict
     indicator: dict  # frame stiffness, K_l, shortening, spring-back, toe
     methods: dict
@@ -169,5 +337,6 @@ class CompressionResult(_ResultMapping):
     record: dict = field(default_factory=dict)
     E_apparent_stderr_MPa: float | None = None  # only with the apparent modulus
     modulus: dict | None = None  # only with an elastic line
+    inverse_fe: CompressionInverseFE | None = None  # only from the inverse FE identification
     dface_advice: str | None = None  # μ poorly told by dmax and no end face measured: measuring post.dface_mm would settle it
     provenance: dict | None = None  # version, record_sha256, options, date (identification.provenance); set by the writer

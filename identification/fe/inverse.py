@@ -36,6 +36,7 @@ from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
 from flowcurve.identification.fe.model.upsetting import UpsettingModel, simulate_upsetting
 from flowcurve.identification.laws.hardening import fit_hardening, static_form
 from flowcurve.identification.outcome import Identification
+from flowcurve.identification.results import CompressionBudget, CompressionInverseFE, InverseHardening
 from flowcurve.record.specimen import circle_area_mm2
 
 log = logging.getLogger(__name__)
@@ -374,66 +375,57 @@ def _all_warnings(sol, se, misfit: _Misfit, rows: _Rows, law_keys, dface, time_l
     return warnings
 
 
-def _budget(sol, rows: _Rows, inp: _Inputs, time_limit_s, wall: float) -> dict:
+def _budget(sol, rows: _Rows, inp: _Inputs, time_limit_s, wall: float) -> CompressionBudget:
     """result.json's ``inverse_fe.budget``: the limit, whether it cut the fit, what was fitted."""
     targets, fold_over, strain, dface = rows.targets, rows.fold_over, inp.strain, inp.dface
-    return {"time_limit_s": time_limit_s, "cut": sol.cut, "solver_runs": sol.runs, "wall_s": round(wall, 1),
-            "fold_over_strain": fold_over, "force_fitted_to_strain": float(targets[-1]), "record_strain": float(strain.max()),
-            "done": (f"force fitted over strain {targets[0]:.3g}–{targets[-1]:.3g} of {strain.max():.3g} ("
-                     + (f"the side folds onto the platen from {fold_over:.3g} in the warm start's run" if fold_over is not None
-                        else "no fold-over in the warm start's run" if rows.first is not None else "the warm start's run failed")
-                     + f"); shape {', '.join(['dmax'] + (['dface'] if dface is not None else []))} at the end; {sol.runs} runs; "
-                     + ("cut by the time limit" if sol.cut else "converged or stopped by the optimiser"))}
+    done = (f"force fitted over strain {targets[0]:.3g}–{targets[-1]:.3g} of {strain.max():.3g} ("
+            + (f"the side folds onto the platen from {fold_over:.3g} in the warm start's run" if fold_over is not None
+               else "no fold-over in the warm start's run" if rows.first is not None else "the warm start's run failed")
+            + f"); shape {', '.join(['dmax'] + (['dface'] if dface is not None else []))} at the end; {sol.runs} runs; "
+            + ("cut by the time limit" if sol.cut else "converged or stopped by the optimiser"))
+    return CompressionBudget(time_limit_s=time_limit_s, cut=sol.cut, solver_runs=sol.runs, wall_s=round(wall, 1), fold_over_strain=fold_over,
+                             force_fitted_to_strain=float(targets[-1]), record_strain=float(strain.max()), done=done)
 
 
-def _inverse_block(sol, se, mu_se_shape, misfit: _Misfit, rows: _Rows, inp: _Inputs, start: _Start, budget: dict,
-                   increments: int, wall: float) -> dict:
+def _inverse_block(sol, se, mu_se_shape, misfit: _Misfit, rows: _Rows, inp: _Inputs, start: _Start, budget: CompressionBudget,
+                   increments: int, wall: float) -> CompressionInverseFE:
     """result.json's ``inverse_fe`` block: μ and its standard errors, the misfits, the runs, the budget, the model."""
     law_info, dface, elastics = static_form(inp.problem.law), inp.dface, inp.elastics
-    mu = float(sol.x[-1])
-    return {
-        "law": inp.law_choice,
-        "mu": mu, "mu_stderr": float(se[-1]), "mu_stderr_shape_alone": mu_se_shape,
-        "force_residual_serial_correlation": serial_correlation(sol.residuals[:FORCE_POINTS]),
-        "shape_sigma_mm": rows.shape_sigma, "solver_runs": sol.runs, "failed_solver_runs": sol.failed_runs,
-        "retried_solver_runs": sol.retried_runs, "solver_s": round(sol.solver_s, 1),
-        "wall_s": round(wall, 1), "force_rms_residual_pct": misfit.force_rms, "force_max_residual_pct": float(np.max(np.abs(misfit.r_force))),
-        "dmax_residual_mm": misfit.d_res_mm, **({"dface_residual_mm": misfit.face_res_mm} if dface is not None else {}),
-        "shape_measured": ["hk", "dmax"] + (["dface"] if dface is not None else []), "optimizer": sol.optimizer(),
-        "budget": budget,
-        "warm_start": {"mu": start.mu0, **{k: float(v) for k, v in zip(law_info.keys, start.p0)}},
-        "model": {"increments": increments, **elastics.as_dict(), "diagram_options": inp.diagram_options, "h_end_mm": inp.problem.h_end,
-                  "force_points": FORCE_POINTS, "force_sigma_pct": FORCE_SIGMA_PCT, "force_sigma_pct_at_fold_over": float(rows.f_sigma[-1]),
-                  "from_strain": FROM_STRAIN},
-    }
+    return CompressionInverseFE(
+        law=inp.law_choice, mu=float(sol.x[-1]), mu_stderr=float(se[-1]), mu_stderr_shape_alone=mu_se_shape,
+        force_residual_serial_correlation=serial_correlation(sol.residuals[:FORCE_POINTS]),
+        shape_sigma_mm=rows.shape_sigma, solver_runs=sol.runs, failed_solver_runs=sol.failed_runs,
+        retried_solver_runs=sol.retried_runs, solver_s=round(sol.solver_s, 1), wall_s=round(wall, 1),
+        force_rms_residual_pct=misfit.force_rms, force_max_residual_pct=float(np.max(np.abs(misfit.r_force))),
+        dmax_residual_mm=misfit.d_res_mm, dface_residual_mm=misfit.face_res_mm,  # None (not written) without dface
+        shape_measured=["hk", "dmax"] + (["dface"] if dface is not None else []), optimizer=sol.optimizer(), budget=budget,
+        warm_start={"mu": start.mu0, **{k: float(v) for k, v in zip(law_info.keys, start.p0)}},
+        model={"increments": increments, **elastics.as_dict(), "diagram_options": inp.diagram_options, "h_end_mm": inp.problem.h_end,
+               "force_points": FORCE_POINTS, "force_sigma_pct": FORCE_SIGMA_PCT, "force_sigma_pct_at_fold_over": float(rows.f_sigma[-1]),
+               "from_strain": FROM_STRAIN})
 
 
-def _assemble(inp: _Inputs, sol, se, by_side, inverse_block: dict, misfit: _Misfit, rows: _Rows, warnings: list[str]) -> Identification:
+def _assemble(inp: _Inputs, sol, se, by_side, block: CompressionInverseFE, misfit: _Misfit, rows: _Rows, warnings: list[str]) -> Identification:
     """The identification: the fast result with the inverse's law, μ and its block, the law's curve, the force rows."""
     law, law_info, fast, dface, elastics = inp.problem.law, static_form(inp.problem.law), inp.fast, inp.dface, inp.elastics
-    params = dict(zip(law_info.names, map(float, sol.x[:-1])))
     e_hi = float(fast.result["hardening"]["strain_range"][1]) if fast.result.get("hardening") else float(inp.strain.max())
+    hardening = InverseHardening(law, dict(zip(law_info.names, map(float, sol.x[:-1]))), {n: float(se[i]) for i, n in enumerate(law_info.names)},
+                                 float(np.max(np.abs(misfit.r_force))), misfit.force_rms, [0.002, e_hi])
     grid = np.linspace(0.002, e_hi, 200)
-    true_curve = pd.DataFrame({"true_plastic_strain": grid, "true_stress_MPa": law_info.func(grid, **params)})
-    hardening = {"law": law, "method": "inverse_fe", **{k: params[n] for n, k in zip(law_info.names, law_info.keys)},
-                 **{f"{k}_stderr": float(se[i]) for i, k in enumerate(law_info.keys)},
-                 "fit_error_pct": float(np.max(np.abs(misfit.r_force))), "rms_error_pct": misfit.force_rms, "strain_range": [0.002, e_hi]}
-    result = dict(fast.result)
-    result.update({"friction_mu": float(sol.x[-1]), "friction_method": "inverse_fe", "friction_correction": "inverse_fe",
-                   "hardening": hardening, "inverse_fe": inverse_block})
-    if elastics.E_source == "handbook" and inp.diagram_options.get("E_MPa"):  # a class's handbook value, not the fast's "option"
-        result.update(E_MPa=elastics.E_MPa, E_source=f"handbook ({elastics.E_basis})")
+    true_curve = pd.DataFrame({"true_plastic_strain": grid, "true_stress_MPa": hardening(grid)})
     if by_side is not None:  # the force and the shape apart beyond their combined se: a warning, poor
         found, warning = force_shape_check(by_side, "dmax and dface" if dface is not None else "dmax")
-        result["inverse_fe"].update(by_side.as_dict(), force_shape_check=found)
+        block = replace(block, by_side=by_side, force_shape_check=found)
         warnings += [warning] if warning else []
-    result.pop("dface_advice", None)  # the warm start's; the inverse judges μ itself
-    if dface is None and not se[-1] <= MU_TOLD:  # poorly told or undetermined, and no end face to tell it
-        result["dface_advice"] = DFACE_ADVICE
-    result["methods"] = {**result.get("methods", {}), "inverse": "CalculiX upsetting in the loop (scipy least_squares), warm start: fast fe_table identification"}
+    result = replace(fast.result, friction_mu=float(sol.x[-1]), friction_method="inverse_fe", friction_correction="inverse_fe",
+                     hardening=hardening, inverse_fe=block,
+                     dface_advice=DFACE_ADVICE if dface is None and not se[-1] <= MU_TOLD else None,  # the inverse judges μ itself
+                     methods={**fast.result.methods, "inverse": "CalculiX upsetting in the loop (scipy least_squares), warm start: fast fe_table identification"})
+    if elastics.E_source == "handbook" and inp.diagram_options.get("E_MPa"):  # a class's handbook value, not the fast's "option"
+        result.E_MPa, result.E_source = elastics.E_MPa, f"handbook ({elastics.E_basis})"
     if warnings:
-        result["warnings"] = [*result.get("warnings", []), *warnings]
-        hardening["quality"] = "poor"
+        result.warnings = [*result.warnings, *warnings]
+        hardening.quality = "poor"
     curves = dict(fast.curves)
     curves["inverse_fe_force"] = pd.DataFrame({"specimen_displacement_mm": rows.s_pts, "force_N": rows.f_pts, "residual_pct": misfit.r_force})
     return Identification(result=result, true_curve=true_curve, curves=curves)

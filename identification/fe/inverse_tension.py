@@ -29,6 +29,7 @@ from flowcurve.identification.fe.solver_fit import fit_time_limit, fit_with_solv
 from flowcurve.identification.fe.model.deck import PLASTIC_ROWS
 from flowcurve.identification.laws.hardening import fit_hardening
 from flowcurve.identification.outcome import Identification
+from flowcurve.identification.results import InverseBudget, TensionInverseFE, TensionInverseHardening
 
 log = logging.getLogger(__name__)
 
@@ -405,58 +406,57 @@ def _fe_curve(sol, inp: _Inputs, st: _Starts, refit_law: str | None) -> _Curve:
     return _Curve(grid, st.e_end, true_curve, refit, law_rms, warning_law, fe_fracture, fe_fracture_se)
 
 
-def _inverse_block(sol, inp: _Inputs, st: _Starts, rows: _Rows, curve: _Curve, misfit: tuple, time_limit_s, wall: float) -> dict:
+def _budget(sol, inp: _Inputs, st: _Starts, rows: _Rows, time_limit_s, wall: float) -> InverseBudget:
+    """result.json's ``inverse_fe.budget``: the limit, whether it cut the fit, what was fitted."""
+    e_pts = rows.e_pts
+    done = (f"force fitted over elongation {e_pts[0]:.3g}–{e_pts[-1]:.3g} mm (ε_a to fracture, {rows.n_force} points)"
+            + (", the neck radius at fracture" if inp.dk is not None else ", no neck diameter") + f"; {len(st.starts)} warm starts, "
+            + f"{sol.runs} runs; " + ("cut by the time limit" if sol.cut else "converged or stopped by the optimiser"))
+    return InverseBudget(time_limit_s=time_limit_s, cut=sol.cut, solver_runs=sol.runs, wall_s=round(wall, 1), done=done)
+
+
+def _inverse_block(sol, inp: _Inputs, st: _Starts, rows: _Rows, curve: _Curve, misfit: tuple, time_limit_s, wall: float) -> TensionInverseFE:
     """result.json's ``inverse_fe`` block: the family and taper with their standard errors, the fracture stress, the
     neck corrections against it, the runs, the budget, the misfits, the model."""
     (H, beta, c, taper), (H_se, beta_se, c_se, taper_se) = map(float, sol.x), map(float, sol.stderr)
     _, force_rms, force_max, neck_res_mm = misfit
-    fe_fracture, dk, n_force, e_pts = curve.fe_fracture, inp.dk, rows.n_force, rows.e_pts
+    fe_fracture = curve.fe_fracture
     necks = {m: {"stress_MPa": v["stress_MPa"], "vs_fe_pct": 100.0 * (v["stress_MPa"] / fe_fracture - 1.0)}
              for m, v in (inp.fast.result.get("neck_corrections") or {}).items() if isinstance(v, dict) and fe_fracture}
-    return {
-        "H_MPa": H, "H_MPa_stderr": H_se, "beta": beta, "beta_stderr": beta_se, "c": c, "c_stderr": c_se, "taper": taper, "taper_stderr": taper_se,
-        "sigma_a_MPa": inp.rows_s[-1], "measured_to_true_plastic_strain": inp.eps_a, "sigma_u_MPa": st.sigma_u,
-        "uniform_rows": {"true_plastic_strain": inp.rows_e, "true_stress_MPa": inp.rows_s},
-        "uniform_true_plastic_strain": inp.eps_pu, "fracture_true_stress_MPa": fe_fracture, "fracture_true_stress_MPa_stderr": curve.fe_fracture_se,
-        "neck_corrections_vs_fe": necks,
-        "solver_runs": sol.runs, "failed_solver_runs": sol.failed_runs, "solver_s": round(sol.solver_s, 1),
-        "wall_s": round(wall, 1),
-        "budget": {"time_limit_s": time_limit_s, "cut": sol.cut, "solver_runs": sol.runs, "wall_s": round(wall, 1),
-                   "done": (f"force fitted over elongation {e_pts[0]:.3g}–{e_pts[-1]:.3g} mm (ε_a to fracture, {n_force} points)"
-                            + (", the neck radius at fracture" if dk is not None else ", no neck diameter") + f"; {len(st.starts)} warm starts, "
-                            + f"{sol.runs} runs; " + ("cut by the time limit" if sol.cut else "converged or stopped by the optimiser"))},
-        "force_rms_residual_pct": force_rms, "force_max_residual_pct": force_max,
-        "force_residual_serial_correlation": serial_correlation(sol.residuals[:n_force]),
-        "neck_radius_residual_mm": neck_res_mm,
-        "law_rms_error_pct": curve.law_rms, "optimizer": sol.optimizer(),
-        "warm_starts": {k: {"H_MPa": float(v[0]), "beta": float(v[1]), "c": float(v[2]), "taper": float(v[3])} for k, v in st.starts.items()},
-        "model": {"elements": "CAX8R 8x30 quarter model", "increments": inp.problem.increments, "E_MPa": inp.problem.E, "E_source": inp.E_source,
-                  "l0_mm": inp.l0, "elongation_mm": inp.problem.elongation, "force_points": n_force, "force_sigma_pct": FORCE_SIGMA_PCT,
-                  "neck_radius_sigma_mm": rows.neck_sigma, "uniform_fraction": UNIFORM_FRACTION},
-    }
+    return TensionInverseFE(
+        H_MPa=H, H_MPa_stderr=H_se, beta=beta, beta_stderr=beta_se, c=c, c_stderr=c_se, taper=taper, taper_stderr=taper_se,
+        sigma_a_MPa=inp.rows_s[-1], measured_to_true_plastic_strain=inp.eps_a, sigma_u_MPa=st.sigma_u,
+        uniform_rows={"true_plastic_strain": inp.rows_e, "true_stress_MPa": inp.rows_s},
+        uniform_true_plastic_strain=inp.eps_pu, fracture_true_stress_MPa=fe_fracture, fracture_true_stress_MPa_stderr=curve.fe_fracture_se,
+        neck_corrections_vs_fe=necks, solver_runs=sol.runs, failed_solver_runs=sol.failed_runs, solver_s=round(sol.solver_s, 1),
+        wall_s=round(wall, 1), budget=_budget(sol, inp, st, rows, time_limit_s, wall),
+        force_rms_residual_pct=force_rms, force_max_residual_pct=force_max,
+        force_residual_serial_correlation=serial_correlation(sol.residuals[:rows.n_force]), neck_radius_residual_mm=neck_res_mm,
+        law_rms_error_pct=curve.law_rms, optimizer=sol.optimizer(),
+        warm_starts={k: {"H_MPa": float(v[0]), "beta": float(v[1]), "c": float(v[2]), "taper": float(v[3])} for k, v in st.starts.items()},
+        model={"elements": "CAX8R 8x30 quarter model", "increments": inp.problem.increments, "E_MPa": inp.problem.E, "E_source": inp.E_source,
+               "l0_mm": inp.l0, "elongation_mm": inp.problem.elongation, "force_points": rows.n_force, "force_sigma_pct": FORCE_SIGMA_PCT,
+               "neck_radius_sigma_mm": rows.neck_sigma, "uniform_fraction": UNIFORM_FRACTION})
 
 
-def _assemble(sol, inp: _Inputs, rows: _Rows, curve: _Curve, fit_warnings: list[str], block: dict, force_residual_pct) -> Identification:
+def _assemble(sol, inp: _Inputs, rows: _Rows, curve: _Curve, fit_warnings: list[str], block: TensionInverseFE,
+              force_residual_pct) -> Identification:
     """The identification: the fast result with the refitted law, the FE fracture stress, the warnings and the
     ``inverse_fe`` block; the FE-consistent curve, the force rows and the law's curve."""
     import pandas as pd
 
     res = inp.fast.result
-    warnings = [*res.get("warnings", []), *fit_warnings, *([curve.warning_law] if curve.warning_law else [])]
+    warnings = [*res.warnings, *fit_warnings, *([curve.warning_law] if curve.warning_law else [])]
     if inp.dk is None:
         warnings.append("inverse FE: no post.dk_mm: only the force is fitted, not the neck diameter; the taper and the hardening "
                         "beyond Fm are then told apart by the force curve alone")
-    result = dict(res)
-    result["hardening_alternatives"] = {**res.get("hardening_alternatives", {}), "fast": res["hardening"]}
-    result["hardening"] = {**curve.refit.as_dict(), "method": "inverse_fe", "fitted_to": "the FE-consistent flow curve (measured to ε_a, CalculiX beyond)",
-                           "strain_range": [0.002, curve.e_end]}
-    if fit_warnings:  # a card from this curve must not read "good" (as compression's inverse)
-        result["hardening"]["quality"] = "poor"
-    result["fracture_true_stress_MPa"] = curve.fe_fracture if curve.fe_fracture is not None else res.get("fracture_true_stress_MPa")
-    result["warnings"] = warnings
-    result["inverse_fe"] = block
-    result["methods"] = {**res.get("methods", {}), "inverse": "CalculiX necking (CAX8R) in the loop beyond ε_a with the taper fitted "
-                                                             "(scipy least_squares), the curve measured up to ε_a"}
+    result = replace(res, hardening_alternatives={**res.hardening_alternatives, "fast": res["hardening"]},
+                     # a card from this curve must not read "good" when the fit warned (as compression's inverse)
+                     hardening=TensionInverseHardening(curve.refit, [0.002, curve.e_end], fit_poor=bool(fit_warnings)),
+                     fracture_true_stress_MPa=curve.fe_fracture if curve.fe_fracture is not None else res.fracture_true_stress_MPa,
+                     warnings=warnings, inverse_fe=block,
+                     methods={**res.methods, "inverse": "CalculiX necking (CAX8R) in the loop beyond ε_a with the taper fitted "
+                                                       "(scipy least_squares), the curve measured up to ε_a"})
     curves = dict(inp.fast.curves)
     curves["inverse_fe_force"] = pd.DataFrame({"elongation_mm": rows.e_pts, "force_N": rows.f_pts, "residual_pct": force_residual_pct})
     curves["fit"] = pd.DataFrame({"true_plastic_strain": curve.grid, "true_stress_MPa": curve.refit(curve.grid)})

@@ -85,31 +85,40 @@ def linear_runs(state: dict):
         rel = x[:-1] / x0[:-1] - 1.0
         factor = 1.0 + rel[0] + rel[1] * t + rel[2] * t**2 + FORCE_PER_MU * t**3 * (x[-1] - state["mu_force"]) + 5e-4 * np.cos(40.0 * t)
         dmu, meta = x[-1] - state["mu_shape"], state["meta"]
-        return inv._Run(s, f * factor, float(meta["post.dmax_mm"]) + DMAX_PER_MU * dmu, float(meta["post.dface_mm"]) + DFACE_PER_MU * dmu,
+        return inv._Run(s, f * factor, float(meta["post.dmax_mm"]) + DMAX_PER_MU * dmu, float(meta.get("post.dface_mm", "nan")) + DFACE_PER_MU * dmu,
                         wall_s=0.0, cached=True, fold_over_strain=state.get("fold_over"))
 
     return capture, run
 
 
-def _compression(name, mu_force, mu_shape, law, fold_over) -> dict:
-    """The compression inverse on a vendored record with :func:`linear_runs` for CalculiX."""
+def compression_identification(name, mu_force, mu_shape, law, fold_over, *, dropped=()):
+    """The compression inverse's Identification on a vendored record (its ``dropped`` header keys left out) with
+    :func:`linear_runs` for CalculiX."""
     import flowcurve.identification.fe.inverse as inv
     import flowcurve.identification.fe.verify as verify
     from flowcurve.record.format import read_record
 
     identify_inverse_fe = _entry_points()[0]
+    record = read_record(DATA / f"{name}.csv")
+    for key in dropped:
+        del record.meta[key]
     patched = verify.record_force_stroke, inv._run
     verify.record_force_stroke, inv._run = linear_runs({"mu_force": mu_force, "mu_shape": mu_shape, "fold_over": fold_over})
     try:
-        ident = identify_inverse_fe(read_record(DATA / f"{name}.csv"), law=law, workers=1, time_limit_s=None)
+        return identify_inverse_fe(record, law=law, workers=1, time_limit_s=None)
     finally:
         verify.record_force_stroke, inv._run = patched
-    return _identification(ident, ["inverse_fe_force"])
 
 
-def _tension(force_end_fraction, law, dk) -> dict:
-    """The tension inverse on a made-up record (test_inverse_tension_inputs.py's), each run its corrected force
-    scaled by 1 + (H/H* − 1)·u + 10·(δ − δ*)·u² and a neck radius moving with δ (test_time_limit.py's)."""
+def _compression(name, mu_force, mu_shape, law, fold_over) -> dict:
+    """The compression inverse on a vendored record with :func:`linear_runs` for CalculiX."""
+    return _identification(compression_identification(name, mu_force, mu_shape, law, fold_over), ["inverse_fe_force"])
+
+
+def tension_identification(force_end_fraction, law, dk, *, dropped=()):
+    """The tension inverse's Identification on a made-up record (test_inverse_tension_inputs.py's; its ``dropped`` header keys
+    left out), each run its corrected force scaled by 1 + (H/H* − 1)·u + 10·(δ − δ*)·u² and a neck radius moving with δ
+    (test_time_limit.py's)."""
     import flowcurve.identification.fe.inverse_tension as invt
     from flowcurve.identification.fe.synthetic import tension_record
     from flowcurve.identification.tension.identify import identify_tension
@@ -123,6 +132,8 @@ def _tension(force_end_fraction, law, dk) -> dict:
                                           np.full(t.size, 2.2), True, 0.0))
     if dk is not None:
         record.meta["post.dk_mm"] = dk
+    for key in dropped:
+        del record.meta[key]
     diagram = identify_tension(record).curves["corrected_diagram"]
     elong, f_c = diagram["elongation_mm"].to_numpy(), diagram["force_N"].to_numpy()
     state, patched = {}, invt._run
@@ -135,10 +146,14 @@ def _tension(force_end_fraction, law, dk) -> dict:
 
     invt._run = run
     try:
-        ident = identify_inverse_fe(record, law=law, workers=1, time_limit_s=None)
+        return identify_inverse_fe(record, law=law, workers=1, time_limit_s=None)
     finally:
         invt._run = patched
-    return _identification(ident, ["inverse_fe_force", "fit"])
+
+
+def _tension(force_end_fraction, law, dk) -> dict:
+    """The tension inverse on a made-up record with :func:`tension_identification`'s stand-in runs."""
+    return _identification(tension_identification(force_end_fraction, law, dk), ["inverse_fe_force", "fit"])
 
 
 def _fit(kind: str) -> dict:
