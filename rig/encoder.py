@@ -7,6 +7,8 @@ an unbounded Python int of counts since :meth:`CrossheadEncoder.zero`.
 
 from __future__ import annotations
 
+from typing import Iterator
+
 from flowcurve.rig.codecs import dcon
 from flowcurve.rig.codecs import encoder as codec
 from flowcurve.rig.transport import DconDevice
@@ -36,6 +38,19 @@ class CrossheadEncoder(DconDevice):
         return cls(section.port, address=section.address, checksum=section.checksum,
                    counts_per_rev=section.counts_per_rev, gear_ratio=section.gear_ratio,
                    screw_lead_mm=section.screw_lead_mm, **section.transport_kwargs("crosshead encoder"), **kw)
+
+    def check_lines(self, section) -> Iterator[str]:
+        """What ``flowcurve rig check`` prints of the open encoder box: identity, settings (a note
+        where the checksum differs from the rig file's ``section``) and one reading in mm."""
+        cfg = self.configuration()
+        yield f"  identity: module {self.module_name()}, firmware {self.firmware()}"
+        yield f"  settings: address {cfg.address:02X}, {cfg.baud} baud, checksum {'on' if cfg.checksum else 'off'}"
+        if cfg.checksum != section.checksum:
+            yield (f"  note: module checksum {'on' if cfg.checksum else 'off'}, configuration says "
+                   f"{'on' if section.checksum else 'off'}")
+        counts = self.read_counts()
+        mm = counts / self.counts_per_rev / self.gear_ratio * self.screw_lead_mm
+        yield f"  reading: {counts} counts = {mm:.3f} mm; Gray check {'ok' if self.gray_check() else 'FAILED'}"
 
     def read_raw(self) -> int:
         """``#AAN``: the raw 32-bit counter value (0 .. 2**32-1)."""

@@ -15,6 +15,7 @@ import math
 import time
 from collections import deque
 from itertools import takewhile
+from typing import Iterator
 
 from flowcurve.errors import DeviceError, FlowcurveError, SafetyError
 from flowcurve.rig.codecs import dcon
@@ -71,6 +72,19 @@ class Furnace(DconDevice):
         return cls(section.port, address=section.address, checksum=section.checksum,
                    heater_do_bit=section.heater_do_bit, max_temperature_C=section.max_temperature_C,
                    **section.transport_kwargs("furnace"), **kw)
+
+    def check_lines(self, section) -> Iterator[str]:
+        """What ``flowcurve rig check`` prints of the open module: identity, settings (a note when it
+        is not set for a type-K thermocouple), the reading, the heater and the host watchdog's status."""
+        cfg = self.configuration()
+        yield f"  identity: module {self.module_name()}, firmware {self.firmware()}"
+        yield (f"  settings: address {cfg.address:02X}, input type {cfg.thermocouple or f'{cfg.type_code:02X}'}, "
+               f"{cfg.baud} baud, checksum {'on' if cfg.checksum else 'off'}; max {section.max_temperature_C:g} C")
+        if cfg.thermocouple != "K":
+            yield "  note: the module is not set for a type-K thermocouple"
+        status = self.watchdog_status()
+        yield (f"  reading: {self.temperature_C():.1f} C (cold junction {self.cold_junction_C():.1f} C); "
+               f"heater off; host watchdog status {status:02X}{' (timed out earlier)' if status & 0x04 else ''}")
 
     def close(self) -> None:
         """Heater off (best effort), then release the port."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
+from typing import Iterator
 
 import numpy as np
 
@@ -113,6 +114,8 @@ class LoadCell:
     nominal reads 5 120 000). ``raise_on_overload`` makes an overloaded reading raise
     :class:`DeviceError` instead of only flagging the sample.
     """
+
+    probe_parities = ("E", "N", "O")  # rig check --probe: the AED's line settings
 
     def __init__(self, port_url, *, name: str = "load cell", address: int | None = 31,
                  calibration_N_per_count: float | None = None, nominal_load_N: float | None = None,
@@ -220,6 +223,32 @@ class LoadCell:
             raise DeviceError(self.name, f"cannot send '{text}' while streaming (stop_stream first)")
 
     # -- commands ---------------------------------------------------------------------
+    def answers(self) -> None:
+        """One exchange that names the amplifier (``IDN?``); raises :class:`DeviceError` when silent."""
+        self.identify()
+
+    def check_lines(self, section) -> Iterator[str]:
+        """What ``flowcurve rig check`` prints of the open amplifier: identity, settings (a note
+        where they differ from the rig file's ``section``) and one reading in newtons."""
+        idn = self.identify()
+        yield f"  identity: {idn['manufacturer']} {idn['model']}, serial {idn['serial']}, firmware {idn['firmware']}"
+        s = self.settings()
+        rate = aed.ICR_RATES_PER_S[s["rate_code"]] if 0 <= s["rate_code"] < 8 else float("nan")
+        cutoff = aed.ASF_CUTOFF_HZ.get(s["filter"])
+        yield (f"  settings: {s['baud']} baud, parity {s['parity']}, COF{s['output_format']}, "
+               f"ICR{s['rate_code']} ({rate:g} values/s), ASF{s['filter']} "
+               f"({'off' if cutoff is None else f'{cutoff:g} Hz'})"
+               + (f", NOV{s['nov']} (ASCII nominal = {s['nov']} counts)" if s["nov"] else ""))
+        for key, want in (("output_format", section.output_format), ("rate_code", section.rate_code),
+                          ("filter", section.filter)):
+            if s[key] != want:
+                yield f"  note: device has {key} {s[key]}, the configuration says {want} (set when a test starts)"
+        self.fmt = aed.output_format(s["output_format"])  # read in the device's present format
+        sample = self.read()
+        flag = "  OVERLOAD" if sample.overload else ""
+        yield (f"  reading: {sample.force_N:.1f} N ({sample.counts} counts"
+               f"{'' if sample.status is None else f', status {sample.status:#04x}'}){flag}")
+
     def identify(self) -> dict[str, str]:
         """``IDN?`` → manufacturer, model, serial, firmware."""
         return self._query("IDN?", parse=aed.parse_idn)

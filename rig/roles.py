@@ -16,7 +16,7 @@ driver's module and one entry here (docs/extending.md). This module imports only
 from __future__ import annotations
 
 import importlib
-from typing import Any, Protocol, Sequence, runtime_checkable
+from typing import Any, Iterator, Protocol, Sequence, runtime_checkable
 
 
 @runtime_checkable
@@ -35,13 +35,18 @@ class Link(Protocol):
 
 @runtime_checkable
 class Device(Protocol):
-    """Every role: a name for messages, its line, opened and closed."""
+    """Every role: a name for messages, its line, opened and closed; what ``flowcurve rig check``
+    prints of it (``check_lines``, on an open device) and the line settings it tries when the
+    device is silent (``probe_parities``, with ``answers``)."""
 
     name: str
+    probe_parities: tuple[str, ...]
     transport: Link
 
     def open(self) -> Any: ...
     def close(self) -> None: ...
+    def check_lines(self, section: Any) -> Iterator[str]: ...  # `rig check`: identity, settings against the section, a reading
+    def answers(self) -> None: ...  # one exchange that names the device (raises when silent): `rig check --probe`
 
 
 class ForceReading(Protocol):

@@ -393,6 +393,7 @@ class DconDevice:
     ``(port clock s, command, address that answered, commanded)`` for the record's events."""
 
     config_section: str | None = None  # the rig configuration's section, named in a wrong-address message
+    probe_parities = ("N",)  # rig check --probe: DCON modules run 8N1
 
     def __init__(self, port_url, *, name: str, address: int, baudrate: int, parity: str,
                  timeout_s: float, checksum: bool, opener=None):
@@ -479,6 +480,10 @@ class DconDevice:
         self.open()
         self.transport.send(dcon.frame(lead, None if broadcast else self.address, body,
                                        use_checksum=self.checksum))
+
+    def answers(self) -> None:
+        """One exchange that names the module (``$AA2``); raises :class:`DeviceError` when silent."""
+        self.configuration()
 
     def configuration(self) -> dcon.Configuration:
         """``$AA2``: address, type, baud, format and checksum flag as the module reports them."""

@@ -87,60 +87,15 @@ def diagnose(exc: Exception, port: str) -> str:
     return text.split(": ", 1)[-1] if isinstance(exc, DeviceError) else text
 
 
-def check_loadcell(section, out, opener=None) -> None:
-    from flowcurve.rig.codecs import aed
-
-    with section.create(opener=opener) as cell:
-        idn = cell.identify()
-        out(f"  identity: {idn['manufacturer']} {idn['model']}, serial {idn['serial']}, firmware {idn['firmware']}")
-        s = cell.settings()
-        rate = aed.ICR_RATES_PER_S[s["rate_code"]] if 0 <= s["rate_code"] < 8 else float("nan")
-        cutoff = aed.ASF_CUTOFF_HZ.get(s["filter"])
-        out(f"  settings: {s['baud']} baud, parity {s['parity']}, COF{s['output_format']}, "
-            f"ICR{s['rate_code']} ({rate:g} values/s), ASF{s['filter']} "
-            f"({'off' if cutoff is None else f'{cutoff:g} Hz'})"
-            + (f", NOV{s['nov']} (ASCII nominal = {s['nov']} counts)" if s["nov"] else ""))
-        for key, want in (("output_format", section.output_format), ("rate_code", section.rate_code),
-                          ("filter", section.filter)):
-            if s[key] != want:
-                out(f"  note: device has {key} {s[key]}, the configuration says {want} "
-                    f"(set when a test starts)")
-        cell.fmt = aed.output_format(s["output_format"])  # read in the device's present format
-        sample = cell.read()
-        flag = "  OVERLOAD" if sample.overload else ""
-        out(f"  reading: {sample.force_N:.1f} N ({sample.counts} counts"
-            f"{'' if sample.status is None else f', status {sample.status:#04x}'}){flag}")
+def check_device(section, out, opener=None) -> None:
+    """Open the device a rig file's ``section`` names and print what it says of itself
+    (its driver's ``check_lines``: rig/roles.py)."""
+    with section.create(opener=opener) as device:
+        for line in device.check_lines(section):
+            out(line)
 
 
-def check_encoder(section, out, opener=None) -> None:
-    with section.create(opener=opener) as enc:
-        cfg = enc.configuration()
-        out(f"  identity: module {enc.module_name()}, firmware {enc.firmware()}")
-        out(f"  settings: address {cfg.address:02X}, {cfg.baud} baud, checksum {'on' if cfg.checksum else 'off'}")
-        if cfg.checksum != section.checksum:
-            out(f"  note: module checksum {'on' if cfg.checksum else 'off'}, configuration says "
-                f"{'on' if section.checksum else 'off'}")
-        counts = enc.read_counts()
-        mm = counts / enc.counts_per_rev / enc.gear_ratio * enc.screw_lead_mm
-        out(f"  reading: {counts} counts = {mm:.3f} mm; Gray check {'ok' if enc.gray_check() else 'FAILED'}")
-
-
-def check_furnace(section, out, opener=None) -> None:
-    with section.create(opener=opener) as fur:
-        cfg = fur.configuration()
-        out(f"  identity: module {fur.module_name()}, firmware {fur.firmware()}")
-        out(f"  settings: address {cfg.address:02X}, input type {cfg.thermocouple or f'{cfg.type_code:02X}'}, "
-            f"{cfg.baud} baud, checksum {'on' if cfg.checksum else 'off'}; max {section.max_temperature_C:g} C")
-        if cfg.thermocouple != "K":
-            out("  note: the module is not set for a type-K thermocouple")
-        status = fur.watchdog_status()
-        out(f"  reading: {fur.temperature_C():.1f} C (cold junction {fur.cold_junction_C():.1f} C); "
-            f"heater off; host watchdog status {status:02X}"
-            f"{' (timed out earlier)' if status & 0x04 else ''}")
-
-
-CHECKS = (("loadcell", "load cell", check_loadcell), ("encoder", "crosshead encoder", check_encoder),
-          ("furnace", "furnace", check_furnace))
+SECTIONS = (("loadcell", "load cell"), ("encoder", "crosshead encoder"), ("furnace", "furnace"))
 
 
 PROBE_TIMEOUT_S = 0.1
@@ -149,8 +104,9 @@ PROBE_TIMEOUT_S = 0.1
 def probe_line(key: str, section, opener=None) -> str | None:
     """For a silent or garbled device: the first other baud rate / parity it answers at."""
     from flowcurve.rig.config import BAUDS
+    from flowcurve.rig.roles import driver_class
 
-    parities = ("E", "N", "O") if key == "loadcell" else ("N",)
+    parities = driver_class(section.role, section.model).probe_parities
     for baud in sorted(BAUDS, key=lambda b: abs(b - section.baud)):
         for parity in parities:
             if (baud, parity) == (section.baud, section.parity):
@@ -159,7 +115,7 @@ def probe_line(key: str, section, opener=None) -> str | None:
             device = trial.create(opener=opener)
             try:
                 with device:
-                    device.identify() if key == "loadcell" else device.configuration()
+                    device.answers()
             except FlowcurveError:
                 continue
             return f"it answers at {baud} baud, parity {parity}: set baud = {baud}, parity = \"{parity}\" in [{key}]"
@@ -173,14 +129,14 @@ def check_rig(config: RigConfig, out=print, *, probe: bool = True, opener=None) 
     ``opener`` replaces :func:`serial.serial_for_url` (tests).
     """
     failed = 0
-    for key, label, check in CHECKS:
+    for key, label in SECTIONS:
         section = getattr(config, key)
         if section is None:
             out(f"{label}: not configured")
             continue
         out(f"{label} on {section.port}:")
         try:
-            check(section, out, opener)
+            check_device(section, out, opener)
         except FlowcurveError as exc:
             failed += 1
             out(f"  FAILED: {diagnose(exc, section.port)}")

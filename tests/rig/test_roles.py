@@ -109,3 +109,20 @@ def test_the_force_devices_resolution_is_one_count_of_its_output(cof, nominal_N,
     cell = LoadCell("loop://", nominal_load_N=nominal_N, output_format=cof)
     cell.nov = nov
     assert cell.resolution_N() == pytest.approx(expected_N, rel=1e-12)
+
+
+def test_rig_check_knows_no_device_model():
+    """`flowcurve rig check` prints what each driver says of itself (check_lines) and probes through
+    answers/probe_parities: the CLI's module names no codec, so a new device is its driver and its
+    registry line (docs/extending.md)."""
+    import ast
+    from pathlib import Path
+
+    import flowcurve.cli.rig as cli_rig
+
+    tree = ast.parse(Path(cli_rig.__file__).read_text(encoding="utf-8"))
+    imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.module}
+    imported |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
+    assert not [m for m in imported if ".codecs" in m or m.endswith((".loadcell", ".encoder", ".furnace"))], imported
+    for cls in (LoadCell, CrossheadEncoder, Furnace):
+        assert callable(getattr(cls, "check_lines")) and callable(getattr(cls, "answers")) and cls.probe_parities
