@@ -1,6 +1,6 @@
 """The rig as a procedure sees it: the real drivers over the configured ports.
 
-:class:`DriverRig` implements :class:`acquisition.procedure.RigIO` with the device of each role
+:class:`DriverRig` implements :class:`acquisition.rig_io.RigIO` with the device of each role
 (:mod:`rig.roles`) its configuration names: a force device (default
 :class:`rig.loadcell.LoadCell`, streaming ``MSV?0``, stamped on arrival), a position device
 (:class:`rig.encoder.CrossheadEncoder`) and a temperature device (:class:`rig.furnace.Furnace`)
@@ -89,6 +89,7 @@ class DriverRig:
 
     # life cycle ------------------------------------------------------------------------------
     def open(self) -> "DriverRig":
+        """Open and configure every device of the rig; the rig (closed again on an error)."""
         try:
             self.loadcell.open()
             self.loadcell.configure(**self.config.loadcell.settings)
@@ -139,6 +140,7 @@ class DriverRig:
             started = []
 
             def read_force():  # stamped by the driver on the stream's rhythm (rig.loadcell.stream_stamps)
+                """The load cell's stream (started on the first call): (time s, force N) readings."""
                 if not started:
                     cell.start_stream()
                     started.append(True)
@@ -146,6 +148,7 @@ class DriverRig:
         else:
 
             def read_force():
+                """One polled load cell reading: [(time s, force N)]."""
                 s = cell.read()
                 return [(to_clock(s.t_monotonic_s), s.force_N)]
 
@@ -289,13 +292,16 @@ class DriverRig:
         self._clock = clock
 
     def heater_off(self) -> None:
+        """Heater off; DeviceError when the furnace does not acknowledge it."""
         if self.furnace is not None and not self.furnace.heater_off():
             raise DeviceError(self.furnace.name, "heater-off not acknowledged")
 
     def arm_watchdog(self) -> None:
+        """Arm the furnace module's watchdog with the configured timeout."""
         self.furnace.arm_watchdog(self.config.furnace.watchdog_timeout_s)
 
     def host_ok(self) -> None:
+        """Tell the furnace module's watchdog the host is alive."""
         if self.furnace is not None:
             self.furnace.host_ok()
 
@@ -310,9 +316,11 @@ class DriverRig:
         self.virtual.start_crosshead(speed_mm_per_s=speed_mm_per_s)
 
     def stop_crosshead(self) -> None:
+        """Stop the virtual rig's crosshead."""
         self.virtual.stop_crosshead()
 
     def post_test_measurements(self) -> dict[str, float] | None:
+        """The virtual rig's post-test measurements (mm), None on a real rig."""
         if self.virtual is None:
             return None
         return {k: float(v) for k, v in self.virtual.post_test_measurements().items()}

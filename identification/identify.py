@@ -189,6 +189,7 @@ def check_record(record: Record) -> list[str]:
         raise RecordError(source, f"force never rises above noise (largest change {rise:.3g} N, noise {noise:.3g} N); is this the right column?", column="force_N")
     moving = [c for c in ("crosshead_mm", "extensometer_mm") if record.has(c)]
     def spread(column: str) -> float:
+        """The spread (max − min) of a column's finite values."""
         values = record.column(column)
         values = values[np.isfinite(values)]
         return float(np.ptp(values)) if values.size else 0.0

@@ -43,6 +43,7 @@ class Identification:
     plots: dict[str, Callable[[Path], None]] = field(default_factory=dict)
 
     def write(self, outdir: str | Path) -> Path:
+        """Write result.json and the curves (CSV) into ``outdir``; the result.json path."""
         outdir = Path(outdir)
         outdir.mkdir(parents=True, exist_ok=True)
         (outdir / "result.json").write_text(json.dumps(to_jsonable(self.result), indent=2, allow_nan=False) + "\n", encoding="utf-8")

@@ -177,6 +177,7 @@ class Record:
     # -- metadata access -------------------------------------------------------------------
     @property
     def test(self) -> str:
+        """The test, tension or compression, from the header; RecordError otherwise."""
         test = self.meta.get("test", "").strip().lower()
         if test not in TEST_TYPES:
             raise RecordError(
@@ -187,6 +188,7 @@ class Record:
 
     @property
     def name(self) -> str:
+        """The record's name: its file stem, or the specimen id in memory."""
         return Path(self.source).stem if self.source != "<memory>" else self.meta.get("specimen.id", "record")
 
     @property
@@ -232,6 +234,7 @@ class Record:
         return self.data[name].to_numpy(dtype=float)
 
     def has(self, name: str) -> bool:
+        """Whether column ``name`` exists with any value."""
         return name in self.data.columns and bool(self.data[name].notna().any())
 
 
@@ -525,6 +528,7 @@ class RecordWriter:
 
     # rows ----------------------------------------------------------------------------------
     def append_rows(self, rows: Iterable[Sequence[float]] | np.ndarray) -> None:
+        """Append sample rows (one value per column) to the file."""
         arr = np.asarray(rows, dtype=float)
         if arr.size == 0:
             return

@@ -33,6 +33,7 @@ BAUDS = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200)
 
 def _in(lo, hi, *, lo_open=False):
     def check(v):
+        """None when ``v`` is in range, else the message."""
         ok = (lo < v if lo_open else lo <= v) and v <= hi
         return None if ok else f"must be in {lo} {'<' if lo_open else '<='} x <= {hi}, got {v}"
     return check
@@ -71,6 +72,7 @@ class SerialConfig:
     address: int = 0
 
     def transport_kwargs(self, name: str) -> dict[str, Any]:
+        """The SerialTransport keywords of this section for device ``name``."""
         return dict(name=name, baudrate=self.baud, parity=self.parity, timeout_s=self.timeout_s)
 
     def create(self, **kw):

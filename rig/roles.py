@@ -30,7 +30,8 @@ class Link(Protocol):
     late_replies: int
     retried_exchanges: int
 
-    def close(self) -> None: ...
+    def close(self) -> None:
+        """Close the link."""
 
 
 @runtime_checkable
@@ -40,8 +41,10 @@ class Device(Protocol):
     name: str
     transport: Link
 
-    def open(self) -> Any: ...
-    def close(self) -> None: ...
+    def open(self) -> Any:
+        """Open the device's port and check it answers; the device."""
+    def close(self) -> None:
+        """Close the device's port."""
 
 
 class ForceReading(Protocol):
@@ -61,22 +64,32 @@ class ForceDevice(Device, Protocol):
     latency_s: float
 
     @property
-    def frames_lost(self) -> int: ...
-    def supported_rates_Hz(self) -> Sequence[float]: ...
-    def resolution_N(self) -> float: ...  # one count of the output, 0 when unknown
-    def configure(self, **settings: Any) -> None: ...
-    def tare(self) -> None: ...
-    def read(self) -> ForceReading: ...
-    def start_stream(self) -> None: ...
-    def read_stream(self, max_samples: int, timeout: float) -> Sequence[ForceReading]: ...
+    def frames_lost(self) -> int:
+        """Stream frames lost so far."""
+    def supported_rates_Hz(self) -> Sequence[float]:
+        """The output rates the device offers, Hz."""
+    def resolution_N(self) -> float:
+        """One count of the output, N (0 when unknown)."""
+    def configure(self, **settings: Any) -> None:
+        """Apply ``settings`` (rate, filter …)."""
+    def tare(self) -> None:
+        """Set the output to net zero."""
+    def read(self) -> ForceReading:
+        """One reading, polled."""
+    def start_stream(self) -> None:
+        """Start streaming readings."""
+    def read_stream(self, max_samples: int, timeout: float) -> Sequence[ForceReading]:
+        """Up to ``max_samples`` streamed readings, waiting up to ``timeout`` s."""
 
 
 @runtime_checkable
 class PositionDevice(Device, Protocol):
     """Position role (crosshead encoder): the crosshead's travel in mm since :meth:`zero`."""
 
-    def position_mm(self) -> float: ...
-    def zero(self) -> None: ...
+    def position_mm(self) -> float:
+        """The crosshead position, mm."""
+    def zero(self) -> None:
+        """Set the position counter to zero."""
 
 
 @runtime_checkable
@@ -89,14 +102,22 @@ class TemperatureDevice(Device, Protocol):
     heater_is_on: bool
     watchdog_armed: bool
 
-    def temperature_C(self) -> float: ...
-    def heater(self, on: bool, reading_C: float | None = None) -> None: ...
-    def heater_off(self) -> bool: ...
-    def digital_io(self) -> dict[str, int]: ...
-    def clear_watchdog(self) -> None: ...
-    def arm_watchdog(self, timeout_s: float) -> None: ...
-    def disarm_watchdog(self) -> None: ...
-    def host_ok(self) -> None: ...
+    def temperature_C(self) -> float:
+        """The thermocouple temperature, °C."""
+    def heater(self, on: bool, reading_C: float | None = None) -> None:
+        """Switch the heater ``on`` or off (``reading_C``: the reading it acts on, °C)."""
+    def heater_off(self) -> bool:
+        """Heater off; whether the module acknowledged it."""
+    def digital_io(self) -> dict[str, int]:
+        """The digital outputs' states by name."""
+    def clear_watchdog(self) -> None:
+        """Clear a tripped module watchdog."""
+    def arm_watchdog(self, timeout_s: float) -> None:
+        """Arm the module watchdog: outputs safe after ``timeout_s`` s without the host."""
+    def disarm_watchdog(self) -> None:
+        """Disarm the module watchdog."""
+    def host_ok(self) -> None:
+        """Tell the module watchdog the host is alive."""
 
 
 ROLES: dict[str, type] = {"force": ForceDevice, "position": PositionDevice, "temperature": TemperatureDevice}

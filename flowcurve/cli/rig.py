@@ -27,6 +27,7 @@ CHECK_FAILED = 3
 
 
 def register(subparsers) -> None:
+    """Add ``rig`` (check, recover-loadcell, virtual) to the subcommands."""
     parser = subparsers.add_parser("rig", help="check the rig's devices, or start the virtual rig",
                                    description=__doc__.split("\n\n")[1])
     sub = parser.add_subparsers(dest="rig_command", metavar="ACTION")
@@ -88,6 +89,7 @@ def diagnose(exc: Exception, port: str) -> str:
 
 
 def check_loadcell(section, out, opener=None) -> None:
+    """Check the load cell of ``section``: identity, settings and a reading, told through ``out``."""
     from flowcurve.rig.codecs import aed
 
     with section.create(opener=opener) as cell:
@@ -113,6 +115,7 @@ def check_loadcell(section, out, opener=None) -> None:
 
 
 def check_encoder(section, out, opener=None) -> None:
+    """Check the encoder of ``section``: identity, configuration and a count, told through ``out``."""
     with section.create(opener=opener) as enc:
         cfg = enc.configuration()
         out(f"  identity: module {enc.module_name()}, firmware {enc.firmware()}")
@@ -126,6 +129,7 @@ def check_encoder(section, out, opener=None) -> None:
 
 
 def check_furnace(section, out, opener=None) -> None:
+    """Check the furnace module of ``section``: identity, configuration, temperature and watchdog, told through ``out``."""
     with section.create(opener=opener) as fur:
         cfg = fur.configuration()
         out(f"  identity: module {fur.module_name()}, firmware {fur.firmware()}")
@@ -195,6 +199,7 @@ def check_rig(config: RigConfig, out=print, *, probe: bool = True, opener=None) 
 
 
 def run_check(args) -> int:
+    """``flowcurve rig check``: every configured device checked; the exit status."""
     config = load_config(args.config)
     failed = check_rig(config, probe=args.probe)
     if failed:
@@ -204,6 +209,7 @@ def run_check(args) -> int:
 
 
 def run_recover_loadcell(args) -> int:
+    """``flowcurve rig recover-loadcell``: resend the configured baud rate at every rate and parity, then identify the cell."""
     section = load_config(args.config).loadcell
     print(f"load cell on {section.port}: sending ';S98;BDR{section.baud},...;' at every baud rate "
           f"and parity, then IDN? at {section.baud} baud, parity {section.parity}")
@@ -216,6 +222,7 @@ def run_recover_loadcell(args) -> int:
 
 # -- rig virtual ----------------------------------------------------------------------
 def run_virtual(args) -> int:
+    """``flowcurve rig virtual``: serve the virtual rig's devices on ports until stopped; the exit status."""
     from flowcurve.rig.virtual.rig import VirtualRig  # the virtual-rig engineer's twins
 
     for option, value in (("--time-scale", args.time_scale), ("--speed", args.speed)):

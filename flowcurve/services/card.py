@@ -85,6 +85,7 @@ CONSTANT_OPTIONS = ("E_MPa", "poisson", "density_kg_per_m3", "specific_heat_J_pe
 
 
 def overrides(args) -> dict:
+    """The constants given on the command line (``args``), keyed as CardRequest takes them."""
     out = {k: getattr(args, k, None) for k in CONSTANT_OPTIONS}
     if getattr(args, "name", None):
         out["material"] = args.name

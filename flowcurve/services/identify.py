@@ -82,6 +82,7 @@ def identify(req: IdentifyRequest, progress: Callable | None = None):
             limit = time_limit or inverse_time_limit_s(record.test)
 
             def told(runs, elapsed, left_s=None):  # progress(runs, elapsed_s, left_s, limit_s), e.g. a terminal line
+                """Tell ``progress`` (runs, elapsed s, left s, limit s) when given."""
                 if progress is not None:
                     progress(runs, elapsed, left_s, limit)
 

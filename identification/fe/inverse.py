@@ -289,6 +289,7 @@ def _residuals(rows: _Rows, dmax: float, dface: float | None):
     """The residuals of a run: the force points' misfit in % over their σ, the diameters' in mm over theirs."""
 
     def residuals_of(out: _Run) -> np.ndarray:
+        """Residuals of FE run ``out``: force % over the sigma, then the shape (dmax, dface) over theirs."""
         r_f = 100.0 * (np.interp(rows.s_pts, out.stroke_mm, out.force_N) - rows.f_pts) / rows.f_pts
         shape = [(out.dmax_unloaded_mm - dmax) / rows.shape_sigma["dmax"]]
         if dface is not None:

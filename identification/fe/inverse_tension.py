@@ -264,6 +264,7 @@ class _Rows:
 
     @property
     def n_force(self) -> int:
+        """The number of force residuals."""
         return self.e_pts.size
 
 
@@ -283,6 +284,7 @@ def _residuals(rows: _Rows, dk: float | None, elongation: float):
     """The residuals of a run: the force points' misfit in % over FORCE_SIGMA_PCT, the neck radius's in mm over its σ."""
 
     def residuals_of(out: _Run) -> np.ndarray:
+        """Residuals of FE run ``out``: force % over the sigma, then dk over its sigma."""
         r_f = 100.0 * (np.interp(rows.e_pts, out.elongation_mm, out.force_N) - rows.f_pts) / rows.f_pts / FORCE_SIGMA_PCT
         if dk is None:
             return r_f

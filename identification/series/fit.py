@@ -262,6 +262,7 @@ class ConditionCurve:
 
     @property
     def filename(self) -> str:
+        """The curve's CSV name: its temperature and strain rate."""
         return f"T{self.temperature_C:.0f}C_rate{self.strain_rate_per_s:.3g}_per_s.csv"
 
 

@@ -176,6 +176,7 @@ def fit_law(members: Sequence[SeriesMember], law: Law | str, *, conditions: dict
         params.add(p.name, value=float(np.clip(value, p.lower, p.upper)), min=p.lower, max=p.upper, vary=p.name not in fixed)
 
     def residual(pars):
+        """Misfits of the law at ``pars``, in units of each point's uncertainty."""
         return (law.stress(eps, rate, temp, **conditions, **pars.valuesdict()) - sig) / u
 
     result = lmfit.minimize(residual, params, method="least_squares")

@@ -309,6 +309,7 @@ def _strain_zero(inp: _Inputs, line: _ElasticLine, hard: _Hardening, law: str) -
     done = hard.variants.get(f"least_squares_{law}_without_fracture_point")  # fit_hardening(grid, fit_sig, law) already made
 
     def refit(e, s):
+        """The hardening fit of (``e``, ``s``), reusing the main one when they are its points."""
         return done if done is not None and e is hard.grid and s is hard.fit_sig else fit_hardening(e, s, law)
 
     main, start, warnings = apply_to_fit(hard.main, hard.grid, hard.fit_sig, zero, refit)
