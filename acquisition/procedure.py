@@ -100,7 +100,27 @@ class ProcedureError(FlowcurveError):
 
 @dataclass
 class TestSpec:
-    """Everything about the test to run; geometry in mm, temperature in C, speed in mm/s."""
+    """Everything about the test to run.
+
+    Attributes
+    ----------
+    test : str
+        "tension" or "compression".
+    material, operator, specimen_id : str
+        Written to the record's header.
+    geometry_mm : dict
+        d0_mm with l0_mm (tension) or h0_mm (compression), mm.
+    temperature_C : float, optional
+        Heating set-point, °C; None: room temperature.
+    speed_mm_per_s : float
+        Crosshead speed, mm/s.
+    soak_s, soak_band_C, heat_timeout_s : float
+        Test seconds the temperature stays within ±``soak_band_C`` °C; the longest heating, s.
+    stop : StopCriteria
+        When loading stops (fracture, target, force limit).
+    post, extra_meta : dict
+        Post-test measurements given up front (mm); more header values.
+    """
 
     __test__ = False  # not a pytest test class
 
@@ -172,7 +192,28 @@ def heating_progress(start_C: float, now_C: float, setpoint_C: float) -> float:
 
 
 class Procedure(StreamNotes):
-    """One test on one rig, written to ``path``; :meth:`run` returns an :class:`Outcome`."""
+    """One test on one rig, written to ``path`` as it runs; :meth:`run` runs it.
+
+    Parameters
+    ----------
+    rig : RigIO
+        The rig (:class:`flowcurve.acquisition.session.DriverRig` or the virtual one).
+    spec : TestSpec
+        The test.
+    path : str or PathLike
+        The record file.
+    view : LiveView, optional
+        What shows the test live (default: nothing shown).
+    interactive, prompt : bool, callable
+        Ask the operator at the terminal, through ``prompt``.
+    stop_requested : callable, optional
+        Another thread's stop button: an operator-stop reason or None; may raise Interrupted.
+
+    Raises
+    ------
+    ProcedureError
+        Invalid geometry or speed; heating asked of a rig without a furnace or above its maximum.
+    """
 
     tick_s = 0.05  # main-loop period (host seconds)
 
@@ -276,9 +317,16 @@ class Procedure(StreamNotes):
                 f"on disk. Free space, then 'flowcurve recover {self.path}'")
 
     def run(self) -> Outcome:
-        """Run the test: record created, furnace heated and soaked, load cell tared, the rows recorded
-        until a stop criterion; heater off and motion stopped on every exit path; the Outcome (path,
-        status, reason, samples, duration, maximum force, post-test measurements)."""
+        """Run the test: heat and soak, tare, record until a stop criterion, post-test measurements.
+
+        The heater is off and the motion stopped on every way out; the record is closed complete or
+        aborted (with the reason).
+
+        Returns
+        -------
+        Outcome
+            Path, status, reason, samples, duration, maximum force and post-test measurements.
+        """
         spec, rig = self.spec, self.rig
         self._t0 = self.timebase.now()
         rig.set_clock(self.clock)

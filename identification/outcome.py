@@ -26,15 +26,17 @@ TRUE_CURVE_COLUMNS = ("true_plastic_strain", "true_stress_MPa")
 class Identification:
     """Results of identifying one record.
 
-    result: what is written to ``result.json`` (keys carry units: ``Rm_MPa``): a
-        :class:`identification.results.TensionResult` or ``CompressionResult`` (typed, and
-        readable as a mapping), or a plain dict (the inverse-FE identification's).
-    true_curve: DataFrame with at least the columns of :data:`TRUE_CURVE_COLUMNS`.
-    curves: named intermediate curves for plots and comparison (e.g. "raw_diagram",
-        "corrected_diagram", "engineering", "true", "fit", one per correction method), each a
-        DataFrame with unit-named columns.
-    plots: name → function(path) that draws one PNG; the command line fills it from
-        ``reports`` (identification does not import reports) and :meth:`write` calls them.
+    Attributes
+    ----------
+    result : Mapping
+        What result.json holds (units in its keys: ``Rm_MPa``): a TensionResult, CompressionResult
+        or plain dict (the inverse FE's).
+    true_curve : DataFrame
+        At least the columns of :data:`TRUE_CURVE_COLUMNS`.
+    curves : dict of DataFrame
+        Named curves for plots and comparison ("raw_diagram", "engineering", "true", "fit" …).
+    plots : dict of callable
+        name → function(path) drawing one PNG (filled by the caller; :meth:`write` calls them).
     """
 
     result: Mapping  # TensionResult | CompressionResult | dict

@@ -165,7 +165,23 @@ class Event:
 
 @dataclass
 class Record:
-    """A test record: metadata, samples (a DataFrame with unit-named columns) and events."""
+    """A test record: header, samples and events.
+
+    Attributes
+    ----------
+    meta : dict of str
+        The header's ``key: value`` lines (units in the keys: ``specimen.d0_mm``).
+    data : DataFrame
+        The samples, unit-named columns (``time_s``, ``force_N``, ``crosshead_mm`` …).
+    source : str
+        The file read, or "<memory>".
+    events : list of Event
+        Timed events (tare, heater off, stops).
+    truncated : bool
+        The file ended inside a row (a crash); the partial row dropped.
+    warnings : list of str
+        What reading it noticed.
+    """
 
     meta: dict[str, str]
     data: pd.DataFrame
@@ -260,7 +276,23 @@ def parse_header_line(line: str) -> tuple[str, str] | None:
 
 
 def read_record(path: str | os.PathLike) -> Record:
-    """Read a flowcurve record. Raises :class:`RecordError` naming file, line and column."""
+    """Read a native flowcurve record.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The record file.
+
+    Returns
+    -------
+    Record
+        Its header, samples and events.
+
+    Raises
+    ------
+    RecordError
+        Naming file, line and column of anything unreadable.
+    """
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -485,7 +517,20 @@ def _format_value(value: object) -> str:
 
 
 def write_record(path: str | os.PathLike, record: Record) -> Path:
-    """Write a whole record atomically (temp file, fsync, rename)."""
+    """Write a whole record atomically (temp file, fsync, rename).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file written (replaced).
+    record : Record
+        What to write.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     path = Path(path)
     buf = io.StringIO()
     buf.write(format_header(record.meta))
@@ -506,6 +551,19 @@ class RecordWriter:
             rec.append_rows(block)        # rows: sequences of floats, in column order
             rec.event(t, "heater_off", "soak reached")
         # the header now says status: complete
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The record file created.
+    meta : Mapping
+        The header's values (units in the keys).
+    columns : sequence of str
+        The sample columns, unit-named.
+    fsync_every_s : float
+        Seconds between flushes to the disk.
+    float_format : str
+        printf format of the values.
     """
 
     def __init__(self, path: str | os.PathLike, meta: Mapping[str, object], columns: Sequence[str], *, fsync_every_s: float = 1.0, float_format: str = "%.6f"):

@@ -177,8 +177,28 @@ def report_content(root, units: str = DEFAULT_UNIT_SYSTEM, title: str | None = N
 
 def write_report(root, output=None, *, units: str = DEFAULT_UNIT_SYSTEM, title: str | None = None, lab: LabHeader | None = None,
                  pdf: bool = True, **overrides) -> list[Path]:
-    """Write ``report.html`` and ``report.pdf`` (default into ``root``; ``output`` names the HTML
-    file, the PDF goes beside it) and the card under ``cards/``; returns the files written."""
+    """Write the series report of the results under ``root`` and the cards it links.
+
+    Parameters
+    ----------
+    root : str or Path
+        The folder of result and fit folders.
+    output : str or Path, optional
+        The HTML file (default ``root``/report.html); the PDF goes beside it.
+    units, title : str
+        The cards' unit system; the report's title.
+    lab : LabHeader, optional
+        The laboratory's header.
+    pdf : bool
+        Write the PDF too.
+    **overrides
+        Card constants (E_MPa, poisson …).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     from flowcurve.reports.report_pdf import write_pdf
 
     out = Path(output) if output else Path(root) / "report.html"

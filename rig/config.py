@@ -186,7 +186,21 @@ class InstrumentsConfig:
 
 @dataclass(frozen=True)
 class RigConfig:
-    """The whole rig; ``furnace`` is None on a rig without one; ``source`` is the file read."""
+    """The whole rig, as its TOML file configures it.
+
+    Attributes
+    ----------
+    loadcell, encoder : LoadCellConfig, EncoderConfig
+        The force and position devices' ports and settings.
+    furnace : FurnaceConfig or None
+        The furnace controller; None on a rig without one.
+    frame : FrameConfig
+        The frame: capacity (N), stiffness (N/µm), stroke (mm), speed range (mm/s).
+    source : str
+        The file read ("<virtual>" for the virtual rig's).
+    instruments : InstrumentsConfig
+        Classes, certificates and resolutions of the instruments (uncertainty budgets).
+    """
 
     loadcell: LoadCellConfig
     encoder: EncoderConfig
@@ -347,7 +361,23 @@ def parse_config(data: dict, origin: str = "<config>") -> RigConfig:
 
 
 def load_config(path) -> RigConfig:
-    """Read and validate a rig TOML file."""
+    """Read and validate a rig TOML file.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The rig's TOML file.
+
+    Returns
+    -------
+    RigConfig
+        The checked configuration.
+
+    Raises
+    ------
+    ConfigError
+        Naming the file, section and key of a missing or refused value.
+    """
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")

@@ -56,9 +56,17 @@ class ForceReading(Protocol):
 
 @runtime_checkable
 class ForceDevice(Device, Protocol):
-    """Force role (load-cell amplifier): polled or streamed force readings, tare, its output rates
-    (``supported_rates_Hz()[rate_code]`` is the rate its section's ``rate_code`` sets) and what its
-    stream lost (``frames_lost``, ``stream_resyncs``, ``latency_s``)."""
+    """Force role (load-cell amplifier): polled or streamed force readings, tare and output rates.
+
+    ``supported_rates_Hz()[rate_code]`` is the rate its section's ``rate_code`` sets.
+
+    Attributes
+    ----------
+    name, transport : str, Link
+        A name for messages; its serial line.
+    stream_resyncs, latency_s : int, float
+        What its stream lost or delayed: resynchronisations, latency in host seconds.
+    """
 
     stream_resyncs: int
     latency_s: float
@@ -84,7 +92,13 @@ class ForceDevice(Device, Protocol):
 
 @runtime_checkable
 class PositionDevice(Device, Protocol):
-    """Position role (crosshead encoder): the crosshead's travel in mm since :meth:`zero`."""
+    """Position role (crosshead encoder): the crosshead's travel in mm since :meth:`zero`.
+
+    Attributes
+    ----------
+    name, transport : str, Link
+        A name for messages; its serial line.
+    """
 
     def position_mm(self) -> float:
         """The crosshead position, mm."""
@@ -94,9 +108,17 @@ class PositionDevice(Device, Protocol):
 
 @runtime_checkable
 class TemperatureDevice(Device, Protocol):
-    """Temperature role (furnace module): the reading, the heater output (never on at or above
-    ``max_temperature_C``; ``heater_off`` True when acknowledged), the address check
-    (``digital_io``) and the host watchdog that switches the heater off by itself."""
+    """Temperature role (furnace module): the reading, the heater, the address check and the host watchdog.
+
+    Attributes
+    ----------
+    name, transport : str, Link
+        A name for messages; its serial line.
+    max_temperature_C : float
+        The heater is never on at or above it, °C.
+    heater_is_on, watchdog_armed : bool
+        The heater output as last commanded; the module watchdog armed (it switches the heater off by itself).
+    """
 
     max_temperature_C: float
     heater_is_on: bool
@@ -133,8 +155,25 @@ DEFAULT_MODELS = {role: next(iter(models)) for role, models in MODELS.items()}
 
 
 def driver_class(role: str, model: str) -> type:
-    """The driver class registered for ``model`` in ``role`` (imported now); KeyError naming the
-    known models when there is none."""
+    """The driver class registered for ``model`` in ``role`` (imported now).
+
+    Parameters
+    ----------
+    role : str
+        "force", "position" or "temperature".
+    model : str
+        A model name of :data:`MODELS` (``hbm-aed``).
+
+    Returns
+    -------
+    type
+        The driver class.
+
+    Raises
+    ------
+    KeyError
+        Naming the known models when there is none.
+    """
     try:
         entry = MODELS[role][model]
     except KeyError:

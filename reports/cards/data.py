@@ -320,7 +320,22 @@ def _law(fit: dict, path) -> tuple[str, dict[str, float], dict[str, float | None
 
 
 def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
-    """A :class:`CardData` from a parsed ``fit.json``; ``overrides`` (e.g. ``E_MPa=2.1e5``) win."""
+    """The CardData of a parsed fit.json.
+
+    Parameters
+    ----------
+    fit : dict
+        fit.json's content.
+    path : str
+        Where it was read (for messages).
+    **overrides
+        Constants that win over the fit's (``E_MPa=2.1e5``).
+
+    Returns
+    -------
+    CardData
+        The law, constants, curves and ranges.
+    """
     rng = fit.get("range") or {}
     law_name, law_values, stderr = _law(fit, path)
     jc = law_name == "johnson_cook"
