@@ -118,6 +118,7 @@ class LiveView:
             self.tty = bool(isatty and isatty())
 
     def show(self, s: Snapshot, force: bool = False) -> None:
+        """Draw snapshot ``s`` at the refresh rate, on a change of state, or at once when ``force``."""
         if self.quiet:
             return
         now = time.monotonic()

@@ -1,6 +1,6 @@
 """Test procedures: tension and compression, from specimen entry to the amended record.
 
-The procedure drives a :class:`RigIO` (see :mod:`acquisition.session` for the real and the
+The procedure drives a :class:`~acquisition.rig_io.RigIO` (see :mod:`acquisition.session` for the real and the
 virtual rig) through the phases
 
 1. optional heating to a set-point and a soak until the temperature is steady,
@@ -19,11 +19,9 @@ from __future__ import annotations
 import datetime as _dt
 import math
 import os
-import select
-import sys
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable, Protocol
+from typing import Callable
 
 import numpy as np
 
@@ -32,7 +30,9 @@ from flowcurve.record.format import STATUS_ABORTED, STATUS_COMPLETE, RecordWrite
 from flowcurve.record.summary import MEASURED_SPEED_KEY, speed_mismatch
 from flowcurve.acquisition.plausibility import RateGuard
 from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temperature
-from flowcurve.acquisition.sampler import Channel, Sampler
+from flowcurve.acquisition.keys import KeyWatcher
+from flowcurve.acquisition.rig_io import RigIO  # noqa: F401  (procedure.RigIO, as before)
+from flowcurve.acquisition.sampler import Sampler
 from flowcurve.acquisition.stream_notes import StreamNotes
 from flowcurve.clock import WALL, Clock
 from flowcurve.rig.config import SETPOINT_MARGIN_C, setpoint_refusal
@@ -98,34 +98,29 @@ class ProcedureError(FlowcurveError):
     """A test that cannot be started as asked (missing geometry, no furnace for heating)."""
 
 
-class RigIO(Protocol):
-    """What a procedure needs from a rig (real or virtual); built by acquisition.session."""
-
-    has_furnace: bool
-    can_drive: bool  # True on the virtual rig: the procedure starts the crosshead itself
-    time_scale: float  # test seconds per host second (1 on the real rig)
-    timebase: Clock  # host time: the wall clock, or a model clock in the fast tests
-    max_temperature_C: float
-    setpoint_margin_C: float  # a set-point leaves this below the maximum (rig.config.SETPOINT_MARGIN_C when absent)
-    frame_stiffness_N_per_um: float | None
-    loadcell_period_s: float
-
-    def set_clock(self, clock: Callable[[], float]) -> None: ...
-    def channels(self, clock: Callable[[], float], to_clock: Callable[[float], float]) -> dict[str, Channel]: ...
-    def read_temperature_C(self) -> float: ...
-    def hold_temperature(self, setpoint_C: float) -> float: ...  # one control step; the reading
-    def heater_off(self) -> None: ...
-    def arm_watchdog(self) -> None: ...
-    def host_ok(self) -> None: ...
-    def tare(self) -> None: ...  # load cell to net zero and the crosshead counter to zero
-    def start_crosshead(self, speed_mm_per_s: float, direction: int) -> None: ...
-    def stop_crosshead(self) -> None: ...
-    def post_test_measurements(self) -> dict[str, float] | None: ...
-
-
 @dataclass
 class TestSpec:
-    """Everything about the test to run; geometry in mm, temperature in C, speed in mm/s."""
+    """Everything about the test to run.
+
+    Attributes
+    ----------
+    test : str
+        "tension" or "compression".
+    material, operator, specimen_id : str
+        Written to the record's header.
+    geometry_mm : dict
+        d0_mm with l0_mm (tension) or h0_mm (compression), mm.
+    temperature_C : float, optional
+        Heating set-point, °C; None: room temperature.
+    speed_mm_per_s : float
+        Crosshead speed, mm/s.
+    soak_s, soak_band_C, heat_timeout_s : float
+        Test seconds the temperature stays within ±``soak_band_C`` °C; the longest heating, s.
+    stop : StopCriteria
+        When loading stops (fracture, target, force limit).
+    post, extra_meta : dict
+        Post-test measurements given up front (mm); more header values.
+    """
 
     __test__ = False  # not a pytest test class
 
@@ -144,6 +139,7 @@ class TestSpec:
     extra_meta: dict[str, str] = field(default_factory=dict)
 
     def check(self) -> None:
+        """ProcedureError unless the test, geometry (> 0 mm) and speed (> 0 mm/s) are valid."""
         if self.test not in TEST_GEOMETRY:
             raise ProcedureError(f"test must be tension or compression, not {self.test!r}")
         for key in TEST_GEOMETRY[self.test]:
@@ -154,6 +150,7 @@ class TestSpec:
             raise ProcedureError(f"crosshead speed must be > 0 mm/s, got {self.speed_mm_per_s}")
 
     def meta(self, rig: RigIO) -> dict[str, object]:
+        """The record's header of this test on ``rig``: test, material, date, geometry, rig and instruments."""
         m: dict[str, object] = {
             "test": self.test,
             "material": self.material,
@@ -188,37 +185,6 @@ class Outcome:
     losses: str = ""  # what the record declares lost or rejected ("" when nothing)
 
 
-class KeyWatcher:
-    """Reports a 'q' typed on an interactive terminal (cbreak mode, restored on exit)."""
-
-    def __init__(self, enabled: bool):
-        self.enabled = enabled and sys.stdin.isatty()
-        self._saved = None
-
-    def __enter__(self) -> "KeyWatcher":
-        if self.enabled:
-            import termios
-            import tty
-
-            self._saved = termios.tcgetattr(sys.stdin)
-            tty.setcbreak(sys.stdin.fileno())
-        return self
-
-    def quit_pressed(self) -> bool:
-        if not self.enabled:
-            return False
-        while select.select([sys.stdin], [], [], 0)[0]:
-            if os.read(sys.stdin.fileno(), 1) in (b"q", b"Q"):
-                return True
-        return False
-
-    def __exit__(self, *exc) -> None:
-        if self._saved is not None:
-            import termios
-
-            termios.tcsetattr(sys.stdin, termios.TCSADRAIN, self._saved)
-
-
 def heating_progress(start_C: float, now_C: float, setpoint_C: float) -> float:
     """Fraction of the way from the start temperature to the set-point, in [0, 1]."""
     span = setpoint_C - start_C
@@ -226,7 +192,28 @@ def heating_progress(start_C: float, now_C: float, setpoint_C: float) -> float:
 
 
 class Procedure(StreamNotes):
-    """One test on one rig, written to ``path``; :meth:`run` returns an :class:`Outcome`."""
+    """One test on one rig, written to ``path`` as it runs; :meth:`run` runs it.
+
+    Parameters
+    ----------
+    rig : RigIO
+        The rig (:class:`flowcurve.acquisition.session.DriverRig` or the virtual one).
+    spec : TestSpec
+        The test.
+    path : str or PathLike
+        The record file.
+    view : LiveView, optional
+        What shows the test live (default: nothing shown).
+    interactive, prompt : bool, callable
+        Ask the operator at the terminal, through ``prompt``.
+    stop_requested : callable, optional
+        Another thread's stop button: an operator-stop reason or None; may raise Interrupted.
+
+    Raises
+    ------
+    ProcedureError
+        Invalid geometry or speed; heating asked of a rig without a furnace or above its maximum.
+    """
 
     tick_s = 0.05  # main-loop period (host seconds)
 
@@ -269,9 +256,11 @@ class Procedure(StreamNotes):
 
     # clock: test seconds since the procedure started (time-scaled on the virtual rig)
     def clock(self) -> float:
+        """Test seconds since the procedure started (time-scaled on the virtual rig)."""
         return (self.timebase.now() - self._t0) * self.rig.time_scale
 
     def to_clock(self, t_host: float) -> float:
+        """Host time ``t_host`` (s) as test seconds."""
         return (t_host - self._t0) * self.rig.time_scale
 
     def _event(self, name: str, text: str = "") -> None:
@@ -328,9 +317,16 @@ class Procedure(StreamNotes):
                 f"on disk. Free space, then 'flowcurve recover {self.path}'")
 
     def run(self) -> Outcome:
-        """Run the test: record created, furnace heated and soaked, load cell tared, the rows recorded
-        until a stop criterion; heater off and motion stopped on every exit path; the Outcome (path,
-        status, reason, samples, duration, maximum force, post-test measurements)."""
+        """Run the test: heat and soak, tare, record until a stop criterion, post-test measurements.
+
+        The heater is off and the motion stopped on every way out; the record is closed complete or
+        aborted (with the reason).
+
+        Returns
+        -------
+        Outcome
+            Path, status, reason, samples, duration, maximum force and post-test measurements.
+        """
         spec, rig = self.spec, self.rig
         self._t0 = self.timebase.now()
         rig.set_clock(self.clock)
@@ -523,6 +519,7 @@ class Procedure(StreamNotes):
                         if setpoint is None else None)
 
         def guarded() -> float:
+            """One furnace read: a control step toward the set-point while heating holds, else a reading, °C."""
             hold = setpoint is not None and not self._heater_released
             try:
                 temp = rig.hold_temperature(setpoint) if hold else rig.read_temperature_C()
@@ -730,6 +727,7 @@ class Procedure(StreamNotes):
             seconds, settle = WATCH_UNHEATED_S, {"settle_s": 0.0}
 
         def extended(why: str) -> None:
+            """Tell the operator, and the record, that the furnace watch was extended and why."""
             self._alert(f"furnace: {why}")
             self._event("watch_extended", why)
 

@@ -55,6 +55,7 @@ class Stream:
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
     def extend(self, times: Iterable[float], values: Iterable[float]) -> None:
+        """Append the readings (``times`` s, ``values``)."""
         times, values = list(times), list(values)
         with self._lock:
             self._t.extend(times)
@@ -70,10 +71,12 @@ class Stream:
             return len(self._t)
 
     def last(self) -> tuple[float, float] | None:
+        """The last (time, value), or None before the first reading."""
         with self._lock:
             return (self._t[-1], self._v[-1]) if self._t else None
 
     def last_time(self) -> float:
+        """The last reading's time, s (-inf before the first)."""
         with self._lock:
             return self._t[-1] if self._t else -np.inf
 
@@ -173,10 +176,12 @@ class Channel(threading.Thread):
         self._stop_event = threading.Event()
 
     def stop(self) -> None:
+        """Ask the channel's thread to stop."""
         self._stop_event.set()
         self.timebase.notify()
 
     def run(self) -> None:
+        """The channel's thread: read the device on its period into the stream until stopped or failed."""
         tb = self.timebase
         failures = 0
         self.last_data_wall_s = tb.now()
@@ -307,9 +312,11 @@ class Sampler:
 
     @property
     def released(self) -> int:
+        """The rows released so far."""
         return self._released
 
     def start(self) -> "Sampler":
+        """Start every channel's thread; the sampler."""
         # on a model clock, time waits for every channel (and the caller) to take part:
         # a channel started first must not run ahead while the others start
         for ch in self.channels.values():
@@ -359,6 +366,7 @@ class Sampler:
             ch.stop()
 
     def stop(self, timeout_s: float = 2.0) -> None:
+        """Stop the channels and wait up to ``timeout_s`` for each."""
         self.request_stop()
         for ch in self.channels.values():
             if ch.is_alive() and ch is not threading.current_thread():

@@ -1,6 +1,6 @@
 """The rig as a procedure sees it: the real drivers over the configured ports.
 
-:class:`DriverRig` implements :class:`acquisition.procedure.RigIO` with the device of each role
+:class:`DriverRig` implements :class:`acquisition.rig_io.RigIO` with the device of each role
 (:mod:`rig.roles`) its configuration names: a force device (default
 :class:`rig.loadcell.LoadCell`, streaming ``MSV?0``, stamped on arrival), a position device
 (:class:`rig.encoder.CrossheadEncoder`) and a temperature device (:class:`rig.furnace.Furnace`)
@@ -41,15 +41,20 @@ BRACKET_KEEP_S = 0.2  # ... a reading is kept at least this often (host seconds)
 
 
 class DriverRig:
-    """A configured rig (``rig.config.RigConfig``) opened for one test.
+    """A configured rig opened for one test: the procedure's RigIO over the device drivers.
 
-    time_scale: test seconds per host second — 1 on the real rig; the virtual rig's
-        ``time_scale`` when its model runs faster (the record's ``time_s`` is then model time).
-    virtual: a :class:`rig.virtual.rig.VirtualRig` to drive (start/stop the crosshead,
-        post-test measurements); None on the real rig.
-    timebase: host time (:mod:`flowcurve.clock`): the virtual rig's clock when there is
-        one, else the wall clock.
-    stream: read the load cell as a ``MSV?0`` stream (True) or poll ``MSV?`` (False).
+    Parameters
+    ----------
+    config : RigConfig
+        The rig's configuration.
+    time_scale : float
+        Test seconds per host second: 1 on the real rig, the virtual rig's when its model runs faster.
+    virtual : VirtualRig, optional
+        The virtual rig to drive (crosshead, post-test measurements); None on the real rig.
+    stream : bool
+        Read the load cell as a ``MSV?0`` stream (True) or poll ``MSV?`` (False).
+    timebase : Clock, optional
+        Host time: the virtual rig's clock when there is one, else the wall clock.
     """
 
     loadcell: ForceDevice
@@ -89,6 +94,7 @@ class DriverRig:
 
     # life cycle ------------------------------------------------------------------------------
     def open(self) -> "DriverRig":
+        """Open and configure every device of the rig; the rig (closed again on an error)."""
         try:
             self.loadcell.open()
             self.loadcell.configure(**self.config.loadcell.settings)
@@ -139,6 +145,7 @@ class DriverRig:
             started = []
 
             def read_force():  # stamped by the driver on the stream's rhythm (rig.loadcell.stream_stamps)
+                """The load cell's stream (started on the first call): (time s, force N) readings."""
                 if not started:
                     cell.start_stream()
                     started.append(True)
@@ -146,6 +153,7 @@ class DriverRig:
         else:
 
             def read_force():
+                """One polled load cell reading: [(time s, force N)]."""
                 s = cell.read()
                 return [(to_clock(s.t_monotonic_s), s.force_N)]
 
@@ -289,13 +297,16 @@ class DriverRig:
         self._clock = clock
 
     def heater_off(self) -> None:
+        """Heater off; DeviceError when the furnace does not acknowledge it."""
         if self.furnace is not None and not self.furnace.heater_off():
             raise DeviceError(self.furnace.name, "heater-off not acknowledged")
 
     def arm_watchdog(self) -> None:
+        """Arm the furnace module's watchdog with the configured timeout."""
         self.furnace.arm_watchdog(self.config.furnace.watchdog_timeout_s)
 
     def host_ok(self) -> None:
+        """Tell the furnace module's watchdog the host is alive."""
         if self.furnace is not None:
             self.furnace.host_ok()
 
@@ -310,9 +321,11 @@ class DriverRig:
         self.virtual.start_crosshead(speed_mm_per_s=speed_mm_per_s)
 
     def stop_crosshead(self) -> None:
+        """Stop the virtual rig's crosshead."""
         self.virtual.stop_crosshead()
 
     def post_test_measurements(self) -> dict[str, float] | None:
+        """The virtual rig's post-test measurements (mm), None on a real rig."""
         if self.virtual is None:
             return None
         return {k: float(v) for k, v in self.virtual.post_test_measurements().items()}
@@ -334,18 +347,31 @@ class VirtualRun:
 def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None, interactive: bool = False, stream: bool = True, friction_mu: float = 0.1, rig_setup=None, config_overrides: dict | None = None, initial_temperature_C: float | None = None, clock: Clock = WALL, link: str = "pty", stop_requested=None, compression_response: str = "fe", tension_response: str = "fe", faults: tuple = ()) -> VirtualRun:
     """Run ``spec`` on a virtual rig in this process through the real drivers.
 
-    The devices sit on ptys in real time by default; ``link="inprocess"`` with a
-    :class:`flowcurve.clock.ModelClock` runs the same drivers over ``virtual://`` ports in
-    simulated time (the fast tests). The virtual specimen takes ``spec.geometry_mm``;
-    ``rig_setup(virtual_rig)`` may inject faults or change the model before the test
-    starts; ``config_overrides`` go to ``rig.config.virtual_config``
-    (e.g. ``furnace_max_temperature_C=500``); ``stop_requested`` goes to the
-    :class:`Procedure` (a stop button in another thread); ``compression_response`` chooses the
-    virtual rig's compression physics ("fe" CalculiX runs, or "slab" with the seed's (3.18)) and
-    ``tension_response`` its neck ("fe" CalculiX necking runs, or "bridgman" with Le Roy's a/R);
-    the record's header says which (``virtual.compression_response`` / ``virtual.tension_response``).
-    ``faults``: :class:`rig.virtual.fault_spec.FaultSpec` drills scheduled on the rig (``--fault``),
-    listed in the header as ``virtual.faults``.
+    Parameters
+    ----------
+    spec : TestSpec
+        The test; the virtual specimen takes its geometry.
+    path : str or Path
+        The record file.
+    material, time_scale : str, float
+        The virtual material; test seconds per host second.
+    view, interactive, stream, stop_requested : optional
+        As :class:`Procedure` and :class:`DriverRig` take them.
+    friction_mu, initial_temperature_C : float, optional
+        Die friction of compression; the furnace's start temperature, °C.
+    rig_setup, config_overrides, faults : optional
+        ``rig_setup(virtual_rig)`` before the start; keywords of ``rig.config.virtual_config``;
+        FaultSpec drills (``--fault``), listed in the header.
+    clock, link : Clock, str
+        "pty" in real time (default), or "inprocess" with a ModelClock in simulated time.
+    compression_response, tension_response : str
+        The physics: "fe" (CalculiX runs) or "slab"; "fe" or "bridgman" (the header says which).
+
+    Returns
+    -------
+    VirtualRun
+        The procedure's Outcome with the truth the record was generated from (material, rate,
+        temperature, μ, responses).
     """
     from flowcurve.acquisition.procedure import Procedure
     from flowcurve.rig.config import virtual_config

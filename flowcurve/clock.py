@@ -37,13 +37,20 @@ from typing import Callable, ContextManager, Protocol
 class Clock(Protocol):
     """Monotonic seconds, waits and timers (see the module docstring)."""
 
-    def now(self) -> float: ...
-    def sleep(self, seconds: float) -> None: ...
-    def wait(self, event: threading.Event, timeout: float | None = None) -> bool: ...
-    def notify(self) -> None: ...
-    def call_at(self, when: float, callback: Callable[[], None]) -> "Timer": ...
-    def idle(self) -> ContextManager[None]: ...
-    def enlist(self, thread: threading.Thread) -> None: ...
+    def now(self) -> float:
+        """Monotonic time now, s."""
+    def sleep(self, seconds: float) -> None:
+        """Wait ``seconds`` on this clock."""
+    def wait(self, event: threading.Event, timeout: float | None = None) -> bool:
+        """Wait until ``event`` is set or ``timeout`` s pass on this clock; whether it was set."""
+    def notify(self) -> None:
+        """Wake the waiters to look at their events again (an event was set)."""
+    def call_at(self, when: float, callback: Callable[[], None]) -> "Timer":
+        """Run ``callback`` at time ``when`` on this clock; the Timer (cancel it to drop the call)."""
+    def idle(self) -> ContextManager[None]:
+        """A context in which the calling thread blocks on something another thread's wait will release."""
+    def enlist(self, thread: threading.Thread) -> None:
+        """Make ``thread`` take part in the clock before it starts."""
 
 
 class Timer:
@@ -56,6 +63,7 @@ class Timer:
         self._thread: threading.Timer | None = None
 
     def cancel(self) -> None:
+        """Drop the callback if it has not run yet."""
         self.cancelled = True
         if self._thread is not None:
             self._thread.cancel()
@@ -65,28 +73,34 @@ class WallClock:
     """Real time: :func:`time.monotonic`, real sleeps, timers on threads."""
 
     def now(self) -> float:
+        """:func:`time.monotonic`, s."""
         return time.monotonic()
 
     def sleep(self, seconds: float) -> None:
+        """:func:`time.sleep` for ``seconds`` (none when not positive)."""
         if seconds > 0:
             time.sleep(seconds)
 
     def wait(self, event: threading.Event, timeout: float | None = None) -> bool:
+        """``event.wait(timeout)``: whether the event was set."""
         return event.wait(timeout)
 
     def notify(self) -> None:
         """Nothing to do: threading.Event wakes its waiters itself."""
 
     def idle(self) -> ContextManager[None]:
+        """A null context: the wall clock moves on while a thread blocks."""
         return nullcontext()
 
     def enlist(self, thread: threading.Thread) -> None:
         """Nothing to do: real time does not wait for anyone."""
 
     def call_at(self, when: float, callback: Callable[[], None]) -> Timer:
+        """A :class:`Timer` firing ``callback`` at monotonic time ``when`` on a timer thread."""
         timer = Timer(when, callback)
 
         def fire() -> None:
+            """Call the callback unless the timer was cancelled."""
             if not timer.cancelled:
                 callback()
 
@@ -131,6 +145,7 @@ class ModelClock:
 
     # -- reading and moving time ------------------------------------------------------------
     def now(self) -> float:
+        """The model time now, s."""
         return self._now
 
     def advance(self, seconds: float) -> None:
@@ -197,6 +212,7 @@ class ModelClock:
                 del self._waiting[me]
 
     def sleep(self, seconds: float) -> None:
+        """Wait ``seconds`` of model time."""
         self.wait_until(self._now + max(0.0, seconds))
 
     def wait(self, event: threading.Event, timeout: float | None = None) -> bool:

@@ -169,6 +169,7 @@ def demo_time_scale(spec: TestSpec, time_scale: float = DEMO_TIME_SCALE) -> floa
 
 
 def demo_specs(material_name: str) -> list[TestSpec]:
+    """The demo's tension and compression specs for ``material_name``."""
     from flowcurve.rig.virtual.physics import Specimen
 
     t, c = Specimen.tension(), Specimen.compression()
@@ -214,6 +215,7 @@ def summary_lines(run, ident, folder: Path) -> list[str]:
 
 def run_demo(out: Path, *, material: str = "steel45", quiet: bool = False, time_scale: float = DEMO_TIME_SCALE,
              compression_response: str = "fe", tension_response: str = "fe", faults: tuple = ()) -> int:
+    """Run the demo series on the virtual rig into ``out``, identify and fit it; the exit status."""
     out = Path(out)
     view = LiveView(quiet=quiet)
     t_start = time.monotonic()

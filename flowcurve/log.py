@@ -24,10 +24,12 @@ class _CurrentStderr(logging.StreamHandler):
 
     @property
     def stream(self):
+        """The current sys.stderr (so a redirected stderr is followed)."""
         return sys.stderr
 
     @stream.setter
     def stream(self, value) -> None:  # StreamHandler.__init__ sets it; the property decides
+        """Ignore the stream StreamHandler sets: the property reads sys.stderr."""
         pass
 
 

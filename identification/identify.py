@@ -189,6 +189,7 @@ def check_record(record: Record) -> list[str]:
         raise RecordError(source, f"force never rises above noise (largest change {rise:.3g} N, noise {noise:.3g} N); is this the right column?", column="force_N")
     moving = [c for c in ("crosshead_mm", "extensometer_mm") if record.has(c)]
     def spread(column: str) -> float:
+        """The spread (max − min) of a column's finite values."""
         values = record.column(column)
         values = values[np.isfinite(values)]
         return float(np.ptp(values)) if values.size else 0.0
@@ -288,13 +289,36 @@ def identify_inverse_fe(record: Record, *, law: str = "auto", workers: int | Non
                         E_MPa: float | None = None, time_limit_s: float | None | str = "default", **options) -> Identification:
     """Identify with CalculiX in the loop (``--method inverse-fe``), dispatched on ``record.test``.
 
-    Compression: ``law`` and μ fitted to the force–stroke and dmax
-    (:func:`.fe.inverse.identify_inverse_fe_compression`; ``law="auto"``: the law that best fits the fast
-    curve). Tension: the hardening beyond Fm fitted to the force–elongation and dk
-    (:func:`.fe.inverse_tension.identify_inverse_fe_tension`; ``law="auto"``: the law that best follows
-    the FE-consistent curve). ``time_limit_s``: the wall-time budget, s (None: none; "default":
-    :func:`inverse_time_limit_s`). ``options``: the other keywords of the test's inverse. Raises
-    :class:`IdentificationError` for an unknown law or a record of another test.
+    Compression: the law and μ fitted to the force–stroke and dmax
+    (:func:`.fe.inverse.identify_inverse_fe_compression`); tension: the hardening beyond Fm fitted
+    to the force–elongation and dk (:func:`.fe.inverse_tension.identify_inverse_fe_tension`).
+
+    Parameters
+    ----------
+    record : Record
+        A tension or compression record.
+    law : str
+        A law name, or "auto": the law that best follows the fast (or FE-consistent) curve.
+    workers, scheduler : optional
+        CalculiX runs in parallel: local processes, or a Dask scheduler's address.
+    progress : callable, optional
+        ``progress(runs, elapsed_s, left_s, limit_s)`` while the solver runs.
+    E_MPa : float, optional
+        Young's modulus of the model, MPa (compression).
+    time_limit_s : float, None or "default"
+        The wall-time budget, s (None: none; "default": :func:`inverse_time_limit_s`).
+    **options
+        The other keywords of the test's inverse.
+
+    Returns
+    -------
+    Identification
+        Whose result carries the ``inverse_fe`` block.
+
+    Raises
+    ------
+    IdentificationError
+        For an unknown law or a record of another test.
     """
     from flowcurve.identification.fe.law_choice import check_law
 

@@ -26,16 +26,17 @@ TRUE_CURVE_COLUMNS = ("true_plastic_strain", "true_stress_MPa")
 class Identification:
     """Results of identifying one record.
 
-    result: what is written to ``result.json`` (keys carry units: ``Rm_MPa``): a
-        :class:`identification.results.TensionResult` or ``CompressionResult`` (typed, and
-        readable as a mapping; the inverse-FE identification's with its typed ``inverse_fe``
-        block), or a plain dict.
-    true_curve: DataFrame with at least the columns of :data:`TRUE_CURVE_COLUMNS`.
-    curves: named intermediate curves for plots and comparison (e.g. "raw_diagram",
-        "corrected_diagram", "engineering", "true", "fit", one per correction method), each a
-        DataFrame with unit-named columns.
-    plots: name → function(path) that draws one PNG; the command line fills it from
-        ``reports`` (identification does not import reports) and :meth:`write` calls them.
+    Attributes
+    ----------
+    result : Mapping
+        What result.json holds (units in its keys: ``Rm_MPa``): a TensionResult or CompressionResult
+        (typed, readable as a mapping; the inverse FE's with its typed ``inverse_fe`` block), or a plain dict.
+    true_curve : DataFrame
+        At least the columns of :data:`TRUE_CURVE_COLUMNS`.
+    curves : dict of DataFrame
+        Named curves for plots and comparison ("raw_diagram", "engineering", "true", "fit" …).
+    plots : dict of callable
+        name → function(path) drawing one PNG (filled by the caller; :meth:`write` calls them).
     """
 
     result: Mapping  # TensionResult | CompressionResult (| dict)
@@ -44,6 +45,7 @@ class Identification:
     plots: dict[str, Callable[[Path], None]] = field(default_factory=dict)
 
     def write(self, outdir: str | Path) -> Path:
+        """Write result.json and the curves (CSV) into ``outdir``; the result.json path."""
         outdir = Path(outdir)
         outdir.mkdir(parents=True, exist_ok=True)
         (outdir / "result.json").write_text(json.dumps(to_jsonable(self.result), indent=2, allow_nan=False) + "\n", encoding="utf-8")

@@ -81,6 +81,7 @@ class TensionHardening:
     start_uncertainty: dict | None = None  # the curve's start as far as it rests on the strain zero (methods §2.11)
 
     def as_dict(self) -> dict:
+        """The tension hardening block of result.json."""
         return {**self.fit.as_dict(), "fracture_point_weight": self.fracture_point_weight, "fracture_point": self.fracture_point,
                 "fracture_point_choice": self.fracture_point_choice, "uniform_range_error_pct": self.uniform_range_error_pct,
                 "fit_range": self.fit_range, "start_uncertainty": self.start_uncertainty}
@@ -95,6 +96,7 @@ class CompressionHardening:
     start_uncertainty: dict | None = None  # the curve's start as far as it rests on the strain zero (methods §2.11)
 
     def as_dict(self) -> dict:
+        """The compression hardening block of result.json."""
         correlations = {a: {b: round(r, 3) for b, r in row.items()} for a, row in self.fit.correlations.items()}  # A and n trade off
         return {**self.fit.as_dict(), "correlations": correlations, "correction": self.correction, "start_uncertainty": self.start_uncertainty}
 

@@ -62,6 +62,7 @@ class SdarFit:
         return all(v["passed"] for v in self.quality.values())
 
     def failed_checks(self) -> list[str]:
+        """The names of the quality checks that failed."""
         return [k for k, v in self.quality.items() if not v["passed"]]
 
 

@@ -104,10 +104,12 @@ class AdhesionTable:
         return len(self.data)
 
     def column(self, name: str) -> np.ndarray:
+        """Column ``name`` as floats."""
         return self.data[name].to_numpy(dtype=float)
 
     @property
     def material(self) -> str:
+        """The material named in the header ("" when none)."""
         return self.meta.get("material", "")
 
 
@@ -333,6 +335,7 @@ def _parse_row(cells, names, mapping, converters, meta, source: str, line_no: in
 def _check_row(row: dict, mapping, source: str, line_no: int) -> None:
     """The physical checks of one test: N_z > 0, M_z ≥ 0, r > 0, a temperature given."""
     def col(quantity):
+        """The table column of ``quantity``."""
         return mapping[quantity][0]
 
     if not math.isfinite(row["temperature_C"]):

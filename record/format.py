@@ -165,7 +165,23 @@ class Event:
 
 @dataclass
 class Record:
-    """A test record: metadata, samples (a DataFrame with unit-named columns) and events."""
+    """A test record: header, samples and events.
+
+    Attributes
+    ----------
+    meta : dict of str
+        The header's ``key: value`` lines (units in the keys: ``specimen.d0_mm``).
+    data : DataFrame
+        The samples, unit-named columns (``time_s``, ``force_N``, ``crosshead_mm`` …).
+    source : str
+        The file read, or "<memory>".
+    events : list of Event
+        Timed events (tare, heater off, stops).
+    truncated : bool
+        The file ended inside a row (a crash); the partial row dropped.
+    warnings : list of str
+        What reading it noticed.
+    """
 
     meta: dict[str, str]
     data: pd.DataFrame
@@ -177,6 +193,7 @@ class Record:
     # -- metadata access -------------------------------------------------------------------
     @property
     def test(self) -> str:
+        """The test, tension or compression, from the header; RecordError otherwise."""
         test = self.meta.get("test", "").strip().lower()
         if test not in TEST_TYPES:
             raise RecordError(
@@ -187,6 +204,7 @@ class Record:
 
     @property
     def name(self) -> str:
+        """The record's name: its file stem, or the specimen id in memory."""
         return Path(self.source).stem if self.source != "<memory>" else self.meta.get("specimen.id", "record")
 
     @property
@@ -232,6 +250,7 @@ class Record:
         return self.data[name].to_numpy(dtype=float)
 
     def has(self, name: str) -> bool:
+        """Whether column ``name`` exists with any value."""
         return name in self.data.columns and bool(self.data[name].notna().any())
 
 
@@ -257,7 +276,23 @@ def parse_header_line(line: str) -> tuple[str, str] | None:
 
 
 def read_record(path: str | os.PathLike) -> Record:
-    """Read a flowcurve record. Raises :class:`RecordError` naming file, line and column."""
+    """Read a native flowcurve record.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The record file.
+
+    Returns
+    -------
+    Record
+        Its header, samples and events.
+
+    Raises
+    ------
+    RecordError
+        Naming file, line and column of anything unreadable.
+    """
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -482,7 +517,20 @@ def _format_value(value: object) -> str:
 
 
 def write_record(path: str | os.PathLike, record: Record) -> Path:
-    """Write a whole record atomically (temp file, fsync, rename)."""
+    """Write a whole record atomically (temp file, fsync, rename).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file written (replaced).
+    record : Record
+        What to write.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     path = Path(path)
     buf = io.StringIO()
     buf.write(format_header(record.meta))
@@ -503,6 +551,19 @@ class RecordWriter:
             rec.append_rows(block)        # rows: sequences of floats, in column order
             rec.event(t, "heater_off", "soak reached")
         # the header now says status: complete
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The record file created.
+    meta : Mapping
+        The header's values (units in the keys).
+    columns : sequence of str
+        The sample columns, unit-named.
+    fsync_every_s : float
+        Seconds between flushes to the disk.
+    float_format : str
+        printf format of the values.
     """
 
     def __init__(self, path: str | os.PathLike, meta: Mapping[str, object], columns: Sequence[str], *, fsync_every_s: float = 1.0, float_format: str = "%.6f"):
@@ -525,6 +586,7 @@ class RecordWriter:
 
     # rows ----------------------------------------------------------------------------------
     def append_rows(self, rows: Iterable[Sequence[float]] | np.ndarray) -> None:
+        """Append sample rows (one value per column) to the file."""
         arr = np.asarray(rows, dtype=float)
         if arr.size == 0:
             return

@@ -40,18 +40,31 @@ from flowcurve.record.importers_csv import read_csv_export
 
 
 def load_record(path: str | os.PathLike, *, columns: Mapping[str, tuple[str, str | None]] | None = None, meta: Mapping[str, str] | None = None) -> Record:
-    """Read a record file of any supported kind; ``meta`` overrides or adds metadata.
+    """Read a record file of any supported kind (native, CSV, INSTRON, text).
 
-    columns: for a plain CSV, which file column is which quantity and in which unit, e.g.
-        ``{"force": ("Load", "kN"), "crosshead": ("Extension", "mm"), "time": ("Time", "s")}``
-        (keys: time, force, crosshead, extensometer, temperature). A unit of ``None`` takes
-        the unit from the column's name (``Load [kN]``) or the file's units row. Without a
-        mapping, columns whose names are recognisable (:func:`.importers_csv.recognise_quantity`) are used.
-        Ignored (with a warning) for native records and INSTRON exports, which describe their
-        own columns.
-    An extensometer column in a strain unit (``%``, ``mm/mm``, ``-``) becomes elongation with
-    the extensometer gauge length Le (``specimen.extensometer_gauge_mm``, e.g. from ``meta``).
-    Raises :class:`RecordError` (one line naming file, line, column) for anything unreadable.
+    An extensometer column in a strain unit (``%``, ``mm/mm``) becomes elongation over the gauge
+    length ``specimen.extensometer_gauge_mm``.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file.
+    columns : Mapping, optional
+        For a plain CSV: quantity → (file column, unit), e.g. ``{"force": ("Load", "kN")}`` (keys:
+        time, force, crosshead, extensometer, temperature; unit None: from the column's name or the
+        units row); None: recognisable names are used. Ignored (with a warning) by self-describing files.
+    meta : Mapping, optional
+        Header values overriding or adding to the file's.
+
+    Returns
+    -------
+    Record
+        In the native units (s, N, mm, °C).
+
+    Raises
+    ------
+    RecordError
+        One line naming file, line and column for anything unreadable.
     """
     path = Path(path)
     _check_readable(path)

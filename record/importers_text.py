@@ -275,6 +275,7 @@ def sniff_delimiter(line: str) -> str:
 
 
 def is_number(cell: str, decimal: str, thousands: str | None = None) -> bool:
+    """Whether ``cell`` reads as a number with this ``decimal`` and ``thousands`` separator."""
     cell = cell.strip()
     if thousands:
         cell = cell.replace(thousands, "")

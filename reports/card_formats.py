@@ -18,10 +18,23 @@ Writer = Callable[[Any, Any, Any], str]  # (CardData, UnitSystem, CardOptions) -
 
 @dataclass(frozen=True)
 class CardFormat:
-    """One solver format: ``name`` (``--format``), ``suffix`` of its files (no dot),
-    ``display_name`` (``LS-DYNA``), ``writer`` (callable or ``"module:function"``); ``contents``
-    says what the card holds (in the report's link); ``in_report``: the series report writes and
-    links this card."""
+    """One solver card format of the registry.
+
+    Attributes
+    ----------
+    name : str
+        The ``--format`` name.
+    suffix : str
+        Its files' suffix (no dot).
+    display_name : str
+        As printed (``LS-DYNA``).
+    writer : callable or str
+        ``writer(card, units, options) -> str``, or ``"module:function"``.
+    contents : str
+        What the card holds (the report's link).
+    in_report : bool
+        The series report writes and links this card.
+    """
 
     name: str
     suffix: str

@@ -82,6 +82,7 @@ def _range_lines(law: dict, pressures, temperatures, units: UnitSystem) -> list[
     t_cov = covered.get("temperature_C")
 
     def se(key, fmt="{:.3g}"):
+        """A constant's error as " +/- error", or "" without one."""
         err = law.get(f"{key}_stderr")
         return "" if not isinstance(err, (int, float)) else " +/- " + fmt.format(err)
 

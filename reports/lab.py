@@ -65,6 +65,7 @@ class LabHeader:
         return self.report_number or self.report_number_scheme.format(series=series, date=date, year=date[:4])
 
     def revision_text(self) -> str:
+        """The revision as the report's header says it."""
         return f"{self.revision}, supersedes revision {self.revision - 1}" if self.revision > 0 else "0 (first issue)"
 
     def decision_rule_text(self) -> str:

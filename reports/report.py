@@ -72,6 +72,7 @@ def _card_block(fmt, fit_path: Path, material: str | None, units: str, cards_dir
 
 
 def fit_blocks_factory(units: str, cards_dir: Path | None, link_base: Path | None, overrides: dict):
+    """The report's fit section builder for this unit system, cards folder and constants."""
     def fit_blocks(fit_path: Path, fit: dict, material: str | None, report: Report) -> list:
         """Constants ± U (k = 2 on the fit's standard errors), conditions, range, errors, plots, card link."""
         rows = []
@@ -83,6 +84,7 @@ def fit_blocks_factory(units: str, cards_dir: Path | None, link_base: Path | Non
         rng = fit.get("range") or {}
 
         def span(key, step, unit=""):
+            """The range of ``key`` as "lo – hi unit" at the rounding ``step``."""
             r = rng.get(key)
             return f"{format_step(r[0], step)} – {format_step(r[1], step)}{unit}" if isinstance(r, list) and len(r) == 2 else "–"
 
@@ -127,6 +129,7 @@ def _cell(text: str) -> str:
 
 
 def to_html(report: Report) -> str:
+    """The report as a standalone HTML page."""
     parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(report.title)}</title>"
              f"<style>{STYLE}</style></head><body>"]
     if report.not_for_release:
@@ -174,8 +177,28 @@ def report_content(root, units: str = DEFAULT_UNIT_SYSTEM, title: str | None = N
 
 def write_report(root, output=None, *, units: str = DEFAULT_UNIT_SYSTEM, title: str | None = None, lab: LabHeader | None = None,
                  pdf: bool = True, **overrides) -> list[Path]:
-    """Write ``report.html`` and ``report.pdf`` (default into ``root``; ``output`` names the HTML
-    file, the PDF goes beside it) and the card under ``cards/``; returns the files written."""
+    """Write the series report of the results under ``root`` and the cards it links.
+
+    Parameters
+    ----------
+    root : str or Path
+        The folder of result and fit folders.
+    output : str or Path, optional
+        The HTML file (default ``root``/report.html); the PDF goes beside it.
+    units, title : str
+        The cards' unit system; the report's title.
+    lab : LabHeader, optional
+        The laboratory's header.
+    pdf : bool
+        Write the PDF too.
+    **overrides
+        Card constants (E_MPa, poisson …).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     from flowcurve.reports.report_pdf import write_pdf
 
     out = Path(output) if output else Path(root) / "report.html"

@@ -78,9 +78,11 @@ class Report:
     engineer: list = field(default_factory=list)  # "for the engineer": command-line hints, codes (HTML only)
 
     def add(self, *blocks) -> None:
+        """Append ``blocks`` to the report."""
         self.blocks.extend(blocks)
 
     def for_engineer(self, text: str) -> None:
+        """Add a note for the engineer (once)."""
         if text not in self.engineer:
             self.engineer.append(text)
 
@@ -196,6 +198,7 @@ def modulus_source(result: dict) -> str:
 
 
 def modulus_cell(result: dict) -> str:
+    """Young's modulus of a result as the table shows it."""
     E = _num(result.get("E_MPa"))
     if E is None:
         return "–"
@@ -213,6 +216,7 @@ def specimen_id(name: str, result: dict) -> str:
 
 
 def stated(value) -> str:
+    """``value`` as text, or "not stated"."""
     return str(value).strip() if value is not None and str(value).strip() else NOT_STATED
 
 
@@ -247,6 +251,7 @@ def calibration(report: Report, results: list, issued: str) -> tuple[list, list[
 # ---- sections -------------------------------------------------------------------------------
 
 def header(report: Report, series: str, results: list) -> None:
+    """Add the report's header: laboratory, report number, revision, dates."""
     lab = report.lab
     rows = [("laboratory", lab.name), ("address", lab.address or NOT_STATED), ("accreditation", lab.accreditation),
             ("report number", report.number), ("revision", lab.revision_text()), ("date of issue", report.issued),
@@ -265,6 +270,7 @@ def header(report: Report, series: str, results: list) -> None:
 
 
 def designations(results: list, lab: LabHeader) -> list[tuple[str, str]]:
+    """(specimen, designation) rows of the standards each result conforms to."""
     rows = []
     for name, _, r in results:
         conf = (r.get("methods") or {}).get("conformity") or {}
@@ -281,12 +287,14 @@ def designations(results: list, lab: LabHeader) -> list[tuple[str, str]]:
 
 
 def specimen_table(results: list) -> Table:
+    """The specimens table: id, record, material, orientation, date, operator."""
     rows = [[specimen_id(n, r), relative_name(_rec(r).get("path")), str(_rec(r).get("material") or NOT_STATED),
              stated(_rec(r).get("orientation")), test_date(r), stated(_rec(r).get("operator"))] for n, _, r in results]
     return Table(["specimen", "record", "material", "orientation", "test date", "operator"], rows)
 
 
 def conditions_table(results: list) -> Table:
+    """The test conditions table: geometry, temperature, crosshead speed and strain rates."""
     cols = ["specimen", "test", "d0, mm", "L0 / h0, mm", "Lc, mm", "temperature, °C", "crosshead, mm/s", "strain rate, 1/s (tension: ė_Lc elastic / yield / to Rm, measured)"]
     rows = []
     for name, _, r in results:
@@ -321,6 +329,7 @@ def remarks(result: dict) -> str:
 
 
 def tension_table(results: list) -> Table | None:
+    """The tension results table (E, Rp0.2, Rm, Ag, A, Z with U), or None without tension."""
     rows = [[specimen_id(n, r), modulus_cell(r), modulus_source(r), _with_U(r, "Rp02_MPa"), _with_U(r, "Rm_MPa"),
              _with_U(r, "Ag_pct"), _with_U(r, "A_pct"), _with_U(r, "Z_pct"), remarks(r)]
             for n, _, r in results if r.get("test") == "tension"]
@@ -355,6 +364,7 @@ def friction_cell(result: dict) -> str:
 
 
 def compression_table(results: list) -> Table | None:
+    """The compression results table, or None without compression."""
     comp = [(n, r) for n, _, r in results if r.get("test") == "compression"]
     if not comp:
         return None
@@ -379,12 +389,14 @@ def compression_measures(results: list) -> Table | None:
 
 
 def hardening_table(results: list) -> Table:
+    """The hardening constants table of every result."""
     rows = []
     for n, _, r in results:
         h = r.get("hardening") or {}
         hu = _unc(r).get("hardening") or {}
 
         def cell(key, h=h, hu=hu):
+            """A hardening constant with its U, rounded."""
             return value_with_U(_num(h.get(key)), _num((hu.get(key) or {}).get("U")), STEPS.get(key))
         rng = h.get("strain_range") or h.get("fit_range") or [None, None]
         law = str(h.get("law") or "–")
@@ -406,6 +418,7 @@ def _verdict(block: dict) -> str:
 
 
 def conformity_table(results: list, report: Report | None = None) -> Table:
+    """The conformity table: each result's checks against its standard."""
     rows = []
     for n, _, r in results:
         conf = (r.get("methods") or {}).get("conformity") or {}
@@ -470,6 +483,7 @@ def budget_tables(name: str, result: dict, report: Report | None = None) -> list
 
 
 def figures(name: str, folder: Path) -> list:
+    """The figures of a result folder's plots, captioned."""
     return [Figure(p, f"{name}: {PLOT_CAPTIONS.get(p.stem, p.stem.replace('_', ' '))}") for p in sorted(folder.glob("*.png"))]
 
 
@@ -481,11 +495,13 @@ def in_words(text: str) -> str:
 
 
 def specimen_warnings(results: list, report: Report | None = None) -> list:
+    """Each result's warnings as report paragraphs."""
     return [Para(f"{specimen_id(n, r)}: {customer_text(in_words(str(w)), report)}", "warn")
             for n, _, r in results for w in r.get("warnings") or []]
 
 
 def standards_text() -> str:
+    """The rounding and uncertainty statement of the report."""
     rules = "; ".join(f"{what} to {step}" for what, step in ISO_6892_1_RULES)
     return (f"Results are rounded as ISO 6892-1:2019 §22 prescribes ({rules}), or finer where U is finer (§22 allows "
             "'or better'), so that value ± U always holds the unrounded result; other quantities to the steps the "
@@ -495,6 +511,7 @@ def standards_text() -> str:
 
 
 def signature_block(lab: LabHeader) -> list:
+    """The approval block: approved by, signature, date."""
     return [Heading("Approval"), Facts([("approved by", lab.approved_by or NOT_STATED), ("signature", "_" * 30),
                                         ("date", "_" * 16)])]
 

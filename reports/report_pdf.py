@@ -31,6 +31,28 @@ def _line_h(size: float) -> float:
     return size * 1.3 * PT
 
 
+def _column_widths(columns: list[str] | None, rows: list[list[str]], size: float) -> list[int]:
+    """Each column's width in characters: its longest cell, the widest narrowed first to fit the text width,
+    but not below their longest word (no word broken while others have room)."""
+    ncol = len(columns) if columns else max(len(r) for r in rows)
+    budget = _chars(TEXT_W, size) - 2 * ncol
+    natural = [max([len(str(c)) for c in ([columns[i]] if columns else [])] + [len(str(r[i])) for r in rows if i < len(r)] + [3])
+               for i in range(ncol)]
+    cells = [[columns[i]] if columns else [] for i in range(ncol)]
+    for r in rows:
+        for i in range(min(ncol, len(r))):
+            cells[i].append(str(r[i]))
+    floor = [min(16, max([len(w) for c in col for w in c.split()] + [3])) for col in cells]
+    widths = list(natural)
+    while sum(widths) > budget:
+        shrinkable = [k for k in range(ncol) if widths[k] > floor[k]]
+        if not shrinkable:
+            break
+        i = max(shrinkable, key=lambda k: widths[k])
+        widths[i] = max(floor[i], int(widths[i] * 0.85))
+    return widths
+
+
 class _Layout:
     def __init__(self, report: Report):
         import matplotlib.pyplot as plt
@@ -65,11 +87,13 @@ class _Layout:
 
     # -- blocks -----------------------------------------------------------------------------
     def title(self) -> None:
+        """Draw the report's title."""
         self._room(_line_h(SIZES["title"]) * 2)
         self._text(MARGIN_X, self.report.title, SIZES["title"], weight="bold")
         self.y += _line_h(SIZES["title"]) * 1.4
 
     def figure_height(self, b: Figure) -> float:
+        """The height figure ``b`` takes at the text width, inches."""
         import matplotlib.image as mpimg
 
         h_px, w_px = mpimg.imread(b.path).shape[:2]
@@ -84,6 +108,7 @@ class _Layout:
         self.y += _line_h(size) * 1.1
 
     def para(self, text: str, kind: str = "", url: str | None = None) -> None:
+        """Draw a wrapped paragraph (a note smaller; a link when ``url``)."""
         size = SIZES["body"] if kind != "note" else SIZES["small"] + 0.5
         for line in textwrap.wrap(text, _chars(TEXT_W, size)) or [""]:
             self._room(_line_h(size))
@@ -92,31 +117,18 @@ class _Layout:
         self.y += _line_h(size) * 0.4
 
     def table(self, columns: list[str] | None, rows: list[list[str]], caption: str = "", *, size: float = SIZES["table"]) -> None:
-        ncol = len(columns) if columns else max(len(r) for r in rows)
-        budget = _chars(TEXT_W, size) - 2 * ncol
-        natural = [max([len(str(c)) for c in ([columns[i]] if columns else [])] + [len(str(r[i])) for r in rows if i < len(r)] + [3])
-                   for i in range(ncol)]
-        # narrow the widest columns first, but not below their longest word (no word broken while others have room)
-        cells = [[columns[i]] if columns else [] for i in range(ncol)]
-        for r in rows:
-            for i in range(min(ncol, len(r))):
-                cells[i].append(str(r[i]))
-        floor = [min(16, max([len(w) for c in col for w in c.split()] + [3])) for col in cells]
-        widths = list(natural)
-        while sum(widths) > budget:
-            shrinkable = [k for k in range(ncol) if widths[k] > floor[k]]
-            if not shrinkable:
-                break
-            i = max(shrinkable, key=lambda k: widths[k])
-            widths[i] = max(floor[i], int(widths[i] * 0.85))
+        """Draw a table with wrapped cells, its header repeated on each page."""
+        widths = _column_widths(columns, rows, size)
         scale = TEXT_W / sum(w + 2 for w in widths)
         col_w = [(w + 2) * scale for w in widths]
         line = _line_h(size)
 
         def wrap(row):
+            """Each cell of ``row`` wrapped to its column's width."""
             return [textwrap.wrap(str(c), w) or [""] for c, w in zip(row, widths)]
 
         def draw(row, bold=False, shade=False):
+            """Draw one table row."""
             cells = wrap(row)
             height = max(len(c) for c in cells) * line + 0.5 * line
             x = MARGIN_X
@@ -133,6 +145,7 @@ class _Layout:
             return height
 
         def row_height(row):
+            """The height of one table row."""
             return max(len(c) for c in wrap(row)) * line + 0.5 * line
 
         header_h = row_height(columns) if columns else 0.0
@@ -153,6 +166,7 @@ class _Layout:
         self.y += line * 0.6
 
     def figure(self, b: Figure) -> None:
+        """Draw figure ``b`` at the text width."""
         import matplotlib.image as mpimg
 
         img = mpimg.imread(b.path)
@@ -170,6 +184,7 @@ class _Layout:
         self.para(b.caption, "note")
 
     def number_pages(self) -> None:
+        """Write "page i of n" on every page."""
         total = len(self.pages)
         for i, fig in enumerate(self.pages, 1):
             fig.text(1 - MARGIN_X / PAGE_W, 0.35 / PAGE_H, f"page {i} of {total}", fontsize=SIZES["small"], ha="right", color="#555")

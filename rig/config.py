@@ -33,6 +33,7 @@ BAUDS = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200)
 
 def _in(lo, hi, *, lo_open=False):
     def check(v):
+        """None when ``v`` is in range, else the message."""
         ok = (lo < v if lo_open else lo <= v) and v <= hi
         return None if ok else f"must be in {lo} {'<' if lo_open else '<='} x <= {hi}, got {v}"
     return check
@@ -71,6 +72,7 @@ class SerialConfig:
     address: int = 0
 
     def transport_kwargs(self, name: str) -> dict[str, Any]:
+        """The SerialTransport keywords of this section for device ``name``."""
         return dict(name=name, baudrate=self.baud, parity=self.parity, timeout_s=self.timeout_s)
 
     def create(self, **kw):
@@ -184,7 +186,21 @@ class InstrumentsConfig:
 
 @dataclass(frozen=True)
 class RigConfig:
-    """The whole rig; ``furnace`` is None on a rig without one; ``source`` is the file read."""
+    """The whole rig, as its TOML file configures it.
+
+    Attributes
+    ----------
+    loadcell, encoder : LoadCellConfig, EncoderConfig
+        The force and position devices' ports and settings.
+    furnace : FurnaceConfig or None
+        The furnace controller; None on a rig without one.
+    frame : FrameConfig
+        The frame: capacity (N), stiffness (N/µm), stroke (mm), speed range (mm/s).
+    source : str
+        The file read ("<virtual>" for the virtual rig's).
+    instruments : InstrumentsConfig
+        Classes, certificates and resolutions of the instruments (uncertainty budgets).
+    """
 
     loadcell: LoadCellConfig
     encoder: EncoderConfig
@@ -345,7 +361,23 @@ def parse_config(data: dict, origin: str = "<config>") -> RigConfig:
 
 
 def load_config(path) -> RigConfig:
-    """Read and validate a rig TOML file."""
+    """Read and validate a rig TOML file.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The rig's TOML file.
+
+    Returns
+    -------
+    RigConfig
+        The checked configuration.
+
+    Raises
+    ------
+    ConfigError
+        Naming the file, section and key of a missing or refused value.
+    """
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")

@@ -281,6 +281,7 @@ class StuckRelayCheck:
         self._recent: deque[tuple[float, float]] = deque()  # (time, reading) with the heater off, the last confirm_s and one before
 
     def update(self, temperature_C: float, now: float, heater_on: bool) -> None:
+        """Take one reading (``temperature_C`` at ``now`` s, heater state)."""
         if heater_on:
             self._off_since = None
             self._recent.clear()

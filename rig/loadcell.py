@@ -185,6 +185,7 @@ class LoadCell:
 
     # -- life cycle -------------------------------------------------------------------
     def open(self) -> "LoadCell":
+        """Open the port and select the amplifier's address; the load cell."""
         self.transport.open()
         if self.select_address and not self._selected and self.address is not None:
             self.transport.send(aed.command(f"S{self.address:02d}"))  # never answers
@@ -192,6 +193,7 @@ class LoadCell:
         return self
 
     def close(self) -> None:
+        """Stop a running stream and close the port."""
         if self.transport.is_open and self.streaming:
             try:
                 self.stop_stream()

@@ -70,6 +70,7 @@ class PortLock:
         self.held = False
 
     def acquire(self) -> "PortLock":
+        """Take the port's lock file (DeviceError naming the holder when taken); the lock."""
         if self.path is None or self.held:
             return self
         holder = f"flowcurve {' '.join(sys.argv[1:3])}".strip() + f" ({self.device})"
@@ -96,6 +97,7 @@ class PortLock:
         raise PortBusyError(self.device, f"port {self.port}: cannot take its lock file {self.path}")
 
     def release(self) -> None:
+        """Release the lock file."""
         if not self.held:
             return
         self.held = False

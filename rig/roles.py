@@ -30,7 +30,8 @@ class Link(Protocol):
     late_replies: int
     retried_exchanges: int
 
-    def close(self) -> None: ...
+    def close(self) -> None:
+        """Close the link."""
 
 
 @runtime_checkable
@@ -43,10 +44,14 @@ class Device(Protocol):
     probe_parities: tuple[str, ...]
     transport: Link
 
-    def open(self) -> Any: ...
-    def close(self) -> None: ...
-    def check_lines(self, section: Any) -> Iterator[str]: ...  # `rig check`: identity, settings against the section, a reading
-    def answers(self) -> None: ...  # one exchange that names the device (raises when silent): `rig check --probe`
+    def open(self) -> Any:
+        """Open the device's port and check it answers; the device."""
+    def close(self) -> None:
+        """Close the device's port."""
+    def check_lines(self, section: Any) -> Iterator[str]:
+        """``flowcurve rig check``'s lines of the open device: identity, settings against ``section``, a reading."""
+    def answers(self) -> None:
+        """One exchange that names the device; raises DeviceError when silent (``rig check --probe``)."""
 
 
 class ForceReading(Protocol):
@@ -58,50 +63,90 @@ class ForceReading(Protocol):
 
 @runtime_checkable
 class ForceDevice(Device, Protocol):
-    """Force role (load-cell amplifier): polled or streamed force readings, tare, its output rates
-    (``supported_rates_Hz()[rate_code]`` is the rate its section's ``rate_code`` sets) and what its
-    stream lost (``frames_lost``, ``stream_resyncs``, ``latency_s``)."""
+    """Force role (load-cell amplifier): polled or streamed force readings, tare and output rates.
+
+    ``supported_rates_Hz()[rate_code]`` is the rate its section's ``rate_code`` sets.
+
+    Attributes
+    ----------
+    name, transport : str, Link
+        A name for messages; its serial line.
+    stream_resyncs, latency_s : int, float
+        What its stream lost or delayed: resynchronisations, latency in host seconds.
+    """
 
     stream_resyncs: int
     latency_s: float
 
     @property
-    def frames_lost(self) -> int: ...
-    def supported_rates_Hz(self) -> Sequence[float]: ...
-    def resolution_N(self) -> float: ...  # one count of the output, 0 when unknown
-    def configure(self, **settings: Any) -> None: ...
-    def tare(self) -> None: ...
-    def read(self) -> ForceReading: ...
-    def start_stream(self) -> None: ...
-    def read_stream(self, max_samples: int, timeout: float) -> Sequence[ForceReading]: ...
+    def frames_lost(self) -> int:
+        """Stream frames lost so far."""
+    def supported_rates_Hz(self) -> Sequence[float]:
+        """The output rates the device offers, Hz."""
+    def resolution_N(self) -> float:
+        """One count of the output, N (0 when unknown)."""
+    def configure(self, **settings: Any) -> None:
+        """Apply ``settings`` (rate, filter …)."""
+    def tare(self) -> None:
+        """Set the output to net zero."""
+    def read(self) -> ForceReading:
+        """One reading, polled."""
+    def start_stream(self) -> None:
+        """Start streaming readings."""
+    def read_stream(self, max_samples: int, timeout: float) -> Sequence[ForceReading]:
+        """Up to ``max_samples`` streamed readings, waiting up to ``timeout`` s."""
 
 
 @runtime_checkable
 class PositionDevice(Device, Protocol):
-    """Position role (crosshead encoder): the crosshead's travel in mm since :meth:`zero`."""
+    """Position role (crosshead encoder): the crosshead's travel in mm since :meth:`zero`.
 
-    def position_mm(self) -> float: ...
-    def zero(self) -> None: ...
+    Attributes
+    ----------
+    name, transport : str, Link
+        A name for messages; its serial line.
+    """
+
+    def position_mm(self) -> float:
+        """The crosshead position, mm."""
+    def zero(self) -> None:
+        """Set the position counter to zero."""
 
 
 @runtime_checkable
 class TemperatureDevice(Device, Protocol):
-    """Temperature role (furnace module): the reading, the heater output (never on at or above
-    ``max_temperature_C``; ``heater_off`` True when acknowledged), the address check
-    (``digital_io``) and the host watchdog that switches the heater off by itself."""
+    """Temperature role (furnace module): the reading, the heater, the address check and the host watchdog.
+
+    Attributes
+    ----------
+    name, transport : str, Link
+        A name for messages; its serial line.
+    max_temperature_C : float
+        The heater is never on at or above it, °C.
+    heater_is_on, watchdog_armed : bool
+        The heater output as last commanded; the module watchdog armed (it switches the heater off by itself).
+    """
 
     max_temperature_C: float
     heater_is_on: bool
     watchdog_armed: bool
 
-    def temperature_C(self) -> float: ...
-    def heater(self, on: bool, reading_C: float | None = None) -> None: ...
-    def heater_off(self) -> bool: ...
-    def digital_io(self) -> dict[str, int]: ...
-    def clear_watchdog(self) -> None: ...
-    def arm_watchdog(self, timeout_s: float) -> None: ...
-    def disarm_watchdog(self) -> None: ...
-    def host_ok(self) -> None: ...
+    def temperature_C(self) -> float:
+        """The thermocouple temperature, °C."""
+    def heater(self, on: bool, reading_C: float | None = None) -> None:
+        """Switch the heater ``on`` or off (``reading_C``: the reading it acts on, °C)."""
+    def heater_off(self) -> bool:
+        """Heater off; whether the module acknowledged it."""
+    def digital_io(self) -> dict[str, int]:
+        """The digital outputs' states by name."""
+    def clear_watchdog(self) -> None:
+        """Clear a tripped module watchdog."""
+    def arm_watchdog(self, timeout_s: float) -> None:
+        """Arm the module watchdog: outputs safe after ``timeout_s`` s without the host."""
+    def disarm_watchdog(self) -> None:
+        """Disarm the module watchdog."""
+    def host_ok(self) -> None:
+        """Tell the module watchdog the host is alive."""
 
 
 ROLES: dict[str, type] = {"force": ForceDevice, "position": PositionDevice, "temperature": TemperatureDevice}
@@ -117,8 +162,25 @@ DEFAULT_MODELS = {role: next(iter(models)) for role, models in MODELS.items()}
 
 
 def driver_class(role: str, model: str) -> type:
-    """The driver class registered for ``model`` in ``role`` (imported now); KeyError naming the
-    known models when there is none."""
+    """The driver class registered for ``model`` in ``role`` (imported now).
+
+    Parameters
+    ----------
+    role : str
+        "force", "position" or "temperature".
+    model : str
+        A model name of :data:`MODELS` (``hbm-aed``).
+
+    Returns
+    -------
+    type
+        The driver class.
+
+    Raises
+    ------
+    KeyError
+        Naming the known models when there is none.
+    """
     try:
         entry = MODELS[role][model]
     except KeyError:

@@ -100,6 +100,7 @@ class SerialTransport:
 
     # -- life cycle -------------------------------------------------------------------
     def open(self) -> "SerialTransport":
+        """Open (and lock) the serial port; the transport."""
         if self._port is not None:
             return self
         key = self._key
@@ -139,6 +140,7 @@ class SerialTransport:
             return port
 
     def close(self) -> None:
+        """Release the lock and close the port."""
         port, self._port = self._port, None
         lock, self._lock_file = self._lock_file, None
         if lock is not None:
@@ -154,6 +156,7 @@ class SerialTransport:
 
     @property
     def is_open(self) -> bool:
+        """Whether the port is open."""
         return self._port is not None
 
     def __enter__(self) -> "SerialTransport":
@@ -187,6 +190,7 @@ class SerialTransport:
         return self._port
 
     def write(self, data: bytes) -> None:
+        """Write ``data`` to the port; DeviceError on a port failure."""
         port = self._require_port()
         try:
             port.write(data)
@@ -410,10 +414,12 @@ class DconDevice:
                                              timeout_s=timeout_s, opener=opener)
 
     def open(self):
+        """Open the transport; the device."""
         self.transport.open()
         return self
 
     def close(self) -> None:
+        """Close the transport."""
         self.transport.close()
 
     def __enter__(self):
@@ -442,6 +448,7 @@ class DconDevice:
         what = "'" + raw_command.decode("ascii").strip() + "'"
 
         def parse(raw: bytes):
+            """The reply ``raw`` checked (its address when asked) and decoded; WrongAddress when another module answered."""
             reply = dcon.parse_reply(raw, use_checksum=self.checksum)
             try:
                 if addressed is True or (callable(addressed) and addressed(reply)):

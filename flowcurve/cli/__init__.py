@@ -33,6 +33,7 @@ COMMAND_MODULES = (
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``flowcurve`` argument parser with every subcommand registered."""
     parser = argparse.ArgumentParser(
         prog="flowcurve",
         description=(
@@ -64,6 +65,7 @@ def _add_logging_options(parser: argparse.ArgumentParser, *, top: bool) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run ``flowcurve`` with ``argv`` (None: sys.argv); the process exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
     configure(level_name(args.verbose, args.log_level))

@@ -24,6 +24,7 @@ if TYPE_CHECKING:  # the acquisition and the record format import numpy: importe
     from flowcurve.acquisition.procedure import Outcome
 
 def register(subparsers) -> None:
+    """Add ``run``, ``recover``, ``annotate`` and ``demo`` to the subcommands."""
     run = subparsers.add_parser("run", help="run a tension or compression test and record it", description="Run a test on the rig (--config) or on the virtual rig (no --config), record it crash-safely, show it live.")
     run.add_argument("test", choices=TEST_TYPES, help="test type")
     run.add_argument("--config", type=Path, help="rig configuration (TOML); without it the virtual rig runs in this process")
@@ -108,6 +109,7 @@ def _ask(prompt: str, default=None, cast=str):
 
 
 def default_out(test: str) -> Path:
+    """The default record path of a ``test``: records/TEST-YYYYmmdd-HHMMSS.csv."""
     return Path("records") / f"{test}-{_dt.datetime.now():%Y%m%d-%H%M%S}.csv"
 
 
@@ -160,6 +162,7 @@ def run_request(args) -> RunRequest:
 
 
 def cmd_run(args) -> int:
+    """``flowcurve run``: run a test on the rig or the virtual rig; the exit status."""
     from flowcurve.acquisition.live import LiveView
 
     view = LiveView(quiet=args.quiet)
@@ -181,6 +184,7 @@ def cmd_run(args) -> int:
 
 
 def cmd_recover(args) -> int:
+    """``flowcurve recover``: close a record a crashed run left open; the exit status."""
     from flowcurve.record.format import read_record, recover_record
 
     before = read_record(args.record)
@@ -203,6 +207,7 @@ def cmd_recover(args) -> int:
 
 
 def cmd_annotate(args) -> int:
+    """``flowcurve annotate``: add post-test measurements to a record; the exit status."""
     from flowcurve.acquisition.procedure import POST_KEYS, missing_post_keys, post_prompts
     from flowcurve.record.format import amend_record, read_record
 
@@ -223,6 +228,7 @@ def cmd_annotate(args) -> int:
 
 
 def cmd_demo(args) -> int:
+    """``flowcurve demo``: a series of virtual tests identified and fitted; the exit status."""
     from flowcurve.demo import run_demo
 
     return run_demo(args.out, material=args.material, quiet=args.quiet, faults=virtual_faults(args), **virtual_responses(args))

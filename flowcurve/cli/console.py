@@ -14,6 +14,7 @@ from flowcurve.errors import FlowcurveError
 
 
 def register(subparsers) -> None:
+    """Add ``console`` to the subcommands."""
     p = subparsers.add_parser(
         "console",
         help="the operator's console: set up, run and watch tests in a web page",
@@ -42,6 +43,7 @@ def register(subparsers) -> None:
 
 
 def cmd_console(args) -> int:
+    """``flowcurve console``: serve the operator's console until stopped; the exit status."""
     try:
         import uvicorn  # noqa: F401  (the server's)
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 
 def register(subparsers) -> None:
+    """Add ``verify`` to the subcommands."""
     p = subparsers.add_parser(
         "verify", help="run the identified curve in CalculiX on the record's specimen and report the force-stroke deviation",
         description=__doc__.split("\n\n")[1].replace("\n", " "))
@@ -50,6 +51,7 @@ def _plot(report: dict, path: Path) -> None:
 
 
 def run_verify(args) -> int:
+    """``flowcurve verify``: the identified curve run in CalculiX against the record; the exit status."""
     from flowcurve.identification.fe.verify import VERIFY_INCREMENTS, VERIFY_LAYERS, load_curve, verify_compression
     from flowcurve.identification.outcome import to_jsonable
     from flowcurve.record.importers import load_record

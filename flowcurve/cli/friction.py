@@ -21,6 +21,7 @@ CARD_FILES = {"abaqus": "friction_abaqus.inp", "lsdyna": "friction_lsdyna.k"}
 
 
 def register(subparsers) -> None:
+    """Add ``friction`` to the subcommands."""
     p = subparsers.add_parser(
         "friction",
         help="adhesion friction constants tau0, beta0, k_b, theta_k from adhesiometer tests",
@@ -97,6 +98,7 @@ def _fit(table, args) -> FrictionFit:
 
 
 def run(args) -> int:
+    """``flowcurve friction``: adhesion friction constants from adhesiometer tables; the exit status."""
     from flowcurve.record.adhesion import parse_adhesion_column_option, read_adhesion_tables
 
     columns = dict(parse_adhesion_column_option(text) for text in args.column)
@@ -110,6 +112,7 @@ def run(args) -> int:
 
 
 def run_demo(args) -> int:
+    """``flowcurve friction --demo``: virtual adhesiometer tables written and fitted; the exit status."""
     import numpy as np
 
     from flowcurve.record.adhesion import write_adhesion_table
@@ -216,9 +219,11 @@ def _plots(fit: FrictionFit, folder: Path) -> list[str]:
 
 
 def summary(fit: FrictionFit, path: Path) -> str:
+    """The terminal's summary of a friction fit: each constant ± its standard error."""
     v, se = fit.values, fit.stderr
 
     def pm(key, unit="", fmt="{:.4g}"):
+        """One constant as "value ± error unit", or why it is not given."""
         if v[key] is None:
             return "not identified"
         flag = " (UNDETERMINED: smaller than its own uncertainty)" if key in fit.extra.get("undetermined", ()) else ""

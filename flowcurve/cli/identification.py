@@ -65,6 +65,7 @@ exit code is then non-zero.
 
 
 def register(subparsers) -> None:
+    """Add ``identify`` to the subcommands."""
     p = subparsers.add_parser(
         "identify",
         help="identify true stress-strain curves, ISO 6892-1 results and hardening constants from records",
@@ -311,6 +312,7 @@ def _record_meta(path: str, meta: dict[str, str], table) -> dict[str, str]:
 
 
 def run(args) -> int:
+    """``flowcurve identify``: identify each record into a result folder; the exit status."""
     check_specimen_options(args)
     columns = None
     if args.column:  # the importers (numpy, pandas) only for a plain CSV: records that are current need neither

@@ -41,6 +41,7 @@ class ProgressBar:
         self._drawn = False
 
     def update(self, done: int, note: str = "") -> None:
+        """Show ``done`` of the total (and ``note``): in place on a terminal, a line every ``every_s`` s elsewhere."""
         now = time.perf_counter()
         if not self.tty and done < self.total and now - self._last < self.every_s:
             return
@@ -51,6 +52,7 @@ class ProgressBar:
         self._drawn = True
 
     def close(self) -> None:
+        """End the bar's line on a terminal."""
         if self.tty and self._drawn:
             self.stream.write("\n")
             self.stream.flush()

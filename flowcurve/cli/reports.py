@@ -10,6 +10,7 @@ from flowcurve.services.card import CardRequest, ReportRequest, card, report
 
 
 def register(subparsers) -> None:
+    """Add ``card`` and ``report`` to the subcommands."""
     p = subparsers.add_parser(
         "card",
         help="material card for an FE solver from a series fit (fit.json)",
@@ -96,6 +97,7 @@ def card_request(args) -> CardRequest:
 
 
 def run_card(args) -> int:
+    """``flowcurve card``: a material card of a fit.json, printed or written; the exit status."""
     request = card_request(args)
     text = card(request)
     if request.output:
@@ -106,6 +108,7 @@ def run_card(args) -> int:
 
 
 def run_report(args) -> int:
+    """``flowcurve report``: the series report (HTML, PDF) of result folders; the exit status."""
     written = report(ReportRequest(args.dir, args.output, lab=args.lab, pdf=not args.no_pdf, units=args.units, title=args.title,
                                    **{k: getattr(args, k) for k in ("E_MPa", "poisson", "density_kg_per_m3", "specific_heat_J_per_kgK",
                                                                     "melt_temperature_C")}))

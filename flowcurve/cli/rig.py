@@ -27,6 +27,7 @@ CHECK_FAILED = 3
 
 
 def register(subparsers) -> None:
+    """Add ``rig`` (check, recover-loadcell, virtual) to the subcommands."""
     parser = subparsers.add_parser("rig", help="check the rig's devices, or start the virtual rig",
                                    description=__doc__.split("\n\n")[1])
     sub = parser.add_subparsers(dest="rig_command", metavar="ACTION")
@@ -151,6 +152,7 @@ def check_rig(config: RigConfig, out=print, *, probe: bool = True, opener=None) 
 
 
 def run_check(args) -> int:
+    """``flowcurve rig check``: every configured device checked; the exit status."""
     config = load_config(args.config)
     failed = check_rig(config, probe=args.probe)
     if failed:
@@ -160,6 +162,7 @@ def run_check(args) -> int:
 
 
 def run_recover_loadcell(args) -> int:
+    """``flowcurve rig recover-loadcell``: resend the configured baud rate at every rate and parity, then identify the cell."""
     section = load_config(args.config).loadcell
     print(f"load cell on {section.port}: sending ';S98;BDR{section.baud},...;' at every baud rate "
           f"and parity, then IDN? at {section.baud} baud, parity {section.parity}")
@@ -172,6 +175,7 @@ def run_recover_loadcell(args) -> int:
 
 # -- rig virtual ----------------------------------------------------------------------
 def run_virtual(args) -> int:
+    """``flowcurve rig virtual``: serve the virtual rig's devices on ports until stopped; the exit status."""
     from flowcurve.rig.virtual.rig import VirtualRig  # the virtual-rig engineer's twins
 
     for option, value in (("--time-scale", args.time_scale), ("--speed", args.speed)):

@@ -14,6 +14,7 @@ from flowcurve.services.fit import SHAPE_ERROR_PCT as DEFAULT_SHAPE_ERROR_PCT
 
 
 def register(subparsers) -> None:
+    """Add ``fit`` to the subcommands."""
     p = subparsers.add_parser(
         "fit",
         help="Johnson-Cook constants (A, B, n, C, m), or another registered law's (--law), from a series of tests",
@@ -122,6 +123,7 @@ def load_members_in_parallel(inputs, identify_options: dict, jobs: int = 1, sche
 
 
 def run(args) -> int:
+    """``flowcurve fit``: fit a law to a series of records or result folders; the exit status."""
     from flowcurve.identification.laws.base import get_law
     from flowcurve.services.fit import FitRequest, fit, summary
 

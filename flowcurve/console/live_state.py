@@ -41,6 +41,7 @@ class PlotBuffer:
     _seen: int = 0  # rows offered so far; row i is kept when i is a multiple of the stride
 
     def extend(self, xs: np.ndarray, ys: np.ndarray) -> None:
+        """Add the rows of ``xs``, ``ys`` that fall on the buffer's stride."""
         first = (-self._seen) % self.stride  # the first row of this block on the stride
         self.x.extend(float(v) for v in xs[first::self.stride])
         self.y.extend(float(v) for v in ys[first::self.stride])
@@ -103,6 +104,7 @@ class ConsoleView:
         return now_on or self.state == "heating" or (self._heater_on_wall_s is not None and now - self._heater_on_wall_s < self.heater_window_s)
 
     def show(self, s, force: bool = False) -> None:
+        """Take the procedure's snapshot ``s`` as the pages' state (the procedure's LiveView call)."""
         self._heater_state(ended=False)  # catch the short on-pulses between the pages' looks
         with self.lock:
             # the procedure's "done" comes before the rig is released and its outcome returned:
@@ -132,12 +134,14 @@ class ConsoleView:
         self._notify()
 
     def say(self, text: str) -> None:
+        """Add a message for the pages."""
         with self.lock:
             self.messages.append(text)
         self._notify()
 
     # the server's side -----------------------------------------------------------------------
     def set_state(self, state: str, message: str = "") -> None:
+        """Set the run's ``state`` and its ``message``."""
         with self.lock:
             self.state, self.message = state, message
         self._notify()

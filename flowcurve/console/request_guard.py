@@ -219,10 +219,12 @@ class FailedLogins:
             return max(0.0, times[0] + self.window_s - self.clock())
 
     def failed(self, client: str) -> None:
+        """Count a failed login from ``client``."""
         with self._lock:
             self._recent(client)
             self._failures.setdefault(client, deque()).append(self.clock())
 
     def succeeded(self, client: str) -> None:
+        """Forget ``client``'s failed logins."""
         with self._lock:
             self._failures.pop(client, None)

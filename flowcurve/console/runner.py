@@ -74,9 +74,11 @@ class TestRun:
 
     @property
     def running(self) -> bool:
+        """Whether the test's thread is still running."""
         return self.thread is not None and not self.ended.is_set() and self.thread.is_alive()
 
     def summary(self) -> dict:
+        """The run as the pages show it: id, record, state and outcome."""
         o = self.outcome
         return {
             "test_id": self.test_id,
@@ -114,9 +116,11 @@ class TestRunner:
 
     @property
     def virtual(self) -> bool:
+        """Whether tests run on the virtual rig (no configuration and no rig opener)."""
         return self.config is None and self.open_rig is None
 
     def start(self, setup: RunSetup, form: dict | None = None) -> TestRun:
+        """Start ``setup`` on its own thread; BusyError when a test runs already."""
         with self._lock:
             if self.current is not None and self.current.running:
                 raise BusyError(f"a test is running on this rig already ({self.current.record.name}); stop it first")
@@ -174,6 +178,7 @@ class TestRunner:
     @staticmethod
     def _stop_requested(run: TestRun):
         def asked() -> str | None:
+            """The console's stop reason, or None; raises Interrupted when the test was aborted."""
             if run.abort_reason:
                 raise Interrupted(run.abort_reason)
             return run.stop_reason
@@ -197,6 +202,7 @@ class TestRunner:
 
     def _procedure(self, run: TestRun) -> None:
         def attach(rig) -> None:  # the virtual rig: its furnace's relay; a driver rig: its furnace driver
+            """Hand the run the rig's heater (for the pages) and apply the virtual rig's setup."""
             run.heater_source = rig.model.furnace if self.virtual else getattr(rig, "furnace", None)
             if self.virtual and self.virtual_setup is not None:
                 self.virtual_setup(rig)

@@ -95,6 +95,7 @@ class Console:
         self.runner.abort(SHUTDOWN_SIGNAME)
 
     def test_summary(self) -> dict | None:
+        """The current test as the pages show it, or None."""
         run = self.runner.current
         if run is None:
             return None
@@ -224,6 +225,7 @@ async def _read_body(receive):
     replay = [{"type": "http.request", "body": b"".join(chunks), "more_body": False}]
 
     async def replayed():
+        """The body already read, then what the client sends next."""
         return replay.pop() if replay else await receive()
 
     return replayed
@@ -341,9 +343,11 @@ def create_app(console: Console) -> Starlette:
     runner, workspace = console.runner, console.workspace
 
     async def index(request: Request) -> Response:
+        """GET /: the console's page."""
         return FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
 
     async def info(request: Request) -> Response:
+        """GET /api/info: the rig, the run form's choices and the card formats."""
         from flowcurve.reports.card_formats import WRITERS
         from flowcurve.rig.virtual.fault_spec import help_text
 
@@ -353,6 +357,7 @@ def create_app(console: Console) -> Starlette:
                       "card_formats": [[f.name, f.display_name] for f in WRITERS.values()]})  # the fit form's choices
 
     async def login(request: Request) -> Response:
+        """POST /api/login: check the token and set its cookie."""
         data = await _body(request, LOGIN_FIELDS)
         given = str(data.get("token") or "")
         try:
@@ -364,26 +369,32 @@ def create_app(console: Console) -> Starlette:
         return response
 
     async def status(request: Request) -> Response:
+        """GET /api/status: the running test's status, or idle."""
         run = runner.current
         return _json({"status": run.view.status() if run else IDLE_STATUS, "test": console.test_summary()})
 
     async def stop(request: Request) -> Response:
+        """POST /api/stop: an operator stop of the running test."""
         await _body(request, {})
         return _json({"stopping": runner.stop()})
 
     async def abort(request: Request) -> Response:
+        """POST /api/abort: abort the running test."""
         await _body(request, {})
         return _json({"aborting": runner.abort()})
 
     async def records(request: Request) -> Response:
+        """GET /api/records: the records of the workspace."""
         return _json({"records": await asyncio.to_thread(workspace.list_records)})
 
     async def events(request: Request) -> Response:
+        """GET /api/events: the live state as server-sent events."""
         return StreamingResponse(_event_stream(console, request), media_type="text/event-stream",
                                  headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
 
     @asynccontextmanager
     async def lifespan(app):
+        """On shutdown: close the console and abort a running test."""
         yield
         console.close()
         await asyncio.to_thread(runner.shutdown)  # a running test is aborted: heater off, record closed
@@ -405,6 +416,7 @@ def create_app(console: Console) -> Starlette:
     ]
 
     async def flowcurve_error(request: Request, exc: FlowcurveError) -> Response:
+        """A FlowcurveError as a JSON error (400, or the error's status)."""
         if isinstance(exc, FormError):
             return _error(str(exc), 400, fields=exc.errors)
         return _error(str(exc), getattr(exc, "status", 400))
@@ -425,6 +437,7 @@ async def _event_stream(console: Console, request: Request):
     changed = asyncio.Event()
 
     def wake() -> None:
+        """Set ``changed`` from the view's thread."""
         loop.call_soon_threadsafe(changed.set)
 
     listening_to = None
@@ -506,6 +519,7 @@ def serve(console: Console, host: str, port: int) -> None:
 
     class ConsoleServer(uvicorn.Server):
         def handle_exit(self, sig, frame) -> None:
+            """Note the signal, close the console, then uvicorn's own shutdown."""
             signals.append(sig)
             console.close()
             super().handle_exit(sig, frame)

@@ -28,9 +28,29 @@ class Constants:
 
 @dataclass
 class CardRequest(Constants):
-    """A card from ``fit`` (fit.json) in ``format`` and ``units``, to ``output`` (None: returned
-    only); the constants (lab units: MPa, kg/m³, J/(kg K), °C, W/(m K), 1/K) override fit.json's,
-    the rest are the card's options (``curves``, ``max_rows`` …, as ``flowcurve card`` names them)."""
+    """A material card of a fit, as ``flowcurve card`` and the console ask for it.
+
+    Attributes
+    ----------
+    fit : str
+        The fit.json file.
+    format, units : str
+        The card format (a name of :data:`flowcurve.reports.card_formats.WRITERS`) and unit system.
+    output : str, optional
+        The card file written; None: the text is only returned.
+    name : str, optional
+        The material's name on the card.
+    E_MPa, poisson, density_kg_per_m3, specific_heat_J_per_kgK, melt_temperature_C : float, optional
+        Constants overriding fit.json's: MPa, –, kg/m³, J/(kg K), °C.
+    conductivity_W_per_mK, expansion_per_K, friction_mu : float, optional
+        Constants some cards take: W/(m K), 1/K, the tool–workpiece μ.
+    curves, max_rows, strain_rate_per_s, temperature_C, extend_to, temperature_tolerance_C : optional
+        The flow tables: source ("auto", "measured", "law"), rows, the rate (1/s) and temperatures
+        (°C) tabulated, the strain they reach, the tolerance matching a temperature, °C.
+    id_offset, radioss_version, fcut_hz, erosion_strain, damage_displacement_mm, lsdyna_material : optional
+        Format options: ids, the Radioss version, a filter cut-off (Hz), erosion strain, damage
+        displacement (mm) and the LS-DYNA material (as ``flowcurve card`` names them).
+    """
 
     fit: str
     format: str
@@ -69,8 +89,23 @@ class CardRequest(Constants):
 
 @dataclass
 class ReportRequest(Constants):
-    """A series report of the result folders under ``dir`` to ``output`` (HTML; the PDF beside it
-    unless not ``pdf``), with the lab file ``lab`` and the card's ``units`` and constants."""
+    """A series report of the result folders under ``dir``.
+
+    Attributes
+    ----------
+    dir : str
+        The folder of result folders (and fit folders).
+    output : str, optional
+        The HTML file written (default ``dir``/report.html); the PDF goes beside it.
+    lab : str, optional
+        The laboratory's TOML file (name, accreditation, approver).
+    pdf : bool
+        Write the PDF too.
+    units, title : str
+        The unit system of the cards linked; the report's title.
+    E_MPa, poisson, density_kg_per_m3, specific_heat_J_per_kgK, melt_temperature_C : float, optional
+        Constants for the cards the report writes (MPa, –, kg/m³, J/(kg K), °C).
+    """
 
     dir: str
     output: str | None = None
@@ -85,6 +120,7 @@ CONSTANT_OPTIONS = ("E_MPa", "poisson", "density_kg_per_m3", "specific_heat_J_pe
 
 
 def overrides(args) -> dict:
+    """The constants given on the command line (``args``), keyed as CardRequest takes them."""
     out = {k: getattr(args, k, None) for k in CONSTANT_OPTIONS}
     if getattr(args, "name", None):
         out["material"] = args.name
@@ -168,7 +204,18 @@ def card(req: CardRequest) -> str:
 
 
 def report(req: ReportRequest) -> list:
-    """Write the report; the files written (HTML, PDF)."""
+    """Write the series report of ``req``.
+
+    Parameters
+    ----------
+    req : ReportRequest
+        The folder of results, the output, the lab file and the card constants.
+
+    Returns
+    -------
+    list of Path
+        The files written (HTML, then PDF when asked).
+    """
     from flowcurve.reports.lab import load_lab
     from flowcurve.reports.report import write_report
     from flowcurve.rig.config import instruments_given

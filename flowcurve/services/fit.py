@@ -25,9 +25,36 @@ SHAPE_ERROR_PCT = 0.4  # series_fit.SHAPE_ERROR_PCT, likewise
 
 @dataclass
 class FitRequest:
-    """A Johnson–Cook fit of a series: ``inputs`` records or result folders, ``out`` the folder;
-    reference rate 1/s, temperatures °C, ``fix_C``/``fix_m`` constants not identified, ``E_MPa``
-    for records without a handbook modulus, ``shape_error`` %, ``fracture_points`` a CSV file."""
+    """A series fit as ``flowcurve fit`` and the console ask for it (Johnson–Cook unless ``law``).
+
+    Attributes
+    ----------
+    inputs : list of str
+        Record files or result folders (or folders of them).
+    out : str or Path
+        The fit folder written.
+    ref_rate, ref_temp, melt_temp : float, optional
+        Reference strain rate, 1/s; reference and melting temperature, °C.
+    method : str
+        "global" (one least squares) or "stepwise" (Johnson–Cook only).
+    fix_C, fix_m : float, optional
+        Johnson–Cook's C and m held at these values, not identified.
+    E_MPa : float, optional
+        Young's modulus for records without a handbook one, MPa.
+    rate_per_record, max_points : bool, int
+        One strain rate per record instead of per point; points taken from each curve.
+    shape_error : float
+        The law's model-form error added to each point's uncertainty, %.
+    fracture_points : str, optional
+        A CSV of fracture points measured elsewhere (Johnson–Cook damage D1–D5).
+    law : str
+        A registered law's name (:func:`flowcurve.identification.laws.base.registered_laws`).
+    adiabatic, taylor_quinney, density_kg_per_m3, heat_capacity_J_per_kg_K, adiabatic_min_rate : optional
+        Put the points at or above ``adiabatic_min_rate`` (1/s) at their adiabatic temperature:
+        ΔT = β/(ρ c) ∫σ dεp with β, ρ (kg/m³) and c (J/(kg K)).
+    warnings, options : list, dict
+        Warnings gathered while checking; the options as given (fit.json's provenance).
+    """
 
     inputs: list[str]
     out: str | Path = "fit"
@@ -62,8 +89,25 @@ class FitRequest:
 
 
 def fit(req: FitRequest, members):
-    """Fit ``members`` (identification.series members) as ``req`` asks and write the fit folder:
-    (SeriesFit, fit.json path). IdentificationError names every input the fit lacks."""
+    """Fit a series as ``req`` asks and write the fit folder (fit.json, curves, plots).
+
+    Parameters
+    ----------
+    req : FitRequest
+        The law, method, reference conditions and output folder.
+    members : list of SeriesMember
+        The series (:func:`flowcurve.identification.series.members.load_members`).
+
+    Returns
+    -------
+    (SeriesFit, Path)
+        The fit and the path of the fit.json written.
+
+    Raises
+    ------
+    IdentificationError
+        Naming every input the fit lacks (melting temperature, a fixed C or m …), at once.
+    """
     from flowcurve.errors import IdentificationError
     from flowcurve.identification.series.damage import read_fracture_points
     from flowcurve.identification.series.series import fit_series

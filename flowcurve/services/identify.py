@@ -17,10 +17,25 @@ from flowcurve.errors import RecordError
 
 @dataclass
 class IdentifyRequest:
-    """One record to identify: ``record`` its file, ``out`` the folder of result folders,
-    ``columns`` a plain CSV's quantity → (column, unit), ``meta`` header values given (geometry in
-    mm …), ``options`` the identification's (neck, hardening, law, E_MPa, method, workers,
-    time_limit …; None: the default), ``record_sha256`` when the caller has it."""
+    """One record to identify, as ``flowcurve identify`` and the console ask for it.
+
+    Attributes
+    ----------
+    record : str or Path
+        The record file (native, or a foreign export: CSV, INSTRON, text).
+    out : Path
+        The folder the record's result folder is written under.
+    columns : dict, optional
+        A plain CSV's quantity → (column, unit); None: recognised from the column names.
+    meta : dict
+        Header values given (geometry in mm, material …), overriding the file's.
+    options : dict
+        The identification's options (neck, hardening, law, E_MPa, method, workers, time_limit …; None: default).
+    plots : bool
+        Draw the result's PNG plots.
+    record_sha256 : str, optional
+        The record file's SHA-256 when the caller has it (else computed).
+    """
 
     record: str | Path
     out: Path
@@ -82,6 +97,7 @@ def identify(req: IdentifyRequest, progress: Callable | None = None):
             limit = time_limit or inverse_time_limit_s(record.test)
 
             def told(runs, elapsed, left_s=None):  # progress(runs, elapsed_s, left_s, limit_s), e.g. a terminal line
+                """Tell ``progress`` (runs, elapsed s, left s, limit s) when given."""
                 if progress is not None:
                     progress(runs, elapsed, left_s, limit)
 

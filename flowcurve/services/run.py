@@ -29,8 +29,26 @@ RANGE_OPTIONS = {k: OPTIONS[k] for k in ("temperature", "soak", "speed", "target
 
 @dataclass
 class RunRequest:
-    """One test as asked: lengths in mm, speed mm/s, temperature °C, soak s, force N, E MPa;
-    ``post`` KEY=VALUE post-test measurements, ``fault`` the virtual rig's drills (DEVICE:KIND…)."""
+    """One test as ``flowcurve run`` and the console ask for it.
+
+    Attributes
+    ----------
+    test : str
+        "tension" or "compression".
+    material, operator, specimen_id : str, optional
+        Written to the record's header.
+    E_MPa : float, optional
+        The material's handbook Young's modulus, MPa.
+    temperature, soak : float
+        Heating set-point, °C (None: room temperature); soak time at it, s.
+    speed, d0, l0, h0, target, force_limit : float, optional
+        Crosshead speed, mm/s; diameter, gauge length and height, mm; target displacement, mm;
+        force limit, N.
+    post : list of str
+        Post-test measurements as KEY=VALUE (``post.lu_mm=55.2``).
+    time_scale, fault, compression_response, tension_response : optional
+        The virtual rig's time scale, fault drills (DEVICE:KIND…) and physics ("fe", "slab"; "fe", "bridgman").
+    """
 
     test: str
     material: str | None = None
@@ -209,10 +227,33 @@ def build_spec(req: RunRequest, geometry_default: dict[str, float] | None = None
 
 
 def prepare(req: RunRequest, *, virtual: bool | None = None, config=None, ask: Callable | None = None) -> RunSetup:
-    """``req`` checked in ``run``'s order and set up: on a configured rig (``config``; its ranges)
-    at time scale 1 and 0.01 mm/s by default, on the virtual rig in this process (``virtual``,
-    default: no ``config``) at 15 and 0.05 mm/s with the virtual specimen's geometry where none
-    is given. FieldError names a refused field."""
+    """Check ``req`` in ``run``'s order and set the test up.
+
+    On a configured rig (``config``): its ranges, time scale 1 and 0.01 mm/s by default; on the
+    virtual rig in this process: time scale 15, 0.05 mm/s and the virtual specimen's geometry
+    where none is given.
+
+    Parameters
+    ----------
+    req : RunRequest
+        The test as asked.
+    virtual : bool, optional
+        Run on the virtual rig (default: when there is no ``config``).
+    config : RigConfig, optional
+        The rig's configuration (:func:`flowcurve.rig.config.load_config`).
+    ask : callable, optional
+        ``ask(prompt, default, cast)`` asks the operator for what is missing; None: nothing asked.
+
+    Returns
+    -------
+    RunSetup
+        The checked TestSpec and, on the virtual rig, its material, time scale and drills.
+
+    Raises
+    ------
+    FieldError
+        Naming each refused field.
+    """
     if not (config is None if virtual is None else virtual):
         scale = 1.0 if req.time_scale is None else req.time_scale
         measured("time_scale", OPTIONS["time_scale"], scale)
@@ -243,10 +284,31 @@ def prepare(req: RunRequest, *, virtual: bool | None = None, config=None, ask: C
 
 def run_test(setup: RunSetup, record: Path, *, config=None, view=None, interactive: bool = False, stream: bool = True,
              stop_requested=None, on_rig: Callable | None = None, open_rig: Callable | None = None):
-    """Run ``setup`` into ``record``: on the virtual rig in this process (``config`` and
-    ``open_rig`` None) or on the configured one (``open_rig(time_scale)`` a context manager
-    giving the rig; default DriverRig). ``on_rig(rig)`` sees the rig once it is open. The
-    procedure's Outcome."""
+    """Run a prepared test into a record file.
+
+    Parameters
+    ----------
+    setup : RunSetup
+        From :func:`prepare`.
+    record : Path
+        The record file written as the test runs.
+    config : RigConfig, optional
+        The configured rig; None with ``open_rig`` None: the virtual rig in this process.
+    view : LiveView, optional
+        What shows the test live (the terminal, the console).
+    interactive, stream : bool
+        Ask the operator at the terminal; stream the load cell (else poll it).
+    stop_requested : callable, optional
+        Another thread's stop button: an operator-stop reason or None.
+    on_rig, open_rig : callable, optional
+        ``on_rig(rig)`` sees the rig once open; ``open_rig(time_scale)`` a context manager giving
+        the rig (default :class:`flowcurve.acquisition.session.DriverRig`).
+
+    Returns
+    -------
+    Outcome
+        The procedure's outcome: path, status, reason, samples, duration, maximum force.
+    """
     if config is None and open_rig is None:
         from flowcurve.acquisition.session import run_virtual_test
 

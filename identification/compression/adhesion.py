@@ -217,6 +217,7 @@ class _Series:
 
     @property
     def pressure_MPa(self):
+        """Nominal mean contact pressure of each point, MPa."""
         return nominal_mean_pressure(self.force_N, self.radius_mm)
 
 
@@ -499,6 +500,7 @@ def _weighted_fit(deviation, params, plan, s: _Series, use, *, measured, moment_
     part of the measured value proportional to M_z.
     """
     def fit_with(scale):
+        """The fit with residuals divided by ``scale``."""
         return _minimize(lambda pars: (deviation(pars.valuesdict(), s.radius_mm) / scale)[use], params, plan, s.temperature_C[use])
 
     result = fit_with(_weights(measured, weights))

@@ -68,6 +68,7 @@ class FrictionResult:
     extra: dict[str, float] = field(default_factory=dict)
 
     def as_dict(self) -> dict:
+        """The result as result.json's friction block."""
         return {"method": self.method, "mu": self.mu, "inputs": dict(self.inputs), **self.extra}
 
 
@@ -435,6 +436,7 @@ def _fe_mu_fixed_point(table, curve, eps_p, hardening: tuple[float, float], face
     μ read again (FE_HARDENING_ITERATIONS times)."""
 
     def read_mu(hardening):
+        """μ of the FE table at ``hardening`` (n, ε0)."""
         if face is None:
             return _fe_mu_lowering_n(table, bulge_over_hk, h0_d0, hardening, eps_k)
         mu = table.mu_from_face(face, h0_d0, hardening[0], eps_k, eps0=hardening[1], clamp=True)
@@ -455,6 +457,7 @@ def _fe_face_extra(table, face: float, mu: float, d_n: float, delta_r: float, hk
     n, eps0 = hardening
 
     def face_mu(half):
+        """μ at the face ratio ± ``half`` (the table's spread)."""
         return [table.mu_from_face(min(face + sign * half, 1.0), h0_d0, n, eps_k, eps0=eps0, clamp=True) for sign in (1.0, -1.0)]
 
     lo, hi = face_mu(mf.face_sigma(d_n, DIAMETER_RESOLUTION_MM))

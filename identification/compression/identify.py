@@ -394,32 +394,32 @@ def _modulus_method(choice: ModulusChoice, yld: _Yield, line: _Line) -> dict:
     return out
 
 
-def identify_compression(
-    record: Record,
-    *,
-    friction_method: str = fr.DEFAULT_FRICTION_METHOD,
-    friction_correction: str = fr.DEFAULT_CORRECTION,
-    law: str = "johnson_cook",
-    E_MPa: float | None = None,
-    frame_stiffness_N_per_um: float | None = None,
-    modulus_window_MPa: tuple[float, float] | None = None,
-    modulus_window: tuple[float, float] | None = None,
-    modulus_reference: str = "Rp02",
-    toe: bool = True,
-    fit_range: tuple[float, float] | None = None,
-    modulus_method: str = DEFAULT_MODULUS_METHOD,
-) -> Identification:
+def identify_compression(record: Record, *, friction_method: str = fr.DEFAULT_FRICTION_METHOD,
+                         friction_correction: str = fr.DEFAULT_CORRECTION, law: str = "johnson_cook", E_MPa: float | None = None,
+                         frame_stiffness_N_per_um: float | None = None, modulus_window_MPa: tuple[float, float] | None = None,
+                         modulus_window: tuple[float, float] | None = None, modulus_reference: str = "Rp02", toe: bool = True,
+                         fit_range: tuple[float, float] | None = None, modulus_method: str = DEFAULT_MODULUS_METHOD) -> Identification:
     """Identify a compression record: friction, friction-corrected true curves and hardening.
 
-    Options: ``friction_method`` (one of ``fe_table`` (default), ``bulge_regression``,
-    ``ebrahimi_najafizadeh``), ``friction_correction`` (``fe_table`` (default), ``k_sigma``,
-    ``siebel``, ``slab``), ``law`` of the hardening fit, ``E_MPa`` (handbook modulus for elastic strain and
-    spring-back; otherwise the apparent modulus), ``frame_stiffness_N_per_um`` (otherwise the
-    record's ``rig.frame_stiffness_N_per_um``), ``modulus_window_MPa`` / ``modulus_window``
-    (fractions of the yield stress, or of the largest stress with ``modulus_reference`` "Rm";
-    default: the widest linear stretch, :func:`elastic_line`), ``toe`` (compensate a soft
-    start, default on), ``fit_range`` (LO, HI true plastic strain of the hardening fit),
-    ``modulus_method`` ("window", "sdar", or "auto": the window, see :func:`elastic_line`).
+    Parameters
+    ----------
+    record : Record
+        A compression record with its post-test measurements (barrel, faces).
+    friction_method, friction_correction : str
+        μ by "fe_table", "bulge_regression" or "ebrahimi_najafizadeh"; the correction by
+        "fe_table", "k_sigma", "siebel" or "slab".
+    law, fit_range : str, tuple
+        The hardening law; (lo, hi) true plastic strain of its fit.
+    E_MPa, frame_stiffness_N_per_um : float, optional
+        Handbook E (MPa; else the apparent one) and frame stiffness (N/µm; else the record's).
+    modulus_window_MPa, modulus_window, modulus_reference, modulus_method, toe : optional
+        E's window in MPa or in fractions of ``modulus_reference`` (Rp02, Rm); "window", "sdar",
+        "auto" (:func:`elastic_line`); ``toe`` compensates a soft start.
+
+    Returns
+    -------
+    Identification
+        A CompressionResult (friction, yield, fits, uncertainty) and the curves.
     """
     _check_options(friction_correction, E_MPa)
     E_MPa, E_source, E_choice = _handbook_modulus(record, E_MPa)

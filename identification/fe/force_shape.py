@@ -27,10 +27,12 @@ class MuBySide:
 
     @property
     def force_told(self) -> bool:
+        """Whether the force gave μ (finite value and error)."""
         return math.isfinite(self.mu_force) and math.isfinite(self.stderr_force)
 
     @property
     def shape_told(self) -> bool:
+        """Whether the shape gave μ (finite value and error)."""
         return math.isfinite(self.mu_shape) and math.isfinite(self.stderr_shape)
 
     @property

@@ -25,10 +25,12 @@ def parser(module: str, doc: str, default_out: Path) -> argparse.ArgumentParser:
 
 
 def command_line(module: str, argv: Sequence[str] | None) -> str:
+    """The command line that regenerates a data file: ``python -m module argv``."""
     return f"python -m {module} " + " ".join(argv if argv is not None else sys.argv[1:])
 
 
 def now_utc() -> str:
+    """The UTC time now, ISO 8601 to the second."""
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
 
 
@@ -36,6 +38,7 @@ def run_timed(fn: Callable[[Any], dict], items: Sequence[Any], *, workers: int, 
     """``fn`` over ``items`` on the pool (or Dask), progress on stderr → (results, wall s)."""
 
     def progress(done, total, elapsed):
+        """Print runs done of ``total`` and elapsed s to stderr."""
         print(f"  {done}/{total} runs, {elapsed:.0f} s", file=sys.stderr, flush=True)
 
     t0 = time.perf_counter()

@@ -290,6 +290,7 @@ def _residuals(rows: _Rows, dmax: float, dface: float | None):
     """The residuals of a run: the force points' misfit in % over their σ, the diameters' in mm over theirs."""
 
     def residuals_of(out: _Run) -> np.ndarray:
+        """Residuals of FE run ``out``: force % over the sigma, then the shape (dmax, dface) over theirs."""
         r_f = 100.0 * (np.interp(rows.s_pts, out.stroke_mm, out.force_N) - rows.f_pts) / rows.f_pts
         shape = [(out.dmax_unloaded_mm - dmax) / rows.shape_sigma["dmax"]]
         if dface is not None:
@@ -434,14 +435,32 @@ def _assemble(inp: _Inputs, sol, se, by_side, block: CompressionInverseFE, misfi
 def identify_inverse_fe_compression(record, *, law: str = "auto", workers: int | None = None, scheduler=None, increments: int = 50,
                                     max_runs: int = 150, progress=None, E_MPa: float | None = None,
                                     time_limit_s: float | None | str = "default") -> Identification:
-    """Fit ``law`` and μ to a compression record's force–stroke and dmax with CalculiX in the loop.
+    """Fit a hardening law and μ to a compression record's force–stroke and dmax with CalculiX in the loop.
 
-    ``law="auto"``: the law that best fits the fast identification's curve (:func:`.law_choice.best_law_for`).
-    The model's E and the frame's stiffness: :func:`.machine.model_elastics` (E given, material.E_MPa, an
-    extensometer's, else a named material class's handbook value; k stated by the rig, else fitted by closure
-    on hk); never an apparent slope (else an error naming the inputs to give). ``time_limit_s``: the wall-time
-    budget, s (None: none; "default": :data:`TIME_LIMIT_S`). Returns the :class:`Identification` whose result
-    carries the ``inverse_fe`` block (docs/methods.md §4a.3)."""
+    The model's E and frame stiffness: :func:`.machine.model_elastics` (never an apparent slope).
+
+    Parameters
+    ----------
+    record : Record
+        A compression record with dmax measured.
+    law : str
+        A law name, or "auto": the law that best fits the fast curve (:func:`.law_choice.best_law_for`).
+    workers, scheduler : optional
+        Parallel CalculiX runs: local processes, or a Dask scheduler's address.
+    increments, max_runs : int
+        The model's load increments; the most solver runs.
+    progress : callable, optional
+        ``progress(runs, elapsed_s, left_s)``.
+    E_MPa : float, optional
+        Young's modulus, MPa.
+    time_limit_s : float, None or "default"
+        The wall-time budget, s (None: none; "default": :data:`TIME_LIMIT_S`).
+
+    Returns
+    -------
+    Identification
+        Whose result carries the ``inverse_fe`` block (docs/methods.md §4a.3).
+    """
     check_law(law)
     time_limit_s = TIME_LIMIT_S if time_limit_s == "default" else time_limit_s
     if record.test != "compression":

@@ -265,6 +265,7 @@ class _Rows:
 
     @property
     def n_force(self) -> int:
+        """The number of force residuals."""
         return self.e_pts.size
 
 
@@ -284,6 +285,7 @@ def _residuals(rows: _Rows, dk: float | None, elongation: float):
     """The residuals of a run: the force points' misfit in % over FORCE_SIGMA_PCT, the neck radius's in mm over its σ."""
 
     def residuals_of(out: _Run) -> np.ndarray:
+        """Residuals of FE run ``out``: force % over the sigma, then dk over its sigma."""
         r_f = 100.0 * (np.interp(rows.e_pts, out.elongation_mm, out.force_N) - rows.f_pts) / rows.f_pts / FORCE_SIGMA_PCT
         if dk is None:
             return r_f
@@ -466,15 +468,30 @@ def _assemble(sol, inp: _Inputs, rows: _Rows, curve: _Curve, fit_warnings: list[
 def identify_inverse_fe_tension(record, *, workers: int | None = None, scheduler=None, increments: int = INCREMENTS,
                                 max_runs: int = 60, progress=None, refit_law: str | None = None, time_limit_s: float | None = TIME_LIMIT_S,
                                 **tension_options) -> Identification:
-    """The hardening beyond ε_a and the specimen's taper, fitted to the record's force from ε_a to
-    fracture and its neck diameter with CalculiX. The FE-consistent curve is refitted in
-    ``refit_law``; None: in the law that follows it best (a warning when a given law follows it
-    poorly and another well). ``time_limit_s``: the whole identification's wall-time budget (None:
-    none); no batch of runs starts that would end past it, a run still going at it is stopped there
-    (not counted failed), and a fit so cut answers with the best
-    parameter set run so far (``inverse_fe.budget.cut``, a warning, the hardening poor).
-    ``progress(runs, elapsed_s, left_s)``: the time so far and an estimate of the time left.
-    Returns the :class:`Identification` whose result carries the ``inverse_fe`` block (docs/methods.md §4a.4)."""
+    """Fit the hardening beyond ε_a and the taper to a tension record's force and neck diameter with CalculiX.
+
+    Parameters
+    ----------
+    record : Record
+        A tension record with dk measured.
+    workers, scheduler : optional
+        Parallel CalculiX runs: local processes, or a Dask scheduler's address.
+    increments, max_runs : int
+        The model's load increments; the most solver runs.
+    progress : callable, optional
+        ``progress(runs, elapsed_s, left_s)``.
+    refit_law : str, optional
+        The law the FE-consistent curve is refitted in; None: the one that follows it best.
+    time_limit_s : float, optional
+        The wall-time budget, s (None: none); a fit cut by it answers with the best run so far.
+    **tension_options
+        Options of :func:`identify_tension` (the fast identification).
+
+    Returns
+    -------
+    Identification
+        Whose result carries the ``inverse_fe`` block (docs/methods.md §4a.4).
+    """
     t0 = time.perf_counter()
     inp = _inputs(record, increments, tension_options)
     rows = _rows(inp)

@@ -39,6 +39,7 @@ class ModelElastics:
     frame_compliance_source: str  # "record header" or "fitted (closure on the measured height change)"
 
     def as_dict(self) -> dict:
+        """The elastics as result.json's block."""
         return {"E_MPa": self.E_MPa, "E_stderr_MPa": self.E_stderr_MPa, "E_source": self.E_source, "E_basis": self.E_basis,
                 "frame_stiffness_N_per_um": self.frame_stiffness_N_per_um,
                 "frame_stiffness_stderr_N_per_um": self.frame_stiffness_stderr_N_per_um,
@@ -68,6 +69,7 @@ def fit_frame_stiffness(record, E_MPa: float, E_stderr_MPa: float) -> tuple[floa
     from flowcurve.identification.compression.identify import identify_compression
 
     def shortening(u_um_per_N: float) -> tuple[float, float, float]:  # (K_l, max specimen displacement mm, force there N)
+        """(K_l, max specimen displacement mm, force there N) at compliance ``u_um_per_N``."""
         ident = identify_compression(record, E_MPa=E_MPa, frame_stiffness_N_per_um=1.0 / u_um_per_N if u_um_per_N > 0 else 1e12)
         ind = ident.result["indicator"]
         return float(ind["K_l"]), float(ind["max_specimen_displacement_mm"]), float(ident.curves["corrected_diagram"]["force_N"].max())

@@ -86,6 +86,7 @@ def swift(eps_p, n, eps0=SWIFT_EPS0):
 
 def grid_model(mu: float, h0_d0: float, n: float, eps0: float = SWIFT_EPS0, *, d0_mm: float = D0_MM, eps_end: float = EPS_END,
                increments: int = INCREMENTS, **settings) -> UpsettingModel:
+    """The upsetting model of one grid point (μ, h0/d0, Swift n and ε0)."""
     h0 = h0_d0 * d0_mm
     return UpsettingModel.from_law(d0_mm, h0, h0 * math.exp(-eps_end), mu, partial(swift, n=n, eps0=eps0), E_MPa=E_MPa, nu=NU,
                                    increments=increments, **MESH, **settings)
@@ -119,6 +120,7 @@ def mu0_increments_ratio(h0_d0: float, n: float, eps0: float, eps, *, eps_end: f
     """At strains ``eps``: the μ = 0 run's raw force factor on ``reference`` increments over the
     one on ``own`` — what puts a run on ``own`` increments on the reference's normalisation."""
     def mu0(increments):
+        """The μ = 0 force factor at ``increments`` on the strain grid."""
         m = grid_model(0.0, h0_d0, n, eps0, eps_end=eps_end, increments=increments)
         r = simulate_upsetting(m, timeout_s=900.0)
         return np.interp(eps, r.strain, raw_force_factor(m, r, n, eps0)[1])
@@ -197,6 +199,7 @@ def build_start(out: Path = DEFAULT_OUT, *, workers: int = 2, scheduler=None, co
 
 
 def build_table(mu=MU, h0_d0=H0_D0, n=N, eps0=EPS0, *, workers: int = 2, scheduler=None, out: Path = DEFAULT_OUT, command: str = "") -> dict:
+    """Run the grid in CalculiX and write the friction table to ``out``; the table's dict."""
     points = grid_points(mu, h0_d0, n, eps0)
     if 0.0 not in mu:
         raise ValueError("the grid needs μ = 0 (the force factor is normalised by it)")
@@ -322,6 +325,7 @@ def write_virtual_rig_copy(table: Path = DEFAULT_OUT, out: Path = VIRTUAL_RIG_CO
 
 
 def main(argv=None) -> int:
+    """``python -m`` entry: build the friction table; the exit status."""
     p = generator.parser(MODULE, __doc__, DEFAULT_OUT)
     p.add_argument("--mu", type=float, nargs="+", default=list(MU))
     p.add_argument("--h0-d0", type=float, nargs="+", default=list(H0_D0))

@@ -98,6 +98,7 @@ def profile_a_over_R(z_mm, r_mm, a_mm: float, window: float = PROFILE_WINDOW) ->
 
 
 def grid_model(n: float, *, increment_mm: float = INCREMENT_MM, neck_elongation_mm: float = NECK_ELONGATION_MM) -> TensionModel:
+    """The tension model of one Swift exponent ``n``."""
     elongation = L0_MM * math.expm1(n) + neck_elongation_mm
     return TensionModel.from_law(D0_MM, L0_MM, elongation, partial(swift_flow, K=SWIFT_K_MPa, eps0=SWIFT_EPS0, n=n),
                                  E_MPa=E_MPa, nu=NU, imperfection=IMPERFECTION, surface=True,
@@ -127,6 +128,7 @@ def sample_run(n: float, strain=NECK_STRAIN) -> dict:
     inside = np.asarray(strain) <= reached + 1e-12
 
     def on_grid(values):
+        """``values`` on the strain grid (NaN outside the run's range)."""
         ok = keep & np.isfinite(values)
         return np.where(inside, np.interp(strain, eps_n[ok], values[ok]), np.nan)
 
@@ -139,6 +141,7 @@ def sample_run(n: float, strain=NECK_STRAIN) -> dict:
 
 
 def build_response(n=N, *, workers: int = 2, scheduler=None, out: Path = DEFAULT_OUT, command: str = "") -> dict:
+    """Run the tension grid in CalculiX and write the virtual rig's response to ``out``; its dict."""
     n = tuple(sorted(float(v) for v in n))
 
     runs, wall = generator.run_timed(sample_run, n, workers=workers, scheduler=scheduler)
@@ -182,6 +185,7 @@ def build_response(n=N, *, workers: int = 2, scheduler=None, out: Path = DEFAULT
 
 
 def main(argv=None) -> int:
+    """``python -m`` entry: build the tension response; the exit status."""
     p = generator.parser(MODULE, __doc__, DEFAULT_OUT)
     p.add_argument("--n", type=float, nargs="+", default=list(N), help="Swift exponents of the runs")
     a = p.parse_args(argv)

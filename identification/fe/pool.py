@@ -19,6 +19,7 @@ log = logging.getLogger(__name__)
 
 
 def default_workers() -> int:
+    """The CPUs this process may use (at least 1)."""
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
 
 

@@ -138,6 +138,7 @@ class SolverFit:
         return 1.0 / np.sqrt(info) if info > 0 else float("inf")
 
     def optimizer(self) -> dict:
+        """The optimizer's status, message and function evaluations."""
         return {"status": self.status, "message": self.message, "nfev": self.nfev}
 
     def failed_runs_warnings(self, what: str = "inverse FE") -> list[str]:
@@ -200,6 +201,7 @@ def progress_on_whole_clock(progress, before_s: float, n_params: int, time_limit
         return None
 
     def shown(runs, elapsed, _left=None):
+        """Tell ``progress`` with the time before this fit added."""
         progress(runs, before_s + elapsed, time_left_s(runs, before_s + elapsed, n_params, time_limit_s))
 
     return shown
@@ -264,6 +266,7 @@ class _Runs:
             self.best.update(x=np.asarray(p, float), r=r)
 
     def fun(self, x):
+        """The residual vector at ``x`` (one FE run)."""
         return self.evaluate([np.asarray(x, float)])[0]
 
     def jacobian(self, x, steps, lo, hi):

@@ -145,6 +145,7 @@ RECORD_MESH = {"nr": 30, "layers": 2, "layer_fraction": 1.0 / 30.0}
 
 
 def case_flow(case: dict):
+    """The flow stress function (εp → MPa) of a synthetic ``case``."""
     from functools import partial
 
     fn, kw = case["law"]
@@ -159,6 +160,7 @@ RECORD_INCREMENTS = (70, 80, 60)  # the first that runs to the end; the rest onl
 
 
 def case_model(case: dict, increments: int = RECORD_INCREMENTS[0]):
+    """The upsetting model of a synthetic ``case`` at ``increments``."""
     from flowcurve.identification.fe.model.upsetting import UpsettingModel
 
     # a finer mesh than the table's and the inverse's (30 core elements, a d0/30 rim layer), 70 increments

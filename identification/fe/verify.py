@@ -104,6 +104,7 @@ def curve_from_card(text: str, source: str = "card") -> FlowCurveSource:
 
 
 def load_curve(path: str | Path) -> FlowCurveSource:
+    """The flow curve of a result folder or CSV at ``path``."""
     from flowcurve.identification.outcome import read_json_object
 
     p = Path(path)
@@ -191,6 +192,7 @@ def verify_compression(curve: FlowCurveSource, record, *, mu: float | None = Non
         raise IdentificationError(f"{record.source}: too little of the record beyond {COMPARE_FROM_STRAIN:g} strain to compare")
 
     def run_at(n_layers: int, n_increments: int):
+        """Run the curve at ``n_layers`` rim layers and ``n_increments`` increments."""
         return _simulate_with_retries(
             lambda **settings: UpsettingModel(d0, h0, h0 - s_end, float(mu), tuple(map(float, curve.eps_p)), tuple(map(float, curve.stress_MPa)),
                                               E_MPa=float(E), **{"layers": n_layers, "increments": n_increments, **settings}).realising(),

@@ -26,9 +26,18 @@ KELVIN_OFFSET = 273.15
 class Parameter:
     """One named constant of a law.
 
-    name: the symbol in the equation (``A``); key: the JSON key with its unit (``A_MPa``);
-    unit: the unit as printed ("" for a pure number); lower, upper: the bounds a fit keeps;
-    meaning: one line for the docs and reports.
+    Attributes
+    ----------
+    name : str
+        The symbol in the equation (``A``).
+    key : str
+        The JSON key with its unit (``A_MPa``).
+    unit : str
+        The unit as printed ("" for a pure number).
+    lower, upper : float
+        The bounds a fit keeps.
+    meaning : str
+        One line for the docs and reports.
     """
 
     name: str
@@ -97,8 +106,27 @@ class Law:
         raise KeyError(f"{self.name} has no parameter {name!r}")
 
     def stress(self, eps_p, strain_rate_per_s=None, temperature_C=None, **values: float) -> np.ndarray:
-        """σ (MPa) at true plastic strain ``eps_p`` (clipped at 0), strain rate (1/s) and
-        temperature (°C), broadcast; a rate or temperature the law needs must be given."""
+        """The law's flow stress σ(εp, ε̇, T), broadcast over the arrays.
+
+        Parameters
+        ----------
+        eps_p : array_like
+            True plastic strain (clipped at 0).
+        strain_rate_per_s, temperature_C : array_like, optional
+            Strain rate, 1/s, and temperature, °C; required when the law depends on them.
+        **values : float
+            The law's constants by name (:attr:`names`) and its conditions.
+
+        Returns
+        -------
+        ndarray
+            σ, MPa.
+
+        Raises
+        ------
+        IdentificationError
+            A constant, condition, rate or temperature the law needs not given.
+        """
         missing = [p.name for p in self.parameters + self.conditions if p.name not in values]
         if missing:
             raise IdentificationError(f"{self.display_name}: no value for {', '.join(missing)}")
@@ -136,7 +164,18 @@ _DISCOVERED = False
 
 
 def register(cls: type[Law]) -> type[Law]:
-    """Class decorator: put one instance of the law in the registry under ``cls.name``."""
+    """Class decorator: put one instance of the law in the registry under ``cls.name``.
+
+    Parameters
+    ----------
+    cls : type
+        A :class:`Law` subclass.
+
+    Returns
+    -------
+    type
+        ``cls``, unchanged.
+    """
     if not cls.name:
         raise ValueError(f"{cls.__name__} has no name")
     if cls.name in _REGISTRY and type(_REGISTRY[cls.name]) is not cls:
@@ -157,13 +196,35 @@ def _discover() -> None:
 
 
 def registered_laws() -> dict[str, Law]:
-    """Every registered law by name, in registration order."""
+    """Every registered law by name.
+
+    Returns
+    -------
+    dict of str to Law
+        In registration order.
+    """
     _discover()
     return dict(_REGISTRY)
 
 
 def get_law(name: str) -> Law:
-    """The registered law called ``name``; a one-line error with the nearest names otherwise."""
+    """The registered law called ``name``.
+
+    Parameters
+    ----------
+    name : str
+        A registry key (``johnson_cook``).
+
+    Returns
+    -------
+    Law
+        The law's instance.
+
+    Raises
+    ------
+    IdentificationError
+        One line with the nearest names when there is none.
+    """
     laws = registered_laws()
     try:
         return laws[name]

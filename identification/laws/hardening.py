@@ -217,6 +217,7 @@ def _polish(spec: StaticForm, starts: list[dict[str, float]], eps: np.ndarray, s
     hi = np.array([spec.bounds[n][1] for n in spec.names])
 
     def residual(x):
+        """Weighted residuals of the law at ``x`` (1e12 where not finite)."""
         with np.errstate(over="ignore", invalid="ignore"):
             r = w * (spec.func(eps, *x) - sig)
         return np.where(np.isfinite(r), r, 1e12)
@@ -430,6 +431,7 @@ def three_point_fit(points: Sequence[Sequence[float]], law: str = "johnson_cook"
     if law == "johnson_cook":
         # (ε3^n − ε1^n)/(ε2^n − ε1^n) = r, increasing in n
         def g(n):
+            """Hollomon/Ludwik ratio of the three points at exponent ``n``, minus its target."""
             return (e3**n - e1**n) / (e2**n - e1**n) - r
         n = _root(g, 1e-4, 20.0, "exponent n")
         B = (s2 - s1) / (e2**n - e1**n)
@@ -437,6 +439,7 @@ def three_point_fit(points: Sequence[Sequence[float]], law: str = "johnson_cook"
     elif law == "voce":
         # (e^{−bε1} − e^{−bε3})/(e^{−bε1} − e^{−bε2}) = r
         def g(b):
+            """Voce ratio of the three points at ``b``, minus its target."""
             return -np.expm1(-b * (e3 - e1)) / -np.expm1(-b * (e2 - e1)) - r
         b = _root(g, 1e-6 / e3, 1e4 / e3, "saturation rate b")
         Q = (s2 - s1) / (np.exp(-b * e1) - np.exp(-b * e2))
@@ -446,6 +449,7 @@ def three_point_fit(points: Sequence[Sequence[float]], law: str = "johnson_cook"
         rl = np.log(s3 / s1) / np.log(s2 / s1)
 
         def g(e0):
+            """Swift ratio of the three points at ``e0``, minus its target."""
             return np.log((e0 + e3) / (e0 + e1)) / np.log((e0 + e2) / (e0 + e1)) - rl
         e0 = _root(g, 1e-9, 100.0, "pre-strain ε0")
         n = np.log(s2 / s1) / np.log((e0 + e2) / (e0 + e1))

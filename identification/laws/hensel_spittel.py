@@ -83,6 +83,7 @@ class HenselSpittel(Law):
               "Grundstoffindustrie, Leipzig, 1978; the nine-constant form of the forming codes (FORGE, QForm, Simufact)")
 
     def evaluate(self, eps_p, strain_rate_per_s, temperature_C, **values):
+        """Hensel–Spittel flow stress, MPa."""
         # (HS)
         return hensel_spittel(eps_p, strain_rate_per_s, temperature_C, **values)
 

@@ -65,6 +65,7 @@ class HyperbolicSine(Law):
               "(1944) 22–32; strain compensation as in Y. C. Lin, M.-S. Chen, J. Zhong, Comput. Mater. Sci. 42 (2008) 470–477")
 
     def evaluate(self, eps_p, strain_rate_per_s, temperature_C, **values):
+        """Strain-compensated hyperbolic-sine flow stress, MPa (coefficients polynomial in εp)."""
         # Sellars–Tegart with strain-compensated constants
         coeff = {s: polynomial(eps_p, [values[f"{s}{i}"] for i in range(DEGREE + 1)]) for s in ("alpha", "n", "Q", "lnA")}
         return hyperbolic_sine(eps_p, strain_rate_per_s, temperature_C, **coeff)

@@ -92,6 +92,7 @@ class JohnsonCook(Law):
 
     def evaluate(self, eps_p, strain_rate_per_s, temperature_C, *, A, B, n, C, m,
                  ref_strain_rate_per_s, ref_temperature_C, melt_temperature_C):
+        """Johnson–Cook flow stress, MPa."""
         # (2.19)
         return johnson_cook(eps_p, strain_rate_per_s, temperature_C, A=A, B=B, n=n, C=C, m=m,
                             ref_strain_rate_per_s=ref_strain_rate_per_s, ref_temperature_C=ref_temperature_C,

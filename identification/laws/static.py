@@ -59,6 +59,7 @@ class StaticLaw(Law):
     function: ClassVar[Callable]
 
     def evaluate(self, eps_p, strain_rate_per_s, temperature_C, **values):
+        """The static law's flow stress, MPa (rate and temperature ignored)."""
         return type(self).function(eps_p, **{name: values[name] for name in self.names})
 
     def profile(self, eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, list[dict[str, float]]]:

@@ -73,6 +73,7 @@ class ZerilliArmstrongBCC(_ZerilliArmstrong):
     latex = r"\sigma = C_0 + C_1\,e^{-C_3 T + C_4 T\ln\dot\varepsilon} + C_5\,\varepsilon_p^{\,n}"
 
     def evaluate(self, eps_p, strain_rate_per_s, temperature_C, *, C0, C1, C3, C4, C5, n):
+        """Zerilli–Armstrong (bcc) flow stress, MPa."""
         # ZA (1987) bcc
         return C0 + C1 * thermal_activation(strain_rate_per_s, temperature_C, C3, C4) + C5 * np.power(eps_p, n)
 
@@ -101,6 +102,7 @@ class ZerilliArmstrongFCC(_ZerilliArmstrong):
     latex = r"\sigma = C_0 + C_2\,\varepsilon_p^{1/2}\,e^{-C_3 T + C_4 T\ln\dot\varepsilon}"
 
     def evaluate(self, eps_p, strain_rate_per_s, temperature_C, *, C0, C2, C3, C4):
+        """Zerilli–Armstrong (fcc) flow stress, MPa."""
         # ZA (1987) fcc
         return C0 + C2 * np.sqrt(eps_p) * thermal_activation(strain_rate_per_s, temperature_C, C3, C4)
 

@@ -405,6 +405,7 @@ def _window_slopes(t: np.ndarray, r: np.ndarray, n: int) -> np.ndarray:
     t = t - t.mean()
 
     def window_sums(v):  # Σ over every window of n samples
+        """Σ over every window of n samples."""
         c = np.concatenate([[0.0], np.cumsum(v)])
         return c[n:] - c[:-n]
 

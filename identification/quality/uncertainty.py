@@ -83,6 +83,7 @@ class Component:
         return abs(self.sensitivity * self.u)
 
     def as_dict(self) -> dict:
+        """The component as the budget's JSON row."""
         out = {"name": self.name, "value": self.value, "unit": self.unit, "u": self.u, "sensitivity": self.sensitivity,
                "contribution": self.contribution, "basis": self.basis}
         return out if math.isinf(self.dof) else {**out, "dof": self.dof}

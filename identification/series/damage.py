@@ -199,6 +199,7 @@ class DamageFit:
                                **self.params)
 
     def covered(self) -> dict[str, list[float]]:
+        """The triaxiality, rate and temperature ranges the fracture points cover."""
         pts = self.points
         return {"triaxiality_range": [min(p.triaxiality for p in pts), max(p.triaxiality for p in pts)],
                 "strain_rate_per_s": [min(p.strain_rate_per_s for p in pts), max(p.strain_rate_per_s for p in pts)],
@@ -302,6 +303,7 @@ def _least_squares(tri, lr, ts, eps_f, fixed: dict[str, float]):
         pars.add(p, value=fixed.get(p, start[p]), vary=p not in fixed)
 
     def residual(par):
+        """Relative misfit of the fracture strains at ``par``."""
         return fracture_strain(tri, lr, ts, **par.valuesdict()) / eps_f - 1.0
 
     with np.errstate(invalid="ignore"):

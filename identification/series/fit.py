@@ -262,6 +262,7 @@ class ConditionCurve:
 
     @property
     def filename(self) -> str:
+        """The curve's CSV name: its temperature and strain rate."""
         return f"T{self.temperature_C:.0f}C_rate{self.strain_rate_per_s:.3g}_per_s.csv"
 
 
@@ -317,7 +318,25 @@ def repeats_type_a(group: Sequence[SeriesMember], lo: float, hi: float) -> dict 
 
 @dataclass
 class SeriesFit:
-    """Everything ``flowcurve fit`` writes: the chosen fit, the other for comparison, the series."""
+    """Everything ``flowcurve fit`` writes: the chosen fit, the other for comparison, the series.
+
+    Attributes
+    ----------
+    method : str
+        The chosen method ("global", "stepwise").
+    fit, global_fit, stepwise_fit : JohnsonCookFit or LawFit
+        The chosen fit and each method's (None when not run).
+    stepwise_note : str, optional
+        Why the stepwise fit was not run.
+    members, curves : list
+        The series' members; one ConditionCurve per condition.
+    warnings : list of str
+        The fit's warnings.
+    max_points : int
+        Points taken from each curve.
+    damage, shape_uncertainty : optional
+        The Johnson–Cook damage fit (D1–D5); the law's shape uncertainty band.
+    """
 
     method: str
     fit: JohnsonCookFit
@@ -416,20 +435,49 @@ def law_block(fit: LawFit) -> dict:
             "temperature_unit": "C", "point_u_terms": list(fit.point_u_terms)}
 
 
-def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_strain_rate_per_s: float | None = None,
-               ref_temperature_C: float | None = None, melt_temperature_C: float | None = None,
-               fixed: dict[str, float] | None = None, max_points: int = MAX_POINTS,
-               fracture_points: Sequence[FracturePoint] = (), shape_error_pct: float = SHAPE_ERROR_PCT,
-               law: str = "johnson_cook") -> SeriesFit:
-    """Fit the series with the registered ``law`` (Johnson–Cook by default) by ``method`` ("global" or, JC
-    only, "stepwise") and, for JC, the other method for comparison; D1-D5 from the members' fractures and
-    ``fracture_points`` (measured elsewhere) when given (JC)."""
+def _check_fit_options(method: str, max_points: int, shape_error_pct: float) -> None:
+    """IdentificationError for an unknown method, fewer than 5 points per record or a shape error not ≥ 0 %."""
     if method not in ("global", "stepwise"):
         raise IdentificationError(f"unknown fit method {method!r}; choose global or stepwise")
     if max_points < 5:
         raise IdentificationError(f"max_points must be at least 5 points per record, got {max_points}")
     if not (math.isfinite(shape_error_pct) and shape_error_pct >= 0):
         raise IdentificationError(f"the curves' shape error must be a finite percentage ≥ 0 (--shape-error), got {shape_error_pct:g}")
+
+
+def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_strain_rate_per_s: float | None = None,
+               ref_temperature_C: float | None = None, melt_temperature_C: float | None = None,
+               fixed: dict[str, float] | None = None, max_points: int = MAX_POINTS,
+               fracture_points: Sequence[FracturePoint] = (), shape_error_pct: float = SHAPE_ERROR_PCT,
+               law: str = "johnson_cook") -> SeriesFit:
+    """Fit a registered law to a series (Johnson–Cook by default), σ = f(εp, ε̇, T).
+
+    For Johnson–Cook the other method is fitted for comparison, and D1–D5 from the members'
+    fractures and ``fracture_points``.
+
+    Parameters
+    ----------
+    members : sequence of SeriesMember
+        The series' plastic curves with their rates and temperatures.
+    method : str
+        "global" (one least squares) or "stepwise" (Johnson–Cook only).
+    ref_strain_rate_per_s, ref_temperature_C, melt_temperature_C : float, optional
+        Johnson–Cook's reference rate (1/s) and temperatures (°C); default from the series.
+    fixed : dict, optional
+        Constants held, not fitted (``{"C": 0.0}``).
+    max_points, shape_error_pct : int, float
+        Points taken from each curve; the model-form error added to each point's u, %.
+    fracture_points : sequence of FracturePoint
+        Fracture points measured elsewhere.
+    law : str
+        A registered law's name.
+
+    Returns
+    -------
+    SeriesFit
+        The chosen fit, the other for comparison, the curves and the warnings.
+    """
+    _check_fit_options(method, max_points, shape_error_pct)
     members = list(members)
     chosen_law = get_law(law)
     if chosen_law.name != "johnson_cook":

@@ -63,9 +63,29 @@ def stack_points(members: Sequence[SeriesMember], max_points: int, shape_error_p
 class LawFit:
     """Identified constants of a registered law with their uncertainties and the quality of fit.
 
-    params/stderr by name (stderr None: fixed or not estimated); fixed: not fitted, with ``fixed_why``;
-    at_bound: the constants that ended on a bound ("lower"/"upper"); conditions: the law's stated inputs;
-    reference: Johnson–Cook's (identification.series.fit.Reference), None for other laws."""
+    Attributes
+    ----------
+    method : str
+        How it was fitted.
+    params, stderr : dict
+        Constants by name, in the law's units; their standard errors (None: fixed or not estimated).
+    reference : object, optional
+        Johnson–Cook's Reference; None for other laws.
+    fixed, fixed_why : dict
+        Constants not fitted, and why.
+    correlations : dict
+        Correlation coefficients between fitted constants.
+    fit_error_pct, rms_error_pct : float
+        Largest and RMS relative misfit, %.
+    record_errors : dict
+        Each record's misfit, %.
+    report : str
+        lmfit's report.
+    law, conditions : Law, dict
+        The law and its stated inputs.
+    at_bound : dict
+        Constants that ended on a bound ("lower", "upper").
+    """
 
     method: str
     params: dict[str, float]
@@ -147,11 +167,29 @@ def on_bound(law: Law, params: dict[str, float], free) -> dict[str, str]:
 def fit_law(members: Sequence[SeriesMember], law: Law | str, *, conditions: dict[str, float] | None = None,
             fixed: dict[str, float] | None = None, fixed_why: dict[str, str] | None = None, start: dict[str, float] | None = None,
             max_points: int = MAX_POINTS, shape_error_pct: float = SHAPE_ERROR_PCT, reference=None) -> LawFit:
-    """# (the law) every free constant in one least-squares problem over all true curves (lmfit),
-    residuals (σ_law − σ)/u with u each point's stated uncertainty (:func:`point_u`).
+    """Fit every free constant of ``law`` in one least-squares problem over all the series' true curves.
 
-    Terms the law says the series cannot support (``law.unsupported``) are fixed at 0 with the reason;
-    ``start`` overrides the law's own ``guess``. Returns a :class:`LawFit` with errors filled."""
+    Residuals (σ_law − σ)/u with u each point's stated uncertainty (:func:`point_u`); terms the
+    law says the series cannot support (``law.unsupported``) are fixed at 0 with the reason.
+
+    Parameters
+    ----------
+    members : sequence of SeriesMember
+        The series' plastic curves.
+    law : Law or str
+        A law or a registered law's name.
+    conditions, reference : optional
+        The law's stated inputs (reference rate 1/s, temperatures °C); Johnson–Cook's Reference.
+    fixed, fixed_why, start : dict, optional
+        Constants held at a value, and why; starting values overriding the law's ``guess``.
+    max_points, shape_error_pct : int, float
+        Points taken from each curve; the model-form error added to each u, %.
+
+    Returns
+    -------
+    LawFit
+        The constants with standard errors, correlations and errors filled.
+    """
     import lmfit
 
     law = get_law(law) if isinstance(law, str) else law
@@ -170,6 +208,7 @@ def fit_law(members: Sequence[SeriesMember], law: Law | str, *, conditions: dict
         params.add(p.name, value=float(np.clip(value, p.lower, p.upper)), min=p.lower, max=p.upper, vary=p.name not in fixed)
 
     def residual(pars, weights_u):
+        """Misfits of the law at ``pars``, in units of each point's uncertainty ``weights_u``."""
         return (law.stress(eps, rate, temp, **conditions, **pars.valuesdict()) - sig) / weights_u
 
     result = _minimize(residual, params, u, law)

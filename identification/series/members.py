@@ -430,8 +430,25 @@ def _flat_specimen(block: dict) -> dict:
 
 
 def load_members(paths: Iterable[str | Path], **identify_options) -> list[SeriesMember]:
-    """Series members from record files, result folders, or folders of result folders. Any
-    error names the record (file or folder) it comes from (:func:`member_of_path`)."""
+    """Series members from record files, result folders, or folders of result folders.
+
+    Parameters
+    ----------
+    paths : iterable of str or Path
+        The inputs.
+    **identify_options
+        Options of :func:`flowcurve.identification.identify.identify` for the records.
+
+    Returns
+    -------
+    list of SeriesMember
+        One per record or result (its plastic curve, strain rate and temperature).
+
+    Raises
+    ------
+    RecordError
+        Naming the file or folder an error comes from (:func:`member_of_path`).
+    """
     members: list[SeriesMember] = []
     for p in paths:
         members.extend(member_of_path(p, **identify_options))

@@ -309,6 +309,7 @@ def _strain_zero(inp: _Inputs, line: _ElasticLine, hard: _Hardening, law: str) -
     done = hard.variants.get(f"least_squares_{law}_without_fracture_point")  # fit_hardening(grid, fit_sig, law) already made
 
     def refit(e, s):
+        """The hardening fit of (``e``, ``s``), reusing the main one when they are its points."""
         return done if done is not None and e is hard.grid and s is hard.fit_sig else fit_hardening(e, s, law)
 
     main, start, warnings = apply_to_fit(hard.main, hard.grid, hard.fit_sig, zero, refit)
@@ -416,31 +417,30 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
                      fracture_point: str = "auto", modulus_method: str = DEFAULT_MODULUS_METHOD) -> Identification:
     """Identify a tension record: ISO 6892-1 results, true curve, fracture point, hardening law.
 
-    use_extensometer: None = use the extensometer channel when the record has one.
-    frame_stiffness_N_per_um: overrides rig.frame_stiffness_N_per_um (crosshead path).
-    crosshead_length_mm: length the crosshead elongation refers to (default: the parallel
-        length if given, else l0); with post.lu_mm measured and ``scale`` it is l0 (3.1).
-    modulus_window: E is regressed over (lo, hi) × the reference stress (Rp0.2, iterated,
-        or Rm); modulus_window_MPa: over (lo, hi) MPa; neither (default): over the most linear
-        stretch of the first loading (:func:`identification.indicator.auto_modulus`), or all of
-        its samples when there are few — then the handbook ``material.E_MPa`` when the record
-        has one. A line whose E is not resolved (standard error over 10 %) gives way to the
-        handbook E with a warning, and without one is an error. The window in MPa and
-        ``modulus.source`` are reported. E_MPa fixes the modulus. modulus_method: "window" (that
-        automatic window), "sdar" (ASTM E3076-18, :func:`identification.indicator.sdar_modulus`) or
-        "auto" (default: SDAR on the crosshead, the window on an extensometer).
-    true_stress: "constant_volume" (default, σ_e·(1 + e)) or "gost_3_6" (the seed's corrected
-        (3.6), with ν = ``poisson``: it linearises the area and reads high at large strain,
-        docs/methods.md §3.2; kept for comparison).
-    neck: the neck correction used for the fracture point (all are reported).
-    law, hardening: the hardening law and method of the main fit; the others are reported.
-    fracture_weight: weight of the fracture point in the least squares (default √N, so that
-        it counts as much as the N points of the uniform range).
-    fit_range: (lo, hi) true plastic strain of the uniform range used by the hardening fits.
-    fracture_point: "include" / "exclude" the neck-corrected fracture point from the least
-        squares, or "auto" (default): include it unless it costs the uniform range more than
-        2 percentage points of max error (:func:`choose_fracture_variant`); both variants are
-        kept in ``hardening_alternatives``.
+    The rules behind the defaults: docs/methods.md §3.7.
+
+    Parameters
+    ----------
+    record : Record
+        A tension record (elongation from the extensometer or the crosshead).
+    use_extensometer, frame_stiffness_N_per_um, crosshead_length_mm, scale, toe : optional
+        The extensometer (None: when recorded); else the crosshead with the frame's stiffness (N/µm,
+        default the record's) over a length, mm (parallel length, else l0; l0 with post.lu_mm and
+        ``scale``); ``toe`` compensates a soft start.
+    modulus_window, modulus_window_MPa, modulus_reference, modulus_method, E_MPa : optional
+        E's window in fractions of ``modulus_reference`` (Rp02, Rm) or in MPa (default: the most
+        linear stretch); "window", "sdar" (ASTM E3076-18) or "auto"; ``E_MPa`` fixes E, MPa.
+    true_stress, poisson : str, float
+        "constant_volume" σ = σe·(1 + e), or "gost_3_6" (3.6) with ν (docs/methods.md §3.2).
+    neck, law, hardening : str
+        The neck correction of the fracture point; the main fit's law and method.
+    fracture_weight, fracture_point, fit_range : optional
+        The fracture point's weight (√N), "include", "exclude" or "auto"; (lo, hi) εp fitted.
+
+    Returns
+    -------
+    Identification
+        A TensionResult (E, Rp0.2, Rm, Ag, A, Z, fits, uncertainty) and the curves.
     """
     fit_range, fractions, window_fixed_MPa = _check_options(
         true_stress=true_stress, neck=neck, law=law, hardening=hardening, modulus_reference=modulus_reference,

@@ -66,6 +66,7 @@ class CardOptions:
         return out
 
     def check(self) -> None:
+        """CardError for an unknown table source or too few table rows."""
         if self.curves not in ("auto", "measured", "law"):
             raise CardError(f"unknown table source {self.curves!r} (auto, measured, law)")
         if self.max_rows < 3:
@@ -175,6 +176,7 @@ class CardData:
 
     @property
     def is_johnson_cook(self) -> bool:
+        """Whether the law is Johnson–Cook."""
         return self.law_name == "johnson_cook"
 
     def values(self, temperature_C=None) -> dict[str, float]:
@@ -215,7 +217,9 @@ class CardData:
 
     # -- what the card is valid for --------------------------------------------------------
     def valid_range_text(self) -> list[str]:
+        """The fit's valid strain, rate and temperature ranges as lines of text."""
         def rng(r, fmt, unit):
+            """A range as "lo to hi unit", or that the fit file does not state it."""
             return "not stated in the fit file" if r is None else f"{fmt(r[0])} to {fmt(r[1])}{unit}"
 
         return [
@@ -316,7 +320,22 @@ def _law(fit: dict, path) -> tuple[str, dict[str, float], dict[str, float | None
 
 
 def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
-    """A :class:`CardData` from a parsed ``fit.json``; ``overrides`` (e.g. ``E_MPa=2.1e5``) win."""
+    """The CardData of a parsed fit.json.
+
+    Parameters
+    ----------
+    fit : dict
+        fit.json's content.
+    path : str
+        Where it was read (for messages).
+    **overrides
+        Constants that win over the fit's (``E_MPa=2.1e5``).
+
+    Returns
+    -------
+    CardData
+        The law, constants, curves and ranges.
+    """
     rng = fit.get("range") or {}
     law_name, law_values, stderr = _law(fit, path)
     jc = law_name == "johnson_cook"
@@ -412,6 +431,7 @@ def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_not
     options = options or CardOptions()
 
     def pm(key, value, unit="", errors=card.stderr):
+        """A constant as "value +/- error unit"."""
         err = errors.get(key)
         return f"{value:.6g}{unit}" + (f" +/- {err:.2g}" if isinstance(err, (int, float)) else "")
 

@@ -17,8 +17,29 @@ def card_format(fmt: str) -> CardFormat:
 
 
 def write_card(card: CardData, fmt: str, units: str | UnitSystem, **options) -> str:
-    """The card text in solver format ``fmt`` and unit system ``units``; ``options`` are the
-    fields of :class:`CardOptions` (None keeps a default)."""
+    """The card text of ``card`` in solver format ``fmt`` and unit system ``units``.
+
+    Parameters
+    ----------
+    card : CardData
+        The law, curves and constants (:func:`card_data_from_fit`).
+    fmt : str
+        A registered format (:data:`FORMATS`).
+    units : str or UnitSystem
+        The unit system (``mm-s-t-N-MPa`` …).
+    **options
+        Fields of :class:`CardOptions` (None keeps a default).
+
+    Returns
+    -------
+    str
+        The card.
+
+    Raises
+    ------
+    CardError
+        An unknown format, or a value the format cannot write.
+    """
     entry = card_format(fmt)
     system = get_unit_system(units) if isinstance(units, str) else units
     return entry.write(card, system, CardOptions.from_keywords(**options))

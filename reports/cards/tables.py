@@ -177,6 +177,7 @@ def flow_tables(card: CardData, options: CardOptions) -> list[FlowCurve]:
     tol = options.temperature_tolerance_C
 
     def asked(temp):
+        """Whether the card asked for temperature ``temp`` (all when none were asked)."""
         return wanted is None or any(abs(temp - t) <= tol for t in wanted)
 
     if source_of(card, options) == "law":

@@ -54,6 +54,7 @@ class Reply:
 
     @property
     def refused(self) -> bool:
+        """Whether the module refused the command ('?')."""
         return self.lead == "?"
 
 
@@ -120,6 +121,7 @@ class Configuration:
 
     @property
     def thermocouple(self) -> str | None:
+        """The thermocouple type of the input range code, None when not one."""
         return THERMOCOUPLE_TYPES.get(self.type_code)
 
 

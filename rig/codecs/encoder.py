@@ -60,6 +60,7 @@ class Unwrapper:
         self.count: int | None = None
 
     def update(self, raw: int) -> int:
+        """The unwrapped count after raw reading ``raw``."""
         if self.last_raw is None:
             self.count = to_signed(raw, self.bits)
         else:
@@ -68,6 +69,7 @@ class Unwrapper:
         return self.count
 
     def reset(self) -> None:
+        """Forget the last reading and the count."""
         self.last_raw = self.count = None
 
 

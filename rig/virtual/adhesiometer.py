@@ -89,6 +89,7 @@ class VirtualAdhesiometer:
     # -- physics ---------------------------------------------------------------------------------
     @property
     def sphere_radius_mm(self) -> float:
+        """The sphere's radius, mm."""
         return self.sphere_diameter_mm / 2.0
 
     @property
@@ -146,6 +147,7 @@ class VirtualAdhesiometer:
         p0 = 3.0 * force_N / (2.0 * math.pi * a_mm**2)
 
         def integrand(rho):
+            """The moment's integrand at radius ``rho`` (mm), N."""
             normal = p0 * math.sqrt(max(1.0 - (rho / a_mm) ** 2, 0.0))
             return 2.0 * math.pi * rho**2 * float(self.shear_stress_MPa(normal, temperature_C))
 

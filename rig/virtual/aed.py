@@ -130,6 +130,7 @@ class AEDAmplifier(PtyDevice):
 
     # -- input ------------------------------------------------------------------------
     def on_bytes(self, data: bytes) -> None:
+        """Take bytes from the host and answer each complete command."""
         self._buffer += data
         while True:
             m = re.search(rb"[;\n]", self._buffer)
@@ -266,6 +267,7 @@ class AEDAmplifier(PtyDevice):
 
     # -- continuous output ----------------------------------------------------------------
     def next_deadline(self) -> float | None:
+        """The next streamed frame's time, None when not streaming."""
         return self._next_due if self._remaining != 0 else None
 
     def on_tick(self, now: float) -> None:

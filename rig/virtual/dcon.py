@@ -63,6 +63,7 @@ class DconDevice(PtyDevice):
 
     # -- framing ----------------------------------------------------------------------
     def on_bytes(self, data: bytes) -> None:
+        """Take bytes from the host and answer each complete command."""
         self._buffer += data
         while b"\r" in self._buffer:
             raw, self._buffer = self._buffer.split(b"\r", 1)
@@ -99,6 +100,7 @@ class DconDevice(PtyDevice):
             self.reply(reply)
 
     def reply(self, text: str) -> None:
+        """Send ``text`` to the host (its address and checksum as configured)."""
         if self.reply_address is not None and text[:1] in "!?" and text[1:3] == self.aa:
             text = f"{text[0]}{self.reply_address:02X}{text[3:]}"
         if self.checksum_on:
@@ -107,6 +109,7 @@ class DconDevice(PtyDevice):
 
     @property
     def aa(self) -> str:
+        """The module's address as two hex digits."""
         return f"{self.address:02X}"
 
     # -- to override ------------------------------------------------------------------
@@ -124,6 +127,7 @@ class DconDevice(PtyDevice):
 
     # -- host watchdog ----------------------------------------------------------------
     def watchdog_command(self, body: str) -> str | None:
+        """The reply to a host-watchdog command ``body`` (status, reset, read, set …), None when not one."""
         aa = self.aa
         if body == "0":
             return f"!{aa}{self.watchdog_status:02X}"
@@ -151,11 +155,13 @@ class DconDevice(PtyDevice):
         return max(self.watchdog_timeout_s / self.time_scale, min(self.watchdog_timeout_s, WATCHDOG_HOST_FLOOR_S))
 
     def next_deadline(self) -> float | None:
+        """When the host watchdog trips next, None when disarmed or tripped."""
         if self.watchdog_enabled and not self.watchdog_status & WATCHDOG_TIMED_OUT:
             return self._last_host_ok + self.watchdog_host_s
         return None
 
     def on_tick(self, now: float) -> None:
+        """Trip the host watchdog when the host was silent too long at ``now``."""
         if (self.watchdog_enabled and not self.watchdog_status & WATCHDOG_TIMED_OUT
                 and now - self._last_host_ok >= self.watchdog_host_s):
             self.watchdog_status |= WATCHDOG_TIMED_OUT
@@ -207,6 +213,7 @@ class I7011(DconDevice):
 
     @property
     def format_byte(self) -> int:
+        """The configuration's data-format byte (checksum bit included)."""
         return (self.data_format & FORMAT_BITS) | (CHECKSUM_BIT if self.checksum_on else 0)
 
     def reading_text(self, temperature_C: float) -> str:
@@ -228,9 +235,11 @@ class I7011(DconDevice):
         self.set_heater(bool(self.do & 1))
 
     def watchdog_tripped(self) -> None:
+        """Outputs to their safe values on a watchdog trip."""
         self._set_do(self.safe_do)
 
     def command(self, lead: str, body: str) -> str | None:
+        """The I-7011's reply to a command (``lead`` and ``body``), None when silent."""
         aa = self.aa
         if lead == "#" and body == "":
             corrupt, self._corrupt_C = self._corrupt_C, 0.0

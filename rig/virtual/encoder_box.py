@@ -44,10 +44,12 @@ class EncoderBox(DconDevice):
         return (self._offset + self.read_counts()) & MASK32
 
     def broadcast(self, text: str) -> None:
+        """Latch the count on the synchronised-sampling broadcast (#**)."""
         if text == "#**":
             self.latched = self.count()
 
     def command(self, lead: str, body: str) -> str | None:
+        """The encoder module's reply to a command (``lead`` and ``body``), None when silent."""
         aa = self.aa
         if lead == "#" and body == "0":
             corrupt, self._corrupt_counts = self._corrupt_counts, 0

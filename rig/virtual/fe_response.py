@@ -65,6 +65,7 @@ class UpsettingResponse:
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> "UpsettingResponse":
+        """The compression response at ``path`` (None: the packaged one)."""
         return _load(str(path or DATA))
 
     # -- interpolation ----------------------------------------------------------------------

@@ -88,6 +88,7 @@ class TensionResponse:
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> "TensionResponse":
+        """The tension response at ``path`` (None: the packaged one)."""
         return _load(str(path or DATA))
 
     def out_of_range(self, n_eff, delta) -> list[str]:

@@ -118,15 +118,18 @@ class Specimen:
 
     @property
     def area0_mm2(self) -> float:
+        """The initial cross-section, mm²."""
         return math.pi * self.d0_mm**2 / 4.0
 
     @property
     def neck_mm(self) -> float:
+        """The neck's length, mm (d0 unless given, at most l0)."""
         ln = self.d0_mm if self.neck_length_mm is None else self.neck_length_mm
         return min(ln, self.l0_mm)
 
     @property
     def length0_mm(self) -> float:
+        """The initial gauge length (tension) or height (compression), mm."""
         return self.l0_mm if self.test == "tension" else self.h0_mm
 
     @classmethod
@@ -226,14 +229,17 @@ class Mechanics:
 
     # -- conditions -----------------------------------------------------------------
     def set_conditions(self, strain_rate_per_s: float, temperature_C: float) -> None:
+        """Set the strain rate (1/s) and temperature (°C) the flow stress is taken at."""
         self.strain_rate_per_s = strain_rate_per_s
         self.temperature_C = temperature_C
 
     def flow(self, eps_p):
+        """The flow stress at ``eps_p`` under the current conditions, MPa."""
         return float(self.material.flow_stress(eps_p, self.strain_rate_per_s, self.temperature_C))
 
     @property
     def fracture_strain(self) -> float:
+        """The fracture strain under the current conditions."""
         return self.material.fracture_strain_at(self.strain_rate_per_s, self.temperature_C)
 
     def considere_strain(self) -> float:
@@ -457,6 +463,7 @@ class FurnaceParams:
     max_step_s: float = 0.5
 
     def steady_state_C(self, power_fraction: float = 1.0) -> float:
+        """The furnace's steady temperature at ``power_fraction`` of the heater power, °C."""
         return furnace_steady_state_C(self.heater_power_W * power_fraction, self.ambient_C,
                                       self.loss_W_per_K, self.loss_W_per_K2)
 
@@ -474,6 +481,7 @@ class Furnace:
 
     @property
     def relay_on(self) -> bool:
+        """Whether the relay conducts (commanded on or stuck on)."""
         return self.commanded_on or self.relay_stuck_on
 
     def set_heater(self, on: bool) -> None:
@@ -482,6 +490,7 @@ class Furnace:
         self._record()
 
     def set_relay_stuck(self, stuck: bool) -> None:
+        """Set the relay's stuck-on fault."""
         self.relay_stuck_on = bool(stuck)
         self._record()
 
@@ -583,6 +592,7 @@ class RigModel:
 
     @property
     def state(self) -> SpecimenState:
+        """The specimen's state."""
         return self.mechanics.state
 
     @property
@@ -592,6 +602,7 @@ class RigModel:
 
     @property
     def temperature_C(self) -> float:
+        """The furnace's temperature, °C."""
         return self.furnace.temperature_C
 
     @property
@@ -602,6 +613,7 @@ class RigModel:
 
     @property
     def fractured(self) -> bool:
+        """Whether the specimen has fractured."""
         return self.mechanics.state.fractured
 
     def _update_conditions(self) -> None:
@@ -609,6 +621,7 @@ class RigModel:
 
     # -- commands ---------------------------------------------------------------------
     def start_crosshead(self) -> None:
+        """Start the crosshead (unless fractured or at the stroke limit)."""
         if not self.fractured and self.crosshead_mm < self.stroke_limit_mm:
             self.moving = True
             self.events.append((self.time_s, "crosshead_start"))
@@ -621,11 +634,13 @@ class RigModel:
         self._update_conditions()
 
     def stop_crosshead(self) -> None:
+        """Stop the crosshead."""
         if self.moving:
             self.moving = False
             self.events.append((self.time_s, "crosshead_stop"))
 
     def set_heater(self, on: bool) -> None:
+        """Switch the heater ``on`` or off."""
         self.furnace.set_heater(on)
 
     # -- time -------------------------------------------------------------------------
@@ -677,4 +692,5 @@ class RigModel:
         return self.furnace.temperature_C + (self.rng.normal(0.0, noise) if noise > 0 else 0.0)
 
     def post_test_measurements(self) -> dict[str, str]:
+        """The specimen's post-test measurements, as the record writes them."""
         return self.mechanics.post_test_measurements()

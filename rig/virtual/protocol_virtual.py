@@ -43,6 +43,7 @@ def register(url: str, device) -> None:
 
 
 def unregister(url: str) -> None:
+    """Forget the device at ``url``."""
     with _DEVICES_LOCK:
         _DEVICES.pop(url.lower(), None)
 
@@ -60,6 +61,7 @@ class Serial(SerialBase):
 
     # -- life cycle -------------------------------------------------------------------
     def open(self) -> None:
+        """Attach to the registered device (SerialException when open or unknown)."""
         if self.is_open:
             raise SerialException("Port is already open.")
         if self._port is None:
@@ -76,6 +78,7 @@ class Serial(SerialBase):
         self.is_open = True
 
     def close(self) -> None:
+        """Detach from the device."""
         if self._device is not None:
             self._device.detach(self)
         self.is_open = False
@@ -103,12 +106,14 @@ class Serial(SerialBase):
         return self._device
 
     def write(self, data) -> int:
+        """Send ``data`` to the device at the baud rate's pace; the bytes written."""
         device = self._check()
         data = bytes(data)
         device.host_write(data, BITS_PER_BYTE / self._baudrate)
         return len(data)
 
     def flush(self) -> None:
+        """Nothing to flush (checks the port is open)."""
         self._check()
 
     def read(self, size: int = 1) -> bytes:
@@ -135,21 +140,25 @@ class Serial(SerialBase):
 
     @property
     def in_waiting(self) -> int:
+        """Bytes waiting to be read."""
         self._check()
         with self._rx_lock:
             return len(self._rx)
 
     def reset_input_buffer(self) -> None:
+        """Drop the bytes waiting to be read."""
         self._check()
         with self._rx_lock:
             self._rx.clear()
             self._rx_event.clear()
 
     def reset_output_buffer(self) -> None:
+        """Nothing to drop (checks the port is open)."""
         self._check()
 
     @property
     def out_waiting(self) -> int:
+        """Always 0: writes are delivered at once."""
         return 0
 
     def _update_break_state(self) -> None:
@@ -163,16 +172,20 @@ class Serial(SerialBase):
 
     @property
     def cts(self) -> bool:
+        """Always True (no handshake lines)."""
         return True
 
     @property
     def dsr(self) -> bool:
+        """Always True (no handshake lines)."""
         return True
 
     @property
     def ri(self) -> bool:
+        """Always False (no handshake lines)."""
         return False
 
     @property
     def cd(self) -> bool:
+        """Always True (no handshake lines)."""
         return True

@@ -135,6 +135,7 @@ class PtyDevice:
 
     # -- life cycle -------------------------------------------------------------------
     def start(self) -> "PtyDevice":
+        """Start serving the device (its pty or in-process link); the device."""
         if not self._started:
             self._started = True
             if self.link == "pty":
@@ -218,6 +219,7 @@ class PtyDevice:
             self._byte_time_s = byte_time_s
 
     def detach(self, host) -> None:
+        """Detach ``host`` when it is the attached one."""
         with self._lock:
             if self._host is host:
                 self._host = None

@@ -117,6 +117,7 @@ class VirtualRig:
 
     @property
     def lock(self) -> threading.RLock:
+        """The lock over the rig's model and devices."""
         return self._lock
 
     def _loadcell_sample(self):
@@ -158,6 +159,7 @@ class VirtualRig:
 
     # -- life cycle ---------------------------------------------------------------------
     def start(self) -> "VirtualRig":
+        """Start the devices and the model's time; the rig."""
         with self._lock:
             self._t0 = self.clock.now() - self.model.time_s / self.time_scale
         for dev in self.devices.values():
@@ -195,6 +197,7 @@ class VirtualRig:
                 self._apply_due()
 
     def stop_crosshead(self) -> None:
+        """Stop the crosshead."""
         with self._lock:
             m = self.sync()
             m.stop_crosshead()

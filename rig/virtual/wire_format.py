@@ -66,6 +66,7 @@ def _cof_entry(cof: int) -> tuple[str, bool, tuple[str, ...], bool]:
 
 
 def is_known_cof(cof: int) -> bool:
+    """Whether ``cof`` is a known output format code."""
     try:
         _cof_entry(cof)
     except KeyError:
@@ -74,10 +75,12 @@ def is_known_cof(cof: int) -> bool:
 
 
 def is_binary_cof(cof: int) -> bool:
+    """Whether output format ``cof`` is binary."""
     return _cof_entry(cof)[0] != "text"
 
 
 def is_two_byte_cof(cof: int) -> bool:
+    """Whether output format ``cof`` is two bytes a value."""
     return _cof_entry(cof)[0] == "bin16"
 
 

@@ -81,6 +81,7 @@ def reached_the_end(last_time: float, returncode: int, error_lines: list[str]) -
 
 
 def ccx_executable() -> str:
+    """The CalculiX executable's path (FLOWCURVE_CCX or ``ccx`` on PATH); SolverError when absent."""
     exe = os.environ.get("FLOWCURVE_CCX", "ccx")
     path = shutil.which(exe)
     if path is None:
@@ -102,10 +103,12 @@ def ccx_version() -> str:
 
 
 def cache_dir() -> Path:
+    """The FE result cache folder (FLOWCURVE_FE_CACHE or ~/.cache/flowcurve/fe)."""
     return Path(os.environ.get("FLOWCURVE_FE_CACHE") or Path.home() / ".cache" / "flowcurve" / "fe")
 
 
 def deck_key(deck: str) -> str:
+    """The cache key of ``deck``: a hash of the CalculiX version and the deck."""
     return hashlib.sha256((ccx_version() + "\n" + deck).encode()).hexdigest()[:32]
 
 

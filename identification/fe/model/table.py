@@ -76,6 +76,7 @@ class UpsettingTable:
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> "UpsettingTable":
+        """The friction table at ``path`` (None: the packaged one)."""
         return _load(str(path or PACKAGE_TABLE))
 
     # -- interpolation --------------------------------------------------------------------
@@ -299,6 +300,7 @@ def swift_stress_on_grid(strain, n, eps0, K_MPa: float, E_MPa: float) -> np.ndar
     e = np.broadcast_to(np.asarray(strain, dtype=float)[None, None, :], (n.shape[0], eps0.shape[1], np.size(strain)))
 
     def flow(eps_p):
+        """Swift flow stress K·(ε0 + εp)^n, MPa."""
         return K_MPa * np.power(eps0 + eps_p, n)
 
     return flow(plastic_strain_at(e, flow, E=E_MPa))
@@ -451,6 +453,7 @@ def swift_hardening(eps_p, stress_MPa, start: float = SWIFT_FIT_FROM) -> tuple[f
     grid, ln_s = curve
 
     def fit(log_eps0):
+        """(coefficients, squared residual) of the Swift line in log space at ``log_eps0``."""
         A = np.column_stack([np.ones_like(grid), np.log(math.exp(log_eps0) + grid)])
         coef, *_ = np.linalg.lstsq(A, ln_s, rcond=None)
         return coef, float(np.sum((A @ coef - ln_s) ** 2))

@@ -45,11 +45,13 @@ class TensionModel:
 
     @classmethod
     def from_law(cls, d0_mm, l0_mm, elongation_mm, flow_stress, **kw) -> "TensionModel":
+        """The model with the plastic table of ``flow_stress`` (a function of εp, MPa)."""
         eps, sig = plastic_table(flow_stress)
         return cls(d0_mm, l0_mm, elongation_mm, tuple(float(x) for x in eps), tuple(float(x) for x in sig), **kw)
 
 
 def tension_deck(m: TensionModel) -> str:
+    """The CalculiX deck of tension model ``m`` (axisymmetric half specimen)."""
     R, L = m.d0_mm / 2.0, m.l0_mm / 2.0
     nr2, nz2 = 2 * m.nr, 2 * m.nz
     ids, nodes = {}, []
@@ -107,6 +109,7 @@ class TensionResult:
 
 
 def simulate_tension(m: TensionModel, *, require_complete: bool = True, timeout_s: float = 600.0, use_cache: bool = True) -> TensionResult:
+    """Run tension model ``m`` in CalculiX; its force–elongation and neck history."""
     out = run_deck(tension_deck(m), name=f"tension d0={m.d0_mm:g}", timeout_s=timeout_s, use_cache=use_cache, require_complete=require_complete)
     r_neck0 = m.d0_mm / 2.0 * (1.0 - m.imperfection)
     res = TensionResult(m, out.time, m.elongation_mm * out.time, out.totals["TOP"][:, 1] * SECTOR,

@@ -79,11 +79,13 @@ class UpsettingModel:
 
     @classmethod
     def from_law(cls, d0_mm, h0_mm, h_end_mm, mu, flow_stress, **kw) -> "UpsettingModel":
+        """The model with the plastic table of ``flow_stress`` (a function of εp, MPa)."""
         eps, sig = plastic_table(flow_stress)
         return cls(d0_mm, h0_mm, h_end_mm, mu, tuple(float(x) for x in eps), tuple(float(x) for x in sig), **kw)
 
     @property
     def stroke_mm(self) -> float:
+        """The stroke h0 − h_end, mm."""
         return self.h0_mm - self.h_end_mm
 
     def realising(self) -> "UpsettingModel":
@@ -101,10 +103,12 @@ class Mesh:
     elements: list = field(default_factory=list)  # 4 node numbers (1-based), counter-clockwise
 
     def add_node(self, r: float, z: float) -> int:
+        """Add node (r, z) in mm; its 1-based number."""
         self.nodes.append((r, z))
         return len(self.nodes)
 
     def add_quad(self, a: int, b: int, c: int, d: int) -> int:
+        """Add a quadrilateral of nodes a–d (counter-clockwise); its 1-based number."""
         quad = [a, b, c, d]
         pts = np.array([self.nodes[k - 1] for k in quad])
         area2 = np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1])
@@ -243,12 +247,14 @@ FOLD_OVER_GAP = 0.05  # a side node this part of its first distance from the pla
 
 
 def simulate_upsetting(m: UpsettingModel, *, require_complete: bool = True, timeout_s: float = 600.0, use_cache: bool = True) -> UpsettingResult:
+    """Run upsetting model ``m`` in CalculiX; its force–stroke and bulge history."""
     out: CcxOutput = run_deck(upsetting_deck(m), name=f"upsetting mu={m.mu:g} h0/d0={m.h0_mm / m.d0_mm:.3g}",
                               timeout_s=timeout_s, use_cache=use_cache, require_complete=require_complete)
     return upsetting_result(m, out)
 
 
 def upsetting_result(m: UpsettingModel, out: CcxOutput) -> UpsettingResult:
+    """The UpsettingResult of model ``m`` from CalculiX's output ``out``."""
     mesh, s = build_mesh(m)
     t = out.time
     rf = out.totals["PLN"]
