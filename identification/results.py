@@ -146,6 +146,7 @@ class InverseHardening:
         return static_form(self.law).func(eps_p, **self.params)
 
     def as_dict(self) -> dict:
+        """result.json's ``hardening`` object: the law, its constants by their keys, their standard errors and the errors."""
         from flowcurve.identification.laws.hardening import static_form
 
         law = static_form(self.law)
@@ -165,6 +166,7 @@ class TensionInverseHardening:
     method: str = "inverse_fe"
 
     def as_dict(self) -> dict:
+        """result.json's ``hardening`` object: the refit's, with the method, what it was fitted to and its range."""
         out = {**self.fit.as_dict(), "method": self.method, "fitted_to": self.fitted_to, "strain_range": self.strain_range}
         if self.fit_poor:
             out["quality"] = "poor"

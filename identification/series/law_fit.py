@@ -85,6 +85,8 @@ class LawFit:
         The law and its stated inputs.
     at_bound : dict
         Constants that ended on a bound ("lower", "upper").
+    point_u_terms : list of str
+        The terms of each point's uncertainty that weighed the fit (``floor``, ``start``, ``friction`` …).
     """
 
     method: str
@@ -197,15 +199,8 @@ def fit_law(members: Sequence[SeriesMember], law: Law | str, *, conditions: dict
     fixed, why = dict(fixed or {}), dict(fixed_why or {})
     eps, sig, rate, temp, _, terms = stack_terms(members, max_points, shape_error_pct)
     u = terms.u
-    unsupported = getattr(law, "unsupported", None)
-    for name, reason in (unsupported(eps, rate, temp) if unsupported else {}).items():
-        if name not in fixed:
-            fixed[name], why[name] = 0.0, reason
-    first = start or law.guess(eps, sig, rate, temp, weights=1.0 / u, **conditions)
-    params = lmfit.Parameters()
-    for p in law.parameters:
-        value = fixed.get(p.name, first[p.name])
-        params.add(p.name, value=float(np.clip(value, p.lower, p.upper)), min=p.lower, max=p.upper, vary=p.name not in fixed)
+    _fix_unsupported(law, eps, rate, temp, fixed, why)
+    params = _parameters(law, fixed, start or law.guess(eps, sig, rate, temp, weights=1.0 / u, **conditions))
 
     def residual(pars, weights_u):
         """Misfits of the law at ``pars``, in units of each point's uncertainty ``weights_u``."""
@@ -226,6 +221,25 @@ def fit_law(members: Sequence[SeriesMember], law: Law | str, *, conditions: dict
                  report=lmfit.fit_report(result), point_u_terms=terms.terms(slopes))
     fill_errors(fit, members, max_points)
     return fit
+
+
+def _fix_unsupported(law: Law, eps, rate, temp, fixed: dict[str, float], why: dict[str, str]) -> None:
+    """Fix at 0, with the reason, the terms ``law.unsupported`` says the points cannot tell (in place)."""
+    unsupported = getattr(law, "unsupported", None)
+    for name, reason in (unsupported(eps, rate, temp) if unsupported else {}).items():
+        if name not in fixed:
+            fixed[name], why[name] = 0.0, reason
+
+
+def _parameters(law: Law, fixed: dict[str, float], first: dict[str, float]):
+    """lmfit Parameters of ``law``: the fixed ones held, the others from ``first`` clipped to their bounds."""
+    import lmfit
+
+    params = lmfit.Parameters()
+    for p in law.parameters:
+        value = fixed.get(p.name, first[p.name])
+        params.add(p.name, value=float(np.clip(value, p.lower, p.upper)), min=p.lower, max=p.upper, vary=p.name not in fixed)
+    return params
 
 
 def _minimize(residual, params, weights_u, law):
