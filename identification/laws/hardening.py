@@ -256,6 +256,19 @@ def _weighted_points(eps_p, stress_MPa, extra_points, weights) -> tuple[np.ndarr
     return eps, sig, w
 
 
+def undetermined(spec, values: dict[str, float], stderr: dict[str, float | None]) -> list[str]:
+    """The keys of the constants a fit does not determine: not on a bound, and with no standard
+    error or one at least the value itself (|v| ≤ se: the interval v ± se holds 0)."""
+    out = []
+    for name, key in zip(spec.names, spec.keys):
+        if _on_bound(values[name], *spec.bounds[name]):
+            continue  # named by its own warning
+        se = stderr.get(name)
+        if se is None or not np.isfinite(se) or se >= abs(values[name]):
+            out.append(key)
+    return out
+
+
 def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points: Iterable[Sequence[float]] = (),
                   weights=None) -> HardeningFit:
     """Least-squares fit of a hardening law (lmfit) to a true curve σ(εp), global then local.
@@ -298,6 +311,11 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
                             "(another law, --fit-range or --fracture-point exclude may)")
     if max_pct > POOR_FIT_PCT:
         warnings.append(f"{law} fit is poor: max error {max_pct:.3g} % (> {POOR_FIT_PCT:g} %), rms {rms_pct:.3g} %")
+    loose = undetermined(spec, values, stderr)
+    if loose:
+        warnings.append(f"{law} {', '.join(loose)} not determined by this curve (no standard error, or one above the value): "
+                        f"the constants trade off and only their set traces the curve (max error {max_pct:.3g} %); "
+                        "do not read or compare them one by one (a law with fewer constants may be determined)")
     return HardeningFit(law=law, method="least_squares", params=values, stderr=stderr, correlations=correl,
                         fit_error_pct=max_pct, rms_error_pct=rms_pct,
                         strain_range=(float(np.min(eps)), float(np.max(eps))), report=best.fit_report(), warnings=warnings,
@@ -323,12 +341,16 @@ def choose_law(eps_p, stress_MPa, *, weights=None, extra_points: Iterable[Sequen
     ranked = sorted((f for f in fits.values() if np.isfinite(f.aic)), key=lambda f: f.aic)
     if not ranked:
         raise IdentificationError(f"--law best: no law could be fitted ({'; '.join(f'{k}: {v}' for k, v in failed.items())})")
-    close = [f for f in ranked if f.aic - ranked[0].aic <= PARSIMONY_DELTA_AIC]
+    loose = {f.law: undetermined(static_form(f.law), f.params, f.stderr) for f in ranked}
+    eligible = [f for f in ranked if not loose[f.law]] or ranked
+    close = [f for f in eligible if f.aic - eligible[0].aic <= PARSIMONY_DELTA_AIC]
     won = min(close, key=lambda f: (len(f.params), f.aic))
-    runner = next((f for f in ranked if f is not won), None)
+    runner = next((f for f in eligible if f is not won), None)
     won.law_choice = {
-        "by": f"AIC on the same weighted points; within {PARSIMONY_DELTA_AIC:g} of the lowest, the fewest constants",
+        "by": (f"AIC on the same weighted points among the laws whose constants the curve determines; within "
+               f"{PARSIMONY_DELTA_AIC:g} of the lowest, the fewest constants"),
         "chosen": won.law, "lowest_aic": ranked[0].law,
+        "undetermined": {law: keys for law, keys in loose.items() if keys},
         "next": None if runner is None else runner.law,
         "delta_aic_to_next": None if runner is None else float(runner.aic - won.aic),
         "aic": {f.law: float(f.aic) for f in ranked}, "failed": failed,
@@ -343,7 +365,13 @@ def law_choice_text(choice: dict) -> str:
     delta = choice["delta_aic_to_next"]
     how = (f"AIC {delta:.1f} below the next ({choice['next']})" if delta >= 0 else
            f"AIC {-delta:.1f} above {choice['next']}, within {PARSIMONY_DELTA_AIC:g}: as good with fewer constants")
-    return f"--law best: {choice['chosen']} by {how} (ΔAIC > 10: the others have essentially no support)"
+    support = ("; ΔAIC > 10: the next has essentially no support" if delta > 10 else
+               "; ΔAIC 2–10: the next has less support, not none" if delta > PARSIMONY_DELTA_AIC else "")
+    lower = choice.get("lowest_aic")
+    loose = choice.get("undetermined") or {}
+    passed = (f"; {lower} fits closer but the curve does not determine its {', '.join(loose[lower])}"
+              if lower and lower != choice["chosen"] and lower in loose else "")
+    return f"--law best: {choice['chosen']} by {how}{support}{passed}"
 
 
 def resolve_law(law: str, eps_p, stress_MPa) -> tuple[str, dict | None]:

@@ -57,3 +57,29 @@ def test_a_rate_law_or_an_unknown_name_is_one_line_before_any_work(tmp_path, cap
     assert main(["identify", str(path), "--law", "zerilli_armstrong_bc", "--out", str(tmp_path / "o"), "--no-plots"]) != 0
     err = capsys.readouterr().err
     assert "unknown law 'zerilli_armstrong_bc' (did you mean 'zerilli_armstrong_bcc'?)" in err and "Traceback" not in err
+
+
+COMPRESSION_EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "data" / "compression-steel45.csv"
+
+
+def test_best_never_chooses_a_law_whose_constants_the_curve_does_not_determine(tmp_path, capsys):
+    """The virtual rig's compression record: Swift–Voce's seven constants fit closest (lowest AIC) but
+    trade off without bound (σ0 0.001 ± 2·10⁷ MPa before this rule); best takes the lowest AIC among
+    the determined laws, every constant of the winner within its own value (|v| > se), and says so."""
+    assert main(["identify", str(COMPRESSION_EXAMPLE), "--law", "best", "--out", str(tmp_path), "--no-plots"]) == 0
+    printed = capsys.readouterr().out
+    h = json.loads((tmp_path / "compression-steel45" / "result.json").read_text())["hardening"]
+    choice = h["law_choice"]
+    assert h["law"] == choice["chosen"] and choice["chosen"] not in choice["undetermined"]
+    for p in get_law(choice["chosen"]).parameters:
+        if p.key in h:
+            assert h[f"{p.key}_stderr"] is not None and h[f"{p.key}_stderr"] < abs(h[p.key]), (p.key, h)
+    assert choice["lowest_aic"] in choice["undetermined"] and choice["lowest_aic"] != choice["chosen"]
+    assert f"{choice['lowest_aic']} fits closer but the curve does not determine" in printed
+
+
+def test_a_named_law_whose_constants_trade_off_says_so(tmp_path):
+    record = load_record(COMPRESSION_EXAMPLE)
+    h = identify(record, law="swift_voce").result["hardening"]
+    assert h["law"] == "swift_voce"  # the law asked for is kept, with the warning
+    assert any("not determined by this curve" in w for w in h["warnings"]), h["warnings"]

@@ -97,3 +97,22 @@ def test_a_rate_or_temperature_law_on_one_record_is_refused_naming_fit():
             fit_hardening(EPS, 300 + 100 * EPS, name)
     with pytest.raises(IdentificationError, match="did you mean 'hollomon'"):
         fit_hardening(EPS, 300 + 100 * EPS, "holomon")
+
+
+def test_undetermined_names_the_constants_whose_interval_holds_zero():
+    from flowcurve.identification.laws.hardening import static_form, undetermined
+
+    spec = static_form("voce")
+    values = {"sigma0": 250.0, "Q": 200.0, "b": 15.0}
+    assert undetermined(spec, values, {"sigma0": 2.0, "Q": 3.0, "b": 0.5}) == []
+    assert undetermined(spec, values, {"sigma0": 2.0, "Q": 250.0, "b": None}) == ["Q_MPa", "b"]
+
+
+def test_law_choice_text_claims_no_support_only_beyond_ten():
+    from flowcurve.identification.laws.hardening import law_choice_text
+
+    base = {"chosen": "swift", "next": "voce", "lowest_aic": "swift", "undetermined": {}}
+    assert "essentially no support" in law_choice_text({**base, "delta_aic_to_next": 12.0})
+    assert "less support, not none" in law_choice_text({**base, "delta_aic_to_next": 5.0})
+    text = law_choice_text({**base, "delta_aic_to_next": 1.0})
+    assert "support" not in text and "AIC 1.0 below the next (voce)" in text
