@@ -540,6 +540,11 @@ def _fit_warnings(fit: LawFit, band: dict, shape_error_pct: float, names: Sequen
     out += [f"{p} ended on its {side} bound ({fit.params[p]:g}): the series does not identify it; no uncertainty is stated"
             for p, side in fit.at_bound.items()]
     key = {p.name: p.key for p in fit.law.parameters}
+    free = [p for p in fit.law.names if p not in fit.fixed and p not in fit.at_bound]
+    open_ = [key[p] for p in free if fit.stderr.get(p) is None or not math.isfinite(fit.stderr[p]) or fit.stderr[p] >= abs(fit.params[p])]
+    if open_:
+        out.append(f"{', '.join(open_)} not determined by the series (no standard error, or one above the value): the "
+                   "constants trade off and only their set traces the curves; do not read or compare them one by one")
     loose = {p: 100.0 * band[key[p]] / abs(fit.params[p]) for p in names
              if band.get(key[p]) is not None and abs(fit.params[p]) > 0 and p not in fit.at_bound}
     loose = {p: v for p, v in loose.items() if v > LOOSE_CONSTANT_PCT}
