@@ -277,8 +277,13 @@ def _plots(series: SeriesFit, folder: Path) -> dict[str, str]:
 
 
 def summary(series: SeriesFit, path: Path) -> str:
-    """What the terminal shows after a fit: constants ± one standard error, range, errors."""
+    """What the terminal shows after a fit: constants ± their total standard uncertainty (the fit's
+    standard error and the curve-shape band in quadrature, both stated), range, errors."""
+    from flowcurve.identification.series.law_fit import total_uncertainty
+
     f = series.fit
+    band = series.shape_uncertainty or {}
+    total = total_uncertainty(f, band)
     ref, law = f.reference, f.law
     head = f"{law.display_name}, {series.method} fit over {len(series.members)} records"
     if ref is not None:
@@ -286,10 +291,12 @@ def summary(series: SeriesFit, path: Path) -> str:
                  f"[{ref.temperature_source}], melting {ref.melt_temperature_C:g} °C)")
     lines = [head]
     for p, v in f.params.items():
-        se, unit = f.stderr.get(p), law.parameter(p).unit
+        se, unit, key = f.stderr.get(p), law.parameter(p).unit, law.parameter(p).key
+        u, shape = total.get(key), band.get(key)
+        parts = ", ".join(x for x in (f"fit {se:.2g}" if se is not None else "", f"curve shape {shape:.2g}" if shape is not None else "") if x)
         tag = (f" (fixed, not identified: {f.fixed_why.get(p, 'by the user')})" if p in f.fixed
                else f" (on its {f.at_bound[p]} bound: not identified)" if p in f.at_bound
-               else f" ± {se:.3g}" if se is not None else " (no uncertainty)")
+               else f" ± {u:.3g} ({parts}; standard uncertainty)" if u is not None else " (no uncertainty)")
         lines.append(f"  {p} = {v:.5g}{' ' + unit if unit else ''}{tag}")
     d = series.covered_range()
     lines.append(f"  identified on: plastic strain {d['plastic_strain'][0]:.3g}–{d['plastic_strain'][1]:.3g}, "

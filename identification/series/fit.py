@@ -530,8 +530,9 @@ def _fit_series_law(members: list[SeriesMember], law, *, method: str, fixed: dic
 
 
 def _fit_warnings(fit: LawFit, band: dict, shape_error_pct: float, names: Sequence[str]) -> list[str]:
-    """A poor fit (worst records named), constants on a bound (stated as such, no percentage), and constants
-    among ``names`` a ``shape_error_pct`` shape error moves more than LOOSE_CONSTANT_PCT."""
+    """A poor fit (worst records named), constants on a bound (stated as such, no percentage), constants
+    whose total uncertainty (:func:`.law_fit.total_uncertainty`) reaches their value (not determined), and
+    constants among ``names`` a ``shape_error_pct`` shape error moves more than LOOSE_CONSTANT_PCT."""
     out = []
     if fit.fit_error_pct > POOR_FIT_PCT:
         worst = sorted(fit.record_errors.items(), key=lambda kv: -kv[1]["fit_error_pct"])[:3]
@@ -540,10 +541,12 @@ def _fit_warnings(fit: LawFit, band: dict, shape_error_pct: float, names: Sequen
     out += [f"{p} ended on its {side} bound ({fit.params[p]:g}): the series does not identify it; no uncertainty is stated"
             for p, side in fit.at_bound.items()]
     key = {p.name: p.key for p in fit.law.parameters}
+    total = total_uncertainty(fit, band)
     free = [p for p in fit.law.names if p not in fit.fixed and p not in fit.at_bound]
-    open_ = [key[p] for p in free if fit.stderr.get(p) is None or not math.isfinite(fit.stderr[p]) or fit.stderr[p] >= abs(fit.params[p])]
+    open_ = [key[p] for p in free if total.get(key[p]) is None or not math.isfinite(total[key[p]]) or total[key[p]] >= abs(fit.params[p])]
     if open_:
-        out.append(f"{', '.join(open_)} not determined by the series (no standard error, or one above the value): the "
+        out.append(f"{', '.join(open_)} not determined by the series (no uncertainty, or a total one — fit and curve shape — "
+                   "above the value): the "
                    "constants trade off and only their set traces the curves; do not read or compare them one by one")
     loose = {p: 100.0 * band[key[p]] / abs(fit.params[p]) for p in names
              if band.get(key[p]) is not None and abs(fit.params[p]) > 0 and p not in fit.at_bound}
