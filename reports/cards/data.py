@@ -338,6 +338,9 @@ def card_data_from_fit(fit: dict, path="<memory>", **overrides) -> CardData:
     """
     rng = fit.get("range") or {}
     law_name, law_values, stderr = _law(fit, path)
+    total = fit.get("total_uncertainty")  # the fit's standard error and the curve-shape band in quadrature, where the fit states it
+    if isinstance(total, dict):
+        stderr = {**stderr, **{str(k): v for k, v in total.items() if isinstance(v, (int, float))}}
     jc = law_name == "johnson_cook"
     rates = _pair(rng.get("strain_rate_per_s"), "range.strain_rate_per_s", path)
     temps = _pair(rng.get("temperature_C"), "range.temperature_C", path)
@@ -444,6 +447,8 @@ def header_lines(card: CardData, units: UnitSystem, solver: str, temperature_not
         f"unit system: {units.name} (length {units.name.split('-')[0]}, time {units.name.split('-')[1]}, "
         f"mass {units.name.split('-')[2]}, force {units.force_name}, stress {units.stress_name}); {temperature_note}",
         law_line(card, pm),
+        "+/-: standard uncertainty (k = 1) of each constant, the fit's standard error and the curve-shape band in "
+        "quadrature where the fit file states both (total_uncertainty), else the standard error alone",
         "identified on: " + "; ".join(card.valid_range_text()),
         "WARNING: valid only on the range above. Extrapolation beyond it (larger strains, the "
         "high strain rates and temperatures of machining) is the user's risk.",

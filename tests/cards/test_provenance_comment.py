@@ -27,3 +27,15 @@ def test_the_card_names_every_record_checksum_and_the_options(fit_file, fmt):
 def test_a_fit_file_from_before_provenance_says_so(fit_file):
     card = write_card(load_card_data(fit_file()), "calculix", "mm-s-t-N-MPa")
     assert "provenance: fit file carries none" in card
+
+
+def test_the_constants_carry_the_fits_total_uncertainty_where_it_states_one(fit_file, tmp_path):
+    """A series fit states each constant's total standard uncertainty (fit and curve shape, fit.json
+    total_uncertainty): the card's comment prints that, not the fit's standard error alone, and says what ± is."""
+    plain = write_card(load_card_data(fit_file()), "lsdyna", "mm-s-t-N-MPa").replace("\n$   ", " ")
+    total = write_card(load_card_data(fit_file(total_uncertainty={"A_MPa": 12.5, "B_MPa": 40.0, "n": 0.02, "C": None, "m": None})),
+                       "lsdyna", "mm-s-t-N-MPa").replace("\n$   ", " ")
+    assert "A = 105 +/- 2.1 MPa" in plain and "B = 1392 +/- 35 MPa" in plain
+    assert "A = 105 +/- 12 MPa" in total and "B = 1392 +/- 40 MPa" in total and "n = 0.642 +/- 0.02" in total
+    flat = total
+    assert "standard uncertainty (k = 1)" in flat
