@@ -71,16 +71,48 @@ def _card_block(fmt, fit_path: Path, material: str | None, units: str, cards_dir
     return Link(f"{label} ({units}{contents}): {href}", href), True
 
 
+def fit_law_rows(fit: dict) -> tuple[str, str, list[list[str]]]:
+    """(law name, equation, rows [constant, value ± U (k = 2), how]) of a fit.json: its law block's
+    constants (a v1 file is Johnson–Cook's), U twice the total standard uncertainty (the fit's
+    standard error and the curves' shape band, fit.json ``total_uncertainty``) where stated, else twice
+    the standard error; a fixed constant or one on its bound has no U and says why."""
+    from flowcurve.identification.laws.base import get_law
+    from flowcurve.identification.laws.fit_file import law_of_fit
+
+    total, fixed, bound = (fit.get(k) or {} for k in ("total_uncertainty", "fixed", "at_bound"))
+    if isinstance(fit.get("law"), dict):
+        law, values = law_of_fit(fit)
+        stderr = {**{k[:-7]: v for k, v in fit.items() if k.endswith("_stderr")}, **(fit["law"].get("stderr") or {})}
+        keyed = [(p.key, p.name, f"{p.name}{', ' + p.unit if p.unit else ''}", values.get(p.name)) for p in law.parameters]
+    else:
+        law, stderr = get_law("johnson_cook"), {k[:-7]: v for k, v in fit.items() if k.endswith("_stderr")}
+        keyed = [(key, key.split("_")[0], label, fit.get(key)) for key, label in FIT_CONSTANTS]
+    rows = []
+    for key, name, label, value in keyed:
+        u = total.get(key) if isinstance(total.get(key), (int, float)) else stderr.get(key)
+        if key in fixed or name in fixed:
+            how, u = "given, not identified", None
+        elif key in bound or name in bound:
+            how, u = f"on its {bound.get(key) or bound.get(name)} bound: not identified", None
+        else:
+            how = "fitted"
+        U = 2.0 * u if isinstance(u, (int, float)) else None
+        rows.append([label, value_with_U(value, U, STEPS.get(key)), how])
+    equation = JC_EQUATION if law.name == "johnson_cook" else f"{law.display_name}: {fit['law'].get('equation') or law.equation}"
+    return law.name, equation, rows
+
+
 def fit_blocks_factory(units: str, cards_dir: Path | None, link_base: Path | None, overrides: dict):
     """The report's fit section builder for this unit system, cards folder and constants."""
     def fit_blocks(fit_path: Path, fit: dict, material: str | None, report: Report) -> list:
-        """Constants ± U (k = 2 on the fit's standard errors), conditions, range, errors, plots, card link."""
-        rows = []
-        for key, label in FIT_CONSTANTS:
-            stderr = fit.get(f"{key}_stderr")
-            given = key in (fit.get("fixed") or {})
-            U = 2.0 * stderr if isinstance(stderr, (int, float)) and not given else None
-            rows.append([label, value_with_U(fit.get(key), U, STEPS.get(key)), "given, not identified" if given else "fitted"])
+        """The fitted law's constants ± U (k = 2, :func:`fit_law_rows`), conditions, range, errors, plots, card link."""
+        from flowcurve.errors import IdentificationError
+        from flowcurve.identification.laws.base import display_name_of
+
+        try:
+            law_name, equation, rows = fit_law_rows(fit)
+        except IdentificationError as exc:
+            raise ReportError(f"{fit_path}: {exc}") from None
         rng = fit.get("range") or {}
 
         def span(key, step, unit=""):
@@ -88,9 +120,10 @@ def fit_blocks_factory(units: str, cards_dir: Path | None, link_base: Path | Non
             r = rng.get(key)
             return f"{format_step(r[0], step)} – {format_step(r[1], step)}{unit}" if isinstance(r, list) and len(r) == 2 else "–"
 
-        facts = [("method", str(fit.get("method", "–"))), ("reference strain rate", f"{_g(fit.get('ref_strain_rate_per_s'))} 1/s"),
-                 ("reference temperature", f"{format_step(fit.get('ref_temperature_C'), 1.0)} °C"),
-                 ("melting temperature", f"{format_step(fit.get('melt_temperature_C'), 1.0)} °C"),
+        jc_facts = [("reference strain rate", f"{_g(fit.get('ref_strain_rate_per_s'))} 1/s"),
+                    ("reference temperature", f"{format_step(fit.get('ref_temperature_C'), 1.0)} °C"),
+                    ("melting temperature", f"{format_step(fit.get('melt_temperature_C'), 1.0)} °C")]
+        facts = [("method", str(fit.get("method", "–"))), *(jc_facts if law_name == "johnson_cook" else []),
                  ("identified on: plastic strain", span("plastic_strain", 0.001)),
                  ("identified on: strain rate", span("strain_rate_per_s", None, " 1/s")),
                  ("identified on: temperature", span("temperature_C", 1.0, " °C")),
@@ -100,10 +133,11 @@ def fit_blocks_factory(units: str, cards_dir: Path | None, link_base: Path | Non
                       for r in fit.get("records") or [] if isinstance(r, dict)]
         if fit.get("equation"):
             report.for_engineer(f"fit.json equation: {fit['equation']}")
-        blocks = [Heading("Johnson–Cook fit of the series"), Para(JC_EQUATION, "note"),
+        blocks = [Heading(f"{display_name_of(law_name)} fit of the series"), Para(equation, "note"),
                   Table(["constant", "value ± U (k = 2)", ""], rows,
-                        "series: one set of constants fitted to all specimens together; U from this fit's statistics "
-                        "(it does not hold the spread between specimens, see the per-specimen constants)"), Facts(facts)]
+                        "series: one set of constants fitted to all specimens together; U from this fit's statistics and, "
+                        "where the fit states it, the curves' shape error (it does not hold the spread between specimens, "
+                        "see the per-specimen constants)"), Facts(facts)]
         blocks += [Para(customer_text(str(w), report), "warn") for w in fit.get("warnings") or []]
         if per_record:
             blocks.append(Table(["record", "temperature, °C", "strain rate, 1/s", "max error, %", "rms error, %"], per_record,

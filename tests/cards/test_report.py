@@ -102,7 +102,10 @@ def test_report_of_a_real_series_fit(tmp_path):
                         cards_dir=tmp_path / "cards", link_base=tmp_path)
     fit = json.loads((root / "fit" / "fit.json").read_text())
     assert fit["A_MPa"] == pytest.approx(105.0, rel=1e-3)  # the law the series was made from
-    assert f"<td class='num'>{value_with_U(fit['A_MPa'], 2 * fit['A_MPa_stderr'], 1.0)}</td>" in text
+    # U = 2 × the total standard uncertainty (the fit's standard error and the curves' shape band), not the standard error alone
+    assert fit["total_uncertainty"]["A_MPa"] > fit["A_MPa_stderr"]
+    assert f"<td class='num'>{value_with_U(fit['A_MPa'], 2 * fit['total_uncertainty']['A_MPa'], 1.0)}</td>" in text
+    assert "Johnson–Cook fit of the series" in text
     assert len(images(text)) > len(SPECIMENS)  # the fit's plots too
     card = next((tmp_path / "cards").glob("*.k")).read_text()
     assert "*MAT_JOHNSON_COOK" in card and "mm-ms-kg-kN-GPa" in text
@@ -159,3 +162,23 @@ def test_empty_folder_is_a_one_line_error(tmp_path, capsys):
         build_report(tmp_path)
     assert main(["report", str(tmp_path / "missing")]) == 2
     assert "no such folder" in capsys.readouterr().err
+
+
+def test_report_of_another_laws_series_fit_names_that_law_and_its_constants(tmp_path):
+    """A Hensel–Spittel series fit (fit.json v2's law block) is reported as Hensel–Spittel with its own
+    constants ± 2 × their total uncertainty — not under Johnson–Cook's heading with JC's empty columns."""
+    from flowcurve.identification.laws.base import get_law
+    from flowcurve.reports.report import fit_law_rows
+
+    law = get_law("hensel_spittel")
+    params = {p.key: v for p, v in zip(law.parameters, (1500.0, -0.0028, 0.16, 0.13, 0.0005, 4e-5, -0.33, 1e-7, -0.002))}
+    total = {k: abs(v) * 0.1 for k, v in params.items()}
+    total["m8_per_C"] = None
+    fit = {"schema": "flowcurve-fit/2", "law": {"name": "hensel_spittel", "parameters": params, "stderr": {}, "conditions": {}},
+           "total_uncertainty": total, "fixed": {}, "at_bound": {"m8": "lower"}}
+    name, equation, rows = fit_law_rows(fit)
+    assert name == "hensel_spittel" and equation.startswith("Hensel–Spittel: ")
+    by_label = {r[0]: r for r in rows}
+    assert by_label["A, MPa"][1] == value_with_U(1500.0, 300.0, None) and by_label["A, MPa"][2] == "fitted"
+    assert by_label["m8, 1/°C"][2] == "on its lower bound: not identified" and "±" not in by_label["m8, 1/°C"][1]
+    assert [r[0].split(",")[0] for r in rows] == [p.name for p in law.parameters]
