@@ -7,16 +7,21 @@ from flowcurve.acquisition.session import DriverRig
 from flowcurve.rig.encoder import CrossheadEncoder
 
 
-def test_a_reading_taken_on_the_retry_lies_within_the_answered_request_and_its_reply(fake_port):
-    fake = fake_port([(b"#020\r", None), (b"#020\r", b">00000064\r")])  # the first reply is dropped
-    sent = []
-    write = fake.write
+def timed_writes(fake) -> list[float]:
+    """The fake port's clock at each write, in a list that fills as the driver writes."""
+    sent, write = [], fake.write
 
     def timed_write(data):
         sent.append(fake.clock.now())
         return write(data)
 
     fake.write = timed_write
+    return sent
+
+
+def test_a_reading_taken_on_the_retry_lies_within_the_answered_request_and_its_reply(fake_port):
+    fake = fake_port([(b"#020\r", None), (b"#020\r", b">00000064\r")])  # the first reply is dropped
+    sent = timed_writes(fake)
     enc = CrossheadEncoder("fake://enc", timeout_s=0.05, opener=fake.opener).open()
     rig = SimpleNamespace(timebase=fake.clock, encoder=enc, _to_clock=lambda t_host: t_host,
                           _narrowest_half_s=float("inf"), _position_kept_at=-float("inf"),
@@ -33,14 +38,7 @@ def test_a_temperature_taken_on_the_retry_lies_within_the_answered_request_and_i
     from flowcurve.rig.furnace import Furnace
 
     fake = fake_port([(b"#01\r", None), (b"#01\r", b">+0600.25\r")])  # the first reply is dropped
-    sent = []
-    write = fake.write
-
-    def timed_write(data):
-        sent.append(fake.clock.now())
-        return write(data)
-
-    fake.write = timed_write
+    sent = timed_writes(fake)
     fur = Furnace("fake://fur", timeout_s=0.05, opener=fake.opener, max_temperature_C=900.0, data_format=0).open()
     checked = []
     rig = SimpleNamespace(timebase=fake.clock, furnace=fur, _to_clock=lambda t_host: t_host,
