@@ -257,14 +257,17 @@ def _weighted_points(eps_p, stress_MPa, extra_points, weights) -> tuple[np.ndarr
 
 
 def undetermined(spec, values: dict[str, float], stderr: dict[str, float | None]) -> list[str]:
-    """The keys of the constants a fit does not determine: not on a bound, and with no standard
-    error or one at least the value itself (|v| ≤ se: the interval v ± se holds 0)."""
+    """The keys of the constants a fit does not determine: not on a bound, and with a standard error
+    at least the value itself (|v| ≤ se: the interval v ± se holds 0), or with none where no constant
+    sits on a bound (a singular covariance; with one on its bound lmfit states no errors at all, and
+    that constant's own warning says why)."""
+    bound = [name for name in spec.names if _on_bound(values[name], *spec.bounds[name])]
     out = []
     for name, key in zip(spec.names, spec.keys):
-        if _on_bound(values[name], *spec.bounds[name]):
+        if name in bound:
             continue  # named by its own warning
         se = stderr.get(name)
-        if se is None or not np.isfinite(se) or se >= abs(values[name]):
+        if (se is None or not np.isfinite(se)) and not bound or (se is not None and np.isfinite(se) and se >= abs(values[name])):
             out.append(key)
     return out
 

@@ -106,6 +106,10 @@ def test_undetermined_names_the_constants_whose_interval_holds_zero():
     values = {"sigma0": 250.0, "Q": 200.0, "b": 15.0}
     assert undetermined(spec, values, {"sigma0": 2.0, "Q": 3.0, "b": 0.5}) == []
     assert undetermined(spec, values, {"sigma0": 2.0, "Q": 250.0, "b": None}) == ["Q_MPa", "b"]
+    # a constant on its bound: lmfit states no errors at all, which says nothing of the others (46NTAV's JC: A on 0,
+    # B 1415 ± 2.7 MPa and n 0.039 ± 0.0025 once the errors are taken without it)
+    assert undetermined(spec, {**values, "sigma0": 0.0}, {"sigma0": None, "Q": None, "b": None}) == []
+    assert undetermined(spec, {**values, "sigma0": 0.0}, {"sigma0": None, "Q": 250.0, "b": None}) == ["Q_MPa"]
 
 
 def test_law_choice_text_claims_no_support_only_beyond_ten():
