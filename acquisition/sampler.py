@@ -81,11 +81,18 @@ class Stream:
             return self._t[-1] if self._t else -np.inf
 
 
-def interpolate_at(t: np.ndarray, ts: np.ndarray, vs: np.ndarray) -> np.ndarray:
-    """Linear interpolation of the stream (ts, vs) at times t; ends held; NaN if empty."""
+def interpolate_at(t: np.ndarray, ts: np.ndarray, vs: np.ndarray, *, hold_ends: bool = False) -> np.ndarray:
+    """Linear interpolation of the stream (ts, vs) at times t; NaN if empty. Its ends are held for
+    GAP_FACTOR × its median interval (a poll due but not yet read), no further: a stream that stopped
+    answering (a silent furnace) leaves the rows after it unread, not its last value repeated.
+    ``hold_ends``: held however far (a crosshead stands after its last reading at a stop)."""
     if ts.size == 0:
         return np.full(t.shape, np.nan)
-    return np.interp(t, ts, vs)  # holds the first/last value outside the stream
+    out = np.interp(t, ts, vs)  # holds the first/last value outside the stream
+    if ts.size >= 4 and not hold_ends:
+        reach = GAP_FACTOR * float(np.median(np.diff(ts)))
+        out[(t > ts[-1] + reach) | (t < ts[0] - reach)] = np.nan
+    return out
 
 
 def releasable(force_t: np.ndarray, other_last_t: Sequence[float], final: bool) -> int:
@@ -121,7 +128,7 @@ def run_or_stand_at(t: np.ndarray, ts: np.ndarray, vs: np.ndarray) -> np.ndarray
     (:func:`is_gap`) that it crossed slower than it ran before: there it runs on at its speed
     before the gap and then stands at the reading after it — a crosshead moves at its speed or
     stands, so a stop inside the gap is not smeared over it. x(t) = x0 + sign(Δ)·min(|v|(t − t0), |Δ|)."""
-    out = interpolate_at(t, ts, vs)
+    out = interpolate_at(t, ts, vs, hold_ends=True)
     for j in np.flatnonzero(is_gap(ts)):
         delta, span = vs[j + 1] - vs[j], ts[j + 1] - ts[j]
         v = speed_before(ts, vs, j)

@@ -71,21 +71,38 @@ def temperature_warnings(record: Record) -> list[str]:
     if not record.has("temperature_C") or not record.has("force_N"):
         return []
     force, temp = np.abs(record.column("force_N")), record.column("temperature_C")
+    unread = unread_temperature_warnings(record, force, temp)
     loaded = np.isfinite(force) & np.isfinite(temp)
     if not loaded.any():
-        return []
+        return unread
     loaded &= force >= LOADED_FRACTION * np.max(force[loaded])
     try:
         nominal = record.number("nominal_temperature_C")
     except RecordError:  # not a number: nothing to hold the recording against
         return []
     if not loaded.any() or nominal is None or not math.isfinite(nominal):
-        return []
+        return unread
     lo, hi = float(np.min(temp[loaded])), float(np.max(temp[loaded]))
     if max(nominal - lo, hi - nominal) <= TEMPERATURE_SPREAD_C:
-        return []
-    return [f"the recorded temperature under load ranges {lo:.0f}–{hi:.0f} C against the nominal {nominal:g} C: the flow "
+        return unread
+    return unread + [f"the recorded temperature under load ranges {lo:.0f}–{hi:.0f} C against the nominal {nominal:g} C: the flow "
             f"curve mixes temperatures (did the furnace hold its set-point?) and is not the nominal temperature's"]
+
+
+def unread_temperature_warnings(record: Record, force_N: np.ndarray, temperature_C: np.ndarray) -> list[str]:
+    """A heated test whose temperature was recorded under load but not all through it (the furnace
+    stopped answering: the rows after its last reading carry none): that part of the curve is of an
+    unknown temperature. Empty when every loaded row has one, or none has (no furnace recorded)."""
+    finite = np.isfinite(force_N)
+    if not finite.any():
+        return []
+    loaded = finite & (force_N >= LOADED_FRACTION * np.max(force_N[finite]))
+    unread = loaded & ~np.isfinite(temperature_C)
+    if not unread.any() or not (loaded & np.isfinite(temperature_C)).any():
+        return []
+    since = f" from {record.column('time_s')[unread][0]:.1f} s" if record.has("time_s") else ""
+    return [f"the temperature was not recorded over {100 * unread.sum() / loaded.sum():.0f} % of the loading{since} (the furnace did "
+            "not answer): the flow curve there is of an unknown temperature, not the nominal one's"]
 
 
 # record events in which the acquisition declares a rig fault (docs/record-format.md)

@@ -51,6 +51,16 @@ def test_interpolate_holds_ends_and_nan_when_empty():
     assert np.isnan(interpolate_at(np.array([1.0]), np.array([]), np.array([]))).all()
 
 
+def test_a_stream_that_stopped_answering_leaves_the_rows_after_it_unread():
+    """A furnace polled every 0.5 s that fell silent at 2 s: a row 1 s later (a poll due, within 3 × the
+    interval) still holds its last reading, a row 5 s later has none — never the last value repeated."""
+    ts = np.arange(0.0, 2.01, 0.5)
+    vs = 600.0 - ts
+    out = interpolate_at(np.array([-0.5, 1.25, 3.0, 7.0, -2.0]), ts, vs)
+    np.testing.assert_allclose(out[:3], [600.0, 598.75, 598.0])
+    assert np.isnan(out[3]) and np.isnan(out[4])
+
+
 def test_every_force_sample_appears_exactly_once_and_in_order(tb):
     clock = tb.now
     n = 600
@@ -122,7 +132,9 @@ def test_failing_device_is_named_and_recorded_samples_kept(tb):
     assert sampler.fault is not None
     assert str(sampler.fault).startswith("encoder: ")
     assert "returned no data" in str(sampler.fault)
-    assert len(rows) > 0 and np.all(rows[:, 2] == 1.0)
+    crosshead = rows[:, 2]
+    read = np.isfinite(crosshead)  # an encoder that is not a standing stream: rows after it died (beyond 3 intervals) carry none
+    assert len(rows) > 0 and read[0] and np.all(crosshead[read] == 1.0) and np.all(np.diff(read.astype(int)) <= 0)
 
 
 def test_silent_device_returning_nothing_is_a_fault(tb):

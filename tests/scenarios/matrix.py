@@ -85,7 +85,7 @@ LAST_CROSSHEAD_TOL_MM = 0.05
 FM_TOL = 0.003
 RM_TOL = 0.01
 RP02_TOL = 0.02  # a proof stress moves with the modulus fit's window: twice Rm's
-TEMPERATURE_MARK = re.compile(r"recorded temperature under load ranges")  # identify: the flow curve mixes temperatures
+TEMPERATURE_MARK = re.compile(r"recorded temperature under load ranges|temperature was not recorded over")  # identify: the curve mixes or loses temperatures
 CHANGES_THE_SPECIMEN = ("relay_stuck",)  # the furnace heats on: the specimen is hotter, its force truly lower (the record's temperature says so)
 CURVE_OVER_REFERENCE_PCT = 1.0  # where the fault-free cell's own curve is beyond 3 %, the faulty one may add this much
 DEFAULT_CELLS = 40
@@ -593,8 +593,14 @@ def remember(r: CellRun) -> None:
 def survived(r: CellRun, rec, ref: Truth) -> list[tuple[str, str]]:
     """The numbers beyond the fault-free truth's tolerance: [(class, detail)]. None when identify says
     the recorded temperature under load left the nominal one: the specimen truly changed (the record's
-    temperature column shows it), the fault-free run is another test, and every value is marked."""
-    if r.result and any(TEMPERATURE_MARK.search(w) for w in (r.result.get("warnings") or [])):
+    temperature column shows it), the fault-free run is another test, and every value is marked; or,
+    where identify refused the record (an aborted run without its post-test measurements), when the
+    record itself says so (the same rule, identify's temperature_warnings on the record: a furnace that
+    stopped answering leaves the rows after it without a temperature, not its last reading repeated)."""
+    from flowcurve.identification.identify import temperature_warnings
+
+    warnings = (r.result.get("warnings") or []) if r.result else temperature_warnings(rec)
+    if any(TEMPERATURE_MARK.search(w) for w in warnings):
         return []
     bad = []
     x, f = _rows(rec)

@@ -53,3 +53,18 @@ def test_an_aborted_record_says_so_in_its_warnings():
     assert said == ["the test was aborted (load cell: stream ('MSV?0') silent for 1.3 s): the results cover the record up to the "
                     "fault, a short and maybe disturbed part of the test"]
     assert not [w for w in identify(rec).result["warnings"] if "aborted" in w]
+
+
+def test_a_temperature_no_longer_read_under_load_is_reported_not_held():
+    """A furnace that stopped answering at 40 % of the test (the matrix's furnace:silence at 600 C: the
+    module's watchdog switched the heater off, the specimen cooled and its force rose 2.5 % above the
+    fault-free run's while the record repeated the last reading, 592.6 C): the rows after it carry no
+    temperature, and identify says that part of the curve is of an unknown temperature."""
+    rec, _ = make_record(noise_N=5.0)
+    rec = with_temperature(rec, lambda s: np.where(s < 0.4, 600.0, np.nan))
+    said = [w for w in temperature_warnings(rec) if "temperature was not recorded over" in w]
+    assert len(said) == 1 and "unknown temperature" in said[0], temperature_warnings(rec)
+    share = float(said[0].split("over ")[1].split(" %")[0])
+    assert 50 <= share <= 70  # about the last 60 % of the rows, less the unloaded start
+    # a test with no furnace reading at all is not a heated test that lost its temperature
+    assert temperature_warnings(with_temperature(rec, lambda s: np.full(s.shape, np.nan))) == []
