@@ -14,7 +14,8 @@ from flowcurve.services.fit import SHAPE_ERROR_PCT as DEFAULT_SHAPE_ERROR_PCT
 
 
 def register(subparsers) -> None:
-    """Add ``fit`` to the subcommands."""
+    """Add ``fit`` and ``laws`` to the subcommands."""
+    register_laws(subparsers)
     p = subparsers.add_parser(
         "fit",
         help="Johnson-Cook constants (A, B, n, C, m), or another registered law's (--law), from a series of tests",
@@ -31,8 +32,8 @@ def register(subparsers) -> None:
     p.add_argument("--ref-temp", type=float, metavar="C", help="reference temperature, °C (default: the lowest of the series)")
     p.add_argument("--melt-temp", type=float, metavar="C", help="melting temperature of the material, °C (required)")
     p.add_argument("--law", default="johnson_cook", metavar="NAME",
-                   help="a registered law with strain rate and temperature (default johnson_cook; e.g. hensel_spittel, T in °C); "
-                        "checked when the fit runs")
+                   help="a registered law with strain rate and temperature (default johnson_cook; e.g. hensel_spittel, T in °C; "
+                        "'flowcurve laws' lists them); checked when the fit runs")
     p.add_argument("--method", choices=("global", "stepwise"), default="global",
                    help="global least squares over all curves (default) or the classic stepwise procedure; the other is reported for comparison")
     p.add_argument("--fix-C", type=float, metavar="VALUE", help="do not identify C, use this value (e.g. for a series at one rate)")
@@ -120,6 +121,38 @@ def load_members_in_parallel(inputs, identify_options: dict, jobs: int = 1, sche
     if dup:
         raise IdentificationError(f"two series members have the same name {', '.join(dup)}; rename one (names label the per-record errors and plots)")
     return members
+
+
+def register_laws(subparsers) -> None:
+    """Add ``laws``: the registered laws, read from the registry (a law's file is enough to list it)."""
+    p = subparsers.add_parser("laws", help="the registered hardening laws: names for identify --law and fit --law, equations, constants",
+                              description="List every registered law (identification/laws/, one file each): its name for "
+                                          "'flowcurve identify --law' (static laws) or 'flowcurve fit --law' (laws with strain "
+                                          "rate and temperature), its equation and its constants with their units.")
+    p.set_defaults(func=run_laws)
+
+
+def law_lines() -> list[str]:
+    """One block per registered law: name, display name, where it is used, equation, constants (unit)."""
+    from flowcurve.identification.laws.base import registered_laws
+    from flowcurve.identification.laws.hardening import static_law_names
+
+    static = set(static_law_names())
+    lines = []
+    for name, law in registered_laws().items():
+        use = ("identify --law, fit --law" if name in static and law.rate_dependent and law.temperature_dependent
+               else "identify --law" if name in static else "fit --law" if law.rate_dependent and law.temperature_dependent
+               else "neither (a static part of another law)")
+        constants = ", ".join(f"{p.name}{f' ({p.unit})' if p.unit else ''}" for p in law.parameters)
+        lines += [f"{name}: {law.display_name} [{use}]", f"  {law.equation}", f"  constants: {constants}"]
+    lines.append("identify --law best: every static law fitted, the lowest AIC among the laws whose constants the curve determines")
+    return lines
+
+
+def run_laws(args) -> int:
+    """``flowcurve laws``: print the registry; exit 0."""
+    print("\n".join(law_lines()))
+    return 0
 
 
 def run(args) -> int:

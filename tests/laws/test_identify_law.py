@@ -83,3 +83,38 @@ def test_a_named_law_whose_constants_trade_off_says_so(tmp_path):
     h = identify(record, law="swift_voce").result["hardening"]
     assert h["law"] == "swift_voce"  # the law asked for is kept, with the warning
     assert any("not determined by this curve" in w for w in h["warnings"]), h["warnings"]
+
+
+def test_flowcurve_laws_lists_every_registered_law_a_new_file_included(capsys):
+    """`flowcurve laws` reads the registry: every law, and a law registered now (as its own file would
+    register it) with no list to edit; the help texts of identify and fit point to it."""
+    import numpy as np
+
+    from flowcurve.identification.laws import base
+    from flowcurve.identification.laws.base import Parameter, register, registered_laws
+    from flowcurve.identification.laws.static import StaticLaw
+
+    @register
+    class Linear(StaticLaw):
+        """A test law: σ = σ0 + H·εp."""
+
+        name = "test_linear"
+        display_name = "Linear (test)"
+        parameters = (Parameter("sigma0", "sigma0_MPa", "MPa", 0.0, np.inf, "yield stress"),
+                      Parameter("H", "H_MPa", "MPa", 0.0, np.inf, "hardening modulus"))
+        equation = "sigma_MPa = sigma0 + H*eps_p"
+        latex = r"\sigma = \sigma_0 + H\varepsilon_p"
+        function = staticmethod(lambda eps_p, sigma0, H: sigma0 + H * np.asarray(eps_p, dtype=float))
+
+    try:
+        assert main(["laws"]) == 0
+        printed = capsys.readouterr().out
+        for name, law in registered_laws().items():
+            assert f"{name}: {law.display_name} [" in printed, name
+        assert "test_linear: Linear (test) [identify --law]" in printed and "constants: sigma0 (MPa), H (MPa)" in printed
+        assert "hensel_spittel: Hensel–Spittel [fit --law]" in printed
+    finally:
+        base._REGISTRY.pop("test_linear", None)
+    with pytest.raises(SystemExit):
+        main(["identify", "--help"])
+    assert "'flowcurve laws' lists them" in capsys.readouterr().out
