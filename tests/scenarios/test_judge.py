@@ -27,6 +27,9 @@ class Rec:
     def column(self, name):
         return self._cols[name]
 
+    def has(self, name):  # the Record interface the judge reads (no temperature column here)
+        return name in self._cols
+
 
 X = np.arange(0.0, 5.0 + STEP_MM / 2, STEP_MM)
 TRUTH = matrix.truth_from_rows(X, force_N(X), True, {"Rm_MPa": 500.0}, None)
@@ -86,3 +89,21 @@ def test_a_target_stop_judged_by_its_crosshead_not_its_rising_force():
     assert matrix.survived(RUN, Rec(one_more, rising(one_more)), truth) == []
     late = np.arange(0.0, 3.3 + STEP_MM / 2, STEP_MM)  # the stop 0.2 mm late
     assert [k for k, _ in matrix.survived(RUN, Rec(late, rising(late)), truth)] == ["last crosshead beyond the fault-free run's"]
+
+
+def test_a_record_that_lost_its_temperature_under_load_is_judged_by_what_it_says():
+    """A heated record whose furnace stopped answering (no temperature in its last rows) and whose force
+    then left the fault-free run's (the specimen cooled): not a wrong number — the record says the
+    temperature is unknown there, and identify's rule marks it. The same force with the temperature
+    recorded throughout (the last reading repeated, as before stop 48) is caught."""
+    from flowcurve.record.format import Record
+    import pandas as pd
+
+    f = force_N(X) * np.where(X > 2.0, 1.03, 1.0)
+    unread = np.where(X > 2.0, np.nan, 600.0)
+    def record(temperature):
+        data = pd.DataFrame({"time_s": X * 10.0, "force_N": f, "crosshead_mm": X, "temperature_C": temperature})
+        return Record(meta={"status": "complete", "nominal_temperature_C": "600"}, data=data, source="cell.csv")
+    assert matrix.survived(RUN, record(unread), TRUTH) == []
+    caught = matrix.survived(RUN, record(np.full(X.shape, 600.0)), TRUTH)
+    assert caught and caught[0][0] == "force against the crosshead beyond the fault-free run's", caught
