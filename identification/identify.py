@@ -148,6 +148,30 @@ def fault_warnings(record: Record) -> tuple[list[str], bool]:
 LOSS_EVENTS = ("frames_missing", "stream_restart", "data_loss")  # a load-cell frame went missing
 
 
+# a fault after the loading that heats the specimen where it stands, under the stop's load (the furnace's watch)
+HEATED_AFTER_LOADING = re.compile(r"heater does not switch off|over-temperature")
+
+
+def after_loading_warnings(record: Record) -> list[str]:
+    """A fault the record declares after its last row that heated the specimen in the machine (a
+    stuck relay found by the furnace's watch after the stop, an over-temperature): the specimen
+    stood under the stop's load while it heated and may have flowed on, so its post-test
+    measurements (``post.*``) may describe a specimen the rows do not. Empty without ``post.*``
+    keys or such an event."""
+    post = sorted(k for k in record.meta if k.startswith("post."))
+    if not post or record.data.empty or not record.has("time_s"):
+        return []
+    times = record.column("time_s")
+    last = float(np.nanmax(times)) if np.isfinite(times).any() else math.nan
+    late = next((e for e in record.events if e.name == "fault" and e.time_s > last and HEATED_AFTER_LOADING.search(e.text)), None)
+    if late is None:
+        return []
+    return [f"after the loading's last row ({last:.1f} s) the record declares at {late.time_s:.1f} s: "
+            f"{' '.join(late.text.split())[:160]} — the specimen stood in the machine under the stop's load while it heated, "
+            f"so the post-test measurements ({', '.join(post)}) may include flow after the record, and whatever rests on them "
+            "(the strain's scaling K_l and μ in compression, A, Z and the neck in tension) with them"]
+
+
 def old_writer_warning(record: Record) -> str | None:
     """A record written before the force samples were stamped on the stream's rhythm (no
     ``writer.stamping`` in its header) that declares lost load-cell frames: that writer stamped
@@ -283,12 +307,15 @@ def identify(record: Record, **options) -> Identification:
     if shifted:
         warnings.append(shifted)
         doubtful = True
+    after = after_loading_warnings(record)
+    warnings += after
     mismatch = speed_mismatch(record.number("crosshead_speed_mm_per_s"), record.number(MEASURED_SPEED_KEY))
     warnings += [mismatch] if mismatch else []
     fit = getattr(getattr(result, "hardening", None), "fit", None)  # the main fit (result["hardening"] is its copy)
-    if doubtful and fit is not None and fit.quality == "good":
-        fit.doubt = "the record declares lost or corrupt samples"
-        fit.warnings.append("marked poor: the record declares lost or corrupt samples (see the warnings)")
+    if (doubtful or after) and fit is not None and fit.quality == "good":
+        why = "the record declares lost or corrupt samples" if doubtful else "the post-test measurements may be of a specimen changed after the record"
+        fit.doubt = why
+        fit.warnings.append(f"marked poor: {why} (see the warnings)")
     attach_assurance(result, ident.curves, record)
     old = list(result.get("warnings") or [])
     result["warnings"] = old + [w for w in warnings if w not in old]

@@ -1,0 +1,63 @@
+"""Post-test measurements taken after a fault changed the specimen: the matrix's compression at 20 C
+with a stuck relay (seed 190028814735116) stopped at its 3 mm target, then the furnace's watch held
+the specimen under the stop's load for 9 s while it heated 16 C; it flowed on, hk came out 0.8 %
+shorter than the fault-free run's, K_l scaled the strain by it and the flow curve read 3.4 % below
+the material's, marked good. The rows are the fault-free run's: only the event after them tells."""
+
+import math
+
+import numpy as np
+
+from flowcurve.identification.identify import after_loading_warnings, identify
+from flowcurve.record.format import Event, Record
+
+
+STUCK = Event(60.0, "fault", "furnace: heater does not switch off (relay stuck?): 16.2 C rise with the heater off for 9 s, still rising")
+
+
+def _with(record: Record, *, events=(), hk_factor=1.0) -> Record:
+    meta = dict(record.meta)
+    meta["post.hk_mm"] = f"{float(meta['post.hk_mm']) * hk_factor:.4f}"
+    return Record(meta=meta, data=record.data, source=record.source, events=list(events))
+
+
+def _max_gap_pct(one: dict, other: dict, eps=np.linspace(0.1, 0.6, 11)) -> float:
+    def sigma(result):
+        h = result["hardening"]
+        return h["A_MPa"] + h["B_MPa"] * eps ** h["n"]
+
+    return float(100 * np.max(np.abs(sigma(one) / sigma(other) - 1)))
+
+
+def test_a_specimen_heated_under_load_after_the_record_is_not_read_as_certified(make_record):
+    record, _ = make_record(hk_target=4.3)  # the matrix cell's shortening: its clean reading is marked good
+    end = float(record.data["time_s"].iloc[-1])
+    late = Event(end + 9.0, STUCK.name, STUCK.text)
+    clean = identify(record).result
+    flowed = identify(_with(record, events=[late], hk_factor=0.985)).result  # hk as the matrix's cell left it: flowed on
+    # the same rows, scaled to another hk: K_l as (3.1) gives it, and a curve 0.5 % and more away from the clean one's
+    h0, hk = float(record.meta["specimen.h0_mm"]), float(record.meta["post.hk_mm"])
+    springback = clean["indicator"]["springback_mm"]
+    expected = clean["indicator"]["K_l"] * (h0 - 0.985 * hk + springback) / (h0 - hk + springback)
+    assert abs(flowed["indicator"]["K_l"] / expected - 1) < 2e-3
+    assert _max_gap_pct(flowed, clean) > 0.5
+    said = [w for w in flowed["warnings"] if "after the loading's last row" in w]
+    assert len(said) == 1 and "post.hk_mm" in said[0] and "heater does not switch off" in said[0], flowed["warnings"]
+    assert clean["hardening"]["quality"] == "good" and not [w for w in clean["warnings"] if "after the loading" in w]
+    assert flowed["hardening"]["quality"] == "poor"
+    assert any("post-test measurements may be of a specimen changed" in w for w in flowed["hardening"]["warnings"])
+
+
+def test_only_a_heating_fault_after_the_last_row_is_held_against_the_post_test_measurements(seed_like_record):
+    record, _ = seed_like_record
+    end = float(record.data["time_s"].iloc[-1])
+    assert after_loading_warnings(_with(record, events=[Event(end + 9.0, STUCK.name, STUCK.text)]))
+    assert after_loading_warnings(_with(record, events=[Event(end + 1.0, "fault", "furnace: over-temperature: 1210.0 C above the configured maximum 1200.0 C; heater switched off")]))
+    # during the loading: the rows carry it (their temperature column), not the post-test measurements alone
+    assert after_loading_warnings(_with(record, events=[Event(end / 2, STUCK.name, STUCK.text)])) == []
+    # after the loading, a fault that does not heat the specimen
+    assert after_loading_warnings(_with(record, events=[Event(end + 1.0, "fault", "load cell: stream ('MSV?0') silent for 1.3 s")])) == []
+    # no post-test measurements: nothing rests on them
+    meta = {k: v for k, v in record.meta.items() if not k.startswith("post.")}
+    assert after_loading_warnings(Record(meta=meta, data=record.data, source="x.csv", events=[Event(end + 9.0, STUCK.name, STUCK.text)])) == []
+    assert math.isfinite(end)
