@@ -508,12 +508,32 @@ def violations(r: CellRun, reference: "Truth | None" = None) -> list[tuple[str, 
     if sent is not None and sent - rows > declared + LOSS_SLACK_FRAMES:
         bad.append(("samples lost beyond what the events declare",
                     f"{sent} frames sent within the record's span, {rows} rows, {declared} declared lost"))
+    bad += unmarked_post_test(r.result, rec)
     judged = reference is not None and cell.fault is not NO_FAULT and cell.fault.kind not in CHANGES_THE_SPECIMEN
     tolerance = max(CURVE_TOLERANCE_PCT, (reference.curve_dev_pct or 0.0) + CURVE_OVER_REFERENCE_PCT) if judged else CURVE_TOLERANCE_PCT
     bad += _curve_violations(r, rec, tolerance)
     if judged:
         bad += survived(r, rec, reference)
     return bad
+
+
+HEATED_WHERE_IT_STOOD = re.compile(r"heater does not switch off|over-temperature")  # the furnace heated the specimen after the stop
+POST_TEST_MARK = re.compile(r"post-test measurements")
+
+
+def unmarked_post_test(result: dict | None, rec) -> list[tuple[str, str]]:
+    """A record whose specimen was heated after its last row (a stuck relay found by the furnace's
+    watch, an over-temperature), its post-test measurements taken after that, identified without
+    a word of it: the specimen flowed on under the stop's load (the 20 C relay_stuck cell: hk 0.8 %
+    short, the curve 3.4 % low, marked good)."""
+    if not result or rec.data.empty or not any(k.startswith("post.") for k in rec.meta):
+        return []
+    last = float(np.nanmax(rec.data["time_s"].to_numpy(dtype=float)))
+    late = [e for e in rec.events if e.name == "fault" and e.time_s > last and HEATED_WHERE_IT_STOOD.search(e.text)]
+    if not late or any(POST_TEST_MARK.search(w) for w in result.get("warnings") or []):
+        return []
+    return [("post-test measurements after a heating fault, unmarked", f"{late[0].text[:80]} at {late[0].time_s:.1f} s, "
+             f"the last row at {last:.1f} s; hardening quality {(result.get('hardening') or {}).get('quality')}")]
 
 
 # -- the numbers that survived a fault (issue 42) ---------------------------------------------------

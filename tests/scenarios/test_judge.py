@@ -107,3 +107,21 @@ def test_a_record_that_lost_its_temperature_under_load_is_judged_by_what_it_says
     assert matrix.survived(RUN, record(unread), TRUTH) == []
     caught = matrix.survived(RUN, record(np.full(X.shape, 600.0)), TRUTH)
     assert caught and caught[0][0] == "force against the crosshead beyond the fault-free run's", caught
+
+
+def test_post_test_measurements_after_a_heating_fault_must_be_marked():
+    """The 20 C relay_stuck cell: the furnace's watch after the stop found the relay stuck; the specimen
+    stood under load while it heated and flowed on, so its hk is not the record's. Unmarked: caught."""
+    import pandas as pd
+
+    from flowcurve.record.format import Event
+
+    data = pd.DataFrame({"time_s": [0.0, 3.0, 6.3], "force_N": [0.0, 4e4, 4.9e4], "crosshead_mm": [0.0, 1.5, 3.0]})
+    stuck = Event(15.4, "fault", "furnace: heater does not switch off (relay stuck?): 16.2 C rise with the heater off for 9 s")
+    rec = SimpleNamespace(data=data, meta={"post.hk_mm": "4.28"}, events=[stuck])
+    unmarked = {"warnings": [], "hardening": {"quality": "good"}}
+    assert [k for k, _ in matrix.unmarked_post_test(unmarked, rec)] == ["post-test measurements after a heating fault, unmarked"]
+    marked = {"warnings": ["after the loading's last row … so the post-test measurements (post.hk_mm) may include flow"]}
+    assert matrix.unmarked_post_test(marked, rec) == []
+    during = SimpleNamespace(data=data, meta=rec.meta, events=[Event(5.0, stuck.name, stuck.text)])  # the rows carry it
+    assert matrix.unmarked_post_test(unmarked, during) == []
