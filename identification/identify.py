@@ -18,7 +18,7 @@ import numpy as np
 
 from flowcurve.record.format import STATUS_ABORTED, WRITER_STAMPING_KEY, Record
 from flowcurve.record.summary import MEASURED_SPEED_KEY, record_summary, speed_mismatch
-from flowcurve.errors import IdentificationError, RecordError
+from flowcurve.errors import FlowcurveError, IdentificationError, RecordError
 from flowcurve.identification.compression.identify import identify_compression
 from flowcurve.identification.iso6892 import mad_sigma
 from flowcurve.identification.outcome import Identification
@@ -317,9 +317,49 @@ def identify(record: Record, **options) -> Identification:
         fit.doubt = why
         fit.warnings.append(f"marked poor: {why} (see the warnings)")
     attach_assurance(result, ident.curves, record)
+    if after and record.test == "compression":
+        warnings += _post_test_spread(result, record, func, accepted)
     old = list(result.get("warnings") or [])
     result["warnings"] = old + [w for w in warnings if w not in old]
     return ident
+
+
+def _post_test_spread(result, record: Record, func, options: dict) -> list[str]:
+    """A compression result whose post-test measurements are doubtful (:func:`after_loading_warnings`):
+    identified again on the specimen as the record left it, the difference entered into each budget
+    (:mod:`.quality.post_test_doubt`); where that cannot be done, the budgets it would widen are
+    stated not certifiable. Returns the warnings."""
+    from flowcurve.identification.quality import post_test_doubt as doubt
+    from flowcurve.identification.quality.assurance import not_certifiable
+
+    unc = result.get("uncertainty") or {}
+    hk = doubt.record_final_height_mm(result)
+    why = None
+    if hk is None:
+        why = "the record's own shortening gives no final height to compare the measured hk with"
+    else:
+        try:
+            alt = func(doubt.as_left_by_record(record, hk), **options)
+            attach_assurance(alt.result, alt.curves, record)
+        except FlowcurveError as exc:
+            why = f"the specimen as the record left it (hk {hk:.4g} mm) does not identify: {str(exc).splitlines()[0]}"
+        else:
+            missing = doubt.widen(unc, alt.result.get("uncertainty") or {})
+            measured = result["record"]["post"]["hk_mm"]
+            note = (f"the budgets include the spread between the measured hk {measured:.4g} mm and the record's own "
+                    f"{hk:.4g} mm ({doubt.COMPONENT})")
+            if not missing:
+                return [note]
+            why = f"the specimen as the record left it (hk {hk:.4g} mm) states no {', '.join(missing)}"
+    for key in ("flow_stress_MPa", "hardening"):
+        block = unc.get(key)
+        if isinstance(block, dict):
+            for name, b in block.items():
+                block[name] = not_certifiable(b, f"post-test measurements after a heating fault: {why}")
+    for key in ("friction_mu", "Rp02_MPa"):
+        if isinstance(unc.get(key), dict):
+            unc[key] = not_certifiable(unc[key], f"post-test measurements after a heating fault: {why}")
+    return [f"not certifiable: {why}; the post-test measurements may include flow after the record"]
 
 
 def inverse_time_limit_s(test: str) -> float:

@@ -467,6 +467,9 @@ def budget_tables(name: str, result: dict, report: Report | None = None) -> list
             unit = f" {c['unit']}" if c["unit"] != "1" else ""
             rows.append([label if i == 0 else "", c["name"], f"{_g(c['value'], 5)}{unit}", _g(c["u"]), _g(c["sensitivity"]),
                          _g(c["contribution"])])
+        if b.get("certifiable") is False:
+            rows.append([label if not b["components"] else "", "not certifiable (see the note)", f"{_g(b['value'], 5)}", "–", "", "no U"])
+            continue
         rows.append(["", "combined uc, U (k = 2)", f"{_g(b['value'], 5)}", _g(b["u"]), "", f"U = {format_uncertainty(b['U'])}"])
     inst = unc.get("instruments") or {}
     facts = (f"{name}: force ISO 7500-1 class {inst.get('force_class', '–')}, extensometer ISO 9513 class "

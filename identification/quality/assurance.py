@@ -152,7 +152,7 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
             out["Rp02_MPa"] = un.proof_strength_budget(Rp, d0, inst, plastic_slope_MPa=theta, strain_rel_u=strain_u,
                                                        E_MPa=E, u_E_MPa=u_E, E_measured=E_measured)
             method = _tension_rp_method(result, curves.get("engineering"), Rp, E)
-            _extend(out["Rp02_MPa"], method)
+            extend_budget(out["Rp02_MPa"], method)
     Ag = _num(result.get("Ag_pct"))
     if Ag is not None and Rm is not None:
         out["Ag_pct"] = _uniform_elongation(result, curves, inst, Ag, Rm, E, E_measured=E_measured, strain_u=strain_u, u_E=u_E,
@@ -249,12 +249,13 @@ def _at_strain(curve, column: str, eps: np.ndarray, at: float) -> float | None:
     return float(np.interp(at, eps[ok], values[ok])) if ok.any() else None
 
 
-def _extend(b: dict, method: list) -> None:
-    """A budget with the method's own components added: u, U again and ``u_method`` stated apart."""
+def extend_budget(b: dict, method: list) -> None:
+    """A budget with the method's own components added: u, U again; ``u_method`` (the method's share,
+    stated apart) grown by them; the budget's other keys kept."""
     old = [un.Component(**{k: c[k] for k in ("name", "value", "unit", "u", "sensitivity", "basis", "dof") if k in c}) for c in b["components"]]
     out = un.budget(b["value"], b["unit"], old + method, note=b.get("note", ""))
-    b.clear()
-    b.update(out, u_method=un.combined(method))
+    u_method = math.hypot(_num(b.get("u_method")) or 0.0, un.combined(method))
+    b.update(out, u_method=u_method)
 
 
 def _tension_rp_method(result: Mapping, curve, Rp: float, E: float) -> list:

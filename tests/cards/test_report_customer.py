@@ -244,3 +244,20 @@ def test_the_conditions_show_the_strain_rates_the_conformity_check_judged(crmo, 
         phases = result["methods"]["conformity"]["testing_rate"]["phases"]
         shown = " / ".join(f"{phases[p]['strain_rate_per_s']:.3g}" for p in ("elastic", "yield", "to_Rm"))
         assert shown in text, (name, shown)
+
+
+def test_a_budget_stated_not_certifiable_shows_no_U_and_says_why():
+    """A flow stress whose post-test measurements are doubtful (identify's not-certifiable budget) prints its value,
+    'no U' and the reason, beside a certified one."""
+    from flowcurve.identification.quality.assurance import not_certifiable
+    from flowcurve.reports.report_content import Table, budget_tables
+
+    fine = {"value": 300.0, "unit": "MPa", "u": 2.0, "U": 4.0, "k": 2.0,
+            "components": [{"name": "force", "value": 9000.0, "unit": "N", "u": 10.0, "sensitivity": 0.2, "contribution": 2.0}]}
+    doubtful = not_certifiable({"value": 410.0, "unit": "MPa"}, "post-test measurements after a heating fault: no height to compare")
+    result = {"test": "compression", "uncertainty": {"instruments": {}, "flow_stress_MPa": {"0.1": fine, "0.2": doubtful}}}
+    blocks = budget_tables("c1", result)
+    (table,) = [b for b in blocks if isinstance(b, Table)]
+    assert ["", "combined uc, U (k = 2)", "300", "2", "", "U = 4.0"] in table.rows
+    assert ["σ at εp 0.2, MPa", "not certifiable (see the note)", "410", "–", "", "no U"] in table.rows
+    assert any("heating fault" in getattr(b, "text", "") for b in blocks)

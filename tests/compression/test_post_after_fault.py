@@ -7,9 +7,13 @@ the material's, marked good. The rows are the fault-free run's: only the event a
 import math
 
 import numpy as np
+import pytest
 
 from flowcurve.identification.identify import after_loading_warnings, identify
+from flowcurve.identification.quality import post_test_doubt as doubt
 from flowcurve.record.format import Event, Record
+
+from .conftest import flow_stress
 
 
 STUCK = Event(60.0, "fault", "furnace: heater does not switch off (relay stuck?): 16.2 C rise with the heater off for 9 s, still rising")
@@ -48,6 +52,42 @@ def test_a_specimen_heated_under_load_after_the_record_is_not_read_as_certified(
     assert any("post-test measurements may be of a specimen changed" in w for w in flowed["hardening"]["warnings"])
 
 
+def test_the_doubt_enters_the_budgets_and_they_hold_the_material(make_record):
+    """The flowed record's budgets carry the spread between the measured hk and the record's own
+    (the crosshead's shortening, frame compliance removed); with it each flow stress holds the law
+    the record was made with, without it some do not."""
+    record, truth = make_record(hk_target=4.3)
+    end = float(record.data["time_s"].iloc[-1])
+    clean = identify(record).result
+    flowed = identify(_with(record, events=[Event(end + 9.0, STUCK.name, STUCK.text)], hk_factor=0.985)).result
+    # the record's own final height: the generator's unloaded hk within the crosshead's 0.01 mm step
+    assert abs(doubt.record_final_height_mm(clean) - truth["hk"]) < 0.01
+    assert abs(doubt.record_final_height_mm(flowed) - truth["hk"]) < 0.01
+    held_without = []
+    for at, b in flowed["uncertainty"]["flow_stress_MPa"].items():
+        (spread,) = [c for c in b["components"] if c["name"] == doubt.COMPONENT]
+        error = abs(b["value"] - flow_stress(float(at), **truth["law"]))
+        assert error <= b["U"], (at, b["value"], b["U"])
+        held_without.append(error <= b["k"] * math.sqrt(b["u"] ** 2 - spread["contribution"] ** 2))
+        assert b["u_method"] >= spread["contribution"]
+    assert not all(held_without)
+    for b in (*flowed["uncertainty"]["hardening"].values(), flowed["uncertainty"]["friction_mu"]):
+        assert doubt.COMPONENT in [c["name"] for c in b["components"]]
+    budgets = (*clean["uncertainty"]["flow_stress_MPa"].values(), *clean["uncertainty"]["hardening"].values())
+    assert all(doubt.COMPONENT not in [c["name"] for c in b["components"]] for b in budgets)
+    assert any("the record's own" in w for w in flowed["warnings"])
+
+
+def test_the_specimen_as_the_record_left_it_keeps_its_volume(seed_like_record):
+    record, _ = seed_like_record
+    hk, dmax = float(record.meta["post.hk_mm"]), float(record.meta["post.dmax_mm"])
+    left = doubt.as_left_by_record(_with(record, events=[]), hk * 1.02)
+    assert float(left.meta["post.hk_mm"]) == float(f"{hk * 1.02:.6g}")
+    assert float(left.meta["post.dmax_mm"]) ** 2 * float(left.meta["post.hk_mm"]) == \
+        pytest.approx(dmax**2 * hk, rel=1e-5)  # π/4·d²·h: the barrel's volume
+    assert record.meta["post.hk_mm"] == f"{hk:.4f}"  # the record itself untouched
+
+
 def test_only_a_heating_fault_after_the_last_row_is_held_against_the_post_test_measurements(seed_like_record):
     record, _ = seed_like_record
     end = float(record.data["time_s"].iloc[-1])
@@ -61,3 +101,15 @@ def test_only_a_heating_fault_after_the_last_row_is_held_against_the_post_test_m
     meta = {k: v for k, v in record.meta.items() if not k.startswith("post.")}
     assert after_loading_warnings(Record(meta=meta, data=record.data, source="x.csv", events=[Event(end + 9.0, STUCK.name, STUCK.text)])) == []
     assert math.isfinite(end)
+
+
+def test_without_the_records_own_height_the_budgets_are_not_certified(seed_like_record, monkeypatch):
+    """No second final height to compare with: the budgets resting on hk state no U, and say why."""
+    record, _ = seed_like_record
+    end = float(record.data["time_s"].iloc[-1])
+    monkeypatch.setattr(doubt, "record_final_height_mm", lambda result: None)
+    result = identify(_with(record, events=[Event(end + 9.0, STUCK.name, STUCK.text)])).result
+    unc = result["uncertainty"]
+    budgets = [*unc["flow_stress_MPa"].values(), *unc["hardening"].values(), unc["friction_mu"]]
+    assert budgets and all(b["U"] is None and b["certifiable"] is False and "heating fault" in b["note"] for b in budgets)
+    assert any(w.startswith("not certifiable: the record's own shortening") for w in result["warnings"])
