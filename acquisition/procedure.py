@@ -359,10 +359,15 @@ class Procedure(StreamNotes):
                 except FlowcurveError as exc:
                     status, reason, error = STATUS_ABORTED, str(exc), exc
                 finally:
+                    self._end_reason = reason
+                    if error is None and sampler is not None and rig.can_drive:
+                        # ended on its criterion, the drive answering: the motion first, since it goes on shortening the
+                        # specimen unrecorded while a faulty furnace's heater-off is retried (the heater's inertia and
+                        # watchdog wait a command; on a device fault the heater still goes first)
+                        self._stop_motion()
                     self._let_streams_finish(sampler, error)
                     self._heater_released = True  # no control step from here on commands the heater
                     safety.switch_off(reason or "end of test")
-                    self._end_reason = reason
                     self._stop_motion()
                     if sampler is not None:
                         status, reason, error = self._final_rows(sampler, safety, status, reason, error)
