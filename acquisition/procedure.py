@@ -360,11 +360,7 @@ class Procedure(StreamNotes):
                     status, reason, error = STATUS_ABORTED, str(exc), exc
                 finally:
                     self._end_reason = reason
-                    if error is None and sampler is not None and rig.can_drive:
-                        # ended on its criterion, the drive answering: the motion first, since it goes on shortening the
-                        # specimen unrecorded while a faulty furnace's heater-off is retried (the heater's inertia and
-                        # watchdog wait a command; on a device fault the heater still goes first)
-                        self._stop_motion()
+                    self._stop_motion_first(sampler, error)
                     self._let_streams_finish(sampler, error)
                     self._heater_released = True  # no control step from here on commands the heater
                     safety.switch_off(reason or "end of test")
@@ -622,6 +618,13 @@ class Procedure(StreamNotes):
                 self._unshown_rows.clear()
                 last = crosshead.stream.last() if crosshead is not None else None
                 self.timebase.sleep(loop_tick_s(last, crit, spec.speed_mm_per_s, rig.time_scale, self.tick_s))
+
+    def _stop_motion_first(self, sampler: Sampler | None, error: FlowcurveError | None) -> None:
+        """A test that ended on its criterion, the drive answering: the motion stops before the heater,
+        since it goes on loading the specimen unrecorded while a faulty furnace's heater-off is retried
+        (the heater's inertia and watchdog wait one command); on a device fault the heater goes first."""
+        if error is None and sampler is not None and self.rig.can_drive:
+            self._stop_motion()
 
     def _stop_motion(self) -> None:
         try:

@@ -64,27 +64,36 @@ def force_noise_N(force_N: np.ndarray) -> float:
     return mad_sigma(d) / math.sqrt(2.0)
 
 
-def temperature_warnings(record: Record) -> list[str]:
-    """The recorded temperature while the specimen carries load against the nominal one: a
-    flow curve is one temperature's only while the furnace holds it (a stuck relay, a lost
-    furnace heat it on). Empty without a temperature column or within TEMPERATURE_SPREAD_C."""
+def temperature_stray_C(record: Record) -> tuple[float, float, float] | None:
+    """(lowest, highest, nominal) °C recorded while the specimen carries load, where it strays beyond
+    TEMPERATURE_SPREAD_C from the nominal temperature (a stuck relay, a lost furnace heat it on);
+    None within it, or without a temperature column or a numeric nominal temperature."""
     if not record.has("temperature_C") or not record.has("force_N"):
-        return []
+        return None
     force, temp = np.abs(record.column("force_N")), record.column("temperature_C")
-    unread = unread_temperature_warnings(record, force, temp)
     loaded = np.isfinite(force) & np.isfinite(temp)
     if not loaded.any():
-        return unread
+        return None
     loaded &= force >= LOADED_FRACTION * np.max(force[loaded])
     try:
         nominal = record.number("nominal_temperature_C")
     except RecordError:  # not a number: nothing to hold the recording against
-        return []
+        return None
     if not loaded.any() or nominal is None or not math.isfinite(nominal):
-        return unread
+        return None
     lo, hi = float(np.min(temp[loaded])), float(np.max(temp[loaded]))
-    if max(nominal - lo, hi - nominal) <= TEMPERATURE_SPREAD_C:
+    return None if max(nominal - lo, hi - nominal) <= TEMPERATURE_SPREAD_C else (lo, hi, float(nominal))
+
+
+def temperature_warnings(record: Record) -> list[str]:
+    """The recorded temperature while the specimen carries load against the nominal one
+    (:func:`temperature_stray_C`) and a temperature recorded under load but not all through it."""
+    unread = (unread_temperature_warnings(record, np.abs(record.column("force_N")), record.column("temperature_C"))
+              if record.has("temperature_C") and record.has("force_N") else [])
+    stray = temperature_stray_C(record)
+    if stray is None:
         return unread
+    lo, hi, nominal = stray
     return unread + [f"the recorded temperature under load ranges {lo:.0f}–{hi:.0f} C against the nominal {nominal:g} C: the flow "
             f"curve mixes temperatures (did the furnace hold its set-point?) and is not the nominal temperature's"]
 
@@ -301,8 +310,21 @@ def identify(record: Record, **options) -> Identification:
             block[key] = value
     if ignored:
         warnings.append(f"option(s) not used by {record.test} identification: {', '.join(ignored)}")
-    declared, doubtful = fault_warnings(record)
-    warnings += declared
+    warnings += _what_the_record_says(result, record)
+    attach_assurance(result, ident.curves, record)
+    if after_loading_warnings(record) and record.test == "compression":
+        warnings += _post_test_spread(result, record, func, accepted)
+    warnings += off_temperature_warnings(result, record)
+    old = list(result.get("warnings") or [])
+    result["warnings"] = old + [w for w in warnings if w not in old]
+    return ident
+
+
+def _what_the_record_says(result, record: Record) -> list[str]:
+    """The record's declared faults, an old writer's shift, a heating after its last row, a speed
+    mismatch and a temperature that strayed under load, as warnings; a good hardening fit on such a
+    record marked poor (its ``doubt``)."""
+    warnings, doubtful = fault_warnings(record)
     shifted = old_writer_warning(record)
     if shifted:
         warnings.append(shifted)
@@ -312,16 +334,13 @@ def identify(record: Record, **options) -> Identification:
     mismatch = speed_mismatch(record.number("crosshead_speed_mm_per_s"), record.number(MEASURED_SPEED_KEY))
     warnings += [mismatch] if mismatch else []
     fit = getattr(getattr(result, "hardening", None), "fit", None)  # the main fit (result["hardening"] is its copy)
-    if (doubtful or after) and fit is not None and fit.quality == "good":
-        why = "the record declares lost or corrupt samples" if doubtful else "the post-test measurements may be of a specimen changed after the record"
+    stray = temperature_stray_C(record)
+    if (doubtful or after or stray) and fit is not None and fit.quality == "good":
+        why = ("the record declares lost or corrupt samples" if doubtful else "the post-test measurements may be of a specimen changed after the record"
+               if after else "the curve mixes temperatures away from the nominal one")
         fit.doubt = why
         fit.warnings.append(f"marked poor: {why} (see the warnings)")
-    attach_assurance(result, ident.curves, record)
-    if after and record.test == "compression":
-        warnings += _post_test_spread(result, record, func, accepted)
-    old = list(result.get("warnings") or [])
-    result["warnings"] = old + [w for w in warnings if w not in old]
-    return ident
+    return warnings
 
 
 def _post_test_spread(result, record: Record, func, options: dict) -> list[str]:
@@ -330,7 +349,6 @@ def _post_test_spread(result, record: Record, func, options: dict) -> list[str]:
     (:mod:`.quality.post_test_doubt`); where that cannot be done, the budgets it would widen are
     stated not certifiable. Returns the warnings."""
     from flowcurve.identification.quality import post_test_doubt as doubt
-    from flowcurve.identification.quality.assurance import not_certifiable
 
     unc = result.get("uncertainty") or {}
     hk = doubt.record_final_height_mm(result)
@@ -351,15 +369,37 @@ def _post_test_spread(result, record: Record, func, options: dict) -> list[str]:
             if not missing:
                 return [note]
             why = f"the specimen as the record left it (hk {hk:.4g} mm) states no {', '.join(missing)}"
-    for key in ("flow_stress_MPa", "hardening"):
-        block = unc.get(key)
-        if isinstance(block, dict):
-            for name, b in block.items():
-                block[name] = not_certifiable(b, f"post-test measurements after a heating fault: {why}")
-    for key in ("friction_mu", "Rp02_MPa"):
-        if isinstance(unc.get(key), dict):
-            unc[key] = not_certifiable(unc[key], f"post-test measurements after a heating fault: {why}")
+    state_not_certifiable(unc, ("friction_mu", "Rp02_MPa", "flow_stress_MPa", "hardening"),
+                          f"post-test measurements after a heating fault: {why}")
     return [f"not certifiable: {why}; the post-test measurements may include flow after the record"]
+
+
+def state_not_certifiable(uncertainty: dict, keys, why: str) -> None:
+    """Each budget of ``uncertainty`` under ``keys`` (a budget, or a block of them: flow_stress_MPa,
+    hardening) replaced by the statement that it is not certifiable, and why (no U)."""
+    from flowcurve.identification.quality.assurance import not_certifiable
+
+    for key in keys:
+        block = uncertainty.get(key)
+        if isinstance(block, dict) and "components" in block:
+            uncertainty[key] = not_certifiable(block, why)
+        elif isinstance(block, dict):
+            for name, b in block.items():
+                if isinstance(b, dict):
+                    block[name] = not_certifiable(b, why)
+
+
+def off_temperature_warnings(result, record: Record) -> list[str]:
+    """A record whose temperature under load strays from the nominal (:func:`temperature_stray_C`):
+    its strengths, flow stresses and constants are not the nominal temperature's, and no U can say
+    by how much without the material's temperature sensitivity: stated not certifiable."""
+    stray = temperature_stray_C(record)
+    if stray is None or not isinstance(result.get("uncertainty"), dict):
+        return []
+    lo, hi, nominal = stray
+    why = f"recorded under load at {lo:.0f}–{hi:.0f} C, not at the nominal {nominal:g} C (±{TEMPERATURE_SPREAD_C:g} C)"
+    state_not_certifiable(result["uncertainty"], ("Rp02_MPa", "Rm_MPa", "flow_stress_MPa", "hardening"), why)
+    return [f"the strengths, flow stresses and hardening constants are not certifiable: {why}"]
 
 
 def inverse_time_limit_s(test: str) -> float:

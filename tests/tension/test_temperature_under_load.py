@@ -21,10 +21,19 @@ def with_temperature(record, temperature_C, nominal=600.0):
 def test_a_temperature_that_strays_under_load_is_reported(drift_C, warned):
     rec, _ = make_record(noise_N=5.0)
     rec = with_temperature(rec, lambda s: 600.0 + drift_C * s + 0.3 * np.sin(40 * s))
-    said = [w for w in identify(rec).result["warnings"] if "recorded temperature under load" in w]
+    result = identify(rec).result
+    said = [w for w in result["warnings"] if "recorded temperature under load" in w]
     assert bool(said) == warned
     if warned:
         assert "600 C" in said[0] and "650" in said[0]
+    # a value of a temperature the test did not hold has no U: stated not certifiable, the hardening marked poor
+    unc = result["uncertainty"]
+    strengths = [unc[k] for k in ("Rp02_MPa", "Rm_MPa") if k in unc] + list(unc["hardening"].values())
+    assert strengths and all((b.get("certifiable") is False) == warned for b in strengths)
+    assert all(b["U"] is None and "not at the nominal 600 C" in b["note"] for b in strengths if warned)
+    assert (result["hardening"]["quality"] == "poor") if warned else True
+    geometric = [unc[k] for k in ("Ag_pct", "A_pct", "Z_pct") if k in unc]
+    assert geometric and all(b["U"] is not None for b in geometric)  # not a temperature's: still certified
 
 
 def test_heating_before_the_load_is_not_held_against_the_test():
