@@ -9,6 +9,7 @@ Units: displacements in mm, forces in N, stiffness in N/µm, stresses in MPa.
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -454,18 +455,35 @@ def sdar_modulus(strain, stress_MPa, *, upto_MPa: float | None = None, strain_on
                       quality={k: dict(v) for k, v in fit.quality.items()})
 
 
+def _sdar_once(memo: dict | None, strain, stress_MPa, **options) -> ModulusFit:
+    """:func:`sdar_modulus` of the curve, computed once per ``options`` while the caller keeps ``memo``
+    (a dict it passes with the same curve every time); a copy, so the caller may relabel it."""
+    if memo is None:
+        return sdar_modulus(strain, stress_MPa, **options)
+    key = tuple(sorted(options.items()))
+    if key not in memo:
+        try:
+            memo[key] = sdar_modulus(strain, stress_MPa, **options)
+        except IdentificationError as exc:
+            memo[key] = exc
+    if isinstance(memo[key], IdentificationError):
+        raise memo[key]
+    return copy.deepcopy(memo[key])
+
+
 def elastic_modulus(method: str, strain, stress_MPa, reference_MPa: float, *, upto_MPa: float | None = None, strain_on_stress: bool = False,
-                    noise_MPa: float = 0.0, strain_noise: float = 0.0, crosshead: bool = False) -> ModulusFit:
+                    noise_MPa: float = 0.0, strain_noise: float = 0.0, crosshead: bool = False, sdar_memo: dict | None = None) -> ModulusFit:
     """The modulus of the first loading by ``method``: "window" (:func:`auto_modulus`, the widest
     linear stretch below ``reference_MPa``), "sdar" (:func:`sdar_modulus`), or "auto": on a
     ``crosshead`` strain SDAR's line when it passes its fit quality checks, else (and on an
-    extensometer) the window."""
+    extensometer) the window. ``sdar_memo``: a dict kept by a caller that asks again of the same
+    curve with another reference (SDAR's line does not depend on it: computed once)."""
     if method == "auto":
         sdar_failed = None
         if crosshead:
             try:
-                fit = sdar_modulus(strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
-                                   strain_noise=strain_noise)
+                fit = _sdar_once(sdar_memo, strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                                 strain_noise=strain_noise)
                 if fit.quality["curvature"]["passed"] and fit.quality["fit_range"]["passed"]:
                     return fit
                 sdar_failed = [k for k, v in fit.quality.items() if not v["passed"]]
@@ -479,8 +497,8 @@ def elastic_modulus(method: str, strain, stress_MPa, reference_MPa: float, *, up
             window_fit.sdar_failed = sdar_failed
         return window_fit
     if method == "sdar":
-        return sdar_modulus(strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
-                            strain_noise=strain_noise)
+        return _sdar_once(sdar_memo, strain, stress_MPa, upto_MPa=upto_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa,
+                          strain_noise=strain_noise)
     if method != "window":
         raise IdentificationError(f"unknown modulus method {method!r} (choose from {', '.join(MODULUS_METHODS)})")
     return auto_modulus(strain, stress_MPa, reference_MPa, strain_on_stress=strain_on_stress, noise_MPa=noise_MPa, strain_noise=strain_noise)

@@ -69,6 +69,14 @@ class StaticForm:
         ss, cands = self.law.profile(eps, sig, w)
         return ss, [self.renamed(c) for c in cands]
 
+    def grid_starts(self, eps, sig, w, count: int) -> list[dict[str, float]] | None:
+        """The profile's ``count`` best basins (:func:`_grid_minima`) under this form's names; None
+        where no row of the profile is finite (the data do not harden)."""
+        ss, cands = self.law.profile(eps, sig, w)
+        if not np.any(np.isfinite(ss)):
+            return None
+        return [self.renamed(cands[i]) for i in _grid_minima(ss, count)]
+
     def data_start(self, eps, sig) -> dict[str, float]:
         """The static law's start values read off the data, under this form's names."""
         return self.renamed(self.law.data_start(eps, sig))
@@ -272,6 +280,14 @@ def undetermined(spec, values: dict[str, float], stderr: dict[str, float | None]
     return out
 
 
+@lru_cache(maxsize=None)
+def _lmfit_model(law: str):
+    """The lmfit Model of the law's static form (made once per law: fits only read it)."""
+    import lmfit  # here, so `flowcurve --help` stays fast
+
+    return lmfit.Model(static_form(law).func, independent_vars=["eps_p"])
+
+
 def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points: Iterable[Sequence[float]] = (),
                   weights=None) -> HardeningFit:
     """Least-squares fit of a hardening law (lmfit) to a true curve σ(εp), global then local.
@@ -287,16 +303,13 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     A constant left on a bound and a fit with a max error above 10 % are reported in
     ``warnings``; the latter makes ``quality`` "poor".
     """
-    import lmfit  # here, so `flowcurve --help` stays fast
-
     spec = static_form(law)
     eps, sig, w = _weighted_points(eps_p, stress_MPa, extra_points, weights)
-    ss, candidates = spec.profile(eps, sig, w)
-    if not np.any(np.isfinite(ss)):
+    grid = spec.grid_starts(eps, sig, w, GRID_STARTS)
+    if grid is None:
         raise IdentificationError(f"the data do not harden (stress does not rise with strain): a {law} law cannot be fitted")
-    starts = [candidates[i] for i in _grid_minima(ss, GRID_STARTS)] + [spec.data_start(eps, sig)]
-    polished = _polish(spec, starts, eps, sig, w)
-    model = lmfit.Model(spec.func, independent_vars=["eps_p"])
+    polished = _polish(spec, grid + [spec.data_start(eps, sig)], eps, sig, w)
+    model = _lmfit_model(law)
     params = model.make_params()
     for name in spec.names:
         lo, hi = spec.bounds[name]

@@ -50,22 +50,25 @@ def _first_guesses(inp: _Inputs, automatic: bool) -> list[float]:
 
 def _modulus_window(step: int, ref: float, first_guesses: list[float], strain0, eng_stress, *, fractions, window_fixed_MPa,
                     modulus_reference: str, noise_MPa: float, strain_noise: float, method: str = DEFAULT_MODULUS_METHOD,
-                    crosshead: bool = False):
+                    crosshead: bool = False, sdar_memo: dict | None = None):
     """The stress window of the elastic line at one step: given (MPa, or × the reference stress) or
-    the most linear stretch; returns (window_MPa, line_points, how, auto fit or None, reference)."""
+    the most linear stretch; returns (window_MPa, line_points, how, auto fit or None, reference).
+    ``sdar_memo``: kept across the steps (SDAR's line does not depend on the reference)."""
     if window_fixed_MPa is not None:
         return window_fixed_MPa, 5, "given window (MPa)", None, ref
     if fractions is not None:
         return (fractions[0] * ref, fractions[1] * ref), 5, f"given window {fractions[0]:g}–{fractions[1]:g} × {modulus_reference}", None, ref
     try:
-        auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise, crosshead=crosshead)  # the window is the same before toe and scaling
+        auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise, crosshead=crosshead,
+                              sdar_memo=sdar_memo)  # the window is the same before toe and scaling
     except IdentificationError:
         if step > 0 or not first_guesses:
             raise
         while True:  # a sparse elastic line may hold too few samples below the first guess
             ref = first_guesses.pop(0)
             try:
-                auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise, crosshead=crosshead)
+                auto = elastic_modulus(method, strain0, eng_stress, ref, noise_MPa=noise_MPa, strain_noise=strain_noise, crosshead=crosshead,
+                              sdar_memo=sdar_memo)
                 break
             except IdentificationError:
                 if not first_guesses:
@@ -123,12 +126,13 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
     disp0 = src["disp"]
     toe_mm, scale_factor = 0.0, None
     unresolved = None  # the line's fit when it was not resolved and the handbook E took its place (kept from then on)
+    strain0, sdar_memo = disp0 / length, {}
     for step in range(6):
         try:
             window_MPa, line_points, how, auto, ref = _modulus_window(
-                step, ref, first_guesses, disp0 / length, eng_stress, fractions=fractions, window_fixed_MPa=window_fixed_MPa,
+                step, ref, first_guesses, strain0, eng_stress, fractions=fractions, window_fixed_MPa=window_fixed_MPa,
                 modulus_reference=modulus_reference, noise_MPa=noise_MPa, strain_noise=strain_noise, method=modulus_method,
-                crosshead=src["source"] != "extensometer")
+                crosshead=src["source"] != "extensometer", sdar_memo=sdar_memo)
         except IdentificationError as exc:
             if unresolved is None:
                 if automatic and (E_MPa is not None or handbook_E is not None):  # no line to be found: the E given

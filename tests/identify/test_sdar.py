@@ -202,3 +202,17 @@ def test_identify_reports_the_failed_check_in_result_json_and_warnings():
     assert x["modulus"]["sdar_failed_checks"] == ["fit_range"] and "(ASTM E3076-18, not used)" in x["modulus"]["source"]
     assert any("E is from flowcurve's own automatic window instead (not an E3076 result)" in w for w in x["warnings"])
     assert "all quality checks passed" not in x["modulus"]["source"]
+
+
+def test_the_memo_gives_the_line_a_fresh_search_gives_and_keeps_it_from_relabels():
+    """The modulus's fixed-point loop asks again of the same curve with another reference: SDAR's line is
+    found once (its line does not depend on the reference), the same as a fresh search, and a caller
+    relabelling one answer leaves the next untouched."""
+    e, s, _ = toe_line_knee(n=3000, seed=4)
+    memo: dict = {}
+    first = elastic_modulus("auto", e, s, 0.5 * float(np.max(s)), crosshead=True, sdar_memo=memo)
+    first.source = "relabelled by the caller"
+    again = elastic_modulus("auto", e, s, 0.4 * float(np.max(s)), crosshead=True, sdar_memo=memo)
+    fresh = elastic_modulus("auto", e, s, 0.4 * float(np.max(s)), crosshead=True)
+    assert len(memo) == 1 and again.source == fresh.source != first.source
+    assert (again.E_MPa, again.window_MPa, again.n_points) == (fresh.E_MPa, fresh.window_MPa, fresh.n_points)
