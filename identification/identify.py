@@ -310,31 +310,31 @@ def identify(record: Record, **options) -> Identification:
             block[key] = value
     if ignored:
         warnings.append(f"option(s) not used by {record.test} identification: {', '.join(ignored)}")
-    warnings += _what_the_record_says(result, record)
+    after, stray = after_loading_warnings(record), temperature_stray_C(record)  # each read once: a long record's passes
+    warnings += _what_the_record_says(result, record, after, stray)
     attach_assurance(result, ident.curves, record)
-    if after_loading_warnings(record) and record.test == "compression":
+    if after and record.test == "compression":
         warnings += _post_test_spread(result, record, func, accepted)
-    warnings += off_temperature_warnings(result, record)
+    warnings += off_temperature_warnings(result, record, stray)
     old = list(result.get("warnings") or [])
     result["warnings"] = old + [w for w in warnings if w not in old]
     return ident
 
 
-def _what_the_record_says(result, record: Record) -> list[str]:
-    """The record's declared faults, an old writer's shift, a heating after its last row, a speed
-    mismatch and a temperature that strayed under load, as warnings; a good hardening fit on such a
-    record marked poor (its ``doubt``)."""
+def _what_the_record_says(result, record: Record, after: list[str], stray: tuple | None) -> list[str]:
+    """The record's declared faults, an old writer's shift, a heating after its last row (``after``:
+    :func:`after_loading_warnings`), a speed mismatch and a temperature that strayed under load
+    (``stray``: :func:`temperature_stray_C`), as warnings; a good hardening fit on such a record
+    marked poor (its ``doubt``)."""
     warnings, doubtful = fault_warnings(record)
     shifted = old_writer_warning(record)
     if shifted:
         warnings.append(shifted)
         doubtful = True
-    after = after_loading_warnings(record)
     warnings += after
     mismatch = speed_mismatch(record.number("crosshead_speed_mm_per_s"), record.number(MEASURED_SPEED_KEY))
     warnings += [mismatch] if mismatch else []
     fit = getattr(getattr(result, "hardening", None), "fit", None)  # the main fit (result["hardening"] is its copy)
-    stray = temperature_stray_C(record)
     if (doubtful or after or stray) and fit is not None and fit.quality == "good":
         why = ("the record declares lost or corrupt samples" if doubtful else "the post-test measurements may be of a specimen changed after the record"
                if after else "the curve mixes temperatures away from the nominal one")
@@ -389,11 +389,10 @@ def state_not_certifiable(uncertainty: dict, keys, why: str) -> None:
                     block[name] = not_certifiable(b, why)
 
 
-def off_temperature_warnings(result, record: Record) -> list[str]:
-    """A record whose temperature under load strays from the nominal (:func:`temperature_stray_C`):
+def off_temperature_warnings(result, record: Record, stray: tuple | None) -> list[str]:
+    """A record whose temperature under load strays from the nominal (``stray``: :func:`temperature_stray_C`):
     its strengths, flow stresses and constants are not the nominal temperature's, and no U can say
     by how much without the material's temperature sensitivity: stated not certifiable."""
-    stray = temperature_stray_C(record)
     if stray is None or not isinstance(result.get("uncertainty"), dict):
         return []
     lo, hi, nominal = stray
