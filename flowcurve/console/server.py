@@ -66,7 +66,7 @@ DEFAULT_HOST = "127.0.0.1"  # any other --host needs a token
 START_FIELDS = {"test": TEXT, **{k: NUMBER for k in NUMERIC_FIELDS}, **{k: TEXT for k in (*TEXT_FIELDS, FAULT_FIELD)}}
 POST_FIELDS = {k: NUMBER for keys in POST_KEYS.values() for k in keys}
 FIT_FIELDS = {"records": NAMES, **{k: NUMBER for k in ("melt_temp", "fix_C", "fix_m", "ref_rate", "ref_temp", "poisson", "density", "cp", "E_MPa")},
-              **{k: TEXT for k in ("method", "format", "units")}}
+              **{k: TEXT for k in ("method", "format", "units", "law", "lsdyna_material")}}
 LOGIN_FIELDS = {"token": TEXT}
 IDLE_STATUS = {"state": "idle", "heater": "off"}
 
@@ -348,13 +348,14 @@ def create_app(console: Console) -> Starlette:
 
     async def info(request: Request) -> Response:
         """GET /api/info: the rig, the run form's choices and the card formats."""
+        from flowcurve.console.workspace import fit_choices
         from flowcurve.reports.card_formats import WRITERS
         from flowcurve.rig.virtual.fault_spec import help_text
 
         return _json({"rig": console.rig_name, "virtual": runner.virtual, "out": str(workspace.root), "time_scale": console.time_scale,
                       "token_required": bool(console.token), "post": POST_KEYS, "prompts": POST_PROMPTS,
                       "fault_help": help_text() if runner.virtual else None,
-                      "card_formats": [[f.name, f.display_name] for f in WRITERS.values()]})  # the fit form's choices
+                      "card_formats": [[f.name, f.display_name] for f in WRITERS.values()], **fit_choices()})  # the fit form's choices
 
     async def login(request: Request) -> Response:
         """POST /api/login: check the token and set its cookie."""

@@ -249,6 +249,22 @@ def _inside_file(workspace: Workspace, path: Path) -> bool:
         return False
 
 
+def fit_choices() -> dict[str, list]:
+    """The fit form's choices from the registries, [[value, shown], …] each (a new law or unit
+    system needs no edit of the page): laws (Johnson–Cook first: the default), fit methods, unit
+    systems (the default first) and LS-DYNA materials ("": *MAT_015 with *MAT_024, the default)."""
+    from flowcurve.identification.laws.base import registered_laws
+    from flowcurve.reports.cards.data import LSDYNA_MATERIAL_NAMES
+    from flowcurve.reports.units import DEFAULT_UNIT_SYSTEM, UNIT_SYSTEMS
+    from flowcurve.services.fit import METHODS
+
+    laws = sorted(registered_laws().items(), key=lambda item: (item[0] != "johnson_cook", item[1].display_name))
+    return {"laws": [[name, law.display_name] for name, law in laws],
+            "fit_methods": [[m, m] for m in METHODS],
+            "unit_systems": [[u, u] for u in sorted(UNIT_SYSTEMS, key=lambda u: u != DEFAULT_UNIT_SYSTEM)],
+            "lsdyna_materials": [["", "*MAT_015 and *MAT_024"]] + [[k, f"{k} ({v})"] for k, v in LSDYNA_MATERIAL_NAMES.items()]}
+
+
 # the fit form's fields → (request, its field); how the form labels every input it may lack
 FIT_FIELDS = {"melt_temp": ("fit", "melt_temp"), "fix_C": ("fit", "fix_C"), "fix_m": ("fit", "fix_m"), "ref_rate": ("fit", "ref_rate"),
               "ref_temp": ("fit", "ref_temp"), "poisson": ("card", "poisson"), "density": ("card", "density_kg_per_m3"),
@@ -275,8 +291,11 @@ def _requests(inputs: list[str], out: Path, options: dict):
         except ValueError:
             errors[form] = f"not a number: {text!r}"
     units = str(options.get("units") or "").strip()
-    fit_request = FitRequest(inputs, out, method=str(options.get("method") or "global"), **values["fit"])
-    card_request = CardRequest("fit.json", str(options.get("format") or "lsdyna"), **values["card"], **({"units": units} if units else {}))
+    law = str(options.get("law") or "").strip() or "johnson_cook"
+    material = str(options.get("lsdyna_material") or "").strip() or None  # none: *MAT_015 with *MAT_024
+    fit_request = FitRequest(inputs, out, method=str(options.get("method") or "global"), law=law, **values["fit"])
+    card_request = CardRequest("fit.json", str(options.get("format") or "lsdyna"), **values["card"], **({"units": units} if units else {}),
+                               lsdyna_material=material)
     for request in (fit_request, card_request):
         try:
             request.check()

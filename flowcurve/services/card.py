@@ -74,12 +74,16 @@ class CardRequest(Constants):
     lsdyna_material: str | None = None
 
     def check(self) -> CardRequest:
-        """The request, or FieldError naming its first refused field (format, units)."""
+        """The request, or FieldError naming its first refused field (format, units, LS-DYNA material)."""
         from flowcurve.reports.card_formats import FORMATS
         from flowcurve.reports.units import UNIT_SYSTEMS
 
+        from flowcurve.reports.cards.data import LSDYNA_MATERIALS
+
         choice("format", "--format/-f", self.format, FORMATS)
         choice("units", "--units/-u", self.units, sorted(UNIT_SYSTEMS))
+        if self.lsdyna_material is not None:
+            choice("lsdyna_material", "--lsdyna-material", str(self.lsdyna_material), LSDYNA_MATERIALS)
         return self
 
     def options(self) -> dict:

@@ -79,8 +79,16 @@ class FitRequest:
     options: dict = field(default_factory=dict)  # as given, for fit.json's provenance
 
     def check(self) -> FitRequest:
-        """The request, or FieldError naming its first refused field."""
+        """The request, or FieldError naming its first refused field (method, law)."""
+        from flowcurve.errors import FlowcurveError
+        from flowcurve.identification.laws.base import get_law
+        from flowcurve.services import FieldError
+
         choice("method", "--method", self.method, METHODS)
+        try:
+            get_law(self.law)
+        except FlowcurveError as exc:  # an unknown law, with the nearest name
+            raise FieldError("law", str(exc)) from None
         return self
 
     def fixed(self) -> dict[str, float]:

@@ -20,6 +20,7 @@ from flowcurve.reports.units import UnitSystem
 MAX_TABLE_ROWS = 100  # docs/calculix.md: tables over ~150 rows gave stresses ~8 % too low
 DAMAGE_KEYS = ("D1", "D2", "D3", "D4", "D5")
 LSDYNA_MATERIALS = ("15", "24", "224")  # *MAT_JOHNSON_COOK, *MAT_PIECEWISE_LINEAR_PLASTICITY, *MAT_TABULATED_JOHNSON_COOK
+LSDYNA_MATERIAL_NAMES = {"15": "*MAT_JOHNSON_COOK", "24": "*MAT_PIECEWISE_LINEAR_PLASTICITY", "224": "*MAT_TABULATED_JOHNSON_COOK"}
 
 
 @dataclass

@@ -289,3 +289,29 @@ def test_fit_form_values_the_service_refuses_are_tied_to_their_fields_without_re
     assert fields["melt_temp"] == "not a number: 'hot'" and fields["density"] == "not a number: '1e'"
     assert "invalid choice: 'nastran'" in fields["format"] and "invalid choice: 'best'" in fields["method"]
     assert not (tmp_path / "out" / "fits").exists() or not list((tmp_path / "out" / "fits").iterdir())
+
+
+def test_the_fit_form_offers_the_registries_and_its_law_units_and_lsdyna_material_reach_the_card(tmp_path):
+    """The console wrote only Johnson–Cook cards in mm-s-t-N-MPa with *MAT_015 and *MAT_024: the law, the
+    unit system and the LS-DYNA material (224, the tabulated one) had no field (issue 45). /api/info lists
+    them from the registries; the card written says what was chosen."""
+    from flowcurve.identification.laws.base import registered_laws
+    from flowcurve.reports.units import UNIT_SYSTEMS
+
+    _console, client = _client(tmp_path)
+    info = client.get("/api/info").json()
+    assert [name for name, _ in info["laws"]][0] == "johnson_cook" and {n for n, _ in info["laws"]} == set(registered_laws())
+    assert {u for u, _ in info["unit_systems"]} == set(UNIT_SYSTEMS) and [m for m, _ in info["lsdyna_materials"]] == ["", "15", "24", "224"]
+    assert [m for m, _ in info["fit_methods"]] == ["global", "stepwise"]
+    names = identified_records(tmp_path / "out")
+    given = {"records": names, "format": "lsdyna", "melt_temp": "1450", "fix_C": "0.01", "fix_m": "1", "E_MPa": "200000",
+             "poisson": "0.3", "density": "7850", "cp": "460"}
+    r = client.post("/api/fit", json={**given, "law": "hensel_spitel", "lsdyna_material": "99"}, headers=JSON)
+    assert r.status_code == 400, r.text
+    fields = r.json()["fields"]
+    assert "did you mean 'hensel_spittel'" in fields["law"] and "invalid choice: '99'" in fields["lsdyna_material"], fields
+    r = client.post("/api/fit", json={**given, "law": "johnson_cook", "units": "mm-ms-kg-kN-GPa", "lsdyna_material": "224"}, headers=JSON)
+    assert r.status_code == 200, r.text
+    card = client.get(r.json()["card"]).text
+    assert "*MAT_TABULATED_JOHNSON_COOK" in card and "*MAT_PIECEWISE_LINEAR_PLASTICITY" not in card
+    assert "mm-ms-kg-kN-GPa" in card

@@ -153,10 +153,13 @@ def test_a_compression_test_through_the_page_gives_runs_record_and_its_result(se
     box = f'#records input[value="{run.record.name}"]'
     wait_for(lambda: driver.find_element(By.CSS_SELECTOR, box).click() or driver.find_element(By.CSS_SELECTOR, box).is_selected(), what="the record selected")
     fill(driver, {"melt_temp": "1450", "fix_C": "0.01", "fix_m": "1", "poisson": "0.3", "density": "7850", "cp": "460", "format": "lsdyna"})
+    # the law, unit-system and LS-DYNA-material choices come from /api/info: the tabulated Johnson–Cook in kN and GPa
+    assert [o.get_attribute("value") for o in driver.find_elements(By.CSS_SELECTOR, "#fit-lsdyna option")] == ["", "15", "24", "224"]
+    fill(driver, {"law": "johnson_cook", "units": "mm-ms-kg-kN-GPa", "lsdyna_material": "224"})
     driver.find_element(By.ID, "btn-fit").click()
     card = wait_for(lambda: driver.find_element(By.ID, "card-link"), timeout_s=120, what="the card link")
     body = urllib.request.urlopen(card.get_attribute("href")).read().decode()
-    assert "*MAT_JOHNSON_COOK" in body
+    assert "*MAT_TABULATED_JOHNSON_COOK" in body and "mm-ms-kg-kN-GPa" in body
     shot(driver, "6-records-fit")
 
 

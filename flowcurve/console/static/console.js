@@ -372,6 +372,15 @@ async function sendToken(ev) {
   boot();
 }
 
+function fillChoices(selector, choices) {
+  $(selector).replaceChildren(...choices.map(([value, shown]) => {
+    const option = document.createElement("option");
+    option.value = value;
+    option.textContent = shown;
+    return option;
+  }));
+}
+
 async function boot() {
   const res = await api("/api/info");
   if (!res.ok) return;
@@ -381,13 +390,11 @@ async function boot() {
     if (!probe.ok) return;
   }
   if (info.card_formats) {  // the card registry's formats (reports/card_formats.py): a new one needs no edit here
-    $("#fit-format").replaceChildren(...info.card_formats.map(([name, shown]) => {
-      const option = document.createElement("option");
-      option.value = name;
-      option.textContent = `${name} (${shown})`;
-      return option;
-    }));
+    fillChoices("#fit-format", info.card_formats.map(([name, shown]) => [name, `${name} (${shown})`]));
   }
+  // the law, method, unit-system and LS-DYNA-material registries, the default first
+  [["#fit-law", info.laws], ["#fit-method", info.fit_methods], ["#fit-units", info.unit_systems], ["#fit-lsdyna", info.lsdyna_materials]]
+    .forEach(([sel, choices]) => { if (choices) fillChoices(sel, choices); });
   $("#rig").textContent = `— ${info.rig}`;
   showScale(info.time_scale);
   $("#out").textContent = info.out;
