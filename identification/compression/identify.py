@@ -286,7 +286,8 @@ def _strain_zero(diagram: _Diagram, geo: dict, line: _Line, nominal: _Nominal, y
         offsets = toe_offsets(diagram.specimen, diagram.force, window, E_MPa=E_used, area0_mm2=geo["area0"], h0_mm=geo["h0"])
         toe_spread = float(np.ptp(offsets)) / 2.0 / geo["h0"]  # half the spread, as toe_spread_warning states it
     zero = tension_or_compression_zero(strain[: top + 1], stress[: top + 1], window_MPa=window, E_line_MPa=E_line, E_line_stderr_MPa=E_se,
-                                       E_used_MPa=E_used, line_resolved=yld.E_source == "apparent" and np.isfinite(E_se), toe_spread=toe_spread)
+                                       E_used_MPa=E_used, line_resolved=yld.E_source == "apparent" and np.isfinite(E_se), toe_spread=toe_spread,
+                                       zero_E_MPa=E_used if el is not None and yld.E_source != "apparent" else None)
     eps_tp, sig_t, _ = friction.corrected[friction_correction]
     idx = _fit_points(eps_tp, yld.i_yield, fit_range)
     fits[friction_correction], start, warnings = apply_to_fit(fits[friction_correction], eps_tp[idx], sig_t[idx], zero,

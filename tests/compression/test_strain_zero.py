@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from flowcurve.identification.compression.identify import identify_compression
-from flowcurve.identification.strain_zero import line_curvature_u, line_zero_u, start_uncertainty, strain_zero_uncertainty
+from flowcurve.identification.strain_zero import line_curvature_u, line_zero_u, start_uncertainty, strain_zero_uncertainty, top_spacing_u
+from tests.series import compression_series as cs
 
 from .conftest import flow_stress
 from .toe_records import make_toe_compression
@@ -36,6 +37,40 @@ def test_a_bent_line_has_a_curvature_term_a_straight_one_none():
     bent = straight + 2e-4 * (stress / 120.0) ** 4  # plasticity creeping in at the top
     assert line_curvature_u(straight, stress, (10.0, 120.0)) < 1e-12
     assert line_curvature_u(bent, stress, (10.0, 120.0)) > 2e-5
+
+
+def test_top_spacing_goes_through_the_zeros_estimator_in_closed_form():
+    """The last sample's plastic part moves the zero as its estimator does: the median of a known
+    slope's two offsets by half the top one's excess (at most the step), none when it is on the line;
+    a regressed line, a single sample or samples off one line keep the step itself, Δε/√3."""
+    E, stress = 200_000.0, np.array([0.0, 100.0, 200.0, 300.0])
+    strain = 1e-4 + stress / E
+    strain[-1] += 4e-3  # the first sample past the line, one step further
+    step = strain[-1] - strain[-2]
+    assert top_spacing_u(strain, stress, (50.0, 250.0)) == pytest.approx(step / np.sqrt(3.0))  # a regressed line: the step
+    bent = strain.copy()
+    bent[2] += 2e-5  # the top sample of the window 2e-5 off the line of slope E: at most that of it is plastic
+    assert top_spacing_u(bent, stress, (50.0, 250.0), E_MPa=E) == pytest.approx(2e-5 / 2.0 / np.sqrt(3.0), rel=1e-6)
+    assert top_spacing_u(strain, stress, (50.0, 250.0), E_MPa=E) == pytest.approx(0.0, abs=1e-15)  # on the line: nothing plastic
+    assert top_spacing_u(strain, stress, (150.0, 250.0), E_MPa=E) == pytest.approx(step / np.sqrt(3.0))  # one sample: it is the zero
+    past = strain.copy()
+    past[2] += 1e-3  # the two samples 1e-3 apart off a line of slope E that spans 5e-4 between them: no line, the step as it is
+    assert top_spacing_u(past, stress, (50.0, 250.0), E_MPa=E) == pytest.approx((past[3] - past[2]) / np.sqrt(3.0))
+
+
+def test_the_strain_zero_holds_its_actual_error_on_the_closed_form_series():
+    """δε0 against the generator's truth (tests/series/compression_series.py: the seating toe closes at
+    0.02 mm, so the elastic line's foot is there): |ε0 error| = |toe − 0.02 mm|/h0 within 2 δε0 on every
+    (T, rate), and δε0 not a blanket (median within 3× the median error). Before δε0 took the top
+    sample spacing as Δε/√3 whatever the estimator: 0.0017–0.0024 at 0.05 /s for errors of 1–2e-4."""
+    stated, actual = [], []
+    for T, rate in cs.SERIES:
+        record, _ = cs.compression_record(T, rate, seed=0, response="fe", reading_mm=0.01)
+        result = identify_compression(record).result
+        actual.append(abs(result["indicator"]["toe_compensation_mm"] - 0.02) / cs.H0_MM)
+        stated.append(result["hardening"]["start_uncertainty"]["delta_eps0"])
+    assert all(a <= 2.0 * d for a, d in zip(actual, stated)), list(zip(actual, stated))
+    assert np.median(stated) <= 3.0 * np.median(actual), list(zip(actual, stated))
 
 
 def test_start_uncertainty_uses_the_law_slope_in_closed_form():
