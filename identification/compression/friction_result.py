@@ -169,13 +169,22 @@ MU_SENSITIVITY_STEP = 0.01  # the secant's half step in μ (the FE table's μ no
 
 
 def correction_mu_sensitivity(geo: dict, nominal: _Nominal, mu: float, friction_correction: str, E_used: float | None,
-                              step: float = MU_SENSITIVITY_STEP) -> np.ndarray:
+                              step: float = MU_SENSITIVITY_STEP, mu_range=None) -> np.ndarray:
     """∂σ/∂μ, MPa per unit μ, at every point of the nominal curve, of the correction actually applied: the curve
-    corrected again at μ ± ``step`` (the lower end at μ = 0 at most), the secant between them."""
-    # ∂σ/∂μ ≈ (σ(μ + s) − σ(max(μ − s, 0))) / (μ + s − max(μ − s, 0)), σ by fr.correct on the same p(ε)
+    corrected again at the ends of μ's stated ±1σ range ``mu_range`` [lo, hi] (u(μ) = (hi − lo)/2), the secant
+    between them, so that u(μ)·∂σ/∂μ is half the change of σ across that range; without a range (or an empty
+    one) at μ ± ``step`` (the lower end at μ = 0 at most).
+
+    The range is where μ is stated to lie: near sticking it is one-sided (the end face or the bulge no longer
+    grows with μ, or the table's runs were continued: up to the table's largest μ), and the local slope at μ times its
+    half-width extrapolated σ's change to a μ below the range, where σ moves most (issue 43)."""
+    # ∂σ/∂μ ≈ (σ(hi) − σ(lo)) / (hi − lo), σ by fr.correct on the same p(ε); hi, lo the range's ends or μ ± s
     eps_p = plastic_strain(nominal.strain, nominal.pressure, E_used) if E_used is not None else None
     elastic = None if E_used is None else (E_used, geo["nu"])
     lo, hi = max(mu - step, 0.0), mu + step
+    if mu_range is not None and len(mu_range) == 2 and all(v is not None and math.isfinite(v) for v in mu_range) \
+            and float(mu_range[1]) - float(mu_range[0]) > 1e-9:
+        lo, hi = max(float(mu_range[0]), 0.0), float(mu_range[1])
     sig_lo, sig_hi = (fr.correct(friction_correction, nominal.strain, nominal.pressure, m, nominal.d_n / 2.0, nominal.h, eps_p=eps_p,
                                  elastic=elastic)[1] for m in (lo, hi))
     return (np.asarray(sig_hi, dtype=float) - np.asarray(sig_lo, dtype=float)) / (hi - lo)

@@ -452,6 +452,7 @@ def identify_compression(record: Record, *, friction_method: str = fr.DEFAULT_FR
         result.warnings.extend(fold_warnings)
     curves = _curves(diagram, nominal, friction, fits[friction_correction])
     # the flow stress budget's μ term reads the sensitivity of this correction, not Siebel's (uncertainty.flow_stress_budget)
-    sensitivity = correction_mu_sensitivity(geo, nominal, friction.chosen.mu, friction_correction, yld.E_used)
+    sensitivity = correction_mu_sensitivity(geo, nominal, friction.chosen.mu, friction_correction, yld.E_used,
+                                              mu_range=friction.chosen.extra.get("mu_range"))
     curves[f"true_{friction_correction}"]["dsigma_dmu_MPa"] = sensitivity
     return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield, uncertainty, sensitivity), curves=curves)
