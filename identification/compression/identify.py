@@ -395,6 +395,16 @@ def _modulus_method(choice: ModulusChoice, yld: _Yield, line: _Line) -> dict:
     return out
 
 
+def _mu_sensitivity(geo: dict, nominal: _Nominal, friction, friction_correction: str, E_used: float | None, curves: dict) -> np.ndarray:
+    """∂σ/∂μ of the correction applied, across μ's stated range (:func:`correction_mu_sensitivity`), also
+    written into its true curve's ``dsigma_dmu_MPa`` column: the flow stress budget's μ term reads this
+    correction's sensitivity, not Siebel's (uncertainty.flow_stress_budget)."""
+    sensitivity = correction_mu_sensitivity(geo, nominal, friction.chosen.mu, friction_correction, E_used,
+                                            mu_range=friction.chosen.extra.get("mu_range"))
+    curves[f"true_{friction_correction}"]["dsigma_dmu_MPa"] = sensitivity
+    return sensitivity
+
+
 def identify_compression(record: Record, *, friction_method: str = fr.DEFAULT_FRICTION_METHOD,
                          friction_correction: str = fr.DEFAULT_CORRECTION, law: str = "johnson_cook", E_MPa: float | None = None,
                          frame_stiffness_N_per_um: float | None = None, modulus_window_MPa: tuple[float, float] | None = None,
@@ -451,8 +461,5 @@ def identify_compression(record: Record, *, friction_method: str = fr.DEFAULT_FR
         uncertainty, result.methods["correction_uncertainty"], fold_warnings = _fe_correction_uncertainty(geo, friction, yld.E_used)
         result.warnings.extend(fold_warnings)
     curves = _curves(diagram, nominal, friction, fits[friction_correction])
-    # the flow stress budget's μ term reads the sensitivity of this correction, not Siebel's (uncertainty.flow_stress_budget)
-    sensitivity = correction_mu_sensitivity(geo, nominal, friction.chosen.mu, friction_correction, yld.E_used,
-                                              mu_range=friction.chosen.extra.get("mu_range"))
-    curves[f"true_{friction_correction}"]["dsigma_dmu_MPa"] = sensitivity
+    sensitivity = _mu_sensitivity(geo, nominal, friction, friction_correction, yld.E_used, curves)
     return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield, uncertainty, sensitivity), curves=curves)
