@@ -76,9 +76,8 @@ class CardRequest(Constants):
     def check(self) -> CardRequest:
         """The request, or FieldError naming its first refused field (format, units, LS-DYNA material)."""
         from flowcurve.reports.card_formats import FORMATS
-        from flowcurve.reports.units import UNIT_SYSTEMS
-
         from flowcurve.reports.cards.data import LSDYNA_MATERIALS
+        from flowcurve.reports.units import UNIT_SYSTEMS
 
         choice("format", "--format/-f", self.format, FORMATS)
         choice("units", "--units/-u", self.units, sorted(UNIT_SYSTEMS))

@@ -64,14 +64,10 @@ class StaticForm:
         """The static law's values under this form's names."""
         return {mine: values[theirs] for mine, theirs in zip(self.names, self.law.names)}
 
-    def profile(self, eps, sig, w) -> tuple[np.ndarray, list[dict[str, float]]]:
-        """The static law's variable-projection profile (global stage), under this form's names."""
-        ss, cands = self.law.profile(eps, sig, w)
-        return ss, [self.renamed(c) for c in cands]
-
     def grid_starts(self, eps, sig, w, count: int) -> list[dict[str, float]] | None:
-        """The profile's ``count`` best basins (:func:`_grid_minima`) under this form's names; None
-        where no row of the profile is finite (the data do not harden)."""
+        """The ``count`` best basins (:func:`_grid_minima`) of the static law's variable-projection
+        profile (global stage) under this form's names; None where no row of the profile is finite
+        (the data do not harden)."""
         ss, cands = self.law.profile(eps, sig, w)
         if not np.any(np.isfinite(ss)):
             return None
