@@ -227,8 +227,8 @@ def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dic
     :func:`strain_zero_uncertainty`; refit: eps, σ → HardeningFit. Returns (fit, block, warnings)."""
     from dataclasses import replace
 
-    from flowcurve.identification.laws.hardening import _on_bound, static_form
-    from flowcurve.identification.quality.uncertainty import correlated_fit_u
+    from flowcurve.identification.laws.hardening import static_form
+    from flowcurve.identification.quality.uncertainty import constants_on_bound, correlated_fit_u
 
     delta = zero["delta_eps0"]
     start = {**start_uncertainty(fit, fit.strain_range, delta), "components": zero["components"]}
@@ -237,10 +237,13 @@ def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dic
     shift = constants_shift(refit, refit(np.asarray(eps_p, dtype=float), stress_MPa), eps_p, stress_MPa, delta) if delta > 0 else {}
     start["constants_shift"] = shift
     law = static_form(fit.law)
-    sides = {k: _on_bound(v, *law.bounds[k]) for k, v in fit.params.items()} if law else {}
-    on_bound = {k: 1.0 if side == "lower" else -1.0 for k, side in sides.items() if side}
+    on_bound = constants_on_bound(law.func, fit.params, law.bounds, eps_p) if law else {}
+    start["constants_on_bound"] = {k: "lower" if inward > 0 else "upper" for k, inward in on_bound.items()}
     start["constants_lack_of_fit"] = correlated_fit_u(law.func, fit.params, eps_p, stress_MPa, on_bound) if law else {}
+    # with a constant on its bound the fit's own covariance is not the bounded fit's (lmfit's at a bound, or none):
+    # the free constants' statistics are constants_lack_of_fit's, the bound one fixed
+    own = {k: None for k in fit.stderr} if on_bound else fit.stderr
     stderr = {k: (math.hypot(se, shift[k]) if se is not None and np.isfinite(se) else shift[k]) if k in shift else se
-              for k, se in fit.stderr.items()}
+              for k, se in own.items()}
     warning = start_warning(start)
     return replace(fit, stderr=stderr), start, [warning] if warning else []

@@ -96,13 +96,14 @@ def _constants(hard: Mapping, stress_rel_u: float) -> dict:
     out = {}
     shifts = ((hard.get("start_uncertainty") or {}).get("constants_shift") or {})
     lack = ((hard.get("start_uncertainty") or {}).get("constants_lack_of_fit") or {})
+    sides = ((hard.get("start_uncertainty") or {}).get("constants_on_bound") or {})
     for key, unit in CONSTANTS:
         value = _num(hard.get(key))
         if value is None:
             continue
         shift = _num(shifts.get(key.removesuffix("_MPa")))
         b = un.constant_budget(value, _num(hard.get(f"{key}_stderr")), stress_rel_u, unit, zero_shift=shift,
-                               lack_of_fit=_num(lack.get(key.removesuffix("_MPa"))))
+                               lack_of_fit=_num(lack.get(key.removesuffix("_MPa"))), on_bound=sides.get(key.removesuffix("_MPa")))
         if b is not None:
             out[key] = b
     return out

@@ -452,6 +452,47 @@ def _jacobian(func: Callable, params: Mapping[str, float], eps: np.ndarray) -> n
     return np.column_stack(cols)
 
 
+BOUND_REL_TOL = 1e-6  # a constant within this part of its own scale from a finite bound sits on it (the optimisers stop short)
+
+
+def constant_scales(func: Callable, params: Mapping[str, float], eps) -> dict[str, float]:
+    """Each constant's own scale: the change that moves the law by its own size, max|f| / max|∂f/∂p_k|
+    (A of Johnson–Cook: the stress level; n: about 1/|ln ε|). Inputs: the law, its constants, the strains."""
+    eps = np.asarray(eps, dtype=float).ravel()
+    eps = eps[np.isfinite(eps)]
+    with np.errstate(all="ignore"):
+        level = float(np.nanmax(np.abs(func(eps, **params)))) if eps.size else 0.0
+        J = _jacobian(func, params, eps) if eps.size else np.zeros((0, len(params)))
+    out = {}
+    for i, k in enumerate(params):
+        top = float(np.nanmax(np.abs(J[:, i]))) if J.size else 0.0
+        out[k] = level / top if top > 0 and math.isfinite(level / top) else 0.0
+    return out
+
+
+def constants_on_bound(func: Callable, params: Mapping[str, float], bounds: Mapping[str, tuple[float, float]], eps) -> dict[str, float]:
+    """The constants sitting on a finite bound, name → +1 (lower: inward is up) or −1 (upper): within
+    :data:`BOUND_REL_TOL` × the constant's scale (:func:`constant_scales`) of it, or of |bound| where larger."""
+    scales = constant_scales(func, params, eps)
+    out = {}
+    for k, v in params.items():
+        lo, hi = bounds.get(k, (-math.inf, math.inf))
+        for bound, inward in ((lo, 1.0), (hi, -1.0)):
+            if math.isfinite(bound) and abs(v - bound) <= BOUND_REL_TOL * max(abs(bound), scales.get(k, 0.0), 1e-12):
+                out[k] = inward
+                break
+    return out
+
+
+def on_bound_reach(m: float, se: float, k: float = K_COVERAGE) -> float:
+    """How far inward the constant's value (as the law fitted with its bounds, noise-free, would give it)
+    can lie from its bound: the bounded fit's constant is max(bound, p) of the unbounded one p ~ N(m, se²),
+    m the unbounded optimum's distance inward (≤ 0 when the bound holds it), se its standard error;
+    the k-interval of p mapped through max: [bound, bound + max(0, m + k·se)] (exact for a linear model;
+    0 when the noise cannot take it off its bound)."""
+    return max(0.0, m + k * se)
+
+
 def correlated_fit_u(func: Callable, params: Mapping[str, float], eps, stress_MPa, on_bound: Mapping[str, float] | None = None) -> dict[str, float]:
     """Standard uncertainties of a least-squares fit's constants when its residuals are correlated
     along the range (a lack of fit is a smooth residual, not independent noise).
@@ -459,11 +500,12 @@ def correlated_fit_u(func: Callable, params: Mapping[str, float], eps, stress_MP
     func(eps, **params): the law; eps, stress_MPa: the fitted points; on_bound: constant → +1
     (on its lower bound) or −1 (upper). The free constants: (JᵀJ)⁻¹·SSR/(N_eff − p) (J by central
     differences; the white s²·(JᵀJ)⁻¹ widened by N/N_eff), N_eff = N·(1 − ρ)/(1 + ρ) ≥ p + 1 from
-    the residuals' lag-1 autocorrelation ρ (an AR(1) residual). A constant on its bound: the distance δ it could move
-    inward, the free ones refitted (linearised), before the SSR grows by the noise's variance
-    σ²_n = Σ(Δr)²/(2(N − 1)) (first differences), δ²·|a⊥|² − 2δ·(a⊥·r) = σ²_n (a⊥ its column
-    less its projection on the free ones'),
-    stated as u = δ/2 so that U = 2u spans it. {} when it cannot be formed."""
+    the residuals' lag-1 autocorrelation ρ (an AR(1) residual). A constant on its bound, the free ones
+    refitted (linearised, a⊥ its inward column less its projection on the free ones'): its unbounded
+    optimum lies m = a⊥·r/|a⊥|² inward (≤ 0), with se = σ_n/|a⊥|, σ²_n = Σ(Δr)²/(2(N − 1)) the noise
+    alone (first differences); stated u = R/k, R = :func:`on_bound_reach` (U = R: the one-sided interval
+    [bound, bound + R]), at least :data:`BOUND_REL_TOL` × its scale (the bound as the optimisers reach it).
+    {} when it cannot be formed."""
     on_bound = dict(on_bound or {})
     eps, sig = np.asarray(eps, dtype=float).ravel(), np.asarray(stress_MPa, dtype=float).ravel()
     ok = np.isfinite(eps) & np.isfinite(sig)
@@ -487,23 +529,30 @@ def correlated_fit_u(func: Callable, params: Mapping[str, float], eps, stress_MP
     cov = np.linalg.pinv(Jf.T @ Jf) * threshold
     out = {k: float(math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(free)}
     noise = float(np.sum(np.diff(r) ** 2)) / (2.0 * (n - 1))  # σ² of the noise alone: first differences cancel a smooth lack of fit (Rice 1984)
+    scales = constant_scales(func, params, eps) if on_bound else {}
     for k, inward in on_bound.items():
         a = inward * J[:, names.index(k)]
         if free:
             a = a - Jf @ np.linalg.lstsq(Jf, a, rcond=None)[0]  # a⊥: the free constants absorb what they can
         aa, ar = float(np.dot(a, a)), float(np.dot(a, r))
         if aa > 0:
-            out[k] = (ar + math.sqrt(ar * ar + aa * noise)) / aa / 2.0  # δ/2, δ the root of δ²·aa − 2δ·ar = σ²_noise
+            reach = on_bound_reach(ar / aa, math.sqrt(noise / aa))
+            out[k] = max(reach, BOUND_REL_TOL * scales.get(k, 0.0)) / K_COVERAGE
     return out
 
 
 def constant_budget(value: float, stderr: float | None, stress_rel_u: float, unit: str, *, zero_shift: float | None = None,
-                    lack_of_fit: float | None = None) -> dict | None:
+                    lack_of_fit: float | None = None, on_bound: str | None = None) -> dict | None:
     """A fitted constant: the fit's standard error and, for a stress (MPa), the stress scale. With
     ``zero_shift`` (the constant's move when the strain zero moves by δε0, already inside the
     widened standard error) the method's share is stated apart: fit √(se² − shift²) and the shift.
     With ``lack_of_fit`` (:func:`correlated_fit_u`) where it exceeds the fit's standard error, the
-    difference √(u_lof² − se²) is a method term: the standard error then reads as u_lof."""
+    difference √(u_lof² − se²) is a method term: the standard error then reads as u_lof. ``on_bound``
+    ("lower"/"upper"): the constant sits on that bound, its fit's standard error is not its own (a
+    covariance at a bound) and ``lack_of_fit`` is its reach inward over k (:func:`on_bound_reach`): the
+    budget states it with the shift and the stress scale, and ``interval`` one-sided, [value, value + U]."""
+    if on_bound:
+        return _on_bound_budget(value, lack_of_fit or 0.0, stress_rel_u, unit, on_bound, zero_shift)
     if (stderr is None or not math.isfinite(stderr)) and lack_of_fit is None:
         return None
     stderr = stderr if stderr is not None and math.isfinite(stderr) else 0.0
@@ -513,8 +562,8 @@ def constant_budget(value: float, stderr: float | None, stress_rel_u: float, uni
         stderr = math.sqrt(stderr ** 2 - zero_shift ** 2)
     if lack_of_fit is not None and math.isfinite(lack_of_fit) and lack_of_fit > stderr:
         method.append(Component("method: constants over the fit range", value, unit, math.sqrt(lack_of_fit ** 2 - stderr ** 2), 1.0,
-                                "the fit's covariance with its residuals correlated along the range (lack of fit; a constant on "
-                                "its bound as far as it could move), beyond the standard error (§2.12)"))
+                                "the fit's covariance with its residuals correlated along the range (lack of fit), "
+                                "beyond the standard error (§2.12)"))
     comps = [Component("fit (standard error)", value, unit, stderr, 1.0, "least squares"), *method]
     if unit == "MPa":
         comps.append(Component("stress scale (force class, d0)", 1.0, "1", stress_rel_u, value, "relative"))
@@ -523,6 +572,25 @@ def constant_budget(value: float, stderr: float | None, stress_rel_u: float, uni
     if method and method[-1].name == "method: constants over the fit range" and out["U"] >= abs(value):
         out["note"] = ("over this fit range the law's constants trade off (their correlations): this one alone is not determined, "
                        "the set of them is")
+    return out
+
+
+def _on_bound_budget(value: float, u_bound: float, stress_rel_u: float, unit: str, side: str, zero_shift: float | None) -> dict:
+    """The budget of a constant on its ``side`` bound: its reach inward (u = reach/k), the strain zero's
+    shift (its move under εp + δε0) and, for a stress, the stress scale; ``interval`` is one-sided:
+    [value, value + U] on a lower bound, [value − U, value] on an upper one (``one_sided``: the side)."""
+    method = [Component(f"method: constant on its {side} bound", value, unit, u_bound, 1.0,
+                        "how far inward the law fitted with its bounds could place it: the unbounded optimum (the free "
+                        "constants refitted) + k·its standard error, at least the bound's tolerance; one-sided (§2.12)")]
+    if zero_shift is not None and math.isfinite(zero_shift) and zero_shift > 0.0:
+        method.append(Component("method: strain zero ε0", value, unit, zero_shift, 1.0, "the constant refitted with the strain zero moved by δε0 (§2.11)"))
+    comps = [*method]
+    if unit == "MPa":
+        comps.append(Component("stress scale (force class, d0)", 1.0, "1", stress_rel_u, value, "relative"))
+    out = budget(value, unit, comps, note=f"on its {side} bound: the value lies on the bound's inward side only, within U of it")
+    out["u_method"] = combined(method)
+    out["interval"] = [value, value + out["U"]] if side == "lower" else [value - out["U"], value]
+    out["one_sided"] = side
     return out
 
 
