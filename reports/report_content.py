@@ -388,6 +388,17 @@ def compression_measures(results: list) -> Table | None:
     return Table(["specimen", "hk, mm", "dmax, mm", "dface, mm"], rows, "measured after the test ('–': not in the result)") if rows else None
 
 
+def constant_text(value, budget, step: float | None) -> str:
+    """A hardening constant as printed: ``'812 ± 14'``, or where its budget is one-sided (a constant on
+    its bound: the value lies on the bound's inward side only) its interval as a range, outward to
+    ``step``, ``'0–1 (on its lower bound)'``."""
+    b = budget if isinstance(budget, dict) else {}
+    interval = b.get("interval")
+    if b.get("one_sided") and isinstance(interval, (list, tuple)) and len(interval) == 2:
+        return f"{format_range(_num(interval[0]), _num(interval[1]), step)} (on its {b['one_sided']} bound)"
+    return value_with_U(value, _num(b.get("U")), step)
+
+
 def hardening_table(results: list) -> Table:
     """The hardening constants table of every result."""
     rows = []
@@ -396,8 +407,8 @@ def hardening_table(results: list) -> Table:
         hu = _unc(r).get("hardening") or {}
 
         def cell(key, h=h, hu=hu):
-            """A hardening constant with its U, rounded."""
-            return value_with_U(_num(h.get(key)), _num((hu.get(key) or {}).get("U")), STEPS.get(key))
+            """A hardening constant with its U, rounded (:func:`constant_text`)."""
+            return constant_text(_num(h.get(key)), hu.get(key), STEPS.get(key))
         rng = h.get("strain_range") or h.get("fit_range") or [None, None]
         law = str(h.get("law") or "–")
         constants = ([cell("A_MPa"), cell("B_MPa"), cell("n")] if law in ("johnson_cook", "–")
@@ -470,7 +481,9 @@ def budget_tables(name: str, result: dict, report: Report | None = None) -> list
         if b.get("certifiable") is False:
             rows.append([label if not b["components"] else "", "not certifiable (see the note)", f"{_g(b['value'], 5)}", "–", "", "no U"])
             continue
-        rows.append(["", "combined uc, U (k = 2)", f"{_g(b['value'], 5)}", _g(b["u"]), "", f"U = {format_uncertainty(b['U'])}"])
+        U_text = f"U = {format_uncertainty(b['U'])}" + (f", one-sided on its {b['one_sided']} bound: " + ("value to value + U" if b["one_sided"] == "lower" else "value − U to value")
+                                                              if b.get("one_sided") else "")
+        rows.append(["", "combined uc, U (k = 2)", f"{_g(b['value'], 5)}", _g(b["u"]), "", U_text])
     inst = unc.get("instruments") or {}
     facts = (f"{name}: force ISO 7500-1 class {inst.get('force_class', '–')}, extensometer ISO 9513 class "
              f"{inst.get('extensometer_class', '–')}, diameters at {inst.get('diameter_resolution_mm', '–')} mm, lengths at "

@@ -182,3 +182,13 @@ def test_report_of_another_laws_series_fit_names_that_law_and_its_constants(tmp_
     assert by_label["A, MPa"][1] == value_with_U(1500.0, 300.0, None) and by_label["A, MPa"][2] == "fitted"
     assert by_label["m8, 1/°C"][2] == "on its lower bound: not identified" and "±" not in by_label["m8, 1/°C"][1]
     assert [r[0].split(",")[0] for r in rows] == [p.name for p in law.parameters]
+
+
+def test_a_constant_on_its_bound_prints_its_one_sided_interval_as_a_range():
+    """A one-sided budget (docs/methods.md §2.12) prints [bound, bound + U] outward to the step, never '0 ± U'."""
+    from flowcurve.reports.report_content import constant_text
+
+    on = {"value": 0.0, "U": 0.4, "interval": [0.0, 0.4], "one_sided": "lower"}
+    assert constant_text(0.0, on, 1.0) == "0–1 (on its lower bound)"
+    assert constant_text(812.3, {"value": 812.3, "U": 13.2}, 1.0) == value_with_U(812.3, 13.2, 1.0) == "812 ± 14"
+    assert constant_text(812.3, None, 1.0) == "812"

@@ -21,11 +21,10 @@ KNOWN: dict[tuple[str, str], str] = {
     ("compression closed form", "johnson_cook A_MPa"): "blanket: method share 20× the median error 1.1 MPa (32× before δε0's spacing went through its estimator)",
     ("compression closed form", "johnson_cook B_MPa"): "blanket: method share 10.8× the median error 3.6 MPa (12× before)",
     ("compression closed form", "johnson_cook n"): "blanket: method share 9.9× the median error 0.003 (11× before)",
-    ("tension drawn", "johnson_cook A_MPa"): ("95 % held since the constants-over-the-range term (79 % before); blanket 19× (5.9× before): the strain "
-                                              "zero's shift along the A–B–n valley, and A = 0 on its bound whose truth is 0 too (error ~0) gets the distance it could move"),
-    ("tension drawn", "johnson_cook n"): "95 % held since the constants-over-the-range term (71 % before); blanket 5.25× (limit 5)",
+    # tension drawn A and n hold since a constant on its bound states the k-interval of its unbounded value mapped through
+    # the bound (A 18.6× → 4.2×, n 5.25× → 3.6×, 95 % held; docs/methods.md §2.12)
     # misses: U too small for the method's error
-    ("virtual rig", "johnson_cook n"): "65 % held before the constants-over-the-range term, 92 % after (borderline: 3 misses of 37)",
+    ("virtual rig", "johnson_cook n"): "65 % held before the constants-over-the-range term, 92 % after (borderline: 3 misses of 36)",
 }
 
 # cells within a few records of 90 % on the virtual rig, whose records are not bit-for-bit repeatable
