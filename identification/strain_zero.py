@@ -238,7 +238,8 @@ def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dic
     start["constants_shift"] = shift
     law = static_form(fit.law)
     on_bound = constants_on_bound(law.func, fit.params, law.bounds, eps_p) if law else {}
-    start["constants_on_bound"] = {k: "lower" if inward > 0 else "upper" for k, inward in on_bound.items()}
+    if on_bound:  # named only where there is one (result.json of every other fit as before)
+        start["constants_on_bound"] = {k: "lower" if inward > 0 else "upper" for k, inward in on_bound.items()}
     start["constants_lack_of_fit"] = correlated_fit_u(law.func, fit.params, eps_p, stress_MPa, on_bound) if law else {}
     # with a constant on its bound the fit's own covariance is not the bounded fit's (lmfit's at a bound, or none):
     # the free constants' statistics are constants_lack_of_fit's, the bound one fixed

@@ -562,8 +562,8 @@ def constant_budget(value: float, stderr: float | None, stress_rel_u: float, uni
         stderr = math.sqrt(stderr ** 2 - zero_shift ** 2)
     if lack_of_fit is not None and math.isfinite(lack_of_fit) and lack_of_fit > stderr:
         method.append(Component("method: constants over the fit range", value, unit, math.sqrt(lack_of_fit ** 2 - stderr ** 2), 1.0,
-                                "the fit's covariance with its residuals correlated along the range (lack of fit), "
-                                "beyond the standard error (§2.12)"))
+                                "the fit's covariance with its residuals correlated along the range (lack of fit; a constant on "
+                                "its bound as far as it could move), beyond the standard error (§2.12)"))
     comps = [Component("fit (standard error)", value, unit, stderr, 1.0, "least squares"), *method]
     if unit == "MPa":
         comps.append(Component("stress scale (force class, d0)", 1.0, "1", stress_rel_u, value, "relative"))
