@@ -94,11 +94,14 @@ class CompressionHardening:
     fit: HardeningFit
     correction: str
     start_uncertainty: dict | None = None  # the curve's start as far as it rests on the strain zero (methods §2.11)
+    # the method's shares inside the stated standard errors (μ, FE model form, fit range): name → {result key: u} (methods §4.8)
+    stderr_shares: dict | None = None
 
     def as_dict(self) -> dict:
         """The compression hardening block of result.json."""
         correlations = {a: {b: round(r, 3) for b, r in row.items()} for a, row in self.fit.correlations.items()}  # A and n trade off
-        return {**self.fit.as_dict(), "correlations": correlations, "correction": self.correction, "start_uncertainty": self.start_uncertainty}
+        return {**self.fit.as_dict(), "correlations": correlations, "correction": self.correction, "start_uncertainty": self.start_uncertainty,
+                "stderr_shares": self.stderr_shares}
 
 
 class _Block:

@@ -11,7 +11,7 @@ import numpy as np
 from flowcurve.errors import IdentificationError
 from flowcurve.identification.compression import friction as fr
 from flowcurve.identification.fe.model import model_form as mf
-from flowcurve.identification.laws.hardening import RANGE_SHARE_PART, HardeningFit, pattern_shift, range_shift
+from flowcurve.identification.laws.hardening import RANGE_SHARE_PART, HardeningFit, pattern_shift, range_shift, static_form
 from flowcurve.identification.results import CompressionResult
 from flowcurve.identification.compression.values import _Friction, _Nominal, _Yield, _fit_points, _hardening_fits, plastic_strain
 
@@ -113,7 +113,7 @@ def _constants_stderr(src: str, geo: dict, nominal: _Nominal, friction: _Frictio
             k: mf.quadrature(*(b.get(k, 0.0) for b in by_pattern)) for k in fit.params}
     by_range = range_shift(eps_fit, sig_fit, law)
     if by_range:
-        shares[f"the fit range (fitted again over its first {RANGE_SHARE_PART:.0%})"] = by_range
+        shares[f"fit range (fitted again over its first {RANGE_SHARE_PART:.0%})"] = by_range
     return shares
 
 
@@ -127,12 +127,22 @@ def trade_off_note(fit: HardeningFit, limit: float = 0.9) -> str | None:
             "compare fits through the curve, not constant by constant")
 
 
+def stderr_shares(shares: dict[str, dict[str, float]], fit: HardeningFit) -> dict[str, dict[str, float]]:
+    """The shares as result.json's ``hardening.stderr_shares``: "method: <share>" → {result key (A_MPa …): u}
+    (:func:`.quality.uncertainty.constant_budget` states each as its own component)."""
+    keys = dict(zip(static_form(fit.law).names, static_form(fit.law).keys))
+    return {f"method: {name}": {keys[k]: float(u) for k, u in per.items() if k in keys} for name, per in shares.items()}
+
+
 def _model_form_shares(src: str, geo: dict, nominal: _Nominal, yld: _Yield, friction: _Friction, fit: HardeningFit, result: CompressionResult,
                        fit_range, law: str, friction_correction: str) -> None:
-    """The main fit's standard errors with μ's and the model form's shares (:func:`_constants_stderr`),
-    said in ``methods.hardening_stderr``; a face and bulge that disagree make it poor, with a warning."""
+    """The main fit's standard errors with μ's and the model form's shares (:func:`_constants_stderr`)
+    in quadrature, each share also kept apart (:func:`stderr_shares`) so that the budget states it as
+    a component of its own; said in ``methods.hardening_stderr``; a face and bulge that disagree make
+    it poor, with a warning."""
     shares = _constants_stderr(src, geo, nominal, friction, fit, yld.i_yield, fit_range, law, friction_correction, yld.E_used)
     fit.stderr = mf.combined_stderr(fit.stderr, *shares.values())
+    result.hardening.stderr_shares = stderr_shares(shares, fit)
     note = trade_off_note(fit)
     result.methods["hardening_stderr"] = "; ".join(["the fit's standard errors", *shares]) + " (in quadrature)" + (f". {note}" if note else "")
     disagreement = _friction_disagreement(friction.chosen)

@@ -542,29 +542,37 @@ def correlated_fit_u(func: Callable, params: Mapping[str, float], eps, stress_MP
 
 
 def constant_budget(value: float, stderr: float | None, stress_rel_u: float, unit: str, *, zero_shift: float | None = None,
-                    lack_of_fit: float | None = None, on_bound: str | None = None) -> dict | None:
+                    lack_of_fit: float | None = None, on_bound: str | None = None, shares: Mapping[str, float] | None = None) -> dict | None:
     """A fitted constant: the fit's standard error and, for a stress (MPa), the stress scale. With
     ``zero_shift`` (the constant's move when the strain zero moves by δε0, already inside the
     widened standard error) the method's share is stated apart: fit √(se² − shift²) and the shift.
-    With ``lack_of_fit`` (:func:`correlated_fit_u`) where it exceeds the fit's standard error, the
-    difference √(u_lof² − se²) is a method term: the standard error then reads as u_lof. ``on_bound``
-    ("lower"/"upper"): the constant sits on that bound, its fit's standard error is not its own (a
-    covariance at a bound) and ``lack_of_fit`` is its reach inward over k (:func:`on_bound_reach`): the
-    budget states it with the shift and the stress scale, and ``interval`` one-sided, [value, value + U]."""
+    ``shares`` (component name → u, each already inside the widened standard error in quadrature:
+    compression's μ, FE model form and fit range) are stated apart the same way, one component each,
+    the fit's own √(se² − shift² − Σu²). With ``lack_of_fit`` (:func:`correlated_fit_u`) where it
+    exceeds the standard error (with its shares), the difference √(u_lof² − se²) is a method term:
+    the standard error then reads as u_lof. ``on_bound`` ("lower"/"upper"): the constant sits on that
+    bound, its fit's standard error is not its own (a covariance at a bound) and ``lack_of_fit`` is its
+    reach inward over k (:func:`on_bound_reach`): the budget states it with the shift and the stress
+    scale, and ``interval`` one-sided, [value, value + U]."""
     if on_bound:
         return _on_bound_budget(value, lack_of_fit or 0.0, stress_rel_u, unit, on_bound, zero_shift)
     if (stderr is None or not math.isfinite(stderr)) and lack_of_fit is None:
         return None
-    stderr = stderr if stderr is not None and math.isfinite(stderr) else 0.0
+    given = stderr is not None and math.isfinite(stderr)
+    stderr = stderr if given else 0.0
     method = []
     if zero_shift is not None and math.isfinite(zero_shift) and 0.0 < zero_shift <= stderr:
         method = [Component("method: strain zero ε0", value, unit, zero_shift, 1.0, "the constant refitted with the strain zero moved by δε0 (§2.11)")]
         stderr = math.sqrt(stderr ** 2 - zero_shift ** 2)
+    inside = [Component(name, value, unit, float(u), 1.0, "the constant refitted (docs/methods.md §4.8)")
+              for name, u in (shares or {}).items() if given and u is not None and math.isfinite(u) and u > 0]
+    own = math.sqrt(max(stderr ** 2 - combined(inside) ** 2, 0.0))  # se² = own² + Σ share²
+    method += inside
     if lack_of_fit is not None and math.isfinite(lack_of_fit) and lack_of_fit > stderr:
         method.append(Component("method: constants over the fit range", value, unit, math.sqrt(lack_of_fit ** 2 - stderr ** 2), 1.0,
                                 "the fit's covariance with its residuals correlated along the range (lack of fit; a constant on "
                                 "its bound as far as it could move), beyond the standard error (§2.12)"))
-    comps = [Component("fit (standard error)", value, unit, stderr, 1.0, "least squares"), *method]
+    comps = [Component("fit (standard error)", value, unit, own, 1.0, "least squares"), *method]
     if unit == "MPa":
         comps.append(Component("stress scale (force class, d0)", 1.0, "1", stress_rel_u, value, "relative"))
     out = budget(value, unit, comps)

@@ -24,7 +24,8 @@ generating curve over the strain range the result reports, so a constant is judg
 constant of that range. A cell (kind × quantity) fails when fewer than :data:`MIN_SHARE` of its
 statements hold the truth, or, on the kinds whose instruments are simulated perfectly, when the
 median of U's method share (U less its instrument terms: the simulation does not err with the
-instruments the budget states) is more than :data:`MAX_BLANKET` × the median |error| (a blanket U).
+instruments the budget states; and less the conditions the records follow, :data:`INSTRUMENT_TERMS`,
+:data:`OWN_FRICTION_MODEL`) is more than :data:`MAX_BLANKET` × the median |error| (a blanket U).
 
 ``python -m tests.coverage.campaign [--default]`` prints the markdown table (docs/test-report.md).
 """
@@ -292,9 +293,21 @@ INSTRUMENT_TERMS = ("force", "diameter", "strain scale", "stress scale", "initia
                     "method: crosshead compliance")
 
 
-def method_share_U(budget: dict) -> float:
-    """U less its instrument and test-condition terms: k·√(Σ contribution² of the method's components) (GUM root sum of squares)."""
-    comps = [c for c in budget.get("components") or [] if not str(c.get("name", "")).lower().startswith(INSTRUMENT_TERMS)]
+# the FE model form of the friction correction (the spread between the product's upsetting model and other defensible
+# ones, 0.12·μ of the force, identification/fe/model/model_form.py) is a condition where the records make friction by the
+# product's own model: the closed-form records and the virtual rig take their force factor and barrel from the very
+# CalculiX runs the fe_table correction reads (tests/series/compression_series.py, rig/virtual/fe_response.py), so the
+# truth is the value on a specimen that follows that model — as the compliance term's machine follows its model. On the
+# CalculiX kind the second model's records (tests/fe/second_model.py) realise it: there it stays in the method share.
+OWN_FRICTION_MODEL = {"compression closed form", "virtual rig"}
+MODEL_FORM_TERMS = ("method: fe model form",)
+
+
+def method_share_U(budget: dict, kind: str = "") -> float:
+    """U less its instrument and test-condition terms (and the FE model form on :data:`OWN_FRICTION_MODEL`'s kinds):
+    k·√(Σ contribution² of the method's components) (GUM root sum of squares)."""
+    conditions = INSTRUMENT_TERMS + (MODEL_FORM_TERMS if kind in OWN_FRICTION_MODEL else ())
+    comps = [c for c in budget.get("components") or [] if not str(c.get("name", "")).lower().startswith(conditions)]
     k = float(budget.get("k") or 2.0)
     return k * math.sqrt(sum(float(c.get("contribution") or 0.0) ** 2 for c in comps))
 
@@ -310,7 +323,7 @@ def judge(case: Case, result: dict, truth: Truth) -> list[dict]:
         value, U = float(budget["value"]), float(budget["U"])
         if isinstance(true, tuple):  # a truth the generator makes twice (equal maxima): the nearer one
             true = min(true, key=lambda x: abs(value - x))
-        rows.append(dict(kind=case.kind, record=case.name, quantity=quantity, value=value, U=U, U_method=method_share_U(budget),
+        rows.append(dict(kind=case.kind, record=case.name, quantity=quantity, value=value, U=U, U_method=method_share_U(budget, case.kind),
                          truth=float(true), error=abs(value - true), held=abs(value - true) <= U))
 
     for key in ("Rp02_MPa", "Rm_MPa", "Ag_pct", "A_pct", "Z_pct", "friction_mu"):

@@ -116,6 +116,18 @@ def test_the_judge_bites(default_rows):
     assert any(c["blanket"] for c in cp.table(grown))
 
 
+def test_the_fe_model_form_is_a_condition_only_where_the_records_follow_the_products_friction_model():
+    """"method: FE model form" leaves the method share on the closed-form and virtual-rig compression (their friction is
+    the product's CalculiX runs') and stays in it on the CalculiX kind (the second model realises it)."""
+    budget = {"k": 2.0, "components": [{"name": "fit (standard error)", "contribution": 3.0},
+                                       {"name": "method: FE model form (1.3% of the force at μ 0.108, uniform and growing with strain)",
+                                        "contribution": 4.0},
+                                       {"name": "stress scale (force class, d0)", "contribution": 12.0}]}
+    assert cp.method_share_U(budget, "compression closed form") == pytest.approx(6.0)
+    assert cp.method_share_U(budget, "virtual rig") == pytest.approx(6.0)
+    assert cp.method_share_U(budget, "CalculiX") == pytest.approx(10.0)
+
+
 def test_too_many_misses():
     """Binomial tail against hand values: 0 of 5 is fine; 3 of 10 at 10 % has P = 0.0702; 4 of 10, P = 0.0128; 5 of 10, P = 0.00163."""
     assert not too_many_misses(5, 0)
