@@ -302,12 +302,32 @@ def undetermined(spec, values: dict[str, float], stderr: dict[str, float | None]
     return out
 
 
-@lru_cache(maxsize=None)
-def _lmfit_model(law: str):
-    """The lmfit Model of the law's static form (made once per law: fits only read it)."""
+def _lmfit_refit(spec: StaticForm, start: dict[str, float], eps: np.ndarray, sig: np.ndarray, w: np.ndarray):
+    """lmfit's Levenberg–Marquardt from ``start`` within the bounds, for the constants' standard
+    errors, correlations, AIC and report: lmfit.Model.fit's residual (σ − law)·w and its report
+    (R² included), through ``lmfit.minimize``, which spares Model.fit's parameter copies (most
+    of its cost). Returns (lmfit's MinimizerResult, report text)."""
     import lmfit  # here, so `flowcurve --help` stays fast
 
-    return lmfit.Model(static_form(law).func, independent_vars=["eps_p"])
+    params = lmfit.Parameters()
+    for name in spec.names:
+        lo, hi = spec.bounds[name]
+        params.add(name, value=float(np.clip(start[name], lo, hi)), min=lo, max=hi)
+
+    def residual(p):
+        """(σ − law)·w, Model.fit's residual; non-finite law values end the fit as Model.fit's do."""
+        model = spec.func(eps, **p.valuesdict())
+        if not np.all(np.isfinite(model)):
+            raise ValueError("The model function generated NaN values and the fit aborted! Please check your model function "
+                             "and/or set boundaries on parameters where applicable.")
+        diff = sig - model
+        diff *= w
+        return diff
+
+    best = lmfit.minimize(residual, params, max_nfev=MAX_EVALUATIONS)
+    law = spec.func(eps, **best.params.valuesdict())
+    best.rsquared = 1.0 - ((sig - law) ** 2).sum() / max(1e-15, ((sig - sig.mean()) ** 2).sum())  # R² as Model.fit reports it
+    return best, f"[[Model]]\n    Model({spec.func.__name__})\n{lmfit.fit_report(best)}"
 
 
 def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points: Iterable[Sequence[float]] = (),
@@ -331,12 +351,7 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     if grid is None:
         raise IdentificationError(f"the data do not harden (stress does not rise with strain): a {law} law cannot be fitted")
     polished = _polish(spec, grid + [spec.data_start(eps, sig)], eps, sig, w)
-    model = _lmfit_model(law)
-    params = model.make_params()
-    for name in spec.names:
-        lo, hi = spec.bounds[name]
-        params[name].set(value=float(np.clip(polished[name], lo, hi)), min=lo, max=hi)
-    best = model.fit(sig, params, eps_p=eps, weights=w, nan_policy="raise", max_nfev=MAX_EVALUATIONS)
+    best, report = _lmfit_refit(spec, polished, eps, sig, w)
     values = {name: float(best.params[name].value) for name in spec.names}
     stderr = {name: (None if best.params[name].stderr is None else float(best.params[name].stderr)) for name in spec.names}
     correl = {name: {k: float(v) for k, v in (best.params[name].correl or {}).items()} for name in spec.names}
@@ -356,7 +371,7 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
                         "do not read or compare them one by one (a law with fewer constants may be determined)")
     return HardeningFit(law=law, method="least_squares", params=values, stderr=stderr, correlations=correl,
                         fit_error_pct=max_pct, rms_error_pct=rms_pct,
-                        strain_range=(float(np.min(eps)), float(np.max(eps))), report=best.fit_report(), warnings=warnings,
+                        strain_range=(float(np.min(eps)), float(np.max(eps))), report=report, warnings=warnings,
                         aic=float(best.aic))
 
 

@@ -36,3 +36,32 @@ def test_a_trust_region_fit_with_it_ends_where_scipys_own_difference_does():
     fast = least_squares(residual, x0, jac=lambda x: forward_jacobian(residual, x, LO, HI), bounds=(LO, HI), x_scale="jac")
     assert np.array_equal(plain.x, fast.x) and plain.nfev == fast.nfev
     assert fast.x == pytest.approx([300.0, 600.0, 0.35], rel=1e-6)
+
+
+@pytest.mark.parametrize("law", ["johnson_cook", "voce", "hockett_sherby"])
+def test_the_lmfit_refit_is_model_fits_to_the_last_digit(law):
+    """lmfit.minimize on Model.fit's residual: the same constants, errors, correlations, AIC and report."""
+    import lmfit
+
+    from flowcurve.identification.laws.hardening import _lmfit_refit, static_form
+
+    spec = static_form(law)
+    rng = np.random.default_rng(3)
+    eps = np.append(EPS, 0.8)
+    sig = np.append(SIG + rng.normal(0.0, 1.0, EPS.size), johnson_cook_static(0.8, 300.0, 600.0, 0.35))
+    w = np.append(np.ones(EPS.size), 30**0.5)  # a fracture point's weight
+    start = spec.law.guess(eps, sig)
+    start = spec.renamed(start) if set(start) != set(spec.names) else start
+    model = lmfit.Model(spec.func, independent_vars=["eps_p"])
+    params = model.make_params()
+    for name in spec.names:
+        lo, hi = spec.bounds[name]
+        params[name].set(value=float(np.clip(start[name], lo, hi)), min=lo, max=hi)
+    expected = model.fit(sig, params, eps_p=eps, weights=w, nan_policy="raise", max_nfev=500)
+    got, report = _lmfit_refit(spec, start, eps, sig, w)
+    for name in spec.names:
+        assert got.params[name].value == expected.params[name].value
+        assert got.params[name].stderr == expected.params[name].stderr
+        assert got.params[name].correl == expected.params[name].correl
+    assert got.aic == expected.aic
+    assert report == expected.fit_report()
