@@ -11,7 +11,7 @@ from flowcurve.identification.laws.voce import Voce
 
 def hockett_sherby(eps_p, sigma_s, sigma0, N, p):
     """Hockett–Sherby: σs − (σs − σ0)·exp(−N·εp^p) (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
+    eps_p = np.maximum(np.asarray(eps_p, dtype=float), 0.0)  # np.clip(…, 0, None) without its dispatch
     return sigma_s - (sigma_s - sigma0) * np.exp(-N * np.power(eps_p, p))
 
 

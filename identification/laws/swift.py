@@ -11,7 +11,7 @@ from flowcurve.identification.laws.static import STRAIN_GRID_POINTS, StaticLaw, 
 
 def swift(eps_p, K, eps0, n):
     """Swift hardening: K·(ε0 + εp)^n (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
+    eps_p = np.maximum(np.asarray(eps_p, dtype=float), 0.0)  # np.clip(…, 0, None) without its dispatch
     return K * np.power(eps0 + eps_p, n)
 
 

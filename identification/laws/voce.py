@@ -10,7 +10,7 @@ from flowcurve.identification.laws.static import STRAIN_GRID_POINTS, StaticLaw, 
 
 def voce(eps_p, sigma0, Q, b):
     """Voce saturation hardening: σ0 + Q·(1 − exp(−b·εp)) (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
+    eps_p = np.maximum(np.asarray(eps_p, dtype=float), 0.0)  # np.clip(…, 0, None) without its dispatch
     return sigma0 + Q * (1.0 - np.exp(-b * eps_p))
 
 
