@@ -39,7 +39,7 @@ MAX_STRAIN = 5.0
 
 def johnson_cook_static(eps_p, A, B, n):
     """Johnson–Cook static flow stress (2.19), first bracket: A + B·εp^n (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
+    eps_p = np.maximum(np.asarray(eps_p, dtype=float), 0.0)  # np.clip(…, 0, None) without its dispatch
     return A + B * np.power(eps_p, n)
 
 
@@ -214,15 +214,16 @@ MAX_EVALUATIONS = 500  # per local fit: a start crawling along a bound is cut sh
 FORWARD_STEP = float(np.finfo(float).eps) ** 0.5  # scipy's relative step of a 2-point difference
 
 
-def forward_jacobian(residual: Callable, x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+def forward_jacobian(residual: Callable, x: np.ndarray, lo: np.ndarray, hi: np.ndarray, f0: np.ndarray | None = None) -> np.ndarray:
     """The Jacobian of ``residual`` at ``x`` by forward differences, step for step scipy's
     ``jac="2-point"`` within bounds (lo, hi), without its per-call overhead (the fits' largest cost).
 
     J[:, i] = (r(x + h_i e_i) − r(x)) / h_i, h_i = √ε·max(1, |x_i|) signed as x_i (0 counts as +),
     turned back where the step leaves the bounds, the distance to the farther bound where neither
     side has room; returned Fortran-ordered (a transposed (n, m) array) as scipy's is, so the
-    solver's linear algebra rounds alike. x: (n,) values; residual: x → (m,) array."""
-    f0 = residual(x)
+    solver's linear algebra rounds alike. x: (n,) values; residual: x → (m,) array; f0: r(x)
+    when the caller has it."""
+    f0 = residual(x) if f0 is None else f0
     h = FORWARD_STEP * ((x >= 0) * 2.0 - 1.0) * np.maximum(1.0, np.abs(x))
     below, above = x - lo, hi - x
     fits = np.abs(h) <= np.maximum(below, above)
@@ -245,19 +246,24 @@ def _polish(spec: StaticForm, starts: list[dict[str, float]], eps: np.ndarray, s
     lo = np.array([spec.bounds[n][0] for n in spec.names])
     hi = np.array([spec.bounds[n][1] for n in spec.names])
 
+    last: list = [None, None]  # the last point evaluated and its residuals: the Jacobian at an accepted step starts there
+
     def residual(x):
-        """Weighted residuals of the law at ``x`` (1e12 where not finite)."""
-        with np.errstate(over="ignore", invalid="ignore"):
-            r = w * (spec.func(eps, *x) - sig)
-        return np.where(np.isfinite(r), r, 1e12)
+        """Weighted residuals of the law at ``x`` (1e12 where not finite); called under the caller's errstate."""
+        r = w * (spec.func(eps, *x) - sig)
+        last[:] = x.copy(), np.where(np.isfinite(r), r, 1e12)
+        return last[1]
+
+    def jacobian(x):
+        """:func:`forward_jacobian` at ``x``, from the residuals already evaluated there."""
+        return forward_jacobian(residual, x, lo, hi, f0=last[1].copy() if np.array_equal(last[0], x) else None)
 
     best_x, best_cost = None, np.inf
     for start in starts:
         x0 = np.clip([start[n] for n in spec.names], lo, hi)
         x0 = np.where(x0 <= lo, lo + 1e-9 * np.maximum(np.abs(lo), 1.0), x0)  # strictly inside for trf
         with np.errstate(all="ignore"):  # trial steps may overflow; such steps are rejected by the solver
-            sol = least_squares(residual, x0, jac=lambda x: forward_jacobian(residual, x, lo, hi), bounds=(lo, hi),
-                                x_scale="jac", max_nfev=MAX_EVALUATIONS)
+            sol = least_squares(residual, x0, jac=jacobian, bounds=(lo, hi), x_scale="jac", max_nfev=MAX_EVALUATIONS)
         if np.isfinite(sol.cost) and sol.cost < best_cost:
             best_x, best_cost = sol.x, sol.cost
     if best_x is None:

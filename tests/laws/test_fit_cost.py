@@ -25,6 +25,7 @@ def test_forward_jacobian_is_scipys_two_point_difference(x):
     expected = approx_derivative(residual, x, method="2-point", bounds=(LO, HI), f0=residual(x))
     got = forward_jacobian(residual, x, LO, HI)
     assert np.array_equal(got, expected)
+    assert np.array_equal(forward_jacobian(residual, x, LO, HI, f0=residual(x)), expected)  # the residuals at x handed in
     assert got.flags.f_contiguous  # laid out as scipy's, so the solver's linear algebra rounds alike
 
 
@@ -65,3 +66,16 @@ def test_the_lmfit_refit_is_model_fits_to_the_last_digit(law):
         assert got.params[name].correl == expected.params[name].correl
     assert got.aic == expected.aic
     assert report == expected.fit_report()
+
+
+def test_the_laws_clip_a_negative_strain_to_zero_as_before():
+    """np.maximum(εp, 0) is np.clip(εp, 0, None): same values, same scalar type for a scalar."""
+    from flowcurve.identification.laws.hardening import static_form, static_law_names
+
+    eps = np.array([-0.1, -0.0, 0.0, 0.05, 0.4])
+    for law in static_law_names():
+        spec = static_form(law)
+        values = spec.law.guess(EPS, SIG)
+        values = {mine: values[theirs] for mine, theirs in zip(spec.names, spec.law.names)}
+        assert np.array_equal(spec.func(eps, **values), spec.func(np.clip(eps, 0.0, None), **values))
+        assert type(spec.func(0.1, **values)) is np.float64
