@@ -250,8 +250,11 @@ class Record:
         return self.data[name].to_numpy(dtype=float)
 
     def has(self, name: str) -> bool:
-        """Whether column ``name`` exists with any value."""
-        return name in self.data.columns and bool(self.data[name].notna().any())
+        """Whether column ``name`` exists with any value (a first value says so without a pass over a long record)."""
+        if name not in self.data.columns:
+            return False
+        column = self.data[name]
+        return bool(column.iloc[:1].notna().any()) or bool(column.notna().any())
 
 
 # -- reading --------------------------------------------------------------------------------

@@ -178,3 +178,13 @@ def test_missing_required_metadata_is_named():
     rec.meta["test"] = "torsion"
     with pytest.raises(RecordError, match="tension, compression"):
         rec.test
+
+
+def test_has_is_true_for_a_column_with_any_value_and_false_for_an_empty_one():
+    """Record.has reads the first value before a pass over the column: a column that starts empty still counts."""
+    n = 1000
+    data = pd.DataFrame({"full": np.arange(n, dtype=float), "late": np.r_[np.full(n - 1, np.nan), 1.0],
+                         "empty": np.full(n, np.nan), "text": ["x"] * n})
+    record = Record(meta={}, data=data, source="t")
+    assert [record.has(c) for c in ("full", "late", "empty", "text", "absent")] == [True, True, False, True, False]
+    assert not Record(meta={}, data=pd.DataFrame({"full": []}), source="t").has("full")
