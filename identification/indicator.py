@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.iso6892 import mad_sigma
+from flowcurve.identification.iso6892 import mad_sigma_of_differences
 
 UM_PER_MM = 1000.0
 
@@ -261,8 +261,7 @@ def yield_onset_from_rate(time_s, force_N, levels: int = 400) -> float:
     f = np.asarray(force_N, dtype=float)
     if f.size < 8:
         raise IdentificationError(f"only {f.size} samples of the first loading: no yield estimate")
-    d = np.diff(f)
-    noise = mad_sigma(d) / math.sqrt(2.0)  # of the successive differences: σ√2
+    noise = mad_sigma_of_differences(f, 1) / math.sqrt(2.0)  # of the successive differences: σ√2
     envelope = np.maximum.accumulate(f)
     step = max(envelope[-1] / levels, 5.0 * noise)
     level = np.arange(step, envelope[-1], step)

@@ -81,6 +81,21 @@ def mad_sigma(values) -> float:
     return float(1.4826 * np.median(np.abs(v - np.median(v))))
 
 
+def mad_sigma_of_differences(values, order: int) -> float:
+    """:func:`mad_sigma` of ``np.diff(values, order)``, its k-th differences evaluated only where
+    mad_sigma reads them (every m-th past :data:`MAD_SAMPLES`): the same number without k passes
+    over a long record. Δᵏx[i] by np.diff's own recursion, Δᵏx[i] = Δᵏ⁻¹x[i + 1] − Δᵏ⁻¹x[i]."""
+    v = np.asarray(values, dtype=float)
+    size = v.size - order
+    if size <= MAD_SAMPLES:
+        return mad_sigma(np.diff(v, order))
+    at = np.arange(0, size, -(-size // MAD_SAMPLES))
+    parts = [v[at + j] for j in range(order + 1)]
+    for _ in range(order):
+        parts = [b - a for a, b in zip(parts[:-1], parts[1:])]
+    return mad_sigma(parts[0])
+
+
 def max_force_band(strain, stress_MPa, *, window: int = 50) -> tuple[float, float]:
     """(lowest, highest) strain of the samples within the noise of the maximum force: a flat
     maximum's plateau (ISO 6892-1 §13: Ag at its mid-point). Band: σ ≥ σ_max − 2√2·s, s the stress

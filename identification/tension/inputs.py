@@ -155,5 +155,5 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
 
 def _stress_noise_MPa(stress_MPa: np.ndarray) -> float:
     """Noise standard deviation of a stress signal from its second differences (robust MAD)."""
-    curvature = np.diff(stress_MPa, 2)  # second differences: a linear trend leaves none, white noise σ leaves σ√6
-    return iso6892.mad_sigma(curvature) / math.sqrt(6.0) if curvature.size else 0.0
+    # second differences: a linear trend leaves none, white noise σ leaves σ√6
+    return iso6892.mad_sigma_of_differences(stress_MPa, 2) / math.sqrt(6.0) if np.size(stress_MPa) > 2 else 0.0

@@ -139,3 +139,13 @@ def test_the_noise_of_a_long_series_is_read_at_a_stride_and_stays_the_noise():
     assert mad_sigma(d2) == pytest.approx(full, rel=0.02)
     head = d2[:MAD_SAMPLES]
     assert mad_sigma(head) == 1.4826 * float(np.median(np.abs(head - np.median(head))))
+
+
+@pytest.mark.parametrize("size", [5, 50_001, 50_002, 540_003])
+@pytest.mark.parametrize("order", [1, 2, 3])
+def test_mad_sigma_of_differences_is_mad_sigma_of_np_diff_to_the_bit(order, size):
+    """The k-th differences evaluated only where mad_sigma reads them give the very same number."""
+    from flowcurve.identification.iso6892 import mad_sigma, mad_sigma_of_differences
+
+    x = np.cumsum(np.random.default_rng(order).normal(1.0, 3.0, size))  # a trend and its noise
+    assert mad_sigma_of_differences(x, order) == mad_sigma(np.diff(x, order))
