@@ -318,12 +318,13 @@ def _strain_zero(inp: _Inputs, line: _ElasticLine, hard: _Hardening, law: str) -
 
 def _curves(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, fracture: dict, hard: _Hardening, neck: str) -> dict[str, pd.DataFrame]:
     """The intermediate curves for plots: raw and corrected diagram, engineering, true, fit, fracture point
-    (the record-long ones share the identification's arrays: copy=False spares stacking them into blocks)."""
+    (the record-long ones share the identification's arrays: copy=False spares stacking them into blocks; the raw
+    diagram is a column selection, already a copy: a lazy one under pandas' copy-on-write, a taken one before it)."""
     data, uni = inp.data, slice(0, inp.i_m + 1)
     eps_end = fracture.get("true_strain", float(hard.grid[-1]))
     fit_eps = np.linspace(0.0, eps_end, 200)
     curves = {
-        "raw_diagram": data[[c for c in ("time_s", "force_N", "crosshead_mm", "extensometer_mm") if c in data.columns]].copy(),
+        "raw_diagram": data[[c for c in ("time_s", "force_N", "crosshead_mm", "extensometer_mm") if c in data.columns]],  # a selection is its own copy
         "corrected_diagram": pd.DataFrame({"elongation_mm": line.disp, "force_N": inp.force}, copy=False),
         "engineering": pd.DataFrame({"engineering_strain": line.strain, "engineering_stress_MPa": inp.eng_stress}, copy=False),
         "true": pd.DataFrame({"true_strain": true.log_strain[uni], "true_plastic_strain": true.eps_p[uni], "true_stress_MPa": true.sig_t[uni]}, copy=False),
