@@ -216,10 +216,12 @@ def sdar(x, y) -> SdarFit:
     when there is no tangency point or fewer than 10 samples before it."""
     x0 = np.asarray(x, dtype=float)
     y0 = np.asarray(y, dtype=float)
-    ok = np.flatnonzero(np.isfinite(x0) & np.isfinite(y0))
+    finite = np.isfinite(x0) & np.isfinite(y0)
+    ok = np.arange(x0.size) if finite.all() else np.flatnonzero(finite)
     if ok.size < MIN_WINDOW_POINTS:
         raise IdentificationError(f"SDAR: only {ok.size} finite samples; at least {MIN_WINDOW_POINTS} are needed")
-    xs, ys = x0[ok] - x0[ok[0]], y0[ok] - y0[ok[0]]
+    x_ok, y_ok = (x0, y0) if ok.size == x0.size else (x0[ok], y0[ok])  # every sample finite: no copy of a long record
+    xs, ys = x_ok - x_ok[0], y_ok - y_ok[0]
     for raises in range(MAX_OFFSET_RAISES + 1):
         t = tangency_index(xs, ys, raises)
         x_t, y_t = xs[t], ys[t]
@@ -241,6 +243,6 @@ def sdar(x, y) -> SdarFit:
         raise IdentificationError(f"SDAR: its linear region ({j - i + 1} samples) is flatter than the secant from the start to its top: a stretch "
                                   "past yield, not the elastic line, which has too few samples (sample faster or give the modulus)")
     quality = {"noise": noise_metrics(xn, yn), "resolution": resolution_metrics(xn, yn), **fit_quality}
-    slope, intercept = np.polyfit(x0[ok][window], y0[ok][window], 1)
+    slope, intercept = np.polyfit(x_ok[window], y_ok[window], 1)
     return SdarFit(slope=float(slope), intercept=float(intercept), indices=ok[window], normalized_residual=resid,
                    offset_raises=raises, quality=quality)
