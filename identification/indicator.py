@@ -83,7 +83,8 @@ def stepped_fraction(reading) -> float:
     """The share of consecutive samples with the same reading: near 1 for an encoder whose step
     spans many samples, 0 for a signal that changes at every sample."""
     d = np.diff(np.asarray(reading, dtype=float))
-    d = d[np.isfinite(d)]
+    finite = np.isfinite(d)
+    d = d if finite.all() else d[finite]  # (every step finite: no copy)
     return float(np.mean(d == 0.0)) if d.size else 0.0
 
 
@@ -122,8 +123,9 @@ def reread_if_stepped(time_s, reading) -> tuple[np.ndarray, float | None]:
     interpolated between its counts on its finite samples (:func:`interpolate_steps`), with that
     step; any other reading (a noisy analogue one, a count finer than the motion) as it is, with None."""
     t, x = np.asarray(time_s, dtype=float), np.asarray(reading, dtype=float)
-    ok = np.flatnonzero(np.isfinite(t) & np.isfinite(x))
-    if ok.size < 3 or stepped_fraction(x[ok]) <= STEPPED_FRACTION:
+    finite = np.isfinite(t) & np.isfinite(x)
+    ok = slice(None) if finite.all() else np.flatnonzero(finite)  # every sample finite: read in place, no copy
+    if x[ok].size < 3 or stepped_fraction(x[ok]) <= STEPPED_FRACTION:
         return x, None
     steps = np.abs(np.diff(x[ok]))
     if not np.any(steps > 0):

@@ -298,10 +298,11 @@ def reading_quantum(values) -> float:
     """A channel's reading quantum estimated from the data: its smallest non-zero step (steps below float
     noise, 1e-9 of the values' span, left out); 0 with fewer than two distinct values."""
     v = np.asarray(values, dtype=float)
-    v = v[np.isfinite(v)]
+    finite = np.isfinite(v)
+    v = v if finite.all() else v[finite]  # (every value finite: no copy)
     steps = np.abs(np.diff(v))
-    steps = steps[steps > 1e-9 * (np.ptp(v) if v.size else 0.0)]
-    return float(steps.min()) if steps.size else 0.0
+    real = steps > 1e-9 * (np.ptp(v) if v.size else 0.0)  # the steps above float noise
+    return float(np.min(steps, where=real, initial=np.inf)) if real.any() else 0.0
 
 
 def elastic_stress_rate(time_s, stress_MPa, window_MPa: Sequence[float]) -> float | None:

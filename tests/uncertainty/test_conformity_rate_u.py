@@ -51,6 +51,7 @@ def test_the_reading_quantum_is_the_smallest_step():
     x = np.round(np.linspace(0, 1, 500) / 0.002) * 0.002
     assert cf.reading_quantum(x) == pytest.approx(0.002)
     assert cf.reading_quantum([1.0, 1.0]) == 0.0
+    assert cf.reading_quantum(np.r_[x[:250], np.nan, x[250:]]) == cf.reading_quantum(x)  # a blank cell left out
 
 
 def test_the_band_verdict_is_three_way():
