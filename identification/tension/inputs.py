@@ -96,6 +96,15 @@ class _Inputs:
 SPIKE_NOISE_FACTOR, SPIKE_FRACTION = 12.0, 0.25  # a lone force sample this far (× noise σ, × peak force) from its agreeing neighbours is corrupt: farther than an upper yield point stands
 
 
+def _median_of_three_at_extreme(f: np.ndarray) -> float:
+    """|median of three| about the sample of largest |F| (inner samples): one of the values whose peak
+    :func:`isolated_force_spikes` takes, so a lower bound of that peak, found without a pass over them all."""
+    inner = f[1:-1]
+    k = int(np.argmax(inner)) if np.max(inner) >= -np.min(inner) else int(np.argmin(inner))
+    a, b, c = f[k], f[k + 1], f[k + 2]
+    return float(abs(max(min(a, b), min(max(a, b), c))))
+
+
 def isolated_force_spikes(force_N) -> np.ndarray:
     """Indices of lone corrupt force samples: unlike both neighbours, which agree with each other
     (no specimen's force jumps and comes back within one sample; a fracture does not come back).
@@ -105,6 +114,8 @@ def isolated_force_spikes(force_N) -> np.ndarray:
     if f.size < 5:
         return np.zeros(0, dtype=int)
     deviation = np.abs(f[1:-1] - 0.5 * (f[:-2] + f[2:]))
+    if not np.any(deviation > SPIKE_FRACTION * _median_of_three_at_extreme(f)):
+        return np.zeros(0, dtype=int)  # none beyond a quarter of one median of three (≤ their peak): none beyond the thresholds below
     gap = np.abs(f[2:] - f[:-2])
     a, b, c = f[:-2], f[1:-1], f[2:]
     peak = float(np.max(np.abs(np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c)))))  # median of three, in closed form
