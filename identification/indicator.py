@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.iso6892 import mad_sigma_of_differences
+from flowcurve.identification.iso6892 import first_index, mad_sigma_of_differences
 
 UM_PER_MM = 1000.0
 
@@ -47,10 +47,10 @@ def scale_to_measured(displacement_mm, measured_final_mm: float) -> tuple[np.nda
 def first_loading(y, up_to: float, unit: str = "N") -> int:
     """Index of the first sample at or above ``up_to`` (the end of the first loading branch)."""
     y = np.asarray(y, dtype=float)
-    above = np.nonzero(y >= up_to)[0]
-    if above.size == 0:
+    above = first_index(lambda at: y[at] >= up_to, 0, y.size)
+    if above is None:
         raise IdentificationError(f"the loading curve never reaches {up_to:.4g} {unit}, the top of the fit window")
-    return int(above[0])
+    return above
 
 
 @dataclass

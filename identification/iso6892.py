@@ -24,6 +24,20 @@ def nan_argmax(values) -> int:
     return i if not np.isnan(values[i]) else int(np.nanargmax(values))
 
 
+def first_index(condition, start: int, stop: int, chunk: int = 4096) -> int | None:
+    """The first index i in [start, stop) where ``condition`` holds (None: nowhere); ``condition``
+    maps a slice of the samples to booleans, evaluated over doubling chunks, so a crossing early
+    in a long record (the elastic line's top, the 0.2 % offset) costs no pass over the rest."""
+    while start < stop:
+        end = min(stop, start + chunk)
+        hit = condition(slice(start, end))
+        i = int(np.argmax(hit))
+        if hit[i]:
+            return start + i
+        start, chunk = end, 2 * chunk
+    return None
+
+
 def max_force_index(force_N) -> int:
     """Index of the maximum force Fm (the first one on a flat top)."""
     force = np.asarray(force_N, dtype=float)
@@ -51,15 +65,16 @@ def offset_yield_strength(strain, stress_MPa, E_MPa: float, offset: float = 0.00
     e = np.asarray(strain, dtype=float)
     s = np.asarray(stress_MPa, dtype=float)
     i_m = nan_argmax(s)
-    g = s[: i_m + 1] - E_MPa * (e[: i_m + 1] - offset)  # > 0 left of the offset line
-    begin = int(np.argmax(s >= start_MPa)) if start_MPa > 0 else 0
-    below = np.nonzero(g[begin:] <= 0)[0]
-    if below.size == 0:
+    def g(at):  # > 0 left of the offset line
+        return s[at] - E_MPa * (e[at] - offset)
+
+    begin = (first_index(lambda at: s[at] >= start_MPa, 0, s.size) or 0) if start_MPa > 0 else 0
+    k = first_index(lambda at: g(at) <= 0, begin, i_m + 1)
+    if k is None:
         raise IdentificationError(f"the curve never reaches {100 * offset:g} % plastic extension before maximum force: no Rp{100 * offset:g}")
-    k = begin + int(below[0])
     if k == 0:
         raise IdentificationError("the curve starts beyond the offset line: check the strain zero (toe)")
-    x = g[k - 1] / (g[k - 1] - g[k])  # linear interpolation between k−1 and k
+    x = g(k - 1) / (g(k - 1) - g(k))  # linear interpolation between k−1 and k
     return float(s[k - 1] + x * (s[k] - s[k - 1])), float(k - 1 + x)
 
 

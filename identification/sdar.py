@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.iso6892 import first_index
 
 OFFSET_START = 0.05  # the offset point's x: the first y above this fraction of the largest y
 OFFSET_RISE = 0.15  # ... its y: that y plus this fraction (raised by OFFSET_STEP on a retry)
@@ -70,10 +71,10 @@ def tangency_index(x: np.ndarray, y: np.ndarray, raises: int = 0) -> int:
     """Index of the tangency point of the line from the offset point to the curve (§6.3): the
     highest local maximum of the tangent slope (2 rises before and 2 falls after, else 1)."""
     y_max = float(np.max(y))
-    start = np.flatnonzero(y > OFFSET_START * y_max)
-    if start.size == 0 or not y_max > 0:
+    start = first_index(lambda at: y[at] > OFFSET_START * y_max, 0, y.size)
+    if start is None or not y_max > 0:
         raise IdentificationError("SDAR: the record does not rise; no linear region")
-    x_off, y_off = x[start[0]], y[start[0]] + (OFFSET_RISE + OFFSET_STEP * raises) * y_max
+    x_off, y_off = x[start], y[start] + (OFFSET_RISE + OFFSET_STEP * raises) * y_max
     above = np.flatnonzero((y > y_off) & (x > x_off))
     if above.size < 3:
         raise IdentificationError(f"SDAR: the record never rises {100 * (OFFSET_RISE + OFFSET_STEP * raises):.0f} % of its range above the offset point: no tangency point")

@@ -149,3 +149,18 @@ def test_mad_sigma_of_differences_is_mad_sigma_of_np_diff_to_the_bit(order, size
 
     x = np.cumsum(np.random.default_rng(order).normal(1.0, 3.0, size))  # a trend and its noise
     assert mad_sigma_of_differences(x, order) == mad_sigma(np.diff(x, order))
+
+
+@pytest.mark.parametrize("where", [None, 0, 1, 4095, 4096, 12_287, 12_288, 99_999])
+def test_first_index_reads_in_chunks_what_flatnonzero_reads_whole(where):
+    from flowcurve.identification.iso6892 import first_index
+
+    y = np.zeros(100_000)
+    if where is not None:
+        y[where:] = 1.0
+    whole = np.flatnonzero(y >= 0.5)
+    assert first_index(lambda at: y[at] >= 0.5, 0, y.size) == (int(whole[0]) if whole.size else None)
+    assert first_index(lambda at: y[at] >= 0.5, 50_000, 60_000) == (min(max(where, 50_000), 60_000) if where is not None and where < 60_000 else None)
+    read = []
+    first_index(lambda at: read.append(at.stop - at.start) or y[at] >= 0.5, 0, y.size)
+    assert sum(read) <= max(2 * (where or y.size) + 4096, 4096) or where is None  # never much past the hit
