@@ -35,7 +35,7 @@ class Ludwik(StaticLaw):
         """n over 0.005–3 (log grid); σ0 ≥ 0 and K by weighted linear least squares."""
         grid = np.geomspace(0.005, 3.0, STRAIN_GRID_POINTS)
         s0, K, ss = linear_on_grid(np.power(eps[None, :], grid[:, None]), sig, w, nonnegative_c0=True)
-        return best_rows(ss, [{"sigma0": s0[i], "K": K[i], "n": grid[i]} for i in range(grid.size)], K > 0)
+        return best_rows(ss, lambda i: {"sigma0": s0[i], "K": K[i], "n": grid[i]}, K > 0)
 
     def data_start(self, eps, sig):
         """σ0 just below the first point, K and n from the log–log slope of σ − σ0."""

@@ -79,3 +79,23 @@ def test_the_laws_clip_a_negative_strain_to_zero_as_before():
         values = {mine: values[theirs] for mine, theirs in zip(spec.names, spec.law.names)}
         assert np.array_equal(spec.func(eps, **values), spec.func(np.clip(eps, 0.0, None), **values))
         assert type(spec.func(0.1, **values)) is np.float64
+
+
+def test_a_profiles_rows_are_built_when_read_as_floats():
+    """The lazy rows of a profile: every row the law's constants as floats, indexable like the list they replace."""
+    from flowcurve.identification.laws.hardening import static_form, static_law_names
+    from flowcurve.identification.laws.static import Rows
+
+    built = []
+    rows = Rows(3, lambda i: built.append(i) or {"K": np.float64(10.0 * i), "n": i})
+    assert built == [] and len(rows) == 3
+    assert rows[1] == {"K": 10.0, "n": 1.0} and type(rows[1]["K"]) is float and rows[-1] == rows[2]
+    assert rows[0:2] == [rows[0], rows[1]] and list(rows) == [rows[0], rows[1], rows[2]]
+    with pytest.raises(IndexError):
+        rows[3]
+    for law in static_law_names():
+        spec = static_form(law)
+        ss, cands = spec.law.profile(EPS, SIG, np.ones_like(EPS))
+        assert len(cands) == ss.size
+        best = cands[int(np.argmin(ss))]
+        assert set(best) == set(spec.law.names) and all(type(v) is float for v in best.values())
