@@ -44,11 +44,12 @@ def max_force_index(force_N) -> int:
     return nan_argmax(force)
 
 
-def fracture_index(force_N) -> int:
+def fracture_index(force_N, i_m: int | None = None) -> int:
     """Index of the last sample before fracture: the sample before the largest single-step
-    force drop after Fm when that drop exceeds 20 % of Fm, else the last sample."""
+    force drop after Fm when that drop exceeds 20 % of Fm, else the last sample. ``i_m``: Fm's
+    index (:func:`max_force_index`) when the caller has it."""
     force = np.asarray(force_N, dtype=float)
-    i_m = max_force_index(force)
+    i_m = max_force_index(force) if i_m is None else i_m
     tail = force[i_m:]
     if tail.size < 2:
         return force.size - 1

@@ -27,7 +27,7 @@ from flowcurve.identification.tension.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import TensionHardening, TensionResult
 from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
-from flowcurve.identification.tension.values import FIT_POINTS, FRACTURE_POINT_MODES, HARDENING_METHODS, MIN_YIELD_OFFSET, MODULUS_REFERENCES, TRUE_STRESS_FORMS, TRUE_STRESS_SPLIT_PCT, _check_window, _increasing, bulk_modulus, check_fit_range, choose_fracture_variant, fracture_index, reaches_fracture, true_plastic_strain, true_stress_constant_volume, true_stress_gost, uniform_error_pct, without_fracture_values
+from flowcurve.identification.tension.values import FIT_POINTS, FRACTURE_POINT_MODES, HARDENING_METHODS, MIN_YIELD_OFFSET, MODULUS_REFERENCES, TRUE_STRESS_FORMS, TRUE_STRESS_SPLIT_PCT, _check_window, _increasing, bulk_modulus, check_fit_range, choose_fracture_variant, reaches_fracture, true_plastic_strain, true_stress_constant_volume, true_stress_gost, uniform_error_pct, without_fracture_values
 from flowcurve.identification.tension.inputs import _Inputs, _inputs
 from flowcurve.identification.tension.elastic import _ElasticLine, _elastic_line, _resolved, sdar_warnings
 
@@ -130,8 +130,8 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
                         "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")
     e_m = float(np.mean(iso6892.max_force_band(strain, eng_stress)))  # ISO 6892-1 §13: a flat maximum's mid-point
     Ag = float(iso6892.plastic_extension_pct(e_m, inp.Rm, E))
-    i_k = fracture_index(force)
-    At = float(100.0 * strain[i_k]) if reaches_fracture(force) else None  # ISO 6892-1 3.6.6: elastic and plastic
+    i_k = inp.i_k
+    At = float(100.0 * strain[i_k]) if reaches_fracture(force, i_k) else None  # ISO 6892-1 3.6.6: elastic and plastic
     if inp.lu is not None:
         A, A_method = iso6892.elongation_after_fracture_pct(inp.l0, inp.lu), "measured gauge length after fracture (post.lu_mm)"
     elif At is not None:

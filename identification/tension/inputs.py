@@ -27,22 +27,23 @@ def _check_post_dimensions(record: Record, d0: float, l0: float, lu: float | Non
             raise RecordError(record.source, f"{name} = {d:g} mm (post.{name}_mm{', --dk' if name == 'dk' else ''}) is larger than d0 = {d0:g} mm (specimen.d0_mm, --d0): a specimen does not thicken in tension")
 
 
-def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndarray, l0: float, options: dict) -> dict:
-    """Displacement (mm), the length it refers to (mm) and how it was obtained."""
+def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndarray, l0: float, options: dict, i_k: int) -> dict:
+    """Displacement (mm), the length it refers to (mm) and how it was obtained; ``i_k``: the
+    fracture's index (:func:`.values.fracture_index` of ``force``), up to which a channel must have values."""
     has_ext = record.has("extensometer_mm")
     if use_extensometer and not has_ext:
         raise RecordError(record.source, "use_extensometer was requested but the record has no extensometer channel", column="extensometer_mm")
     warnings: list[str] = []
     if has_ext and use_extensometer is not False:
         ext = record.column("extensometer_mm")
-        gaps = np.nonzero(~np.isfinite(ext[: fracture_index(force) + 1]))[0]
+        gaps = np.nonzero(~np.isfinite(ext[: i_k + 1]))[0]
         if gaps.size:
             message = f"the extensometer channel has no value from sample {gaps[0] + 1} on (removed before fracture?)"
             if not record.has("crosshead_mm"):
                 raise RecordError(record.source, message + "; the record has no crosshead column to identify from instead", column="extensometer_mm")
             if use_extensometer:
                 raise RecordError(record.source, message + "; identify from the crosshead instead (use_extensometer=False)", column="extensometer_mm")
-            fallback = _strain_source(record, False, force, l0, options)
+            fallback = _strain_source(record, False, force, l0, options, i_k)
             fallback["warnings"].insert(0, message + ": the crosshead is used instead")
             return fallback
         gauge = record.specimen.extensometer_gauge_mm or l0
@@ -52,7 +53,7 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
     if not record.has("crosshead_mm"):
         raise RecordError(record.source, "the record has no crosshead column: its strain can only come from the extensometer (leave out --no-extensometer)", column="crosshead_mm")
     cross = record.column("crosshead_mm")
-    gaps = np.nonzero(~np.isfinite(cross[: fracture_index(force) + 1]))[0]
+    gaps = np.nonzero(~np.isfinite(cross[: i_k + 1]))[0]
     if gaps.size:
         raise RecordError(record.source, f"the crosshead channel has no value at sample {gaps[0] + 1} (of {gaps.size} before fracture); the strain cannot be followed through the gap", column="crosshead_mm")
     step = None
@@ -84,6 +85,7 @@ class _Inputs:
     force: np.ndarray
     eng_stress: np.ndarray
     i_m: int  # index of the maximum force
+    i_k: int  # index of the last sample before fracture (:func:`.values.fracture_index`)
     Fm: float
     Rm: float
     src: dict  # :func:`_strain_source`: displacement, its length, how it was obtained
@@ -151,7 +153,8 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
     if Rm > MAX_STRESS_MPa:
         raise IdentificationError(f"{record.source}: Rm = {Rm:.4g} MPa is implausible - check units of force (N) and diameter (mm)")
 
-    src = _strain_source(sub, use_extensometer, force, l0, {"frame_stiffness_N_per_um": frame_stiffness_N_per_um, "crosshead_length_mm": crosshead_length_mm})
+    i_k = fracture_index(force)
+    src = _strain_source(sub, use_extensometer, force, l0, {"frame_stiffness_N_per_um": frame_stiffness_N_per_um, "crosshead_length_mm": crosshead_length_mm}, i_k)
     warnings += src["warnings"]
     lu = spec.lu_mm
     _check_post_dimensions(record, d0, l0, lu)
@@ -160,7 +163,7 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
         if lu <= l0:
             raise IdentificationError(f"{record.source}: post.lu_mm = {lu:g} mm is not longer than l0 = {l0:g} mm")
         length = l0
-    return _Inputs(record=record, d0=d0, l0=l0, s0=s0, data=data, sub=sub, force=force, eng_stress=eng_stress, i_m=i_m,
+    return _Inputs(record=record, d0=d0, l0=l0, s0=s0, data=data, sub=sub, force=force, eng_stress=eng_stress, i_m=i_m, i_k=i_k,
                    Fm=Fm, Rm=Rm, src=src, lu=lu, length=length, warnings=warnings)
 
 

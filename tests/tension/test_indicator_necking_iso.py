@@ -164,3 +164,15 @@ def test_first_index_reads_in_chunks_what_flatnonzero_reads_whole(where):
     read = []
     first_index(lambda at: read.append(at.stop - at.start) or y[at] >= 0.5, 0, y.size)
     assert sum(read) <= max(2 * (where or y.size) + 4096, 4096) or where is None  # never much past the hit
+
+
+def test_the_fracture_index_from_a_known_maximum_is_the_one_found_anew():
+    """Fm's and the fracture's indices handed on (read once per record) give what each call would find."""
+    from flowcurve.identification.tension.values import fracture_index, reaches_fracture
+
+    rising = np.linspace(0.0, 10_000.0, 400)
+    for force in (np.r_[rising, 9_000.0, 8_000.0, 1_000.0], np.r_[rising, np.linspace(9_990.0, 9_000.0, 50)], rising):
+        i_m = iso6892.max_force_index(force)
+        assert iso6892.fracture_index(force, i_m) == iso6892.fracture_index(force)
+        i_k = fracture_index(force)
+        assert reaches_fracture(force, i_k) == reaches_fracture(force)
