@@ -454,9 +454,10 @@ def command_segment(time_s, events, i_max: int) -> tuple[int, int, bool]:
     t0 = max(starts) if starts else -math.inf
     ends = [e.time_s for e in events or () if e.name in ("start", "stop") and e.time_s > t0]
     t1 = min(ends) if ends else math.inf
-    inside = np.flatnonzero((t >= t0) & (t <= t1))
-    inside = inside[inside <= i_max]
-    return (int(inside[0]), int(inside[-1]), bool(starts)) if inside.size else (0, int(i_max), False)
+    inside = (t[: i_max + 1] >= t0) & (t[: i_max + 1] <= t1)  # (the samples after Fm never count: not read)
+    if not inside.any():
+        return 0, int(i_max), False
+    return int(np.argmax(inside)), int(inside.size - 1 - np.argmax(inside[::-1])), bool(starts)
 
 
 def _num(value) -> float | None:

@@ -167,3 +167,24 @@ def test_the_command_segment_is_read_from_the_events():
     assert cf.command_segment(t, events, 80) == (11, 80, True)
     assert cf.command_segment(t, events + [Event(50.5, "start", "crosshead 0.02 mm/s")], 80) == (51, 80, True)
     assert cf.command_segment(t, None, 80) == (0, 80, False)
+    assert cf.command_segment(t, [Event(10.2, "start", ""), Event(40.0, "stop", "")], 80) == (11, 40, True)  # stopped before Fm
+    assert cf.command_segment(t, [Event(85.0, "start", "")], 80) == (0, 80, False)  # no start before Fm
+    gappy = t.copy()
+    gappy[[11, 12, 80]] = np.nan  # blank time stamps are in no segment
+    assert cf.command_segment(gappy, events, 79) == (13, 79, True)
+    assert cf.command_segment(gappy, events, 80) == (0, 10, False)  # Fm's own time blank: no start before it is known
+
+
+def test_the_window_halves_slopes_are_each_halfs_own_regression():
+    """line_windows_E: the samples of each half (a sample on the middle in both) regressed strain on stress, E = 1/slope."""
+    from flowcurve.identification.quality.uncertainty import line_windows_E
+
+    stress = np.r_[np.linspace(0.0, 400.0, 401), np.linspace(400.0, 300.0, 50), 120.0, np.nan]  # a dip back into the window
+    strain = stress / 200e3 + 1e-4 * (stress / 400.0) ** 2
+    strain[-3] = np.nan  # a sample without a strain is left out
+    got = line_windows_E(strain, stress, (100.0, 300.0))
+    top = int(np.nanargmax(stress)) + 1
+    for name, (a, b) in (("the window's lower half", (100.0, 200.0)), ("the window's upper half", (200.0, 300.0))):
+        on = [i for i in range(top) if a <= stress[i] <= b and np.isfinite(strain[i])]
+        assert got[name] == 1.0 / np.polyfit(stress[on], strain[on], 1)[0]
+    assert got["the window's lower half"] > got["the window's upper half"]  # the curve bends over
