@@ -118,7 +118,7 @@ def max_force_band(strain, stress_MPa, *, window: int = 50) -> tuple[float, floa
     noise from third differences about the maximum, s = 1.4826·MAD(Δ³σ)/√20; noise-free, the
     maximum's own strain twice."""
     e, s = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
-    i_m = int(np.nanargmax(s))
+    i_m = nan_argmax(s)
     near = s[max(i_m - window, 0): i_m + window + 1]
     d3 = np.diff(near[np.isfinite(near)], 3)  # a smooth curve's third differences vanish, the noise's do not
     if d3.size < 3:

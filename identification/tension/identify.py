@@ -190,7 +190,7 @@ def _true_curve(inp: _Inputs, line: _ElasticLine, true_stress: str, poisson: flo
     uni = slice(0, i_m + 1)
     ep_u, sig_u = _increasing(eps_p[uni], sig_t[uni])
     in_range = ep_u >= MIN_YIELD_OFFSET  # the flow curve from Rp0.2 on, as for compression; elastic jitter left out
-    curve = pd.DataFrame({"true_plastic_strain": ep_u[in_range], "true_stress_MPa": sig_u[in_range]})
+    curve = pd.DataFrame({"true_plastic_strain": ep_u[in_range], "true_stress_MPa": sig_u[in_range]}, copy=False)  # fresh arrays: no copy
     sig_t_rp = float(np.interp(MIN_YIELD_OFFSET, ep_u, sig_u)) if ep_u[-1] > MIN_YIELD_OFFSET else None
     return _TrueCurve(strain=strain, log_strain=log_strain, sig_t=sig_t, eps_p=eps_p, eps_u=float(log_strain[i_m]), ep_u=ep_u, sig_u=sig_u,
                       curve=curve, sig_t_rp=sig_t_rp, eps_p_at_Rm=float(eps_p[i_m]), E_specimen=E_s, warnings=[note] if note else [])
