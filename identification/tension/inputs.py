@@ -134,15 +134,16 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
     d0, l0, s0 = spec.d0_mm, spec.l0_mm, spec.s0_mm2  # F0: the stated S0, else π d0²/4
     force = record.column("force_N")
     ok = np.isfinite(force)
-    if not ok.all():
+    every = bool(ok.all())  # every force finite: the positions are the samples, no copies (a one-hour record)
+    if not every:
         warnings.append(f"{int((~ok).sum())} samples without a force value were left out")
-    spikes = np.flatnonzero(ok)[isolated_force_spikes(force[ok])]
+    spikes = isolated_force_spikes(force) if every else np.flatnonzero(ok)[isolated_force_spikes(force[ok])]
     if spikes.size:
-        ok[spikes] = False
+        ok[spikes], every = False, False
         warnings.append(f"{spikes.size} force sample(s) unlike both neighbours (a corrupt load-cell frame) left out: "
                         + ", ".join(f"sample {k + 1} ({force[k]:.6g} N)" for k in spikes[:5]) + (" …" if spikes.size > 5 else ""))
-    data = (record.data[ok] if not ok.all() else record.data).reset_index(drop=True)  # all kept: no copy (copy-on-write)
-    force = force[ok]
+    data = (record.data if every else record.data[ok]).reset_index(drop=True)  # all kept: no copy (copy-on-write)
+    force = force if every else force[ok]
     sub = Record(meta=record.meta, data=data, source=record.source)
     i_m = iso6892.max_force_index(force)
     Fm = float(force[i_m])
