@@ -179,6 +179,8 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | No
     run = np.maximum.accumulate(head)
     threshold = np.maximum(YIELD_DROP * run, YIELD_DROP_NOISE * noise_MPa)
     below = (run - head > threshold) & (run > start_MPa)
+    if not np.any(below[:-1] & below[1:]):
+        return None  # no drop that lasts (the test below only narrows them): no yield point
     if E_MPa is not None:  # ReH ends the elastic line: a drop from a maximum beyond 0.5 % plastic extension is a relaxation (a pause), not yield
         at_max = np.maximum.accumulate(np.where(head >= run, np.arange(head.size), 0))
         below &= 100.0 * (e[at_max] - run / E_MPa) <= MAX_YIELD_POINT_EXTENSION_PCT
