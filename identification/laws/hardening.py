@@ -224,16 +224,19 @@ def forward_jacobian(residual: Callable, x: np.ndarray, lo: np.ndarray, hi: np.n
     solver's linear algebra rounds alike. x: (n,) values; residual: x → (m,) array; f0: r(x)
     when the caller has it."""
     f0 = residual(x) if f0 is None else f0
-    h = FORWARD_STEP * ((x >= 0) * 2.0 - 1.0) * np.maximum(1.0, np.abs(x))
-    below, above = x - lo, hi - x
-    fits = np.abs(h) <= np.maximum(below, above)
-    h = np.where(((x + h < lo) | (x + h > hi)) & fits, -h, h)
-    h = np.where(fits, h, np.where(above >= below, above, -below))
     jt = np.empty((x.size, f0.size))
-    for i in range(x.size):
+    for i, (xi, low, high) in enumerate(zip(x.tolist(), lo.tolist(), hi.tolist())):  # a few constants: scalars, not arrays
+        size = abs(xi)
+        h = FORWARD_STEP * (1.0 if xi >= 0 else -1.0) * (size if size > 1.0 or size != size else 1.0)  # np.maximum(1, |x|), NaN kept
+        below, above = xi - low, high - xi
+        fits = abs(h) <= (above if above > below or above != above else below)  # np.maximum(below, above)
+        if not fits:
+            h = above if above >= below else -below
+        elif xi + h < low or xi + h > high:
+            h = -h
         step = x.copy()
-        step[i] = x[i] + h[i]
-        jt[i] = (residual(step) - f0) / ((x[i] + h[i]) - x[i])
+        step[i] = xi + h
+        jt[i] = (residual(step) - f0) / ((xi + h) - xi)
     return jt.T
 
 

@@ -99,3 +99,19 @@ def test_a_profiles_rows_are_built_when_read_as_floats():
         assert len(cands) == ss.size
         best = cands[int(np.argmin(ss))]
         assert set(best) == set(spec.law.names) and all(type(v) is float for v in best.values())
+
+
+def test_forward_jacobian_matches_scipy_at_random_points_near_and_on_the_bounds():
+    from scipy.optimize._numdiff import approx_derivative
+
+    rng = np.random.default_rng(11)
+    lo, hi = np.array([-5.0, 0.0, 0.01]), np.array([5.0, np.inf, 1e-2 + 4e-8])  # a bound pair narrower than the step
+    for _ in range(300):
+        x = np.array([rng.choice([-5.0, 5.0, -5.0 + 1e-9, rng.uniform(-5, 5), 0.0]), rng.choice([0.0, 1e-12, rng.uniform(0, 1e3)]),
+                      rng.choice([0.01, 0.01 + 2e-8, 0.01 + 4e-8])])
+
+        def r(v):
+            return np.array([v[0] * v[1], np.sin(v[0]) + v[2] ** 2, v[1] * v[2] - v[0]])
+
+        expected = approx_derivative(r, x, method="2-point", bounds=(lo, hi), f0=r(x))
+        assert np.array_equal(forward_jacobian(r, x, lo, hi), expected)
