@@ -270,8 +270,10 @@ def yield_onset_from_rate(time_s, force_N, levels: int = 400) -> float:
     if level.size < 8:
         raise IdentificationError("the force rises too little above its noise for a yield estimate")
     times = t[np.searchsorted(envelope, level)]
-    period = float(np.median(np.diff(t)))
-    rate = 3.0 * step / np.maximum(times[3:] - times[:-3], period)
+    spans = times[3:] - times[:-3]
+    steps = np.diff(t)
+    # the sampling period floors each span; when every span is longer than the longest step it floors none (its median not needed)
+    rate = 3.0 * step / (spans if np.min(spans) > np.max(steps) else np.maximum(spans, float(np.median(steps))))
     peak = int(np.argmax(rate))
     below = np.nonzero(rate[peak:] < 0.5 * rate[peak])[0]
     return float(level[peak + int(below[0])]) if below.size else float(level[-1])
