@@ -284,9 +284,10 @@ def slope_u(t, y, *, quantum: float = 0.0, time_u_s: float = 0.0) -> tuple[float
     if t.size < MIN_PHASE_SAMPLES or np.ptp(t) <= 0:
         return None
     dt = t - t.mean()
+    dy = y - y.mean()
     sxx = np.einsum("i,i->", dt, dt)  # einsum, not np.dot: BLAS threads on a busy machine cost 50× a plain loop
-    b = float(np.einsum("i,i->", dt, y - y.mean()) / sxx)  # least squares: Σ(t − t̄)(y − ȳ) / Σ(t − t̄)²
-    r = y - y.mean() - b * dt
+    b = float(np.einsum("i,i->", dt, dy) / sxx)  # least squares: Σ(t − t̄)(y − ȳ) / Σ(t − t̄)²
+    r = dy - b * dt
     u_res = math.sqrt(np.einsum("i,i->", r, r) / (t.size - 2) / sxx)
     u_read = math.sqrt((quantum ** 2 / 12.0 + (b * time_u_s) ** 2) / sxx)
     if quantum > 0:  # q²/(√6·|b|·T²): q/(√6·T) per quantum crossed
