@@ -111,7 +111,7 @@ def _increasing(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Keep the points where x strictly exceeds every earlier x (noise makes εp wobble)."""
     keep = np.ones(x.size, dtype=bool)
     keep[1:] = x[1:] > np.maximum.accumulate(x)[:-1]
-    return x[keep], y[keep]
+    return np.compress(keep, x), np.compress(keep, y)  # x[keep], y[keep]: a noisy mask, which boolean indexing takes branch by branch
 
 
 def fracture_index(force_N) -> int:
