@@ -31,7 +31,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from flowcurve.identification.iso6892 import nan_argmax
+from flowcurve.identification.iso6892 import first_index, nan_argmax
 
 STANDARD_TENSION = "ISO 6892-1:2019"
 STANDARD_HEATED = "ISO 6892-2:2018"
@@ -259,9 +259,11 @@ def _is_number(text: str) -> bool:
 def _elastic_stretch(stress_MPa: np.ndarray, window_MPa: Sequence[float], i_m: int) -> np.ndarray:
     """Indices of the first contiguous stretch before the maximum whose stress lies in the window."""
     lo, hi = window_MPa
-    sel = np.flatnonzero((stress_MPa[: i_m + 1] >= lo) & (stress_MPa[: i_m + 1] <= hi))
-    gaps = np.flatnonzero(np.diff(sel) > 1)
-    return sel[: gaps[0] + 1] if gaps.size else sel
+    first = first_index(lambda at: (stress_MPa[at] >= lo) & (stress_MPa[at] <= hi), 0, i_m + 1)
+    if first is None:
+        return np.zeros(0, dtype=np.intp)
+    after = first_index(lambda at: ~((stress_MPa[at] >= lo) & (stress_MPa[at] <= hi)), first, i_m + 1)  # the stretch's end: read no further
+    return np.arange(first, i_m + 1 if after is None else after)
 
 
 def _slope(t: np.ndarray, y: np.ndarray) -> float | None:
@@ -336,8 +338,8 @@ def phase_bounds(strain, stress_MPa, *, window_MPa: Sequence[float], Rp_MPa: flo
         end = i_h + int(past[0]) if past.size else i_m
         out["yield"] = [i_h, end]
     elif Rp_MPa is not None:
-        reach = np.flatnonzero(s[start: i_m + 1] >= Rp_MPa)
-        end = start + int(reach[0]) if reach.size else i_m
+        reach = first_index(lambda at: s[at] >= Rp_MPa, start, i_m + 1)
+        end = i_m if reach is None else reach
         out["yield"] = [start, max(end, start + MIN_PHASE_SAMPLES - 1)]
     else:
         out["yield"] = None

@@ -188,3 +188,16 @@ def test_the_window_halves_slopes_are_each_halfs_own_regression():
         on = [i for i in range(top) if a <= stress[i] <= b and np.isfinite(strain[i])]
         assert got[name] == 1.0 / np.polyfit(stress[on], strain[on], 1)[0]
     assert got["the window's lower half"] > got["the window's upper half"]  # the curve bends over
+
+
+def test_the_elastic_stretch_is_the_first_run_of_samples_in_the_window():
+    """Read from its first sample to its first gap: the first contiguous stretch the whole selection gives."""
+    rng = np.random.default_rng(4)
+    for _ in range(200):
+        s = np.cumsum(rng.normal(1.0, 4.0, rng.integers(1, 300)))
+        s[rng.integers(0, s.size, 3)] = np.nan
+        i_m = int(rng.integers(0, s.size))
+        sel = np.flatnonzero((s[: i_m + 1] >= 20.0) & (s[: i_m + 1] <= 80.0))
+        gaps = np.flatnonzero(np.diff(sel) > 1)
+        expected = sel[: gaps[0] + 1] if gaps.size else sel
+        assert np.array_equal(cf._elastic_stretch(s, (20.0, 80.0), i_m), expected)
