@@ -75,8 +75,8 @@ def strain_quantum_noise(strain) -> float:
     """Standard deviation of the reading error of a quantized strain signal: q/√12, q its
     smallest non-zero step (negligible for a signal that is not quantized)."""
     d = np.abs(np.diff(np.asarray(strain, dtype=float)))
-    d = d[np.isfinite(d) & (d > 0)]
-    return float(np.min(d)) / math.sqrt(12.0) if d.size else 0.0
+    real = np.isfinite(d) & (d > 0)  # the smallest of these, without gathering them into a copy
+    return float(np.min(d, where=real, initial=np.inf)) / math.sqrt(12.0) if real.any() else 0.0
 
 
 def stepped_fraction(reading) -> float:

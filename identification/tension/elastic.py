@@ -185,7 +185,7 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
 def _line_checks(source: str, strain, E: float, unresolved: ModulusFit | None) -> list[str]:
     """The line's strain checked for units (an error past MAX_STRAIN); warnings for an unresolved
     line (the handbook E took its place) and for an E far from any metal's."""
-    if np.nanmax(np.abs(strain)) > MAX_STRAIN:
+    if max(np.nanmax(strain), -np.nanmin(strain)) > MAX_STRAIN:  # max |e| from the extremes: no |e| array of the record
         raise IdentificationError(f"{source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
     warnings: list[str] = []
     if unresolved is not None:
