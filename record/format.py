@@ -254,7 +254,9 @@ class Record:
         if name not in self.data.columns:
             return False
         column = self.data[name]
-        return bool(column.iloc[:1].notna().any()) or bool(column.notna().any())
+        if column.size and isinstance(column.dtype, np.dtype) and column.dtype.kind == "f" and column.iat[0] == column.iat[0]:  # not NaN
+            return True
+        return bool(column.notna().any())
 
 
 # -- reading --------------------------------------------------------------------------------

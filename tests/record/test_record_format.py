@@ -188,3 +188,5 @@ def test_has_is_true_for_a_column_with_any_value_and_false_for_an_empty_one():
     record = Record(meta={}, data=data, source="t")
     assert [record.has(c) for c in ("full", "late", "empty", "text", "absent")] == [True, True, False, True, False]
     assert not Record(meta={}, data=pd.DataFrame({"full": []}), source="t").has("full")
+    nullable = pd.DataFrame({"late": pd.array([None, 1.0], dtype="Float64"), "empty": pd.array([None, None], dtype="Float64")})
+    assert [Record(meta={}, data=nullable, source="t").has(c) for c in ("late", "empty")] == [True, False]
