@@ -486,15 +486,33 @@ THREE_POINT_LAWS = ("johnson_cook", "swift", "voce")  # the laws three_point_fit
 
 
 def _root(g: Callable[[float], float], lo: float, hi: float, what: str) -> float:
-    """Bracketing root of a monotone g on [lo, hi] (log-spaced scan, then Brent)."""
+    """Bracketing root of a monotone g on [lo, hi] (log-spaced scan, then Brent). The scan
+    evaluates g on the whole grid at once (g takes arrays); the bracket is then checked point by
+    point, so a sign that the vectorised arithmetic rounds the other way falls back to the scan
+    point by point."""
     grid = np.geomspace(lo, hi, 400)
-    vals = np.array([g(x) for x in grid])
+    with np.errstate(all="ignore"):  # inf or nan where g has none: left out of the brackets
+        vals = np.asarray(g(grid), dtype=float)
+    try:
+        return _bracketed_root(g, grid, vals)
+    except (ValueError, IndexError):  # no bracket, or brentq: the points' own values do not bracket a root
+        vals = np.array([g(x) for x in grid])
+        if not _brackets(vals).size:
+            raise IdentificationError(f"three-point fit: no {what} makes the law pass through the three points (the points are not consistent with this law)") from None
+        return _bracketed_root(g, grid, vals)
+
+
+def _brackets(vals: np.ndarray) -> np.ndarray:
+    """The cells of a grid where the finite values ``vals`` change sign (or reach 0)."""
     sign = np.sign(vals)
-    idx = np.nonzero(np.isfinite(vals[:-1]) & np.isfinite(vals[1:]) & (sign[:-1] * sign[1:] <= 0))[0]
-    if idx.size == 0:
-        raise IdentificationError(f"three-point fit: no {what} makes the law pass through the three points (the points are not consistent with this law)")
-    i = idx[0]
-    if vals[i] == 0:
+    return np.nonzero(np.isfinite(vals[:-1]) & np.isfinite(vals[1:]) & (sign[:-1] * sign[1:] <= 0))[0]
+
+
+def _bracketed_root(g: Callable[[float], float], grid: np.ndarray, vals: np.ndarray) -> float:
+    """Brent's root of g in the first cell of ``grid`` where ``vals`` (g on the grid) change sign
+    (IndexError: none)."""
+    i = _brackets(vals)[0]
+    if g(grid[i]) == 0:
         return float(grid[i])
     from scipy.optimize import brentq
 

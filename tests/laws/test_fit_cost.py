@@ -4,6 +4,7 @@ forward-difference Jacobian is scipy's "2-point" one, bit for bit, inside and at
 import numpy as np
 import pytest
 
+from flowcurve.errors import IdentificationError
 from flowcurve.identification.laws.hardening import forward_jacobian, johnson_cook_static
 
 EPS = np.linspace(0.004, 0.3, 30)
@@ -115,3 +116,32 @@ def test_forward_jacobian_matches_scipy_at_random_points_near_and_on_the_bounds(
 
         expected = approx_derivative(r, x, method="2-point", bounds=(lo, hi), f0=r(x))
         assert np.array_equal(forward_jacobian(r, x, lo, hi), expected)
+
+
+def _root_point_by_point(g, lo, hi):
+    """_root as written before issue 43: g evaluated point by point over the grid."""
+    from scipy.optimize import brentq
+
+    grid = np.geomspace(lo, hi, 400)
+    vals = np.array([g(x) for x in grid])
+    sign = np.sign(vals)
+    i = np.nonzero(np.isfinite(vals[:-1]) & np.isfinite(vals[1:]) & (sign[:-1] * sign[1:] <= 0))[0][0]
+    return float(grid[i]) if vals[i] == 0 else float(brentq(g, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-13, maxiter=200))
+
+
+@pytest.mark.parametrize("law", ["johnson_cook", "voce", "swift"])
+def test_the_three_point_root_scan_on_the_whole_grid_finds_the_point_by_point_root(law, monkeypatch):
+    from flowcurve.identification.laws import hardening
+
+    rng = np.random.default_rng(2)
+    for _ in range(20):
+        e = np.sort(rng.uniform(0.002, 0.6, 3))
+        s = johnson_cook_static(e, rng.uniform(100, 500), rng.uniform(200, 900), rng.uniform(0.1, 0.6))
+        try:
+            fast = hardening.three_point_fit(list(zip(e, s)), law)
+        except IdentificationError:
+            continue
+        with monkeypatch.context() as m:
+            m.setattr(hardening, "_root", lambda g, lo, hi, what: _root_point_by_point(g, lo, hi))
+            slow = hardening.three_point_fit(list(zip(e, s)), law)
+        assert fast.params == slow.params
