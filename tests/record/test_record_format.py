@@ -190,3 +190,11 @@ def test_has_is_true_for_a_column_with_any_value_and_false_for_an_empty_one():
     assert not Record(meta={}, data=pd.DataFrame({"full": []}), source="t").has("full")
     nullable = pd.DataFrame({"late": pd.array([None, 1.0], dtype="Float64"), "empty": pd.array([None, None], dtype="Float64")})
     assert [Record(meta={}, data=nullable, source="t").has(c) for c in ("late", "empty")] == [True, False]
+
+
+@pytest.mark.parametrize("start, stop", [(0, 0), (0, 5), (3, 3_000_001), (1_048_575, 2_097_153), (0, 3_000_003)])
+def test_count_byte_counts_what_bytes_count_does(start, stop):
+    from flowcurve.record.format import count_byte
+
+    raw = bytes(np.random.default_rng(start).choice(np.frombuffer(b"0123,\\n.-", dtype=np.uint8), 3_000_003))
+    assert count_byte(raw, b",", start, stop) == raw.count(b",", start, stop)
