@@ -277,11 +277,11 @@ def _fit_laws(grid, fit_sig, extra: list, three_points: list | None, fracture_po
     return fits, variants, choices, warnings
 
 
-def _hardening_fits(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: dict, *, neck: str, law: str, hardening: str,
-                    fracture_weight: float | None, fit_range, fracture_point: str) -> _Hardening:
-    """The hardening laws fitted to the uniform range (and the fracture point); the main one chosen."""
+def _hardening_fits(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: dict, points: tuple, *, neck: str, law: str, hardening: str,
+                    fracture_weight: float | None, fracture_point: str) -> _Hardening:
+    """The hardening laws fitted to the uniform range's ``points`` (:func:`_fit_points`) and the fracture point; the main one chosen."""
     warnings: list[str] = []
-    grid, fit_sig, fit_lo = _fit_points(inp, iso, true, fit_range)
+    grid, fit_sig, fit_lo = points
     weight = math.sqrt(FIT_POINTS) if fracture_weight is None else float(fracture_weight)
     extra = [(fracture["true_strain"], fracture[neck]["stress_MPa"], weight)] if fracture else []
     if fracture_point == "include" and not extra:
@@ -456,9 +456,10 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     iso = _iso_results(inp, line)
     true = _true_curve(inp, line, true_stress, poisson)
     fracture, neck_warnings = _neck_correction(inp, iso, true)
-    law, law_choice = resolve_law(law, *_fit_points(inp, iso, true, fit_range)[:2])  # --law best: chosen on the uniform range
-    hard = _hardening_fits(inp, iso, true, fracture, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
-                           fit_range=fit_range, fracture_point=fracture_point)
+    points = _fit_points(inp, iso, true, fit_range)  # the uniform range resampled: the law chosen on it (--law best) and fitted to it
+    law, law_choice = resolve_law(law, *points[:2])
+    hard = _hardening_fits(inp, iso, true, fracture, points, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
+                           fracture_point=fracture_point)
     hard, start_warnings = _strain_zero(inp, line, hard, law)
     hard.main.law_choice = law_choice  # the main fit's copy only (result.json's hardening)
     warnings = (inp.warnings + line.warnings + sdar_warnings(line.mod) + iso.warnings + true.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings
