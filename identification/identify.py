@@ -56,8 +56,10 @@ def force_noise_N(force_N: np.ndarray) -> float:
     From the median absolute successive difference: for white noise σ, diff has σ√2 and
     MAD·1.4826 estimates a standard deviation.
     """
+    force_N = np.asarray(force_N, dtype=float)
     step = max(1, len(force_N) // NOISE_SAMPLES)
-    d = np.diff(force_N)[::step]  # successive differences, evenly thinned: same statistics
+    later = force_N[1::step]  # successive differences, evenly thinned (np.diff(F)[::step], only those taken): same statistics
+    d = later - force_N[::step][: later.size]
     d = d[np.isfinite(d)]
     if d.size == 0:
         return 0.0
@@ -233,7 +235,8 @@ def check_record(record: Record) -> list[str]:
     force = force[finite] if not finite.all() else force
     head = force[: max(5, len(force) // 50)]
     baseline = float(np.median(head))
-    rise = float(np.max(np.abs(force - baseline)))
+    top, bottom = float(np.max(force)), float(np.min(force))
+    rise = max(top - baseline, baseline - bottom)  # max |F − baseline| (subtraction is monotone: the extremes' differences)
     noise = force_noise_N(force)
     if rise <= MIN_RISE_IN_NOISE * noise or rise == 0.0:
         raise RecordError(source, f"force never rises above noise (largest change {rise:.3g} N, noise {noise:.3g} N); is this the right column?", column="force_N")
@@ -241,7 +244,8 @@ def check_record(record: Record) -> list[str]:
     def spread(column: str) -> float:
         """The spread (max − min) of a column's finite values."""
         values = record.column(column)
-        values = values[np.isfinite(values)]
+        finite = np.isfinite(values)
+        values = values if finite.all() else values[finite]
         return float(np.ptp(values)) if values.size else 0.0
 
     if moving and not any(spread(c) > 0 for c in moving):
@@ -249,10 +253,11 @@ def check_record(record: Record) -> list[str]:
                                   "or a column scaled to zero?", column=moving[0])
     specimen = record.specimen  # d0 and l0 (or h0) required
     d0, area_mm2 = specimen.d0_mm, specimen.area0_mm2
-    peak_MPa = float(np.max(np.abs(force))) / area_mm2
+    peak_N = max(top, -bottom)  # max |F|
+    peak_MPa = peak_N / area_mm2
     lo, hi = PLAUSIBLE_STRESS_MPa
     if not lo <= peak_MPa <= hi:
-        raise RecordError(source, f"peak engineering stress {peak_MPa:.3g} MPa (force {np.max(np.abs(force)):.4g} N on d0 = {d0:g} mm) is outside {lo:g}–{hi:g} MPa; check units of force and diameter")
+        raise RecordError(source, f"peak engineering stress {peak_MPa:.3g} MPa (force {peak_N:.4g} N on d0 = {d0:g} mm) is outside {lo:g}–{hi:g} MPa; check units of force and diameter")
     warnings = list(record.warnings) + temperature_warnings(record)
     if record.meta.get("status") == STATUS_ABORTED:  # a fault ended the test: the curve ends there, and may not be one test's
         why = " ".join(str(record.meta.get("abort_reason") or "no reason recorded").split())

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.iso6892 import mad_sigma
+from flowcurve.identification.iso6892 import first_index, mad_sigma_of_differences
 
 UM_PER_MM = 1000.0
 
@@ -47,10 +47,10 @@ def scale_to_measured(displacement_mm, measured_final_mm: float) -> tuple[np.nda
 def first_loading(y, up_to: float, unit: str = "N") -> int:
     """Index of the first sample at or above ``up_to`` (the end of the first loading branch)."""
     y = np.asarray(y, dtype=float)
-    above = np.nonzero(y >= up_to)[0]
-    if above.size == 0:
+    above = first_index(lambda at: y[at] >= up_to, 0, y.size)
+    if above is None:
         raise IdentificationError(f"the loading curve never reaches {up_to:.4g} {unit}, the top of the fit window")
-    return int(above[0])
+    return above
 
 
 @dataclass
@@ -75,15 +75,16 @@ def strain_quantum_noise(strain) -> float:
     """Standard deviation of the reading error of a quantized strain signal: q/√12, q its
     smallest non-zero step (negligible for a signal that is not quantized)."""
     d = np.abs(np.diff(np.asarray(strain, dtype=float)))
-    d = d[np.isfinite(d) & (d > 0)]
-    return float(np.min(d)) / math.sqrt(12.0) if d.size else 0.0
+    real = np.isfinite(d) & (d > 0)  # the smallest of these, without gathering them into a copy
+    return float(np.min(d, where=real, initial=np.inf)) / math.sqrt(12.0) if real.any() else 0.0
 
 
 def stepped_fraction(reading) -> float:
     """The share of consecutive samples with the same reading: near 1 for an encoder whose step
     spans many samples, 0 for a signal that changes at every sample."""
     d = np.diff(np.asarray(reading, dtype=float))
-    d = d[np.isfinite(d)]
+    finite = np.isfinite(d)
+    d = d if finite.all() else d[finite]  # (every step finite: no copy)
     return float(np.mean(d == 0.0)) if d.size else 0.0
 
 
@@ -122,8 +123,9 @@ def reread_if_stepped(time_s, reading) -> tuple[np.ndarray, float | None]:
     interpolated between its counts on its finite samples (:func:`interpolate_steps`), with that
     step; any other reading (a noisy analogue one, a count finer than the motion) as it is, with None."""
     t, x = np.asarray(time_s, dtype=float), np.asarray(reading, dtype=float)
-    ok = np.flatnonzero(np.isfinite(t) & np.isfinite(x))
-    if ok.size < 3 or stepped_fraction(x[ok]) <= STEPPED_FRACTION:
+    finite = np.isfinite(t) & np.isfinite(x)
+    ok = slice(None) if finite.all() else np.flatnonzero(finite)  # every sample finite: read in place, no copy
+    if x[ok].size < 3 or stepped_fraction(x[ok]) <= STEPPED_FRACTION:
         return x, None
     steps = np.abs(np.diff(x[ok]))
     if not np.any(steps > 0):
@@ -261,16 +263,17 @@ def yield_onset_from_rate(time_s, force_N, levels: int = 400) -> float:
     f = np.asarray(force_N, dtype=float)
     if f.size < 8:
         raise IdentificationError(f"only {f.size} samples of the first loading: no yield estimate")
-    d = np.diff(f)
-    noise = mad_sigma(d) / math.sqrt(2.0)  # of the successive differences: σ√2
+    noise = mad_sigma_of_differences(f, 1) / math.sqrt(2.0)  # of the successive differences: σ√2
     envelope = np.maximum.accumulate(f)
     step = max(envelope[-1] / levels, 5.0 * noise)
     level = np.arange(step, envelope[-1], step)
     if level.size < 8:
         raise IdentificationError("the force rises too little above its noise for a yield estimate")
     times = t[np.searchsorted(envelope, level)]
-    period = float(np.median(np.diff(t)))
-    rate = 3.0 * step / np.maximum(times[3:] - times[:-3], period)
+    spans = times[3:] - times[:-3]
+    steps = np.diff(t)
+    # the sampling period floors each span; when every span is longer than the longest step it floors none (its median not needed)
+    rate = 3.0 * step / (spans if np.min(spans) > np.max(steps) else np.maximum(spans, float(np.median(steps))))
     peak = int(np.argmax(rate))
     below = np.nonzero(rate[peak:] < 0.5 * rate[peak])[0]
     return float(level[peak + int(below[0])]) if below.size else float(level[-1])

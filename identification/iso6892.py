@@ -24,17 +24,32 @@ def nan_argmax(values) -> int:
     return i if not np.isnan(values[i]) else int(np.nanargmax(values))
 
 
+def first_index(condition, start: int, stop: int, chunk: int = 4096) -> int | None:
+    """The first index i in [start, stop) where ``condition`` holds (None: nowhere); ``condition``
+    maps a slice of the samples to booleans, evaluated over doubling chunks, so a crossing early
+    in a long record (the elastic line's top, the 0.2 % offset) costs no pass over the rest."""
+    while start < stop:
+        end = min(stop, start + chunk)
+        hit = condition(slice(start, end))
+        i = int(np.argmax(hit))
+        if hit[i]:
+            return start + i
+        start, chunk = end, 2 * chunk
+    return None
+
+
 def max_force_index(force_N) -> int:
     """Index of the maximum force Fm (the first one on a flat top)."""
     force = np.asarray(force_N, dtype=float)
     return nan_argmax(force)
 
 
-def fracture_index(force_N) -> int:
+def fracture_index(force_N, i_m: int | None = None) -> int:
     """Index of the last sample before fracture: the sample before the largest single-step
-    force drop after Fm when that drop exceeds 20 % of Fm, else the last sample."""
+    force drop after Fm when that drop exceeds 20 % of Fm, else the last sample. ``i_m``: Fm's
+    index (:func:`max_force_index`) when the caller has it."""
     force = np.asarray(force_N, dtype=float)
-    i_m = max_force_index(force)
+    i_m = max_force_index(force) if i_m is None else i_m
     tail = force[i_m:]
     if tail.size < 2:
         return force.size - 1
@@ -51,15 +66,16 @@ def offset_yield_strength(strain, stress_MPa, E_MPa: float, offset: float = 0.00
     e = np.asarray(strain, dtype=float)
     s = np.asarray(stress_MPa, dtype=float)
     i_m = nan_argmax(s)
-    g = s[: i_m + 1] - E_MPa * (e[: i_m + 1] - offset)  # > 0 left of the offset line
-    begin = int(np.argmax(s >= start_MPa)) if start_MPa > 0 else 0
-    below = np.nonzero(g[begin:] <= 0)[0]
-    if below.size == 0:
+    def g(at):  # > 0 left of the offset line
+        return s[at] - E_MPa * (e[at] - offset)
+
+    begin = (first_index(lambda at: s[at] >= start_MPa, 0, s.size) or 0) if start_MPa > 0 else 0
+    k = first_index(lambda at: g(at) <= 0, begin, i_m + 1)
+    if k is None:
         raise IdentificationError(f"the curve never reaches {100 * offset:g} % plastic extension before maximum force: no Rp{100 * offset:g}")
-    k = begin + int(below[0])
     if k == 0:
         raise IdentificationError("the curve starts beyond the offset line: check the strain zero (toe)")
-    x = g[k - 1] / (g[k - 1] - g[k])  # linear interpolation between k−1 and k
+    x = g(k - 1) / (g(k - 1) - g(k))  # linear interpolation between k−1 and k
     return float(s[k - 1] + x * (s[k] - s[k - 1])), float(k - 1 + x)
 
 
@@ -81,13 +97,28 @@ def mad_sigma(values) -> float:
     return float(1.4826 * np.median(np.abs(v - np.median(v))))
 
 
+def mad_sigma_of_differences(values, order: int) -> float:
+    """:func:`mad_sigma` of ``np.diff(values, order)``, its k-th differences evaluated only where
+    mad_sigma reads them (every m-th past :data:`MAD_SAMPLES`): the same number without k passes
+    over a long record. Δᵏx[i] by np.diff's own recursion, Δᵏx[i] = Δᵏ⁻¹x[i + 1] − Δᵏ⁻¹x[i]."""
+    v = np.asarray(values, dtype=float)
+    size = v.size - order
+    if size <= MAD_SAMPLES:
+        return mad_sigma(np.diff(v, order))
+    at = np.arange(0, size, -(-size // MAD_SAMPLES))
+    parts = [v[at + j] for j in range(order + 1)]
+    for _ in range(order):
+        parts = [b - a for a, b in zip(parts[:-1], parts[1:])]
+    return mad_sigma(parts[0])
+
+
 def max_force_band(strain, stress_MPa, *, window: int = 50) -> tuple[float, float]:
     """(lowest, highest) strain of the samples within the noise of the maximum force: a flat
     maximum's plateau (ISO 6892-1 §13: Ag at its mid-point). Band: σ ≥ σ_max − 2√2·s, s the stress
     noise from third differences about the maximum, s = 1.4826·MAD(Δ³σ)/√20; noise-free, the
     maximum's own strain twice."""
     e, s = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
-    i_m = int(np.nanargmax(s))
+    i_m = nan_argmax(s)
     near = s[max(i_m - window, 0): i_m + window + 1]
     d3 = np.diff(near[np.isfinite(near)], 3)  # a smooth curve's third differences vanish, the noise's do not
     if d3.size < 3:
@@ -148,6 +179,8 @@ def yield_point(strain, stress_MPa, *, noise_MPa: float = 0.0, E_MPa: float | No
     run = np.maximum.accumulate(head)
     threshold = np.maximum(YIELD_DROP * run, YIELD_DROP_NOISE * noise_MPa)
     below = (run - head > threshold) & (run > start_MPa)
+    if not np.any(below[:-1] & below[1:]):
+        return None  # no drop that lasts (the test below only narrows them): no yield point
     if E_MPa is not None:  # ReH ends the elastic line: a drop from a maximum beyond 0.5 % plastic extension is a relaxation (a pause), not yield
         at_max = np.maximum.accumulate(np.where(head >= run, np.arange(head.size), 0))
         below &= 100.0 * (e[at_max] - run / E_MPa) <= MAX_YIELD_POINT_EXTENSION_PCT

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.iso6892 import first_index
 
 OFFSET_START = 0.05  # the offset point's x: the first y above this fraction of the largest y
 OFFSET_RISE = 0.15  # ... its y: that y plus this fraction (raised by OFFSET_STEP on a retry)
@@ -70,10 +71,10 @@ def tangency_index(x: np.ndarray, y: np.ndarray, raises: int = 0) -> int:
     """Index of the tangency point of the line from the offset point to the curve (§6.3): the
     highest local maximum of the tangent slope (2 rises before and 2 falls after, else 1)."""
     y_max = float(np.max(y))
-    start = np.flatnonzero(y > OFFSET_START * y_max)
-    if start.size == 0 or not y_max > 0:
+    start = first_index(lambda at: y[at] > OFFSET_START * y_max, 0, y.size)
+    if start is None or not y_max > 0:
         raise IdentificationError("SDAR: the record does not rise; no linear region")
-    x_off, y_off = x[start[0]], y[start[0]] + (OFFSET_RISE + OFFSET_STEP * raises) * y_max
+    x_off, y_off = x[start], y[start] + (OFFSET_RISE + OFFSET_STEP * raises) * y_max
     above = np.flatnonzero((y > y_off) & (x > x_off))
     if above.size < 3:
         raise IdentificationError(f"SDAR: the record never rises {100 * (OFFSET_RISE + OFFSET_STEP * raises):.0f} % of its range above the offset point: no tangency point")
@@ -216,10 +217,12 @@ def sdar(x, y) -> SdarFit:
     when there is no tangency point or fewer than 10 samples before it."""
     x0 = np.asarray(x, dtype=float)
     y0 = np.asarray(y, dtype=float)
-    ok = np.flatnonzero(np.isfinite(x0) & np.isfinite(y0))
+    finite = np.isfinite(x0) & np.isfinite(y0)
+    ok = np.arange(x0.size) if finite.all() else np.flatnonzero(finite)
     if ok.size < MIN_WINDOW_POINTS:
         raise IdentificationError(f"SDAR: only {ok.size} finite samples; at least {MIN_WINDOW_POINTS} are needed")
-    xs, ys = x0[ok] - x0[ok[0]], y0[ok] - y0[ok[0]]
+    x_ok, y_ok = (x0, y0) if ok.size == x0.size else (x0[ok], y0[ok])  # every sample finite: no copy of a long record
+    xs, ys = x_ok - x_ok[0], y_ok - y_ok[0]
     for raises in range(MAX_OFFSET_RAISES + 1):
         t = tangency_index(xs, ys, raises)
         x_t, y_t = xs[t], ys[t]
@@ -241,6 +244,6 @@ def sdar(x, y) -> SdarFit:
         raise IdentificationError(f"SDAR: its linear region ({j - i + 1} samples) is flatter than the secant from the start to its top: a stretch "
                                   "past yield, not the elastic line, which has too few samples (sample faster or give the modulus)")
     quality = {"noise": noise_metrics(xn, yn), "resolution": resolution_metrics(xn, yn), **fit_quality}
-    slope, intercept = np.polyfit(x0[ok][window], y0[ok][window], 1)
+    slope, intercept = np.polyfit(x_ok[window], y_ok[window], 1)
     return SdarFit(slope=float(slope), intercept=float(intercept), indices=ok[window], normalized_residual=resid,
                    offset_raises=raises, quality=quality)

@@ -39,7 +39,7 @@ MAX_STRAIN = 5.0
 
 def johnson_cook_static(eps_p, A, B, n):
     """Johnson–Cook static flow stress (2.19), first bracket: A + B·εp^n (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
+    eps_p = np.maximum(np.asarray(eps_p, dtype=float), 0.0)  # np.clip(…, 0, None) without its dispatch
     return A + B * np.power(eps_p, n)
 
 
@@ -211,6 +211,35 @@ GRID_STARTS = 4  # local fits started from the best basins of the global grid st
 MAX_EVALUATIONS = 500  # per local fit: a start crawling along a bound is cut short, the others finish
 
 
+FORWARD_STEP = float(np.finfo(float).eps) ** 0.5  # scipy's relative step of a 2-point difference
+
+
+def forward_jacobian(residual: Callable, x: np.ndarray, lo: np.ndarray, hi: np.ndarray, f0: np.ndarray | None = None) -> np.ndarray:
+    """The Jacobian of ``residual`` at ``x`` by forward differences, step for step scipy's
+    ``jac="2-point"`` within bounds (lo, hi), without its per-call overhead (the fits' largest cost).
+
+    J[:, i] = (r(x + h_i e_i) − r(x)) / h_i, h_i = √ε·max(1, |x_i|) signed as x_i (0 counts as +),
+    turned back where the step leaves the bounds, the distance to the farther bound where neither
+    side has room; returned Fortran-ordered (a transposed (n, m) array) as scipy's is, so the
+    solver's linear algebra rounds alike. x: (n,) values; residual: x → (m,) array; f0: r(x)
+    when the caller has it."""
+    f0 = residual(x) if f0 is None else f0
+    jt = np.empty((x.size, f0.size))
+    for i, (xi, low, high) in enumerate(zip(x.tolist(), lo.tolist(), hi.tolist())):  # a few constants: scalars, not arrays
+        size = abs(xi)
+        h = FORWARD_STEP * (1.0 if xi >= 0 else -1.0) * (size if size > 1.0 or size != size else 1.0)  # np.maximum(1, |x|), NaN kept
+        below, above = xi - low, high - xi
+        fits = abs(h) <= (above if above > below or above != above else below)  # np.maximum(below, above)
+        if not fits:
+            h = above if above >= below else -below
+        elif xi + h < low or xi + h > high:
+            h = -h
+        step = x.copy()
+        step[i] = xi + h
+        jt[i] = (residual(step) - f0) / ((xi + h) - xi)
+    return jt.T
+
+
 def _polish(spec: StaticForm, starts: list[dict[str, float]], eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> dict[str, float]:
     """Local bounded least squares (scipy, trust region) from every start; the lowest cost wins.
 
@@ -220,18 +249,24 @@ def _polish(spec: StaticForm, starts: list[dict[str, float]], eps: np.ndarray, s
     lo = np.array([spec.bounds[n][0] for n in spec.names])
     hi = np.array([spec.bounds[n][1] for n in spec.names])
 
+    last: list = [None, None]  # the last point evaluated and its residuals: the Jacobian at an accepted step starts there
+
     def residual(x):
-        """Weighted residuals of the law at ``x`` (1e12 where not finite)."""
-        with np.errstate(over="ignore", invalid="ignore"):
-            r = w * (spec.func(eps, *x) - sig)
-        return np.where(np.isfinite(r), r, 1e12)
+        """Weighted residuals of the law at ``x`` (1e12 where not finite); called under the caller's errstate."""
+        r = w * (spec.func(eps, *x) - sig)
+        last[:] = x.copy(), np.where(np.isfinite(r), r, 1e12)
+        return last[1]
+
+    def jacobian(x):
+        """:func:`forward_jacobian` at ``x``, from the residuals already evaluated there."""
+        return forward_jacobian(residual, x, lo, hi, f0=last[1].copy() if np.array_equal(last[0], x) else None)
 
     best_x, best_cost = None, np.inf
     for start in starts:
         x0 = np.clip([start[n] for n in spec.names], lo, hi)
         x0 = np.where(x0 <= lo, lo + 1e-9 * np.maximum(np.abs(lo), 1.0), x0)  # strictly inside for trf
         with np.errstate(all="ignore"):  # trial steps may overflow; such steps are rejected by the solver
-            sol = least_squares(residual, x0, bounds=(lo, hi), x_scale="jac", max_nfev=MAX_EVALUATIONS)
+            sol = least_squares(residual, x0, jac=jacobian, bounds=(lo, hi), x_scale="jac", max_nfev=MAX_EVALUATIONS)
         if np.isfinite(sol.cost) and sol.cost < best_cost:
             best_x, best_cost = sol.x, sol.cost
     if best_x is None:
@@ -276,12 +311,32 @@ def undetermined(spec, values: dict[str, float], stderr: dict[str, float | None]
     return out
 
 
-@lru_cache(maxsize=None)
-def _lmfit_model(law: str):
-    """The lmfit Model of the law's static form (made once per law: fits only read it)."""
+def _lmfit_refit(spec: StaticForm, start: dict[str, float], eps: np.ndarray, sig: np.ndarray, w: np.ndarray):
+    """lmfit's Levenberg–Marquardt from ``start`` within the bounds, for the constants' standard
+    errors, correlations, AIC and report: lmfit.Model.fit's residual (σ − law)·w and its report
+    (R² included), through ``lmfit.minimize``, which spares Model.fit's parameter copies (most
+    of its cost). Returns (lmfit's MinimizerResult, report text)."""
     import lmfit  # here, so `flowcurve --help` stays fast
 
-    return lmfit.Model(static_form(law).func, independent_vars=["eps_p"])
+    params = lmfit.Parameters()
+    for name in spec.names:
+        lo, hi = spec.bounds[name]
+        params.add(name, value=float(np.clip(start[name], lo, hi)), min=lo, max=hi)
+
+    def residual(p):
+        """(σ − law)·w, Model.fit's residual; non-finite law values end the fit as Model.fit's do."""
+        model = spec.func(eps, **p.valuesdict())
+        if not np.all(np.isfinite(model)):
+            raise ValueError("The model function generated NaN values and the fit aborted! Please check your model function "
+                             "and/or set boundaries on parameters where applicable.")
+        diff = sig - model
+        diff *= w
+        return diff
+
+    best = lmfit.minimize(residual, params, max_nfev=MAX_EVALUATIONS)
+    law = spec.func(eps, **best.params.valuesdict())
+    best.rsquared = 1.0 - ((sig - law) ** 2).sum() / max(1e-15, ((sig - sig.mean()) ** 2).sum())  # R² as Model.fit reports it
+    return best, f"[[Model]]\n    Model({spec.func.__name__})\n{lmfit.fit_report(best)}"
 
 
 def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points: Iterable[Sequence[float]] = (),
@@ -305,12 +360,7 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     if grid is None:
         raise IdentificationError(f"the data do not harden (stress does not rise with strain): a {law} law cannot be fitted")
     polished = _polish(spec, grid + [spec.data_start(eps, sig)], eps, sig, w)
-    model = _lmfit_model(law)
-    params = model.make_params()
-    for name in spec.names:
-        lo, hi = spec.bounds[name]
-        params[name].set(value=float(np.clip(polished[name], lo, hi)), min=lo, max=hi)
-    best = model.fit(sig, params, eps_p=eps, weights=w, nan_policy="raise", max_nfev=MAX_EVALUATIONS)
+    best, report = _lmfit_refit(spec, polished, eps, sig, w)
     values = {name: float(best.params[name].value) for name in spec.names}
     stderr = {name: (None if best.params[name].stderr is None else float(best.params[name].stderr)) for name in spec.names}
     correl = {name: {k: float(v) for k, v in (best.params[name].correl or {}).items()} for name in spec.names}
@@ -330,7 +380,7 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
                         "do not read or compare them one by one (a law with fewer constants may be determined)")
     return HardeningFit(law=law, method="least_squares", params=values, stderr=stderr, correlations=correl,
                         fit_error_pct=max_pct, rms_error_pct=rms_pct,
-                        strain_range=(float(np.min(eps)), float(np.max(eps))), report=best.fit_report(), warnings=warnings,
+                        strain_range=(float(np.min(eps)), float(np.max(eps))), report=report, warnings=warnings,
                         aic=float(best.aic))
 
 
@@ -436,15 +486,33 @@ THREE_POINT_LAWS = ("johnson_cook", "swift", "voce")  # the laws three_point_fit
 
 
 def _root(g: Callable[[float], float], lo: float, hi: float, what: str) -> float:
-    """Bracketing root of a monotone g on [lo, hi] (log-spaced scan, then Brent)."""
+    """Bracketing root of a monotone g on [lo, hi] (log-spaced scan, then Brent). The scan
+    evaluates g on the whole grid at once (g takes arrays); the bracket is then checked point by
+    point, so a sign that the vectorised arithmetic rounds the other way falls back to the scan
+    point by point."""
     grid = np.geomspace(lo, hi, 400)
-    vals = np.array([g(x) for x in grid])
+    with np.errstate(all="ignore"):  # inf or nan where g has none: left out of the brackets
+        vals = np.asarray(g(grid), dtype=float)
+    try:
+        return _bracketed_root(g, grid, vals)
+    except (ValueError, IndexError):  # no bracket, or brentq: the points' own values do not bracket a root
+        vals = np.array([g(x) for x in grid])
+        if not _brackets(vals).size:
+            raise IdentificationError(f"three-point fit: no {what} makes the law pass through the three points (the points are not consistent with this law)") from None
+        return _bracketed_root(g, grid, vals)
+
+
+def _brackets(vals: np.ndarray) -> np.ndarray:
+    """The cells of a grid where the finite values ``vals`` change sign (or reach 0)."""
     sign = np.sign(vals)
-    idx = np.nonzero(np.isfinite(vals[:-1]) & np.isfinite(vals[1:]) & (sign[:-1] * sign[1:] <= 0))[0]
-    if idx.size == 0:
-        raise IdentificationError(f"three-point fit: no {what} makes the law pass through the three points (the points are not consistent with this law)")
-    i = idx[0]
-    if vals[i] == 0:
+    return np.nonzero(np.isfinite(vals[:-1]) & np.isfinite(vals[1:]) & (sign[:-1] * sign[1:] <= 0))[0]
+
+
+def _bracketed_root(g: Callable[[float], float], grid: np.ndarray, vals: np.ndarray) -> float:
+    """Brent's root of g in the first cell of ``grid`` where ``vals`` (g on the grid) change sign
+    (IndexError: none)."""
+    i = _brackets(vals)[0]
+    if g(grid[i]) == 0:
         return float(grid[i])
     from scipy.optimize import brentq
 

@@ -11,7 +11,7 @@ from flowcurve.identification.laws.voce import Voce
 
 def hockett_sherby(eps_p, sigma_s, sigma0, N, p):
     """Hockett–Sherby: σs − (σs − σ0)·exp(−N·εp^p) (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
+    eps_p = np.maximum(np.asarray(eps_p, dtype=float), 0.0)  # np.clip(…, 0, None) without its dispatch
     return sigma_s - (sigma_s - sigma0) * np.exp(-N * np.power(eps_p, p))
 
 
@@ -42,8 +42,7 @@ class HockettSherby(StaticLaw):
         s_s, drop, ss = linear_on_grid(X, sig, w, nonnegative_c0=True)
         with np.errstate(invalid="ignore"):  # a row whose X is flat has no line: nan, dropped below
             s0 = s_s - drop
-        cands = [{"sigma_s": s_s[i], "sigma0": s0[i], "N": N[i], "p": p[i]} for i in range(p.size)]
-        return best_rows(ss, cands, (drop > 0) & (s0 >= 0))
+        return best_rows(ss, lambda i: {"sigma_s": s_s[i], "sigma0": s0[i], "N": N[i], "p": p[i]}, (drop > 0) & (s0 >= 0))
 
     def data_start(self, eps, sig):
         """Voce's start read as p = 1: σs = σ0 + Q, N = b."""

@@ -10,7 +10,7 @@ from flowcurve.identification.laws.static import STRAIN_GRID_POINTS, StaticLaw, 
 
 def hollomon(eps_p, K, n):
     """Hollomon: K·εp^n (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
+    eps_p = np.maximum(np.asarray(eps_p, dtype=float), 0.0)  # np.clip(…, 0, None) without its dispatch
     return K * np.power(eps_p, n)
 
 
@@ -37,7 +37,7 @@ class Hollomon(StaticLaw):
         with np.errstate(divide="ignore", invalid="ignore"):
             K = (X @ (w2 * sig)) / ((X**2) @ w2)
             ss = ((K[:, None] * X - sig) ** 2) @ w2
-        return best_rows(ss, [{"K": K[i], "n": grid[i]} for i in range(grid.size)], K > 0)
+        return best_rows(ss, lambda i: {"K": K[i], "n": grid[i]}, K > 0)
 
     def data_start(self, eps, sig):
         """ln σ = ln K + n·ln εp over the points with εp > 0 (log-linear)."""

@@ -11,7 +11,7 @@ from flowcurve.identification.laws.static import STRAIN_GRID_POINTS, StaticLaw, 
 
 def ludwik(eps_p, sigma0, K, n):
     """Ludwik: σ0 + K·εp^n (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
+    eps_p = np.maximum(np.asarray(eps_p, dtype=float), 0.0)  # np.clip(…, 0, None) without its dispatch
     return sigma0 + K * np.power(eps_p, n)
 
 
@@ -35,7 +35,7 @@ class Ludwik(StaticLaw):
         """n over 0.005–3 (log grid); σ0 ≥ 0 and K by weighted linear least squares."""
         grid = np.geomspace(0.005, 3.0, STRAIN_GRID_POINTS)
         s0, K, ss = linear_on_grid(np.power(eps[None, :], grid[:, None]), sig, w, nonnegative_c0=True)
-        return best_rows(ss, [{"sigma0": s0[i], "K": K[i], "n": grid[i]} for i in range(grid.size)], K > 0)
+        return best_rows(ss, lambda i: {"sigma0": s0[i], "K": K[i], "n": grid[i]}, K > 0)
 
     def data_start(self, eps, sig):
         """σ0 just below the first point, K and n from the log–log slope of σ − σ0."""

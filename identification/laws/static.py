@@ -8,6 +8,7 @@ record (:mod:`.hardening`) use them, and any series fit can use :meth:`Law.guess
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Callable, ClassVar
 
 import numpy as np
@@ -62,7 +63,7 @@ class StaticLaw(Law):
         """The static law's flow stress, MPa (rate and temperature ignored)."""
         return type(self).function(eps_p, **{name: values[name] for name in self.names})
 
-    def profile(self, eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, list[dict[str, float]]]:
+    def profile(self, eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, Sequence[dict[str, float]]]:
         """(weighted residual sum of squares, constants) over a grid of the nonlinear constant(s),
         the linear ones solved exactly (variable projection); inf where a row breaks a bound."""
         raise NotImplementedError
@@ -78,7 +79,27 @@ class StaticLaw(Law):
         return cands[int(np.argmin(ss))] if np.any(np.isfinite(ss)) else self.data_start(eps, sig)
 
 
-def best_rows(ss: np.ndarray, cands: list[dict], ok: np.ndarray) -> tuple[np.ndarray, list[dict[str, float]]]:
-    """A profile's result: inf where a row breaks a bound or is not finite, constants as floats."""
+class Rows(Sequence):
+    """A profile's candidate constants, row i (as floats) built when it is read: a profile scans
+    hundreds of rows, a fit starts from a few of them."""
+
+    def __init__(self, size: int, row: Callable[[int], dict]):
+        self.size, self.row = size, row
+
+    def __len__(self) -> int:
+        return self.size
+
+    def __getitem__(self, i):
+        """Row ``i`` as {name: float}; a slice gives a list of them."""
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(self.size))]
+        if not -self.size <= i < self.size:
+            raise IndexError(f"row {i} of {self.size}")
+        return {k: float(v) for k, v in self.row(int(i) % self.size).items()}
+
+
+def best_rows(ss: np.ndarray, row: Callable[[int], dict], ok: np.ndarray) -> tuple[np.ndarray, Rows]:
+    """A profile's result: inf where a row breaks a bound or is not finite; the constants of row i
+    as ``row(i)`` gives them, as floats, built only for the rows read (:class:`Rows`)."""
     ss = np.where(ok & np.isfinite(ss), ss, np.inf)
-    return ss, [{k: float(v) for k, v in c.items()} for c in cands]
+    return ss, Rows(ss.size, row)

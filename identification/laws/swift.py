@@ -11,7 +11,7 @@ from flowcurve.identification.laws.static import STRAIN_GRID_POINTS, StaticLaw, 
 
 def swift(eps_p, K, eps0, n):
     """Swift hardening: K·(ε0 + εp)^n (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
+    eps_p = np.maximum(np.asarray(eps_p, dtype=float), 0.0)  # np.clip(…, 0, None) without its dispatch
     return K * np.power(eps0 + eps_p, n)
 
 
@@ -41,7 +41,7 @@ class Swift(StaticLaw):
         with np.errstate(over="ignore", invalid="ignore"):
             pred = np.exp(lnK)[:, None] * np.power(base, n[:, None])
         ss = np.where(np.isfinite(pred).all(axis=1), ((pred - sig) ** 2) @ (w**2), np.inf)
-        return best_rows(ss, [{"K": float(np.exp(lnK[i])), "eps0": grid[i], "n": n[i]} for i in range(grid.size)], n > 0)
+        return best_rows(ss, lambda i: {"K": float(np.exp(lnK[i])), "eps0": grid[i], "n": n[i]}, n > 0)
 
     def data_start(self, eps, sig):
         """ε0 1e-3; K and n from ln σ against ln εp (log-linear)."""

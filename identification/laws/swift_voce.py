@@ -44,7 +44,7 @@ class SwiftVoce(StaticLaw):
         s_curve, v_curve = swift(eps, **rows[0]), voce(eps, **rows[1])
         pred = ALPHA_GRID[:, None] * s_curve[None, :] + (1.0 - ALPHA_GRID[:, None]) * v_curve[None, :]
         ss = ((pred - sig) ** 2) @ (w**2)
-        return best_rows(ss, [{"alpha": a, **rows[0], **rows[1]} for a in ALPHA_GRID], np.ones_like(ss, dtype=bool))
+        return best_rows(ss, lambda i: {"alpha": ALPHA_GRID[i], **rows[0], **rows[1]}, np.ones_like(ss, dtype=bool))
 
     def data_start(self, eps, sig):
         """Half Swift's start, half Voce's."""

@@ -10,7 +10,7 @@ from flowcurve.identification.laws.static import STRAIN_GRID_POINTS, StaticLaw, 
 
 def voce(eps_p, sigma0, Q, b):
     """Voce saturation hardening: σ0 + Q·(1 − exp(−b·εp)) (MPa)."""
-    eps_p = np.clip(np.asarray(eps_p, dtype=float), 0.0, None)
+    eps_p = np.maximum(np.asarray(eps_p, dtype=float), 0.0)  # np.clip(…, 0, None) without its dispatch
     return sigma0 + Q * (1.0 - np.exp(-b * eps_p))
 
 
@@ -35,7 +35,7 @@ class Voce(StaticLaw):
         span = max(np.max(eps), 1e-6)
         grid = np.geomspace(0.05 / span, 2000.0 / span, STRAIN_GRID_POINTS)
         s0, Q, ss = linear_on_grid(-np.expm1(-grid[:, None] * eps[None, :]), sig, w, nonnegative_c0=True)
-        return best_rows(ss, [{"sigma0": s0[i], "Q": Q[i], "b": grid[i]} for i in range(grid.size)], Q > 0)
+        return best_rows(ss, lambda i: {"sigma0": s0[i], "Q": Q[i], "b": grid[i]}, Q > 0)
 
     def data_start(self, eps, sig):
         """σ0 just below the first point, Q the rise to the top, 1/b the strain at 63 % of it."""

@@ -31,7 +31,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from flowcurve.identification.iso6892 import nan_argmax
+from flowcurve.identification.iso6892 import first_index, nan_argmax
 
 STANDARD_TENSION = "ISO 6892-1:2019"
 STANDARD_HEATED = "ISO 6892-2:2018"
@@ -259,9 +259,11 @@ def _is_number(text: str) -> bool:
 def _elastic_stretch(stress_MPa: np.ndarray, window_MPa: Sequence[float], i_m: int) -> np.ndarray:
     """Indices of the first contiguous stretch before the maximum whose stress lies in the window."""
     lo, hi = window_MPa
-    sel = np.flatnonzero((stress_MPa[: i_m + 1] >= lo) & (stress_MPa[: i_m + 1] <= hi))
-    gaps = np.flatnonzero(np.diff(sel) > 1)
-    return sel[: gaps[0] + 1] if gaps.size else sel
+    first = first_index(lambda at: (stress_MPa[at] >= lo) & (stress_MPa[at] <= hi), 0, i_m + 1)
+    if first is None:
+        return np.zeros(0, dtype=np.intp)
+    after = first_index(lambda at: ~((stress_MPa[at] >= lo) & (stress_MPa[at] <= hi)), first, i_m + 1)  # the stretch's end: read no further
+    return np.arange(first, i_m + 1 if after is None else after)
 
 
 def _slope(t: np.ndarray, y: np.ndarray) -> float | None:
@@ -284,9 +286,10 @@ def slope_u(t, y, *, quantum: float = 0.0, time_u_s: float = 0.0) -> tuple[float
     if t.size < MIN_PHASE_SAMPLES or np.ptp(t) <= 0:
         return None
     dt = t - t.mean()
+    dy = y - y.mean()
     sxx = np.einsum("i,i->", dt, dt)  # einsum, not np.dot: BLAS threads on a busy machine cost 50× a plain loop
-    b = float(np.einsum("i,i->", dt, y - y.mean()) / sxx)  # least squares: Σ(t − t̄)(y − ȳ) / Σ(t − t̄)²
-    r = y - y.mean() - b * dt
+    b = float(np.einsum("i,i->", dt, dy) / sxx)  # least squares: Σ(t − t̄)(y − ȳ) / Σ(t − t̄)²
+    r = dy - b * dt
     u_res = math.sqrt(np.einsum("i,i->", r, r) / (t.size - 2) / sxx)
     u_read = math.sqrt((quantum ** 2 / 12.0 + (b * time_u_s) ** 2) / sxx)
     if quantum > 0:  # q²/(√6·|b|·T²): q/(√6·T) per quantum crossed
@@ -298,10 +301,11 @@ def reading_quantum(values) -> float:
     """A channel's reading quantum estimated from the data: its smallest non-zero step (steps below float
     noise, 1e-9 of the values' span, left out); 0 with fewer than two distinct values."""
     v = np.asarray(values, dtype=float)
-    v = v[np.isfinite(v)]
+    finite = np.isfinite(v)
+    v = v if finite.all() else v[finite]  # (every value finite: no copy)
     steps = np.abs(np.diff(v))
-    steps = steps[steps > 1e-9 * (np.ptp(v) if v.size else 0.0)]
-    return float(steps.min()) if steps.size else 0.0
+    real = steps > 1e-9 * (np.ptp(v) if v.size else 0.0)  # the steps above float noise
+    return float(np.min(steps, where=real, initial=np.inf)) if real.any() else 0.0
 
 
 def elastic_stress_rate(time_s, stress_MPa, window_MPa: Sequence[float]) -> float | None:
@@ -334,8 +338,8 @@ def phase_bounds(strain, stress_MPa, *, window_MPa: Sequence[float], Rp_MPa: flo
         end = i_h + int(past[0]) if past.size else i_m
         out["yield"] = [i_h, end]
     elif Rp_MPa is not None:
-        reach = np.flatnonzero(s[start: i_m + 1] >= Rp_MPa)
-        end = start + int(reach[0]) if reach.size else i_m
+        reach = first_index(lambda at: s[at] >= Rp_MPa, start, i_m + 1)
+        end = i_m if reach is None else reach
         out["yield"] = [start, max(end, start + MIN_PHASE_SAMPLES - 1)]
     else:
         out["yield"] = None
@@ -453,9 +457,10 @@ def command_segment(time_s, events, i_max: int) -> tuple[int, int, bool]:
     t0 = max(starts) if starts else -math.inf
     ends = [e.time_s for e in events or () if e.name in ("start", "stop") and e.time_s > t0]
     t1 = min(ends) if ends else math.inf
-    inside = np.flatnonzero((t >= t0) & (t <= t1))
-    inside = inside[inside <= i_max]
-    return (int(inside[0]), int(inside[-1]), bool(starts)) if inside.size else (0, int(i_max), False)
+    inside = (t[: i_max + 1] >= t0) & (t[: i_max + 1] <= t1)  # (the samples after Fm never count: not read)
+    if not inside.any():
+        return 0, int(i_max), False
+    return int(np.argmax(inside)), int(inside.size - 1 - np.argmax(inside[::-1])), bool(starts)
 
 
 def _num(value) -> float | None:

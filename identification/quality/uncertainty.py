@@ -372,8 +372,9 @@ def line_windows_E(strain, stress_MPa, window_MPa) -> dict[str, float]:
     lo, hi = float(window_MPa[0]), float(window_MPa[1])
     mid = 0.5 * (lo + hi)
     out = {}
+    inside = np.flatnonzero((stress[:top] >= lo) & (stress[:top] <= hi) & np.isfinite(strain[:top]))  # one pass; each half from it
     for name, (a, b) in (("the window's lower half", (lo, mid)), ("the window's upper half", (mid, hi))):
-        on = np.flatnonzero((stress[:top] >= a) & (stress[:top] <= b) & np.isfinite(strain[:top]))
+        on = inside[(stress[inside] >= a) & (stress[inside] <= b)]
         if on.size >= 4 and np.ptp(stress[on]) > 0:
             slope = np.polyfit(stress[on], strain[on], 1)[0]  # ε = c + σ/E
             if slope > 0:

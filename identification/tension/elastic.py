@@ -110,6 +110,18 @@ def _line_without_samples(inp: _Inputs, E: float, why: str, *, scale: bool, nois
                         scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings)
 
 
+def _line_in_window(strain, eng_stress, window_MPa, line_points: int, how: str, auto: ModulusFit | None) -> ModulusFit:
+    """The line regressed over a step's window, named by how the window was found (``how``); an
+    automatic fit's quality checks carried over and its relative standard error where larger."""
+    mod = fit_modulus(strain, eng_stress, window_MPa, min_points=line_points)
+    mod.source = how
+    if auto is not None:
+        mod.quality = auto.quality
+        mod.sdar_failed = auto.sdar_failed
+        mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
+    return mod
+
+
 def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_reference: str, E_MPa: float | None,
                   toe: bool, scale: bool, modulus_method: str = DEFAULT_MODULUS_METHOD) -> _ElasticLine:
     """E, the toe and Rp0.2, which depend on each other through the window: iterated to a fixed point."""
@@ -126,7 +138,7 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
     disp0 = src["disp"]
     toe_mm, scale_factor = 0.0, None
     unresolved = None  # the line's fit when it was not resolved and the handbook E took its place (kept from then on)
-    strain0, sdar_memo = disp0 / length, {}
+    strain0, sdar_memo, previous = disp0 / length, {}, None
     for step in range(6):
         try:
             window_MPa, line_points, how, auto, ref = _modulus_window(
@@ -139,18 +151,16 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
                     return _line_without_samples(inp, E_MPa if E_MPa is not None else handbook_E, str(exc), scale=scale, noise_MPa=noise_MPa)
                 raise
             break  # no line below the handbook E's Rp0.2 either: the last step's window and Rp0.2 stand
+        if previous == (window_MPa, line_points, how, auto):
+            break  # the last step's window, method and automatic fit (SDAR's do not depend on the reference): its toe, line and Rp0.2 again
+        previous = (window_MPa, line_points, how, auto)
         disp = disp0
         if toe:
             disp, toe_mm = compensate_toe(disp0, force, window_N=(window_MPa[0] * inp.s0, window_MPa[1] * inp.s0), min_points=line_points)
         if src["scalable"] and scale and inp.lu is not None:
             disp, scale_factor = scale_to_measured(disp, inp.lu - inp.l0)  # (3.1) K_l = Δl_p / max Δl
         strain = disp / length
-        mod = fit_modulus(strain, eng_stress, window_MPa, min_points=line_points)
-        mod.source = how
-        if auto is not None:
-            mod.quality = auto.quality
-            mod.sdar_failed = auto.sdar_failed
-            mod.E_stderr_MPa = max(mod.E_stderr_MPa, auto.E_stderr_MPa * mod.E_MPa / auto.E_MPa) if np.isfinite(mod.E_stderr_MPa) else auto.E_stderr_MPa
+        mod = _line_in_window(strain, eng_stress, window_MPa, line_points, how, auto)
         E = _chosen_modulus(mod, E_MPa, handbook_E, given_window=not automatic)
         if unresolved is None and handbook_E is not None and E == mod.E_MPa and not _resolved(mod):
             unresolved = replace(mod)
@@ -175,7 +185,7 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
 def _line_checks(source: str, strain, E: float, unresolved: ModulusFit | None) -> list[str]:
     """The line's strain checked for units (an error past MAX_STRAIN); warnings for an unresolved
     line (the handbook E took its place) and for an E far from any metal's."""
-    if np.nanmax(np.abs(strain)) > MAX_STRAIN:
+    if max(np.nanmax(strain), -np.nanmin(strain)) > MAX_STRAIN:  # max |e| from the extremes: no |e| array of the record
         raise IdentificationError(f"{source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
     warnings: list[str] = []
     if unresolved is not None:

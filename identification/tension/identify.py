@@ -27,7 +27,7 @@ from flowcurve.identification.tension.necking import neck_corrections
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import TensionHardening, TensionResult
 from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
-from flowcurve.identification.tension.values import FIT_POINTS, FRACTURE_POINT_MODES, HARDENING_METHODS, MIN_YIELD_OFFSET, MODULUS_REFERENCES, TRUE_STRESS_FORMS, TRUE_STRESS_SPLIT_PCT, _check_window, _increasing, bulk_modulus, check_fit_range, choose_fracture_variant, fracture_index, reaches_fracture, true_plastic_strain, true_stress_constant_volume, true_stress_gost, uniform_error_pct, without_fracture_values
+from flowcurve.identification.tension.values import FIT_POINTS, FRACTURE_POINT_MODES, HARDENING_METHODS, MIN_YIELD_OFFSET, MODULUS_REFERENCES, TRUE_STRESS_FORMS, TRUE_STRESS_SPLIT_PCT, _check_window, _increasing, bulk_modulus, check_fit_range, choose_fracture_variant, reaches_fracture, true_plastic_strain, true_stress_constant_volume, true_stress_gost, uniform_error_pct, without_fracture_values
 from flowcurve.identification.tension.inputs import _Inputs, _inputs
 from flowcurve.identification.tension.elastic import _ElasticLine, _elastic_line, _resolved, sdar_warnings
 
@@ -130,8 +130,8 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
                         "Rp0.2 lies on the Lüders plateau; report ReH/ReL (ISO 6892-1); the plateau is left out of the hardening fit")
     e_m = float(np.mean(iso6892.max_force_band(strain, eng_stress)))  # ISO 6892-1 §13: a flat maximum's mid-point
     Ag = float(iso6892.plastic_extension_pct(e_m, inp.Rm, E))
-    i_k = fracture_index(force)
-    At = float(100.0 * strain[i_k]) if reaches_fracture(force) else None  # ISO 6892-1 3.6.6: elastic and plastic
+    i_k = inp.i_k
+    At = float(100.0 * strain[i_k]) if reaches_fracture(force, i_k) else None  # ISO 6892-1 3.6.6: elastic and plastic
     if inp.lu is not None:
         A, A_method = iso6892.elongation_after_fracture_pct(inp.l0, inp.lu), "measured gauge length after fracture (post.lu_mm)"
     elif At is not None:
@@ -190,7 +190,7 @@ def _true_curve(inp: _Inputs, line: _ElasticLine, true_stress: str, poisson: flo
     uni = slice(0, i_m + 1)
     ep_u, sig_u = _increasing(eps_p[uni], sig_t[uni])
     in_range = ep_u >= MIN_YIELD_OFFSET  # the flow curve from Rp0.2 on, as for compression; elastic jitter left out
-    curve = pd.DataFrame({"true_plastic_strain": ep_u[in_range], "true_stress_MPa": sig_u[in_range]})
+    curve = pd.DataFrame({"true_plastic_strain": ep_u[in_range], "true_stress_MPa": sig_u[in_range]}, copy=False)  # fresh arrays: no copy
     sig_t_rp = float(np.interp(MIN_YIELD_OFFSET, ep_u, sig_u)) if ep_u[-1] > MIN_YIELD_OFFSET else None
     return _TrueCurve(strain=strain, log_strain=log_strain, sig_t=sig_t, eps_p=eps_p, eps_u=float(log_strain[i_m]), ep_u=ep_u, sig_u=sig_u,
                       curve=curve, sig_t_rp=sig_t_rp, eps_p_at_Rm=float(eps_p[i_m]), E_specimen=E_s, warnings=[note] if note else [])
@@ -277,11 +277,11 @@ def _fit_laws(grid, fit_sig, extra: list, three_points: list | None, fracture_po
     return fits, variants, choices, warnings
 
 
-def _hardening_fits(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: dict, *, neck: str, law: str, hardening: str,
-                    fracture_weight: float | None, fit_range, fracture_point: str) -> _Hardening:
-    """The hardening laws fitted to the uniform range (and the fracture point); the main one chosen."""
+def _hardening_fits(inp: _Inputs, iso: _IsoResults, true: _TrueCurve, fracture: dict, points: tuple, *, neck: str, law: str, hardening: str,
+                    fracture_weight: float | None, fracture_point: str) -> _Hardening:
+    """The hardening laws fitted to the uniform range's ``points`` (:func:`_fit_points`) and the fracture point; the main one chosen."""
     warnings: list[str] = []
-    grid, fit_sig, fit_lo = _fit_points(inp, iso, true, fit_range)
+    grid, fit_sig, fit_lo = points
     weight = math.sqrt(FIT_POINTS) if fracture_weight is None else float(fracture_weight)
     extra = [(fracture["true_strain"], fracture[neck]["stress_MPa"], weight)] if fracture else []
     if fracture_point == "include" and not extra:
@@ -318,12 +318,13 @@ def _strain_zero(inp: _Inputs, line: _ElasticLine, hard: _Hardening, law: str) -
 
 def _curves(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, fracture: dict, hard: _Hardening, neck: str) -> dict[str, pd.DataFrame]:
     """The intermediate curves for plots: raw and corrected diagram, engineering, true, fit, fracture point
-    (the record-long ones share the identification's arrays: copy=False spares stacking them into blocks)."""
+    (the record-long ones share the identification's arrays: copy=False spares stacking them into blocks; the raw
+    diagram is a column selection, already a copy: a lazy one under pandas' copy-on-write, a taken one before it)."""
     data, uni = inp.data, slice(0, inp.i_m + 1)
     eps_end = fracture.get("true_strain", float(hard.grid[-1]))
     fit_eps = np.linspace(0.0, eps_end, 200)
     curves = {
-        "raw_diagram": data[[c for c in ("time_s", "force_N", "crosshead_mm", "extensometer_mm") if c in data.columns]].copy(),
+        "raw_diagram": data[[c for c in ("time_s", "force_N", "crosshead_mm", "extensometer_mm") if c in data.columns]],  # a selection is its own copy
         "corrected_diagram": pd.DataFrame({"elongation_mm": line.disp, "force_N": inp.force}, copy=False),
         "engineering": pd.DataFrame({"engineering_strain": line.strain, "engineering_stress_MPa": inp.eng_stress}, copy=False),
         "true": pd.DataFrame({"true_strain": true.log_strain[uni], "true_plastic_strain": true.eps_p[uni], "true_stress_MPa": true.sig_t[uni]}, copy=False),
@@ -455,9 +456,10 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
     iso = _iso_results(inp, line)
     true = _true_curve(inp, line, true_stress, poisson)
     fracture, neck_warnings = _neck_correction(inp, iso, true)
-    law, law_choice = resolve_law(law, *_fit_points(inp, iso, true, fit_range)[:2])  # --law best: chosen on the uniform range
-    hard = _hardening_fits(inp, iso, true, fracture, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
-                           fit_range=fit_range, fracture_point=fracture_point)
+    points = _fit_points(inp, iso, true, fit_range)  # the uniform range resampled: the law chosen on it (--law best) and fitted to it
+    law, law_choice = resolve_law(law, *points[:2])
+    hard = _hardening_fits(inp, iso, true, fracture, points, neck=neck, law=law, hardening=hardening, fracture_weight=fracture_weight,
+                           fracture_point=fracture_point)
     hard, start_warnings = _strain_zero(inp, line, hard, law)
     hard.main.law_choice = law_choice  # the main fit's copy only (result.json's hardening)
     warnings = (inp.warnings + line.warnings + sdar_warnings(line.mod) + iso.warnings + true.warnings + _true_stress_warnings(inp, line, true, true_stress) + neck_warnings

@@ -27,22 +27,23 @@ def _check_post_dimensions(record: Record, d0: float, l0: float, lu: float | Non
             raise RecordError(record.source, f"{name} = {d:g} mm (post.{name}_mm{', --dk' if name == 'dk' else ''}) is larger than d0 = {d0:g} mm (specimen.d0_mm, --d0): a specimen does not thicken in tension")
 
 
-def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndarray, l0: float, options: dict) -> dict:
-    """Displacement (mm), the length it refers to (mm) and how it was obtained."""
+def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndarray, l0: float, options: dict, i_k: int) -> dict:
+    """Displacement (mm), the length it refers to (mm) and how it was obtained; ``i_k``: the
+    fracture's index (:func:`.values.fracture_index` of ``force``), up to which a channel must have values."""
     has_ext = record.has("extensometer_mm")
     if use_extensometer and not has_ext:
         raise RecordError(record.source, "use_extensometer was requested but the record has no extensometer channel", column="extensometer_mm")
     warnings: list[str] = []
     if has_ext and use_extensometer is not False:
         ext = record.column("extensometer_mm")
-        gaps = np.nonzero(~np.isfinite(ext[: fracture_index(force) + 1]))[0]
+        gaps = np.nonzero(~np.isfinite(ext[: i_k + 1]))[0]
         if gaps.size:
             message = f"the extensometer channel has no value from sample {gaps[0] + 1} on (removed before fracture?)"
             if not record.has("crosshead_mm"):
                 raise RecordError(record.source, message + "; the record has no crosshead column to identify from instead", column="extensometer_mm")
             if use_extensometer:
                 raise RecordError(record.source, message + "; identify from the crosshead instead (use_extensometer=False)", column="extensometer_mm")
-            fallback = _strain_source(record, False, force, l0, options)
+            fallback = _strain_source(record, False, force, l0, options, i_k)
             fallback["warnings"].insert(0, message + ": the crosshead is used instead")
             return fallback
         gauge = record.specimen.extensometer_gauge_mm or l0
@@ -52,7 +53,7 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
     if not record.has("crosshead_mm"):
         raise RecordError(record.source, "the record has no crosshead column: its strain can only come from the extensometer (leave out --no-extensometer)", column="crosshead_mm")
     cross = record.column("crosshead_mm")
-    gaps = np.nonzero(~np.isfinite(cross[: fracture_index(force) + 1]))[0]
+    gaps = np.nonzero(~np.isfinite(cross[: i_k + 1]))[0]
     if gaps.size:
         raise RecordError(record.source, f"the crosshead channel has no value at sample {gaps[0] + 1} (of {gaps.size} before fracture); the strain cannot be followed through the gap", column="crosshead_mm")
     step = None
@@ -84,6 +85,7 @@ class _Inputs:
     force: np.ndarray
     eng_stress: np.ndarray
     i_m: int  # index of the maximum force
+    i_k: int  # index of the last sample before fracture (:func:`.values.fracture_index`)
     Fm: float
     Rm: float
     src: dict  # :func:`_strain_source`: displacement, its length, how it was obtained
@@ -96,6 +98,15 @@ class _Inputs:
 SPIKE_NOISE_FACTOR, SPIKE_FRACTION = 12.0, 0.25  # a lone force sample this far (× noise σ, × peak force) from its agreeing neighbours is corrupt: farther than an upper yield point stands
 
 
+def _median_of_three_at_extreme(f: np.ndarray) -> float:
+    """|median of three| about the sample of largest |F| (inner samples): one of the values whose peak
+    :func:`isolated_force_spikes` takes, so a lower bound of that peak, found without a pass over them all."""
+    inner = f[1:-1]
+    k = int(np.argmax(inner)) if np.max(inner) >= -np.min(inner) else int(np.argmin(inner))
+    a, b, c = f[k], f[k + 1], f[k + 2]
+    return float(abs(max(min(a, b), min(max(a, b), c))))
+
+
 def isolated_force_spikes(force_N) -> np.ndarray:
     """Indices of lone corrupt force samples: unlike both neighbours, which agree with each other
     (no specimen's force jumps and comes back within one sample; a fracture does not come back).
@@ -105,6 +116,8 @@ def isolated_force_spikes(force_N) -> np.ndarray:
     if f.size < 5:
         return np.zeros(0, dtype=int)
     deviation = np.abs(f[1:-1] - 0.5 * (f[:-2] + f[2:]))
+    if not np.any(deviation > SPIKE_FRACTION * _median_of_three_at_extreme(f)):
+        return np.zeros(0, dtype=int)  # none beyond a quarter of one median of three (≤ their peak): none beyond the thresholds below
     gap = np.abs(f[2:] - f[:-2])
     a, b, c = f[:-2], f[1:-1], f[2:]
     peak = float(np.max(np.abs(np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c)))))  # median of three, in closed form
@@ -121,15 +134,16 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
     d0, l0, s0 = spec.d0_mm, spec.l0_mm, spec.s0_mm2  # F0: the stated S0, else π d0²/4
     force = record.column("force_N")
     ok = np.isfinite(force)
-    if not ok.all():
+    every = bool(ok.all())  # every force finite: the positions are the samples, no copies (a one-hour record)
+    if not every:
         warnings.append(f"{int((~ok).sum())} samples without a force value were left out")
-    spikes = np.flatnonzero(ok)[isolated_force_spikes(force[ok])]
+    spikes = isolated_force_spikes(force) if every else np.flatnonzero(ok)[isolated_force_spikes(force[ok])]
     if spikes.size:
-        ok[spikes] = False
+        ok[spikes], every = False, False
         warnings.append(f"{spikes.size} force sample(s) unlike both neighbours (a corrupt load-cell frame) left out: "
                         + ", ".join(f"sample {k + 1} ({force[k]:.6g} N)" for k in spikes[:5]) + (" …" if spikes.size > 5 else ""))
-    data = (record.data[ok] if not ok.all() else record.data).reset_index(drop=True)  # all kept: no copy (copy-on-write)
-    force = force[ok]
+    data = (record.data if every else record.data[ok]).reset_index(drop=True)  # all kept: no copy (copy-on-write)
+    force = force if every else force[ok]
     sub = Record(meta=record.meta, data=data, source=record.source)
     i_m = iso6892.max_force_index(force)
     Fm = float(force[i_m])
@@ -140,7 +154,8 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
     if Rm > MAX_STRESS_MPa:
         raise IdentificationError(f"{record.source}: Rm = {Rm:.4g} MPa is implausible - check units of force (N) and diameter (mm)")
 
-    src = _strain_source(sub, use_extensometer, force, l0, {"frame_stiffness_N_per_um": frame_stiffness_N_per_um, "crosshead_length_mm": crosshead_length_mm})
+    i_k = fracture_index(force)
+    src = _strain_source(sub, use_extensometer, force, l0, {"frame_stiffness_N_per_um": frame_stiffness_N_per_um, "crosshead_length_mm": crosshead_length_mm}, i_k)
     warnings += src["warnings"]
     lu = spec.lu_mm
     _check_post_dimensions(record, d0, l0, lu)
@@ -149,11 +164,11 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
         if lu <= l0:
             raise IdentificationError(f"{record.source}: post.lu_mm = {lu:g} mm is not longer than l0 = {l0:g} mm")
         length = l0
-    return _Inputs(record=record, d0=d0, l0=l0, s0=s0, data=data, sub=sub, force=force, eng_stress=eng_stress, i_m=i_m,
+    return _Inputs(record=record, d0=d0, l0=l0, s0=s0, data=data, sub=sub, force=force, eng_stress=eng_stress, i_m=i_m, i_k=i_k,
                    Fm=Fm, Rm=Rm, src=src, lu=lu, length=length, warnings=warnings)
 
 
 def _stress_noise_MPa(stress_MPa: np.ndarray) -> float:
     """Noise standard deviation of a stress signal from its second differences (robust MAD)."""
-    curvature = np.diff(stress_MPa, 2)  # second differences: a linear trend leaves none, white noise σ leaves σ√6
-    return iso6892.mad_sigma(curvature) / math.sqrt(6.0) if curvature.size else 0.0
+    # second differences: a linear trend leaves none, white noise σ leaves σ√6
+    return iso6892.mad_sigma_of_differences(stress_MPa, 2) / math.sqrt(6.0) if np.size(stress_MPa) > 2 else 0.0

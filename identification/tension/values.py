@@ -111,7 +111,7 @@ def _increasing(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Keep the points where x strictly exceeds every earlier x (noise makes εp wobble)."""
     keep = np.ones(x.size, dtype=bool)
     keep[1:] = x[1:] > np.maximum.accumulate(x)[:-1]
-    return x[keep], y[keep]
+    return np.compress(keep, x), np.compress(keep, y)  # x[keep], y[keep]: a noisy mask, which boolean indexing takes branch by branch
 
 
 def fracture_index(force_N) -> int:
@@ -120,18 +120,18 @@ def fracture_index(force_N) -> int:
     the record ending below BROKEN_END_FORCE × Fm —, where it is the sample before the largest
     step after Fm: a first-order filter's first step after a sudden drop is its largest."""
     force = np.asarray(force_N, dtype=float)
-    i_k = iso6892.fracture_index(force)
     i_m = iso6892.max_force_index(force)
+    i_k = iso6892.fracture_index(force, i_m)
     if i_k < force.size - 1 or force.size - i_m < 3 or not force[-1] <= BROKEN_END_FORCE * force[i_m]:
         return i_k
     return i_m + int(np.nanargmax(force[i_m:-1] - force[i_m + 1:]))
 
 
-def reaches_fracture(force_N: np.ndarray) -> bool:
+def reaches_fracture(force_N: np.ndarray, i_k: int | None = None) -> bool:
     """Does the record reach fracture: a single-step drop of more than 20 % of Fm after Fm
     (the break), or a last force below FRACTURE_END_FORCE × Fm (a necked specimen, the
-    record cut at the break)?"""
-    i_k = fracture_index(force_N)
+    record cut at the break)? ``i_k``: :func:`fracture_index` of ``force_N`` when the caller has it."""
+    i_k = fracture_index(force_N) if i_k is None else i_k
     Fm = float(np.nanmax(force_N))
     return i_k < force_N.size - 1 or float(force_N[-1]) <= FRACTURE_END_FORCE * Fm
 

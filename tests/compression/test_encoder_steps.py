@@ -61,3 +61,6 @@ def test_only_a_counted_reading_is_re_read():
     counted[100] = np.nan  # a missing sample stays missing, the rest is re-read
     out, step = reread_if_stepped(t, counted)
     assert step == pytest.approx(Q) and np.isnan(out[100]) and np.nanmax(np.abs(out - 0.001 * t)[60:440]) < 0.02 * Q  # between the first and last crossings
+    whole = np.round(0.001 * t / Q) * Q  # every sample finite: re-read in place
+    out, step = reread_if_stepped(t, whole)
+    assert step == pytest.approx(Q) and np.nanmax(np.abs(out - 0.001 * t)[60:440]) < 0.02 * Q

@@ -71,3 +71,27 @@ def test_the_next_window_is_set_on_the_lines_rise_not_in_the_noise_before_it():
     strain[:2] = 0.0  # ... but at zero force the specimen has not moved: 0.3 % "past" the line
     strain[-2:] += [0.0025, 0.006]  # ... until it yields
     assert _offset_onset_MPa(strain, stress, line) == 330.0
+
+
+def _onset_with_the_median_period(time_s, force_N, levels: int = 400) -> float:
+    """yield_onset_from_rate as written before issue 43: the median sampling period always taken."""
+    from flowcurve.identification.iso6892 import mad_sigma
+
+    t, f = np.asarray(time_s, dtype=float), np.asarray(force_N, dtype=float)
+    noise = mad_sigma(np.diff(f)) / np.sqrt(2.0)
+    envelope = np.maximum.accumulate(f)
+    step = max(envelope[-1] / levels, 5.0 * noise)
+    level = np.arange(step, envelope[-1], step)
+    times = t[np.searchsorted(envelope, level)]
+    rate = 3.0 * step / np.maximum(times[3:] - times[:-3], float(np.median(np.diff(t))))
+    peak = int(np.argmax(rate))
+    below = np.nonzero(rate[peak:] < 0.5 * rate[peak])[0]
+    return float(level[peak + int(below[0])]) if below.size else float(level[-1])
+
+
+@pytest.mark.parametrize("samples", [60, 400, 5000])
+def test_the_force_rate_onset_is_the_same_whether_the_period_floors_a_span_or_not(samples):
+    """Sparse sampling (a span of three levels within one period: the median period floors it) or dense (it floors none)."""
+    t = np.linspace(0.0, 100.0, samples)
+    f = np.where(t < 40.0, 250.0 * t, 10_000.0 + 20.0 * (t - 40.0)) + np.random.default_rng(samples).normal(0.0, 2.0, samples)
+    assert yield_onset_from_rate(t, f) == _onset_with_the_median_period(t, f)

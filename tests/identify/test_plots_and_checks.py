@@ -69,6 +69,20 @@ def test_noise_estimate_recovers_known_sigma():
     assert force_noise_N(force) == pytest.approx(sigma, rel=0.05)
 
 
+@pytest.mark.parametrize("n", [10, 1000, 100_001, 540_000])
+def test_force_noise_thins_the_differences_as_np_diff_then_a_stride_would(n):
+    """Only the thinned successive differences are taken: the very number of np.diff(F)[::step]."""
+    from flowcurve.identification.identify import NOISE_SAMPLES
+    from flowcurve.identification.iso6892 import mad_sigma
+
+    force = np.cumsum(np.random.default_rng(n).normal(2.0, 3.0, n))
+    force[n // 3] = np.nan  # a blank sample: its two differences left out
+    d = np.diff(force)[:: max(1, n // NOISE_SAMPLES)]
+    d = d[np.isfinite(d)]
+    assert force_noise_N(force) == mad_sigma(d) / np.sqrt(2.0)
+    assert force_noise_N(list(force)) == force_noise_N(force)
+
+
 def _record(force, **meta):
     n = len(force)
     data = pd.DataFrame({"time_s": np.arange(n) * 0.1, "force_N": force, "crosshead_mm": np.arange(n) * 1e-3})

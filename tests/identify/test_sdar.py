@@ -216,3 +216,12 @@ def test_the_memo_gives_the_line_a_fresh_search_gives_and_keeps_it_from_relabels
     fresh = elastic_modulus("auto", e, s, 0.4 * float(np.max(s)), crosshead=True)
     assert len(memo) == 1 and again.source == fresh.source != first.source
     assert (again.E_MPa, again.window_MPa, again.n_points) == (fresh.E_MPa, fresh.window_MPa, fresh.n_points)
+
+
+def test_a_record_with_every_sample_finite_gives_what_its_finite_samples_give():
+    """Every sample finite (no copy of the record is taken) or a blank cell left out: the same fit, index for index."""
+    e, s, _ = toe_line_knee()
+    whole = sdar(e, s)
+    blank = sdar(np.r_[np.nan, e], np.r_[1.0, s])  # a leading sample without a strain: left out, indices shift by one
+    assert (whole.slope, whole.intercept, whole.normalized_residual) == (blank.slope, blank.intercept, blank.normalized_residual)
+    assert np.array_equal(whole.indices + 1, blank.indices) and whole.quality == blank.quality

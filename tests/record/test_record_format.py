@@ -178,3 +178,23 @@ def test_missing_required_metadata_is_named():
     rec.meta["test"] = "torsion"
     with pytest.raises(RecordError, match="tension, compression"):
         rec.test
+
+
+def test_has_is_true_for_a_column_with_any_value_and_false_for_an_empty_one():
+    """Record.has reads the first value before a pass over the column: a column that starts empty still counts."""
+    n = 1000
+    data = pd.DataFrame({"full": np.arange(n, dtype=float), "late": np.r_[np.full(n - 1, np.nan), 1.0],
+                         "empty": np.full(n, np.nan), "text": ["x"] * n})
+    record = Record(meta={}, data=data, source="t")
+    assert [record.has(c) for c in ("full", "late", "empty", "text", "absent")] == [True, True, False, True, False]
+    assert not Record(meta={}, data=pd.DataFrame({"full": []}), source="t").has("full")
+    nullable = pd.DataFrame({"late": pd.array([None, 1.0], dtype="Float64"), "empty": pd.array([None, None], dtype="Float64")})
+    assert [Record(meta={}, data=nullable, source="t").has(c) for c in ("late", "empty")] == [True, False]
+
+
+@pytest.mark.parametrize("start, stop", [(0, 0), (0, 5), (3, 3_000_001), (1_048_575, 2_097_153), (0, 3_000_003)])
+def test_count_byte_counts_what_bytes_count_does(start, stop):
+    from flowcurve.record.format import count_byte
+
+    raw = bytes(np.random.default_rng(start).choice(np.frombuffer(b"0123,\\n.-", dtype=np.uint8), 3_000_003))
+    assert count_byte(raw, b",", start, stop) == raw.count(b",", start, stop)

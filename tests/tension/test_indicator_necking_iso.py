@@ -139,3 +139,51 @@ def test_the_noise_of_a_long_series_is_read_at_a_stride_and_stays_the_noise():
     assert mad_sigma(d2) == pytest.approx(full, rel=0.02)
     head = d2[:MAD_SAMPLES]
     assert mad_sigma(head) == 1.4826 * float(np.median(np.abs(head - np.median(head))))
+
+
+@pytest.mark.parametrize("size", [5, 50_001, 50_002, 540_003])
+@pytest.mark.parametrize("order", [1, 2, 3])
+def test_mad_sigma_of_differences_is_mad_sigma_of_np_diff_to_the_bit(order, size):
+    """The k-th differences evaluated only where mad_sigma reads them give the very same number."""
+    from flowcurve.identification.iso6892 import mad_sigma, mad_sigma_of_differences
+
+    x = np.cumsum(np.random.default_rng(order).normal(1.0, 3.0, size))  # a trend and its noise
+    assert mad_sigma_of_differences(x, order) == mad_sigma(np.diff(x, order))
+
+
+@pytest.mark.parametrize("where", [None, 0, 1, 4095, 4096, 12_287, 12_288, 99_999])
+def test_first_index_reads_in_chunks_what_flatnonzero_reads_whole(where):
+    from flowcurve.identification.iso6892 import first_index
+
+    y = np.zeros(100_000)
+    if where is not None:
+        y[where:] = 1.0
+    whole = np.flatnonzero(y >= 0.5)
+    assert first_index(lambda at: y[at] >= 0.5, 0, y.size) == (int(whole[0]) if whole.size else None)
+    assert first_index(lambda at: y[at] >= 0.5, 50_000, 60_000) == (min(max(where, 50_000), 60_000) if where is not None and where < 60_000 else None)
+    read = []
+    first_index(lambda at: read.append(at.stop - at.start) or y[at] >= 0.5, 0, y.size)
+    assert sum(read) <= max(2 * (where or y.size) + 4096, 4096) or where is None  # never much past the hit
+
+
+def test_the_fracture_index_from_a_known_maximum_is_the_one_found_anew():
+    """Fm's and the fracture's indices handed on (read once per record) give what each call would find."""
+    from flowcurve.identification.tension.values import fracture_index, reaches_fracture
+
+    rising = np.linspace(0.0, 10_000.0, 400)
+    for force in (np.r_[rising, 9_000.0, 8_000.0, 1_000.0], np.r_[rising, np.linspace(9_990.0, 9_000.0, 50)], rising):
+        i_m = iso6892.max_force_index(force)
+        assert iso6892.fracture_index(force, i_m) == iso6892.fracture_index(force)
+        i_k = fracture_index(force)
+        assert reaches_fracture(force, i_k) == reaches_fracture(force)
+
+
+def test_the_strain_quantum_is_the_smallest_real_step():
+    """q/√12 of the smallest finite non-zero step; none (0) for a reading that never moves."""
+    from flowcurve.identification.indicator import strain_quantum_noise
+
+    x = np.r_[0.0, 0.0, 0.003, np.nan, 0.004, 0.010, 0.010, 0.0095]
+    assert strain_quantum_noise(x) == pytest.approx(0.0005 / math.sqrt(12.0), rel=1e-9)
+    d = np.abs(np.diff(x))
+    assert strain_quantum_noise(x) == float(np.min(d[np.isfinite(d) & (d > 0)])) / math.sqrt(12.0)
+    assert strain_quantum_noise(np.full(5, 0.002)) == 0.0 and strain_quantum_noise([np.nan, 1.0]) == 0.0

@@ -107,3 +107,18 @@ def test_a_relaxation_in_a_pause_is_no_yield_point():
     s[k: k + 12] -= 0.03 * s[k] * np.concatenate([np.linspace(0.3, 1.0, 6), np.linspace(1.0, 0.2, 6)])
     e[k: k + 6] = e[k]  # the pause: the crosshead holds while the force relaxes
     assert iso6892.yield_point(e, s, noise_MPa=0.1, E_MPa=E, start_MPa=150.0) is None
+
+
+def test_the_spike_search_skips_only_what_its_peak_rule_would_skip():
+    """The quick exit compares with one median of three (about the largest |F|), never more than their peak."""
+    from flowcurve.identification.tension.inputs import _median_of_three_at_extreme, isolated_force_spikes
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        f = rng.normal(0.0, 1.0, rng.integers(5, 40)) * rng.choice([1.0, 100.0])
+        a, b, c = f[:-2], f[1:-1], f[2:]
+        peak = np.max(np.abs(np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c))))
+        assert _median_of_three_at_extreme(f) <= peak
+    force = np.r_[np.linspace(0.0, 1000.0, 300), np.full(5, 1000.0)]
+    force[150] = -900.0  # a corrupt frame below zero: the largest |F| sample is the spike itself
+    assert isolated_force_spikes(force).tolist() == [150]

@@ -51,6 +51,7 @@ def test_the_reading_quantum_is_the_smallest_step():
     x = np.round(np.linspace(0, 1, 500) / 0.002) * 0.002
     assert cf.reading_quantum(x) == pytest.approx(0.002)
     assert cf.reading_quantum([1.0, 1.0]) == 0.0
+    assert cf.reading_quantum(np.r_[x[:250], np.nan, x[250:]]) == cf.reading_quantum(x)  # a blank cell left out
 
 
 def test_the_band_verdict_is_three_way():
@@ -166,3 +167,37 @@ def test_the_command_segment_is_read_from_the_events():
     assert cf.command_segment(t, events, 80) == (11, 80, True)
     assert cf.command_segment(t, events + [Event(50.5, "start", "crosshead 0.02 mm/s")], 80) == (51, 80, True)
     assert cf.command_segment(t, None, 80) == (0, 80, False)
+    assert cf.command_segment(t, [Event(10.2, "start", ""), Event(40.0, "stop", "")], 80) == (11, 40, True)  # stopped before Fm
+    assert cf.command_segment(t, [Event(85.0, "start", "")], 80) == (0, 80, False)  # no start before Fm
+    gappy = t.copy()
+    gappy[[11, 12, 80]] = np.nan  # blank time stamps are in no segment
+    assert cf.command_segment(gappy, events, 79) == (13, 79, True)
+    assert cf.command_segment(gappy, events, 80) == (0, 10, False)  # Fm's own time blank: no start before it is known
+
+
+def test_the_window_halves_slopes_are_each_halfs_own_regression():
+    """line_windows_E: the samples of each half (a sample on the middle in both) regressed strain on stress, E = 1/slope."""
+    from flowcurve.identification.quality.uncertainty import line_windows_E
+
+    stress = np.r_[np.linspace(0.0, 400.0, 401), np.linspace(400.0, 300.0, 50), 120.0, np.nan]  # a dip back into the window
+    strain = stress / 200e3 + 1e-4 * (stress / 400.0) ** 2
+    strain[-3] = np.nan  # a sample without a strain is left out
+    got = line_windows_E(strain, stress, (100.0, 300.0))
+    top = int(np.nanargmax(stress)) + 1
+    for name, (a, b) in (("the window's lower half", (100.0, 200.0)), ("the window's upper half", (200.0, 300.0))):
+        on = [i for i in range(top) if a <= stress[i] <= b and np.isfinite(strain[i])]
+        assert got[name] == 1.0 / np.polyfit(stress[on], strain[on], 1)[0]
+    assert got["the window's lower half"] > got["the window's upper half"]  # the curve bends over
+
+
+def test_the_elastic_stretch_is_the_first_run_of_samples_in_the_window():
+    """Read from its first sample to its first gap: the first contiguous stretch the whole selection gives."""
+    rng = np.random.default_rng(4)
+    for _ in range(200):
+        s = np.cumsum(rng.normal(1.0, 4.0, rng.integers(1, 300)))
+        s[rng.integers(0, s.size, 3)] = np.nan
+        i_m = int(rng.integers(0, s.size))
+        sel = np.flatnonzero((s[: i_m + 1] >= 20.0) & (s[: i_m + 1] <= 80.0))
+        gaps = np.flatnonzero(np.diff(sel) > 1)
+        expected = sel[: gaps[0] + 1] if gaps.size else sel
+        assert np.array_equal(cf._elastic_stretch(s, (20.0, 80.0), i_m), expected)
