@@ -228,7 +228,8 @@ def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dic
     from dataclasses import replace
 
     from flowcurve.identification.laws.hardening import static_form
-    from flowcurve.identification.quality.uncertainty import constants_on_bound, correlated_fit_u
+    from flowcurve.identification.laws.bounds import constants_on_bound
+    from flowcurve.identification.quality.uncertainty import correlated_fit_u
 
     delta = zero["delta_eps0"]
     start = {**start_uncertainty(fit, fit.strain_range, delta), "components": zero["components"]}

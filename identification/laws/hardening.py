@@ -26,6 +26,7 @@ import logging
 import numpy as np
 
 from flowcurve.errors import IdentificationError
+from flowcurve.identification.laws.bounds import bound_sides
 from flowcurve.identification.laws.static import StaticLaw
 from flowcurve.identification.laws.swift import swift  # noqa: F401 (today's callers import the functions from here)
 from flowcurve.identification.laws.voce import voce  # noqa: F401
@@ -130,6 +131,7 @@ class HardeningFit:
     doubt: str = ""  # evidence outside the fit that the curve is not to be trusted (then "poor")
     aic: float = float("nan")  # Akaike's information criterion of a least-squares fit, N·ln(χ²/N) + 2k
     law_choice: dict | None = None  # set when --law best chose this law: by how much (as_dict's "law_choice")
+    on_bound: dict[str, str] = field(default_factory=dict)  # constant → "lower"/"upper" where it sits on a bound (laws.bounds)
 
     @property
     def quality(self) -> str:
@@ -195,14 +197,6 @@ def _grid_minima(ss: np.ndarray, count: int, within: float = 10.0) -> list[int]:
     minima = np.flatnonzero(finite & (ss <= left) & (ss <= right))
     minima = minima[ss[minima] <= within * np.min(ss[minima])]
     return [int(i) for i in minima[np.argsort(ss[minima])][:count]]
-
-
-def _on_bound(value: float, lo: float, hi: float) -> str | None:
-    """'lower'/'upper' when a fitted value sits on a finite bound (within a relative 1e-6)."""
-    for bound, name in ((lo, "lower"), (hi, "upper")):
-        if np.isfinite(bound) and abs(value - bound) <= 1e-6 * max(abs(bound), 1e-3):
-            return name
-    return None
 
 
 # a fit whose largest relative error exceeds this is marked poor
@@ -295,12 +289,13 @@ def _weighted_points(eps_p, stress_MPa, extra_points, weights) -> tuple[np.ndarr
     return eps, sig, w
 
 
-def undetermined(spec, values: dict[str, float], stderr: dict[str, float | None]) -> list[str]:
-    """The keys of the constants a fit does not determine: not on a bound, and with a standard error
-    at least the value itself (|v| ≤ se: the interval v ± se holds 0), or with none where no constant
-    sits on a bound (a singular covariance; with one on its bound lmfit states no errors at all, and
-    that constant's own warning says why)."""
-    bound = [name for name in spec.names if _on_bound(values[name], *spec.bounds[name])]
+def undetermined(spec, values: dict[str, float], stderr: dict[str, float | None], on_bound: Iterable[str] = ()) -> list[str]:
+    """The keys of the constants a fit does not determine: not ``on_bound`` (the names sitting on a
+    bound, :func:`.bounds.bound_sides`), and with a standard error at least the value itself (|v| ≤ se:
+    the interval v ± se holds 0), or with none where no constant sits on a bound (a singular
+    covariance; with one on its bound lmfit states no errors at all, and that constant's own warning
+    says why)."""
+    bound = set(on_bound)
     out = []
     for name, key in zip(spec.names, spec.keys):
         if name in bound:
@@ -366,14 +361,15 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     correl = {name: {k: float(v) for k, v in (best.params[name].correl or {}).items()} for name in spec.names}
     max_pct, rms_pct = _errors_pct(spec.func(eps, **values), sig)
     warnings = []
+    sides = bound_sides(spec.func, values, spec.bounds, eps)
     for name, key in zip(spec.names, spec.keys):
-        side = _on_bound(values[name], *spec.bounds[name])
+        side = sides.get(name)
         if side:
             warnings.append(f"{law} {key} = {values[name]:.4g} sits on its {side} bound: the law does not describe this curve well "
                             "(another law, --fit-range or --fracture-point exclude may)")
     if max_pct > POOR_FIT_PCT:
         warnings.append(f"{law} fit is poor: max error {max_pct:.3g} % (> {POOR_FIT_PCT:g} %), rms {rms_pct:.3g} %")
-    loose = undetermined(spec, values, stderr)
+    loose = undetermined(spec, values, stderr, sides)
     if loose:
         warnings.append(f"{law} {', '.join(loose)} not determined by this curve (no standard error, or one above the value): "
                         f"the constants trade off and only their set traces the curve (max error {max_pct:.3g} %); "
@@ -381,7 +377,7 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     return HardeningFit(law=law, method="least_squares", params=values, stderr=stderr, correlations=correl,
                         fit_error_pct=max_pct, rms_error_pct=rms_pct,
                         strain_range=(float(np.min(eps)), float(np.max(eps))), report=report, warnings=warnings,
-                        aic=float(best.aic))
+                        aic=float(best.aic), on_bound=sides)
 
 
 PARSIMONY_DELTA_AIC = 2.0  # laws this close to the lowest AIC are as good: the one with the fewest constants is kept
@@ -403,7 +399,7 @@ def choose_law(eps_p, stress_MPa, *, weights=None, extra_points: Iterable[Sequen
     ranked = sorted((f for f in fits.values() if np.isfinite(f.aic)), key=lambda f: f.aic)
     if not ranked:
         raise IdentificationError(f"--law best: no law could be fitted ({'; '.join(f'{k}: {v}' for k, v in failed.items())})")
-    loose = {f.law: undetermined(static_form(f.law), f.params, f.stderr) for f in ranked}
+    loose = {f.law: undetermined(static_form(f.law), f.params, f.stderr, f.on_bound) for f in ranked}
     eligible = [f for f in ranked if not loose[f.law]] or ranked
     close = [f for f in eligible if f.aic - eligible[0].aic <= PARSIMONY_DELTA_AIC]
     won = min(close, key=lambda f: (len(f.params), f.aic))

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from flowcurve.identification.iso6892 import nan_argmax
+from flowcurve.identification.laws.bounds import BOUND_REL_TOL, constant_scales, constants_on_bound  # noqa: F401 (callers read them here)
+from flowcurve.identification.laws.bounds import central_jacobian as _jacobian
 from flowcurve.record.specimen import circle_area_mm2 as _area_mm2  # S0 = π·d0²/4
 
 K_COVERAGE = 2.0  # expanded uncertainty U = k·u_c, k = 2 (≈ 95 % for a normal output)
@@ -441,47 +443,6 @@ def flow_point_method_components(sigma_MPa: float, slope_MPa: float, E_MPa: floa
         out.append(Component("method: E stripping the elastic strain", E_MPa, "MPa", u_E_MPa, slope_MPa * sigma_MPa / E_MPa ** 2, "the rule's E"))
     if delta_eps0 > 0:
         out.append(Component("method: strain zero ε0", 0.0, "1", delta_eps0, slope_MPa, "δε0 of the foot of the elastic line (§2.11)"))
-    return out
-
-
-def _jacobian(func: Callable, params: Mapping[str, float], eps: np.ndarray) -> np.ndarray:
-    """∂f/∂p_k at the points by central differences (unconstrained: a constant on its bound moves both ways)."""
-    cols = []
-    for k in params:
-        h = 1e-6 * max(abs(params[k]), 1e-3)
-        cols.append((func(eps, **{**params, k: params[k] + h}) - func(eps, **{**params, k: params[k] - h})) / (2.0 * h))
-    return np.column_stack(cols)
-
-
-BOUND_REL_TOL = 1e-6  # a constant within this part of its own scale from a finite bound sits on it (the optimisers stop short)
-
-
-def constant_scales(func: Callable, params: Mapping[str, float], eps) -> dict[str, float]:
-    """Each constant's own scale: the change that moves the law by its own size, max|f| / max|∂f/∂p_k|
-    (A of Johnson–Cook: the stress level; n: about 1/|ln ε|). Inputs: the law, its constants, the strains."""
-    eps = np.asarray(eps, dtype=float).ravel()
-    eps = eps[np.isfinite(eps)]
-    with np.errstate(all="ignore"):
-        level = float(np.nanmax(np.abs(func(eps, **params)))) if eps.size else 0.0
-        J = _jacobian(func, params, eps) if eps.size else np.zeros((0, len(params)))
-    out = {}
-    for i, k in enumerate(params):
-        top = float(np.nanmax(np.abs(J[:, i]))) if J.size else 0.0
-        out[k] = level / top if top > 0 and math.isfinite(level / top) else 0.0
-    return out
-
-
-def constants_on_bound(func: Callable, params: Mapping[str, float], bounds: Mapping[str, tuple[float, float]], eps) -> dict[str, float]:
-    """The constants sitting on a finite bound, name → +1 (lower: inward is up) or −1 (upper): within
-    :data:`BOUND_REL_TOL` × the constant's scale (:func:`constant_scales`) of it, or of |bound| where larger."""
-    scales = constant_scales(func, params, eps)
-    out = {}
-    for k, v in params.items():
-        lo, hi = bounds.get(k, (-math.inf, math.inf))
-        for bound, inward in ((lo, 1.0), (hi, -1.0)):
-            if math.isfinite(bound) and abs(v - bound) <= BOUND_REL_TOL * max(abs(bound), scales.get(k, 0.0), 1e-12):
-                out[k] = inward
-                break
     return out
 
 

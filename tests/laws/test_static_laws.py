@@ -108,8 +108,9 @@ def test_undetermined_names_the_constants_whose_interval_holds_zero():
     assert undetermined(spec, values, {"sigma0": 2.0, "Q": 250.0, "b": None}) == ["Q_MPa", "b"]
     # a constant on its bound: lmfit states no errors at all, which says nothing of the others (46NTAV's JC: A on 0,
     # B 1415 ± 2.7 MPa and n 0.039 ± 0.0025 once the errors are taken without it)
-    assert undetermined(spec, {**values, "sigma0": 0.0}, {"sigma0": None, "Q": None, "b": None}) == []
-    assert undetermined(spec, {**values, "sigma0": 0.0}, {"sigma0": None, "Q": 250.0, "b": None}) == ["Q_MPa"]
+    assert undetermined(spec, {**values, "sigma0": 0.0}, {"sigma0": None, "Q": None, "b": None}, on_bound={"sigma0"}) == []
+    assert undetermined(spec, {**values, "sigma0": 0.0}, {"sigma0": None, "Q": 250.0, "b": None}, on_bound={"sigma0"}) == ["Q_MPa"]
+    assert undetermined(spec, {**values, "sigma0": 0.0}, {"sigma0": None, "Q": None, "b": None}) == ["sigma0_MPa", "Q_MPa", "b"]
 
 
 def test_law_choice_text_claims_no_support_only_beyond_ten():
@@ -120,3 +121,18 @@ def test_law_choice_text_claims_no_support_only_beyond_ten():
     assert "less support, not none" in law_choice_text({**base, "delta_aic_to_next": 5.0})
     text = law_choice_text({**base, "delta_aic_to_next": 1.0})
     assert "support" not in text and "AIC 1.0 below the next (voce)" in text
+
+
+def test_a_constant_a_hair_off_its_bound_is_warned_on_it_by_the_budgets_rule():
+    """The fit's warning and the budget's one-sided interval read one rule (laws.bounds): a power law less a
+    constant wants A < 0, and A's lower bound 0 holds it (whether the optimiser stops at 0 or 1e-9 off it)."""
+    from flowcurve.identification.laws.bounds import bound_sides
+    from flowcurve.identification.laws.hardening import fit_hardening, johnson_cook_static, static_form
+
+    eps = np.linspace(0.005, 0.4, 60)
+    fit = fit_hardening(eps, johnson_cook_static(eps, 0.0, 900.0, 0.3) - 40.0)
+    assert fit.on_bound == {"A": "lower"}
+    assert any("A_MPa" in w and "lower bound" in w for w in fit.warnings)
+    law = static_form("johnson_cook")
+    assert bound_sides(law.func, {**fit.params, "A": 5e-9}, law.bounds, eps) == {"A": "lower"}  # 10⁻⁹ MPa absolute missed it
+    assert bound_sides(law.func, {**fit.params, "A": 0.5}, law.bounds, eps) == {}
