@@ -41,16 +41,28 @@ def constant_scales(func: Callable, params: Mapping[str, float], eps) -> dict[st
 
 
 def constants_on_bound(func: Callable, params: Mapping[str, float], bounds: Mapping[str, tuple[float, float]], eps) -> dict[str, float]:
-    """The constants sitting on a finite bound, name → +1 (lower: inward is up) or −1 (upper): within
-    :data:`BOUND_REL_TOL` × the constant's scale (:func:`constant_scales`) of it, or of |bound| where larger."""
-    scales = constant_scales(func, params, eps)
-    out = {}
-    for k, v in params.items():
-        lo, hi = bounds.get(k, (-math.inf, math.inf))
-        for bound, inward in ((lo, 1.0), (hi, -1.0)):
-            if math.isfinite(bound) and abs(v - bound) <= BOUND_REL_TOL * max(abs(bound), scales.get(k, 0.0), 1e-12):
-                out[k] = inward
-                break
+    """The constants sitting on a finite bound, name → +1 (lower: inward is up) or −1 (upper): those whose
+    move onto the bound changes the law by at most :data:`BOUND_REL_TOL` of its level at the strains ``eps``
+    (A = 5·10⁻⁹ MPa on 0 moves a 500 MPa curve by 5·10⁻⁹ MPa; a constant the curve hardly feels but that lies
+    far from its bound moves it by much more, whatever its linearised scale)."""
+    # on ⇔ max|f(p; p_k = bound) − f(p)| ≤ tol·max|f(p)|
+    eps = np.asarray(eps, dtype=float).ravel()
+    eps = eps[np.isfinite(eps)]
+    if not eps.size:
+        return {}
+    with np.errstate(all="ignore"):
+        base = func(eps, **params)
+        level = float(np.nanmax(np.abs(base)))
+        out = {}
+        for k, v in params.items():
+            lo, hi = bounds.get(k, (-math.inf, math.inf))
+            for bound, inward in ((lo, 1.0), (hi, -1.0)):
+                if not math.isfinite(bound) or abs(v - bound) > 0.5 * (hi - lo):
+                    continue
+                moved = float(np.nanmax(np.abs(func(eps, **{**params, k: bound}) - base)))
+                if math.isfinite(moved) and moved <= BOUND_REL_TOL * level:
+                    out[k] = inward
+                    break
     return out
 
 

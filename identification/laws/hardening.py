@@ -19,14 +19,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Callable, Iterable, Sequence
+from typing import Callable, Iterable, Mapping, Sequence
 
 import logging
 
 import numpy as np
 
 from flowcurve.errors import IdentificationError
-from flowcurve.identification.laws.bounds import bound_sides
+from flowcurve.identification.laws.bounds import bound_sides, central_jacobian
 from flowcurve.identification.laws.static import StaticLaw
 from flowcurve.identification.laws.swift import swift  # noqa: F401 (today's callers import the functions from here)
 from flowcurve.identification.laws.voce import voce  # noqa: F401
@@ -132,6 +132,7 @@ class HardeningFit:
     aic: float = float("nan")  # Akaike's information criterion of a least-squares fit, N·ln(χ²/N) + 2k
     law_choice: dict | None = None  # set when --law best chose this law: by how much (as_dict's "law_choice")
     on_bound: dict[str, str] = field(default_factory=dict)  # constant → "lower"/"upper" where it sits on a bound (laws.bounds)
+    undetermined: list[str] = field(default_factory=list)  # keys of the constants the curve does not determine (undetermined())
 
     @property
     def quality(self) -> str:
@@ -306,6 +307,26 @@ def undetermined(spec, values: dict[str, float], stderr: dict[str, float | None]
     return out
 
 
+def _free_stderr(spec, values: dict[str, float], stderr: dict[str, float | None], on_bound: Mapping[str, str],
+                 eps: np.ndarray, sig: np.ndarray, w: np.ndarray) -> dict[str, float | None]:
+    """``stderr`` with, where a constant sits on a bound and lmfit states none, the free constants' own:
+    the bound ones held, the weighted least squares linearised at the fit (the trade-off among the free
+    ones, which :func:`undetermined` judges). Inputs: the law's form, its fitted constants and the points."""
+    # cov_free = s²·(J_fᵀJ_f)⁻¹ = s²·V·S⁻²·Vᵀ (J_f = U·S·Vᵀ), s² = Σ(w·r)² / (N − p_free), J_f = w·∂f/∂p_free
+    free = [k for k in spec.names if k not in on_bound]
+    if not on_bound or not free or any(stderr.get(k) is not None for k in free) or eps.size <= len(free):
+        return stderr
+    with np.errstate(all="ignore"):
+        J = central_jacobian(spec.func, values, eps)[:, [spec.names.index(k) for k in free]] * w[:, None]
+        r = (sig - spec.func(eps, **values)) * w
+    if not (np.all(np.isfinite(J)) and np.all(np.isfinite(r))):
+        return stderr
+    _, sv, vt = np.linalg.svd(J, full_matrices=False)  # no truncation: a trade-off's tiny singular value is its variance
+    with np.errstate(divide="ignore"):
+        var = np.sum((vt / sv[:, None]) ** 2, axis=0) * float(np.dot(r, r)) / (eps.size - len(free))
+    return {**stderr, **{k: float(np.sqrt(var[i])) for i, k in enumerate(free)}}
+
+
 def _lmfit_refit(spec: StaticForm, start: dict[str, float], eps: np.ndarray, sig: np.ndarray, w: np.ndarray):
     """lmfit's Levenberg–Marquardt from ``start`` within the bounds, for the constants' standard
     errors, correlations, AIC and report: lmfit.Model.fit's residual (σ − law)·w and its report
@@ -369,7 +390,7 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
                             "(another law, --fit-range or --fracture-point exclude may)")
     if max_pct > POOR_FIT_PCT:
         warnings.append(f"{law} fit is poor: max error {max_pct:.3g} % (> {POOR_FIT_PCT:g} %), rms {rms_pct:.3g} %")
-    loose = undetermined(spec, values, stderr, sides)
+    loose = undetermined(spec, values, _free_stderr(spec, values, stderr, sides, eps, sig, w), sides)  # the warning's and --law best's
     if loose:
         warnings.append(f"{law} {', '.join(loose)} not determined by this curve (no standard error, or one above the value): "
                         f"the constants trade off and only their set traces the curve (max error {max_pct:.3g} %); "
@@ -377,7 +398,7 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     return HardeningFit(law=law, method="least_squares", params=values, stderr=stderr, correlations=correl,
                         fit_error_pct=max_pct, rms_error_pct=rms_pct,
                         strain_range=(float(np.min(eps)), float(np.max(eps))), report=report, warnings=warnings,
-                        aic=float(best.aic), on_bound=sides)
+                        aic=float(best.aic), on_bound=sides, undetermined=loose)
 
 
 PARSIMONY_DELTA_AIC = 2.0  # laws this close to the lowest AIC are as good: the one with the fewest constants is kept
@@ -399,7 +420,7 @@ def choose_law(eps_p, stress_MPa, *, weights=None, extra_points: Iterable[Sequen
     ranked = sorted((f for f in fits.values() if np.isfinite(f.aic)), key=lambda f: f.aic)
     if not ranked:
         raise IdentificationError(f"--law best: no law could be fitted ({'; '.join(f'{k}: {v}' for k, v in failed.items())})")
-    loose = {f.law: undetermined(static_form(f.law), f.params, f.stderr, f.on_bound) for f in ranked}
+    loose = {f.law: f.undetermined for f in ranked}
     eligible = [f for f in ranked if not loose[f.law]] or ranked
     close = [f for f in eligible if f.aic - eligible[0].aic <= PARSIMONY_DELTA_AIC]
     won = min(close, key=lambda f: (len(f.params), f.aic))

@@ -133,6 +133,7 @@ def test_a_constant_a_hair_off_its_bound_is_warned_on_it_by_the_budgets_rule():
     fit = fit_hardening(eps, johnson_cook_static(eps, 0.0, 900.0, 0.3) - 40.0)
     assert fit.on_bound == {"A": "lower"}
     assert any("A_MPa" in w and "lower bound" in w for w in fit.warnings)
+    assert fit.undetermined == []  # B and n with A held: the linearised errors lmfit does not state at a bound, each under its value
     law = static_form("johnson_cook")
     assert bound_sides(law.func, {**fit.params, "A": 5e-9}, law.bounds, eps) == {"A": "lower"}  # 10⁻⁹ MPa absolute missed it
     assert bound_sides(law.func, {**fit.params, "A": 0.5}, law.bounds, eps) == {}
