@@ -40,6 +40,15 @@ BRACKET_SLACK_S = 0.002  # host seconds a crosshead exchange's half-width may ex
 BRACKET_KEEP_S = 0.2  # ... a reading is kept at least this often (host seconds) all the same
 
 
+def force_filter_meta(loadcell) -> dict[str, float]:
+    """``instruments.force_filter_Hz``: the −3 dB point of the amplifier's low-pass the test sets (``[loadcell] filter``,
+    ASF1…8), whose lag the identification states (identification/quality/filter_lag.py); nothing for no filter."""
+    from flowcurve.rig.codecs.aed import ASF_CUTOFF_HZ
+
+    cutoff = ASF_CUTOFF_HZ.get(getattr(loadcell, "filter", None))
+    return {"instruments.force_filter_Hz": cutoff} if cutoff else {}
+
+
 class DriverRig:
     """A configured rig opened for one test: the procedure's RigIO over the device drivers.
 
@@ -76,7 +85,8 @@ class DriverRig:
         self.frame_stiffness_N_per_um = config.frame.stiffness_N_per_um
         enc = config.encoder  # one count of the encoder in mm: the crosshead readings' quantum (the testing rate's U)
         self.instruments_meta = {**config.instruments.meta(),  # the instruments' classes, for the results' uncertainty
-                                 "instruments.crosshead_resolution_mm": enc.screw_lead_mm / enc.gear_ratio / enc.counts_per_rev}
+                                 "instruments.crosshead_resolution_mm": enc.screw_lead_mm / enc.gear_ratio / enc.counts_per_rev,
+                                 **force_filter_meta(config.loadcell)}
         self.writer_meta = {WRITER_STAMPING_KEY: WRITER_STAMPING}  # how this driver stamps (the record's writer.stamping)
         self.max_force_N = config.frame.max_force_N
         self.loadcell = config.loadcell.create()

@@ -320,6 +320,7 @@ def identify(record: Record, **options) -> Identification:
     attach_assurance(result, ident.curves, record)
     if after and record.test == "compression":
         warnings += _post_test_spread(result, record, func, accepted)
+    warnings += _filter_lag_spread(result, record, func, accepted)
     warnings += off_temperature_warnings(result, record, stray)
     old = list(result.get("warnings") or [])
     result["warnings"] = old + [w for w in warnings if w not in old]
@@ -377,6 +378,27 @@ def _post_test_spread(result, record: Record, func, options: dict) -> list[str]:
     state_not_certifiable(unc, ("friction_mu", "Rp02_MPa", "flow_stress_MPa", "hardening"),
                           f"post-test measurements after a heating fault: {why}")
     return [f"not certifiable: {why}; the post-test measurements may include flow after the record"]
+
+
+def _filter_lag_spread(result, record: Record, func, options: dict) -> list[str]:
+    """A tension record that states its load cell's filter (:mod:`.quality.filter_lag`): identified again with the
+    force the filter delayed restored, each hardening constant's difference entered into its budget. Returns the
+    warnings (one when the second identification fails: the budgets are then left as they were). Compression's
+    range runs to the operator's target, where the yield knee has little weight (docs/methods.md §2.13)."""
+    from flowcurve.identification.quality import filter_lag
+
+    tau = filter_lag.lag_s(record)
+    hard = (result.get("uncertainty") or {}).get("hardening")
+    if tau is None or record.test != "tension" or not hard:
+        return []
+    try:
+        alt = func(filter_lag.unlagged(record, tau), **filter_lag.pinned_options(result, record.test, options))
+        attach_assurance(alt.result, alt.curves, record)
+    except FlowcurveError as exc:
+        return [f"the load cell's filter lag ({1e3 * tau:.0f} ms) is not in the hardening constants' budgets: the record with "
+                f"the force restored does not identify ({str(exc).splitlines()[0]})"]
+    filter_lag.widen(result["uncertainty"], alt.result.get("uncertainty") or {})
+    return []
 
 
 def state_not_certifiable(uncertainty: dict, keys, why: str) -> None:
