@@ -382,7 +382,8 @@ def _post_test_spread(result, record: Record, func, options: dict) -> list[str]:
 
 def _filter_lag_spread(result, record: Record, func, options: dict) -> list[str]:
     """A tension record that states its load cell's filter (:mod:`.quality.filter_lag`): identified again with the
-    force the filter delayed restored, each hardening constant's difference entered into its budget. Returns the
+    force the filter delayed restored, the difference of each hardening constant, Rp0.2 and flow-curve point
+    entered into its budget. Returns the
     warnings (one when the second identification fails: the budgets are then left as they were). Compression's
     range runs to the operator's target, where the yield knee has little weight (docs/methods.md §2.13)."""
     from flowcurve.identification.quality import filter_lag
@@ -395,7 +396,7 @@ def _filter_lag_spread(result, record: Record, func, options: dict) -> list[str]
         alt = func(filter_lag.unlagged(record, tau), **filter_lag.pinned_options(result, record.test, options))
         attach_assurance(alt.result, alt.curves, record)
     except FlowcurveError as exc:
-        return [f"the load cell's filter lag ({1e3 * tau:.0f} ms) is not in the hardening constants' budgets: the record with "
+        return [f"the load cell's filter lag ({1e3 * tau:.0f} ms) is not in the budgets of Rp0.2 and the flow curve: the record with "
                 f"the force restored does not identify ({str(exc).splitlines()[0]})"]
     filter_lag.widen(result["uncertainty"], alt.result.get("uncertainty") or {})
     return []

@@ -7,8 +7,8 @@ constant shift of the travel, which the strain zero takes up; where the force's 
 yield knee) it rounds the curve instead: the first plastic points read low, the more so the faster
 the test. The result is identified again with the force the filter delayed restored
 (F = F_f + τ·dF_f/dt, the first-order filter's own equation), and the difference of each hardening
-constant enters its budget as a component, u = |Δ| (a systematic effect left uncorrected, stated
-as its size).
+constant, of Rp0.2 and of each flow-curve point enters its budget as a component, u = |Δ| (a
+systematic effect left uncorrected, stated as its size).
 """
 
 from __future__ import annotations
@@ -84,12 +84,21 @@ def pinned_options(result: Mapping, test: str, options: Mapping) -> dict:
     return out
 
 
+WIDENED_BLOCKS = ("hardening", "flow_stress_MPa")  # blocks of budgets the lag moves: the constants, the flow-curve points
+WIDENED_VALUES = ("Rp02_MPa",)  # single budgets it moves: the offset yield at the rounded knee
+
+
 def widen(uncertainty: Mapping, alternative: Mapping) -> list[str]:
-    """Add :data:`COMPONENT` to each hardening constant's budget of ``uncertainty`` that ``alternative``
-    (the result with the force restored) also states: u = |Δ|. Returns the constants ``alternative`` lacks."""
-    mine, theirs, missing = uncertainty.get("hardening") or {}, alternative.get("hardening") or {}, []
-    for key, b in mine.items():
-        other = theirs.get(key) if isinstance(theirs, Mapping) else None
+    """Add :data:`COMPONENT` to each budget of ``uncertainty`` the lag moves (:data:`WIDENED_BLOCKS`'
+    members, :data:`WIDENED_VALUES`) that ``alternative`` (the result with the force restored) also
+    states: u = |Δ|. Returns the keys ("block key" in a block) ``alternative`` lacks."""
+    pairs = [(key, uncertainty.get(key), alternative.get(key)) for key in WIDENED_VALUES if key in uncertainty]
+    for block in WIDENED_BLOCKS:
+        mine, theirs = uncertainty.get(block) or {}, alternative.get(block) or {}
+        pairs += [(key if block == "hardening" else f"{block} {key}", b, theirs.get(key) if isinstance(theirs, Mapping) else None)
+                  for key, b in (mine.items() if isinstance(mine, Mapping) else ())]
+    missing = []
+    for key, b, other in pairs:
         if not isinstance(b, dict) or b.get("U") is None or b.get("value") is None or not isinstance(other, Mapping) or other.get("value") is None:
             missing.append(key)
             continue

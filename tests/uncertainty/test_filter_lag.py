@@ -73,6 +73,11 @@ def test_widen_adds_the_difference_as_a_standard_uncertainty():
     assert n["U"] == pytest.approx(2.0 * math.hypot(0.01, 0.03))
     assert A["U"] == pytest.approx(2.0 * math.hypot(1.0, 0.5)) and A["interval"] == [0.0, pytest.approx(A["U"])]
     assert filter_lag.widen({"hardening": {"B_MPa": {"value": 1.0, "U": 1.0, "components": []}}}, alt) == ["B_MPa"]
+    point = {"Rp02_MPa": {"value": 300.0, "unit": "MPa", "u": 1.0, "U": 2.0, "k": 2.0, "components": [dict(comp, value=300.0, unit="MPa", u=1.0)]},
+             "flow_stress_MPa": {"0.05": {"value": 400.0, "unit": "MPa", "u": 1.0, "U": 2.0, "k": 2.0,
+                                          "components": [dict(comp, value=400.0, unit="MPa", u=1.0)]}}}
+    assert filter_lag.widen(point, {"Rp02_MPa": {"value": 304.0}, "flow_stress_MPa": {}}) == ["flow_stress_MPa 0.05"]
+    assert point["Rp02_MPa"]["U"] == pytest.approx(2.0 * math.hypot(1.0, 4.0)) and point["flow_stress_MPa"]["0.05"]["U"] == 2.0
 
 
 def test_the_rig_states_the_filter_it_sets():
@@ -83,7 +88,7 @@ def test_the_rig_states_the_filter_it_sets():
     assert force_filter_meta(LoadCellConfig(port="x", filter=0)) == {}
 
 
-def _fast_aborted(tau: float, stated: bool):
+def _fast_aborted(tau: float, stated: bool, block: str = "hardening", key: str = "n"):
     """make_record's Johnson–Cook material (n 0.3) at a constant crosshead speed, its force through a first-order
     filter of ``tau``, the test aborted at εp ≈ 0.03 (no post-test measurements): the record, and its result."""
     from flowcurve.identification.identify import identify
@@ -102,7 +107,8 @@ def _fast_aborted(tau: float, stated: bool):
     record = dataclasses.replace(rec, meta=meta, data=pd.DataFrame({"time_s": t[keep], "force_N": force[keep], "crosshead_mm": x[keep]}))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return identify(record).result["uncertainty"]["hardening"]["n"]
+        unc = identify(record).result["uncertainty"]
+        return unc[block][key] if block else unc[key]
 
 
 def test_a_rounded_knee_on_a_short_range_is_in_n_budget():
@@ -115,3 +121,10 @@ def test_a_rounded_knee_on_a_short_range_is_in_n_budget():
     lag = [c["u"] for c in stated["components"] if c["name"] == filter_lag.COMPONENT]
     assert len(lag) == 1 and 0.5 * bias < lag[0] < 2.0 * bias
     assert not any(c["name"] == filter_lag.COMPONENT for c in silent["components"])
+
+
+def test_a_rounded_knee_moves_rp02_within_its_budget_when_the_filter_is_stated():
+    """Rp0.2 at the knee the filter rounds: the unfiltered record's (τ → 0) within the stated record's U, which holds the lag."""
+    bare, stated = _fast_aborted(1e-4, False, None, "Rp02_MPa"), _fast_aborted(1.0, True, None, "Rp02_MPa")
+    assert any(c["name"] == filter_lag.COMPONENT for c in stated["components"])
+    assert abs(stated["value"] - bare["value"]) <= stated["U"]
