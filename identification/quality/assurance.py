@@ -97,6 +97,7 @@ def _constants(hard: Mapping, stress_rel_u: float) -> dict:
     shifts = ((hard.get("start_uncertainty") or {}).get("constants_shift") or {})
     lack = ((hard.get("start_uncertainty") or {}).get("constants_lack_of_fit") or {})
     sides = ((hard.get("start_uncertainty") or {}).get("constants_on_bound") or {})
+    scales = ((hard.get("start_uncertainty") or {}).get("constants_on_bound_scale") or {})
     shares = hard.get("stderr_shares") or {}  # compression: name → {key: u}, inside the stated standard error
     for key, unit in CONSTANTS:
         value = _num(hard.get(key))
@@ -105,6 +106,7 @@ def _constants(hard: Mapping, stress_rel_u: float) -> dict:
         shift = _num(shifts.get(key.removesuffix("_MPa")))
         b = un.constant_budget(value, _num(hard.get(f"{key}_stderr")), stress_rel_u, unit, zero_shift=shift,
                                lack_of_fit=_num(lack.get(key.removesuffix("_MPa"))), on_bound=sides.get(key.removesuffix("_MPa")),
+                               scale=_num(scales.get(key.removesuffix("_MPa"))),
                                shares={name: u for name, per in shares.items() if (u := _num((per or {}).get(key))) is not None})
         if b is not None:
             out[key] = b

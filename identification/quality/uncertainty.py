@@ -504,7 +504,8 @@ def correlated_fit_u(func: Callable, params: Mapping[str, float], eps, stress_MP
 
 
 def constant_budget(value: float, stderr: float | None, stress_rel_u: float, unit: str, *, zero_shift: float | None = None,
-                    lack_of_fit: float | None = None, on_bound: str | None = None, shares: Mapping[str, float] | None = None) -> dict | None:
+                    lack_of_fit: float | None = None, on_bound: str | None = None, shares: Mapping[str, float] | None = None,
+                    scale: float | None = None) -> dict | None:
     """A fitted constant: the fit's standard error and, for a stress (MPa), the stress scale. With
     ``zero_shift`` (the constant's move when the strain zero moves by δε0, already inside the
     widened standard error) the method's share is stated apart: fit √(se² − shift²) and the shift.
@@ -515,9 +516,10 @@ def constant_budget(value: float, stderr: float | None, stress_rel_u: float, uni
     the standard error then reads as u_lof. ``on_bound`` ("lower"/"upper"): the constant sits on that
     bound, its fit's standard error is not its own (a covariance at a bound) and ``lack_of_fit`` is its
     reach inward over k (:func:`on_bound_reach`): the budget states it with the shift and the stress
-    scale, and ``interval`` one-sided, [value, value + U]."""
+    scale, and ``interval`` one-sided, [value, value + U]; where U passes the constant's own ``scale``
+    (:func:`.laws.bounds.constant_scales`) the bound holds it and the curve does not, which a note says."""
     if on_bound:
-        return _on_bound_budget(value, lack_of_fit or 0.0, stress_rel_u, unit, on_bound, zero_shift)
+        return _on_bound_budget(value, lack_of_fit or 0.0, stress_rel_u, unit, on_bound, zero_shift, scale)
     if (stderr is None or not math.isfinite(stderr)) and lack_of_fit is None:
         return None
     given = stderr is not None and math.isfinite(stderr)
@@ -545,7 +547,8 @@ def constant_budget(value: float, stderr: float | None, stress_rel_u: float, uni
     return out
 
 
-def _on_bound_budget(value: float, u_bound: float, stress_rel_u: float, unit: str, side: str, zero_shift: float | None) -> dict:
+def _on_bound_budget(value: float, u_bound: float, stress_rel_u: float, unit: str, side: str, zero_shift: float | None,
+                     scale: float | None = None) -> dict:
     """The budget of a constant on its ``side`` bound: its reach inward (u = reach/k), the strain zero's
     shift (its move under εp + δε0) and, for a stress, the stress scale; ``interval`` is one-sided:
     [value, value + U] on a lower bound, [value − U, value] on an upper one (``one_sided``: the side)."""
@@ -557,7 +560,11 @@ def _on_bound_budget(value: float, u_bound: float, stress_rel_u: float, unit: st
     comps = [*method]
     if unit == "MPa":
         comps.append(Component("stress scale (force class, d0)", 1.0, "1", stress_rel_u, value, "relative"))
-    out = budget(value, unit, comps, note=f"on its {side} bound: the value lies on the bound's inward side only, within U of it")
+    note = f"on its {side} bound: the value lies on the bound's inward side only, within U of it"
+    if scale is not None and scale > 0 and K_COVERAGE * combined(method) > scale:  # reaches past the law's own size for it
+        note += ("; over this fit range the law's constants trade off (their correlations): the bound holds this one, the curve "
+                 "does not determine it, the set of them is")
+    out = budget(value, unit, comps, note=note)
     out["u_method"] = combined(method)
     out["interval"] = [value, value + out["U"]] if side == "lower" else [value - out["U"], value]
     out["one_sided"] = side

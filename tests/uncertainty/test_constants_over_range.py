@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from flowcurve.identification.quality import uncertainty as un
 
@@ -143,3 +144,12 @@ def test_constant_budget_states_the_method_term_and_never_zero_on_a_bound():
     assert "not determined" in un.constant_budget(300.0, 5.0, 0.0, "MPa", lack_of_fit=200.0)["note"]  # U = 400 ≥ the value
     unchanged = un.constant_budget(500.0, 5.0, 0.0, "MPa", lack_of_fit=2.0)  # below the standard error: no method term
     assert [c["name"] for c in unchanged["components"]] == ["fit (standard error)", "stress scale (force class, d0)"]
+
+
+def test_a_constant_its_bound_holds_but_the_curve_does_not_says_so():
+    """46NTAV's Johnson–Cook A sits on 0 with n 0.04: A and B·εⁿ trade off, its reach inward (6 000 MPa) passes the law's
+    own scale for A (its stress level, 1 260 MPa): the note says the curve does not determine it; a pinned A (reach 0) says not."""
+    loose = un.constant_budget(0.0, None, 0.005, "MPa", lack_of_fit=3014.6, on_bound="lower", scale=1256.9)
+    pinned = un.constant_budget(0.0, None, 0.005, "MPa", lack_of_fit=5e-4, on_bound="lower", scale=1256.9)
+    assert "does not determine it" in loose["note"] and loose["interval"] == [0.0, pytest.approx(loose["U"])]
+    assert "does not determine" not in pinned["note"] and pinned["U"] < 1e-2
