@@ -381,11 +381,11 @@ def _post_test_spread(result, record: Record, func, options: dict) -> list[str]:
 
 
 def _filter_lag_spread(result, record: Record, func, options: dict) -> list[str]:
-    """A tension record that states its load cell's filter (:mod:`.quality.filter_lag`): identified again with the
-    force the filter delayed restored, the difference of each hardening constant, Rp0.2 and flow-curve point
-    entered into its budget. Returns the
-    warnings (one when the second identification fails: the budgets are then left as they were). Compression's
-    range runs to the operator's target, where the yield knee has little weight (docs/methods.md §2.13)."""
+    """A tension record that states its load cell's filter (:mod:`.quality.filter_lag`) and has hardening budgets:
+    identified again with the force the filter delayed restored, the difference of each hardening constant, Rp0.2
+    and flow-curve point entered into its budget. Returns the warnings (one when the second identification fails:
+    the budgets are then left as they were). Compression's range runs to the operator's target, where the yield
+    knee has little weight (docs/methods.md §2.13)."""
     from flowcurve.identification.quality import filter_lag
 
     tau = filter_lag.lag_s(record)
