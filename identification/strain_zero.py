@@ -228,7 +228,7 @@ def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dic
     from dataclasses import replace
 
     from flowcurve.identification.laws.hardening import static_form
-    from flowcurve.identification.laws.bounds import constant_scales, constants_on_bound
+    from flowcurve.identification.laws.bounds import constant_scales, constants_on_bound, sides
     from flowcurve.identification.quality.uncertainty import correlated_fit_u
 
     delta = zero["delta_eps0"]
@@ -240,7 +240,7 @@ def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dic
     law = static_form(fit.law)
     on_bound = constants_on_bound(law.func, fit.params, law.bounds, eps_p) if law else {}
     if on_bound:  # named only where there is one (result.json of every other fit as before), with each one's own scale
-        start["constants_on_bound"] = {k: "lower" if inward > 0 else "upper" for k, inward in on_bound.items()}
+        start["constants_on_bound"] = sides(on_bound)
         scales = constant_scales(law.func, fit.params, eps_p)
         start["constants_on_bound_scale"] = {k: scales.get(k, 0.0) for k in on_bound}
     start["constants_lack_of_fit"] = correlated_fit_u(law.func, fit.params, eps_p, stress_MPa, on_bound) if law else {}

@@ -66,6 +66,11 @@ def constants_on_bound(func: Callable, params: Mapping[str, float], bounds: Mapp
     return out
 
 
+def sides(on_bound: Mapping[str, float]) -> dict[str, str]:
+    """:func:`constants_on_bound`'s name → ±1 as name → "lower" / "upper"."""
+    return {k: "lower" if inward > 0 else "upper" for k, inward in on_bound.items()}
+
+
 def bound_sides(func: Callable, params: Mapping[str, float], bounds: Mapping[str, tuple[float, float]], eps) -> dict[str, str]:
     """:func:`constants_on_bound` as name → "lower" / "upper"."""
-    return {k: "lower" if inward > 0 else "upper" for k, inward in constants_on_bound(func, params, bounds, eps).items()}
+    return sides(constants_on_bound(func, params, bounds, eps))

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flowcurve.identification.iso6892 import nan_argmax
-from flowcurve.identification.laws.bounds import BOUND_REL_TOL, constant_scales, constants_on_bound  # noqa: F401 (callers read them here)
+from flowcurve.identification.laws.bounds import BOUND_REL_TOL, constant_scales
 from flowcurve.identification.laws.bounds import central_jacobian as _jacobian
 from flowcurve.record.specimen import circle_area_mm2 as _area_mm2  # S0 = π·d0²/4
 

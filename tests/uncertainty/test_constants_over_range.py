@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from flowcurve.identification.laws import bounds as bounds_rule
 from flowcurve.identification.quality import uncertainty as un
 
 
@@ -75,7 +76,7 @@ def test_a_constant_on_its_bound_reaches_the_closed_form_of_its_unbounded_interv
         se = math.sqrt(noise * (x @ x) / (x.size * np.sum((x - x.mean()) ** 2)))
         reach = un.K_COVERAGE * un.correlated_fit_u(line, p, x, y, {"a": 1.0})["a"]
         closed = max(0.0, a1 + 2.0 * se)
-        floor = un.BOUND_REL_TOL * float(np.max(np.abs(p["b"] * x)))
+        floor = bounds_rule.BOUND_REL_TOL * float(np.max(np.abs(p["b"] * x)))
         assert math.isclose(reach, max(closed, floor), rel_tol=1e-4), (true_a, reach, closed)  # J by central differences
     assert closed == 0.0 and math.isclose(reach, floor, rel_tol=1e-6)  # a = −2 (≈ 17 se below): the noise never takes it off its bound
 
@@ -117,10 +118,10 @@ def test_constants_on_bound_by_the_constants_own_scale():
 
     eps = np.linspace(0.01, 0.2, 30)
     bounds = {"A": (0.0, math.inf), "B": (0.0, math.inf), "n": (1e-4, 5.0)}
-    assert un.constants_on_bound(jc, {"A": 5e-9, "B": 1000.0, "n": 0.2}, bounds, eps) == {"A": 1.0}
-    assert un.constants_on_bound(jc, {"A": 0.1, "B": 1000.0, "n": 0.2}, bounds, eps) == {}
-    assert un.constants_on_bound(jc, {"A": 300.0, "B": 1000.0, "n": 5.0 - 1e-7}, bounds, eps) == {"n": -1.0}
-    scales = un.constant_scales(jc, {"A": 300.0, "B": 1000.0, "n": 0.2}, eps)
+    assert bounds_rule.constants_on_bound(jc, {"A": 5e-9, "B": 1000.0, "n": 0.2}, bounds, eps) == {"A": 1.0}
+    assert bounds_rule.constants_on_bound(jc, {"A": 0.1, "B": 1000.0, "n": 0.2}, bounds, eps) == {}
+    assert bounds_rule.constants_on_bound(jc, {"A": 300.0, "B": 1000.0, "n": 5.0 - 1e-7}, bounds, eps) == {"n": -1.0}
+    scales = bounds_rule.constant_scales(jc, {"A": 300.0, "B": 1000.0, "n": 0.2}, eps)
     assert math.isclose(scales["A"], 300.0 + 1000.0 * 0.2**0.2, rel_tol=1e-6)  # ∂σ/∂A = 1: the stress level
 
 
