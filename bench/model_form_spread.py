@@ -12,10 +12,15 @@ d/d_n (absolute change), both sprung back elastically, and the force (largest re
 over ε 0.1 to the end). One ccx at a time; the runs go to $FLOWCURVE_FE_CACHE (a new folder
 makes them all run).
 
+``--profile`` also prints the force's change at ε 0.1, 0.2, … 0.7 per variant and in quadrature
+(also per unit μ).
+
 Measured (one ccx at a time, load average 1 → 8 from other work; 6–100 s a run): the table in
 docs/methods.md §4a.7 — in quadrature per case at most ΔR 4.3 % (C2), d/d_n 0.017 (C3), force
 0.24 / 1.7 / 2.4 / 3.6 % at μ 0.05 / 0.15 / 0.2 / 0.3; S4 (h0/d0 2, μ 0.2) stops in the product's
-model at the fold-over with every setting, S2's stick 1e5 and 200-increment runs too.
+model at the fold-over with every setting, S2's stick 1e5 and 200-increment runs too. Along the
+stroke (``--profile``, 2026-11-29): 0.016–0.044 per unit μ up to the band before the fold-over,
+0.07–0.11 within it and beyond (docs/methods.md §4a.7).
 """
 
 from __future__ import annotations
@@ -45,6 +50,14 @@ CASES = {c.name: c for c in (
 VARIANTS = {"product": {}, "mesh 30": {"nr": 30, "layer_fraction": 1.0 / 30.0}, "stick 1e5": {"stick_slope_MPa_per_mm": 1e5},
             "200 inc": {"increments": 200}}
 FORCE_FROM_STRAIN = 0.1
+PROFILE_STRAINS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7)
+
+
+def force_profile(ref, other, strains=PROFILE_STRAINS) -> list[float]:
+    """The force's relative change at each of ``strains`` (NaN beyond either run's end)."""
+    (e0, f0, _, _), (e1, f1, _, _) = ref, other
+    end = min(e0.max(), e1.max())
+    return [float(np.interp(e, e1, f1) / np.interp(e, e0, f0) - 1.0) if e <= end else math.nan for e in strains]
 
 
 def _shape(case, stroke, force, height, dmax, dface):
@@ -82,6 +95,7 @@ def compare(ref, other) -> tuple[float, float, float]:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", default="", help="comma-separated case names")
+    ap.add_argument("--profile", action="store_true", help="also the force's change along the stroke, per variant and in quadrature")
     args = ap.parse_args()
     names = [n for n in CASES if not args.only or n in args.only.split(",")]
     print("case  h0/d0  mu   | variant      | dR mm   dR change | d/d_n   change  | force change | solver s")
@@ -105,6 +119,14 @@ def main() -> int:
                 continue
             db, dface, df = compare(ref, shape)
             print(f"{head} {shape[2]:6.4f} {100 * db:+7.1f} % | {shape[3]:6.4f} {dface:+7.4f} | {100 * df:8.2f} %   | {info:6.1f}", flush=True)
+        if args.profile and ref is not None:
+            rows = {label: force_profile(ref, shape) for label, (shape, _) in runs.items() if shape is not None and label != "product"}
+            print(f"{name}: force change % at ε " + " ".join(f"{e:6.2f}" for e in PROFILE_STRAINS))
+            for label, row in rows.items():
+                print(f"  {label:12s}" + " ".join(f"{100 * v:+6.2f}" for v in row))
+            squares = np.square(list(rows.values()))
+            total = np.where(np.all(np.isnan(squares), axis=0), np.nan, np.sqrt(np.nansum(squares, axis=0)))  # a run that stopped: left out
+            print(f"  {'quadrature':12s}" + " ".join(f"{100 * v:6.2f}" for v in total) + f"   per μ: " + " ".join(f"{v / case.mu:5.3f}" for v in total), flush=True)
     return 0
 
 
