@@ -29,19 +29,26 @@ def remove_frame_compliance(crosshead_mm, force_N, stiffness_N_per_um: float) ->
     return np.asarray(crosshead_mm, dtype=float) - np.asarray(force_N, dtype=float) / (stiffness_N_per_um * UM_PER_MM)
 
 
-def scale_to_measured(displacement_mm, measured_final_mm: float) -> tuple[np.ndarray, float]:
-    """Scale a displacement so that its largest value equals the measured one (3.1).
+def scale_to_measured(displacement_mm, measured_final_mm: float, reference_mm: float | None = None) -> tuple[np.ndarray, float]:
+    """Scale a displacement so that ``reference_mm`` (default: its largest value) becomes the measured one (3.1).
 
-    Returns the scaled array and the factor K_l = Δl_p / max(Δl).
+    Returns the scaled array and the factor K_l = Δl_p / reference (the seed's: Δl_p / max Δl).
     """
     disp = np.asarray(displacement_mm, dtype=float)
-    peak = float(np.nanmax(np.abs(disp))) if disp.size else 0.0
-    if peak <= 0:
+    peak = (float(np.nanmax(np.abs(disp))) if disp.size else 0.0) if reference_mm is None else float(reference_mm)
+    if not peak > 0:
         raise IdentificationError("cannot scale to the measured elongation: the displacement never leaves zero")
     if not measured_final_mm > 0:
         raise IdentificationError(f"the measured elongation must be > 0 mm, got {measured_final_mm!r}")
-    k = measured_final_mm / peak  # (3.1) K_l = Δl_p / max Δl
+    k = measured_final_mm / peak  # (3.1) K_l = Δl_p / max Δl (or the given reference)
     return disp * k, k
+
+
+def broken_specimen_recovery_mm(force_N: float, length_mm: float, s0_mm2: float, E_MPa: float, uniform_elongation: float = 0.0) -> float:
+    """Elastic extension a tension specimen gives back when the force F leaves it: its length and
+    section at the uniform elongation e_u (constant volume), F·L·(1 + e_u)²/(E·S0)."""
+    # ΔL_el = F·L(1 + e_u) / (E·S0/(1 + e_u))
+    return force_N * length_mm * (1.0 + uniform_elongation) ** 2 / (E_MPa * s0_mm2)
 
 
 def first_loading(y, up_to: float, unit: str = "N") -> int:

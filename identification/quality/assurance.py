@@ -124,8 +124,14 @@ def _strain_rel_u(result: Mapping, inst: Mapping) -> tuple[float, str]:
     shape = un.rectangular(inst["crosshead_strain_error_pct"] / 100.0)
     basis = f"crosshead travel, ±{inst['crosshead_strain_error_pct']:g} % assumed"
     if methods.get("scale_factor_Kl") is not None and l0 and lu and lu != l0:
-        return (math.hypot(shape, un.measured_length_scale_rel_u(l0, lu, inst["length_resolution_mm"])),
-                basis + f", scaled to the measured Lu − L0 at {inst['length_resolution_mm']:g} mm")
+        terms = methods.get("scale_Kl") or {}  # (3.1)'s terms: the recovery at the fracture, its E, the last sample's travel
+        recovery = (_num(terms.get("specimen_recovery_mm")) or 0.0) + (_num(terms.get("frame_recovery_mm")) or 0.0)
+        E_rec, u_E_rec = _num(terms.get("recovery_E_MPa")), _num(terms.get("recovery_E_u_MPa")) or 0.0
+        scale = un.measured_length_scale_rel_u(l0, lu, inst["length_resolution_mm"], mpe_mm=inst["caliper_mpe_mm"], recovery_mm=recovery,
+                                               recovery_E_rel_u=u_E_rec / E_rec if E_rec else un.rectangular(un.HANDBOOK_E_BOUND),
+                                               sample_step_mm=_num(terms.get("sample_step_mm")) or 0.0)
+        return (math.hypot(shape, scale), basis + f", scaled to the measured Lu − L0 (resolution {inst['length_resolution_mm']:g} mm, "
+                f"MPE ±{inst['caliper_mpe_mm']:g} mm) less the elastic recovery at the fracture ({recovery:.3g} mm)")
     return shape, basis
 
 

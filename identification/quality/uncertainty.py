@@ -155,10 +155,15 @@ def extensometer_scale_rel_u(extensometer_class: float) -> float:
     return math.hypot(rectangular(extensometer_class / 100.0), rectangular(extensometer_class / 100.0))
 
 
-def measured_length_scale_rel_u(l0_mm: float, lu_mm: float, length_resolution_mm: float) -> float:
-    """Relative standard uncertainty of a crosshead strain scaled to the measured Lu − L0 (K_l):
-    both lengths read with ``length_resolution_mm``."""
-    return math.sqrt(2.0) * resolution(length_resolution_mm) / abs(lu_mm - l0_mm)
+def measured_length_scale_rel_u(l0_mm: float, lu_mm: float, length_resolution_mm: float, *, mpe_mm: float = 0.0,
+                                recovery_mm: float = 0.0, recovery_E_rel_u: float = 0.0, sample_step_mm: float = 0.0) -> float:
+    """Relative standard uncertainty of a crosshead strain scaled to the measured Lu − L0 (K_l, (3.1)):
+    both lengths read with the caliper's resolution and MPE; the elastic recovery at the fracture
+    taken off the displacement, through its E (u(R)/R = u(E)/E); the break somewhere within the
+    last sample's travel (rectangular over it). K = M/(D − R): u(K)/K = √(u(M)²/M² + u(R)² + δ²/3)/(D − R), D − R ≈ M."""
+    m = abs(lu_mm - l0_mm)
+    length_u = math.sqrt(2.0) * dimension_u(lu_mm, length_resolution_mm, mpe_mm)
+    return math.sqrt(length_u ** 2 + (recovery_mm * recovery_E_rel_u) ** 2 + sample_step_mm ** 2 / 3.0) / m
 
 
 # ---- budgets of the tension results (ISO 6892-1) -------------------------------------------------

@@ -12,7 +12,8 @@ import numpy as np
 from flowcurve.errors import IdentificationError
 from flowcurve.identification import iso6892
 from flowcurve.identification.laws.hardening import MAX_STRAIN
-from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_SAMPLES, ModulusFit, elastic_modulus, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, scale_to_measured
+from flowcurve.identification.elastic_modulus import choose_modulus
+from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_SAMPLES, ModulusFit, broken_specimen_recovery_mm, elastic_modulus, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, scale_to_measured
 from flowcurve.identification.tension.values import MAX_E_UNCERTAINTY, MIN_YIELD_OFFSET
 from flowcurve.identification.tension.inputs import _Inputs, _stress_noise_MPa
 
@@ -33,6 +34,49 @@ class _ElasticLine:
     scale_factor: float | None
     noise_MPa: float
     warnings: list[str]
+    scale: dict | None = None  # :func:`_fracture_scale`'s terms (result.json methods.scale_Kl)
+
+
+def _fracture_scale(inp: _Inputs, disp, line_E_MPa: float | None, E_option_MPa: float | None) -> tuple[float, float, dict]:
+    """(measured, reference, terms) of (3.1) on a broken tension specimen, like with like: the
+    crosshead's plastic elongation at the fracture — the displacement at the last sample before it
+    (``inp.i_k``: later samples hold the travel after the break) less the elastic extension the
+    pieces gave back, the specimen's F_f·L(1 + e_u)²/(E·S0) with the one rule's E (the diagram's
+    slope where there is none) and a frame's F_f·(c_line − L/(E·S0)) where its compliance is still in
+    ``disp`` — against Lu − L0 plus the uniform plastic elongation of the length the crosshead sees
+    beyond L0, (L − L0)·a_u. ``line_E_MPa``: the line's slope on disp/L (unscaled), or None."""
+    src, length, s0, i_k, force = inp.src, inp.length, inp.s0, inp.i_k, inp.force
+    choice = choose_modulus(given=E_option_MPa, handbook=inp.record.positive("material.E_MPa"), material=inp.record.meta.get("material"))
+    frame_in = src["source"] == "crosshead" and src["stiffness"] is None
+    E_line = line_E_MPa if line_E_MPa is not None and np.isfinite(line_E_MPa) and line_E_MPa > 0 else None
+    c_line = length / (E_line * s0) if E_line is not None else None  # mm/N: the diagram's elastic compliance
+    du = inp.record.specimen.du_mm
+    if du is not None and 0 < du <= inp.d0:
+        a_u, a_u_from = (inp.d0 / du) ** 2 - 1.0, "post.du_mm"  # constant volume: a_u = (d0/du)² − 1
+    else:
+        el = inp.Fm * (c_line if c_line is not None else length / (choice.E_MPa * s0) if choice.E_MPa else 0.0)
+        a_u, a_u_from = max((float(disp[inp.i_m]) - el) / length, 0.0), "the diagram at Fm"
+    F_f = max(float(force[i_k]), 0.0)
+    if choice.E_MPa is not None:
+        E_s, u_E, E_from = choice.E_MPa, choice.u_MPa, choice.source
+    elif E_line is not None and not frame_in:
+        E_s, u_E, E_from = E_line, E_line * 0.05, "the diagram's slope (frame removed; ±5 %)"
+    else:
+        E_s, u_E, E_from = None, 0.0, "none"
+    if E_s is not None:
+        specimen = broken_specimen_recovery_mm(F_f, length, s0, E_s, a_u)
+        frame = F_f * max(c_line - length / (E_s * s0), 0.0) if frame_in and c_line is not None else 0.0
+    else:  # no E to split the diagram's slope: specimen and frame together, small strain
+        specimen, frame = (F_f * c_line if c_line is not None else 0.0), 0.0
+    step = float(disp[i_k] - disp[i_k - 1]) if i_k > 0 else 0.0  # the break lies within a sample's travel after i_k
+    reference = float(disp[i_k]) - specimen - frame
+    measured = (inp.lu - inp.l0) + (length - inp.l0) * a_u
+    terms = {"measured_mm": measured, "lu_minus_l0_mm": inp.lu - inp.l0, "uniform_plastic_elongation": a_u, "uniform_from": a_u_from,
+             "length_mm": length, "fracture_index": int(i_k), "fracture_force_N": F_f, "fracture_displacement_mm": float(disp[i_k]),
+             "specimen_recovery_mm": specimen, "frame_recovery_mm": frame, "recovery_E_MPa": E_s, "recovery_E_u_MPa": u_E,
+             "recovery_E_source": E_from, "sample_step_mm": max(step, 0.0), "reference_mm": reference,
+             "seed_max_displacement_mm": float(np.nanmax(np.abs(disp)))}
+    return measured, reference, terms
 
 
 def _first_guesses(inp: _Inputs, automatic: bool) -> list[float]:
@@ -96,9 +140,10 @@ def _chosen_modulus(mod: ModulusFit, E_MPa: float | None, handbook_E: float | No
 def _line_without_samples(inp: _Inputs, E: float, why: str, *, scale: bool, noise_MPa: float) -> _ElasticLine:
     """No elastic line in the record (too few samples before the yield): the given or handbook E
     strips the elastic strain, the toe is not compensated (there is no line to find it on)."""
-    disp, scale_factor = inp.src["disp"], None
+    disp, scale_factor, terms = inp.src["disp"], None, None
     if inp.src["scalable"] and scale and inp.lu is not None:
-        disp, scale_factor = scale_to_measured(disp, inp.lu - inp.l0)  # (3.1) K_l = Δl_p / max Δl
+        measured, reference, terms = _fracture_scale(inp, disp, E if inp.src["stiffness"] is not None or inp.src["source"] != "crosshead" else None, E)
+        disp, scale_factor = scale_to_measured(disp, measured, reference)  # (3.1) K_l = Δl_p / Δl_p at the fracture
     strain = disp / inp.length
     if np.nanmax(np.abs(strain)) > MAX_STRAIN:
         raise IdentificationError(f"{inp.record.source}: engineering strain up to {np.nanmax(strain):.4g} is implausible - check units of the displacement (mm) and l0 (mm)")
@@ -107,7 +152,7 @@ def _line_without_samples(inp: _Inputs, E: float, why: str, *, scale: bool, nois
     warnings = [f"no elastic line ({why}): the toe is not compensated and Rp0.2 and the start of the flow curve rest on "
                 f"the given E = {E:.4g} MPa alone"]
     return _ElasticLine(E=E, mod=mod, Rp02=Rp02, window_MPa=(0.0, 0.0), disp=disp, strain=strain, toe_mm=0.0,
-                        scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings)
+                        scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings, scale=terms)
 
 
 def _line_in_window(strain, eng_stress, window_MPa, line_points: int, how: str, auto: ModulusFit | None) -> ModulusFit:
@@ -136,7 +181,7 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
     apparent = src["source"] == "crosshead" and src["stiffness"] is None
     handbook_E = record.positive("material.E_MPa") if E_MPa is None and not apparent else None
     disp0 = src["disp"]
-    toe_mm, scale_factor = 0.0, None
+    toe_mm, scale_factor, terms = 0.0, None, None
     unresolved = None  # the line's fit when it was not resolved and the handbook E took its place (kept from then on)
     strain0, sdar_memo, previous = disp0 / length, {}, None
     for step in range(6):
@@ -158,7 +203,9 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         if toe:
             disp, toe_mm = compensate_toe(disp0, force, window_N=(window_MPa[0] * inp.s0, window_MPa[1] * inp.s0), min_points=line_points)
         if src["scalable"] and scale and inp.lu is not None:
-            disp, scale_factor = scale_to_measured(disp, inp.lu - inp.l0)  # (3.1) K_l = Δl_p / max Δl
+            unscaled = fit_modulus(disp / length, eng_stress, window_MPa, min_points=line_points).E_MPa  # the line on disp/L
+            measured, reference, terms = _fracture_scale(inp, disp, unscaled, E_MPa)
+            disp, scale_factor = scale_to_measured(disp, measured, reference)  # (3.1) K_l = Δl_p / Δl_p at the fracture
         strain = disp / length
         mod = _line_in_window(strain, eng_stress, window_MPa, line_points, how, auto)
         E = _chosen_modulus(mod, E_MPa, handbook_E, given_window=not automatic)
@@ -179,7 +226,7 @@ def _elastic_line(inp: _Inputs, *, fractions, window_fixed_MPa, modulus_referenc
         ref = Rp02
     warnings = _line_checks(record.source, strain, E, unresolved)
     return _ElasticLine(E=E, mod=mod, Rp02=Rp02, window_MPa=window_MPa, disp=disp, strain=strain, toe_mm=toe_mm,
-                        scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings)
+                        scale_factor=scale_factor, noise_MPa=noise_MPa, warnings=warnings, scale=terms)
 
 
 def _line_checks(source: str, strain, E: float, unresolved: ModulusFit | None) -> list[str]:

@@ -218,7 +218,9 @@ def _neck_correction(inp: _Inputs, iso: _IsoResults, true: _TrueCurve) -> tuple[
     avg = float(inp.force[iso.i_k] / su)  # P_k / F_k
     neck_radius = inp.record.specimen.neck_radius_mm
     dk_for_neck = iso.dk if iso.dk is not None else math.sqrt(4.0 * su / math.pi)
-    fracture = neck_corrections(avg, eps_f, true.eps_u, d_k_mm=dk_for_neck, neck_radius_mm=neck_radius)
+    # a break at the onset of necking: the (plastic) ε_f within the uniform strain's elastic part σ/E is no neck (a/R 0)
+    eps_u = eps_f if true.eps_p_at_Rm <= eps_f < true.eps_u else true.eps_u
+    fracture = neck_corrections(avg, eps_f, eps_u, d_k_mm=dk_for_neck, neck_radius_mm=neck_radius)
     fracture.update({"true_strain": eps_f, "avg_stress_MPa": avg, "force_N": force_k, "area_source": iso.su_source})
     return fracture, []
 
@@ -345,6 +347,7 @@ def _methods(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurv
         "crosshead_step_interpolated_mm": inp.src.get("step_mm"),  # a stepped reading re-read between its steps (None: as read)
         "toe_compensation_mm": line.toe_mm if toe else None,
         "scale_factor_Kl": line.scale_factor,
+        **({"scale_Kl": line.scale} if line.scale is not None else {}),  # (3.1)'s terms: Lu − L0 against the plastic elongation at the fracture
         "modulus": line.mod.source,
         "modulus_r2": line.mod.r2,
         "Rp02": "offset method, ISO 6892-1: intersection with the 0.2 % line of slope E",

@@ -90,7 +90,7 @@ class _Inputs:
     Rm: float
     src: dict  # :func:`_strain_source`: displacement, its length, how it was obtained
     lu: float | None
-    length: float  # the length the strain refers to (l0 when scaled to a measured Lu)
+    length: float  # the length the strain refers to: the crosshead's (parallel length, else l0) or the extensometer's gauge
     warnings: list[str]
     unbroken: bool = False  # the record says the specimen did not break (:func:`.tension_values.unbroken_statement`)
 
@@ -163,7 +163,6 @@ def _inputs(record: Record, *, use_extensometer, frame_stiffness_N_per_um, cross
     if src["scalable"] and scale and lu is not None:
         if lu <= l0:
             raise IdentificationError(f"{record.source}: post.lu_mm = {lu:g} mm is not longer than l0 = {l0:g} mm")
-        length = l0
     return _Inputs(record=record, d0=d0, l0=l0, s0=s0, data=data, sub=sub, force=force, eng_stress=eng_stress, i_m=i_m, i_k=i_k,
                    Fm=Fm, Rm=Rm, src=src, lu=lu, length=length, warnings=warnings)
 

@@ -5,6 +5,11 @@ before the speed work of issue 43, with::
 
     git checkout 38e31b7 && python tests/tension/test_identify_numbers_unchanged.py --write
 
+The long cases were written again at the (3.1) change of branch klscale: the bench's record
+states Lu as L0 plus its *loaded* elongation at the end, and (3.1) now sets Lu − L0 against the
+elongation at the fracture less the elastic recovery there, so its K_l moved 0.99996 → 1.0077 and
+every strain-dependent value with it (Agt 19.73 → 19.89 %); the 42CrMoS4 cases (extensometer) are unchanged.
+
 Every leaf of result.json is compared: strings, booleans and nulls exactly, numbers to a
 relative 1e-9 (float summation order may change; nothing else may).
 """

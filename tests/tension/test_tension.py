@@ -151,8 +151,14 @@ def test_scaling_to_measured_lu(synthetic):
     r = identify_tension(rec).result
     assert r["A_pct"] == pytest.approx(20.0)
     assert r["A_method"].startswith("measured")
+    # (3.1) like with like: the scaled elongation at the last sample before the break, less the elastic
+    # extension the pieces give back there (scaled with it), is Lu − L0 — not the largest elongation
     ident = identify_tension(rec)
-    assert ident.curves["corrected_diagram"]["elongation_mm"].max() == pytest.approx(6.0)
+    terms, K = ident.result["methods"]["scale_Kl"], ident.result["methods"]["scale_factor_Kl"]
+    elong = ident.curves["corrected_diagram"]["elongation_mm"].to_numpy()
+    recovery = terms["specimen_recovery_mm"] + terms["frame_recovery_mm"]
+    assert elong[terms["fracture_index"]] - K * recovery == pytest.approx(6.0, rel=1e-9)
+    assert recovery > 0.0 and terms["frame_recovery_mm"] == 0.0  # the frame's compliance is removed (136 N/µm given)
 
 
 def test_noisy_record_still_gives_the_law(synthetic):
