@@ -117,7 +117,7 @@ def unread_temperature_warnings(record: Record, force_N: np.ndarray, temperature
 
 
 # record events in which the acquisition declares a rig fault (docs/record-format.md)
-FAULT_EVENTS = ("data_loss", "frames_missing", "corrupt", "stream_restart", "late_reply", "retry", "dropped", "stream_latency", "carried", "wrong_address")  # a retry delays a reading: the crosshead may lag
+FAULT_EVENTS = ("data_loss", "frames_missing", "corrupt", "stream_restart", "late_reply", "retry", "dropped", "stream_latency", "carried", "wrong_address", "stream_gap_undecided")  # a retry delays a reading: the crosshead may lag
 POOR_LOSS_FRACTION = 0.05  # samples lost beyond this share of the test mark the hardening poor
 
 
