@@ -34,6 +34,7 @@ LATENCY_FIT = 0.25  # ... and the step must lie within this share of their diffe
 DEFER_FRAMES = 3  # a gap with too few good frames before it for the step rule: decided with this many frames after it
 DEFER_CLEAR = 0.1  # ... the hypothesis that fits must leave under this share of the other's squared residual
 DEFER_FIT = 0.25  # ... and its residual must be within this share of one frame's change times the gap's extra periods
+DEFER_LOADED = 0.5  # a frame before the gap under this share of the first frame after it is before the elastic rise (off the curve)
 STREAM_WRITER = "stream-rhythm-1"  # how this driver stamps the stream (the record header's writer.stamping)
 
 
@@ -106,32 +107,38 @@ def gap_after_verdict(before_N, after_N, after_offsets, periods: int, noise_N: f
     ``periods`` − 1 lost frames, judged on the frames *after* it — the *deferred rule* for a gap
     with too few frames before it for :func:`gap_is_latency`::
 
-        x_b = −(n_b − 1) … 0 (the last ≤ 2 frames before), x_a = s + after_offsets
-        R(s) = Σ (f − q_s(x))²,  q_s the least-squares quadratic through (x_b ∪ x_a, f)
+        before: the last ≤ 2 loaded frames (|f| ≥ DEFER_LOADED·|f_a1|) at x_b = −(n_b − 1) … 0
+        after:  x_a = s + after_offsets;  R(s) = Σ (f − q_s(x))², q_s the least-squares quadratic
         latency (s = 1) ⇔ R(1) < DEFER_CLEAR·R(j) and √R(1) < DEFER_FIT·d;   loss (s = j) symmetric
         d = |(j − 1)·(f_a2 − f_a1)| one frame's change over the extra periods; d ≤ 6·noise: loss
 
     A smooth force lies on one quadratic across the gap only where the after-frames are placed at
-    their true send times; placed one period off they leave a step of d. Returns "latency",
-    "loss", or None where neither fits clearly (a knee, a yield drop or a fracture within the
-    frames: the stamps after the gap are then in doubt by the gap's extra periods).
-    ``before_N``: forces of the good frames before the gap (≥ 1, the last two used), ``after_N``:
-    forces of the frames after it (≥ 2), ``after_offsets``: their periods after the first of them
-    (0, 1, 2 … without further gaps), ``noise_N``: the force's noise σ (its resolution at least)."""
-    b = np.asarray(before_N, dtype=float)[-2:]
+    their true send times; placed one period off they leave a step of d. The elastic rise's knee is
+    no part of a smooth curve: with no loaded frame before the gap, or only one (it may lie on the
+    knee, whose step into the after-frames looks like a lost frame's), the gap is not called a loss.
+    Returns "latency", "loss", or None where it cannot be told (the stamps after the gap are then in
+    doubt by the gap's extra periods). ``before_N``: forces of the good frames before the gap (≥ 1),
+    ``after_N``: forces of the frames after it (≥ 2), ``after_offsets``: their periods after the
+    first of them (0, 1, 2 … without further gaps), ``noise_N``: the force's noise σ (its resolution at least)."""
+    b = np.asarray(before_N, dtype=float)
     g = np.asarray(after_N, dtype=float)
     k = np.asarray(after_offsets, dtype=float)
-    if periods < 2 or b.size < 1 or g.size < 2 or b.size + g.size < 4:
+    if periods < 2 or b.size < 1 or g.size < 2:
         return "loss"
     step = abs((periods - 1) * (g[1] - g[0]) / max(k[1] - k[0], 1.0))  # d
     if step <= LATENCY_NOISE_SIGMAS * noise_N:
         return "loss"  # the force changes within its noise over the gap: the stamps' error costs no force
+    unloaded = np.flatnonzero(np.abs(b) < DEFER_LOADED * abs(g[0]))
+    loaded = b.size - (unloaded[-1] + 1 if unloaded.size else 0)  # the loaded frames just before the gap
+    if loaded == 0 or loaded + g.size < 4:
+        return None
+    b = b[-min(loaded, 2):]
     xb, f = np.arange(1.0 - b.size, 1.0), np.concatenate([b, g])
     latency = _quadratic_residual(np.concatenate([xb, 1.0 + k]), f)
     loss = _quadratic_residual(np.concatenate([xb, periods + k]), f)
     if latency < DEFER_CLEAR * loss and math.sqrt(latency) < DEFER_FIT * step:
         return "latency"
-    if loss < DEFER_CLEAR * latency and math.sqrt(loss) < DEFER_FIT * step:
+    if loss < DEFER_CLEAR * latency and math.sqrt(loss) < DEFER_FIT * step and loaded >= 2:
         return "loss"
     return None
 
