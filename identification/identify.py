@@ -136,8 +136,9 @@ def _last_count(text: str) -> int | None:
 
 def fault_warnings(record: Record) -> tuple[list[str], bool]:
     """The rig faults a record declares (its fault events), as one warning per kind, and whether
-    they make the curve doubtful: more than :data:`POOR_LOSS_FRACTION` of the samples lost, or a
-    reading rejected as corrupt (the gap it leaves is bridged)."""
+    they make the curve doubtful: more than :data:`POOR_LOSS_FRACTION` of the samples lost, a
+    reading rejected as corrupt (the gap it leaves is bridged), or a load-cell stream gap left
+    undecided (``stream_gap_undecided``: the later forces may be a period off the crosshead)."""
     seen: dict[str, list[str]] = {}
     for event in record.events:
         if event.name in FAULT_EVENTS:
@@ -153,7 +154,8 @@ def fault_warnings(record: Record) -> tuple[list[str], bool]:
         counted["frames_missing"] = f"{frames} frame{'s' if frames != 1 else ''}" if frames is not None else counted["frames_missing"]
     warnings = [f"the record declares rig faults ({name}, {counted[name]}): {texts[-1][:200]} — the curve may carry them"
                 for name, texts in seen.items()]
-    return warnings, lost > POOR_LOSS_FRACTION or "corrupt" in seen
+    # a stream gap the acquisition could not tell latency or loss of: the forces after it may lag the crosshead by a period
+    return warnings, lost > POOR_LOSS_FRACTION or "corrupt" in seen or "stream_gap_undecided" in seen
 
 
 LOSS_EVENTS = ("frames_missing", "stream_restart", "data_loss")  # a load-cell frame went missing
@@ -342,7 +344,7 @@ def _what_the_record_says(result, record: Record, after: list[str], stray: tuple
     warnings += [mismatch] if mismatch else []
     fit = getattr(getattr(result, "hardening", None), "fit", None)  # the main fit (result["hardening"] is its copy)
     if (doubtful or after or stray) and fit is not None and fit.quality == "good":
-        why = ("the record declares lost or corrupt samples" if doubtful else "the post-test measurements may be of a specimen changed after the record"
+        why = ("the record declares lost, corrupt or possibly misaligned samples" if doubtful else "the post-test measurements may be of a specimen changed after the record"
                if after else "the curve mixes temperatures away from the nominal one")
         fit.doubt = why
         fit.warnings.append(f"marked poor: {why} (see the warnings)")

@@ -38,3 +38,21 @@ def test_a_clean_record_declares_nothing(tmp_path):
     rec = read_record(record)
     if not any(e.name in ("data_loss", "frames_missing", "stream_restart", "retry", "late_reply", "corrupt", "dropped") for e in rec.events):
         assert fault_warnings(rec) == ([], False)
+
+
+def test_an_undecided_stream_gap_marks_the_curve_doubtful():
+    # a gap neither latency nor lost frames could be told of (rig.loadcell.gap_after_verdict): the forces after it may
+    # be a period off the crosshead, so the curve is not a confident one; one lost frame alone (1 of 41) does not mark it
+    import pandas as pd
+
+    from flowcurve.record.format import Event, Record
+
+    t = [0.5 * k for k in range(40)]  # 40 rows, 1 frame missing: 2.4 %, under the 5 % that marks a curve poor
+    data = pd.DataFrame({"time_s": t, "force_N": [100.0 * k for k in range(40)], "crosshead_mm": t})
+    missing = Event(1.0, "frames_missing", "load cell: 1 frame missing from its stream (1 so far, from the gaps in its timing)")
+    undecided = Event(1.0, "stream_gap_undecided", "load cell: a gap in its stream after 0.600 s (host) could be lost frames "
+                                                   "or the line's latency growing")
+    plain = Record(meta={"samples_missing": "1"}, data=data, events=[missing])
+    assert fault_warnings(plain)[1] is False
+    warnings, doubtful = fault_warnings(Record(meta={"samples_missing": "1"}, data=data, events=[missing, undecided]))
+    assert doubtful and any("stream_gap_undecided" in w for w in warnings)
