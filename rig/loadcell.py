@@ -34,6 +34,7 @@ LATENCY_FIT = 0.25  # ... and the step must lie within this share of their diffe
 DEFER_FRAMES = 3  # a gap with too few good frames before it for the step rule: decided with this many frames after it
 DEFER_CLEAR = 0.1  # ... the hypothesis that fits must leave under this share of the other's squared residual
 DEFER_FIT = 0.25  # ... and its residual must be within this share of one frame's change times the gap's extra periods
+DEFER_NOISE_FRAMES = 6  # ... the force's noise from the third differences of the loaded frames before the gap, where this many
 DEFER_LOADED = 0.5  # a frame before the gap under this share of the first frame after it is before the elastic rise (off the curve)
 STREAM_WRITER = "stream-rhythm-1"  # how this driver stamps the stream (the record header's writer.stamping)
 
@@ -97,6 +98,35 @@ def gap_is_latency(recent_periods, recent_N, next_N: float, periods: int, min_pe
     return bool(apart > LATENCY_NOISE_SIGMAS * sigma and abs(next_N - a - b) < LATENCY_FIT * apart)
 
 
+def step_rule_verdict(recent_periods, recent_N, next_N: float, periods: int, min_periods: int = 2) -> str | None:
+    """The step rule (:func:`gap_is_latency`) where it speaks: "latency" when the frame after the gap
+    lies within LATENCY_FIT of its latency prediction, "loss" within LATENCY_FIT of its loss prediction
+    (a + b·j), both only where they are apart by more than k·σ; else None — too few frames, σ swollen
+    by a bending force (the elastic rise's knee, the hardening within the frames at 2 Hz), or a frame
+    far from both (the line's curvature or a fracture). The driver then decides on the frames after the
+    gap (:func:`gap_after_verdict`); a gap under ``min_periods`` is a loss either way."""
+    x, f = np.asarray(recent_periods, dtype=float), np.asarray(recent_N, dtype=float)
+    if periods < max(2, min_periods) or f.size < 4:
+        return None
+    x = x - x[-1]
+    b, a = np.polyfit(x, f, 1)
+    sigma = float(np.sqrt(np.sum((f - a - b * x) ** 2) / (f.size - 2)))
+    apart = abs((periods - 1) * b)
+    if apart <= LATENCY_NOISE_SIGMAS * sigma:
+        return None
+    if abs(next_N - a - b) < LATENCY_FIT * apart:
+        return "latency"
+    if abs(next_N - a - b * periods) < LATENCY_FIT * apart:
+        return "loss"
+    return None
+
+
+def _noise_from_third_differences(f) -> float:
+    """σ of a smooth force's noise from its third differences (median, robust to one knee among them):
+    σ ≈ median |Δ³f| / (0.6745·√20) (Δ³ of white noise has variance 20·σ²)."""
+    return float(np.median(np.abs(np.diff(np.asarray(f, dtype=float), 3))) / (0.6745 * math.sqrt(20.0)))
+
+
 def _quadratic_residual(x, f) -> float:
     """Σ (f − q(x))² of the least-squares quadratic q through (x, f)."""
     return float(np.sum((f - np.polyval(np.polyfit(x, f, 2), x)) ** 2))
@@ -115,7 +145,8 @@ def gap_after_verdict(before_N, after_N, after_offsets, periods: int, noise_N: f
     A smooth force lies on one quadratic across the gap only where the after-frames are placed at
     their true send times; placed one period off they leave a step of d. The elastic rise's knee is
     no part of a smooth curve: with no loaded frame before the gap, or only one (it may lie on the
-    knee, whose step into the after-frames looks like a lost frame's), the gap is not called a loss.
+    knee, whose step into the after-frames looks like a lost frame's), the gap is not called a loss;
+    nor is one with a maximum among the frames (the force's change turns sign: Fm, a yield drop).
     Returns "latency", "loss", or None where it cannot be told (the stamps after the gap are then in
     doubt by the gap's extra periods). ``before_N``: forces of the good frames before the gap (≥ 1),
     ``after_N``: forces of the frames after it (≥ 2), ``after_offsets``: their periods after the
@@ -132,7 +163,13 @@ def gap_after_verdict(before_N, after_N, after_offsets, periods: int, noise_N: f
     loaded = b.size - (unloaded[-1] + 1 if unloaded.size else 0)  # the loaded frames just before the gap
     if loaded == 0 or loaded + g.size < 4:
         return None
+    if loaded >= DEFER_NOISE_FRAMES:  # the force's noise from its third differences: a plateau's gap is a loss within its noise
+        noise_N = max(noise_N, _noise_from_third_differences(b[-loaded:][-LATENCY_HISTORY:]))
+        if step <= LATENCY_NOISE_SIGMAS * noise_N:
+            return "loss"
     b = b[-min(loaded, 2):]
+    if np.ptp(np.sign(np.diff(np.concatenate([b, g])))) > 0:  # a maximum (Fm, a yield drop) within the frames: its
+        return None  # curvature turns where the gap is, and neither placement is the smoother one
     xb, f = np.arange(1.0 - b.size, 1.0), np.concatenate([b, g])
     latency = _quadratic_residual(np.concatenate([xb, 1.0 + k]), f)
     loss = _quadratic_residual(np.concatenate([xb, periods + k]), f)
@@ -582,26 +619,31 @@ class LoadCell:
 
     def _hold_or_stamp(self, arrival: float, value, force_N: float) -> None:
         """Stamp the frame into :attr:`_released`, or hold it: a gap the step rule cannot judge (fewer
-        than 4 good frames before it) waits for :data:`DEFER_FRAMES` frames after it
+        than 4 good frames before it, or a bending force) waits for :data:`DEFER_FRAMES` frames after it
         (:meth:`release_held` decides it with :func:`gap_after_verdict`)."""
         if self._held:
             self._held.append((arrival, value, force_N))
             if len(self._held) >= DEFER_FRAMES:
                 self.release_held()
             return
-        if self._gap_awaits_frames_after(arrival):
+        if self._gap_awaits_frames_after(arrival, force_N):
             self._held = [(arrival, value, force_N)]
             return
         self._released.append(self._to_sample(value, self._stamp(arrival, force_N)))
 
-    def _gap_awaits_frames_after(self, arrival: float) -> bool:
-        """Whether a frame arriving at ``arrival`` ends a gap the step rule would judge, with too few
-        frames before it to judge it (:func:`gap_is_latency` needs 4)."""
-        if not self.output_rate_per_s or self._last_stamp is None or not self._phase_known or len(self._recent_N) >= 4:
+    def _gap_awaits_frames_after(self, arrival: float, force_N: float) -> bool:
+        """Whether a frame arriving at ``arrival`` ends a gap the step rule would judge but cannot
+        (:func:`step_rule_verdict`: fewer than 4 frames before it, a force that bends within them, or
+        a frame after it near neither prediction)."""
+        if not self.output_rate_per_s or self._last_stamp is None or not self._phase_known or not self._recent_N:
             return False
         period = self._period_s()
         periods = int(round((arrival - self.latency_s - self._last_stamp) / period))
-        return periods >= max(2, 1 + math.ceil(LATENCY_MIN_S / period))
+        min_periods = 1 + math.ceil(LATENCY_MIN_S / period)
+        if periods < max(2, min_periods):
+            return False
+        return step_rule_verdict([t / period for t, _ in self._recent_N], [f for _, f in self._recent_N], force_N, periods,
+                                 min_periods) is None
 
     def release_held(self) -> list[ForceSample]:
         """Decide the held gap with the frames after it (:func:`gap_after_verdict`) and stamp them: a

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from flowcurve.rig.codecs.aed import MeasuredValue
-from flowcurve.rig.loadcell import LoadCell, gap_after_verdict, gap_is_latency
+from flowcurve.rig.loadcell import LoadCell, gap_after_verdict, gap_is_latency, step_rule_verdict
 
 T = 0.01  # 100 values/s
 LINE_S = 0.0012  # the line's time for a frame
@@ -151,3 +151,28 @@ def test_a_2hz_frame_lost_early_in_the_stream_stays_lost(before):
     cell, stamps = stream_at_2hz(sent, hardening(k), sent + LINE_S)
     assert np.max(np.abs(stamps - sent)) <= LINE_S + 1e-9
     assert cell.frames_lost == 1 and cell.latency_s == 0.0 and not cell.gaps_undecided
+
+
+def test_a_2hz_delay_after_the_knee_is_latency_where_the_step_rule_cannot_tell():
+    # 8 frames before the gap: the elastic start (0 N) and a bending flow curve swell the step rule's line σ beyond
+    # one frame's change (it took the gap as a loss: every later frame 0.5 s late); the frames after it decide
+    k = np.arange(20)
+    force = np.where(k == 0, 0.0, hardening(k))
+    assert step_rule_verdict(k[:8], force[:8], force[8], 2, 2) is None
+    sent = k * T2
+    cell, stamps = stream_at_2hz(sent, force, sent + LINE_S + np.where(k >= 8, JUMP_S, 0.0))
+    assert np.max(np.abs(stamps - sent)) <= LINE_S + 1e-9
+    assert cell.frames_lost == 0 and not cell.gaps_undecided
+
+
+def test_deferred_rule_leaves_a_maximum_undecided():
+    # Fm within the frames: the curvature turns at the gap (necking), and the smoother placement is no evidence
+    peak = 13000.0 - 60.0 * (np.arange(10.0) - 5.0) ** 2
+    assert gap_after_verdict(peak[:5], peak[6:9], [0, 1, 2], 2, 1.0) is None  # frame 5 (Fm) lost
+    assert gap_after_verdict(peak[:5], peak[5:8], [0, 1, 2], 2, 1.0) is None  # no frame lost
+
+
+def test_deferred_rule_takes_a_loss_on_a_noisy_plateau_with_frames_enough_for_its_noise():
+    # six loaded frames before the gap give the noise (third differences): a change within it costs no force
+    flat = 9000.0 + np.random.default_rng(5).normal(0.0, 20.0, 12)
+    assert gap_after_verdict(flat[:8], flat[8:11], [0, 1, 2], 2, 0.02) == "loss"
