@@ -205,8 +205,18 @@ class DriverRig:
     @property
     def stream_gaps_undecided(self) -> list[tuple[float, float]]:
         """The load cell's stream gaps that neither the step rule nor the frames after them told apart
-        (rig.loadcell.gap_after_verdict): (host stamp before the gap, host seconds the later stamps are in doubt)."""
-        return list(getattr(self.loadcell, "gaps_undecided", []))
+        (rig.loadcell.gap_after_verdict): (test s of the frame before the gap, test s the later stamps are in doubt)."""
+        return self._on_test_clock(getattr(self.loadcell, "gaps_undecided", []))
+
+    @property
+    def stream_gaps_in_doubt(self) -> list[tuple[float, float]]:
+        """The load cell's stream gaps taken as lost frames where the force stayed within its noise across
+        them (no evidence either way): as :attr:`stream_gaps_undecided`."""
+        return self._on_test_clock(getattr(self.loadcell, "gaps_in_doubt", []))
+
+    def _on_test_clock(self, gaps) -> list[tuple[float, float]]:
+        to_clock = getattr(self, "_to_clock", None)
+        return [(to_clock(t) if to_clock else t, doubt * self.time_scale) for t, doubt in gaps]
 
     @property
     def late_replies(self) -> dict[str, int]:

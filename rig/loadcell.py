@@ -140,15 +140,17 @@ def gap_after_verdict(before_N, after_N, after_offsets, periods: int, noise_N: f
         before: the last ≤ 2 loaded frames (|f| ≥ DEFER_LOADED·|f_a1|) at x_b = −(n_b − 1) … 0
         after:  x_a = s + after_offsets;  R(s) = Σ (f − q_s(x))², q_s the least-squares quadratic
         latency (s = 1) ⇔ R(1) < DEFER_CLEAR·R(j) and √R(1) < DEFER_FIT·d;   loss (s = j) symmetric
-        d = |(j − 1)·(f_a2 − f_a1)| one frame's change over the extra periods; d ≤ 6·noise: loss
+        d = |(j − 1)·(f_a2 − f_a1)| one frame's change over the extra periods; d ≤ 6·noise: "noise"
 
     A smooth force lies on one quadratic across the gap only where the after-frames are placed at
     their true send times; placed one period off they leave a step of d. The elastic rise's knee is
     no part of a smooth curve: with no loaded frame before the gap, or only one (it may lie on the
     knee, whose step into the after-frames looks like a lost frame's), the gap is not called a loss;
     nor is one with a maximum among the frames (the force's change turns sign: Fm, a yield drop).
-    Returns "latency", "loss", or None where it cannot be told (the stamps after the gap are then in
-    doubt by the gap's extra periods). ``before_N``: forces of the good frames before the gap (≥ 1),
+    Returns "latency", "loss", "noise" where the force changes within its noise across the gap (no
+    evidence here; the later stamps' doubt costs force only where the force later changes faster:
+    identify judges that on the record), or None where it cannot be told (the stamps after the gap
+    are in doubt by the gap's extra periods). ``before_N``: forces of the good frames before the gap (≥ 1),
     ``after_N``: forces of the frames after it (≥ 2), ``after_offsets``: their periods after the
     first of them (0, 1, 2 … without further gaps), ``noise_N``: the force's noise σ (its resolution at least)."""
     b = np.asarray(before_N, dtype=float)
@@ -158,7 +160,7 @@ def gap_after_verdict(before_N, after_N, after_offsets, periods: int, noise_N: f
         return "loss"
     step = abs((periods - 1) * (g[1] - g[0]) / max(k[1] - k[0], 1.0))  # d
     if step <= LATENCY_NOISE_SIGMAS * noise_N:
-        return "loss"  # the force changes within its noise over the gap: the stamps' error costs no force
+        return "noise"  # the force changes within its noise over the gap: no evidence either way here
     unloaded = np.flatnonzero(np.abs(b) < DEFER_LOADED * abs(g[0]))
     loaded = b.size - (unloaded[-1] + 1 if unloaded.size else 0)  # the loaded frames just before the gap
     if loaded == 0 or loaded + g.size < 4:
@@ -166,7 +168,7 @@ def gap_after_verdict(before_N, after_N, after_offsets, periods: int, noise_N: f
     if loaded >= DEFER_NOISE_FRAMES:  # the force's noise from its third differences: a plateau's gap is a loss within its noise
         noise_N = max(noise_N, _noise_from_third_differences(b[-loaded:][-LATENCY_HISTORY:]))
         if step <= LATENCY_NOISE_SIGMAS * noise_N:
-            return "loss"
+            return "noise"
     b = b[-min(loaded, 2):]
     if np.ptp(np.sign(np.diff(np.concatenate([b, g])))) > 0:  # a maximum (Fm, a yield drop) within the frames: its
         return None  # curvature turns where the gap is, and neither placement is the smoother one
@@ -245,6 +247,7 @@ class LoadCell:
         self._held: list[tuple[float, object, float]] = []  # (arrival, value, force) after a gap awaiting its verdict
         self._released: list[ForceSample] = []  # held frames stamped, for the next read_stream
         self.gaps_undecided: list[tuple[float, float]] = []  # (stamp before the gap, s in doubt): neither rule could tell
+        self.gaps_in_doubt: list[tuple[float, float]] = []  # ... the force within its noise across it: taken as lost, unproven
         self._carry = b""  # bytes read past a realignment, framed next
         self._resyncs_in_a_row = 0
         self._last_frame_t = 0.0
@@ -648,7 +651,8 @@ class LoadCell:
     def release_held(self) -> list[ForceSample]:
         """Decide the held gap with the frames after it (:func:`gap_after_verdict`) and stamp them: a
         latency grows :attr:`latency_s` by the gap's extra time, a loss leaves the gap in the stamps;
-        a gap neither fits is stamped as a loss and noted in :attr:`gaps_undecided`. Returns (and
+        a gap neither fits is stamped as a loss and noted in :attr:`gaps_undecided`, one across which
+        the force stays within its noise in :attr:`gaps_in_doubt`. Returns (and
         keeps for the next :meth:`read_stream`) the stamped samples."""
         held, self._held = self._held, []
         if held:
@@ -664,6 +668,8 @@ class LoadCell:
                 self.latency_jumps += 1
                 logger.info("%s: the frames after a %d-period gap lie on the force's curve one period on: latency, "
                             "not lost frames (now %.3f s)", self.name, periods, self.latency_s)
+            elif verdict == "noise":
+                self.gaps_in_doubt.append((self._last_stamp, (periods - 1) * period))
             elif verdict is None:
                 self.gaps_undecided.append((self._last_stamp, (periods - 1) * period))
                 logger.warning("%s: a %d-period gap in the stream could be %d lost frames or the line's latency "

@@ -121,7 +121,7 @@ def test_deferred_rule_leaves_a_knee_undecided_or_right():
 
 def test_deferred_rule_takes_a_loss_where_the_force_stands():
     flat = 5000.0 + np.random.default_rng(2).normal(0.0, NOISE_N, 6)
-    assert gap_after_verdict(flat[:2], flat[2:5], [0, 1, 2], 2, NOISE_N) == "loss"
+    assert gap_after_verdict(flat[:2], flat[2:5], [0, 1, 2], 2, NOISE_N) == "noise"  # stamped as lost, in doubt
 
 
 def stream_at_2hz(sent, force, arrival):
@@ -172,7 +172,8 @@ def test_deferred_rule_leaves_a_maximum_undecided():
     assert gap_after_verdict(peak[:5], peak[5:8], [0, 1, 2], 2, 1.0) is None  # no frame lost
 
 
-def test_deferred_rule_takes_a_loss_on_a_noisy_plateau_with_frames_enough_for_its_noise():
-    # six loaded frames before the gap give the noise (third differences): a change within it costs no force
+def test_deferred_rule_finds_a_noisy_plateau_with_frames_enough_for_its_noise():
+    # six loaded frames before the gap give the noise (third differences, not the 0.02 N resolution): a change within it
+    # is no evidence either way (stamped as lost, in doubt: identify judges what the doubt costs later)
     flat = 9000.0 + np.random.default_rng(5).normal(0.0, 20.0, 12)
-    assert gap_after_verdict(flat[:8], flat[8:11], [0, 1, 2], 2, 0.02) == "loss"
+    assert gap_after_verdict(flat[:8], flat[8:11], [0, 1, 2], 2, 0.02) == "noise"
