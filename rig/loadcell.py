@@ -496,6 +496,8 @@ class LoadCell:
             self._hold_or_stamp(self._stream_time(now), value, force_N)  # its send time on the stream's rhythm
             samples += self._released
             self._released = []
+        samples += self._released  # held frames a restart released
+        self._released = []
         silent = self.transport.clock.now() - self._last_frame_t
         if not samples and silent > self.stream_silence_s:
             raise DeviceError(self.name, f"stream ('MSV?0') silent for {silent:.1f} s")
@@ -666,7 +668,7 @@ class LoadCell:
                 grown = first - (self._last_stamp + period)
                 self.latency_s += grown
                 self.latency_jumps += 1
-                logger.info("%s: the frames after a %d-period gap lie on the force's curve one period on: latency, "
+                logger.info("%s: the frames after a %d-period gap lie on the force's curve at one period each: latency, "
                             "not lost frames (now %.3f s)", self.name, periods, self.latency_s)
             elif verdict == "noise":
                 self.gaps_in_doubt.append((self._last_stamp, (periods - 1) * period))
