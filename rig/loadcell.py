@@ -140,7 +140,7 @@ def gap_after_verdict(before_N, after_N, after_offsets, periods: int, noise_N: f
         before: the last ≤ 2 loaded frames (|f| ≥ DEFER_LOADED·|f_a1|) at x_b = −(n_b − 1) … 0
         after:  x_a = s + after_offsets;  R(s) = Σ (f − q_s(x))², q_s the least-squares quadratic
         latency (s = 1) ⇔ R(1) < DEFER_CLEAR·R(j) and √R(1) < DEFER_FIT·d;   loss (s = j) symmetric
-        d = |(j − 1)·(f_a2 − f_a1)| one frame's change over the extra periods; d ≤ 6·noise: "noise"
+        d = (j − 1)·|b_a|, b_a the after-frames' least-squares change per period; |b_a| ≤ 6·σ_b: "noise"
 
     A smooth force lies on one quadratic across the gap only where the after-frames are placed at
     their true send times; placed one period off they leave a step of d. The elastic rise's knee is
@@ -158,16 +158,18 @@ def gap_after_verdict(before_N, after_N, after_offsets, periods: int, noise_N: f
     k = np.asarray(after_offsets, dtype=float)
     if periods < 2 or b.size < 1 or g.size < 2:
         return "loss"
-    step = abs((periods - 1) * (g[1] - g[0]) / max(k[1] - k[0], 1.0))  # d
-    if step <= LATENCY_NOISE_SIGMAS * noise_N:
-        return "noise"  # the force changes within its noise over the gap: no evidence either way here
+    spread = math.sqrt(float(np.sum((k - k.mean()) ** 2)))
+    slope = float(np.polyfit(k, g, 1)[0]) if spread > 0 else 0.0  # the after-frames' change per period
+    step = abs((periods - 1) * slope)  # d
+    if abs(slope) * spread <= LATENCY_NOISE_SIGMAS * noise_N:  # |b| ≤ k·σ_b, σ_b = σ/√Σ(k − k̄)²
+        return "noise"  # the force changes within its noise: no evidence either way here
     unloaded = np.flatnonzero(np.abs(b) < DEFER_LOADED * abs(g[0]))
     loaded = b.size - (unloaded[-1] + 1 if unloaded.size else 0)  # the loaded frames just before the gap
     if loaded == 0 or loaded + g.size < 4:
         return None
     if loaded >= DEFER_NOISE_FRAMES:  # the force's noise from its third differences: a plateau's gap is a loss within its noise
         noise_N = max(noise_N, _noise_from_third_differences(b[-loaded:][-LATENCY_HISTORY:]))
-        if step <= LATENCY_NOISE_SIGMAS * noise_N:
+        if abs(slope) * spread <= LATENCY_NOISE_SIGMAS * noise_N:
             return "noise"
     b = b[-min(loaded, 2):]
     if np.ptp(np.sign(np.diff(np.concatenate([b, g])))) > 0:  # a maximum (Fm, a yield drop) within the frames: its
