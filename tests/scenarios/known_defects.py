@@ -32,9 +32,9 @@ KNOWN: list[tuple[str, object]] = [
 
 # strict (xfail strict=True): a fix turns the cell red, so the entry is removed with the fix (issue 42)
 STRICT: list[tuple[str, object]] = []
-# the 2 Hz delay (issue 42's STRICT entry until the deferred rule, rig/loadcell.py gap_after_verdict): 50 of 72 cells
-# pass (2 before); the rest are named and marked — not a confident number — but their rows stay a period off, which
-# the matrix's force-against-crosshead check judges; not strict: two runs of the same cells differed by 2 (thread timing)
+# the 2 Hz delay (issue 42's STRICT entry until the deferred rule, rig/loadcell.py gap_after_verdict): 48-50 of 72
+# cells pass (2 before); the rest are named and marked — not a confident number — but their rows stay a period off, which
+# the matrix's force-against-crosshead check judges; not strict: runs of the same cells differ in which fail (thread timing)
 KNOWN.append(("load cell delayed 0.5 s mid-test at 2 Hz (one output period, 2-3 frames before it at 1 mm): where the "
               "frame before the gap is still on the elastic rise's knee, or the frames after it bend at Fm, neither "
               "latency nor one lost frame puts the frames on one smooth curve — the gap is named (stream_gap_undecided: "
