@@ -250,6 +250,7 @@ class Procedure(StreamNotes):
         self._missing_noted = 0  # the load cell's missing frames the events named so far
         self._carried_stop: tuple | None = None  # (t, x of the last reading, t of the stop, speed): a stop on a carried-on position
         self._latency_noted = 0.0  # the load cell's stream latency the events named so far (host s)
+        self._undecided_noted = 0  # the load cell's stream gaps neither latency nor loss could be told of, named so far
         self._late_noted: dict[str, int] = {}
         self._rejected_noted: dict[str, int] = {}
         self._speed = SpeedMeter()

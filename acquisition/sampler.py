@@ -157,11 +157,15 @@ class Channel(threading.Thread):
     rig), so a time-scaled virtual rig does not change how patient the host is. Values returned as a
     bare list are stamped ``spacing_s`` (clock units) apart, ending at the arrival time.
     ``stands``: the value runs at a steady speed or stands (the crosshead): the rows cross a gap in
-    its readings with :func:`run_or_stand_at`, not a straight line.
+    its readings with :func:`run_or_stand_at`, not a straight line. ``heard``: the count of readings
+    the device gave, including those its driver holds back a while (rig.loadcell's deferred gap rule);
+    ``flush``: returns those at the stop.
     """
 
-    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, spacing_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str, Exception | None], None] | None = None, timebase: Clock = WALL, stands: bool = False):
+    def __init__(self, name: str, read: ReadFn, clock: Callable[[], float], *, period_s: float = 0.0, spacing_s: float = 0.0, max_failures: int = 3, silence_s: float = 2.0, on_fault: Callable[[str, str, Exception | None], None] | None = None, timebase: Clock = WALL, stands: bool = False, heard: Callable[[], int] | None = None, flush: ReadFn | None = None):
         super().__init__(name=f"flowcurve-{name}", daemon=True)
+        self.heard = heard  # frames the device has sent so far, returned or held back by its driver (a held frame is no silence)
+        self.flush = flush  # at the stop: what the driver still holds
         self.timebase = timebase
         self.device = name
         self.read = read
@@ -180,6 +184,7 @@ class Channel(threading.Thread):
         self.reads = 0
         self.last_data_wall_s = timebase.now()
         self.error: str | None = None
+        self._heard_count: int | None = None
         self._stop_event = threading.Event()
 
     def stop(self) -> None:
@@ -222,6 +227,10 @@ class Channel(threading.Thread):
                 self._fault(str(exc), exc)
                 return
             wall = tb.now()
+            heard = self.heard() if self.heard is not None else None
+            if heard is not None and heard != self._heard_count:
+                self._heard_count = heard
+                self.last_data_wall_s = wall  # the device answers; its driver holds the readings a while
             if n:
                 self.last_data_wall_s = wall
                 self.reads += 1
@@ -235,6 +244,11 @@ class Channel(threading.Thread):
                     tb.wait(self._stop_event, delay)
                 else:
                     next_due = tb.now()
+        if self.flush is not None and self.error is None:  # what the driver held back
+            try:
+                self._store(self.flush(), self.clock())
+            except (ImplausibleReadings, *DEVICE_FAILURES) as exc:
+                logger.debug("%s: flushing the held readings failed: %s", self.device, _one_line(exc))
         if self.guard is not None and self.error is None:  # a fall held for its next sample passes
             held = self.guard.flush()
             self.stream.extend([p[0] for p in held], [p[1] for p in held])

@@ -160,6 +160,12 @@ class DriverRig:
                     cell.start_stream()
                     started.append(True)
                 return [(to_clock(s.t_monotonic_s), s.force_N) for s in cell.read_stream(STREAM_BLOCK, 0.1)]
+
+            def flush_force():
+                """The frames the driver held after a gap it had not decided yet (rig.loadcell.gap_after_verdict)."""
+                return [(to_clock(s.t_monotonic_s), s.force_N) for s in cell.flush_held()] if started else []
+
+            heard = lambda: cell.frames_received  # noqa: E731 - held frames are no silence
         else:
 
             def read_force():
@@ -167,9 +173,11 @@ class DriverRig:
                 s = cell.read()
                 return [(to_clock(s.t_monotonic_s), s.force_N)]
 
+            flush_force, heard = None, None
+
         chans = {
             # polled: once per output period (a faster poll would read the same value again)
-            "force_N": Channel(cell.name, read_force, clock, period_s=0.0 if self.stream else self.loadcell_period_s, silence_s=self._silence_s(self.config.loadcell), timebase=self.timebase),
+            "force_N": Channel(cell.name, read_force, clock, period_s=0.0 if self.stream else self.loadcell_period_s, silence_s=self._silence_s(self.config.loadcell), timebase=self.timebase, heard=heard, flush=flush_force),
             "crosshead_mm": Channel(self.encoder.name, self._read_position, clock, period_s=ENCODER_PERIOD_S, silence_s=self._silence_s(self.config.encoder), timebase=self.timebase, stands=True),
         }
         if self.furnace is not None:
@@ -193,6 +201,22 @@ class DriverRig:
         """Host seconds the load cell's line latency grew since its stream started (its frames are
         stamped that much before they arrive: :func:`rig.loadcell.gap_is_latency`)."""
         return self.loadcell.latency_s
+
+    @property
+    def stream_gaps_undecided(self) -> list[tuple[float, float]]:
+        """The load cell's stream gaps that neither the step rule nor the frames after them told apart
+        (rig.loadcell.gap_after_verdict): (test s of the frame before the gap, test s the later stamps are in doubt)."""
+        return self._on_test_clock(getattr(self.loadcell, "gaps_undecided", []))
+
+    @property
+    def stream_gaps_in_doubt(self) -> list[tuple[float, float]]:
+        """The load cell's stream gaps taken as lost frames where the force stayed within its noise across
+        them (no evidence either way): as :attr:`stream_gaps_undecided`."""
+        return self._on_test_clock(getattr(self.loadcell, "gaps_in_doubt", []))
+
+    def _on_test_clock(self, gaps) -> list[tuple[float, float]]:
+        to_clock = getattr(self, "_to_clock", None)
+        return [(to_clock(t) if to_clock else t, doubt * self.time_scale) for t, doubt in gaps]
 
     @property
     def late_replies(self) -> dict[str, int]:

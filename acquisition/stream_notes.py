@@ -47,6 +47,18 @@ class StreamNotes:
         if final and self._latency_noted:
             self._alert(f"load cell: its stream arrived {self._latency_noted:.2f} s late from mid-test (the line delays it); "
                         "the force is stamped at its send time — check the cable or converter")
+        undecided = getattr(self.rig, "stream_gaps_undecided", None) or []
+        for t, doubt in undecided[self._undecided_noted:]:  # a gap neither rule could tell: the later forces' stamps in doubt
+            self._event("stream_gap_undecided", f"load cell: a gap in its stream after {t:.3f} s could be lost frames or "
+                                                f"the line's latency growing — stamped as lost, so every later force may be "
+                                                f"stamped up to {doubt:.3f} s late against the crosshead")
+        self._undecided_noted = len(undecided)
+        in_doubt = getattr(self.rig, "stream_gaps_in_doubt", None) or []
+        for t, doubt in in_doubt[getattr(self, "_in_doubt_noted", 0):]:  # the force within its noise there: identify judges the rest
+            self._event("stream_gap_in_doubt", f"load cell: a gap in its stream after {t:.3f} s, across which the force stayed "
+                                               f"within its noise, taken as lost frames; had it been the line's latency growing, "
+                                               f"every later force is stamped up to {doubt:.3f} s late against the crosshead")
+        self._in_doubt_noted = len(in_doubt)
         restarts = getattr(self.rig, "stream_restarts", 0)
         if restarts > self._restarts_noted:
             self._event("stream_restart", f"load cell: garbled stream restarted ({restarts - self._restarts_noted} more, {restarts} so far; frames lost meanwhile)")
@@ -126,6 +138,9 @@ class StreamNotes:
             parts.append("; ".join(rejected))
         if self._dropped:
             parts.append(f"{self._dropped} force samples after the fault left out")
+        if getattr(self, "_undecided_noted", 0):
+            parts.append(f"load cell: {self._undecided_noted} stream gap(s) that could be lost frames or latency: the forces after "
+                         "them may be misaligned against the crosshead by up to the gap")
         return "; ".join(parts)
 
     def _loss_meta(self) -> dict[str, object]:

@@ -117,7 +117,7 @@ def unread_temperature_warnings(record: Record, force_N: np.ndarray, temperature
 
 
 # record events in which the acquisition declares a rig fault (docs/record-format.md)
-FAULT_EVENTS = ("data_loss", "frames_missing", "corrupt", "stream_restart", "late_reply", "retry", "dropped", "stream_latency", "carried", "wrong_address")  # a retry delays a reading: the crosshead may lag
+FAULT_EVENTS = ("data_loss", "frames_missing", "corrupt", "stream_restart", "late_reply", "retry", "dropped", "stream_latency", "carried", "wrong_address", "stream_gap_undecided", "stream_gap_in_doubt")  # a retry delays a reading: the crosshead may lag
 POOR_LOSS_FRACTION = 0.05  # samples lost beyond this share of the test mark the hardening poor
 
 
@@ -136,8 +136,9 @@ def _last_count(text: str) -> int | None:
 
 def fault_warnings(record: Record) -> tuple[list[str], bool]:
     """The rig faults a record declares (its fault events), as one warning per kind, and whether
-    they make the curve doubtful: more than :data:`POOR_LOSS_FRACTION` of the samples lost, or a
-    reading rejected as corrupt (the gap it leaves is bridged)."""
+    they make the curve doubtful: more than :data:`POOR_LOSS_FRACTION` of the samples lost, a
+    reading rejected as corrupt (the gap it leaves is bridged), or a load-cell stream gap left
+    undecided (``stream_gap_undecided``: the later forces may be a period off the crosshead)."""
     seen: dict[str, list[str]] = {}
     for event in record.events:
         if event.name in FAULT_EVENTS:
@@ -153,7 +154,47 @@ def fault_warnings(record: Record) -> tuple[list[str], bool]:
         counted["frames_missing"] = f"{frames} frame{'s' if frames != 1 else ''}" if frames is not None else counted["frames_missing"]
     warnings = [f"the record declares rig faults ({name}, {counted[name]}): {texts[-1][:200]} — the curve may carry them"
                 for name, texts in seen.items()]
-    return warnings, lost > POOR_LOSS_FRACTION or "corrupt" in seen
+    # a stream gap the acquisition could not tell latency or loss of: the forces after it may lag the crosshead by a period
+    return warnings, lost > POOR_LOSS_FRACTION or "corrupt" in seen or "stream_gap_undecided" in seen
+
+
+GAP_IN_DOUBT = re.compile(r"gap in its stream after (-?[\d.]+) s.*?up to ([\d.]+) s late")  # stream_gap_in_doubt's time and doubt
+MISALIGNED_TOL = 0.01  # a possible misalignment of the force against the crosshead beyond this share of the force marks the curve
+LOADED_SHARE = 0.2  # ... judged over the rows loaded to this share of the maximum force (a fracture's fall left out)
+
+
+def misalignment_share(time_s, force_N, after_s: float, doubt_s: float) -> float:
+    """The largest share of the force a stamp error of ``doubt_s`` after ``after_s`` can cost: the
+    force's change over the doubt, max |F(t) − F(t − δ)| / |F(t)| over the rows after the gap loaded to
+    LOADED_SHARE of the maximum (F(t − δ) interpolated in the record's own rows). 0 without such rows."""
+    t, f = np.asarray(time_s, dtype=float), np.asarray(force_N, dtype=float)
+    ok = np.isfinite(t) & np.isfinite(f)
+    t, f = t[ok], f[ok]
+    later = (t > after_s + doubt_s) & (np.abs(f) >= LOADED_SHARE * np.max(np.abs(f), initial=0.0))
+    if not np.any(later):
+        return 0.0
+    shifted = np.interp(t[later] - doubt_s, t, f)  # F(t − δ)
+    return float(np.max(np.abs(f[later] - shifted) / np.abs(f[later])))
+
+
+def gap_in_doubt_warnings(record: Record) -> tuple[list[str], bool]:
+    """A load-cell stream gap the acquisition took as lost frames without evidence (``stream_gap_in_doubt``:
+    the force stayed within its noise across it): had it been the line's latency, every later force lags
+    the crosshead by the doubt. Where that can cost more than MISALIGNED_TOL of the force later (a steeper
+    stretch: the fall after Fm), a warning and the curve doubtful; within it, nothing."""
+    if record.data.empty or not (record.has("time_s") and record.has("force_N")):
+        return [], False
+    warnings = []
+    for event in record.events:
+        found = GAP_IN_DOUBT.search(" ".join(str(event.text).split())) if event.name == "stream_gap_in_doubt" else None
+        if not found:
+            continue
+        after_s, doubt_s = float(found.group(1)), float(found.group(2))
+        share = misalignment_share(record.column("time_s"), record.column("force_N"), after_s, doubt_s)
+        if share > MISALIGNED_TOL:
+            warnings.append(f"the load cell's stream gap after {after_s:.1f} s could not be told lost frames or latency: the "
+                            f"forces after it may lag the crosshead by {doubt_s:.2f} s, up to {100 * share:.1f} % of the force")
+    return warnings, bool(warnings)
 
 
 LOSS_EVENTS = ("frames_missing", "stream_restart", "data_loss")  # a load-cell frame went missing
@@ -333,6 +374,9 @@ def _what_the_record_says(result, record: Record, after: list[str], stray: tuple
     (``stray``: :func:`temperature_stray_C`), as warnings; a good hardening fit on such a record
     marked poor (its ``doubt``)."""
     warnings, doubtful = fault_warnings(record)
+    misaligned, may_lag = gap_in_doubt_warnings(record)
+    warnings += misaligned
+    doubtful = doubtful or may_lag
     shifted = old_writer_warning(record)
     if shifted:
         warnings.append(shifted)
@@ -342,7 +386,7 @@ def _what_the_record_says(result, record: Record, after: list[str], stray: tuple
     warnings += [mismatch] if mismatch else []
     fit = getattr(getattr(result, "hardening", None), "fit", None)  # the main fit (result["hardening"] is its copy)
     if (doubtful or after or stray) and fit is not None and fit.quality == "good":
-        why = ("the record declares lost or corrupt samples" if doubtful else "the post-test measurements may be of a specimen changed after the record"
+        why = ("the record declares lost, corrupt or possibly misaligned samples" if doubtful else "the post-test measurements may be of a specimen changed after the record"
                if after else "the curve mixes temperatures away from the nominal one")
         fit.doubt = why
         fit.warnings.append(f"marked poor: {why} (see the warnings)")

@@ -31,6 +31,11 @@ LATENCY_HISTORY = 8  # good frames before a gap whose per-frame force change pre
 LATENCY_NOISE_SIGMAS = 6.0  # the two predictions must differ by this many σ of a frame's change to be told apart
 LATENCY_MIN_S = 0.2  # host s: a gap's extra time under this is taken as lost frames (a run of them at 100 Hz, or host jitter the chain heals; a latency that small costs little force)
 LATENCY_FIT = 0.25  # ... and the step must lie within this share of their difference from one frame's change
+DEFER_FRAMES = 3  # a gap with too few good frames before it for the step rule: decided with this many frames after it
+DEFER_CLEAR = 0.1  # ... the hypothesis that fits must leave under this share of the other's squared residual
+DEFER_FIT = 0.25  # ... and its residual must be within this share of one frame's change times the gap's extra periods
+DEFER_NOISE_FRAMES = 6  # ... the force's noise from the third differences of the loaded frames before the gap, where this many
+DEFER_LOADED = 0.5  # a frame before the gap under this share of the first frame after it is before the elastic rise (off the curve)
 STREAM_WRITER = "stream-rhythm-1"  # how this driver stamps the stream (the record header's writer.stamping)
 
 
@@ -91,6 +96,92 @@ def gap_is_latency(recent_periods, recent_N, next_N: float, periods: int, min_pe
     sigma = float(np.sqrt(np.sum((f - a - b * x) ** 2) / (f.size - 2)))
     apart = abs((periods - 1) * b)
     return bool(apart > LATENCY_NOISE_SIGMAS * sigma and abs(next_N - a - b) < LATENCY_FIT * apart)
+
+
+def step_rule_verdict(recent_periods, recent_N, next_N: float, periods: int, min_periods: int = 2) -> str | None:
+    """The step rule (:func:`gap_is_latency`) where it speaks: "latency" when the frame after the gap
+    lies within LATENCY_FIT of its latency prediction, "loss" within LATENCY_FIT of its loss prediction
+    (a + b·j), both only where they are apart by more than k·σ; else None — too few frames, σ swollen
+    by a bending force (the elastic rise's knee, the hardening within the frames at 2 Hz), or a frame
+    far from both (the line's curvature or a fracture). The driver then decides on the frames after the
+    gap (:func:`gap_after_verdict`); a gap under ``min_periods`` is a loss either way."""
+    x, f = np.asarray(recent_periods, dtype=float), np.asarray(recent_N, dtype=float)
+    if periods < max(2, min_periods) or f.size < 4:
+        return None
+    x = x - x[-1]
+    b, a = np.polyfit(x, f, 1)
+    sigma = float(np.sqrt(np.sum((f - a - b * x) ** 2) / (f.size - 2)))
+    apart = abs((periods - 1) * b)
+    if apart <= LATENCY_NOISE_SIGMAS * sigma:
+        return None
+    if abs(next_N - a - b) < LATENCY_FIT * apart:
+        return "latency"
+    if abs(next_N - a - b * periods) < LATENCY_FIT * apart:
+        return "loss"
+    return None
+
+
+def _noise_from_third_differences(f) -> float:
+    """σ of a smooth force's noise from its third differences (median, robust to one knee among them):
+    σ ≈ median |Δ³f| / (0.6745·√20) (Δ³ of white noise has variance 20·σ²)."""
+    return float(np.median(np.abs(np.diff(np.asarray(f, dtype=float), 3))) / (0.6745 * math.sqrt(20.0)))
+
+
+def _quadratic_residual(x, f) -> float:
+    """Σ (f − q(x))² of the least-squares quadratic q through (x, f)."""
+    return float(np.sum((f - np.polyval(np.polyfit(x, f, 2), x)) ** 2))
+
+
+def gap_after_verdict(before_N, after_N, after_offsets, periods: int, noise_N: float = 0.0) -> str | None:
+    """Whether a gap of ``periods`` output periods in arrival is the line's latency growing or
+    ``periods`` − 1 lost frames, judged on the frames *after* it — the *deferred rule* for a gap
+    with too few frames before it for :func:`gap_is_latency`::
+
+        before: the last ≤ 2 loaded frames (|f| ≥ DEFER_LOADED·|f_a1|) at x_b = −(n_b − 1) … 0
+        after:  x_a = s + after_offsets;  R(s) = Σ (f − q_s(x))², q_s the least-squares quadratic
+        latency (s = 1) ⇔ R(1) < DEFER_CLEAR·R(j) and √R(1) < DEFER_FIT·d;   loss (s = j) symmetric
+        d = (j − 1)·|b_a|, b_a the after-frames' least-squares change per period; |b_a| ≤ 6·σ_b: "noise"
+
+    A smooth force lies on one quadratic across the gap only where the after-frames are placed at
+    their true send times; placed one period off they leave a step of d. The elastic rise's knee is
+    no part of a smooth curve: with no loaded frame before the gap, or only one (it may lie on the
+    knee, whose step into the after-frames looks like a lost frame's), the gap is not called a loss;
+    nor is one with a maximum among the frames (the force's change turns sign: Fm, a yield drop).
+    Returns "latency", "loss", "noise" where the force changes within its noise across the gap (no
+    evidence here; the later stamps' doubt costs force only where the force later changes faster:
+    identify judges that on the record), or None where it cannot be told (the stamps after the gap
+    are in doubt by the gap's extra periods). ``before_N``: forces of the good frames before the gap (≥ 1),
+    ``after_N``: forces of the frames after it (≥ 2), ``after_offsets``: their periods after the
+    first of them (0, 1, 2 … without further gaps), ``noise_N``: the force's noise σ (its resolution at least)."""
+    b = np.asarray(before_N, dtype=float)
+    g = np.asarray(after_N, dtype=float)
+    k = np.asarray(after_offsets, dtype=float)
+    if periods < 2 or b.size < 1 or g.size < 2:
+        return "loss"
+    spread = math.sqrt(float(np.sum((k - k.mean()) ** 2)))
+    slope = float(np.polyfit(k, g, 1)[0]) if spread > 0 else 0.0  # the after-frames' change per period
+    step = abs((periods - 1) * slope)  # d
+    if abs(slope) * spread <= LATENCY_NOISE_SIGMAS * noise_N:  # |b| ≤ k·σ_b, σ_b = σ/√Σ(k − k̄)²
+        return "noise"  # the force changes within its noise: no evidence either way here
+    unloaded = np.flatnonzero(np.abs(b) < DEFER_LOADED * abs(g[0]))
+    loaded = b.size - (unloaded[-1] + 1 if unloaded.size else 0)  # the loaded frames just before the gap
+    if loaded == 0 or loaded + g.size < 4:
+        return None
+    if loaded >= DEFER_NOISE_FRAMES:  # the force's noise from its third differences: a plateau's gap is a loss within its noise
+        noise_N = max(noise_N, _noise_from_third_differences(b[-loaded:][-LATENCY_HISTORY:]))
+        if abs(slope) * spread <= LATENCY_NOISE_SIGMAS * noise_N:
+            return "noise"
+    b = b[-min(loaded, 2):]
+    if np.ptp(np.sign(np.diff(np.concatenate([b, g])))) > 0:  # a maximum (Fm, a yield drop) within the frames: its
+        return None  # curvature turns where the gap is, and neither placement is the smoother one
+    xb, f = np.arange(1.0 - b.size, 1.0), np.concatenate([b, g])
+    latency = _quadratic_residual(np.concatenate([xb, 1.0 + k]), f)
+    loss = _quadratic_residual(np.concatenate([xb, periods + k]), f)
+    if latency < DEFER_CLEAR * loss and math.sqrt(latency) < DEFER_FIT * step:
+        return "latency"
+    if loss < DEFER_CLEAR * latency and math.sqrt(loss) < DEFER_FIT * step and loaded >= 2:
+        return "loss"
+    return None
 
 
 @dataclass(frozen=True)
@@ -155,6 +246,10 @@ class LoadCell:
         self.latency_s = 0.0  # the line's latency grown since the stream started (gap_is_latency): arrivals less it
         self.latency_jumps = 0  # gaps taken as a latency jump, not lost frames
         self._recent_N: list[tuple[float, float]] = []  # the latest good frames' (stamp, force) (LATENCY_HISTORY)
+        self._held: list[tuple[float, object, float]] = []  # (arrival, value, force) after a gap awaiting its verdict
+        self._released: list[ForceSample] = []  # held frames stamped, for the next read_stream
+        self.gaps_undecided: list[tuple[float, float]] = []  # (stamp before the gap, s in doubt): neither rule could tell
+        self.gaps_in_doubt: list[tuple[float, float]] = []  # ... the force within its noise across it: taken as lost, unproven
         self._carry = b""  # bytes read past a realignment, framed next
         self._resyncs_in_a_row = 0
         self._last_frame_t = 0.0
@@ -399,9 +494,12 @@ class LoadCell:
             self._resyncs_in_a_row = 0
             self.frames_received += 1
             force_N = self._force_N(value)
-            t = self._stamp(self._stream_time(now), force_N)  # its send time on the stream's rhythm
-            samples.append(self._to_sample(value, t))
             self._last_frame_t = now
+            self._hold_or_stamp(self._stream_time(now), value, force_N)  # its send time on the stream's rhythm
+            samples += self._released
+            self._released = []
+        samples += self._released  # held frames a restart released
+        self._released = []
         silent = self.transport.clock.now() - self._last_frame_t
         if not samples and silent > self.stream_silence_s:
             raise DeviceError(self.name, f"stream ('MSV?0') silent for {silent:.1f} s")
@@ -475,6 +573,7 @@ class LoadCell:
         if self._resyncs_in_a_row > self.max_resyncs:
             raise DeviceError(self.name, f"garbled stream: {self._resyncs_in_a_row} restarts in a row "
                                          f"did not regain the framing ({exc})")
+        self.release_held()  # frames held before the restart keep the old phase
         self.stop_stream()
         self.start_stream()
 
@@ -524,6 +623,71 @@ class LoadCell:
             sent = round((t - self._first_stamp) * self.output_rate_per_s) + 1
             self._frames_skipped = max(self._frames_skipped, sent - self.frames_received)
         return t
+
+    def _hold_or_stamp(self, arrival: float, value, force_N: float) -> None:
+        """Stamp the frame into :attr:`_released`, or hold it: a gap the step rule cannot judge (fewer
+        than 4 good frames before it, or a bending force) waits for :data:`DEFER_FRAMES` frames after it
+        (:meth:`release_held` decides it with :func:`gap_after_verdict`)."""
+        if self._held:
+            self._held.append((arrival, value, force_N))
+            if len(self._held) >= DEFER_FRAMES:
+                self.release_held()
+            return
+        if self._gap_awaits_frames_after(arrival, force_N):
+            self._held = [(arrival, value, force_N)]
+            return
+        self._released.append(self._to_sample(value, self._stamp(arrival, force_N)))
+
+    def _gap_awaits_frames_after(self, arrival: float, force_N: float) -> bool:
+        """Whether a frame arriving at ``arrival`` ends a gap the step rule would judge but cannot
+        (:func:`step_rule_verdict`: fewer than 4 frames before it, a force that bends within them, or
+        a frame after it near neither prediction)."""
+        if not self.output_rate_per_s or self._last_stamp is None or not self._phase_known or not self._recent_N:
+            return False
+        period = self._period_s()
+        periods = int(round((arrival - self.latency_s - self._last_stamp) / period))
+        min_periods = 1 + math.ceil(LATENCY_MIN_S / period)
+        if periods < max(2, min_periods):
+            return False
+        return step_rule_verdict([t / period for t, _ in self._recent_N], [f for _, f in self._recent_N], force_N, periods,
+                                 min_periods) is None
+
+    def release_held(self) -> list[ForceSample]:
+        """Decide the held gap with the frames after it (:func:`gap_after_verdict`) and stamp them: a
+        latency grows :attr:`latency_s` by the gap's extra time, a loss leaves the gap in the stamps;
+        a gap neither fits is stamped as a loss and noted in :attr:`gaps_undecided`, one across which
+        the force stays within its noise in :attr:`gaps_in_doubt`. Returns (and
+        keeps for the next :meth:`read_stream`) the stamped samples."""
+        held, self._held = self._held, []
+        if held:
+            period = self._period_s()
+            first = held[0][0] - self.latency_s
+            periods = max(1, int(round((first - self._last_stamp) / period)))
+            offsets = [round((a - held[0][0]) / period) for a, _, _ in held]
+            verdict = gap_after_verdict([f for _, f in self._recent_N], [f for *_, f in held], offsets, periods,
+                                        self.resolution_N())
+            if verdict == "latency":
+                grown = first - (self._last_stamp + period)
+                self.latency_s += grown
+                self.latency_jumps += 1
+                logger.info("%s: the frames after a %d-period gap lie on the force's curve at one period each: latency, "
+                            "not lost frames (now %.3f s)", self.name, periods, self.latency_s)
+            elif verdict == "noise":
+                self.gaps_in_doubt.append((self._last_stamp, (periods - 1) * period))
+            elif verdict is None:
+                self.gaps_undecided.append((self._last_stamp, (periods - 1) * period))
+                logger.warning("%s: a %d-period gap in the stream could be %d lost frames or the line's latency "
+                               "growing: stamped as lost", self.name, periods, periods - 1)
+            for arrival, value, force_N in held:
+                self._released.append(self._to_sample(value, self._stamp(arrival, force_N)))
+        return self._released
+
+    def flush_held(self) -> list[ForceSample]:
+        """At the stream's end: the held frames decided with what came (:meth:`release_held`), and every
+        stamped frame not yet returned."""
+        self.release_held()
+        out, self._released = self._released, []
+        return out
 
     def stop_stream(self) -> None:
         """``STP`` (never answers), then discard the frames still in flight."""

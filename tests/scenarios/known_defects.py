@@ -31,17 +31,16 @@ KNOWN: list[tuple[str, object]] = [
 
 
 # strict (xfail strict=True): a fix turns the cell red, so the entry is removed with the fix (issue 42)
-STRICT: list[tuple[str, object]] = [
-    (_DELAY_2HZ := "load cell delayed 0.5 s mid-test at 2 Hz: the delay is one output period, and the stream has 2-3 frames before "
-     "it (the matrix injects at 1 mm) — too few for the step rule (rig/loadcell.py gap_is_latency needs 4) to tell "
-     "the latency from one lost frame, so the frames after it are stamped 0.5 s late: force 2-17 % off, exit 0",
-     lambda c: _fault(c, "loadcell", "delay") and c.rate_Hz == 2.0 and not (c.test == "tension" and c.speed_mm_per_s == 0.005)),
-]
-KNOWN += STRICT
-# the same defect in a tension test at 0.005 mm/s, whose force hardly changes in 0.5 s: mostly within tolerance, but not
-# always (seed 54146602839918, 850 C: -3.8 % at 1.25 mm, 9 of 75 rows), so not strict
-KNOWN.append((_DELAY_2HZ + " (tension at 0.005 mm/s: mostly within tolerance)",
-              lambda c: _fault(c, "loadcell", "delay") and c.rate_Hz == 2.0 and c.test == "tension" and c.speed_mm_per_s == 0.005))
+STRICT: list[tuple[str, object]] = []
+# the 2 Hz delay (issue 42's STRICT entry until the deferred rule, rig/loadcell.py gap_after_verdict): 48-50 of 72
+# cells pass (2 before); the rest are named and marked — not a confident number — but their rows stay a period off, which
+# the matrix's force-against-crosshead check judges; not strict: runs of the same cells differ in which fail (thread timing)
+KNOWN.append(("load cell delayed 0.5 s mid-test at 2 Hz (one output period, 2-3 frames before it at 1 mm): where the "
+              "frame before the gap is still on the elastic rise's knee, or the frames after it bend at Fm, neither "
+              "latency nor one lost frame puts the frames on one smooth curve — the gap is named (stream_gap_undecided: "
+              "data_loss, run exit 5, the curve marked poor; or stream_gap_in_doubt where the force stays within its "
+              "noise: identify marks the curve where the doubt costs > 1 %), stamped as a loss: the rows stay a period off",
+              lambda c: _fault(c, "loadcell", "delay") and c.rate_Hz == 2.0))
 
 
 def is_strict(cell: Cell) -> bool:
