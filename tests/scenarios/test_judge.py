@@ -125,3 +125,27 @@ def test_post_test_measurements_after_a_heating_fault_must_be_marked():
     assert matrix.unmarked_post_test(marked, rec) == []
     during = SimpleNamespace(data=data, meta=rec.meta, events=[Event(5.0, stuck.name, stuck.text)])  # the rows carry it
     assert matrix.unmarked_post_test(unmarked, during) == []
+
+
+def test_a_run_the_furnace_left_hotter_is_judged_at_its_own_temperature():
+    """A furnace fault that lets the specimen run 2.5 °C hotter (within the standard's ±3 °C) lowers its
+    force by the material's own factor (Johnson–Cook (1 − T*^m), closed form): judged against the fault-free
+    run at the recorded temperatures it passes; the same lower force recorded at the reference's temperature
+    is caught."""
+    import pandas as pd
+
+    from flowcurve.record.format import Record
+    from flowcurve.rig.virtual.materials import get_material
+
+    m = get_material("12Kh18N12M3TL")
+    hot = float(m.rate_temperature_factor(0.0, 302.5) / m.rate_temperature_factor(0.0, 300.0))  # (1 − T*^m) at 302.5 over 300 °C
+    assert 1.0 - hot > matrix.FM_TOL  # the closed form: more than the Fm judge's tolerance
+    truth = matrix.dataclasses.replace(TRUTH, temperature_C=np.full(X.size, 300.0), material="12Kh18N12M3TL")
+
+    def record(temperature_C):
+        data = pd.DataFrame({"time_s": X * 10.0, "force_N": force_N(X) * hot, "crosshead_mm": X, "temperature_C": temperature_C})
+        return Record(meta={"status": "complete", "nominal_temperature_C": "300"}, data=data, source="cell.csv")
+
+    assert matrix.survived(RUN, record(np.full(X.size, 302.5)), truth) == []
+    bad = matrix.survived(RUN, record(np.full(X.size, 300.0)), truth)
+    assert [k for k, _ in bad] == ["Fm beyond the fault-free run's"], bad
