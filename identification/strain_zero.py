@@ -245,7 +245,8 @@ def tension_or_compression_zero(strain, stress_MPa, *, window_MPa, E_line_MPa: f
     places it: the regressed line's fit and curvature (:func:`line_zero_u`, :func:`line_curvature_u`), or
     the known slope's offsets' spread (:func:`known_slope_spread_u`); the spacing at the top through it.
     Also ``plastic_start_step`` (:func:`top_step_u`): where the plastic part starts, for an offset read between samples,
-    and ``regressed_line``: whether a line with a standard error (3 samples or more) was regressed on the window."""
+    and, where a known slope places the zero, ``regressed_line``: whether a line with a standard error (3 samples or more)
+    was regressed on the window (elsewhere its ``line_fit`` part says so)."""
     has_line = np.isfinite(E_line_MPa) and np.isfinite(E_line_stderr_MPa) and window_MPa[1] > window_MPa[0]
     known = zero_E_MPa is not None and np.isfinite(zero_E_MPa) and zero_E_MPa > 0
     regressed = has_line and not known
@@ -256,7 +257,10 @@ def tension_or_compression_zero(strain, stress_MPa, *, window_MPa, E_line_MPa: f
         toe=known_slope_spread_u(strain, stress_MPa, window_MPa, zero_E_MPa) if known else 0.0,
         spacing=top_spacing_u(strain, stress_MPa, window_MPa, E_MPa=zero_E_MPa),
         handbook=0.0 if line_resolved else handbook_line_u(E_used_MPa, window_MPa[1]))
-    return {**zero, "plastic_start_step": top_step_u(strain, stress_MPa, window_MPa), "regressed_line": line_u > 0.0}
+    out = {**zero, "plastic_start_step": top_step_u(strain, stress_MPa, window_MPa)}
+    if known:  # its line_fit part no longer says whether a line was regressed on the window
+        out["regressed_line"] = line_u > 0.0
+    return out
 
 
 def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dict, list[str]]:
