@@ -6,7 +6,8 @@ another model than the correction's). Per record and constant: the error, the st
 share |fit over the first half − over the whole| ("range"), and two candidates in its place:
   "contribution": the range shift of the corrected curve less that of the curve corrected at μ = 0 (the correction's own);
   "projection": the constants' change when the law is fitted as σ = (A + B·εpⁿ)(1 + k·c), c = 1 − σ_corrected/σ_nominal
-  (a shape error of the correction's own shape; 0 where the correction is nil).
+  (a shape error of the correction's own shape; 0 where the correction is nil);
+  "span": the same with one such term per correction (fe_table, k_sigma, siebel, slab at μ̂): any friction model's shape.
 Prints per record and a summary: the campaign's method share / median |error| (shares in quadrature, the FE model form
 left out as the campaign does on this kind) and the slab records' count beyond 2.5 standard errors.
 Run: PYTHONPATH=. python bench/fit_range_candidates.py"""
@@ -51,7 +52,14 @@ def _spy(src, geo, nominal, friction, fit, i_yield, fit_range, law, friction_cor
         model = lambda e, A, B, n, k: (A + B * e**n) * (1.0 + k * c)  # noqa: E731  # σ = (A + Bεⁿ)(1 + k·c)
         p, _ = curve_fit(model, eps_fit, sig_fit, p0=[whole["A"], whole["B"], whole["n"], 0.0], maxfev=20000)
         projection = dict(zip(("A", "B", "n"), (abs(p[0] - whole["A"]), abs(p[1] - whole["B"]), abs(p[2] - whole["n"]))))
-    SEEN.append({"range": {k: abs(v) for k, v in corrected.items()}, "contribution": {k: abs(corrected[k] - reference[k]) for k in corrected},
+    patterns = [q for q in (1.0 - friction.corrected[m][1][idx] / sig_r[idx] for m in fr.CORRECTIONS) if np.max(np.abs(q)) > 1e-3]
+    span = {k: 0.0 for k in whole}
+    if patterns:  # σ = (A + Bεⁿ)(1 + Σ k_m·c_m), c_m every correction's relative size at μ̂
+        shapes = np.vstack(patterns)
+        model = lambda e, A, B, n, *k: (A + B * e**n) * (1.0 + np.dot(np.asarray(k), shapes))  # noqa: E731
+        p, _ = curve_fit(model, eps_fit, sig_fit, p0=[whole["A"], whole["B"], whole["n"]] + [0.0] * len(patterns), maxfev=40000)
+        span = dict(zip(("A", "B", "n"), (abs(p[0] - whole["A"]), abs(p[1] - whole["B"]), abs(p[2] - whole["n"]))))
+    SEEN.append({"span": span, "range": {k: abs(v) for k, v in corrected.items()}, "contribution": {k: abs(corrected[k] - reference[k]) for k in corrected},
                  "projection": projection, "shares": {name: dict(v) for name, v in shares.items()}})
     return shares
 
@@ -106,10 +114,10 @@ def main() -> None:
         print(f"== {title}")
         for r in rows:
             print(f"{r['name']:28s} " + " | ".join(f"{k} err {r['err'][k]:.3g} se {r['se'][k]:.3g} range {r['range'][k]:.3g} "
-                                                   f"contribution {r['contribution'][k]:.3g} projection {r['projection'][k]:.3g}" for k in KEYS))
+                                                   f"contribution {r['contribution'][k]:.3g} projection {r['projection'][k]:.3g} span {r['span'][k]:.3g}" for k in KEYS))
     for k in KEYS:
         errors = statistics.median(r["err"][k] for r in campaign)
-        for cand in ("range", "contribution", "projection"):
+        for cand in ("range", "contribution", "projection", "span"):
             method = [2.0 * math.sqrt(sum(v.get(k, 0.0) ** 2 for name, v in r["shares"].items() if not name.startswith(("fit range", "FE model form")))
                                       + r["zero"].get(k, 0.0) ** 2 + r[cand][k] ** 2) for r in campaign]
             beyond = [r["name"] for r in slab if r["err"][k] > 2.5 * _with(r, k, r[cand][k])]
