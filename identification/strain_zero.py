@@ -78,6 +78,52 @@ def top_step_u(strain, stress_MPa, window_MPa) -> float:
     return float(step / math.sqrt(3.0)) if np.isfinite(step) else 0.0
 
 
+def _top_plastic_part(strain: np.ndarray, stress: np.ndarray, window_MPa, E_MPa: float):
+    """(the window's sample indices, their offsets ε − σ/E, the last one's plastic part p) on a line of known
+    slope E, p = the last offset above the others' median, at most the step Δε to the next sample; None where
+    no step follows the window, it holds under 2 samples, or its samples up to the median lie off one line of
+    slope E by more than it spans (the zero not resolved)."""
+    lo, hi = float(window_MPa[0]), float(window_MPa[1])
+    step = top_step_u(strain, stress, window_MPa) * math.sqrt(3.0)
+    top = nan_argmax(stress) if stress.size else 0
+    below = np.flatnonzero(stress[: top + 1] <= hi)
+    if step == 0.0 or not (np.isfinite(E_MPa) and E_MPa > 0) or below.size == 0:
+        return None
+    last = below[-1]
+    on = np.flatnonzero((stress[: last + 1] >= lo) & np.isfinite(strain[: last + 1]))
+    if on.size < 2 or on[-1] != last:
+        return None
+    offsets = strain[on] - stress[on] / E_MPa  # ε − σ/E: one value, the zero, on a line of slope E
+    low = slice(0, on.size // 2 + 1)  # the samples up to the median: they place it
+    if np.ptp(offsets[low]) > np.ptp(stress[on][low]) / E_MPa:
+        return None
+    return on, offsets, min(step, max(float(offsets[-1] - np.median(offsets[:-1])), 0.0))
+
+
+def known_slope_offsets(strain, stress_MPa, window_MPa, E_MPa: float) -> np.ndarray:
+    """The offsets ε − σ/E of the window's samples on a line of known slope E (compression's toe: their median
+    places the zero), the last sample's plastic part (:func:`_top_plastic_part`, :func:`top_spacing_u`'s share)
+    taken out of it where 3 samples or more tell it from their spread (two: kept whole, the spread is the top's
+    plastic part or not). Equation: ε − σ/E, the last one less p."""
+    strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
+    lo, hi = float(window_MPa[0]), float(window_MPa[1])
+    top = nan_argmax(stress) if stress.size else 0
+    on = np.flatnonzero((stress[: top + 1] >= lo) & (stress[: top + 1] <= hi) & np.isfinite(strain[: top + 1]))
+    offsets = strain[on] - stress[on] / E_MPa
+    placed = _top_plastic_part(strain, stress, window_MPa, E_MPa) if on.size >= 3 else None
+    if placed is not None:
+        offsets = placed[1].copy()
+        offsets[-1] -= placed[2]
+    return offsets
+
+
+def known_slope_spread_u(strain, stress_MPa, window_MPa, E_MPa: float) -> float:
+    """The strain zero's spread on a line of known slope E: half the spread of :func:`known_slope_offsets`
+    (0 under 2 samples). Equation: u = (max − min)/2."""
+    offsets = known_slope_offsets(strain, stress_MPa, window_MPa, E_MPa)
+    return float(np.ptp(offsets) / 2.0) if offsets.size >= 2 else 0.0
+
+
 def top_spacing_u(strain, stress_MPa, window_MPa, *, E_MPa: float | None = None) -> float:
     """The strain zero's uncertainty from the sample spacing where the line ends.
 
@@ -92,24 +138,13 @@ def top_spacing_u(strain, stress_MPa, window_MPa, *, E_MPa: float | None = None)
     few top samples carry beyond the model (taken through the regression instead, its A, B, n
     coverage fell 97/94/92 → 92/92/86 %)."""
     strain, stress = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
-    lo, hi = float(window_MPa[0]), float(window_MPa[1])
     whole = top_step_u(strain, stress, window_MPa)
-    top = nan_argmax(stress) if stress.size else 0
-    below = np.flatnonzero(stress[: top + 1] <= hi)
-    if whole == 0.0 or E_MPa is None or not (np.isfinite(E_MPa) and E_MPa > 0):
+    placed = None if whole == 0.0 or E_MPa is None else _top_plastic_part(strain, stress, window_MPa, E_MPa)
+    if placed is None:  # a regressed line, or samples off one line of slope E (compression's toe_spread_warning): the step as it is
         return whole
-    last = below[-1]
-    on = np.flatnonzero((stress[: last + 1] >= lo) & np.isfinite(strain[: last + 1]))
-    if on.size < 2 or on[-1] != last:
-        return whole
-    offsets = strain[on] - stress[on] / E_MPa
-    low = slice(0, on.size // 2 + 1)  # the samples up to the median: they place it
-    if np.ptp(offsets[low]) > np.ptp(stress[on][low]) / E_MPa:  # off one line of slope E by more than it spans: no line
-        return whole  # pins the zero (compression's toe_spread_warning): the step as it is
-    step = whole * math.sqrt(3.0)
-    plastic = min(step, max(float(offsets[-1] - np.median(offsets[:-1])), 0.0))
+    on, _, plastic = placed
     moved = strain.copy()
-    moved[last] -= plastic  # its plastic part taken out
+    moved[on[-1]] -= plastic  # its plastic part taken out
     return float(abs(_zero_of_known_slope(moved[on], stress[on], E_MPa) - _zero_of_known_slope(strain[on], stress[on], E_MPa)) / math.sqrt(3.0))
 
 
@@ -199,24 +234,33 @@ def constants_shift(refit, base, eps_p, stress_MPa, delta_eps0: float) -> dict[s
 
 
 def tension_or_compression_zero(strain, stress_MPa, *, window_MPa, E_line_MPa: float, E_line_stderr_MPa: float,
-                                E_used_MPa: float, line_resolved: bool, toe_spread: float = 0.0,
-                                zero_E_MPa: float | None = None) -> dict:
+                                E_used_MPa: float, line_resolved: bool, zero_E_MPa: float | None = None) -> dict:
     """δε0 of a first loading (:func:`strain_zero_uncertainty`) from its arrays and its elastic line.
 
     strain, stress_MPa: the toe-compensated first loading; window_MPa: the line's window ((0, top)
     when no line was found); E_line_MPa, E_line_stderr_MPa: the regressed line (nan: none);
     E_used_MPa: the E that strips the elastic strain; line_resolved: False when a given/handbook E
-    took the line's place; toe_spread: the toe offsets' standard spread (strain); zero_E_MPa: the slope
-    of a line of known slope whose offsets' median places the zero (None: the regressed line's intercept).
-    Also ``plastic_start_step`` (:func:`top_step_u`): where the plastic part starts, for an offset read between samples."""
+    took the line's place; zero_E_MPa: the slope of a line of known slope whose offsets' median places
+    the zero (None: the regressed line's intercept). The zero's parts are those of the estimator that
+    places it: the regressed line's fit and curvature (:func:`line_zero_u`, :func:`line_curvature_u`), or
+    the known slope's offsets' spread (:func:`known_slope_spread_u`); the spacing at the top through it.
+    Also ``plastic_start_step`` (:func:`top_step_u`): where the plastic part starts, for an offset read between samples,
+    and, where a known slope places the zero, ``regressed_line``: whether a line with a standard error (3 samples or more)
+    was regressed on the window (elsewhere its ``line_fit`` part says so)."""
     has_line = np.isfinite(E_line_MPa) and np.isfinite(E_line_stderr_MPa) and window_MPa[1] > window_MPa[0]
+    known = zero_E_MPa is not None and np.isfinite(zero_E_MPa) and zero_E_MPa > 0
+    regressed = has_line and not known
+    line_u = line_zero_u(E_line_MPa, E_line_stderr_MPa, window_MPa) if has_line else 0.0
     zero = strain_zero_uncertainty(
-        line=line_zero_u(E_line_MPa, E_line_stderr_MPa, window_MPa) if has_line else 0.0,
-        curvature=line_curvature_u(strain, stress_MPa, window_MPa) if has_line else 0.0,
-        toe=toe_spread,
+        line=line_u if regressed else 0.0,
+        curvature=line_curvature_u(strain, stress_MPa, window_MPa) if regressed else 0.0,
+        toe=known_slope_spread_u(strain, stress_MPa, window_MPa, zero_E_MPa) if known else 0.0,
         spacing=top_spacing_u(strain, stress_MPa, window_MPa, E_MPa=zero_E_MPa),
         handbook=0.0 if line_resolved else handbook_line_u(E_used_MPa, window_MPa[1]))
-    return {**zero, "plastic_start_step": top_step_u(strain, stress_MPa, window_MPa)}
+    out = {**zero, "plastic_start_step": top_step_u(strain, stress_MPa, window_MPa)}
+    if known:  # its line_fit part no longer says whether a line was regressed on the window
+        out["regressed_line"] = line_u > 0.0
+    return out
 
 
 def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dict, list[str]]:
@@ -233,8 +277,9 @@ def apply_to_fit(fit, eps_p, stress_MPa, zero: dict, refit) -> tuple[object, dic
 
     delta = zero["delta_eps0"]
     start = {**start_uncertainty(fit, fit.strain_range, delta), "components": zero["components"]}
-    if "plastic_start_step" in zero:
-        start["plastic_start_step"] = zero["plastic_start_step"]
+    for key in ("plastic_start_step", "regressed_line"):
+        if key in zero:
+            start[key] = zero[key]
     shift = constants_shift(refit, refit(np.asarray(eps_p, dtype=float), stress_MPa), eps_p, stress_MPa, delta) if delta > 0 else {}
     start["constants_shift"] = shift
     law = static_form(fit.law)

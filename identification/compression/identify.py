@@ -39,7 +39,7 @@ from flowcurve.identification.laws.hardening import HardeningFit, fit_hardening,
 from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_POINTS_TOP, SDAR_REACH, ModulusFit, auto_modulus, elastic_modulus, fit_modulus, scale_to_measured, yield_onset_from_rate
 from flowcurve.identification.outcome import Identification
 from flowcurve.identification.results import CompressionHardening, CompressionResult
-from flowcurve.identification.strain_zero import apply_to_fit, tension_or_compression_zero
+from flowcurve.identification.strain_zero import apply_to_fit, known_slope_offsets, tension_or_compression_zero
 from flowcurve.identification.compression.values import FIT_CURVE_POINTS, YIELD_OFFSET, _Diagram, _Friction, _Line, _Nominal, _Yield, _check_options, _fit_points, _handbook_modulus, _hardening_fits, _inputs, _meta_geometry, offset_yield, plastic_strain
 from flowcurve.identification.compression.friction_result import _dface_advice, correction_mu_sensitivity, _fe_correction_uncertainty, _friction_all, _friction_correction, _model_form_shares, _mu_stderr_basis
 
@@ -215,7 +215,9 @@ def _elastic_line(diagram: _Diagram, geo: dict, *, E_MPa: float | None, modulus_
                 line, toe_mm = known if known is not None else (None, 0.0)
             else:
                 toe_mm = float(np.median(offsets))  # the toe of a line of known slope E; its offsets' spread judged
-                warnings += [w for w in [toe_spread_warning(offsets, line.window_MPa, E_MPa=E_MPa, h0_mm=geo["h0"])] if w]
+                # as δε0 judges it: the top sample's plastic part is where the plastic part starts (the spacing term), not a spread
+                judged = geo["h0"] * known_slope_offsets(specimen / geo["h0"], diagram.force / area0, line.window_MPa, E_MPa)
+                warnings += [w for w in [toe_spread_warning(judged, line.window_MPa, E_MPa=E_MPa, h0_mm=geo["h0"])] if w]
         elif line.E_MPa < METAL_E_RANGE_MPa[0]:
             warnings.append(f"apparent modulus {line.E_MPa:.4g} MPa over {line.window_MPa[0]:.4g}–{line.window_MPa[1]:.4g} MPa is far below any metal's: "
                             "the line found may be a toe or a stretch past yield, and Rp0.2 with it — give the handbook E (--E or material.E_MPa) "
@@ -281,12 +283,8 @@ def _strain_zero(diagram: _Diagram, geo: dict, line: _Line, nominal: _Nominal, y
     else:
         window, E_line, E_se = el.window_MPa, el.E_MPa, el.E_stderr_MPa
     E_used = yld.E_used if yld.E_used is not None else E_line
-    toe_spread = 0.0  # a line of known slope E: its samples' offsets Δl − h0·σ/E spread by what is not on the line
-    if el is not None and yld.E_source != "apparent" and E_used is not None:
-        offsets = toe_offsets(diagram.specimen, diagram.force, window, E_MPa=E_used, area0_mm2=geo["area0"], h0_mm=geo["h0"])
-        toe_spread = float(np.ptp(offsets)) / 2.0 / geo["h0"]  # half the spread, as toe_spread_warning states it
     zero = tension_or_compression_zero(strain[: top + 1], stress[: top + 1], window_MPa=window, E_line_MPa=E_line, E_line_stderr_MPa=E_se,
-                                       E_used_MPa=E_used, line_resolved=yld.E_source == "apparent" and np.isfinite(E_se), toe_spread=toe_spread,
+                                       E_used_MPa=E_used, line_resolved=yld.E_source == "apparent" and np.isfinite(E_se),
                                        zero_E_MPa=E_used if el is not None and yld.E_source != "apparent" else None)
     eps_tp, sig_t, _ = friction.corrected[friction_correction]
     idx = _fit_points(eps_tp, yld.i_yield, fit_range)

@@ -321,8 +321,9 @@ def _compression_rp_method(result: Mapping, nominal) -> list:
 
 
 def _offset_line_zero(result: Mapping) -> float:
-    """δε0 of the offset line's foot. Where a regressed line places it, the sample spacing at the
-    line's top is left out (it places where the curve's plastic part starts, not the line's foot);
+    """δε0 of the offset line's foot. Where a line was regressed on the window (``regressed_line``; before
+    that key, a line fit term), the sample spacing at the line's top is left out (it places where the
+    curve's plastic part starts, not the line's foot);
     where a given or handbook E does, the step itself counts (``plastic_start_step``, Δε/√3: the
     offset crossing read between sparse samples) in place of the zero's own spacing term. Equation:
     root sum of squares of the parts (hardening.start_uncertainty.components)."""
@@ -330,7 +331,7 @@ def _offset_line_zero(result: Mapping) -> float:
     parts = start.get("components")
     if not isinstance(parts, Mapping):
         return _num(start.get("delta_eps0")) or 0.0
-    regressed = (_num(parts.get("line_fit")) or 0.0) > 0.0
+    regressed = start["regressed_line"] if "regressed_line" in start else (_num(parts.get("line_fit")) or 0.0) > 0.0
     step = _num(start.get("plastic_start_step"))
     spacing = 0.0 if regressed else (step if step is not None else _num(parts.get("sample_spacing")) or 0.0)
     return math.sqrt(sum((_num(v) or 0.0) ** 2 for k, v in parts.items() if k != "sample_spacing") + spacing ** 2)

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from flowcurve.identification.compression.identify import identify_compression
-from flowcurve.identification.strain_zero import line_curvature_u, line_zero_u, start_uncertainty, strain_zero_uncertainty, top_spacing_u
+from flowcurve.identification.strain_zero import (known_slope_spread_u, line_curvature_u, line_zero_u, start_uncertainty, strain_zero_uncertainty,
+                                                  tension_or_compression_zero, top_spacing_u)
 from tests.series import compression_series as cs
 
 from .conftest import flow_stress
@@ -56,6 +57,27 @@ def test_top_spacing_goes_through_the_zeros_estimator_in_closed_form():
     past = strain.copy()
     past[2] += 1e-3  # the two samples 1e-3 apart off a line of slope E that spans 5e-4 between them: no line, the step as it is
     assert top_spacing_u(past, stress, (50.0, 250.0), E_MPa=E) == pytest.approx((past[3] - past[2]) / np.sqrt(3.0))
+
+
+def test_a_known_slopes_spread_leaves_the_top_samples_plastic_part_to_the_spacing_in_closed_form():
+    """Offsets ε − σ/E of 0, 6e-5 and (plastic) 1.6e-3 on a line of slope E: the median places the zero on the
+    first two, the top one's plastic part (its excess over their median 3e-5, at most the step) is the spacing
+    term's: the spread is (6e-5 − 0)/2 by hand, not (1.6e-3 − 0)/2; two samples keep theirs whole (one degree of
+    freedom: the spread is the top's plastic part or not). δε0 then holds the estimator's own parts only: a line
+    regressed on the same samples (its slope 60 % of E's: the plastic top flattens it) places nothing."""
+    E, stress = 200_000.0, np.array([0.0, 60.0, 200.0, 300.0, 350.0])
+    strain = stress / E + np.array([0.0, 0.0, 6e-5, 1.6e-3, 6e-3])
+    window = (50.0, 310.0)
+    assert known_slope_spread_u(strain, stress, window, E) == pytest.approx(3e-5, rel=1e-9)
+    assert known_slope_spread_u(strain, stress, (150.0, 310.0), E) == pytest.approx((1.6e-3 - 6e-5) / 2.0, rel=1e-9)
+    zero = tension_or_compression_zero(strain, stress, window_MPa=window, E_line_MPa=0.6 * E, E_line_stderr_MPa=0.3 * E, E_used_MPa=E,
+                                       line_resolved=False, zero_E_MPa=E)
+    parts = zero["components"]
+    assert parts["line_fit"] == 0.0 and parts["line_curvature"] == 0.0 and parts["toe"] == pytest.approx(3e-5, rel=1e-9)
+    assert zero["regressed_line"]  # Rp0.2's offset line still leaves the spacing out (quality.assurance._offset_line_zero)
+    regressed = tension_or_compression_zero(strain, stress, window_MPa=window, E_line_MPa=0.6 * E, E_line_stderr_MPa=0.3 * E, E_used_MPa=E,
+                                            line_resolved=True)
+    assert regressed["components"]["line_fit"] == pytest.approx(line_zero_u(0.6 * E, 0.3 * E, window)) and regressed["components"]["toe"] == 0.0
 
 
 def test_the_strain_zero_holds_its_actual_error_on_the_closed_form_series():
