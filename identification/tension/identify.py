@@ -209,6 +209,21 @@ def _true_stress_warnings(inp: _Inputs, line: _ElasticLine, true: _TrueCurve, tr
             f"in the strain, and the uniform strain {true.eps_u:.3f} is beyond that; --true-stress constant_volume for such a material"]
 
 
+NECK_ONSET_SIGMAS = 2.0  # ε_f this many of its reading's standard uncertainties below the uniform plastic strain still breaks at the neck's onset
+
+
+def _fracture_strain_u(inp: _Inputs, dk_mm: float) -> float:
+    """Standard uncertainty of ε_f = ln(F0/Fk) = 2·ln(d0/dk) from the readings of d0 and dk (the record's
+    micrometer, or the defaults): u = 2·√(u(d0)²/d0² + u(dk)²/dk²)."""
+    from flowcurve.identification.quality.assurance import instruments_from_meta
+    from flowcurve.identification.quality.uncertainty import dimension_u
+
+    inst = instruments_from_meta(inp.record.meta)
+    res, mpe = inst["diameter_resolution_mm"], inst["micrometer_mpe_mm"]
+    # u(ε_f) = 2·√((u_d0/d0)² + (u_dk/dk)²)
+    return 2.0 * math.hypot(dimension_u(inp.d0, res, mpe) / inp.d0, dimension_u(dk_mm, res, mpe) / dk_mm)
+
+
 def _neck_correction(inp: _Inputs, iso: _IsoResults, true: _TrueCurve) -> tuple[dict, list[str]]:
     """The fracture point with every neck correction (empty without the area after fracture), and warnings."""
     if iso.su is None:
@@ -218,8 +233,9 @@ def _neck_correction(inp: _Inputs, iso: _IsoResults, true: _TrueCurve) -> tuple[
     avg = float(inp.force[iso.i_k] / su)  # P_k / F_k
     neck_radius = inp.record.specimen.neck_radius_mm
     dk_for_neck = iso.dk if iso.dk is not None else math.sqrt(4.0 * su / math.pi)
-    # a break at the onset of necking: the (plastic) ε_f within the uniform strain's elastic part σ/E is no neck (a/R 0)
-    eps_u = eps_f if true.eps_p_at_Rm <= eps_f < true.eps_u else true.eps_u
+    # a break at the onset of necking: ε_f up to the uniform strain's elastic part σ/E above the plastic one, or within
+    # NECK_ONSET_SIGMAS of its own reading's standard uncertainty below it, is no neck (a/R 0); further below: a misread dk
+    eps_u = eps_f if true.eps_p_at_Rm - NECK_ONSET_SIGMAS * _fracture_strain_u(inp, dk_for_neck) <= eps_f < true.eps_u else true.eps_u
     fracture = neck_corrections(avg, eps_f, eps_u, d_k_mm=dk_for_neck, neck_radius_mm=neck_radius)
     fracture.update({"true_strain": eps_f, "avg_stress_MPa": avg, "force_N": force_k, "area_source": iso.su_source})
     return fracture, []
