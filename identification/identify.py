@@ -362,6 +362,7 @@ def identify(record: Record, **options) -> Identification:
     if after and record.test == "compression":
         warnings += _post_test_spread(result, record, func, accepted)
     warnings += _filter_lag_spread(result, record, func, accepted)
+    warnings += _stream_gap_spread(result, record, func, accepted)
     warnings += off_temperature_warnings(result, record, stray)
     old = list(result.get("warnings") or [])
     result["warnings"] = old + [w for w in warnings if w not in old]
@@ -443,6 +444,29 @@ def _filter_lag_spread(result, record: Record, func, options: dict) -> list[str]
         return [f"the load cell's filter lag ({1e3 * tau:.0f} ms) is not in the budgets of Rp0.2 and the flow curve: the record with "
                 f"the force restored does not identify ({str(exc).splitlines()[0]})"]
     filter_lag.widen(result["uncertainty"], alt.result.get("uncertainty") or {})
+    return []
+
+
+def _stream_gap_spread(result, record: Record, func, options: dict) -> list[str]:
+    """A record naming a load-cell stream gap it could not tell latency or loss of (:mod:`.quality.stream_gap`):
+    identified again with the later forces a period earlier, the difference of Rp0.2, Ag, each flow-curve point
+    and hardening constant entered into its budget; a budget the second identification lacks, or all of them when
+    it fails, stated not certifiable. Returns the warnings."""
+    from flowcurve.identification.quality import filter_lag, stream_gap
+
+    found = stream_gap.gaps(record)
+    unc = result.get("uncertainty")
+    if not found or not isinstance(unc, dict):
+        return []
+    try:
+        alt = func(stream_gap.realigned(record, found), **filter_lag.pinned_options(result, record.test, options))
+        attach_assurance(alt.result, alt.curves, record)
+    except FlowcurveError as exc:
+        why = f"a load-cell stream gap (latency or loss undecided): the record read as latency does not identify ({str(exc).splitlines()[0]})"
+        state_not_certifiable(unc, (*stream_gap.WIDENED_VALUES, *stream_gap.WIDENED_BLOCKS), why)
+        return [f"not certifiable: {why}"]
+    missing = stream_gap.widen(unc, alt.result.get("uncertainty") or {})
+    stream_gap.refuse(unc, missing, "a load-cell stream gap (latency or loss undecided): the record read as latency states no such value")
     return []
 
 

@@ -88,12 +88,13 @@ WIDENED_BLOCKS = ("hardening", "flow_stress_MPa")  # blocks of budgets the lag m
 WIDENED_VALUES = ("Rp02_MPa",)  # single budgets it moves: the offset yield at the rounded knee
 
 
-def widen(uncertainty: Mapping, alternative: Mapping) -> list[str]:
-    """Add :data:`COMPONENT` to each budget of ``uncertainty`` the lag moves (:data:`WIDENED_BLOCKS`'
-    members, :data:`WIDENED_VALUES`) that ``alternative`` (the result with the force restored) also
-    states: u = |Δ|. Returns the keys ("block key" in a block) ``alternative`` lacks."""
-    pairs = [(key, uncertainty.get(key), alternative.get(key)) for key in WIDENED_VALUES if key in uncertainty]
-    for block in WIDENED_BLOCKS:
+def widen(uncertainty: Mapping, alternative: Mapping, *, component: str = COMPONENT, basis: str = BASIS,
+          values: tuple = WIDENED_VALUES, blocks: tuple = WIDENED_BLOCKS) -> list[str]:
+    """Add ``component`` to each budget of ``uncertainty`` the lag moves (``blocks``' members, ``values``)
+    that ``alternative`` (the result with the force restored) also states: u = |Δ|. Returns the keys
+    ("block key" in a block) ``alternative`` lacks."""
+    pairs = [(key, uncertainty.get(key), alternative.get(key)) for key in values if key in uncertainty]
+    for block in blocks:
         mine, theirs = uncertainty.get(block) or {}, alternative.get(block) or {}
         pairs += [(key if block == "hardening" else f"{block} {key}", b, theirs.get(key) if isinstance(theirs, Mapping) else None)
                   for key, b in (mine.items() if isinstance(mine, Mapping) else ())]
@@ -103,7 +104,7 @@ def widen(uncertainty: Mapping, alternative: Mapping) -> list[str]:
             missing.append(key)
             continue
         diff = abs(float(b["value"]) - float(other["value"]))
-        _add(b, un.Component(COMPONENT, float(other["value"]), str(b.get("unit") or ""), diff, 1.0, BASIS))
+        _add(b, un.Component(component, float(other["value"]), str(b.get("unit") or ""), diff, 1.0, basis))
     return missing
 
 
