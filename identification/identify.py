@@ -158,7 +158,6 @@ def fault_warnings(record: Record) -> tuple[list[str], bool]:
     return warnings, lost > POOR_LOSS_FRACTION or "corrupt" in seen or "stream_gap_undecided" in seen
 
 
-GAP_IN_DOUBT = re.compile(r"gap in its stream after (-?[\d.]+) s.*?up to ([\d.]+) s late")  # stream_gap_in_doubt's time and doubt
 MISALIGNED_TOL = 0.01  # a possible misalignment of the force against the crosshead beyond this share of the force marks the curve
 LOADED_SHARE = 0.2  # ... judged over the rows loaded to this share of the maximum force (a fracture's fall left out)
 
@@ -184,12 +183,10 @@ def gap_in_doubt_warnings(record: Record) -> tuple[list[str], bool]:
     stretch: the fall after Fm), a warning and the curve doubtful; within it, nothing."""
     if record.data.empty or not (record.has("time_s") and record.has("force_N")):
         return [], False
+    from flowcurve.identification.quality.stream_gap import gaps
+
     warnings = []
-    for event in record.events:
-        found = GAP_IN_DOUBT.search(" ".join(str(event.text).split())) if event.name == "stream_gap_in_doubt" else None
-        if not found:
-            continue
-        after_s, doubt_s = float(found.group(1)), float(found.group(2))
+    for after_s, doubt_s in gaps(record, ("stream_gap_in_doubt",)):
         share = misalignment_share(record.column("time_s"), record.column("force_N"), after_s, doubt_s)
         if share > MISALIGNED_TOL:
             warnings.append(f"the load cell's stream gap after {after_s:.1f} s could not be told lost frames or latency: the "

@@ -33,9 +33,9 @@ WIDENED_VALUES = ("Rp02_MPa", "Ag_pct")  # single budgets the pairing moves (not
 WIDENED_BLOCKS = ("hardening", "flow_stress_MPa")
 
 
-def gaps(record) -> list[tuple[float, float]]:
-    """(T, δ) in the record's seconds of each stream gap it names undecided or in doubt, in time order."""
-    found = (GAP.search(" ".join(str(e.text).split())) for e in record.events if e.name in EVENTS)
+def gaps(record, names: tuple[str, ...] = EVENTS) -> list[tuple[float, float]]:
+    """(T, δ) in the record's seconds of each stream gap it names in events ``names`` (undecided or in doubt), in time order."""
+    found = (GAP.search(" ".join(str(e.text).split())) for e in record.events if e.name in names)
     return sorted((float(m.group(1)), float(m.group(2))) for m in found if m)
 
 

@@ -8,6 +8,11 @@ file copied into an export of that commit (``git archive 01c1793``) and run ther
 
     FLOWCURVE_DEV_ROOT=<the export> python tests/fe/test_inverse_numbers_unchanged.py --write
 
+Written again (``python tests/fe/<this file> --write`` on main) where a change outside the inverse moved its
+inputs, each such change named in its commit: the compression strain zero of a handbook E (stop 51: only
+the fe_table constants' standard errors), the tension scale (3.1) at the fracture (stop 51: the tension
+stand-ins' K_l 0.991 → 1.002, and with it their inverse's fit).
+
 Every leaf is compared: strings, booleans and nulls exactly, numbers to a relative 1e-9; the wall
 and solver times and the record's path are left out.
 """

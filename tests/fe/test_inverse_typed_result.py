@@ -10,6 +10,11 @@ with this file and test_inverse_numbers_unchanged.py copied in::
 
     FLOWCURVE_DEV_ROOT=<the export> python tests/fe/test_inverse_typed_result.py --write
 
+Written again (``python tests/fe/<this file> --write`` on main) where a change outside the inverse moved its
+inputs, each such change named in its commit: the compression strain zero of a handbook E (stop 51: only
+the fe_table constants' standard errors), the tension scale (3.1) at the fracture (stop 51: the tension
+stand-ins' K_l 0.991 → 1.002, and with it their inverse's fit).
+
 Not compared: ``provenance`` (set by the command line, not here); the wall-clock times
 (``wall_s``) and the record's file path, whose keys stay, in place, with a placeholder.
 """

@@ -39,7 +39,9 @@ KNOWN.append(("load cell delayed 0.5 s mid-test at 2 Hz (one output period, 2-3 
               "frame before the gap is still on the elastic rise's knee, or the frames after it bend at Fm, neither "
               "latency nor one lost frame puts the frames on one smooth curve — the gap is named (stream_gap_undecided: "
               "data_loss, run exit 5, the curve marked poor; or stream_gap_in_doubt where the force stays within its "
-              "noise: identify marks the curve where the doubt costs > 1 %), stamped as a loss: the rows stay a period off",
+              "noise: identify marks the curve where the doubt costs > 1 %), stamped as a loss: the rows stay a period off; "
+              "Rp0.2, Ag, the flow-curve points and the constants state the doubt in their U (identified again as latency, "
+              "u = |Δ|, identification/quality/stream_gap.py), the curve's rows have no U of their own",
               lambda c: _fault(c, "loadcell", "delay") and c.rate_Hz == 2.0))
 
 
