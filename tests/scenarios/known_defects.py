@@ -43,6 +43,15 @@ KNOWN.append(("load cell delayed 0.5 s mid-test at 2 Hz (one output period, 2-3 
               "Rp0.2, Ag, the flow-curve points and the constants state the doubt in their U (identified again as latency, "
               "u = |Δ|, identification/quality/stream_gap.py), the curve's rows have no U of their own",
               lambda c: _fault(c, "loadcell", "delay") and c.rate_Hz == 2.0))
+# the same doubt at 12 Hz in the slowest steel 45 tension tests (300 and 850 C failed on 2ef9f68 too, outside this list
+# until stop 51; the other materials' cells pass: their force after Fm falls less within the gap's doubt)
+KNOWN.append(("load cell delayed 0.5 s mid-test at 12 Hz in a steel 45 tension test at 0.005 mm/s: the force is flat within its "
+              "noise across the 6-period gap, so neither rule can tell latency from lost frames — named "
+              "(stream_gap_in_doubt), stamped as lost, identify warns what the doubt can cost after Fm (up to 5.9 % of "
+              "the force on steel 45 at 850 C), marks the curve poor and states Rp0.2, Ag and the curve's budgets with the "
+              "doubt or not certifiable; the rows after the gap stay 6 periods off",
+              lambda c: _fault(c, "loadcell", "delay") and c.rate_Hz == 12.0 and c.test == "tension" and c.speed_mm_per_s == 0.005
+              and c.material == "steel45"))
 
 
 def is_strict(cell: Cell) -> bool:

@@ -149,3 +149,19 @@ def test_a_run_the_furnace_left_hotter_is_judged_at_its_own_temperature():
     assert matrix.survived(RUN, record(np.full(X.size, 302.5)), truth) == []
     bad = matrix.survived(RUN, record(np.full(X.size, 300.0)), truth)
     assert [k for k, _ in bad] == ["Fm beyond the fault-free run's"], bad
+
+
+def test_rp02_beyond_the_tolerance_passes_only_where_its_own_U_holds_the_fault_free_value():
+    """A sparse 850 C compression record read Rp0.2 159.3 MPa for the fault-free 155.9 (+2.2 %, past the 2 %
+    tolerance) with U 174 MPa: an honest claim. The same value with U 2 MPa is caught, and one stated not
+    certifiable makes no claim to judge."""
+    truth = matrix.dataclasses.replace(TRUTH, values={"Rp02_MPa": 155.9})
+
+    def run(budget):
+        return SimpleNamespace(result={"Rp02_MPa": 159.3, "warnings": [], "uncertainty": {"Rp02_MPa": budget}})
+
+    rec = Rec(X, force_N(X))
+    assert matrix.survived(run({"value": 159.3, "U": 174.0, "components": []}), rec, truth) == []
+    caught = matrix.survived(run({"value": 159.3, "U": 2.0, "components": []}), rec, truth)
+    assert [k for k, _ in caught] == ["Rp02 beyond the fault-free run's"], caught
+    assert matrix.survived(run({"value": 159.3, "U": None, "certifiable": False, "components": []}), rec, truth) == []
