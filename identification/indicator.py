@@ -229,6 +229,7 @@ FEW_POINTS_TOP = 0.90  # with few samples, all of them up to this fraction of th
 MIN_LINE_POINTS = 5  # a window with fewer samples is not a candidate of the automatic choice
 MIN_FEW_POINTS = 2  # with fewer samples on the whole elastic line there is no modulus
 FEW_SAMPLES = 10  # an elastic line with fewer samples is used whole, not searched for a window
+GIVEN_WINDOW_POINTS = 5  # a window the caller gives needs this many samples for its line
 SDAR_REACH = 2.0  # SDAR reads the first loading up to this many times the reference (yield) stress
 
 

@@ -19,6 +19,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from flowcurve.identification.indicator import GIVEN_WINDOW_POINTS
 from flowcurve.identification.quality import uncertainty as un
 
 FILTER_KEY = "instruments.force_filter_Hz"
@@ -77,7 +78,9 @@ def pinned_options(result: Mapping, test: str, options: Mapping) -> dict:
     if hard.get("law"):
         out.setdefault("law", hard["law"])
     window = modulus.get("window_MPa")
-    if "modulus_window" not in out and window and len(window) == 2 and float(window[1]) > float(window[0]):
+    # a window the automatic choice drew over fewer samples than a given one needs is left to that choice again
+    enough = (modulus.get("n_points") or 0) >= GIVEN_WINDOW_POINTS
+    if "modulus_window" not in out and enough and window and len(window) == 2 and float(window[1]) > float(window[0]):
         out.setdefault("modulus_window_MPa", (float(window[0]), float(window[1])))
     if test == "tension" and hard.get("fracture_point") in ("included", "excluded"):
         out.setdefault("fracture_point", hard["fracture_point"].removesuffix("d"))

@@ -13,7 +13,7 @@ from flowcurve.errors import IdentificationError
 from flowcurve.identification import iso6892
 from flowcurve.identification.laws.hardening import MAX_STRAIN
 from flowcurve.identification.elastic_modulus import choose_modulus
-from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_SAMPLES, ModulusFit, broken_specimen_recovery_mm, elastic_modulus, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, scale_to_measured
+from flowcurve.identification.indicator import DEFAULT_MODULUS_METHOD, FEW_SAMPLES, GIVEN_WINDOW_POINTS, ModulusFit, broken_specimen_recovery_mm, elastic_modulus, strain_quantum_noise, yield_onset_from_rate, compensate_toe, fit_modulus, scale_to_measured
 from flowcurve.identification.tension.values import MAX_E_UNCERTAINTY, MIN_YIELD_OFFSET
 from flowcurve.identification.tension.inputs import _Inputs, _stress_noise_MPa
 
@@ -99,7 +99,7 @@ def _modulus_window(step: int, ref: float, first_guesses: list[float], strain0, 
     the most linear stretch; returns (window_MPa, line_points, how, auto fit or None, reference).
     ``sdar_memo``: kept across the steps (SDAR's line does not depend on the reference)."""
     if window_fixed_MPa is not None:
-        return window_fixed_MPa, 5, "given window (MPa)", None, ref
+        return window_fixed_MPa, GIVEN_WINDOW_POINTS, "given window (MPa)", None, ref
     if fractions is not None:
         return (fractions[0] * ref, fractions[1] * ref), 5, f"given window {fractions[0]:g}–{fractions[1]:g} × {modulus_reference}", None, ref
     try:

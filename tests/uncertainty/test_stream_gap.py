@@ -86,3 +86,19 @@ def test_a_budget_the_realigned_record_lacks_is_refused():
     stream_gap.refuse(unc, missing, "why")
     assert unc["flow_stress_MPa"]["0.3"]["U"] is None and unc["hardening"]["n"]["certifiable"] is False
     assert unc["Rp02_MPa"]["U"] == pytest.approx(2.0 * np.hypot(1.0, 3.0))
+
+
+def test_the_second_identification_pins_only_a_window_a_given_one_could_hold():
+    """The re-identifications (stream gap, filter lag) pin the result's E window as a given one, which needs
+    GIVEN_WINDOW_POINTS samples: an automatic window drawn over fewer (a sparse record's) is left to the
+    automatic choice again — pinned, the 850 C steel 45 12 Hz delay record's second identification failed
+    ('only 3 samples … need 5') and every budget it moves was stated not certifiable."""
+    from flowcurve.identification.indicator import GIVEN_WINDOW_POINTS
+    from flowcurve.identification.quality.filter_lag import pinned_options
+
+    def result(n):
+        return {"hardening": {"law": "johnson_cook"}, "modulus": {"window_MPa": [20.0, 300.0], "n_points": n}}
+
+    assert pinned_options(result(GIVEN_WINDOW_POINTS), "tension", {})["modulus_window_MPa"] == (20.0, 300.0)
+    few = pinned_options(result(GIVEN_WINDOW_POINTS - 2), "tension", {})
+    assert "modulus_window_MPa" not in few and few["law"] == "johnson_cook"
