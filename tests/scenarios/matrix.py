@@ -593,17 +593,20 @@ def truth_from_rows(x: np.ndarray, f: np.ndarray, complete: bool, result: dict |
                  values, curve_dev_pct)
 
 
+def _rows_with_both(rec) -> np.ndarray:
+    """The rows that hold both a crosshead and a force reading."""
+    return np.isfinite(rec.column("crosshead_mm")) & np.isfinite(rec.column("force_N"))
+
+
 def _rows(rec) -> tuple[np.ndarray, np.ndarray]:
     """|crosshead| and |force| of the rows with both, in record order (the crosshead only advances)."""
-    x, f = np.abs(rec.column("crosshead_mm")), np.abs(rec.column("force_N"))
-    ok = np.isfinite(x) & np.isfinite(f)
-    return x[ok], f[ok]
+    ok = _rows_with_both(rec)
+    return np.abs(rec.column("crosshead_mm"))[ok], np.abs(rec.column("force_N"))[ok]
 
 
 def _row_temperatures(rec) -> np.ndarray:
     """The recorded temperature of :func:`_rows`' rows (NaN where a row has none, or the record no column)."""
-    x, f = np.abs(rec.column("crosshead_mm")), np.abs(rec.column("force_N"))
-    ok = np.isfinite(x) & np.isfinite(f)
+    ok = _rows_with_both(rec)
     return rec.column(TEMPERATURE_COLUMN)[ok] if rec.has(TEMPERATURE_COLUMN) else np.full(int(np.sum(ok)), np.nan)
 
 
@@ -668,9 +671,10 @@ def survived(r: CellRun, rec, ref: Truth) -> list[tuple[str, str]]:
     x, f = _rows(rec)
     # the fault-free run's force at the run's own recorded temperature (the specimen is what it was)
     at_temperature = np.ones(x.shape)
-    if ref.temperature_C is not None and x.size:
+    run_C = _row_temperatures(rec) if ref.temperature_C is not None else None
+    if run_C is not None and x.size:
         order = np.argsort(ref.x_mm, kind="stable")
-        at_temperature = temperature_ratio(ref.material, _row_temperatures(rec), np.interp(x, ref.x_mm[order], ref.temperature_C[order]))
+        at_temperature = temperature_ratio(ref.material, run_C, np.interp(x, ref.x_mm[order], ref.temperature_C[order]))
     # the reference's force at each recorded crosshead position: |F − F_ref(x)| ≤ tol·F_ref + half its step there,
     # short of either run's end by two steps (the fracture's fall, the crosshead standing at a stop)
     end = min(ref.loaded_to_mm, float(x[-1]) if x.size else 0.0) - 2 * ref.step_mm
@@ -694,8 +698,8 @@ def survived(r: CellRun, rec, ref: Truth) -> list[tuple[str, str]]:
             bad.append(("last crosshead beyond the fault-free run's", f"{x[-1]:.3f} mm for {ref.last_x_mm:.3f}"))
         fm = float(np.max(f))
         fm_ref = ref.fm_N
-        if ref.temperature_C is not None:  # each Fm at its own run's temperature there
-            fm_ref *= float(temperature_ratio(ref.material, _row_temperatures(rec)[int(np.argmax(f))], ref.temperature_C[int(np.argmax(ref.force_N))]))
+        if run_C is not None:  # each Fm at its own run's temperature there
+            fm_ref *= float(temperature_ratio(ref.material, run_C[int(np.argmax(f))], ref.temperature_C[int(np.argmax(ref.force_N))]))
         # rising to a target: Fm is the stop's force, where either run stopped (the force against the crosshead judges it)
         fm_at_stop = (ref.x_mm[int(np.argmax(ref.force_N))] >= ref.x_mm[-1] - 2 * ref.step_mm
                       or x[int(np.argmax(f))] >= x[-1] - 2 * ref.step_mm)
