@@ -459,5 +459,7 @@ def identify_compression(record: Record, *, friction_method: str = fr.DEFAULT_FR
         uncertainty, result.methods["correction_uncertainty"], fold_warnings = _fe_correction_uncertainty(geo, friction, yld.E_used)
         result.warnings.extend(fold_warnings)
     curves = _curves(diagram, nominal, friction, fits[friction_correction])
+    if uncertainty is not None:  # the flow stress budgets state the correction's own σ per point (assurance)
+        curves["true_fe_table"]["correction_uncertainty_pct"] = uncertainty
     sensitivity = _mu_sensitivity(geo, nominal, friction, friction_correction, yld.E_used, curves)
     return Identification(result=result, true_curve=_flow_curve(eps_def, sig_def, yld.i_yield, uncertainty, sensitivity), curves=curves)

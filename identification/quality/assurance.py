@@ -242,6 +242,7 @@ def compression_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> 
                 sigma = float(np.interp(at, eps, sig))
                 method = un.flow_point_method_components(sigma, _curve_slope(eps, sig, at), _num(E_method.get("E_MPa")),
                                                          _num(E_method.get("u_MPa")) or 0.0, zero)
+                method += un.correction_form_components(sigma, _at_strain(curve, "correction_uncertainty_pct", eps, at))
                 flow[f"{at:g}"] = un.flow_stress_budget(sigma, at, d0, h0, hk, inst, mu=mu, u_mu=u_mu, method=method,
                                                         mu_sensitivity=_at_strain(curve, "dsigma_dmu_MPa", eps, at))
         if flow:

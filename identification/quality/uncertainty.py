@@ -451,6 +451,19 @@ def flow_point_method_components(sigma_MPa: float, slope_MPa: float, E_MPa: floa
     return out
 
 
+CORRECTION_FORM = "method: FE model form of the friction correction"
+
+
+def correction_form_components(sigma_MPa: float, correction_u_pct: float | None) -> list[Component]:
+    """The friction correction's own σ at a flow-curve point (the fe_table correction's stated per-point
+    uncertainty, true_curve.csv ``correction_uncertainty_pct``: the model form's share of the force, grown
+    over the band before the fold-over): u = σ·u_corr/100, sensitivity 1; none where the correction states none."""
+    if correction_u_pct is None or not math.isfinite(correction_u_pct) or correction_u_pct <= 0:
+        return []
+    return [Component(CORRECTION_FORM, sigma_MPa, "MPa", sigma_MPa * correction_u_pct / 100.0, 1.0,
+                      f"the correction's stated σ at this point, {correction_u_pct:.2f} % of the stress (correction_uncertainty_pct)")]
+
+
 def on_bound_reach(m: float, se: float, k: float = K_COVERAGE) -> float:
     """How far inward the constant's value (as the law fitted with its bounds, noise-free, would give it)
     can lie from its bound: the bounded fit's constant is max(bound, p) of the unbounded one p ~ N(m, se²),

@@ -6,6 +6,10 @@ the split, with::
     git archive 01c1793 | tar -x -C /tmp/old
     FLOWCURVE_DEV_ROOT=/tmp/old python tests/compression/test_identify_numbers_unchanged.py --write
 
+Rewritten since, each time for a change of the numbers that says why: the flow stress budgets state the fe_table
+correction's own per-point σ (true_curve.csv correction_uncertainty_pct; docs/methods.md §4.8, issue 43): only
+uncertainty.flow_stress_MPa's U, u, u_method and their new component moved.
+
 Every leaf is compared as in tests/tension/test_identify_numbers_unchanged.py (numbers to a
 relative 1e-9, everything else exactly).
 """

@@ -55,7 +55,9 @@ def test_a_specimen_heated_under_load_after_the_record_is_not_read_as_certified(
 def test_the_doubt_enters_the_budgets_and_they_hold_the_material(make_record):
     """The flowed record's budgets carry the spread between the measured hk and the record's own
     (the crosshead's shortening, frame compliance removed); with it each flow stress holds the law
-    the record was made with, without it some do not."""
+    the record was made with, and the spread holds what the flowed hk moved: the fault-free run's
+    flow stress within 2 u of it. (Before the flow stress stated the correction's own σ, the spread
+    was also what held the law: without it some points missed; that σ now holds them on this record.)"""
     record, truth = make_record(hk_target=4.3)
     end = float(record.data["time_s"].iloc[-1])
     clean = identify(record).result
@@ -63,14 +65,13 @@ def test_the_doubt_enters_the_budgets_and_they_hold_the_material(make_record):
     # the record's own final height: the generator's unloaded hk within the crosshead's 0.01 mm step
     assert abs(doubt.record_final_height_mm(clean) - truth["hk"]) < 0.01
     assert abs(doubt.record_final_height_mm(flowed) - truth["hk"]) < 0.01
-    held_without = []
     for at, b in flowed["uncertainty"]["flow_stress_MPa"].items():
         (spread,) = [c for c in b["components"] if c["name"] == doubt.COMPONENT]
         error = abs(b["value"] - flow_stress(float(at), **truth["law"]))
         assert error <= b["U"], (at, b["value"], b["U"])
-        held_without.append(error <= b["k"] * math.sqrt(b["u"] ** 2 - spread["contribution"] ** 2))
+        moved = abs(b["value"] - clean["uncertainty"]["flow_stress_MPa"][at]["value"])  # what the flowed hk did
+        assert 0.0 < moved <= 2.0 * spread["contribution"], (at, moved, spread["contribution"])
         assert b["u_method"] >= spread["contribution"]
-    assert not all(held_without)
     for b in (*flowed["uncertainty"]["hardening"].values(), flowed["uncertainty"]["friction_mu"]):
         assert doubt.COMPONENT in [c["name"] for c in b["components"]]
     budgets = (*clean["uncertainty"]["flow_stress_MPa"].values(), *clean["uncertainty"]["hardening"].values())
