@@ -7,7 +7,10 @@ share |fit over the first half − over the whole| ("range"), and two candidates
   "contribution": the range shift of the corrected curve less that of the curve corrected at μ = 0 (the correction's own);
   "projection": the constants' change when the law is fitted as σ = (A + B·εpⁿ)(1 + k·c), c = 1 − σ_corrected/σ_nominal
   (a shape error of the correction's own shape; 0 where the correction is nil);
-  "span": the same with one such term per correction (fe_table, k_sigma, siebel, slab at μ̂): any friction model's shape.
+  "span": the same with one such term per correction (fe_table, k_sigma, siebel, slab at μ̂): any friction model's shape;
+  "rate": the range shift of the curve with the constant-speed rate rise's own shape divided out, σ/(1 + k·ε) with k
+  from σ = (A + B·εpⁿ)(1 + k·ε) over the whole range (ε̇ = v/h grows as e^ε, so ln ε̇ by ε);
+  "rate4": |constants of that four-constant law fitted over the first half − over the whole|.
 Prints per record and a summary: the campaign's method share / median |error| (shares in quadrature, the FE model form
 left out as the campaign does on this kind) and the slab records' count beyond 2.5 standard errors.
 Run: PYTHONPATH=. python bench/fit_range_candidates.py"""
@@ -59,9 +62,20 @@ def _spy(src, geo, nominal, friction, fit, i_yield, fit_range, law, friction_cor
         model = lambda e, A, B, n, *k: (A + B * e**n) * (1.0 + np.dot(np.asarray(k), shapes))  # noqa: E731
         p, _ = curve_fit(model, eps_fit, sig_fit, p0=[whole["A"], whole["B"], whole["n"]] + [0.0] * len(patterns), maxfev=40000)
         span = dict(zip(("A", "B", "n"), (abs(p[0] - whole["A"]), abs(p[1] - whole["B"]), abs(p[2] - whole["n"]))))
-    SEEN.append({"span": span, "range": {k: abs(v) for k, v in corrected.items()}, "contribution": {k: abs(corrected[k] - reference[k]) for k in corrected},
+    rate, rate4 = _rate_shifts(eps_fit, sig_fit, friction.corrected[friction_correction][2][idx], whole, law)
+    SEEN.append({"rate": rate, "rate4": rate4, "span": span, "range": {k: abs(v) for k, v in corrected.items()}, "contribution": {k: abs(corrected[k] - reference[k]) for k in corrected},
                  "projection": projection, "shares": {name: dict(v) for name, v in shares.items()}})
     return shares
+
+
+def _rate_shifts(eps_p, sig, eps_t, whole, law):
+    """("rate", "rate4") of the docstring: the refits with the rate rise's shape (1 + k·ε) free."""
+    model = lambda e, A, B, n, k, t=eps_t: (A + B * e**n) * (1.0 + k * t)  # noqa: E731  # σ = (A + Bεpⁿ)(1 + kε)
+    p, _ = curve_fit(model, eps_p, sig, p0=[whole["A"], whole["B"], whole["n"], 0.0], maxfev=20000)
+    shifted, _ = _signed_range(eps_p, sig / (1.0 + p[3] * eps_t), law)
+    first = eps_p <= eps_p.min() + 0.5 * np.ptp(eps_p)
+    q, _ = curve_fit(lambda e, A, B, n, k: model(e, A, B, n, k, eps_t[first]), eps_p[first], sig[first], p0=list(p), maxfev=20000)
+    return {k: abs(v) for k, v in shifted.items()}, dict(zip(("A", "B", "n"), (abs(q[i] - p[i]) for i in range(3))))
 
 
 frr._constants_stderr = _spy
@@ -114,10 +128,11 @@ def main() -> None:
         print(f"== {title}")
         for r in rows:
             print(f"{r['name']:28s} " + " | ".join(f"{k} err {r['err'][k]:.3g} se {r['se'][k]:.3g} range {r['range'][k]:.3g} "
-                                                   f"contribution {r['contribution'][k]:.3g} projection {r['projection'][k]:.3g} span {r['span'][k]:.3g}" for k in KEYS))
+                                                   f"contribution {r['contribution'][k]:.3g} projection {r['projection'][k]:.3g} span {r['span'][k]:.3g} "
+                                                   f"rate {r['rate'][k]:.3g} rate4 {r['rate4'][k]:.3g}" for k in KEYS))
     for k in KEYS:
         errors = statistics.median(r["err"][k] for r in campaign)
-        for cand in ("range", "contribution", "projection", "span"):
+        for cand in ("range", "contribution", "projection", "span", "rate", "rate4"):
             method = [2.0 * math.sqrt(sum(v.get(k, 0.0) ** 2 for name, v in r["shares"].items() if not name.startswith(("fit range", "FE model form")))
                                       + r["zero"].get(k, 0.0) ** 2 + r[cand][k] ** 2) for r in campaign]
             beyond = [r["name"] for r in slab if r["err"][k] > 2.5 * _with(r, k, r[cand][k])]
