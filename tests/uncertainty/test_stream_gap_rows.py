@@ -95,3 +95,32 @@ def test_the_rows_after_the_gap_carry_its_doubt_and_the_truth_lies_within_2u(run
         err = np.abs(s[both] - truth)
         late = u[both] > 0
         assert np.max(err[late]) > 1.0 and np.all(err[late] >= 0.9 * u[both][late])
+
+
+def test_the_written_rows_the_series_fit_and_the_report_name_where_the_doubt_starts(runs, tmp_path):
+    """true_curve.csv holds the column (NaN as an empty cell, read back as NaN); a series member read from it knows the
+    strain from which its rows carry the doubt, the series fit's warnings name it (cards are made from its curves),
+    and the report's budget notes say it in words without the file's names."""
+    import pandas as pd
+
+    from flowcurve.identification.outcome import to_jsonable
+    from flowcurve.identification.series.members import stated_uncertainties, stream_gap_warnings
+    from flowcurve.reports.report_content import customer_text, stream_gap_rows_note
+
+    ident = runs["latency"]
+    ident.write(tmp_path)
+    back = pd.read_csv(tmp_path / "true_curve.csv")
+    u = ident.true_curve[stream_gap.ROW_COLUMN].to_numpy(dtype=float)
+    np.testing.assert_allclose(back[stream_gap.ROW_COLUMN].to_numpy(dtype=float), u, rtol=1e-5, atol=1e-9, equal_nan=True)
+    start = ident.result["methods"]["stream_gap_rows"]["from_plastic_strain"]
+    stated = stated_uncertainties(ident.result, back)
+    assert stated["stream_gap_from_strain"] == pytest.approx(start, rel=1e-5)
+    assert stated["stream_gap_u_max_MPa"] == pytest.approx(np.nanmax(u), rel=1e-5)
+    assert "stream_gap_from_strain" not in stated_uncertainties(runs["free"].result, runs["free"].true_curve)
+    member = dataclasses.make_dataclass("M", ["name", "stream_gap_from_strain", "stream_gap_u_max_MPa"])("s1", start, 4.2)
+    (line,) = stream_gap_warnings([member])
+    assert line.startswith("s1:") and f"{start:.4g}" in line
+    (note,) = stream_gap_rows_note(to_jsonable(ident.result))
+    words = customer_text(note)
+    assert f"{start:.3g}"[:5] in words and "csv" not in words and "stream_gap_u_MPa" not in words
+    assert stream_gap_rows_note(to_jsonable(runs["free"].result)) == []
