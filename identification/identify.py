@@ -359,7 +359,7 @@ def identify(record: Record, **options) -> Identification:
     if after and record.test == "compression":
         warnings += _post_test_spread(result, record, func, accepted)
     warnings += _filter_lag_spread(result, record, func, accepted)
-    warnings += _stream_gap_spread(result, record, func, accepted)
+    warnings += _stream_gap_spread(result, record, func, accepted, ident)
     warnings += off_temperature_warnings(result, record, stray)
     old = list(result.get("warnings") or [])
     result["warnings"] = old + [w for w in warnings if w not in old]
@@ -444,11 +444,12 @@ def _filter_lag_spread(result, record: Record, func, options: dict) -> list[str]
     return []
 
 
-def _stream_gap_spread(result, record: Record, func, options: dict) -> list[str]:
+def _stream_gap_spread(result, record: Record, func, options: dict, ident: Identification | None = None) -> list[str]:
     """A record naming a load-cell stream gap it could not tell latency or loss of (:mod:`.quality.stream_gap`):
     identified again with the later forces a period earlier, the difference of Rp0.2, Ag, each flow-curve point
     and hardening constant entered into its budget; a budget the second identification lacks, or all of them when
-    it fails, stated not certifiable. Returns the warnings."""
+    it fails, stated not certifiable. Each row of ``ident``'s true curve gets its own difference as a column
+    (:func:`_stream_gap_rows`). Returns the warnings."""
     from flowcurve.identification.quality import filter_lag, stream_gap
 
     found = stream_gap.gaps(record)
@@ -461,10 +462,34 @@ def _stream_gap_spread(result, record: Record, func, options: dict) -> list[str]
     except FlowcurveError as exc:
         why = f"a load-cell stream gap (latency or loss undecided): the record read as latency does not identify ({str(exc).splitlines()[0]})"
         state_not_certifiable(unc, (*stream_gap.WIDENED_VALUES, *stream_gap.WIDENED_BLOCKS), why)
+        _stream_gap_rows(result, ident, None, why)
         return [f"not certifiable: {why}"]
     missing = stream_gap.widen(unc, alt.result.get("uncertainty") or {})
     stream_gap.refuse(unc, missing, "a load-cell stream gap (latency or loss undecided): the record read as latency states no such value")
+    _stream_gap_rows(result, ident, alt.true_curve, None)
     return []
+
+
+def _stream_gap_rows(result, ident: Identification | None, alt_curve, why: str | None) -> None:
+    """The true curve's rows (true_curve.csv) each with its share of the stream gap's doubt
+    (:func:`.quality.stream_gap.row_doubt` against ``alt_curve``, the record read as latency; all NaN without
+    one, ``why``), and result.json ``methods.stream_gap_rows`` saying what the column holds."""
+    from flowcurve.identification.outcome import TRUE_CURVE_COLUMNS
+    from flowcurve.identification.quality import stream_gap
+
+    curve = getattr(ident, "true_curve", None)
+    if curve is None or any(c not in curve.columns for c in TRUE_CURVE_COLUMNS):
+        return
+    x, s = (curve[c].to_numpy(dtype=float) for c in TRUE_CURVE_COLUMNS)
+    if alt_curve is None or any(c not in alt_curve.columns for c in TRUE_CURVE_COLUMNS):
+        u = np.full(x.shape, np.nan)
+        why = why or "the record read as latency states no true curve"
+    else:
+        u = stream_gap.row_doubt(x, s, *(alt_curve[c].to_numpy(dtype=float) for c in TRUE_CURVE_COLUMNS))
+    curve[stream_gap.ROW_COLUMN] = u
+    methods = result.get("methods")
+    if isinstance(methods, dict):
+        methods["stream_gap_rows"] = stream_gap.rows_note(x, u, why)
 
 
 def state_not_certifiable(uncertainty: dict, keys, why: str) -> None:

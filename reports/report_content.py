@@ -493,9 +493,22 @@ def budget_tables(name: str, result: dict, report: Report | None = None) -> list
         facts += f". Strain: {strain.get('basis')}, relative u {_g(strain.get('u_rel'))}"
     notes = [f"{label}: {customer_text(b['note'], report)}" for label, b in budgets
              if b.get("note") and not b["note"].startswith("at true plastic strain")]
+    notes += [customer_text(n, report) for n in stream_gap_rows_note(result)]
     return [Heading(f"Uncertainty budget — {name}", 3), Para(facts, "note"),
             Table(["result", "input", "value", "u (standard)", "sensitivity c", "contribution |c|·u"], rows),
             *([Para("; ".join(notes), "note")] if notes else [])]
+
+
+def stream_gap_rows_note(result: dict) -> list[str]:
+    """The strain from which the true curve's rows carry a load-cell stream gap's doubt (result.json
+    methods.stream_gap_rows), in a sentence; empty without one."""
+    rows = (result.get("methods") or {}).get("stream_gap_rows") or {}
+    start, most = _num(rows.get("from_plastic_strain")), _num(rows.get("max_u_MPa"))
+    if start is None:
+        return []
+    unread = f"; {rows['rows_without_u']} rows without it (the other reading's curve does not reach their strain)" if rows.get("rows_without_u") else ""
+    return [f"true curve: the rows from plastic strain {_g(start, 3)} on carry a load-cell stream gap's doubt (latency or loss "
+            f"undecided), up to {_g(most)} MPa; each row's own: true_curve.csv stream_gap_u_MPa{unread}"]
 
 
 def figures(name: str, folder: Path) -> list:

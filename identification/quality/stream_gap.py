@@ -81,3 +81,42 @@ def refuse(uncertainty: dict, missing: list[str], why: str) -> None:
         b = holder.get(key) if isinstance(holder, dict) else None
         if isinstance(b, dict) and "components" in b and b.get("certifiable") is not False:
             holder[key] = not_certifiable(b, why)
+
+
+ROW_COLUMN = "stream_gap_u_MPa"  # true_curve.csv: each row's share of the gap's doubt, MPa
+ROWS_BASIS = ("u = |σ_alt(x) − σ(x)|, σ_alt the curve of the record identified again as if the gap had been latency "
+              "(every later force sent δ before its stamp, every choice pinned), interpolated at the row's own "
+              "true_plastic_strain x; the row's error is 0 (a loss, as stamped) or that difference (a latency), "
+              "uncorrected: σ ± 2·u holds either reading")
+
+
+def row_doubt(strain, stress_MPa, alt_strain, alt_stress_MPa) -> np.ndarray:
+    """Each curve row's share of the gap's doubt, MPa: u = |σ_alt(x) − σ(x)| at the row's strain x, σ_alt linear
+    between the alternative curve's rows (sorted by strain); NaN where x lies outside them (not reached)."""
+    x, s = np.asarray(strain, dtype=float), np.asarray(stress_MPa, dtype=float)
+    ax, asig = np.asarray(alt_strain, dtype=float), np.asarray(alt_stress_MPa, dtype=float)
+    ok = np.isfinite(ax) & np.isfinite(asig)
+    ax, asig = ax[ok], asig[ok]
+    if ax.size < 2:
+        return np.full(x.shape, np.nan)
+    order = np.argsort(ax, kind="stable")
+    ax, asig = ax[order], asig[order]
+    alt = np.interp(x, ax, asig)  # σ_alt(x)
+    return np.where((x >= ax[0]) & (x <= ax[-1]), np.abs(alt - s), np.nan)  # u = |Δ|, NaN outside the alternative
+
+
+def rows_note(strain, u_MPa, why_missing: str | None = None) -> dict:
+    """result.json methods' word on :data:`ROW_COLUMN`: what it holds, the strain from which the rows carry a
+    doubt (the first row with u > 0; the rows before it agree in both readings), its largest value, and the rows
+    without one (NaN) and why."""
+    x, u = np.asarray(strain, dtype=float), np.asarray(u_MPa, dtype=float)
+    carried = np.isfinite(u) & (u > 0)
+    unread = ~np.isfinite(u)
+    note = {"column": ROW_COLUMN, "holds": ROWS_BASIS,
+            "from_plastic_strain": float(x[carried][0]) if carried.any() else None,
+            "max_u_MPa": float(np.max(u[carried])) if carried.any() else 0.0,
+            "rows_without_u": int(unread.sum())}
+    if unread.any():
+        note["why_without_u"] = why_missing or ("the curve of the record read as latency does not reach these rows' strain "
+                                                f"({float(np.min(x[unread])):.4g}–{float(np.max(x[unread])):.4g}): their doubt is unknown, not 0")
+    return note

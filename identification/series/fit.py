@@ -26,7 +26,7 @@ from flowcurve.identification.quality import uncertainty as un
 from flowcurve.identification.elastic_modulus import series_modulus
 from flowcurve.identification.series.law_fit import (SHAPE_ERROR_PCT, LawFit, fill_errors, fit_law, law_shape_uncertainty,
                                                      total_uncertainty)
-from flowcurve.identification.series.members import MAX_POINTS, SeriesMember
+from flowcurve.identification.series.members import MAX_POINTS, SeriesMember, stream_gap_warnings
 
 PARAMS = ("A", "B", "n", "C", "m")
 KEYS = {"A": "A_MPa", "B": "B_MPa", "n": "n", "C": "C", "m": "m"}
@@ -500,6 +500,7 @@ def fit_series(members: Sequence[SeriesMember], *, method: str = "global", ref_s
     band = shape_uncertainty(members, ref, chosen, max_points=max_points, shape_error_pct=shape_error_pct)
     warnings += _fit_warnings(chosen, band, shape_error_pct, ("A", "B", "n"))
     warnings += [law["why_different"] for law in map(identify_law_range, members) if law and "why_different" in law]
+    warnings += stream_gap_warnings(members)
     damage = _fit_damage(members, list(fracture_points), ref, warnings)
     return SeriesFit(method=method, fit=chosen, global_fit=glob, stepwise_fit=stepwise, stepwise_note=note,
                      members=members, curves=condition_curves(members, max_points), warnings=warnings,
@@ -521,6 +522,7 @@ def _fit_series_law(members: list[SeriesMember], law, *, method: str, fixed: dic
     band = law_shape_uncertainty(members, fit, max_points=max_points, shape_error_pct=shape_error_pct)
     warnings = [f"{law.display_name}: {why}" for why in fit.fixed_why.values()]
     warnings += _fit_warnings(fit, band, shape_error_pct, law.names)
+    warnings += stream_gap_warnings(members)
     if any(m.fracture is not None for m in members) or fracture_points:
         warnings.append(f"no fracture constants: D1-D5 are Johnson–Cook's and the series was fitted with {law.display_name}")
     return SeriesFit(method="global", fit=fit, global_fit=fit, stepwise_fit=None,

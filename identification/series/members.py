@@ -62,6 +62,8 @@ class SeriesMember:
     strain_rate_u_source: str | None = None  # what strain_rate_u_ln holds
     nominal_strain_rate_per_s: float | None = None  # the commanded rate: crosshead speed / gauge length (h0 or l0)
     temperature_u_C: float | None = None  # a stated standard uncertainty of each point's T: the measured T's spread over the plastic range
+    stream_gap_from_strain: float | None = None  # a load-cell stream gap's doubt: the first plastic strain whose row carries it (true_curve.csv stream_gap_u_MPa)
+    stream_gap_u_max_MPa: float | None = None  # ... and the largest it states
 
     def __post_init__(self):
         where = self.source if self.source != "<memory>" else self.name
@@ -409,7 +411,34 @@ def stated_uncertainties(result, curve) -> dict:
     keep = eps >= PLASTIC_START  # as plastic_part
     columns = {name: (np.asarray(curve[column], dtype=float)[keep] if column in curve.columns else None)
                for name, column in (("dsigma_dmu_MPa", "dsigma_dmu_MPa"), ("correction_u_pct", "correction_uncertainty_pct"))}
-    return {"delta_eps0": _number(start.get("delta_eps0") if isinstance(start, dict) else None), "friction_mu_u": u_mu, **columns}
+    return {"delta_eps0": _number(start.get("delta_eps0") if isinstance(start, dict) else None), "friction_mu_u": u_mu, **columns,
+            **_stream_gap_rows(eps[keep], curve, keep)}
+
+
+def _stream_gap_rows(eps: np.ndarray, curve, keep: np.ndarray) -> dict:
+    """The first plastic strain whose row carries a load-cell stream gap's doubt (true_curve column
+    ``stream_gap_u_MPa`` > 0) and the largest it states; empty without such rows."""
+    from flowcurve.identification.quality.stream_gap import ROW_COLUMN
+
+    if ROW_COLUMN not in curve.columns:
+        return {}
+    u = np.asarray(curve[ROW_COLUMN], dtype=float)[keep]
+    carried = ~(u <= 0)  # > 0, or NaN: a doubt not known is not none
+    if not carried.any():
+        return {}
+    return {"stream_gap_from_strain": float(eps[carried][0]), "stream_gap_u_max_MPa": float(np.nanmax(u)) if np.isfinite(u).any() else None}
+
+
+def stream_gap_warnings(members) -> list[str]:
+    """The series fit's word on members whose curve rows carry a load-cell stream gap's doubt: the tabulated curves
+    (and the cards made from them) carry it from that strain on, unstated in their own rows."""
+    return [f"{m.name}: its true curve's rows from plastic strain {m.stream_gap_from_strain:.4g} on carry a load-cell stream "
+            f"gap's doubt (latency or loss undecided: up to {m.stream_gap_u_max_MPa:.3g} MPa, true_curve.csv stream_gap_u_MPa); "
+            "the tabulated curve and the constants fitted to it include it there"
+            if m.stream_gap_u_max_MPa is not None else
+            f"{m.name}: its true curve's rows from plastic strain {m.stream_gap_from_strain:.4g} on carry a load-cell stream gap's "
+            "doubt of unknown size (true_curve.csv stream_gap_u_MPa empty); the tabulated curve and the constants include it there"
+            for m in members if m.stream_gap_from_strain is not None]
 
 
 def _gauge_of(record: Record) -> float | None:

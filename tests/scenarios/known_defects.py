@@ -41,7 +41,8 @@ KNOWN.append(("load cell delayed 0.5 s mid-test at 2 Hz (one output period, 2-3 
               "data_loss, run exit 5, the curve marked poor; or stream_gap_in_doubt where the force stays within its "
               "noise: identify marks the curve where the doubt costs > 1 %), stamped as a loss: the rows stay a period off; "
               "Rp0.2, Ag, the flow-curve points and the constants state the doubt in their U (identified again as latency, "
-              "u = |Δ|, identification/quality/stream_gap.py), the curve's rows have no U of their own",
+              "u = |Δ|, identification/quality/stream_gap.py), and so does each curve row (true_curve.csv stream_gap_u_MPa) — the "
+              "record's rows stay off",
               lambda c: _fault(c, "loadcell", "delay") and c.rate_Hz == 2.0))
 # the same doubt at 12 Hz in the slowest steel 45 tension tests (300 and 850 C failed on 2ef9f68 too, outside this list
 # until stop 51; the other materials' cells pass: their force after Fm falls less within the gap's doubt)
