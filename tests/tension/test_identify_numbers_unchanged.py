@@ -9,6 +9,9 @@ The long cases were written again at the (3.1) change of branch klscale: the ben
 states Lu as L0 plus its *loaded* elongation at the end, and (3.1) now sets Lu − L0 against the
 elongation at the fracture less the elastic recovery there, so its K_l moved 0.99996 → 1.0077 and
 every strain-dependent value with it (Agt 19.73 → 19.89 %); the 42CrMoS4 cases (extensometer) are unchanged.
+Written again (long cases only) on branch lcscale when (3.1)'s a_u without post.du_mm moved from the
+argmax sample to the flat maximum's mid-point less F·L(1 + a_u)²/(E·S0): the bench's a_u 0.1994 → 0.1936
+(54k), its recovery with it, K_l 1.00771 → 1.00763, Agt 19.887 → 19.886 %.
 
 Every leaf of result.json is compared: strings, booleans and nulls exactly, numbers to a
 relative 1e-9 (float summation order may change; nothing else may).
