@@ -35,7 +35,12 @@ EPS_F = 0.8  # true fracture strain ln(F0/Fk)
 
 
 def synthetic_tension(rows: int, rate_hz: float = 150.0, seed: int = 0) -> Record:
-    """A tension record from a known law: uniform hardening to Rm, then a falling neck branch."""
+    """A tension record from a known law: uniform hardening to Rm, then a falling neck branch.
+
+    post.lu_mm is what a caliper reads on the unloaded pieces: L0 plus the elongation at the
+    fracture less the elastic extension the uniform part gives back, L0·e^εu·(e^(σ_f/E) − 1) with
+    σ_f = F_f·e^εu/S0 on its plastic section (the neck's own, over its short length, is left out).
+    """
     rng = np.random.default_rng(seed)
     t = np.arange(rows) / rate_hz
     area = np.pi * D0_MM**2 / 4
@@ -54,6 +59,8 @@ def synthetic_tension(rows: int, rate_hz: float = 150.0, seed: int = 0) -> Recor
     elong = eng * L0_MM
     elong[i_m:] = elong[i_m] + (elong[-1] - elong[i_m]) * tail * 0.6
     crosshead = elong + force / (FRAME_N_PER_UM * 1e3)
+    eps_u = float(eps_p[i_m])
+    recovery = L0_MM * np.exp(eps_u) * np.expm1(force[-1] * np.exp(eps_u) / area / E_MPA)  # the pieces' elastic give-back, mm
     dk = float(D0_MM * np.exp(-EPS_F / 2.0))
     data = pd.DataFrame({
         "time_s": t,
@@ -63,7 +70,7 @@ def synthetic_tension(rows: int, rate_hz: float = 150.0, seed: int = 0) -> Recor
     meta = {"flowcurve-record": "1", "status": "complete", "test": "tension", "material": "synthetic JC",
             "specimen.id": "bench-1h", "nominal_temperature_C": "20", "crosshead_speed_mm_per_s": repr(float(crosshead[-1] / t[-1])),
             "rig.frame_stiffness_N_per_um": repr(FRAME_N_PER_UM), "specimen.d0_mm": repr(D0_MM), "specimen.l0_mm": repr(L0_MM),
-            "post.lu_mm": repr(float(L0_MM + elong[-1])), "post.dk_mm": repr(dk)}
+            "post.lu_mm": repr(float(L0_MM + elong[-1] - recovery)), "post.dk_mm": repr(dk)}
     return Record(meta=meta, data=data, source="bench")
 
 

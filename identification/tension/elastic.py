@@ -50,24 +50,29 @@ def _fracture_scale(inp: _Inputs, disp, line_E_MPa: float | None, E_option_MPa: 
     frame_in = src["source"] == "crosshead" and src["stiffness"] is None
     E_line = line_E_MPa if line_E_MPa is not None and np.isfinite(line_E_MPa) and line_E_MPa > 0 else None
     c_line = length / (E_line * s0) if E_line is not None else None  # mm/N: the diagram's elastic compliance
-    du = inp.record.specimen.du_mm
-    if du is not None and 0 < du <= inp.d0:
-        a_u, a_u_from = (inp.d0 / du) ** 2 - 1.0, "post.du_mm"  # constant volume: a_u = (d0/du)² − 1
-    else:
-        el = inp.Fm * (c_line if c_line is not None else length / (choice.E_MPa * s0) if choice.E_MPa else 0.0)
-        a_u, a_u_from = max((float(disp[inp.i_m]) - el) / length, 0.0), "the diagram at Fm"
-    F_f = max(float(force[i_k]), 0.0)
     if choice.E_MPa is not None:
         E_s, u_E, E_from = choice.E_MPa, choice.u_MPa, choice.source
     elif E_line is not None and not frame_in:
         E_s, u_E, E_from = E_line, E_line * 0.05, "the diagram's slope (frame removed; ±5 %)"
     else:
         E_s, u_E, E_from = None, 0.0, "none"
-    if E_s is not None:
-        specimen = broken_specimen_recovery_mm(F_f, length, s0, E_s, a_u)
-        frame = F_f * max(c_line - length / (E_s * s0), 0.0) if frame_in and c_line is not None else 0.0
-    else:  # no E to split the diagram's slope: specimen and frame together, small strain
-        specimen, frame = (F_f * c_line if c_line is not None else 0.0), 0.0
+
+    def elastic_mm(F: float, a: float) -> tuple[float, float]:
+        """(specimen, frame) elastic extension in ``disp`` at force F and uniform plastic elongation a."""
+        if E_s is None:  # no E to split the diagram's slope: specimen and frame together, small strain
+            return (F * c_line if c_line is not None else 0.0), 0.0
+        frame_mm = F * max(c_line - length / (E_s * s0), 0.0) if frame_in and c_line is not None else 0.0
+        return broken_specimen_recovery_mm(F, length, s0, E_s, a), frame_mm
+
+    du = inp.record.specimen.du_mm
+    if du is not None and 0 < du <= inp.d0:
+        a_u, a_u_from = (inp.d0 / du) ** 2 - 1.0, "post.du_mm"  # constant volume: a_u = (d0/du)² − 1
+    else:  # the flat maximum's mid-point (ISO 6892-1 §13, as Ag) less the elastic extension there (the same as at the break)
+        d_m = float(np.mean(iso6892.max_force_band(disp, inp.eng_stress)))
+        a_u = max(d_m - sum(elastic_mm(inp.Fm, 0.0)), 0.0) / length
+        a_u, a_u_from = max(d_m - sum(elastic_mm(inp.Fm, a_u)), 0.0) / length, "the diagram at Fm"  # one step: (1 + a)² moves a by < 1e-4
+    F_f = max(float(force[i_k]), 0.0)
+    specimen, frame = elastic_mm(F_f, a_u)
     step = float(disp[i_k] - disp[i_k - 1]) if i_k > 0 else 0.0  # the break lies within a sample's travel after i_k
     reference = float(disp[i_k]) - specimen - frame
     measured = (inp.lu - inp.l0) + (length - inp.l0) * a_u

@@ -445,8 +445,8 @@ def identify_tension(record: Record, *, use_extensometer: bool | None = None, fr
         A tension record (elongation from the extensometer or the crosshead).
     use_extensometer, frame_stiffness_N_per_um, crosshead_length_mm, scale, toe : optional
         The extensometer (None: when recorded); else the crosshead with the frame's stiffness (N/µm,
-        default the record's) over a length, mm (parallel length, else l0; l0 with post.lu_mm and
-        ``scale``); ``toe`` compensates a soft start.
+        default the record's) over a length, mm (parallel length, else l0; scaled to post.lu_mm with
+        ``scale``, (3.1)); ``toe`` compensates a soft start.
     modulus_window, modulus_window_MPa, modulus_reference, modulus_method, E_MPa : optional
         E's window in fractions of ``modulus_reference`` (Rp02, Rm) or in MPa (default: the most
         linear stretch); "window", "sdar" (ASTM E3076-18) or "auto"; ``E_MPa`` fixes E, MPa.

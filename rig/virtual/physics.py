@@ -9,7 +9,7 @@ read it. Conventions:
 * Quasi-static mechanics: the specimen state is a function of the crosshead position and
   the plastic history (largest plastic strain reached), solved exactly at each step.
 * Flow stress is Johnson–Cook (:mod:`flowcurve.rig.virtual.materials`) at the *nominal* strain rate of the
-  test, v/l0 (tension) or v/h0 (compression), and at the furnace's true temperature.
+  test, v/Lc (tension: the parallel length, l0 unless given) or v/h0 (compression), and at the furnace's true temperature.
 * Tension: uniform deformation with plastic incompressibility, F = F0·exp(−εp) (elastic
   volume change neglected), until the force maximum (Considère, dσ/dεp = σ); then a neck
   strains alone while the rest unloads elastically; fracture when the neck strain reaches the
@@ -18,7 +18,8 @@ read it. Conventions:
   (:mod:`flowcurve.rig.virtual.neck_response`, the rig's own copy and interpolation, read
   from the material's Considère strain on with its hardening ratio θ/σ): the neck's mean axial
   stress is the flow stress times the FE's factor β(ε_n − ε_u), the elongation is the rest's
-  l0·(e^(ε_u + σ/E) − 1) plus the FE neck's d0·λ(ε_n − ε_u) (runs of l0/d0 = 5), and the
+  Lc·(e^(ε_u + σ/E) − 1) (Lc the parallel length) plus the FE neck's d0·λ(ε_n − ε_u) (runs of l0/d0 = 5;
+  the neck within the gauge marks, whose Lu is l0·e^ε_u plus it), and the
   neck's dk and profile radius measured after the test are the FE's. These are not the
   formulas the identification's neck corrections invert, so the demo shows their real error.
   The specimen itself stays ideal up to Considère (an FE run's imperfection ends the uniform
@@ -100,14 +101,16 @@ def furnace_steady_state_C(power_W, ambient_C, k1_W_per_K, k2_W_per_K2):
 # ----------------------------------------------------------------------------- specimen
 @dataclass(frozen=True)
 class Specimen:
-    """Specimen geometry in mm. Tension uses d0, l0 (gauge) and, with the ``bridgman`` tension
-    response, the neck-zone length; compression uses d0, h0."""
+    """Specimen geometry in mm. Tension uses d0, l0 (gauge), the parallel length (l0 unless
+    given: the crosshead sees it all, the neck lies within the gauge marks) and, with the
+    ``bridgman`` tension response, the neck-zone length; compression uses d0, h0."""
 
     test: str = "tension"
     d0_mm: float = 6.0
     l0_mm: float = 30.0
     h0_mm: float = 6.982
     neck_length_mm: float | None = None
+    parallel_length_mm: float | None = None
 
     def __post_init__(self):
         if self.test not in ("tension", "compression"):
@@ -115,6 +118,9 @@ class Specimen:
         for key in ("d0_mm", "l0_mm", "h0_mm"):
             if not getattr(self, key) > 0:
                 raise ConfigError(f"specimen.{key}: must be positive, got {getattr(self, key)}")
+        if self.parallel_length_mm is not None and not self.parallel_length_mm >= self.l0_mm:
+            raise ConfigError(f"specimen.parallel_length_mm: must be at least l0 = {self.l0_mm:g} mm (the gauge marks lie on it), "
+                              f"got {self.parallel_length_mm}")
 
     @property
     def area0_mm2(self) -> float:
@@ -132,10 +138,15 @@ class Specimen:
         """The initial gauge length (tension) or height (compression), mm."""
         return self.l0_mm if self.test == "tension" else self.h0_mm
 
+    @property
+    def parallel_mm(self) -> float:
+        """The parallel length the crosshead stretches (tension), mm: l0 unless given."""
+        return self.l0_mm if self.parallel_length_mm is None else self.parallel_length_mm
+
     @classmethod
-    def tension(cls, d0_mm=6.0, l0_mm=30.0, neck_length_mm=None) -> "Specimen":
-        """GOST 1497 type IV (docs/methods.md §3): d0 6 mm, l0 30 mm."""
-        return cls("tension", d0_mm=d0_mm, l0_mm=l0_mm, neck_length_mm=neck_length_mm)
+    def tension(cls, d0_mm=6.0, l0_mm=30.0, neck_length_mm=None, parallel_length_mm=None) -> "Specimen":
+        """GOST 1497 type IV (docs/methods.md §3): d0 6 mm, l0 30 mm (parallel length l0 unless given)."""
+        return cls("tension", d0_mm=d0_mm, l0_mm=l0_mm, neck_length_mm=neck_length_mm, parallel_length_mm=parallel_length_mm)
 
     @classmethod
     def compression(cls, d0_mm=5.989, h0_mm=6.982) -> "Specimen":
@@ -152,7 +163,7 @@ class SpecimenState:
     eps_neck: float = 0.0  # plastic strain in the neck zone (tension)
     necked: bool = False
     fractured: bool = False
-    elongation_mm: float = 0.0  # specimen Δl (tension) or shortening h0 − h (compression)
+    elongation_mm: float = 0.0  # specimen Δl over its parallel length (tension) or shortening h0 − h (compression)
 
 
 class Mechanics:
@@ -268,7 +279,7 @@ class Mechanics:
         """(force, crosshead) of a uniform specimen at plastic strain eps_p, true stress sigma."""
         s, E = self.specimen, self.material.E_MPa
         force = sigma * s.area0_mm2 * math.exp(-eps_p)  # F = F0·exp(−εp)
-        dl = s.l0_mm * math.expm1(eps_p + sigma / E)
+        dl = s.parallel_mm * math.expm1(eps_p + sigma / E)
         return force, dl + force / self.C_N_per_mm
 
     # -- FE tension response ------------------------------------------------------------
@@ -295,7 +306,7 @@ class Mechanics:
         return float(self.fe_neck().a_over_R_at(eps_n - eps_u))
 
     def neck_extension_mm(self, eps_u: float, eps_n: float) -> float:
-        """Plastic elongation the neck adds beyond the uniform l0·(e^ε_u − 1): the FE neck's
+        """Plastic elongation the neck adds beyond the uniform Lc·(e^ε_u − 1): the FE neck's
         d0·λ(ε_n − ε_u), or the neck zone's L_n·(e^ε_n − e^ε_u)."""
         s = self.specimen
         if self.tension_response == "bridgman":
@@ -308,14 +319,14 @@ class Mechanics:
         sig_u = force / (s.area0_mm2 * math.exp(-eps_u))
         if self.tension_response == "bridgman":
             sig_n = force / (s.area0_mm2 * math.exp(-eps_n))
-            dl = (s.l0_mm - s.neck_mm) * math.expm1(eps_u + sig_u / E) + s.neck_mm * math.expm1(eps_n + sig_n / E)
+            dl = (s.parallel_mm - s.neck_mm) * math.expm1(eps_u + sig_u / E) + s.neck_mm * math.expm1(eps_n + sig_n / E)
         else:  # the FE's λ was taken under load: the neck's own elastic stretch is in it
-            dl = s.l0_mm * math.expm1(eps_u + sig_u / E) + self.neck_extension_mm(eps_u, eps_n)
+            dl = s.parallel_mm * math.expm1(eps_u + sig_u / E) + self.neck_extension_mm(eps_u, eps_n)
         return dl + force / self.C_N_per_mm
 
     def _tension_unloaded(self, eps_u: float, eps_n: float) -> float:
-        """Elongation of the necked specimen without load (plastic only)."""
-        return self.specimen.l0_mm * math.expm1(eps_u) + self.neck_extension_mm(eps_u, eps_n)
+        """Elongation of the necked specimen's parallel length without load (plastic only)."""
+        return self.specimen.parallel_mm * math.expm1(eps_u) + self.neck_extension_mm(eps_u, eps_n)
 
     def neck_force(self, eps_u: float, eps_n: float) -> float:
         """Force carried by the neck at strain eps_n: σ_flow·β·F0·exp(−εn), β the FE factor or Bridgman's at Le Roy's a/R."""
@@ -333,7 +344,7 @@ class Mechanics:
         eps_f = self.fracture_strain
         if not st.necked:
             eps_hist = st.eps_p
-            slack = s.l0_mm * math.expm1(eps_hist)
+            slack = s.parallel_mm * math.expm1(eps_hist)
             if x <= slack:
                 return SpecimenState(0.0, eps_hist, eps_hist, False, False, slack)
             sig_y = self.flow(eps_hist)
@@ -349,7 +360,7 @@ class Mechanics:
                 f, xc = self._tension_uniform(e, self.flow(e))
                 return SpecimenState(f, e, e, False, False, xc - f / self.C_N_per_mm)
             if eps_f <= eps_u_c:  # fracture before necking
-                return SpecimenState(0.0, eps_f, eps_f, False, True, s.l0_mm * math.expm1(eps_f))
+                return SpecimenState(0.0, eps_f, eps_f, False, True, s.parallel_mm * math.expm1(eps_f))
             st = SpecimenState(self.neck_force(eps_u_c, eps_u_c), eps_u_c, eps_u_c, True, False)
         # necked
         eps_u, eps_hist = st.eps_p, st.eps_neck
@@ -431,7 +442,7 @@ class Mechanics:
             out["post.du_mm"] = f"{s.d0_mm * math.exp(-eps_u / 2.0):.4f}"
             if not st.fractured:  # an unbroken bar has no fracture values (Lu, dk, the neck's radius at fracture)
                 return out
-            lu = s.l0_mm * math.exp(eps_u) + (self.neck_extension_mm(eps_u, eps_n) if st.necked else 0.0)
+            lu = s.l0_mm * math.exp(eps_u) + (self.neck_extension_mm(eps_u, eps_n) if st.necked else 0.0)  # the gauge marks: the neck within them
             dk = s.d0_mm * math.exp(-eps_n / 2.0)
             out["post.lu_mm"] = f"{lu:.4f}"
             out["post.dk_mm"] = f"{dk:.4f}"
@@ -587,8 +598,9 @@ class RigModel:
     # -- derived ----------------------------------------------------------------------
     @property
     def nominal_strain_rate_per_s(self) -> float:
-        """v/l0 (tension) or v/h0 (compression): the rate of the Johnson–Cook rate term."""
-        return self.speed_mm_per_s / self.specimen.length0_mm
+        """v/Lc (tension: the parallel length, l0 unless given; ISO 6892-1 ė_Lc) or v/h0
+        (compression): the rate of the Johnson–Cook rate term."""
+        return self.speed_mm_per_s / (self.specimen.parallel_mm if self.test == "tension" else self.specimen.h0_mm)
 
     @property
     def state(self) -> SpecimenState:
@@ -627,7 +639,7 @@ class RigModel:
             self.events.append((self.time_s, "crosshead_start"))
 
     def set_speed(self, speed_mm_per_s: float) -> None:
-        """The crosshead's speed from now on, mm/s (the rate term follows: v / l0 or v / h0)."""
+        """The crosshead's speed from now on, mm/s (the rate term follows: v / Lc or v / h0)."""
         if not (speed_mm_per_s > 0 and math.isfinite(speed_mm_per_s)):
             raise ConfigError(f"speed_mm_per_s: must be positive, got {speed_mm_per_s}")
         self.speed_mm_per_s = float(speed_mm_per_s)

@@ -6,9 +6,15 @@ before the speed work of issue 43, with::
     git checkout 38e31b7 && python tests/tension/test_identify_numbers_unchanged.py --write
 
 The long cases were written again at the (3.1) change of branch klscale: the bench's record
-states Lu as L0 plus its *loaded* elongation at the end, and (3.1) now sets Lu − L0 against the
+stated Lu as L0 plus its *loaded* elongation at the end, and (3.1) now sets Lu − L0 against the
 elongation at the fracture less the elastic recovery there, so its K_l moved 0.99996 → 1.0077 and
 every strain-dependent value with it (Agt 19.73 → 19.89 %); the 42CrMoS4 cases (extensometer) are unchanged.
+Written again (long cases only) on branch lcscale, twice: (3.1)'s a_u without post.du_mm moved from
+the argmax sample to the flat maximum's mid-point less F·L(1 + a_u)²/(E·S0) (the bench's a_u 0.1994 →
+0.1936 at 54k, K_l 1.00771 → 1.00763); then the bench's record states Lu as the caliper reads it on
+the unloaded pieces (its loaded elongation less the uniform part's elastic give-back, 0.097 mm), so
+like is set against like and K_l reads 0.99996 (54k and 540k) — the truth 1 of a record whose
+crosshead less F/C is its specimen's elongation — and Agt 19.886 → 19.734 % (54k).
 
 Every leaf of result.json is compared: strings, booleans and nulls exactly, numbers to a
 relative 1e-9 (float summation order may change; nothing else may).

@@ -7,6 +7,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
+from flowcurve.errors import ConfigError
 from flowcurve.rig.virtual.materials import get_material
 from flowcurve.rig.virtual.physics import (FurnaceParams, Furnace, RigModel, Specimen, furnace_steady_state_C,
                          slab_friction_factor)
@@ -113,6 +114,31 @@ def test_fracture_post_measurements_are_consistent(response):
         assert 0.05 < a_over_R < 1.1 * d
     assert l0 * math.exp(eps_u) < post["post.lu_mm"] < l0 * math.exp(eps_f)
     assert not m.moving  # the crosshead stopped at fracture
+
+
+@pytest.mark.parametrize("response", ["fe", "bridgman"])
+def test_a_parallel_length_longer_than_l0_stretches_the_crosshead_not_the_gauge_marks(response):
+    # Lc = l0 + 2·d0 at the same rate v/Lc (ISO 6892-1's ė over Lc) as a bar of Lc = l0: the same
+    # flow, neck and fracture; the crosshead sees Lc's uniform strain, Lu the gauge marks' (the neck within them)
+    runs = {}
+    for lc in (None, 42.0):
+        s = Specimen.tension(6.0, 30.0, parallel_length_mm=lc)
+        m = RigModel("12Kh18N10T", "tension", s, speed_mm_per_s=s.parallel_mm * 5e-4, force_noise_N=0.0, tension_response=response)
+        runs[lc] = (m, run(m, 4.0))
+    (m30, r30), (m42, r42) = runs[None], runs[42.0]
+    assert m42.nominal_strain_rate_per_s == pytest.approx(5e-4, rel=1e-12)
+    mat = m42.material
+    uniform = (r42[:, 2] > 0.01) & (r42[:, 3] == r42[:, 2]) & (r42[:, 1] > 0)
+    eps, force = r42[uniform, 2], r42[uniform, 1]
+    sigma = mat.flow_stress(eps, 5e-4, 20.0)
+    np.testing.assert_allclose(r42[uniform, 0], 42.0 * np.expm1(eps + sigma / mat.E_MPa) + force / 136e3, rtol=1e-6)
+    assert m42.state.eps_p == pytest.approx(m30.state.eps_p, rel=1e-9) and m42.fractured and m30.fractured
+    lu30, lu42 = (float(m.post_test_measurements()["post.lu_mm"]) for m in (m30, m42))
+    assert lu42 == pytest.approx(lu30, abs=1e-4)
+    # unloaded, the parallel length is 12 mm of uniform strain longer than the gauge marks
+    assert m42.state.elongation_mm - (lu42 - 30.0) == pytest.approx(12.0 * math.expm1(m42.state.eps_p), abs=1e-4)
+    with pytest.raises(ConfigError, match="parallel_length_mm"):
+        Specimen.tension(6.0, 30.0, parallel_length_mm=29.0)
 
 
 def test_compression_without_friction_is_flow_stress_times_loaded_area():
