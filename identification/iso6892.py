@@ -84,6 +84,15 @@ def plastic_extension_pct(strain, stress_MPa, E_MPa: float):
     return 100.0 * (np.asarray(strain, dtype=float) - np.asarray(stress_MPa, dtype=float) / E_MPa)
 
 
+def gauge_extension_at_fracture(e_L, length_mm: float, l0_mm: float, a_u: float, s_f_MPa: float, E_MPa: float | None) -> float:
+    """The gauge marks' engineering extension at fracture from e_L over the crosshead's length L ≥ L0, the neck
+    within the marks and the rest of L uniform at the plastic elongation a_u, elastic at the fracture force:
+    e_g = (e_L·L − (L − L0)·e_out)/L0, e_out = (1 + a_u)(1 + s_f(1 + a_u)/E) − 1 (true stress s_f(1 + a_u))."""
+    elastic = s_f_MPa * (1.0 + a_u) / E_MPa if E_MPa else 0.0
+    e_out = (1.0 + a_u) * (1.0 + elastic) - 1.0
+    return float((e_L * length_mm - (length_mm - l0_mm) * e_out) / l0_mm)
+
+
 MAD_SAMPLES = 50_000  # a longer series is read at an even stride: the median's own scatter is then ~0.5 % of σ
 
 

@@ -120,6 +120,18 @@ def _check_options(*, true_stress, neck, law, hardening, modulus_reference, frac
     return fit_range, fractions, window_fixed_MPa
 
 
+def _gauge_strain_at_fracture(inp: _Inputs, strain: np.ndarray, Ag_pct: float, E_MPa: float | None) -> float:
+    """The strain at fracture of the gauge L0 (At, A without post.lu_mm): the diagram's own where it refers to L0
+    (an extensometer, or a crosshead over l0); over a parallel length L > L0, the marks' share
+    (:func:`.iso6892.gauge_extension_at_fracture`, a_u from post.du_mm, else Ag)."""
+    e_L = float(strain[inp.i_k])
+    if inp.src.get("source") != "crosshead" or not inp.length > inp.l0 * (1.0 + 1e-9):
+        return e_L
+    du = inp.record.specimen.du_mm
+    a_u = (inp.d0 / du) ** 2 - 1.0 if du is not None and 0 < du <= inp.d0 else max(Ag_pct, 0.0) / 100.0  # constant volume
+    return iso6892.gauge_extension_at_fracture(e_L, inp.length, inp.l0, a_u, float(inp.eng_stress[inp.i_k]), E_MPa)
+
+
 def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     """ISO 6892-1 results after Rp0.2: yield point (ReH, ReL, Ae), Ag, A and Z."""
     record, force, strain, eng_stress, E = inp.record, inp.force, line.strain, inp.eng_stress, line.E
@@ -131,12 +143,14 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     e_m = float(np.mean(iso6892.max_force_band(strain, eng_stress)))  # ISO 6892-1 §13: a flat maximum's mid-point
     Ag = float(iso6892.plastic_extension_pct(e_m, inp.Rm, E))
     i_k = inp.i_k
-    At = float(100.0 * strain[i_k]) if reaches_fracture(force, i_k) else None  # ISO 6892-1 3.6.6: elastic and plastic
+    e_k = _gauge_strain_at_fracture(inp, strain, Ag, E)
+    At = float(100.0 * e_k) if reaches_fracture(force, i_k) else None  # ISO 6892-1 3.6.6: elastic and plastic
+    over = "" if e_k == strain[i_k] else f" over L0 (the parallel length's {inp.length - inp.l0:.3g} mm beyond the marks uniform at Ag)"
     if inp.lu is not None:
         A, A_method = iso6892.elongation_after_fracture_pct(inp.l0, inp.lu), "measured gauge length after fracture (post.lu_mm)"
     elif At is not None:
-        A = float(iso6892.plastic_extension_pct(strain[i_k], eng_stress[i_k], E))
-        A_method = f"{inp.src['source']} at fracture, elastic part removed (no post.lu_mm)"
+        A = float(iso6892.plastic_extension_pct(e_k, eng_stress[i_k], E))
+        A_method = f"{inp.src['source']} at fracture{over}, elastic part removed (no post.lu_mm)"
     else:
         A, A_method = None, None
         if not inp.unbroken:  # (an unbroken specimen's warning says it already)
