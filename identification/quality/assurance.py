@@ -177,6 +177,9 @@ def tension_uncertainty(result: Mapping, curves: Mapping, inst: Mapping) -> dict
         gauge = _num((result.get("methods") or {}).get("strain_length_mm")) or _num(spec.get("extensometer_gauge_mm")) or l0
         if gauge:
             out["A_pct"] = un.elongation_from_extension_budget(A, gauge, inst["extensometer_class"])
+    elif A is not None and isinstance((result.get("methods") or {}).get("A_from_curve"), Mapping):
+        u_a = out["Ag_pct"]["u"] / 100.0 if "Ag_pct" in out else 0.0
+        out["A_pct"] = un.elongation_from_curve_budget(A, result["methods"]["A_from_curve"], strain_u, u_E or 0.0, u_a, strain_basis)
     Z = _num(result.get("Z_pct"))
     du = _num(post.get("dk_mm")) or _num(post.get("du_mm"))
     if du is None and _num(post.get("sk_mm2")):

@@ -264,6 +264,29 @@ def elongation_from_extension_budget(A_pct: float, gauge_mm: float, extensometer
     return budget(A_pct, "%", comps)
 
 
+def elongation_from_curve_budget(A_pct: float, terms: Mapping, strain_rel_u: float, u_E_MPa: float, u_a_u: float = 0.0,
+                                 strain_basis: str = "") -> dict:
+    """A read off the curve at the break (no Lu): A = 100·(e_g − s_k/E), e_g the gauge's strain at fracture
+    (``terms``: identify's methods.A_from_curve). Components: the strain scale (e_L·u_rel, the crosshead's or
+    extensometer's scale over its length L, carried to the gauge by L/L0), E of the elastic part (100·s_k/E²),
+    the break within one sample's travel (rectangular over Δe, 100·L/L0), and over L > L0 the uniform part's a_u
+    (∂e_g/∂a_u ≈ −(L − L0)/L0)."""
+    e_L, s_k, E = float(terms["strain_at_fracture"]), float(terms["stress_at_fracture_MPa"]), float(terms["E_MPa"])
+    L, L0 = float(terms["length_mm"]), float(terms["l0_mm"])
+    a_u = terms.get("uniform_plastic_elongation")
+    beyond = (L - L0) / L0 if a_u is not None and L > L0 else 0.0  # e_out's share: e_g = (e_L·L − (L − L0)·e_out)/L0
+    a = float(a_u) if beyond else 0.0
+    comps = [Component("strain scale at the break", e_L, "1", abs(e_L) * strain_rel_u, 100.0 * L / L0, strain_basis or "the strain source's scale"),
+             # ∂A/∂E = 100·s_k/E²·(1 + (L − L0)/L0·(1 + a_u)²): the gauge's elastic part and the uniform part's
+             Component("E of the elastic part removed", E, "MPa", u_E_MPa, 100.0 * s_k / E ** 2 * (1.0 + beyond * (1.0 + a) ** 2), "the rule's E"),
+             Component("the break within one sample's travel", e_L, "1", abs(float(terms.get("sample_step_strain") or 0.0)) / math.sqrt(12.0),
+                       100.0 * L / L0, "rectangular over the last sample's strain step")]
+    if beyond:  # ∂A/∂a_u = −100·(L − L0)/L0·(1 + 2·s_k(1 + a_u)/E)
+        comps.append(Component("uniform elongation beyond the marks a_u", a, "1", u_a_u, -100.0 * beyond * (1.0 + 2.0 * s_k * (1.0 + a) / E),
+                               "Ag's (or du's) standard uncertainty"))
+    return budget(A_pct, "%", comps)
+
+
 def reduction_of_area_budget(d0_mm: float, du_mm: float, diameter_resolution_mm: float, *, mpe_mm: float = 0.0,
                              fracture_rel: float = 0.0) -> dict:
     """Z = 100·(1 − du²/d0²): ∂Z/∂du = −200·du/d0², ∂Z/∂d0 = 200·du²/d0³ (micrometer resolution and

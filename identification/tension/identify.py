@@ -55,6 +55,7 @@ class _IsoResults:
     A: float | None
     A_method: str | None
     At: float | None  # total extension at fracture, %
+    A_terms: dict | None  # A from the curve (no post.lu_mm): what it was read from, for its budget
     su: float | None  # area after fracture, mm²
     su_source: str | None
     dk: float | None
@@ -120,16 +121,16 @@ def _check_options(*, true_stress, neck, law, hardening, modulus_reference, frac
     return fit_range, fractions, window_fixed_MPa
 
 
-def _gauge_strain_at_fracture(inp: _Inputs, strain: np.ndarray, Ag_pct: float, E_MPa: float | None) -> float:
-    """The strain at fracture of the gauge L0 (At, A without post.lu_mm): the diagram's own where it refers to L0
-    (an extensometer, or a crosshead over l0); over a parallel length L > L0, the marks' share
+def _gauge_strain_at_fracture(inp: _Inputs, strain: np.ndarray, Ag_pct: float, E_MPa: float | None) -> tuple[float, float | None]:
+    """(strain at fracture of the gauge L0, a_u) for At and A without post.lu_mm: the diagram's own where it refers
+    to L0 (an extensometer, or a crosshead over l0; a_u None); over a parallel length L > L0, the marks' share
     (:func:`.iso6892.gauge_extension_at_fracture`, a_u from post.du_mm, else Ag)."""
     e_L = float(strain[inp.i_k])
     if inp.src.get("source") != "crosshead" or not inp.length > inp.l0 * (1.0 + 1e-9):
-        return e_L
+        return e_L, None
     du = inp.record.specimen.du_mm
     a_u = (inp.d0 / du) ** 2 - 1.0 if du is not None and 0 < du <= inp.d0 else max(Ag_pct, 0.0) / 100.0  # constant volume
-    return iso6892.gauge_extension_at_fracture(e_L, inp.length, inp.l0, a_u, float(inp.eng_stress[inp.i_k]), E_MPa)
+    return iso6892.gauge_extension_at_fracture(e_L, inp.length, inp.l0, a_u, float(inp.eng_stress[inp.i_k]), E_MPa), a_u
 
 
 def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
@@ -143,14 +144,18 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     e_m = float(np.mean(iso6892.max_force_band(strain, eng_stress)))  # ISO 6892-1 §13: a flat maximum's mid-point
     Ag = float(iso6892.plastic_extension_pct(e_m, inp.Rm, E))
     i_k = inp.i_k
-    e_k = _gauge_strain_at_fracture(inp, strain, Ag, E)
+    e_k, a_u = _gauge_strain_at_fracture(inp, strain, Ag, E)
     At = float(100.0 * e_k) if reaches_fracture(force, i_k) else None  # ISO 6892-1 3.6.6: elastic and plastic
-    over = "" if e_k == strain[i_k] else f" over L0 (the parallel length's {inp.length - inp.l0:.3g} mm beyond the marks uniform at Ag)"
+    over = "" if a_u is None else f" over L0 (the parallel length's {inp.length - inp.l0:.3g} mm beyond the marks uniform at Ag)"
+    A_terms = None
     if inp.lu is not None:
         A, A_method = iso6892.elongation_after_fracture_pct(inp.l0, inp.lu), "measured gauge length after fracture (post.lu_mm)"
     elif At is not None:
         A = float(iso6892.plastic_extension_pct(e_k, eng_stress[i_k], E))
         A_method = f"{inp.src['source']} at fracture{over}, elastic part removed (no post.lu_mm)"
+        A_terms = {"gauge_strain": e_k, "strain_at_fracture": float(strain[i_k]), "stress_at_fracture_MPa": float(eng_stress[i_k]),
+                   "E_MPa": E, "sample_step_strain": float(strain[i_k] - strain[i_k - 1]) if i_k > 0 else 0.0,
+                   "length_mm": inp.length, "l0_mm": inp.l0, "uniform_plastic_elongation": a_u}
     else:
         A, A_method = None, None
         if not inp.unbroken:  # (an unbroken specimen's warning says it already)
@@ -158,7 +163,7 @@ def _iso_results(inp: _Inputs, line: _ElasticLine) -> _IsoResults:
     spec = record.specimen
     su, su_source, dk = spec.fracture_area_mm2, spec.fracture_area_source, spec.dk_mm  # Sk, else π·dk²/4
     Z = iso6892.reduction_of_area_pct(inp.s0, su) if su is not None else None
-    return _IsoResults(yp=yp, e_m=e_m, Ag=Ag, i_k=i_k, A=A, A_method=A_method, At=At, su=su, su_source=su_source, dk=dk, Z=Z, warnings=warnings)
+    return _IsoResults(yp=yp, e_m=e_m, Ag=Ag, i_k=i_k, A=A, A_method=A_method, At=At, A_terms=A_terms, su=su, su_source=su_source, dk=dk, Z=Z, warnings=warnings)
 
 
 def specimen_strain(strain, eng_stress_MPa, E_line_MPa: float, E_specimen_MPa: float):
@@ -383,6 +388,7 @@ def _methods(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurv
         "Rp02": "offset method, ISO 6892-1: intersection with the 0.2 % line of slope E",
         "Ag": "plastic extension at maximum force, 100·(e_m − Rm/E)",
         "Z": "(S0 − Su)/S0" if iso.Z is not None else None,
+        **({"A_from_curve": iso.A_terms} if iso.A_terms is not None else {}),  # A without post.lu_mm: read off the curve at the break
         "true_curve_strain": ("the specimen's: crosshead strain less σ_e/E_apparent" + (f", plus σ_e/{true.E_specimen:.4g} MPa (the rule's E: material.E_MPa or the class's)" if math.isfinite(true.E_specimen) else " (its own elastic strain left out)")
                               if true.warnings else "the strain source's, elastic strain σ_t/E removed for εp"),
         "true_stress": "(3.6) corrected, K = E/(3(1 − 2ν))" if true_stress == "gost_3_6" else "σ_e(1 + e), constant volume",

@@ -15,6 +15,9 @@ the argmax sample to the flat maximum's mid-point less F·L(1 + a_u)²/(E·S0) (
 the unloaded pieces (its loaded elongation less the uniform part's elastic give-back, 0.097 mm), so
 like is set against like and K_l reads 0.99996 (54k and 540k) — the truth 1 of a record whose
 crosshead less F/C is its specimen's elongation — and Agt 19.886 → 19.734 % (54k).
+Written again (all cases) when A read off the curve without post.lu_mm came to state its terms
+(result.json methods.A_from_curve, for A's new budget): the 42CrMoS4 cases gained that key and nothing
+else moved; the long cases (Lu given) are byte-identical.
 
 Every leaf of result.json is compared: strings, booleans and nulls exactly, numbers to a
 relative 1e-9 (float summation order may change; nothing else may).
