@@ -133,6 +133,7 @@ class HardeningFit:
     law_choice: dict | None = None  # set when --law best chose this law: by how much (as_dict's "law_choice")
     on_bound: dict[str, str] = field(default_factory=dict)  # constant → "lower"/"upper" where it sits on a bound (laws.bounds)
     undetermined: list[str] = field(default_factory=list)  # keys of the constants the curve does not determine (undetermined())
+    flat: bool = False  # the least-squares minimum is flat: the local refit did not settle (the global stage's optimum is stated)
 
     @property
     def quality(self) -> str:
@@ -355,6 +356,52 @@ def _lmfit_refit(spec: StaticForm, start: dict[str, float], eps: np.ndarray, sig
     return best, f"[[Model]]\n    Model({spec.func.__name__})\n{lmfit.fit_report(best)}"
 
 
+def _settled(best) -> bool:
+    """Whether lmfit's Levenberg–Marquardt refit ended on its own tolerances, not cut short at
+    MAX_EVALUATIONS along a flat valley (its end point then differs between identical runs:
+    docs/methods.md §5.1)."""
+    return not getattr(best, "aborted", False)
+
+
+def _linearised_fit(spec: StaticForm, values: dict[str, float], eps: np.ndarray, sig: np.ndarray, w: np.ndarray):
+    """The statistics lmfit's refit states, at fixed constants (the global stage's optimum of a flat
+    minimum), deterministically: standard errors and correlations from the weighted least squares
+    linearised there, none where a constant sits on a bound (lmfit's rule), AIC and a report.
+    Returns (an object with lmfit's ``params`` and ``aic``, report text)."""
+    # cov = s²·(JᵀJ)⁻¹ = s²·V·S⁻²·Vᵀ (J = w·∂f/∂p = U·S·Vᵀ), s² = χ²/(N − k); AIC = N·ln(χ²/N) + 2k
+    import types
+
+    import lmfit
+
+    n, k = eps.size, len(spec.names)
+    with np.errstate(all="ignore"):
+        r = (sig - spec.func(eps, **values)) * w
+        J = central_jacobian(spec.func, values, eps) * w[:, None]
+    chisqr = float(np.dot(r, r))
+    params = lmfit.Parameters()
+    for name in spec.names:
+        lo, hi = spec.bounds[name]
+        params.add(name, value=float(values[name]), min=lo, max=hi)
+    if not bound_sides(spec.func, values, spec.bounds, eps) and n > k and np.all(np.isfinite(J)) and chisqr > 0:
+        _, sv, vt = np.linalg.svd(J, full_matrices=False)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            scaled = vt / sv[:, None]
+            cov = scaled.T @ scaled * chisqr / (n - k)
+        se = np.sqrt(np.diag(cov))
+        if np.all(np.isfinite(se)) and np.all(se > 0):
+            corr = cov / np.outer(se, se)
+            for i, name in enumerate(spec.names):
+                params[name].stderr = float(se[i])
+                params[name].correl = {other: float(corr[i, j]) for j, other in enumerate(spec.names) if j != i}
+    aic = n * np.log(max(chisqr, 1e-250) / n) + 2 * k
+    report = (f"[[Model]]\n    Model({spec.func.__name__})\n[[Fit Statistics]]\n"
+              f"    # fitting method   = trust region (global stage); the Levenberg-Marquardt refit did not settle "
+              f"within {MAX_EVALUATIONS} evaluations: a flat minimum\n"
+              f"    # data points      = {n}\n    # variables        = {k}\n    chi-square         = {chisqr:.8g}\n"
+              f"    Akaike info crit   = {aic:.8g}\n{lmfit.fit_report(params)}")
+    return types.SimpleNamespace(params=params, aic=float(aic)), report
+
+
 def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points: Iterable[Sequence[float]] = (),
                   weights=None) -> HardeningFit:
     """Least-squares fit of a hardening law (lmfit) to a true curve σ(εp), global then local.
@@ -377,6 +424,9 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
         raise IdentificationError(f"the data do not harden (stress does not rise with strain): a {law} law cannot be fitted")
     polished = _polish(spec, grid + [spec.data_start(eps, sig)], eps, sig, w)
     best, report = _lmfit_refit(spec, polished, eps, sig, w)
+    flat = not _settled(best)
+    if flat:  # its end point is not reproducible: the global stage's optimum, stated with linearised errors
+        best, report = _linearised_fit(spec, polished, eps, sig, w)
     values = {name: float(best.params[name].value) for name in spec.names}
     stderr = {name: (None if best.params[name].stderr is None else float(best.params[name].stderr)) for name in spec.names}
     correl = {name: {k: float(v) for k, v in (best.params[name].correl or {}).items()} for name in spec.names}
@@ -388,6 +438,9 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
         if side:
             warnings.append(f"{law} {key} = {values[name]:.4g} sits on its {side} bound: the law does not describe this curve well "
                             "(another law, --fit-range or --fracture-point exclude may)")
+    if flat:
+        warnings.append(f"{law}: the least-squares minimum is flat (the local refit did not settle within {MAX_EVALUATIONS} "
+                        "evaluations): the constants are the global stage's optimum, their errors linearised there")
     if max_pct > POOR_FIT_PCT:
         warnings.append(f"{law} fit is poor: max error {max_pct:.3g} % (> {POOR_FIT_PCT:g} %), rms {rms_pct:.3g} %")
     loose = undetermined(spec, values, _free_stderr(spec, values, stderr, sides, eps, sig, w), sides)  # the warning's and --law best's
@@ -398,7 +451,7 @@ def fit_hardening(eps_p, stress_MPa, law: str = "johnson_cook", *, extra_points:
     return HardeningFit(law=law, method="least_squares", params=values, stderr=stderr, correlations=correl,
                         fit_error_pct=max_pct, rms_error_pct=rms_pct,
                         strain_range=(float(np.min(eps)), float(np.max(eps))), report=report, warnings=warnings,
-                        aic=float(best.aic), on_bound=sides, undetermined=loose)
+                        aic=float(best.aic), on_bound=sides, undetermined=loose, flat=flat)
 
 
 PARSIMONY_DELTA_AIC = 2.0  # laws this close to the lowest AIC are as good: the one with the fewest constants is kept
@@ -406,7 +459,8 @@ PARSIMONY_DELTA_AIC = 2.0  # laws this close to the lowest AIC are as good: the 
 
 def choose_law(eps_p, stress_MPa, *, weights=None, extra_points: Iterable[Sequence[float]] = ()) -> HardeningFit:
     """``--law best``: every static law (:func:`best_candidates`) fitted to the same weighted
-    points and ranked by AIC (N·ln(χ²/N) + 2k, k the law's constants); among the laws within
+    points and ranked by AIC (N·ln(χ²/N) + 2k, k the law's constants), those with undetermined
+    constants or a flat minimum (:attr:`HardeningFit.flat`) passed over; among the laws within
     :data:`PARSIMONY_DELTA_AIC` of the lowest, the one with the fewest constants wins (a law that
     nests another fits the noise too). The winner's ``law_choice`` says which won, by which rule,
     and ΔAIC to the next (the next law's AIC − the winner's; negative when parsimony chose), with
@@ -421,18 +475,20 @@ def choose_law(eps_p, stress_MPa, *, weights=None, extra_points: Iterable[Sequen
     if not ranked:
         raise IdentificationError(f"--law best: no law could be fitted ({'; '.join(f'{k}: {v}' for k, v in failed.items())})")
     loose = {f.law: f.undetermined for f in ranked}
-    eligible = [f for f in ranked if not loose[f.law]] or ranked
+    eligible = [f for f in ranked if not loose[f.law] and not f.flat] or ranked  # a flat minimum's point is not its optimum
     close = [f for f in eligible if f.aic - eligible[0].aic <= PARSIMONY_DELTA_AIC]
     won = min(close, key=lambda f: (len(f.params), f.aic))
     runner = next((f for f in eligible if f is not won), None)
     won.law_choice = {
-        "by": (f"AIC on the same weighted points among the laws whose constants the curve determines; within "
+        "by": (f"AIC on the same weighted points among the laws whose constants the curve determines and whose "
+               f"minimum is not flat; within "
                f"{PARSIMONY_DELTA_AIC:g} of the lowest, the fewest constants"),
         "chosen": won.law, "lowest_aic": ranked[0].law,
         "undetermined": {law: keys for law, keys in loose.items() if keys},
         "next": None if runner is None else runner.law,
         "delta_aic_to_next": None if runner is None else float(runner.aic - won.aic),
         "aic": {f.law: float(f.aic) for f in ranked}, "failed": failed,
+        "flat": [f.law for f in ranked if f.flat],  # AIC at the global stage's optimum: the local refit did not settle
     }
     return won
 
@@ -450,7 +506,9 @@ def law_choice_text(choice: dict) -> str:
     loose = choice.get("undetermined") or {}
     passed = (f"; {lower} fits closer but the curve does not determine its {', '.join(loose[lower])}"
               if lower and lower != choice["chosen"] and lower in loose else "")
-    return f"--law best: {choice['chosen']} by {how}{support}{passed}"
+    flat = choice.get("flat") or []
+    flats = f"; flat minimum (refit not settled, AIC at the global stage's optimum): {', '.join(flat)}" if flat else ""
+    return f"--law best: {choice['chosen']} by {how}{support}{passed}{flats}"
 
 
 def resolve_law(law: str, eps_p, stress_MPa) -> tuple[str, dict | None]:
