@@ -83,9 +83,11 @@ def _held(name: str) -> sm.Case:
     return next(c for c in sm.HELD_OUT if c.name == name)
 
 
-# the laws and specimens of C1, C3 and S4; their μ as the zones' mean, 0.5·μ / 1.5·μ centre / rim and the opposite
+# the laws and specimens of C1, C3 and S4; their μ as the zones' mean, 0.5·μ / 1.5·μ centre / rim (L, a lubricated
+# centre) and the opposite (D, a dry centre). S4D to h 5.6 mm: to 5.0 mm its side folded at 0.917 of the stroke
 CASES = {f"{b}{tag}": zoned(_held(b), round(lo_hi[0] * _held(b).mu, 6), round(lo_hi[1] * _held(b).mu, 6), name=f"{b}{tag}")
          for b in ("C1", "C3", "S4") for tag, lo_hi in (("L", (0.5, 1.5)), ("D", (1.5, 0.5)))}
+CASES["S4D"] = replace(CASES["S4D"], h_end_mm=5.6)
 
 
 def uniform_twin(case: ZonedCase) -> ZonedCase:
