@@ -49,9 +49,11 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--records", type=Path, default=ROOT / "tests" / "fe" / "data")
     args = ap.parse_args(argv)
-    paths = sorted(args.records.glob("zoned_*.csv"))
+    uniform = sorted(args.records / f"second_model_{b}.csv" for b in ("C1", "C3", "S4"))  # the same specimens, one μ: the reference
+    paths = sorted(args.records.glob("zoned_*.csv")) + uniform
     rows = [measure(p) for p in paths]
-    dF = [force_against_uniform(p, args.records / f"second_model_{r['record'][:-1]}.csv") for p, r in zip(paths, rows)]
+    dF = [force_against_uniform(p, args.records / f"second_model_{r['record'][:2]}.csv") for p, r in zip(paths, rows)]
+    ref, rows, dF = rows[len(paths) - len(uniform):], rows[: len(paths) - len(uniform)], dF[: len(paths) - len(uniform)]
     print("record  μ mean (c/r)        | μ face ± se     μ bulge ± se    |Δμ|/U W | flow error % (σ_corr %) [|err|/U] at εp 0.05 0.1 0.2 0.3 0.5"
           " | max|err|/(100μ) | max|err|/σ_corr | ΔF % | constants |err|/U")
     ratios, zs, zmu, zc = [], [], [], []
@@ -68,6 +70,11 @@ def main(argv=None) -> int:
         print(f"{r['record']:6s}  {r['mu_true']:.3f} ({r['mu_center']:.3f}/{r['mu_rim']:.3f}) | {face}  {r['mu_bulge']:.3f} ± {r['mu_bulge_se']:.3f}  "
               f"{zmu[-1]:5.2f} {'W' if r['disagree_warning'] else '-'} | {pts} | {worst:.3f}·μ | {per_sigma:.2f} | {df:+.2f} | {cons}")
     print(f"\nflow-stress error per μ, max|err %|/(100·μ): {min(ratios):.3f}–{max(ratios):.3f} (stated σ 0.12·μ)")
+    ref_ratio = [max(abs(p["error_pct"]) for p in r["points"]) / (100.0 * r["mu_true"]) for r in ref]
+    print("uniform μ, the same specimens (second_model_C1/C3/S4): max|err %|/(100·μ) " + ", ".join(f"{r['record']} {x:.3f}" for r, x in zip(ref, ref_ratio))
+          + "; max|err|/σ_corr " + ", ".join(f"{max(abs(p['error_pct']) / p['u_corr_pct'] for p in r['points']):.2f}" for r in ref)
+          + "; curve " + ", ".join(f"{100 * r['curve_error']:.2f} %" for r in ref))
+    print("the curve's largest |σ/σ_true − 1| over εp 0.05–0.6: " + ", ".join(f"{r['record']} {100 * r['curve_error']:.2f} %" for r in rows))
     print(f"flow stress: value ± U holds the truth at {sum(z <= 1 for z in zs)} of {len(zs)} points (largest |err|/U {max(zs):.2f})")
     print(f"μ: value ± U holds the mean μ on {sum(z <= 1 for z in zmu)} of {len(zmu)} (largest {max(zmu):.2f})")
     print(f"constants: value ± U holds the fitted truth for {sum(z <= 1 for z in zc)} of {len(zc)} (largest {max(zc, default=0):.2f})")

@@ -114,7 +114,7 @@ FLOW_AT = (0.05, 0.1, 0.2, 0.3, 0.5)
 
 
 def measure(path: Path) -> dict:
-    """The product's default identification of a zoned record against its header's truth: μ read (bulge and end
+    """The product's default identification of a zoned record (or a uniform one: both zones its fe2.mu) against its header's truth: μ read (bulge and end
     face) and their standard errors, per flow-stress budget point the error % of A + B·εpⁿ, the stated correction σ %
     (true_curve.csv ``correction_uncertainty_pct``), the model-form component and |error|/U, and per hardening
     constant |error| against the law fitted over the result's fit range (tests/coverage/campaign.py ``fit_constants``) in U."""
@@ -152,11 +152,12 @@ def measure(path: Path) -> dict:
                   "z": abs(float(b["value"]) - fitted[k]) / float(b["U"])}
                  for k, b in (unc.get("hardening") or {}).items() if fitted and k in fitted and b.get("U")]
     mu_b = unc.get("friction_mu") or {}
-    return {"record": meta["specimen.id"], "mu_true": float(meta["fe2.mu"]), "mu_center": float(meta["fe2.mu_center"]),
-            "mu_rim": float(meta["fe2.mu_rim"]), "mu": float(res["friction_mu"]), "mu_U": float(mu_b.get("U", math.nan)),
+    return {"record": meta["specimen.id"], "mu_true": float(meta["fe2.mu"]), "mu_center": float(meta.get("fe2.mu_center", meta["fe2.mu"])),
+            "mu_rim": float(meta.get("fe2.mu_rim", meta["fe2.mu"])), "mu": float(res["friction_mu"]), "mu_U": float(mu_b.get("U", math.nan)),
             "mu_face": fe.get("mu") if fe.get("mu_basis", "").startswith("original end face") else None,
             "mu_face_se": fe.get("mu_stderr"), "mu_bulge": fe.get("mu_from_bulge", fe.get("mu")),
             "mu_bulge_se": fe.get("mu_from_bulge_stderr", fe.get("mu_stderr")), "mu_basis": fe.get("mu_basis"),
             "law": hard.get("law"), "fit_range": lo_hi, "points": points, "constants": constants,
+            "curve_error": sm.curve_error(curve, sm.Case("truth", A, B, n, 1.0, 0.0, 1.0, 1.0, 1.0)),  # max |σ/σ_true − 1|, εp 0.05–0.6
             "disagree_warning": any(w.startswith("friction: μ from the end face") for w in res.get("warnings", [])),
             "warnings": list(res.get("warnings", []))}
