@@ -87,6 +87,14 @@ def _graded(length: float, n: int, ratio: float) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(sizes) / sizes.sum() * length])
 
 
+def contact_zones(case: Case, r: np.ndarray, top: list, side: list) -> list[tuple[str, list, float]]:
+    """The slave node sets and their μ: (name suffix, node ids, μ). One zone, the end face and the side, at
+    ``case.mu``; a case with a ``zones`` method (tests/fe/zoned_friction.py) splits it."""
+    if hasattr(case, "zones"):
+        return case.zones(r, top, side)
+    return [("", sorted(set(top[1:] + side)), case.mu)]  # the axis node is driven with the platen (no master face reaches r = 0)
+
+
 def _deck(case: Case) -> tuple[str, dict]:
     R, H = case.d0_mm / 2.0, case.h0_mm / 2.0  # half model: symmetry at mid-height
     nz = max(6, int(round(case.nr * H / R)))
@@ -102,13 +110,18 @@ def _deck(case: Case) -> tuple[str, dict]:
         for i, ri in enumerate(r):
             if not (k == 2 and i % 2 and j % 2):  # no centre nodes (CAX8R has none)
                 lines.append(f"{nid(i, j)}, {ri:.9g}, {zj:.9g}, 0")
-    # the platen: one row of elements over 0..2.2 R, its lower face at the specimen's top
+    top = [nid(i, z.size - 1) for i in range(ncol)]
+    side = [nid(ncol - 1, j) for j in range(z.size)]
+    zones = contact_zones(case, r, top, side)  # [(suffix, slave nodes, μ)]: one zone unless the case splits its face
+    # the platen: one row of elements over 0..2.2 R, its lower face at the specimen's top; a copy of it (the same
+    # driven nodes' places) for each further zone: two contact pairs on one master face lost a slave node in ccx 2.20
     n_spec = ncol * z.size
     pr = np.linspace(0.0, 2.2 * R, 23)
-    pid = lambda i, j: n_spec + 1 + j * len(pr) + i  # noqa: E731
-    for j, zj in enumerate((H, H + 0.5)):
-        for i, ri in enumerate(pr):
-            lines.append(f"{pid(i, j)}, {ri:.9g}, {zj:.9g}, 0")
+    pid = lambda i, j, q=0: n_spec + 1 + q * 2 * len(pr) + j * len(pr) + i  # noqa: E731
+    for q in range(len(zones)):
+        for j, zj in enumerate((H, H + 0.5)):
+            for i, ri in enumerate(pr):
+                lines.append(f"{pid(i, j, q)}, {ri:.9g}, {zj:.9g}, 0")
     lines.append(f"*ELEMENT, TYPE={case.element}, ELSET=SPECIMEN")
     eid = 0
     for j in range(0, z.size - 1, k):
@@ -117,37 +130,44 @@ def _deck(case: Case) -> tuple[str, dict]:
             corners = [nid(i, j), nid(i + k, j), nid(i + k, j + k), nid(i, j + k)]
             mids = [nid(i + 1, j), nid(i + 2, j + 1), nid(i + 1, j + 2), nid(i, j + 1)] if k == 2 else []
             lines.append(f"{eid}, " + ", ".join(map(str, corners + mids)))
-    lines.append("*ELEMENT, TYPE=CAX4R, ELSET=PLATEN")
-    platen_elems = []
-    for i in range(len(pr) - 1):
-        eid += 1
-        platen_elems.append(eid)
-        lines.append(f"{eid}, {pid(i, 0)}, {pid(i + 1, 0)}, {pid(i + 1, 1)}, {pid(i, 1)}")
+    platen_elems = [[] for _ in zones]
+    for q in range(len(zones)):
+        lines.append("*ELEMENT, TYPE=CAX4R, ELSET=PLATEN")
+        for i in range(len(pr) - 1):
+            eid += 1
+            platen_elems[q].append(eid)
+            lines.append(f"{eid}, {pid(i, 0, q)}, {pid(i + 1, 0, q)}, {pid(i + 1, 1, q)}, {pid(i, 1, q)}")
+    masters = [""] + [suffix for suffix, _, _ in zones[1:]]  # MASTER, then MASTER<suffix> on each copy
 
     def nset(name, ids):
         ids = list(ids)
         return [f"*NSET, NSET={name}"] + [", ".join(map(str, ids[k:k + 12])) for k in range(0, len(ids), 12)]
 
-    top = [nid(i, z.size - 1) for i in range(ncol)]
-    side = [nid(ncol - 1, j) for j in range(z.size)]
     lines += nset("AXIS", [nid(0, j) for j in range(z.size)])
     lines += nset("MID", [nid(i, 0) for i in range(ncol)])
-    lines += nset("CONTACT", sorted(set(top[1:] + side)))  # the axis node is driven with the platen (no master face reaches r = 0)
-    lines += nset("PLATEN", [pid(i, j) for j in range(2) for i in range(len(pr))])
+    for suffix, ids, _ in zones:
+        lines += nset(f"CONTACT{suffix}", ids)
+    lines += nset("PLATEN", [pid(i, j, q) for q in range(len(zones)) for j in range(2) for i in range(len(pr))])
     lines += nset("TOPAXIS", [top[0]])
     lines += nset("SHAPE", sorted(set(top + side)))
-    lines += ["*ELSET, ELSET=PLATENFACE"] + [", ".join(map(str, platen_elems[k:k + 12])) for k in range(0, len(platen_elems), 12)]
-    lines += ["*SURFACE, NAME=SLAVE, TYPE=NODE", "CONTACT", "*SURFACE, NAME=MASTER", "PLATENFACE, S1"]
+    for m, elems in zip(masters, platen_elems):
+        lines += [f"*ELSET, ELSET=PLATENFACE{m}"] + [", ".join(map(str, elems[k:k + 12])) for k in range(0, len(elems), 12)]
+    for suffix, _, _ in zones:
+        lines += [f"*SURFACE, NAME=SLAVE{suffix}, TYPE=NODE", f"CONTACT{suffix}"]
+    for m in masters:
+        lines += [f"*SURFACE, NAME=MASTER{m}", f"PLATENFACE{m}, S1"]
     eps = np.concatenate([[0.0], np.geomspace(1e-4, 3.0, 70)])
     lines += ["*MATERIAL, NAME=METAL", "*ELASTIC", f"{case.E_MPa:.9g}, {case.nu}", "*PLASTIC"]
     lines += [f"{s:.9g}, {e:.9g}" for e, s in zip(eps, case.flow(eps))]
     lines += ["*MATERIAL, NAME=RIGID", "*ELASTIC", "2.1e6, 0.3",
-              "*SOLID SECTION, ELSET=SPECIMEN, MATERIAL=METAL", "*SOLID SECTION, ELSET=PLATEN, MATERIAL=RIGID",
-              "*SURFACE INTERACTION, NAME=SI", "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR", f"{PENALTY_N_PER_MM3:.6g}"]
-    if case.mu > 0:
-        lines += ["*FRICTION", f"{case.mu}, {STICK_SLOPE_N_PER_MM3:.6g}"]
-    lines += ["*CONTACT PAIR, INTERACTION=SI, TYPE=NODE TO SURFACE", "SLAVE, MASTER",
-              "*BOUNDARY", "AXIS, 1, 1", "MID, 2, 2", "PLATEN, 1, 1"]
+              "*SOLID SECTION, ELSET=SPECIMEN, MATERIAL=METAL", "*SOLID SECTION, ELSET=PLATEN, MATERIAL=RIGID"]
+    for suffix, _, mu in zones:  # each zone its own Coulomb μ
+        lines += [f"*SURFACE INTERACTION, NAME=SI{suffix}", "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR", f"{PENALTY_N_PER_MM3:.6g}"]
+        if mu > 0:
+            lines += ["*FRICTION", f"{mu}, {STICK_SLOPE_N_PER_MM3:.6g}"]
+    for (suffix, _, _), m in zip(zones, masters):
+        lines += [f"*CONTACT PAIR, INTERACTION=SI{suffix}, TYPE=NODE TO SURFACE", f"SLAVE{suffix}, MASTER{m}"]
+    lines += ["*BOUNDARY", "AXIS, 1, 1", "MID, 2, 2", "PLATEN, 1, 1"]
     half_stroke = (case.h0_mm - case.h_end_mm) / 2.0
     step = lambda inc, y: ["*STEP, NLGEOM, INC=2000", "*STATIC", f"{1.0 / inc:.9g}, 1.0, 1e-7, {1.0 / inc:.9g}",  # noqa: E731
                            "*BOUNDARY", f"PLATEN, 2, 2, {y:.9g}", f"TOPAXIS, 2, 2, {y:.9g}",
