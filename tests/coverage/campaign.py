@@ -16,6 +16,9 @@ generator, computed here from the generating law and never from the product's un
   truth the law at each point's own rate.
 - ``CalculiX``: the vendored upsetting records of both model families (tests/fe/data, truth in
   their ``fe2.*`` header: the Johnson–Cook law and μ).
+- ``CalculiX zoned friction``: the zoned records there (tests/fe/zoned_friction.py: the end face in two
+  Coulomb zones, a lubricated or a dry centre): the friction law's form the correction's model form holds;
+  truth the law (no one μ to judge).
 - ``virtual rig``: cells of tests/scenarios/matrix.py on model time, fault drills included;
   truth the virtual material (rig/virtual/materials.py).
 
@@ -51,7 +54,7 @@ DEFAULT_RECORDS = 40
 FALLBACK_SEED = 43
 
 # kinds whose instruments are simulated perfectly (no force/strain scale error): the blanket check applies
-PERFECT = {"tension drawn", "tension crosshead", "compression closed form", "CalculiX"}
+PERFECT = {"tension drawn", "tension crosshead", "compression closed form", "CalculiX", "CalculiX zoned friction"}
 
 
 @dataclass
@@ -232,6 +235,21 @@ def calculix_cases() -> list[Case]:
     return [Case("CalculiX", p.stem, functools.partial(_calculix_case, p)) for p in paths]
 
 
+def _zoned_case(path: Path):
+    """A zoned-friction record (tests/fe/zoned_friction.py): truth the law; no μ judged (two Coulomb zones, no one μ)."""
+    from flowcurve.record.importers import load_record
+
+    record = load_record(path)
+    A, B, n = (float(record.meta[f"fe2.{k}"]) for k in ("A_MPa", "B_MPa", "n"))
+    return record, Truth(values={}, flow=lambda ep: A + B * np.asarray(ep) ** n, law="johnson_cook")  # σ = A + Bεⁿ
+
+
+def zoned_cases() -> list[Case]:
+    """The friction law's form realised: the end face in two Coulomb zones (lubricated or dry centre), CalculiX."""
+    return [Case("CalculiX zoned friction", p.stem, functools.partial(_zoned_case, p))
+            for p in sorted((ROOT / "tests" / "fe" / "data").glob("zoned_*.csv"))]
+
+
 def _virtual_case(cell, workdir: Path):
     from tests.scenarios import matrix
 
@@ -268,15 +286,16 @@ def virtual_cases(n: int, seed: int) -> list[Case]:
 
 def all_cases(seed: int = FALLBACK_SEED) -> list[Case]:
     """The whole campaign (≥ 300 records)."""
-    return drawn_cases(150, seed) + crosshead_cases(3) + compression_cases(2) + calculix_cases() + virtual_cases(60, seed)
+    return drawn_cases(150, seed) + crosshead_cases(3) + compression_cases(2) + calculix_cases() + zoned_cases() + virtual_cases(60, seed)
 
 
 def default_cases(seed: int, n: int = DEFAULT_RECORDS) -> list[Case]:
     """About ``n`` records drawn with ``seed``, every kind present (the virtual rig with few: a cell costs seconds)."""
     rng = random.Random(seed)
-    share = {"tension drawn": 12, "tension crosshead": 8, "compression closed form": 8, "CalculiX": 8, "virtual rig": 4}
+    share = {"tension drawn": 12, "tension crosshead": 8, "compression closed form": 8, "CalculiX": 8, "CalculiX zoned friction": 2,
+             "virtual rig": 4}
     pools = {"tension drawn": drawn_cases(150, FALLBACK_SEED), "tension crosshead": crosshead_cases(3),
-             "compression closed form": compression_cases(2), "CalculiX": calculix_cases()}
+             "compression closed form": compression_cases(2), "CalculiX": calculix_cases(), "CalculiX zoned friction": zoned_cases()}
     out = [c for kind, pool in pools.items() for c in rng.sample(pool, min(share[kind], len(pool)))]
     return out + virtual_cases(share["virtual rig"], seed)
 

@@ -24,6 +24,8 @@ from .known_defects import BORDERLINE, KNOWN
 CELLS = [
     ("CalculiX", "flow stress"), ("CalculiX", "friction_mu"), ("CalculiX", "johnson_cook A_MPa"),
     ("CalculiX", "johnson_cook B_MPa"), ("CalculiX", "johnson_cook n"),
+    ("CalculiX zoned friction", "flow stress"), ("CalculiX zoned friction", "johnson_cook A_MPa"),
+    ("CalculiX zoned friction", "johnson_cook B_MPa"), ("CalculiX zoned friction", "johnson_cook n"),
     ("compression closed form", "Rp02_MPa"), ("compression closed form", "flow stress"),
     ("compression closed form", "friction_mu"), ("compression closed form", "johnson_cook A_MPa"),
     ("compression closed form", "johnson_cook B_MPa"), ("compression closed form", "johnson_cook n"),
