@@ -70,6 +70,7 @@ def synthetic_tension(rows: int, rate_hz: float = 150.0, seed: int = 0) -> Recor
     meta = {"flowcurve-record": "1", "status": "complete", "test": "tension", "material": "synthetic JC",
             "specimen.id": "bench-1h", "nominal_temperature_C": "20", "crosshead_speed_mm_per_s": repr(float(crosshead[-1] / t[-1])),
             "rig.frame_stiffness_N_per_um": repr(FRAME_N_PER_UM), "specimen.d0_mm": repr(D0_MM), "specimen.l0_mm": repr(L0_MM),
+            "specimen.parallel_length_mm": repr(L0_MM),  # the crosshead stretches L0: Lc = L0
             "post.lu_mm": repr(float(L0_MM + elong[-1] - recovery)), "post.dk_mm": repr(dk)}
     return Record(meta=meta, data=data, source="bench")
 

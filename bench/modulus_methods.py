@@ -71,7 +71,7 @@ def crosshead_tension(*, sy=850.0, Q=150.0, b=300.0, E=205_000.0, frame_N_per_um
     k = int(np.argmax((g <= 0) & (s[: i_m + 1] > 0.5 * s[i_m])))
     rp02 = float(s[k - 1] + g[k - 1] / (g[k - 1] - g[k]) * (s[k] - s[k - 1]))
     meta = {"test": "tension", "specimen.d0_mm": repr(D0_MM), "specimen.l0_mm": repr(L0_MM), "crosshead_speed_mm_per_s": repr(speed_mm_per_s),
-            "material": "Voce steel (closed form)"}
+            "specimen.parallel_length_mm": repr(L0_MM), "material": "Voce steel (closed form)"}  # the crosshead stretches L0: Lc = L0
     return Record(meta=meta, data=pd.DataFrame({"time_s": t, "force_N": f_t, "crosshead_mm": c_t}),
                   source=f"crosshead C{frame_N_per_um:g} toe{toe_mm:g}@{toe_fraction:g}Fm"), E_app, rp02
 

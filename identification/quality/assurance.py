@@ -123,6 +123,13 @@ def _strain_rel_u(result: Mapping, inst: Mapping) -> tuple[float, str]:
     l0, lu = _num(spec.get("l0_mm")), _num(post.get("lu_mm"))
     shape = un.rectangular(inst["crosshead_strain_error_pct"] / 100.0)
     basis = f"crosshead travel, ±{inst['crosshead_strain_error_pct']:g} % assumed"
+    d0 = _num(spec.get("d0_mm"))
+    if methods.get("strain_length_stated") is False and l0 and d0:  # Lc not stated: l0 taken, up to L0 + 2·d0 (one-sided, u = r/2)
+        scaled = methods.get("scale_factor_Kl") is not None and lu and lu != l0
+        a_u = _num((methods.get("scale_Kl") or {}).get("uniform_plastic_elongation")) if scaled else None
+        r = un.unstated_length_rel(l0, d0, lu_mm=lu if scaled else None, a_u=a_u)
+        shape = math.hypot(shape, r / 2.0)
+        basis += f"; Lc not stated, l0 taken: over L0 + 2·d0 the strains would read {100.0 * r:.2g} % lower (u = half of it)"
     if methods.get("scale_factor_Kl") is not None and l0 and lu and lu != l0:
         terms = methods.get("scale_Kl") or {}  # (3.1)'s terms: the recovery at the fracture, its E, the last sample's travel
         recovery = (_num(terms.get("specimen_recovery_mm")) or 0.0) + (_num(terms.get("frame_recovery_mm")) or 0.0)

@@ -264,6 +264,16 @@ def elongation_from_extension_budget(A_pct: float, gauge_mm: float, extensometer
     return budget(A_pct, "%", comps)
 
 
+def unstated_length_rel(l0_mm: float, d0_mm: float, *, lu_mm: float | None = None, a_u: float | None = None) -> float:
+    """How much lower a crosshead's strains read had its length been ISO 6892-1's L1 = L0 + 2·d0 (the dispute value
+    of a machined bar's Lc) instead of the l0 taken for an unstated Lc: 1 − L0/L1 (e = Δl/L); scaled to the
+    measured Lu by (3.1), whose K_l ∝ (Lu − L0 + (L − L0)·a_u)/L over L, 1 − [(Lu − L0 + 2·d0·a_u)/L1]/[(Lu − L0)/L0]."""
+    L1 = l0_mm + 2.0 * d0_mm
+    if lu_mm is None or a_u is None or not lu_mm > l0_mm:
+        return 1.0 - l0_mm / L1
+    return max(1.0 - ((lu_mm - l0_mm + 2.0 * d0_mm * a_u) / L1) / ((lu_mm - l0_mm) / l0_mm), 0.0)
+
+
 def elongation_from_curve_budget(A_pct: float, terms: Mapping, strain_rel_u: float, u_E_MPa: float, u_a_u: float = 0.0,
                                  strain_basis: str = "") -> dict:
     """A read off the curve at the break (no Lu): A = 100·(e_g − s_k/E), e_g the gauge's strain at fracture

@@ -378,6 +378,7 @@ def _methods(inp: _Inputs, line: _ElasticLine, iso: _IsoResults, true: _TrueCurv
     return {
         "strain_source": inp.src["source"],
         "strain_length_mm": inp.length,
+        **({"strain_length_stated": inp.src["length_stated"]} if "length_stated" in inp.src else {}),  # the crosshead's: Lc given, or l0 assumed
         "frame_stiffness_N_per_um": inp.src["stiffness"],
         "crosshead_step_interpolated_mm": inp.src.get("step_mm"),  # a stepped reading re-read between its steps (None: as read)
         "toe_compensation_mm": line.toe_mm if toe else None,

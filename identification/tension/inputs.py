@@ -67,9 +67,13 @@ def _strain_source(record: Record, use_extensometer: bool | None, force: np.ndar
         disp = remove_frame_compliance(disp, force - force[0], stiffness)
     else:
         warnings.append("no frame stiffness (rig.frame_stiffness_N_per_um): the crosshead displacement still includes the frame; strains and E are not the specimen's")
-    length = options.get("crosshead_length_mm") or record.specimen.parallel_length_mm or l0
-    return {"disp": disp, "length": float(length), "source": "crosshead", "stiffness": stiffness, "scalable": True, "warnings": warnings,
-            "step_mm": step}
+    stated = options.get("crosshead_length_mm") or record.specimen.parallel_length_mm
+    if stated is None:
+        warnings.append(f"the parallel length is not stated (specimen.parallel_length_mm, --lc): the crosshead's strain is taken over "
+                        f"l0 = {l0:g} mm, but an ISO 6892-1 machined bar's Lc is at least L0 + d0/2 (L0 + 2·d0 in case of dispute), "
+                        "over which every strain would read lower: the strain scale's U holds up to L0 + 2·d0")
+    return {"disp": disp, "length": float(stated or l0), "source": "crosshead", "stiffness": stiffness, "scalable": True, "warnings": warnings,
+            "step_mm": step, "length_stated": stated is not None}
 
 
 @dataclass

@@ -160,6 +160,7 @@ def tension_record(pick):
         seat = toe_mm * (1 - np.clip(1 - P / (0.1 * np.max(P)), 0, 1) ** 2)
         data["crosshead_mm"] = _quantize(disp + P / (FRAME_N_PER_UM * 1000) + seat, quantum_mm)
         meta["rig.frame_stiffness_N_per_um"] = repr(FRAME_N_PER_UM)
+        meta["specimen.parallel_length_mm"] = repr(L0_MM)  # the crosshead stretches L0 (disp = e·L0): Lc = L0
     record = Record(meta=meta, data=pd.DataFrame(data), source="drawn.csv")
     truth = Truth(E_MPa=E, law=law, hardening_start=start,
                   Rp02_MPa=None if plateau else rp02_closed_form(law, E, sy),

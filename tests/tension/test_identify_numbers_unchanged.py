@@ -18,6 +18,9 @@ crosshead less F/C is its specimen's elongation — and Agt 19.886 → 19.734 % 
 Written again (all cases) when A read off the curve without post.lu_mm came to state its terms
 (result.json methods.A_from_curve, for A's new budget): the 42CrMoS4 cases gained that key and nothing
 else moved; the long cases (Lu given) are byte-identical.
+The long cases again when the bench's record came to state its parallel length (Lc = L0, its crosshead
+stretches L0; a crosshead record without it now states the unknown length in its strain scale): the
+keys specimen.parallel_length_mm and methods.strain_length_stated and the conformity's wording, no number.
 
 Every leaf of result.json is compared: strings, booleans and nulls exactly, numbers to a
 relative 1e-9 (float summation order may change; nothing else may).

@@ -144,3 +144,21 @@ def test_at_and_a_from_the_curve_refer_to_the_gauge_marks(records, parallel_mm):
     assert abs(r["A_pct"] - rig_truth(records[parallel_mm][1])["A_pct"]) < 0.5
     assert abs(r["A_pct"] - rig_truth(records[parallel_mm][1])["A_pct"]) <= r["uncertainty"]["A_pct"]["U"]  # before: no U at all
     assert "over L0" in r["A_method"]
+
+
+@pytest.mark.parametrize("lu", [True, False])
+def test_an_unstated_parallel_length_is_in_the_strain_scale(records, lu):
+    """The bar of Lc = 42 mm without specimen.parallel_length_mm: its crosshead strain is taken over l0 (too short) and
+    read high. Before, value ± U missed (with post.lu_mm: Ag 38.8 ± 1.6 % for 36.9; without: Ag 51.5 ± 2.2, A 60.5 ± 1.4
+    for 45.4); the strain scale now holds L up to L0 + 2·d0 (ISO 6892-1's Lc in dispute), and the record is warned."""
+    rec, m = records[L0_MM + 2.0 * D0_MM]
+    truth = rig_truth(m)
+    r = identified(rec, ("specimen.parallel_length_mm",) + (() if lu else ("post.lu_mm",))).result
+    assert r["methods"]["strain_length_stated"] is False and r["methods"]["strain_length_mm"] == L0_MM
+    assert any("parallel length is not stated" in w for w in r["warnings"])
+    for key in ("Rp02_MPa", "Ag_pct", "A_pct"):
+        assert abs(r[key] - truth[key]) <= r["uncertainty"][key]["U"], (key, r[key], truth[key], r["uncertainty"][key]["U"])
+    stated = identified(rec, () if lu else ("post.lu_mm",)).result
+    assert stated["methods"]["strain_length_stated"] is True
+    assert not any("parallel length is not stated" in w for w in stated["warnings"])
+    assert r["uncertainty"]["strain_scale"]["u_rel"] > 2.0 * stated["uncertainty"]["strain_scale"]["u_rel"]
