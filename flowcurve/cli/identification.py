@@ -116,7 +116,7 @@ def register(subparsers) -> None:
     m.add_argument("--true-stress", choices=("constant_volume", "gost_3_6"), help="true stress in the uniform part of a tension test: σ·(1 + e) at constant volume (default) or the seed's corrected (3.6) with bulk modulus, for comparison (it reads up to ~7 %% high at e = 0.4)")
     m.add_argument("--law", metavar="LAW", help="hardening law: any static law of the registry ('flowcurve laws' lists them; default johnson_cook: "
                    "A + B·εp^n; checked when run, with the nearest name) — or best (every one fitted, the lowest AIC among the laws whose "
-                   "constants the curve determines kept, and by how much it won); with --method inverse-fe on compression the default is the "
+                   "constants the curve determines and whose least-squares minimum is not flat kept, and by how much it won); with --method inverse-fe on compression the default is the "
                    "law that best fits the fast curve")
     m.add_argument("--modulus-window", type=_pair, metavar="LO,HI", help="stress window of the elastic-modulus regression: MPa (e.g. 50,300), or fractions of Rm when both are ≤ 1 (e.g. 0.1,0.4); default: the widest linear stretch of the first loading, chosen automatically (all of it when it has few samples)")
     m.add_argument("--modulus-method", choices=("auto", "window", "sdar"), help="how the elastic line is found when no --modulus-window is given: window (the widest linear stretch), sdar (ASTM E3076-18, slope determination by analysis of residuals, with its quality metrics) or auto (default: sdar on a crosshead-only tension record, else window)")

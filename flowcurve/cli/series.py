@@ -145,7 +145,8 @@ def law_lines() -> list[str]:
                else "neither (a static part of another law)")
         constants = ", ".join(f"{p.name}{f' ({p.unit})' if p.unit else ''}" for p in law.parameters)
         lines += [f"{name}: {law.display_name} [{use}]", f"  {law.equation}", f"  constants: {constants}"]
-    lines.append("identify --law best: every static law fitted, the lowest AIC among the laws whose constants the curve determines")
+    lines.append("identify --law best: every static law fitted, the lowest AIC among the laws whose constants the curve determines "
+                 "and whose least-squares minimum is not flat (a refit that does not settle is not reproducible)")
     return lines
 
 
