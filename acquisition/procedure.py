@@ -56,6 +56,7 @@ HEAT_STEPS_PER_PERIOD = 4
 HEAT_MIN_TICK_S = 0.005  # host seconds
 FORCE_LIMIT_OF_CAPACITY = 0.98  # default force limit: this fraction of the frame's capacity
 TEST_GEOMETRY = {"tension": ("d0_mm", "l0_mm"), "compression": ("d0_mm", "h0_mm")}
+OPTIONAL_GEOMETRY = {"tension": ("parallel_length_mm",), "compression": ()}  # the parallel length Lc: l0 when not given
 POST_KEYS = {
     "tension": ("post.lu_mm", "post.dk_mm", "post.du_mm", "post.neck_radius_mm"),
     "compression": ("post.hk_mm", "post.dmax_mm", "post.dface_mm"),  # dface optional: μ near sticking (docs/methods.md §4a.2)
@@ -109,7 +110,8 @@ class TestSpec:
     material, operator, specimen_id : str
         Written to the record's header.
     geometry_mm : dict
-        d0_mm with l0_mm (tension) or h0_mm (compression), mm.
+        d0_mm with l0_mm (tension) or h0_mm (compression), mm; tension may add parallel_length_mm
+        (Lc ≥ l0, the length the crosshead stretches; the header states it only when given).
     temperature_C : float, optional
         Heating set-point, °C; None: room temperature.
     speed_mm_per_s : float
@@ -128,7 +130,7 @@ class TestSpec:
     material: str = "unknown"
     operator: str = ""
     specimen_id: str = ""
-    geometry_mm: dict[str, float] = field(default_factory=dict)  # d0_mm, l0_mm / h0_mm
+    geometry_mm: dict[str, float] = field(default_factory=dict)  # d0_mm, l0_mm [, parallel_length_mm] / h0_mm
     temperature_C: float | None = None  # heating set-point; None = room temperature
     speed_mm_per_s: float = 0.01
     soak_s: float = 60.0  # test seconds the temperature must stay within the band
@@ -139,13 +141,21 @@ class TestSpec:
     extra_meta: dict[str, str] = field(default_factory=dict)
 
     def check(self) -> None:
-        """ProcedureError unless the test, geometry (> 0 mm) and speed (> 0 mm/s) are valid."""
+        """ProcedureError unless the test, geometry (> 0 mm; a parallel length, tension only, at
+        least l0) and speed (> 0 mm/s) are valid."""
         if self.test not in TEST_GEOMETRY:
             raise ProcedureError(f"test must be tension or compression, not {self.test!r}")
         for key in TEST_GEOMETRY[self.test]:
             v = self.geometry_mm.get(key)
             if v is None or not (v > 0 and math.isfinite(v)):
                 raise ProcedureError(f"specimen geometry '{key}' is missing or not > 0 (give --{key.split('_')[0]})")
+        unknown = set(self.geometry_mm) - set(TEST_GEOMETRY[self.test]) - set(OPTIONAL_GEOMETRY[self.test])
+        if unknown:
+            raise ProcedureError(f"specimen geometry {', '.join(sorted(unknown))}: not a {self.test} specimen's")
+        lc = self.geometry_mm.get("parallel_length_mm")
+        if lc is not None and not (math.isfinite(lc) and lc >= self.geometry_mm["l0_mm"]):
+            raise ProcedureError(f"specimen parallel length {lc:g} mm must be at least l0 {self.geometry_mm['l0_mm']:g} mm "
+                                 "(the gauge marks lie on it; give --lc ≥ --l0)")
         if not self.speed_mm_per_s > 0:
             raise ProcedureError(f"crosshead speed must be > 0 mm/s, got {self.speed_mm_per_s}")
 
