@@ -47,3 +47,11 @@ def test_identify_lc_sets_the_strain_length_and_ag_meets_the_truth(crosshead_rec
     unstated = identified(path, tmp_path / "nolc")
     assert unstated["methods"]["strain_length_mm"] == truth.l0_mm
     assert unstated["Ag_pct"] - ag_truth > 3 * unstated["uncertainty"]["Ag_pct"]["U"]
+
+
+def test_a_specimens_table_gives_lc_as_the_option_does(crosshead_record, tmp_path):
+    path, truth = crosshead_record
+    table = tmp_path / "specimens.csv"
+    table.write_text(f"file;lc (mm)\n{path.name};{LC_MM:g}\n", encoding="utf-8")
+    given = identified(path, tmp_path / "table", "--specimens", str(table))
+    assert given["methods"]["strain_length_mm"] == LC_MM
