@@ -33,6 +33,7 @@ from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temper
 from flowcurve.acquisition.keys import KeyWatcher
 from flowcurve.acquisition.rig_io import RigIO  # noqa: F401  (procedure.RigIO, as before)
 from flowcurve.acquisition.sampler import Sampler
+from flowcurve.acquisition.specimen_geometry import geometry_problem
 from flowcurve.acquisition.stream_notes import StreamNotes
 from flowcurve.clock import WALL, Clock
 from flowcurve.rig.config import SETPOINT_MARGIN_C, setpoint_refusal
@@ -56,7 +57,6 @@ HEAT_STEPS_PER_PERIOD = 4
 HEAT_MIN_TICK_S = 0.005  # host seconds
 FORCE_LIMIT_OF_CAPACITY = 0.98  # default force limit: this fraction of the frame's capacity
 TEST_GEOMETRY = {"tension": ("d0_mm", "l0_mm"), "compression": ("d0_mm", "h0_mm")}
-OPTIONAL_GEOMETRY = {"tension": ("parallel_length_mm",), "compression": ()}  # the parallel length Lc: l0 when not given
 POST_KEYS = {
     "tension": ("post.lu_mm", "post.dk_mm", "post.du_mm", "post.neck_radius_mm"),
     "compression": ("post.hk_mm", "post.dmax_mm", "post.dface_mm"),  # dface optional: μ near sticking (docs/methods.md §4a.2)
@@ -110,8 +110,7 @@ class TestSpec:
     material, operator, specimen_id : str
         Written to the record's header.
     geometry_mm : dict
-        d0_mm with l0_mm (tension) or h0_mm (compression), mm; tension may add parallel_length_mm
-        (Lc ≥ l0, the length the crosshead stretches; the header states it only when given).
+        d0_mm with l0_mm and optionally parallel_length_mm (Lc ≥ l0; tension) or h0_mm (compression), mm.
     temperature_C : float, optional
         Heating set-point, °C; None: room temperature.
     speed_mm_per_s : float
@@ -141,21 +140,12 @@ class TestSpec:
     extra_meta: dict[str, str] = field(default_factory=dict)
 
     def check(self) -> None:
-        """ProcedureError unless the test, geometry (> 0 mm; a parallel length, tension only, at
-        least l0) and speed (> 0 mm/s) are valid."""
+        """ProcedureError unless the test, geometry (specimen_geometry.geometry_problem) and speed (> 0 mm/s) are valid."""
         if self.test not in TEST_GEOMETRY:
             raise ProcedureError(f"test must be tension or compression, not {self.test!r}")
-        for key in TEST_GEOMETRY[self.test]:
-            v = self.geometry_mm.get(key)
-            if v is None or not (v > 0 and math.isfinite(v)):
-                raise ProcedureError(f"specimen geometry '{key}' is missing or not > 0 (give --{key.split('_')[0]})")
-        unknown = set(self.geometry_mm) - set(TEST_GEOMETRY[self.test]) - set(OPTIONAL_GEOMETRY[self.test])
-        if unknown:
-            raise ProcedureError(f"specimen geometry {', '.join(sorted(unknown))}: not a {self.test} specimen's")
-        lc = self.geometry_mm.get("parallel_length_mm")
-        if lc is not None and not (math.isfinite(lc) and lc >= self.geometry_mm["l0_mm"]):
-            raise ProcedureError(f"specimen parallel length {lc:g} mm must be at least l0 {self.geometry_mm['l0_mm']:g} mm "
-                                 "(the gauge marks lie on it; give --lc ≥ --l0)")
+        problem = geometry_problem(self.test, TEST_GEOMETRY[self.test], self.geometry_mm)
+        if problem:
+            raise ProcedureError(problem)
         if not self.speed_mm_per_s > 0:
             raise ProcedureError(f"crosshead speed must be > 0 mm/s, got {self.speed_mm_per_s}")
 
