@@ -33,6 +33,7 @@ from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temper
 from flowcurve.acquisition.keys import KeyWatcher
 from flowcurve.acquisition.rig_io import RigIO  # noqa: F401  (procedure.RigIO, as before)
 from flowcurve.acquisition.sampler import Sampler
+from flowcurve.acquisition.specimen_geometry import geometry_problem
 from flowcurve.acquisition.stream_notes import StreamNotes
 from flowcurve.clock import WALL, Clock
 from flowcurve.rig.config import SETPOINT_MARGIN_C, setpoint_refusal
@@ -109,7 +110,7 @@ class TestSpec:
     material, operator, specimen_id : str
         Written to the record's header.
     geometry_mm : dict
-        d0_mm with l0_mm (tension) or h0_mm (compression), mm.
+        d0_mm with l0_mm and optionally parallel_length_mm (Lc ≥ l0; tension) or h0_mm (compression), mm.
     temperature_C : float, optional
         Heating set-point, °C; None: room temperature.
     speed_mm_per_s : float
@@ -128,7 +129,7 @@ class TestSpec:
     material: str = "unknown"
     operator: str = ""
     specimen_id: str = ""
-    geometry_mm: dict[str, float] = field(default_factory=dict)  # d0_mm, l0_mm / h0_mm
+    geometry_mm: dict[str, float] = field(default_factory=dict)  # d0_mm, l0_mm [, parallel_length_mm] / h0_mm
     temperature_C: float | None = None  # heating set-point; None = room temperature
     speed_mm_per_s: float = 0.01
     soak_s: float = 60.0  # test seconds the temperature must stay within the band
@@ -139,13 +140,12 @@ class TestSpec:
     extra_meta: dict[str, str] = field(default_factory=dict)
 
     def check(self) -> None:
-        """ProcedureError unless the test, geometry (> 0 mm) and speed (> 0 mm/s) are valid."""
+        """ProcedureError unless the test, geometry (specimen_geometry.geometry_problem) and speed (> 0 mm/s) are valid."""
         if self.test not in TEST_GEOMETRY:
             raise ProcedureError(f"test must be tension or compression, not {self.test!r}")
-        for key in TEST_GEOMETRY[self.test]:
-            v = self.geometry_mm.get(key)
-            if v is None or not (v > 0 and math.isfinite(v)):
-                raise ProcedureError(f"specimen geometry '{key}' is missing or not > 0 (give --{key.split('_')[0]})")
+        problem = geometry_problem(self.test, TEST_GEOMETRY[self.test], self.geometry_mm)
+        if problem:
+            raise ProcedureError(problem)
         if not self.speed_mm_per_s > 0:
             raise ProcedureError(f"crosshead speed must be > 0 mm/s, got {self.speed_mm_per_s}")
 

@@ -371,7 +371,7 @@ class VirtualRun:
 
     outcome: object  # acquisition.procedure.Outcome
     material: object  # flowcurve.rig.virtual.materials.Material
-    strain_rate_per_s: float  # the model's nominal rate (v / l0 or v / h0)
+    strain_rate_per_s: float  # the model's nominal rate (v / Lc, the parallel length, or v / h0)
     temperature_C: float  # furnace temperature while loading
     friction_mu: float
     compression_response: str = "fe"  # the virtual rig's compression response (rig.virtual.responses.COMPRESSION_RESPONSES)
@@ -413,13 +413,16 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
     from flowcurve.rig.virtual.rig import VirtualRig
 
     g = spec.geometry_mm
-    specimen = Specimen.tension(g["d0_mm"], g["l0_mm"]) if spec.test == "tension" else Specimen.compression(g["d0_mm"], g["h0_mm"])
+    specimen = (Specimen.tension(g["d0_mm"], g["l0_mm"], parallel_length_mm=g.get("parallel_length_mm")) if spec.test == "tension"
+                else Specimen.compression(g["d0_mm"], g["h0_mm"]))
     with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu, temperature_C=initial_temperature_C, clock=clock, link=link, compression_response=compression_response, tension_response=tension_response) as vr:
         response = compression_response if spec.test == "compression" else tension_response
         spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}, {spec.test} response {response}")
         spec.extra_meta.setdefault(f"virtual.{spec.test}_response", response)
         spec.extra_meta.setdefault("material.E_MPa", repr(float(vr.model.material.E_MPa)))  # the handbook values an operator would enter
         spec.extra_meta.setdefault("material.nu", repr(float(vr.model.material.nu)))
+        if spec.test == "tension":  # the rig's own bar: its parallel length is known (l0 unless given), so the record states it
+            spec.extra_meta.setdefault("specimen.parallel_length_mm", repr(float(specimen.parallel_mm)))
         if faults:
             spec.extra_meta.setdefault("virtual.faults", " ".join(f.describe() for f in faults))
         for fault in faults:

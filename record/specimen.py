@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from flowcurve.errors import MissingValueError
+from flowcurve.errors import MissingValueError, RecordError
 
 # field name → header key, per test; REQUIRED names those every identification of the test needs
 _COMMON = {"d0_mm": "specimen.d0_mm"}
@@ -71,6 +71,11 @@ class Specimen:
         not a positive number (file, key, value) or a required one missing (d0 and l0 or h0)."""
         test = record.test
         values = {name: record.positive(key, required=name in REQUIRED[test]) for name, key in TEST_KEYS[test].items()}
+        lc, l0 = values.get("parallel_length_mm"), values.get("l0_mm")
+        if lc is not None and l0 is not None and lc < l0:  # the gauge marks lie on the parallel length: a slip, not a bar
+            raise RecordError(record.source, f"metadata '{TEST_KEYS[test]['parallel_length_mm']}' = {lc:g} mm is shorter than "
+                              f"'{TEST_KEYS[test]['l0_mm']}' = {l0:g} mm: the gauge marks lie on the parallel length (ISO 6892-1: "
+                              "Lc ≥ L0); give the machined one (identify --lc) or remove it (Lc is then l0)")
         return cls(test=test, source=record.source, **values)
 
     @property

@@ -28,6 +28,7 @@ from flowcurve.record.importers_text import UnitError, is_number, sniff_delimite
 TABLE_COLUMNS: dict[str, tuple[str, str | None]] = {
     "d0": ("specimen.d0_mm", "length"),
     "l0": ("specimen.l0_mm", "length"),
+    "lc": ("specimen.parallel_length_mm", "length"),  # parallel length (tension): what the crosshead stretches
     "h0": ("specimen.h0_mm", "length"),
     "le": ("specimen.extensometer_gauge_mm", "length"),
     "s0": ("specimen.s0_mm2", "area"),

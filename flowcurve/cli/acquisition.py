@@ -156,9 +156,19 @@ def advice(error: FlowcurveError) -> str:
 def run_request(args) -> RunRequest:
     """The typed request of ``flowcurve run``'s options."""
     return RunRequest(args.test, material=args.material, E_MPa=args.E_MPa, operator=args.operator, specimen_id=args.specimen_id,
-                      temperature=args.temperature, soak=args.soak, speed=args.speed, d0=args.d0, l0=args.l0, h0=args.h0,
+                      temperature=args.temperature, soak=args.soak, speed=args.speed, d0=args.d0, l0=args.l0, lc=args.lc, h0=args.h0,
                       target=args.target, force_limit=args.force_limit, post=list(args.post), time_scale=args.time_scale,
                       fault=list(args.fault), compression_response=args.compression_response, tension_response=args.tension_response)
+
+
+def unused_geometry(args) -> str:
+    """What ``run`` ignores of the geometry given: the options another test type takes (--l0 and
+    --lc on compression, --h0 on tension), in one line; "" when none."""
+    from flowcurve.acquisition.procedure import TEST_GEOMETRY
+
+    takes = {key.split("_")[0] for key in TEST_GEOMETRY[args.test]} | ({"lc"} if args.test == "tension" else set())
+    ignored = [f"--{o}" for o in ("l0", "lc", "h0") if getattr(args, o, None) is not None and o not in takes]
+    return f"{' and '.join(ignored)} ignored: a {args.test} specimen has no such length" if ignored else ""
 
 
 def cmd_run(args) -> int:
@@ -178,6 +188,9 @@ def cmd_run(args) -> int:
 
         config = load_config(args.config)
     interactive = _interactive(args)
+    unused = unused_geometry(args)
+    if unused:
+        print(f"flowcurve: note: {unused}", file=sys.stderr)
     setup = prepare(run_request(args), config=config, ask=_ask if interactive else None)
     outcome = run_test(setup, out_path, config=config, view=view, interactive=interactive, stream=not args.poll)
     return report_outcome(outcome, view)

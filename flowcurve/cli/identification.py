@@ -86,7 +86,7 @@ def register(subparsers) -> None:
                         "the file's units row is used. Repeat per column. Units are converted, never guessed.")
     p.add_argument("--specimens", metavar="TABLE.csv",
                    help="per-specimen dimensions for several records: a table with a 'file' column naming each record and "
-                        "columns d0, l0, h0, le, lu, dk, du, hk, dmax, smax, dface, neck_radius, speed, temperature, test, material, "
+                        "columns d0, l0, lc, h0, le, lu, dk, du, hk, dmax, smax, dface, neck_radius, speed, temperature, test, material, "
                         "each with its unit in the name ('d0 (mm)', 'd0_mm') or in a units row")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG plots (faster for long series)")
     b = p.add_argument_group("many records (an archive)")

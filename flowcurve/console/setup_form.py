@@ -20,6 +20,7 @@ NUMERIC_FIELDS = {
     "E_MPa": ("--E", "MPa"),
     "d0": ("--d0", "mm"),
     "l0": ("--l0", "mm"),
+    "lc": ("--lc", "mm"),  # tension, optional: the parallel length, l0 when empty
     "h0": ("--h0", "mm"),
     "temperature": ("--temperature", "C"),
     "soak": ("--soak", "s"),
@@ -30,7 +31,7 @@ NUMERIC_FIELDS = {
 TEXT_FIELDS = ("material", "operator", "specimen_id")
 FAULT_FIELD = "fault"  # virtual rig only: run's --fault drills, DEVICE:KIND[:VALUE][@SECONDS], several split by spaces or commas
 # each field as the form labels it (static/index.html): an error beside a field names it so
-LABELS = {"E_MPa": "Handbook E, MPa", "d0": "d0, mm", "l0": "l0, mm", "h0": "h0, mm", "temperature": "Temperature, °C",
+LABELS = {"E_MPa": "Handbook E, MPa", "d0": "d0, mm", "l0": "l0, mm", "lc": "Parallel length Lc, mm", "h0": "h0, mm", "temperature": "Temperature, °C",
           "soak": "Soak, s", "speed": "Speed, mm/s", "target": "Target, mm", "force_limit": "Force limit, N",
           FAULT_FIELD: "Fault drill"}
 

@@ -37,6 +37,16 @@ def measured(field: str, option: str, value: float | None) -> float | None:
     return value
 
 
+def parallel_length_refusal(lc_mm: float | None, l0_mm: float | None) -> str | None:
+    """Why a parallel length ``lc_mm`` cannot go with the gauge length ``l0_mm`` (both mm; None:
+    not given): shorter than l0, where the gauge marks lie. None when it can (or either is missing)."""
+    if lc_mm is None or l0_mm is None or lc_mm >= l0_mm:
+        return None
+    return (f"--lc {lc_mm:g} mm is shorter than the gauge length l0 {l0_mm:g} mm: the gauge marks lie on the parallel "
+            f"length (ISO 6892-1: Lc ≥ L0, round bars usually L0 + 2·d0); give the machined parallel length, or "
+            f"nothing when it is l0")
+
+
 def choice(field: str, option: str, value: str, allowed) -> str:
     """``value`` if it is one of ``allowed``, else FieldError in argparse's words."""
     if value not in allowed:

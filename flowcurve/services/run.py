@@ -14,17 +14,17 @@ from pathlib import Path
 from typing import Callable
 
 from flowcurve.errors import FlowcurveError
-from flowcurve.services import FieldError, measured
+from flowcurve.services import FieldError, measured, parallel_length_refusal
 
 DEFAULT_VIRTUAL_MATERIAL = "steel45"
 ROOM_TEMPERATURE_C = 20.0  # the record's nominal temperature without a set-point: a furnace heats above it
 MAX_SOAK_S = 86_400.0  # a day
 SOAK_DEFAULT_S = 60.0
 # request field → run's option (the words of every message)
-OPTIONS = {"E_MPa": "--E", "d0": "--d0", "l0": "--l0", "h0": "--h0", "temperature": "--temperature", "soak": "--soak",
+OPTIONS = {"E_MPa": "--E", "d0": "--d0", "l0": "--l0", "lc": "--lc", "h0": "--h0", "temperature": "--temperature", "soak": "--soak",
            "speed": "--speed", "target": "--target", "force_limit": "--force-limit", "time_scale": "--time-scale",
            "material": "--material", "post": "--post", "fault": "--fault"}
-RANGE_OPTIONS = {k: OPTIONS[k] for k in ("temperature", "soak", "speed", "target", "force_limit", "d0", "l0", "h0")}
+RANGE_OPTIONS = {k: OPTIONS[k] for k in ("temperature", "soak", "speed", "target", "force_limit", "d0", "l0", "lc", "h0")}
 
 
 @dataclass
@@ -41,9 +41,10 @@ class RunRequest:
         The material's handbook Young's modulus, MPa.
     temperature, soak : float
         Heating set-point, °C (None: room temperature); soak time at it, s.
-    speed, d0, l0, h0, target, force_limit : float, optional
-        Crosshead speed, mm/s; diameter, gauge length and height, mm; target displacement, mm;
-        force limit, N.
+    speed, d0, l0, lc, h0, target, force_limit : float, optional
+        Crosshead speed, mm/s; diameter, gauge length, parallel length (tension: the length the
+        crosshead stretches, l0 when not given; ignored for compression) and height, mm; target
+        displacement, mm; force limit, N.
     post : list of str
         Post-test measurements as KEY=VALUE (``post.lu_mm=55.2``).
     time_scale, fault, compression_response, tension_response : optional
@@ -60,6 +61,7 @@ class RunRequest:
     speed: float | None = None
     d0: float | None = None
     l0: float | None = None
+    lc: float | None = None
     h0: float | None = None
     target: float | None = None
     force_limit: float | None = None
@@ -136,7 +138,7 @@ def out_of_range(req, config=None) -> dict[str, str]:
         "target": (0.0, frame.travel_mm, "mm", "the crosshead travel, [frame] travel_mm"),
         "force_limit": (0.0, frame.max_force_N, "N", "the machine's capacity, [frame] max_force_N"),
         "d0": (0.0, frame.max_specimen_diameter_mm, "mm", "the largest diameter the grips and platens take, [frame] max_specimen_diameter_mm"),
-        "l0": longest, "h0": longest,
+        "l0": longest, "lc": longest, "h0": longest,
         "soak": (0.0, MAX_SOAK_S, "s", "a day"),
     }
     problems = {}
@@ -168,13 +170,17 @@ def field_errors(req: RunRequest, *, virtual: bool, config=None) -> dict[str, st
     """Every refused value of ``req`` at once (field → run's message): numbers not > 0, values
     outside the rig's ranges (``config``; None on the virtual rig), malformed fault drills."""
     errors: dict[str, str] = {}
-    for name in ("d0", "l0", "h0", "soak", "speed", "target", "force_limit", "E_MPa"):
+    for name in ("d0", "l0", "lc", "h0", "soak", "speed", "target", "force_limit", "E_MPa"):
         try:
             measured(name, OPTIONS[name], getattr(req, name))
         except FieldError as exc:
             errors.update(exc.errors)
     for name, text in out_of_range(req, None if virtual else config).items():
         errors[name] = f"{OPTIONS[name]} {text}"  # the range says more than "a positive number"
+    if req.test == "tension" and "lc" not in errors and "l0" not in errors:
+        refusal = parallel_length_refusal(req.lc, req.l0)  # l0 not given: build_spec checks against the one it takes
+        if refusal:
+            errors["lc"] = refusal
     if virtual:
         try:
             faults(req)
@@ -195,10 +201,11 @@ def faults(req: RunRequest) -> tuple:
 
 def build_spec(req: RunRequest, geometry_default: dict[str, float] | None = None, ask: Callable | None = None):
     """The TestSpec of ``req`` (geometry in mm); ``ask(prompt, default, cast)`` asks for what is
-    missing (the command line when interactive), else a missing geometry is a FieldError."""
+    missing (the command line when interactive), else a missing geometry is a FieldError. A given
+    parallel length (tension) joins the geometry; it must be at least l0 (FieldError ``lc``)."""
     from flowcurve.acquisition.procedure import TEST_GEOMETRY, StopCriteria, TestSpec
 
-    for name in ("d0", "l0", "h0", "E_MPa", "speed", "target", "force_limit", "soak"):
+    for name in ("d0", "l0", "lc", "h0", "E_MPa", "speed", "target", "force_limit", "soak"):
         measured(name, OPTIONS[name], getattr(req, name))
     geometry: dict[str, float] = {}
     for key in TEST_GEOMETRY[req.test]:
@@ -211,6 +218,11 @@ def build_spec(req: RunRequest, geometry_default: dict[str, float] | None = None
         if value is None:
             raise FieldError(opt, f"specimen geometry missing: give --{opt} (mm)")
         geometry[key] = float(value)
+    if req.test == "tension" and req.lc is not None:  # compression has no parallel length: ignored, as --l0 is
+        refusal = parallel_length_refusal(req.lc, geometry["l0_mm"])
+        if refusal:
+            raise FieldError("lc", refusal)
+        geometry["parallel_length_mm"] = float(req.lc)
     material = req.material or (ask("material", "unknown") if ask else "unknown")
     operator = req.operator if req.operator is not None else (ask("operator", "") if ask else "")
     try:

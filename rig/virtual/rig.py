@@ -298,8 +298,8 @@ class VirtualRig:
             "specimen.d0_mm": f"{s.d0_mm:g}",
         }
         meta["specimen.l0_mm" if m.test == "tension" else "specimen.h0_mm"] = f"{s.length0_mm:g}"
-        if m.test == "tension" and s.parallel_length_mm is not None:
-            meta["specimen.parallel_length_mm"] = f"{s.parallel_length_mm:g}"
+        if m.test == "tension":  # its own bar: the parallel length is known (l0 unless given), so it is stated
+            meta["specimen.parallel_length_mm"] = f"{s.parallel_mm:g}"
         return meta
 
     def config(self):

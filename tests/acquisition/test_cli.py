@@ -139,6 +139,9 @@ def test_run_virtual_compression_from_the_command_line(tmp_path, capsys, mode, v
     (["run", "tension", "--quiet", "--time-scale", "0"], "--time-scale must be a positive number"),
     (["run", "tension", "--quiet", "--temperature", "5000"], "below 900 C (the furnace's [furnace] max_temperature_C), got 5000"),
     (["run", "tension", "--quiet", "--post", "post.lu_mm=x"], "must be a number"),
+    (["run", "tension", "--quiet", "--lc", "25"], "--lc 25 mm is shorter than the gauge length l0 30 mm"),  # the virtual bar's l0
+    (["run", "tension", "--quiet", "--l0", "40", "--lc", "35"], "--lc 35 mm is shorter than the gauge length l0 40 mm"),
+    (["run", "tension", "--quiet", "--lc", "1e4"], "--lc must be more than 0 and at most 200 mm"),
 ])
 def test_run_bad_input_is_one_line(tmp_path, capsys, args, message):
     code, out, err = run_cli(capsys, *args, "--out", tmp_path / "r.csv")
@@ -177,6 +180,45 @@ def test_run_tension_response_option_reaches_the_rig_and_the_header(tmp_path, ca
         assert a_over_R == pytest.approx(le_roy_smooth_a_over_R(rec), rel=3e-3)
     else:  # the CalculiX neck is blunter (tests/rig/virtual/test_neck_response.py)
         assert a_over_R < 0.85 * le_roy_smooth_a_over_R(rec)
+
+
+def elongation_at(rec, fractions) -> np.ndarray:
+    """The specimen's elongation, mm (crosshead less the frame's F/C, C the header's stiffness), where
+    the rising force first reaches ``fractions`` of its maximum (the running maximum, so noise cannot go back)."""
+    force, cross = rec.column("force_N"), rec.column("crosshead_mm")
+    top = int(np.argmax(force))
+    rising = np.maximum.accumulate(force[: top + 1])
+    at = np.asarray(fractions) * force[top]
+    x = np.array([np.interp(level, rising, cross[: top + 1]) for level in at])  # first crossing: rising is non-decreasing
+    return x - at / (float(rec.meta["rig.frame_stiffness_N_per_um"]) * 1e3)
+
+
+def test_run_lc_reaches_the_header_and_the_virtual_bar_stretches_it(tmp_path, capsys, virtual_runs_on):
+    """--lc 42 --l0 30: the header states it and the virtual bar is 42 mm long between its shoulders.
+    Against a bar of Lc = l0 at the same strain rate v/Lc (0.07/42 = 0.05/30): the same force on the
+    rising branch means the same uniform strain, so the elongation the crosshead sees (less F/C) is
+    42/30 of it, as a uniform bar's is (a bar that ignored --lc: about 1). Over the hardening part
+    (0.95-0.985 of Fm: 0.4-1.5 mm) single levels scatter ±3 % (a 10 µm crosshead step between
+    samples, the two channels read apart); their median is within 2 %."""
+    runs = {}
+    for name, options in (("lc42", ["--lc", "42", "--l0", "30", "--d0", "6", "--speed", "0.07"]), ("lc30", ["--speed", "0.05"])):
+        p = tmp_path / f"{name}.csv"
+        code, out, err = run_cli(capsys, "run", "tension", "--quiet", "--time-scale", "60", "--out", p, *options)
+        assert_complete_run(code, err, p)
+        runs[name] = read_record(p)
+    lc42, lc30 = runs["lc42"], runs["lc30"]
+    assert lc42.meta["specimen.parallel_length_mm"] == "42.0" and lc42.meta["specimen.l0_mm"] == "30.0"
+    assert lc30.meta["specimen.parallel_length_mm"] == "30.0"  # the virtual bar states its own Lc = l0
+    fractions = np.linspace(0.95, 0.985, 36)  # past Rp0.2 (0.93 of Fm for steel45), before the flat maximum
+    ratio = float(np.median(elongation_at(lc42, fractions) / elongation_at(lc30, fractions)))
+    assert ratio == pytest.approx(42.0 / 30.0, rel=0.02)
+
+
+def test_run_ignores_lc_on_compression_and_says_so(tmp_path, capsys, virtual_runs_on):
+    p = tmp_path / "c.csv"
+    code, out, err = run_cli(capsys, "run", "compression", "--quiet", "--time-scale", "60", "--target", "0.5", "--out", p, "--lc", "40")
+    assert err.startswith("flowcurve: note: --lc ignored: a compression specimen has no such length"), err
+    assert "specimen.parallel_length_mm" not in read_record(p).meta
 
 
 def test_run_compression_response_option_reaches_the_rig_and_the_header(tmp_path, capsys, virtual_runs_on):

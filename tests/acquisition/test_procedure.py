@@ -119,6 +119,23 @@ def test_bad_spec_is_refused_in_one_line(tmp_path, fake_rig):
         Procedure(fake_rig(max_temperature_C=500.0), spec(temperature_C=600.0), tmp_path / "x.csv")
 
 
+def test_a_parallel_length_is_optional_at_least_l0_and_tension_only(tmp_path, fake_rig):
+    with pytest.raises(ProcedureError, match="parallel length 29 mm must be at least l0 30 mm"):
+        Procedure(fake_rig(), TestSpec("tension", geometry_mm={"d0_mm": 6.0, "l0_mm": 30.0, "parallel_length_mm": 29.0}), tmp_path / "x.csv")
+    with pytest.raises(ProcedureError, match="parallel_length_mm: not a compression specimen's"):
+        Procedure(fake_rig(), TestSpec("compression", geometry_mm={"d0_mm": 10.0, "h0_mm": 15.0, "parallel_length_mm": 20.0}), tmp_path / "x.csv")
+
+
+@pytest.mark.parametrize("lc", [None, 42.0])
+def test_a_rigs_record_states_the_parallel_length_only_when_given(tmp_path, fake_rig, lc):
+    """The real rig does not know its specimen: Lc is the operator's (--lc), never a guess."""
+    test = spec()
+    if lc is not None:
+        test.geometry_mm["parallel_length_mm"] = lc
+    rec = read_record(Procedure(fake_rig(), test, tmp_path / "t.csv").run().path)
+    assert rec.meta.get("specimen.parallel_length_mm") == (None if lc is None else "42.0")
+
+
 def test_set_point_at_the_maximum_is_refused(tmp_path, fake_rig):
     with pytest.raises(ProcedureError, match="not below the configured maximum 500"):
         Procedure(fake_rig(max_temperature_C=500.0), spec(temperature_C=500.0), tmp_path / "x.csv")

@@ -85,6 +85,7 @@ def test_a_set_point_the_furnace_refuses_goes_back_to_the_temperature_field_and_
     ("force_limit", "2e5", "Force limit, N must be more than 0 and at most 100000 N (the machine's capacity"),
     ("d0", "31", "d0, mm must be more than 0 and at most 30 mm (the largest diameter the grips and platens take"),
     ("h0", "1e12", "h0, mm must be more than 0 and at most 200 mm"),
+    ("lc", "1e12", "Parallel length Lc, mm must be more than 0 and at most 200 mm"),
     ("soak", "1e12", "Soak, s must be more than 0 and at most 86400 s"),
 ])
 def test_values_outside_the_rigs_ranges_are_refused_beside_their_field(tmp_path, field, value, words):
@@ -125,6 +126,24 @@ def test_a_configured_rigs_ranges_are_its_own_on_the_page_and_for_run(tmp_path, 
         assert fields[field].replace(LABELS[field], option) in err, (option, err)  # run's words, the option for the label
     ok = validate({**form, "temperature": "450", "speed": "0.4", "target": "39", "d0": "6", "l0": "30"}, virtual=False, time_scale=None, config=config)
     assert ok.spec.temperature_C == 450.0 and ok.spec.speed_mm_per_s == 0.4
+
+
+def test_a_parallel_length_shorter_than_l0_is_refused_beside_its_field_and_a_longer_one_reaches_the_test(tmp_path, capsys):
+    from flowcurve.console.setup_form import LABELS, validate
+
+    console, client = _client(tmp_path)
+    r = client.post("/api/start", json={"test": "tension", "d0": "6", "l0": "30", "lc": "25"}, headers=JSON)
+    assert r.status_code == 400, r.text
+    assert set(r.json()["fields"]) == {"lc"}
+    message = r.json()["fields"]["lc"]
+    assert message.startswith(f"{LABELS['lc']} 25 mm is shorter than the gauge length l0 30 mm"), message
+    assert message.replace(LABELS["lc"], "--lc") in _cli_error(["run", "tension", "--quiet", "--d0", "6", "--l0", "30", "--lc", "25",
+                                                                  "--out", str(tmp_path / "r.csv")], capsys)  # run's words
+    assert console.runner.current is None
+    ok = validate({"test": "tension", "d0": "6", "l0": "30", "lc": "42"}, virtual=True, time_scale=None)
+    assert ok.spec.geometry_mm == {"d0_mm": 6.0, "l0_mm": 30.0, "parallel_length_mm": 42.0}
+    ok = validate({"test": "compression", "lc": "42"}, virtual=True, time_scale=None)  # the field is hidden there: ignored
+    assert "parallel_length_mm" not in ok.spec.geometry_mm
 
 
 def test_one_test_at_a_time_and_stop_gives_a_complete_record(tmp_path):

@@ -183,7 +183,7 @@ def test_a_tension_test_to_fracture_then_the_post_test_form_gives_the_result(ser
     driver = browser_factory()
     open_console(driver, served_console.url)
     fill(driver, {**SETUP, "test": "tension", "specimen_id": "T-browser", "speed": ""})  # the virtual run's speed: about 14 wall s
-    assert driver.find_element(By.ID, "f-l0").is_displayed()  # the tension field shows
+    assert driver.find_element(By.ID, "f-l0").is_displayed() and driver.find_element(By.ID, "f-lc").is_displayed()  # the tension fields show
     driver.find_element(By.ID, "btn-start").click()
     wait_for(lambda: text(driver, "#state").lower() == "recording", what="recording", driver=driver)
     wait_for(lambda: fd_points(driver) > 20, what="the live plot", driver=driver)

@@ -61,6 +61,7 @@ def test_model_time_is_host_time_times_scale(model_time_rig):
     assert rig.clock.now() - t0 == pytest.approx(0.25)
     meta = rig.metadata()
     assert meta["specimen.l0_mm"] == "30" and meta["crosshead_speed_mm_per_s"] == "0.01"
+    assert meta["specimen.parallel_length_mm"] == "30"  # its own bar: Lc = l0, stated (identification's default otherwise)
 
 
 def test_asf_filter_is_first_order_at_its_cutoff_in_model_time():
