@@ -11,7 +11,12 @@ file copied into an export of that commit (``git archive 01c1793``) and run ther
 Written again (``python tests/fe/<this file> --write`` on main) where a change outside the inverse moved its
 inputs, each such change named in its commit: the compression strain zero of a handbook E (stop 51: only
 the fe_table constants' standard errors), the tension scale (3.1) at the fracture (stop 51: the tension
-stand-ins' K_l 0.991 → 1.002, and with it their inverse's fit).
+stand-ins' K_l 0.991 → 1.002, and with it their inverse's fit). Stop 52: (3.1)'s a_u without post.du_mm read at the flat
+maximum's mid-point less F·L(1 + a_u)²/(E·S0) (branch lcscale): the tension stand-ins' K_l, At and the inverse's fit move in the
+fourth to fifth digit (At 20.0382 → 20.0392 %). And a hardening fit
+whose Levenberg–Marquardt refit does not settle states the global stage's optimum (branch lawbest: a flat minimum's
+end point was not reproducible): the tension auto case's per-law rms 5.05/5.05/0.46 → 4.46/4.30/0.24 % (JC, Swift, Voce),
+its chosen Voce curve's first point 312.5 → 317.9 MPa.
 
 Every leaf is compared: strings, booleans and nulls exactly, numbers to a relative 1e-9; the wall
 and solver times and the record's path are left out.

@@ -43,10 +43,14 @@ def test_identify_lc_sets_the_strain_length_and_ag_meets_the_truth(crosshead_rec
     assert stated["methods"]["strain_length_mm"] == LC_MM
     assert stated["provenance"]["options"]["metadata"]["specimen.parallel_length_mm"] == repr(LC_MM)
     assert abs(stated["Ag_pct"] - ag_truth) <= stated["uncertainty"]["Ag_pct"]["U"], (stated["Ag_pct"], ag_truth)
-    # the same record without it: the strain over l0 30 mm, Ag 3.93 % for 3.28 — the error --lc is there to remove
+    # the same record without it: the strain over l0 30 mm, Ag 3.93 % for 3.28 — the error --lc is there to remove; the
+    # unstated length is warned and in the strain scale's U (up to L0 + 2·d0), which --lc takes out again
     unstated = identified(path, tmp_path / "nolc")
-    assert unstated["methods"]["strain_length_mm"] == truth.l0_mm
-    assert unstated["Ag_pct"] - ag_truth > 3 * unstated["uncertainty"]["Ag_pct"]["U"]
+    assert unstated["methods"]["strain_length_mm"] == truth.l0_mm and unstated["methods"]["strain_length_stated"] is False
+    assert unstated["Ag_pct"] - ag_truth > 3 * stated["uncertainty"]["Ag_pct"]["U"]
+    assert abs(unstated["Ag_pct"] - ag_truth) <= unstated["uncertainty"]["Ag_pct"]["U"]
+    assert unstated["uncertainty"]["Ag_pct"]["U"] > 5 * stated["uncertainty"]["Ag_pct"]["U"]
+    assert any("parallel length is not stated" in w for w in unstated["warnings"])
 
 
 def test_a_specimens_table_gives_lc_as_the_option_does(crosshead_record, tmp_path):
