@@ -31,6 +31,7 @@ LATENCY_HISTORY = 8  # good frames before a gap whose per-frame force change pre
 LATENCY_NOISE_SIGMAS = 6.0  # the two predictions must differ by this many σ of a frame's change to be told apart
 LATENCY_MIN_S = 0.2  # host s: a gap's extra time under this is taken as lost frames (a run of them at 100 Hz, or host jitter the chain heals; a latency that small costs little force)
 LATENCY_FIT = 0.25  # ... and the step must lie within this share of their difference from one frame's change
+LATENCY_SE_MARGIN = 2.0  # ... a latency even with the line off by this many of its extrapolation errors (step_rule_verdict)
 DEFER_FRAMES = 3  # a gap with too few good frames before it for the step rule: decided with this many frames after it
 DEFER_CLEAR = 0.1  # ... the hypothesis that fits must leave under this share of the other's squared residual
 DEFER_FIT = 0.25  # ... and its residual must be within this share of one frame's change times the gap's extra periods
@@ -73,48 +74,48 @@ def stream_stamps(arrival, period: float, last: float | None = None, margin: flo
 def gap_is_latency(recent_periods, recent_N, next_N: float, periods: int, min_periods: int = 2) -> bool:
     """Whether a gap of ``periods`` output periods in arrival before the frame ``next_N`` is the
     line's latency growing (no frame lost: the next frame was sent one period after the last)
-    rather than ``periods`` − 1 lost frames — the *step rule*::
+    rather than ``periods`` − 1 lost frames — the *step rule* (:func:`step_rule_verdict`) says
+    "latency". Where the force changes too little to tell (under k·σ over the gap) the gap is taken
+    as a loss: its stamps then err by the gap, but the force that error costs is within the noise. A
+    step far from both (a fracture, a yield drop inside the gap) is a loss too, and so is a gap under
+    ``min_periods`` (the driver: 1 + LATENCY_MIN_S of periods — a few frames lost in a row at a high
+    rate, whose steps differ too little from one frame's change to tell; a latency that small costs
+    as little). ``recent_periods``, ``recent_N``: stamps (in periods) and forces of the good frames
+    before the gap (at least 4), oldest first."""
+    return step_rule_verdict(recent_periods, recent_N, next_N, periods, min_periods) == "latency"
 
-        f ≈ a + b·x, σ the residual    fitted to the good frames before the gap, x their stamps in
+
+def step_rule_verdict(recent_periods, recent_N, next_N: float, periods: int, min_periods: int = 2) -> str | None:
+    """The step rule: a line through the good frames before a gap of j = ``periods`` output periods::
+
+        f ≈ a + b·x, σ the residual    fitted to the n good frames before the gap, x their stamps in
                                         periods from the last one (gaps among them are allowed)
-        loss predicts next ≈ a + b·j, a latency jump next ≈ a + b
-        latency  ⇔  j ≥ min_periods, |(j − 1)·b| > k·σ  and  |next − a − b| < LATENCY_FIT·|(j − 1)·b|
+        loss predicts next ≈ a + b·j, a latency jump next ≈ a + b;  apart = |(j − 1)·b|
+        se = max over x ∈ {1, j} of σ·√(1/n + (x − x̄)²/Σ(x_i − x̄)²)   the line's extrapolation error
+        latency ⇔ j ≥ min_periods, apart > k·σ  and  |next − a − b| + 2·se < LATENCY_FIT·apart
+        loss    ⇔ j ≥ min_periods, apart > k·σ  and  |next − a − b·j| < LATENCY_FIT·apart
 
-    k = LATENCY_NOISE_SIGMAS. Where the force changes too little to tell (under k·σ over the gap)
-    the gap is taken as a loss: its stamps then err by the gap, but the force that error costs is
-    within the noise. A step far from both (a fracture, a yield drop inside the gap) is a loss too,
-    and so is a gap under ``min_periods`` (the driver: 1 + LATENCY_MIN_S of periods — a few frames lost in
-    a row at a high rate, whose steps differ too little from one frame's change to tell; a latency that
-    small costs as little).
-    ``recent_periods``, ``recent_N``: stamps (in periods) and forces of the good frames before the
-    gap (at least 4), oldest first."""
+    k = LATENCY_NOISE_SIGMAS, 2 = LATENCY_SE_MARGIN. "latency" moves every later stamp, so the frame
+    must lie in its window even with the line off by twice its own extrapolation error over the gap: a
+    force bending within the frames (the hardening slowing towards Fm) gives the line their mean slope,
+    not the one at the gap, where a lost frame's step can fall near a + b (bench/stream_gap_rule.py
+    measures both kinds of wrong verdict). Else None — too few frames, σ swollen by a bending
+    force (the elastic rise's knee, the hardening within the frames at 2 Hz), a frame far from both
+    (the line's curvature or a fracture), or a latency the line cannot vouch for. The driver then
+    decides on the frames after the gap (:func:`gap_after_verdict`); a gap under ``min_periods`` is
+    a loss either way."""
     x, f = np.asarray(recent_periods, dtype=float), np.asarray(recent_N, dtype=float)
     if periods < max(2, min_periods) or f.size < 4:
-        return False
+        return None
     x = x - x[-1]
     b, a = np.polyfit(x, f, 1)  # f = a + b·x, least squares
     sigma = float(np.sqrt(np.sum((f - a - b * x) ** 2) / (f.size - 2)))
     apart = abs((periods - 1) * b)
-    return bool(apart > LATENCY_NOISE_SIGMAS * sigma and abs(next_N - a - b) < LATENCY_FIT * apart)
-
-
-def step_rule_verdict(recent_periods, recent_N, next_N: float, periods: int, min_periods: int = 2) -> str | None:
-    """The step rule (:func:`gap_is_latency`) where it speaks: "latency" when the frame after the gap
-    lies within LATENCY_FIT of its latency prediction, "loss" within LATENCY_FIT of its loss prediction
-    (a + b·j), both only where they are apart by more than k·σ; else None — too few frames, σ swollen
-    by a bending force (the elastic rise's knee, the hardening within the frames at 2 Hz), or a frame
-    far from both (the line's curvature or a fracture). The driver then decides on the frames after the
-    gap (:func:`gap_after_verdict`); a gap under ``min_periods`` is a loss either way."""
-    x, f = np.asarray(recent_periods, dtype=float), np.asarray(recent_N, dtype=float)
-    if periods < max(2, min_periods) or f.size < 4:
-        return None
-    x = x - x[-1]
-    b, a = np.polyfit(x, f, 1)
-    sigma = float(np.sqrt(np.sum((f - a - b * x) ** 2) / (f.size - 2)))
-    apart = abs((periods - 1) * b)
     if apart <= LATENCY_NOISE_SIGMAS * sigma:
         return None
-    if abs(next_N - a - b) < LATENCY_FIT * apart:
+    sxx = float(np.sum((x - x.mean()) ** 2))
+    se = sigma * math.sqrt(1.0 / f.size + max((1.0 - x.mean()) ** 2, (periods - x.mean()) ** 2) / sxx)
+    if abs(next_N - a - b) + LATENCY_SE_MARGIN * se < LATENCY_FIT * apart:
         return "latency"
     if abs(next_N - a - b * periods) < LATENCY_FIT * apart:
         return "loss"

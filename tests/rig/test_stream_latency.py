@@ -177,3 +177,62 @@ def test_deferred_rule_finds_a_noisy_plateau_with_frames_enough_for_its_noise():
     # is no evidence either way (stamped as lost, in doubt: identify judges what the doubt costs later)
     flat = 9000.0 + np.random.default_rng(5).normal(0.0, 20.0, 12)
     assert gap_after_verdict(flat[:8], flat[8:11], [0, 1, 2], 2, 0.02) == "noise"
+
+
+# -- a lost frame on a bending force is no latency (the step rule's line has the frames' mean slope, not the gap's) --
+
+# the matrix's tension-850C-0.005mmps-2Hz-12Kh18N12M3TL-loadcell:drop:0.05: 8 frames on the hardening slowing towards
+# Fm (the line's slope 25.8 N a frame, about 17 at the gap; σ 4.29, so the predictions 25.8 N apart, just over 6σ),
+# frame 3043.9 lost, 3060.4 arrives 3.4 N from the latency prediction a + b = 3057.0 (window ±6.4)
+BEFORE_FM = [2845.2, 2880.8, 2904.7, 2928.7, 2953.7, 2976.9, 3010.9, 3027.0, 3043.9, 3060.4, 3092.0, 3099.3]
+
+
+def test_step_rule_claims_no_latency_the_line_cannot_vouch_for():
+    f8 = BEFORE_FM[:8]
+    # the frame lies within the latency window, but the line's own extrapolation error (2·se ≈ 7.9 N) does not fit in it
+    assert step_rule_verdict(X8, f8, BEFORE_FM[9], 2, 2) != "latency"  # the rule before: "latency"
+    assert not gap_is_latency(X8, f8, BEFORE_FM[9], 2, 2)
+    f = ramp(8)  # a straight rise 12 N a frame in 1.5 N noise: one frame's change across the gap is still latency
+    assert step_rule_verdict(X8, f, f[-1] + SLOPE_N, 12, 2) == "latency"
+
+
+def test_a_2hz_frame_lost_before_fm_is_not_stamped_as_latency():
+    k = np.array([i for i in range(len(BEFORE_FM)) if i != 8])  # frame 8 lost
+    sent = k * T2
+    cell, stamps = stream_at_2hz(sent, np.array(BEFORE_FM)[k], sent + LINE_S)
+    # the rule before took it for latency: frames 9-11 stamped a period early
+    assert np.max(np.abs(stamps - sent)) <= LINE_S + 1e-9
+    assert cell.latency_s == 0.0 and cell.latency_jumps == 0 and cell.frames_lost == 1
+
+
+def stream_at(rate_Hz, sent, force, arrival):
+    """The driver's stamping of a stream at ``rate_Hz``, frames held after a gap as read_stream holds them."""
+    cell = LoadCell("loop://", nominal_load_N=100e3, output_rate_per_s=rate_Hz)
+    for a, f in zip(arrival, force):
+        cell.frames_received += 1
+        cell._hold_or_stamp(a, MeasuredValue(int(f), 0), f)
+    return cell, np.array([s.t_monotonic_s for s in cell.flush_held()])
+
+
+# bench/stream_gap_rule.py's histories (the virtual rig's physics, as the matrix's fault-free cells): the hardening's
+# concave rise, 8 frames before the gap, then the frames a loss of j − 1 skips and the frames after it
+CONCAVE_2HZ = [8040.4, 8970.3, 9777.0, 10465.5, 11091.2, 11652.2, 12149.7, 12604.0,  # tension 20 C 0.05 mm/s 12Kh18N12M3TL
+               13013.1, 13389.2, 13742.6, 14059.4, 14344.5]
+CONCAVE_12HZ = [12005.2, 12297.6, 12429.1, 12523.2, 12599.9, 12660.4, 12707.3, 12748.0,  # tension 20 C 0.5 mm/s steel 45
+                12793.2, 12823.8, 12856.0, 12882.0, 12907.2, 12930.4, 12946.9, 12964.8, 12979.6]
+
+
+@pytest.mark.parametrize("rate_Hz, force, lost", [(2.0, CONCAVE_2HZ, 2), (12.0, CONCAVE_12HZ, 6)])
+def test_frames_lost_on_the_hardening_stay_lost_and_a_latency_there_shifts_no_stamp(rate_Hz, force, lost):
+    T = 1.0 / rate_Hz
+    force = np.array(force)
+    k = np.array([i for i in range(force.size) if not 8 <= i < 8 + lost])
+    sent = k * T
+    cell, stamps = stream_at(rate_Hz, sent, force[k], sent + LINE_S)
+    assert np.max(np.abs(stamps - sent)) <= LINE_S + 1e-9  # the rule before: latency, later frames `lost` periods early
+    assert cell.latency_jumps == 0 and cell.frames_lost == lost
+    k = np.arange(force.size)
+    sent = k * T
+    cell, stamps = stream_at(rate_Hz, sent, force, sent + LINE_S + np.where(k >= 8, lost * T, 0.0))
+    assert np.max(np.abs(stamps - sent)) <= LINE_S + 1e-9 or cell.gaps_undecided or cell.gaps_in_doubt  # never silently lost
+    assert cell.frames_lost == 0 or cell.gaps_undecided or cell.gaps_in_doubt

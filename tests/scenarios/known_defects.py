@@ -53,13 +53,6 @@ KNOWN.append(("load cell delayed 0.5 s mid-test at 12 or 50 Hz in a steel 45 ten
               "budgets and rows (to Fm) with the doubt or not certifiable; the record's rows after the gap stay off",
               lambda c: _fault(c, "loadcell", "delay") and c.rate_Hz in (12.0, 50.0) and c.test == "tension" and c.speed_mm_per_s == 0.005
               and c.material == "steel45"))
-KNOWN.append(("a frame lost at 2 Hz on the hardening's slowing rise (tension at 850 C, 0.005 mm/s, 12Kh18N12M3TL): the step rule's line "
-              "through the 8 frames before the gap has their mean slope (25.8 N a frame against about 17 at the gap) and σ at its 6σ "
-              "limit, so the frame after the gap sits on the latency prediction — taken as latency (stream_latency), every later row "
-              "one period early (+1.1 % at one row before Fm); the deferred rule cannot tell on the frames after (None). Measured rate "
-              "of a lost frame taken as latency at 2 Hz: 11 of 1 865 (stop 51); the record is exit 5 from its undecided gaps",
-              lambda c: _fault(c, "loadcell", "drop") and c.rate_Hz == 2.0 and c.test == "tension" and c.speed_mm_per_s == 0.005
-              and c.temperature_C == 850.0 and c.material == "12Kh18N12M3TL"))
 
 
 def is_strict(cell: Cell) -> bool:
