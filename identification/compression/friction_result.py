@@ -108,8 +108,12 @@ def _constants_stderr(src: str, geo: dict, nominal: _Nominal, friction: _Frictio
     eps_fit, sig_fit = eps_tp[idx], sig_t[idx]
     if friction_correction == "fe_table":
         u_force = mf.force_model_form(friction.chosen.mu)
-        by_pattern = [pattern_shift(eps_fit, sig_fit, u_force, g, law) for g in mf.force_patterns(eps_fit)]
-        shares[f"FE model form ({u_force:.1%} of the force at μ {friction.chosen.mu:.3f}, uniform and growing with strain)"] = {
+        eps_t = friction.corrected[friction_correction][2]
+        end = float(np.nanmax(eps_t[np.isfinite(sig_t)])) if np.isfinite(sig_t).any() else None
+        patterns = mf.correction_force_patterns(eps_fit, eps_t[idx], friction.chosen.mu, geo["h0"] / geo["d0"], end)
+        by_pattern = [pattern_shift(eps_fit, sig_fit, u_force, g, law) for g in patterns]
+        how = "uniform and growing with strain" if len(patterns) == 2 else "following friction's share along the stroke"
+        shares[f"FE model form ({u_force:.1%} of the force at μ {friction.chosen.mu:.3f}, {how})"] = {
             k: mf.quadrature(*(b.get(k, 0.0) for b in by_pattern)) for k in fit.params}
     by_range = range_shift(eps_fit, sig_fit, law)
     if by_range:
@@ -209,7 +213,7 @@ def _fe_correction_uncertainty(geo: dict, friction: _Friction, E_used: float | N
     mu, h0_d0 = friction.chosen.mu, geo["h0"] / geo["d0"]
     ok = np.isfinite(sig_t) & (eps_t > 0)
     onset = fr.fe_fold_over_onset(mu, h0_d0, eps_t[ok], sig_t[ok], eps_tp[ok] if E_used is not None else None)
-    u = mf.corrected_stress_uncertainty_pct(eps_t, mu, onset)
+    u = mf.corrected_stress_uncertainty_pct(eps_t, mu, onset, h0_d0, float(np.nanmax(eps_t[ok])) if ok.any() else None)
     u_mf = 100.0 * mf.force_model_form(mu)
     basis = (f"fe_table: per point (true_curve.csv correction_uncertainty_pct) the model form's {u_mf:.1f} % of the force at μ {mu:.3f}"
              + (f", growing to {float(u.max()):.1f} % over ε {onset - mf.FOLD_OVER_BAND:.2f}–{onset:.2f} before the table's fold-over onset"

@@ -20,6 +20,11 @@ BULGE_MODEL_FORM = 0.05
 FACE_MODEL_FORM = 0.02
 # σ of the force at a given law, μ and h0/d0, relative, per unit μ (it grows with friction's share of the force)
 FORCE_MODEL_FORM_PER_MU = 0.12
+# the shape of the fe_table correction's model form along the stroke: "friction_share" (0.12·μ at the stroke's end, where it
+# was measured, scaled by Siebel's friction share m(ε)/m(ε_end) before it; for the constants that one pattern),
+# "friction_share_points" (so on the curve's points only, the constants' uniform and linear patterns kept) or "uniform"
+# (0.12·μ all along): measured by bench/model_form_shape.py (docs/methods.md §4a.7), not adopted
+MODEL_FORM_SHAPE = "uniform"
 # two μ whose difference exceeds this many combined standard errors disagree
 DISAGREE_SIGMAS = 2.0
 # where the side folds onto the platen: the model's own force error, ±1 % (its sawtooth, docs/calculix.md; its mesh 0.4 %)
@@ -83,14 +88,36 @@ def fold_over_ramp(strain, onset: float | None) -> np.ndarray:
     return np.clip((eps - onset + FOLD_OVER_BAND) / FOLD_OVER_BAND, 0.0, 1.0)
 
 
-def corrected_stress_uncertainty_pct(strain, mu: float, onset: float | None) -> np.ndarray:
+def friction_share_shape(strain, mu: float, h0_d0: float, strain_ref: float) -> np.ndarray:
+    """Siebel's share of friction in the mean pressure along the stroke, m(ε) = k/(1 + k), k = μ·d/(3h),
+    d/h = (d0/h0)·e^(1.5ε) (volume constant), relative to its value at ``strain_ref``: m(ε)/m(ε_ref)
+    (its μ → 0 limit e^(1.5(ε − ε_ref)) at μ 0)."""
+    # m(ε)/m(ε_ref) = e^(1.5(ε − ε_ref))·(1 + k_ref)/(1 + k)
+    eps = np.asarray(strain, float)
+    k = max(float(mu), 0.0) / (3.0 * float(h0_d0)) * np.exp(1.5 * eps)
+    k_ref = max(float(mu), 0.0) / (3.0 * float(h0_d0)) * math.exp(1.5 * float(strain_ref))
+    return np.exp(1.5 * (eps - float(strain_ref))) * (1.0 + k_ref) / (1.0 + k)
+
+
+def model_form_shape(strain, mu: float, h0_d0: float | None, strain_ref: float | None) -> np.ndarray:
+    """The fe_table correction's model form along the stroke, relative to :func:`force_model_form` (1 at the
+    stroke's end ``strain_ref``, where 0.12·μ was measured, §4a.7): :data:`MODEL_FORM_SHAPE` "friction_share"
+    (:func:`friction_share_shape`) or "uniform" (1 all along; also without h0/d0 or a stroke's end)."""
+    eps = np.asarray(strain, float)
+    if MODEL_FORM_SHAPE == "uniform" or h0_d0 is None or strain_ref is None or not math.isfinite(strain_ref):
+        return np.ones(eps.shape)
+    return friction_share_shape(eps, mu, h0_d0, strain_ref)
+
+
+def corrected_stress_uncertainty_pct(strain, mu: float, onset: float | None, h0_d0: float | None = None,
+                                     strain_ref: float | None = None) -> np.ndarray:
     """σ of a flow stress corrected by the model's force factor, % per point at ``strain``: the
-    model form's force share at μ (:func:`force_model_form`), growing over the band before the
-    fold-over's ``onset`` (:func:`fold_over_ramp`) to :data:`FOLD_OVER_SIGMA_FACTOR` ×
-    :data:`FORCE_SIGMA_PCT` (the inverse's σ there) where that is larger."""
-    # u = u_mf + g·max(k·σ_F − u_mf, 0)
-    u_mf = 100.0 * force_model_form(mu)
-    return u_mf + fold_over_ramp(strain, onset) * max(FOLD_OVER_SIGMA_FACTOR * FORCE_SIGMA_PCT - u_mf, 0.0)
+    model form's force share at μ (:func:`force_model_form`, shaped along the stroke by :func:`model_form_shape`),
+    growing over the band before the fold-over's ``onset`` (:func:`fold_over_ramp`) to
+    :data:`FOLD_OVER_SIGMA_FACTOR` × :data:`FORCE_SIGMA_PCT` (the inverse's σ there) where that is larger."""
+    # u = u_mf·s(ε) + g·max(k·σ_F − u_mf·s(ε), 0)
+    u_mf = 100.0 * force_model_form(mu) * model_form_shape(strain, mu, h0_d0, strain_ref)
+    return u_mf + fold_over_ramp(strain, onset) * np.maximum(FOLD_OVER_SIGMA_FACTOR * FORCE_SIGMA_PCT - u_mf, 0.0)
 
 
 def shift_of_bias(jac, bias) -> np.ndarray:
@@ -99,6 +126,15 @@ def shift_of_bias(jac, bias) -> np.ndarray:
     # δx = −J⁺·δr
     J = np.nan_to_num(np.asarray(jac, float))  # a column a failed run left blank moves nothing
     return -np.linalg.lstsq(J, np.asarray(bias, float), rcond=None)[0]
+
+
+def correction_force_patterns(eps_p, strain, mu: float, h0_d0: float | None, strain_ref: float | None) -> tuple[np.ndarray, ...]:
+    """The shapes the fe_table correction's model form takes along the fitted points (plastic strain ``eps_p``, true
+    strain ``strain``) for the constants' refits: with :data:`MODEL_FORM_SHAPE` "friction_share" the one
+    :func:`model_form_shape` at ``strain``, else :func:`force_patterns` over ``eps_p``."""
+    if MODEL_FORM_SHAPE != "friction_share" or h0_d0 is None or strain_ref is None:
+        return force_patterns(eps_p)
+    return (model_form_shape(strain, mu, h0_d0, strain_ref),)
 
 
 def force_patterns(strain) -> tuple[np.ndarray, np.ndarray]:
