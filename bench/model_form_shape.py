@@ -103,6 +103,16 @@ def campaign(shape: str) -> list[dict]:
                                                                          or c["quantity"] == "friction_mu")]
 
 
+def _table(lead: list[str], heads: list[str], by_shape: dict, lead_cells, cell, shapes: list[str] | None = None) -> None:
+    """A markdown table: one row per record of the first shape (its ``lead_cells``), one column per shape (``cell``
+    of that shape's row), headed ``lead`` + ``heads``."""
+    shapes = shapes or heads
+    print("| " + " | ".join(lead + heads) + " |")
+    print("|" + "---|" * (len(lead) + len(heads)))
+    for i, row in enumerate(by_shape[shapes[0]]):
+        print("| " + " | ".join(lead_cells(row) + [cell(by_shape[s][i]) for s in shapes]) + " |")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--shapes", default="uniform,friction_share,friction_share_points")
@@ -117,22 +127,12 @@ def main(argv=None) -> int:
 
     if camp:
         print("(a) coverage campaign: held at k = 2 / method share ÷ median |error| (blanket > 5×)")
-        print("| kind | quantity | " + " | ".join(shapes) + " |")
-        print("|---|---|" + "---|" * len(shapes))
-        for i, c in enumerate(camp[shapes[0]]):
-            cells = [camp[s][i] for s in shapes]
-            print(f"| {c['kind']} | {c['quantity']} | " + " | ".join(
-                f"{x['share']:.0%} / {x['method_ratio']:.2f}×{' blanket' if x['blanket'] else ''}" for x in cells) + " |")
+        _table(["kind", "quantity"], shapes, camp, lambda c: [c["kind"], c["quantity"]],
+               lambda x: f"{x['share']:.0%} / {x['method_ratio']:.2f}×{' blanket' if x['blanket'] else ''}")
 
     print("\n(b) slab-barrel records: constants (fitted − truth)/stderr (|z| > 2.5 marked *), flow points missed (of all; without the correction's σ)")
-    print("| record | μ read | " + " | ".join(f"{s}: A / B / n" for s in shapes) + " |")
-    print("|---|---|" + "---|" * len(shapes))
-    for i, r in enumerate(slab[shapes[0]]):
-        cells = []
-        for s in shapes:
-            z = slab[s][i]["z"]
-            cells.append(" / ".join(f"{z[k]:+.2f}{'*' if abs(z[k]) > WITHIN else ''}" for k in ("A", "B", "n")))
-        print(f"| {r['case']} | {r['mu_read']:.3f} | " + " | ".join(cells) + " |")
+    _table(["record", "μ read"], [f"{s}: A / B / n" for s in shapes], slab, lambda r: [r["case"], f"{r['mu_read']:.3f}"],
+           lambda r: " / ".join(f"{r['z'][k]:+.2f}{'*' if abs(r['z'][k]) > WITHIN else ''}" for k in ("A", "B", "n")), shapes)
     for s in shapes:
         pts = [p for r in slab[s] for p in r["points"]]
         worst = max(pts, key=lambda p: p["z"])
@@ -147,15 +147,9 @@ def main(argv=None) -> int:
             print("  missed: " + "; ".join(misses))
 
     print("\n(c) zoned records: worst flow |err|/U, worst |err|/σ_corr, σ_corr % at εp 0.05 … 0.5, constants worst |err|/U")
-    print("| record | " + " | ".join(f"{s}: flow z / err÷σ / σ_corr / constants z" for s in shapes) + " |")
-    print("|---|" + "---|" * len(shapes))
-    for i, r in enumerate(zone[shapes[0]]):
-        cells = []
-        for s in shapes:
-            m = zone[s][i]
-            cells.append(f"{max(p['z'] for p in m['points']):.2f} / {max(abs(p['error_pct']) / p['u_corr_pct'] for p in m['points']):.2f} / "
-                         + " ".join(f"{p['u_corr_pct']:.1f}" for p in m["points"]) + f" / {max(c['z'] for c in m['constants']):.2f}")
-        print(f"| {r['record']} | " + " | ".join(cells) + " |")
+    _table(["record"], [f"{s}: flow z / err÷σ / σ_corr / constants z" for s in shapes], zone, lambda r: [r["record"]],
+           lambda m: (f"{max(p['z'] for p in m['points']):.2f} / {max(abs(p['error_pct']) / p['u_corr_pct'] for p in m['points']):.2f} / "
+                      + " ".join(f"{p['u_corr_pct']:.1f}" for p in m["points"]) + f" / {max(c['z'] for c in m['constants']):.2f}"), shapes)
     print(f"\n{time.perf_counter() - t0:.0f} s")
     return 0
 

@@ -94,6 +94,12 @@ class Specimen:
         return self.l0_mm if self.test == "tension" else self.h0_mm
 
     @property
+    def uniform_plastic_elongation(self) -> float | None:
+        """The uniform part's plastic elongation from its diameter after fracture du, at constant volume:
+        a_u = (d0/du)² − 1; None without du."""
+        return (self.d0_mm / self.du_mm) ** 2 - 1.0 if self.du_mm is not None else None
+
+    @property
     def fracture_area_mm2(self) -> float | None:
         """Section after fracture, mm²: the stated Sk, else π·dk²/4; None without either."""
         if self.sk_mm2 is not None:

@@ -64,9 +64,9 @@ def _fracture_scale(inp: _Inputs, disp, line_E_MPa: float | None, E_option_MPa: 
         frame_mm = F * max(c_line - length / (E_s * s0), 0.0) if frame_in and c_line is not None else 0.0
         return broken_specimen_recovery_mm(F, length, s0, E_s, a), frame_mm
 
-    du = inp.record.specimen.du_mm
-    if du is not None and 0 < du <= inp.d0:
-        a_u, a_u_from = (inp.d0 / du) ** 2 - 1.0, "post.du_mm"  # constant volume: a_u = (d0/du)² − 1
+    a_u = inp.record.specimen.uniform_plastic_elongation  # constant volume: (d0/du)² − 1 (du ≤ d0: checked with the inputs)
+    if a_u is not None:
+        a_u_from = "post.du_mm"
     else:  # the flat maximum's mid-point (ISO 6892-1 §13, as Ag) less the elastic extension there (the same as at the break)
         d_m = float(np.mean(iso6892.max_force_band(disp, inp.eng_stress)))
         a_u = max(d_m - sum(elastic_mm(inp.Fm, 0.0)), 0.0) / length

@@ -128,8 +128,8 @@ def _gauge_strain_at_fracture(inp: _Inputs, strain: np.ndarray, Ag_pct: float, E
     e_L = float(strain[inp.i_k])
     if inp.src.get("source") != "crosshead" or not inp.length > inp.l0 * (1.0 + 1e-9):
         return e_L, None
-    du = inp.record.specimen.du_mm
-    a_u = (inp.d0 / du) ** 2 - 1.0 if du is not None and 0 < du <= inp.d0 else max(Ag_pct, 0.0) / 100.0  # constant volume
+    a_u = inp.record.specimen.uniform_plastic_elongation  # (d0/du)² − 1, constant volume
+    a_u = max(Ag_pct, 0.0) / 100.0 if a_u is None else a_u
     return iso6892.gauge_extension_at_fracture(e_L, inp.length, inp.l0, a_u, float(inp.eng_stress[inp.i_k]), E_MPa), a_u
 
 
