@@ -64,6 +64,9 @@ NOISE_WINDOW = 200  # residuals from the neighbours' chord the noise σ is the m
 NOISE_MIN = 8  # the noise rule judges once this many residuals are in the window
 MAD_TO_SIGMA = 1.0 / 0.6745  # a normal distribution's σ from its median absolute deviation
 LINE_NOISE = 2.0  # a line through two samples extended one step: ≈ 2 × the chord's noise (√6 σ against √1.5 σ)
+CHORD_VARIANCE = 1.5  # a chord residual's variance in the samples' σ² (1 + 2 × ¼)
+APPROACH_SAMPLES = 6  # accepted samples the approach's least-squares line is fitted through
+SMOOTH_CHI2 = 4.0  # ... where their residuals' χ² per degree of freedom is under this (else the two-sample line)
 EXTEND_AT_MOST = 4.0  # a trend line is extended at most this many of its own steps (a gap of lost frames)
 
 
@@ -85,6 +88,7 @@ class RateGuard:
         self._residuals: deque[float] = deque(maxlen=int(noise_window))
         self._sigma: float | None = None
         self._before_last: tuple[float, float] | None = None  # the accepted sample before _last (the approach's line)
+        self._accepted: deque[tuple[float, float]] = deque(maxlen=APPROACH_SAMPLES)  # the approach's samples
         self.max_rate = float(max_rate)
         self.time_slack = float(time_slack)  # how wrong two time stamps' difference may be
         self.tolerance = float(tolerance)
@@ -153,6 +157,11 @@ class RateGuard:
                 if spike:
                     self._reject(tc, vc, spike, counts=False)
                     return
+        elif self.spike_sigmas is not None:  # the last sample: judged against the trend that led to it alone
+            spike = self._noise_spike(c, None, None, vp)
+            if spike:
+                self._reject(tc, vc, spike, counts=False)
+                return
         change = abs(vc) - abs(vp)
         if change > self.limit(tc - tp) or (not self.falls_freely and -change > self.limit(tc - tp)):
             self._reject(tc, vc, f"{'rose' if change > 0 else 'fell'} {abs(change):.4g} {self.unit} in {tc - tp:.3g} s "
@@ -161,26 +170,56 @@ class RateGuard:
         self._accept(tc, vc, out)
 
     def _noise_spike(self, c, n, nn, chord: float) -> str:
-        """Why ``c`` is a one-sample spike by the signal's own noise (the module docstring), or ''."""
+        """Why ``c`` is a one-sample spike by the signal's own noise (the module docstring), or ''.
+        ``n``/``nn``: the samples after it (None at the end of the stream); ``chord``: the value it is
+        measured from (its neighbours' chord, or the last accepted sample without a next one)."""
         sigma = self._sigma
-        if sigma is None or nn is None:
+        if sigma is None:
             return ""
-        (tp, vp), (tc, vc), (tn, vn) = self._last, c, n
-        off = vc - chord
-        tol = self.spike_sigmas * sigma
-        if max(vc - max(vp, vn), min(vp, vn) - vc) <= tol:
+        (tp, vp), (tc, vc) = self._last, c
+        off, tol = vc - chord, self.spike_sigmas * sigma
+        sign = -1.0 if self.falls_freely and vp < 0 else 1.0  # a force rises away from zero, falls toward it
+        band = [sign * vp] + ([sign * n[1]] if n is not None else [])
+        above, below = sign * vc - max(band), min(band) - sign * vc
+        if max(above, below) <= tol:
             return ""  # within the band its neighbours span (a step, a knee, a fall), or not far out of it
+        if self.falls_freely and above > tol:  # a rise out of the band: only as the peak of the rise that led to it
+            if self._on_approach(tc, vc, tol):
+                return ""  # on the rise (or fall) that led to it, not beyond: a peak before a drop, the upper yield point
+            if n is None and self._before_last is not None and sign * (self._before_last[1] - vp) > tol \
+                    and sign * (vc - vp) <= self.max_rate * (tc - tp) + tol:
+                return ""  # the last sample: a rise the machine can make after a fall (a serration's reload)
+            return self._spike_text(off, sigma)
+        if nn is None:  # the end of the stream: a fall is a fracture's, down to the broken specimen's zero
+            return self._spike_text(off, sigma) if self.falls_freely and sign * vc < -self.tolerance else ""
+        tn, vn = n
         line = LINE_NOISE * tol
         approach = _extended(self._before_last, self._last, tc)
         if approach is not None and _between(vc, vp, approach, line):
-            return ""  # on the rise (or fall) that led to it, not beyond: a peak before a drop, the upper yield point
+            return ""  # on the trend that led to it: a fall that had begun before it (any change, without falls_freely)
         departure = _extended(nn, n, tc)
         if departure is not None and _between(vc, vn, departure, line):
             return ""  # on the trend that follows it: the bottom of a yield drop or serration, a fracture
         if self.falls_freely and abs(vc) < min(abs(vp), abs(vn)) and abs(vn) - abs(vc) <= self.max_rate * (tn - tc) + tol:
             return ""  # a fall, then a rise the machine can make: a serration reloading faster than the samples resolve
+        return self._spike_text(off, sigma)
+
+    def _spike_text(self, off: float, sigma: float) -> str:
         return (f"a one-sample spike, {off:+.4g} {self.unit} off its neighbours' chord and back at the next sample "
                 f"({abs(off) / sigma:.0f} × the signal's noise σ {sigma:.2g} {self.unit})")
+
+    def _on_approach(self, tc: float, vc: float, tol: float) -> bool:
+        """``vc`` between the last accepted sample and the approach's trend extended to ``tc``: the least-
+        squares line through the last :data:`APPROACH_SAMPLES` accepted samples where they lie on one
+        (its prediction noise, :func:`line_prediction_factor`, instead of two samples' 2×), else the line
+        through the last two."""
+        vp = self._last[1]
+        fit = _smooth_line(self._accepted, tc, self._sigma / np.sqrt(CHORD_VARIANCE))
+        if fit is not None:
+            value, factor = fit
+            return _between(vc, vp, value, factor * tol)
+        approach = _extended(self._before_last, self._last, tc)
+        return approach is not None and _between(vc, vp, approach, LINE_NOISE * tol)
 
     def _note_residual(self, residual: float) -> None:
         if self.spike_sigmas is None:
@@ -195,6 +234,7 @@ class RateGuard:
 
     def _accept(self, t: float, v: float, out: list) -> None:
         self._before_last, self._last = self._last, (t, v)
+        self._accepted.append((t, v))
         self._in_a_row = 0
         out.append((t, v))
 
@@ -223,3 +263,27 @@ def _extended(a: tuple[float, float] | None, b: tuple[float, float] | None, t: f
     if abs(steps) > EXTEND_AT_MOST:
         return None
     return vb + (vb - va) * steps
+
+
+def line_prediction_factor(t: np.ndarray, at: float) -> float:
+    """The least-squares line through samples at times ``t``, predicted at ``at``: its error's σ in units
+    of a chord residual's σ (each sample's σ² × (1 + 1/k + (at − t̄)²/Sxx), over CHORD_VARIANCE)."""
+    mean = t.mean()
+    return float(np.sqrt((1.0 + 1.0 / t.size + (at - mean) ** 2 / np.sum((t - mean) ** 2)) / CHORD_VARIANCE))
+
+
+def _smooth_line(samples, at: float, sample_sigma: float) -> tuple[float, float] | None:
+    """(value at ``at``, :func:`line_prediction_factor`) of the least-squares line through ``samples``
+    when there are :data:`APPROACH_SAMPLES` of them lying on a line (χ²/dof under :data:`SMOOTH_CHI2`
+    with the samples' σ) and ``at`` is at most :data:`EXTEND_AT_MOST` of their steps beyond; else None."""
+    if len(samples) < APPROACH_SAMPLES:
+        return None
+    t, v = np.array(samples, dtype=float).T
+    step = (t[-1] - t[0]) / (t.size - 1)
+    if step <= 0 or (at - t[-1]) / step > EXTEND_AT_MOST:
+        return None
+    slope, intercept = np.polyfit(t - t[-1], v, 1)  # (t − t_last) keeps the normal equations well conditioned
+    chi2 = np.sum((v - (intercept + slope * (t - t[-1]))) ** 2) / (t.size - 2)
+    if chi2 > SMOOTH_CHI2 * sample_sigma ** 2:
+        return None
+    return float(intercept + slope * (at - t[-1])), line_prediction_factor(t, at)

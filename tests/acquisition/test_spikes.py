@@ -94,6 +94,50 @@ def test_a_spike_at_the_maximum_never_becomes_fm():
     assert kept.max() < 9000.0 + 300.0 * np.sqrt(t[-1]) + 5 * NOISE_N
 
 
+@pytest.mark.parametrize("where", SPACINGS)
+@pytest.mark.parametrize("from_end", [0, 1])
+@pytest.mark.parametrize("size", [40.0, 100.0, 500.0])
+def test_a_garbled_frame_at_the_end_of_the_stream_never_becomes_fm(where, from_end, size):
+    """Failed on the old code: the last two samples, without two after them, were judged by the rate
+    rules alone, so a garbled digit there (+40 to +500 N, under the 1 kN tolerance) became Fm (CI: Fm
+    +0.47 % with 0.5 % of the bytes garbled). They are judged against the rise that led to them."""
+    dt = SPACINGS[where]
+    t = np.arange(600) * dt
+    f = hardening(t, np.random.default_rng(11))
+    k = t.size - 1 - from_end
+    truth_fm = np.delete(f, k).max()  # the maximum of what is left when the garbled frame is rejected
+    f[k] += size
+    g, kept = judged(t, f, dt)
+    assert [r[0] for r in g.rejected] == [t[k]], g.rejected
+    assert kept.max() == pytest.approx(truth_fm)
+
+
+def test_a_sign_flipped_last_frame_is_no_fracture():
+    """A fracture falls to the broken specimen's zero, not to −Fm: the last frame's sign garbled is rejected."""
+    dt = SPACINGS["time scale 15"]
+    t = np.arange(600) * dt
+    f = hardening(t, np.random.default_rng(12))
+    f[-1] = -f[-1]
+    g, kept = judged(t, f, dt)
+    assert [r[0] for r in g.rejected] == [t[-1]] and kept.min() > 0
+
+
+@pytest.mark.parametrize("where", SPACINGS)
+def test_a_spike_twelve_sigma_above_a_smooth_rise_is_rejected(where):
+    """Failed on the old code: a sample out of its neighbours' band passed when it lay within twice the
+    band's tolerance of the line through the two samples before it (16 σ, 0.5 % of Fm here: a garbled
+    hundreds digit). The approach is now the least-squares line through six samples where they lie on one:
+    its prediction noise (1.1 σ) widens the band's tolerance, not two samples' 2 σ."""
+    dt = SPACINGS[where]
+    t = np.arange(600) * dt
+    f = hardening(t, np.random.default_rng(13))
+    sigma_r = NOISE_N * np.sqrt(1.5)
+    for k in (300, 420, 540):
+        f[k] += 12.0 * sigma_r
+    g, kept = judged(t, f, dt)
+    assert [r[0] for r in g.rejected] == [t[300], t[420], t[540]], g.rejected
+
+
 def test_spikes_do_not_stop_the_channel():
     """Spikes judged by the noise are single readings, not a broken channel: ten in a row of
     every other sample are rejected, the test goes on (a +20 kN burst still stops it)."""
