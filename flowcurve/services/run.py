@@ -238,6 +238,25 @@ def build_spec(req: RunRequest, geometry_default: dict[str, float] | None = None
     )
 
 
+def virtual_bar(test: str) -> dict[str, float]:
+    """The virtual rig's own bar of a ``test`` (mm, the record's geometry keys: d0 with l0 or h0):
+    what it simulates where no geometry is given."""
+    from flowcurve.rig.virtual.physics import Specimen
+
+    base = Specimen.tension() if test == "tension" else Specimen.compression()
+    return {"d0_mm": base.d0_mm, "l0_mm" if test == "tension" else "h0_mm": base.length0_mm}
+
+
+def virtual_specimen_geometry(req: RunRequest) -> dict[str, float]:
+    """The geometry (mm, the record's keys) of the bar the virtual rig makes of ``req``'s d0, l0,
+    lc, h0 — its own bar's where one is not given — checked as ``run`` on the virtual rig checks it
+    (:func:`check_ranges` with the frame's defaults, then :func:`build_spec`: FieldError naming the
+    option, e.g. an Lc shorter than l0). For ``flowcurve rig virtual``, whose bar is the one
+    ``run`` would make in its own process of the same options."""
+    check_ranges(req)
+    return build_spec(req, virtual_bar(req.test)).geometry_mm
+
+
 def prepare(req: RunRequest, *, virtual: bool | None = None, config=None, ask: Callable | None = None) -> RunSetup:
     """Check ``req`` in ``run``'s order and set the test up.
 
@@ -274,7 +293,6 @@ def prepare(req: RunRequest, *, virtual: bool | None = None, config=None, ask: C
         spec, material, drills, responses = build_spec(req, ask=ask), None, (), {}
     else:
         from flowcurve.rig.virtual.materials import get_material
-        from flowcurve.rig.virtual.physics import Specimen
 
         drills = faults(req)
         scale = 15.0 if req.time_scale is None else req.time_scale
@@ -285,11 +303,9 @@ def prepare(req: RunRequest, *, virtual: bool | None = None, config=None, ask: C
         except FlowcurveError as exc:
             raise FieldError("material", f"--material: {str(exc).split(': ', 1)[-1]} — the virtual rig makes its specimen of the "
                              "material the record names") from None
-        base = Specimen.tension() if req.test == "tension" else Specimen.compression()
-        geometry = {"d0_mm": base.d0_mm, "l0_mm" if req.test == "tension" else "h0_mm": base.length0_mm}
         req.material = req.material or material
         check_ranges(req)
-        spec, responses = build_spec(req, geometry, ask=ask), req.responses()
+        spec, responses = build_spec(req, virtual_bar(req.test), ask=ask), req.responses()
     spec.check()
     return RunSetup(spec, material, scale, drills, responses)
 
