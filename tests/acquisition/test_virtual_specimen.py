@@ -1,0 +1,102 @@
+"""``flowcurve rig virtual --d0/--l0/--lc/--h0``: the virtual rig in its own process simulates the
+bar it is told, made as ``flowcurve run`` makes it on the virtual rig in its own process (same
+options, checks and defaults), states it in its configuration's ``[virtual]``, and ``run --config``
+warns (and records a ``geometry_mismatch`` event) when the test states another geometry.
+
+The CLI's parsing and refusals, the configuration's table and the warning are fast; that the
+geometry reaches the simulated bar of a real ``rig virtual`` process is ``-m pty``: its record is
+compared with the in-process virtual rig's run of the same geometry (the truth, independent of the
+process path) and with the default bar's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from flowcurve.cli import main
+from flowcurve.clock import ModelClock
+from flowcurve.rig.config import load_config, to_toml
+from flowcurve.rig.virtual.physics import Specimen
+from flowcurve.services.run import RunRequest, prepare
+
+
+
+class Built(Exception):
+    pass
+
+
+@pytest.fixture
+def built(monkeypatch):
+    """What 'rig virtual' builds its VirtualRig with (nothing started: the rig raises Built)."""
+    import flowcurve.rig.virtual.rig as virtual_rig
+
+    seen: dict = {}
+
+    def fake_rig(*args, **kwargs):
+        seen.update(kwargs)
+        raise Built
+
+    monkeypatch.setattr(virtual_rig, "VirtualRig", fake_rig)
+    return seen
+
+
+def in_process_geometry(test, **options) -> dict:
+    """The geometry 'run' on the virtual rig in its own process makes of the same options."""
+    return prepare(RunRequest(test, **options)).spec.geometry_mm
+
+
+@pytest.mark.parametrize("argv, test, options", [
+    ([], "tension", {}),
+    (["--lc", "42"], "tension", {"lc": 42.0}),
+    (["--d0", "8", "--l0", "40", "--lc", "56"], "tension", {"d0": 8.0, "l0": 40.0, "lc": 56.0}),
+    (["--test", "compression", "--d0", "5", "--h0", "7.5"], "compression", {"d0": 5.0, "h0": 7.5}),
+    (["--test", "compression"], "compression", {}),
+])
+def test_rig_virtual_builds_the_bar_run_would_build_in_process(tmp_path, built, argv, test, options):
+    with pytest.raises(Built):
+        main(["rig", "virtual", "--config", str(tmp_path / "v.toml"), *argv])
+    specimen = built["specimen"]
+    assert specimen == Specimen.from_geometry(test, in_process_geometry(test, **options))
+    if "lc" in options:
+        assert specimen.parallel_mm == options["lc"]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--lc", "25"], "--lc 25 mm is shorter than the gauge length l0 30 mm"),  # the default bar's l0
+    (["--l0", "40", "--lc", "35"], "--lc 35 mm is shorter than the gauge length l0 40 mm"),
+    (["--d0", "-6"], "--d0 must be more than 0 and at most 30 mm"),
+    (["--lc", "1e4"], "--lc must be more than 0 and at most 200 mm"),
+    (["--h0", "nan", "--test", "compression"], "--h0 must be a positive number"),
+])
+def test_rig_virtual_refuses_a_bad_geometry_in_one_line_before_starting(tmp_path, capsys, built, argv, message):
+    code = main(["rig", "virtual", "--config", str(tmp_path / "v.toml"), *argv])
+    out, err = capsys.readouterr()
+    assert code == 2 and message in err and err.count("\n") == 1 and "Traceback" not in err, err
+    assert not built and not (tmp_path / "v.toml").exists()  # refused before any rig or file
+
+
+def test_rig_virtual_notes_a_length_the_test_has_not(tmp_path, capsys, built):
+    with pytest.raises(Built):
+        main(["rig", "virtual", "--config", str(tmp_path / "v.toml"), "--test", "compression", "--lc", "40"])
+    assert "--lc ignored: a compression specimen has no such length" in capsys.readouterr().err
+    assert built["specimen"] == Specimen.compression()
+
+
+def virtual_rig_config(tmp_path, specimen: Specimen):
+    """The configuration file 'rig virtual' writes for a rig simulating ``specimen`` (in process)."""
+    from flowcurve.rig.virtual.rig import VirtualRig
+
+    with VirtualRig("steel45", test=specimen.test, specimen=specimen, clock=ModelClock(), link="inprocess",
+                    tension_response="bridgman") as vr:
+        path = tmp_path / "v.toml"
+        path.write_text(to_toml(vr.config()))
+    return path
+
+
+def test_the_configuration_states_the_simulated_bar(tmp_path):
+    path = virtual_rig_config(tmp_path, Specimen.tension(6.0, 30.0, parallel_length_mm=42.0))
+    virtual = load_config(path).virtual
+    assert virtual.test == "tension" and virtual.geometry_mm == {"d0_mm": 6.0, "l0_mm": 30.0, "parallel_length_mm": 42.0}
+    path = virtual_rig_config(tmp_path, Specimen.compression())
+    assert load_config(path).virtual.geometry_mm == {"d0_mm": 5.989, "h0_mm": 6.982}
