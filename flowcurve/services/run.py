@@ -87,6 +87,7 @@ class RunSetup:
     time_scale: float
     faults: tuple = ()  # rig.virtual.fault_spec.FaultSpec drills (virtual rig only)
     responses: dict = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()  # for the operator before the test (also events in the record)
 
 
 def parse_assignments(items: list[str], *, numeric_prefix: str = "post.", known=None, option: str = "--set") -> dict[str, str | None]:
@@ -285,12 +286,17 @@ def prepare(req: RunRequest, *, virtual: bool | None = None, config=None, ask: C
     FieldError
         Naming each refused field.
     """
+    warnings: tuple[str, ...] = ()
     if not (config is None if virtual is None else virtual):
         scale = 1.0 if req.time_scale is None else req.time_scale
         measured("time_scale", OPTIONS["time_scale"], scale)
         req.speed = 0.01 if req.speed is None else req.speed
         check_ranges(req, config)
         spec, material, drills, responses = build_spec(req, ask=ask), None, (), {}
+        mismatch = virtual_mismatch(spec, config)
+        if mismatch:
+            spec.opening_events.append(("geometry_mismatch", mismatch))
+            warnings = (mismatch,)
     else:
         from flowcurve.rig.virtual.materials import get_material
 
@@ -307,7 +313,20 @@ def prepare(req: RunRequest, *, virtual: bool | None = None, config=None, ask: C
         check_ranges(req)
         spec, responses = build_spec(req, virtual_bar(req.test), ask=ask), req.responses()
     spec.check()
-    return RunSetup(spec, material, scale, drills, responses)
+    return RunSetup(spec, material, scale, drills, responses, warnings)
+
+
+def virtual_mismatch(spec, config) -> str | None:
+    """Where ``spec``'s geometry differs from the bar the virtual rig in its own process simulates
+    (``config``'s ``[virtual]``, which ``flowcurve rig virtual`` writes): one line naming both
+    values, with the configuration file; None when they agree or the rig is not a virtual one."""
+    from flowcurve.acquisition.specimen_geometry import virtual_geometry_mismatch
+
+    virtual = getattr(config, "virtual", None)
+    if virtual is None:
+        return None
+    return virtual_geometry_mismatch(spec.test, spec.geometry_mm, virtual.test, virtual.geometry_mm,
+                                     f"the virtual rig ({config.source} [virtual])")
 
 
 def run_test(setup: RunSetup, record: Path, *, config=None, view=None, interactive: bool = False, stream: bool = True,

@@ -100,3 +100,48 @@ def test_the_configuration_states_the_simulated_bar(tmp_path):
     assert virtual.test == "tension" and virtual.geometry_mm == {"d0_mm": 6.0, "l0_mm": 30.0, "parallel_length_mm": 42.0}
     path = virtual_rig_config(tmp_path, Specimen.compression())
     assert load_config(path).virtual.geometry_mm == {"d0_mm": 5.989, "h0_mm": 6.982}
+
+
+@pytest.mark.parametrize("given, words", [
+    ({"d0": 6.0, "l0": 30.0}, "Lc 30 mm here, 42 mm on the rig"),  # no --lc: the header's Lc is l0
+    ({"d0": 6.0, "l0": 30.0, "lc": 36.0}, "Lc 36 mm here, 42 mm on the rig"),
+    ({"d0": 8.0, "l0": 30.0, "lc": 42.0}, "d0 8 mm here, 6 mm on the rig"),
+])
+def test_run_config_warns_of_another_geometry_and_records_it(tmp_path, given, words):
+    path = virtual_rig_config(tmp_path, Specimen.tension(6.0, 30.0, parallel_length_mm=42.0))
+    setup = prepare(RunRequest("tension", target=0.5, **given), config=load_config(path))
+    assert len(setup.warnings) == 1 and words in setup.warnings[0] and f"({path} [virtual])" in setup.warnings[0]
+    assert setup.spec.opening_events == [("geometry_mismatch", setup.warnings[0])]
+
+
+def test_run_config_with_the_rigs_geometry_says_nothing(tmp_path):
+    path = virtual_rig_config(tmp_path, Specimen.tension(6.0, 30.0, parallel_length_mm=42.0))
+    assert prepare(RunRequest("tension", d0=6.0, l0=30.0, lc=42.0), config=load_config(path)).warnings == ()
+    path = virtual_rig_config(tmp_path, Specimen.tension())
+    assert prepare(RunRequest("tension", d0=6.0, l0=30.0), config=load_config(path)).warnings == ()  # Lc = l0 on both
+    warned = prepare(RunRequest("compression", d0=5.989, h0=6.982), config=load_config(path)).warnings
+    assert warned and "simulates a tension specimen, not a compression one (d0 6 mm, l0 30 mm, Lc 30 mm)" in warned[0]
+
+
+def test_a_real_rigs_configuration_has_no_virtual_table(tmp_path):
+    from flowcurve.rig.config import virtual_config
+
+    path = tmp_path / "rig.toml"
+    path.write_text(to_toml(virtual_config({"loadcell": "/dev/null-a", "encoder": "/dev/null-b"})))
+    config = load_config(path)
+    assert config.virtual is None and "[virtual]" not in path.read_text()
+    assert prepare(RunRequest("tension", d0=9.0, l0=45.0), config=config).warnings == ()
+
+
+def test_the_opening_events_reach_the_record(tmp_path):
+    """The procedure writes a spec's opening events (the mismatch) as the record opens."""
+    from flowcurve.acquisition.session import run_virtual_test
+    from flowcurve.record.format import read_record
+
+    setup = prepare(RunRequest("tension", d0=6.0, l0=30.0, target=0.3, time_scale=20.0, tension_response="bridgman"))
+    setup.spec.opening_events.append(("geometry_mismatch", "Lc 30 mm here, 42 mm on the rig"))
+    run = run_virtual_test(setup.spec, tmp_path / "t.csv", material=setup.virtual_material, time_scale=20.0, clock=ModelClock(),
+                           link="inprocess", tension_response="bridgman")
+    events = read_record(run.outcome.path).events
+    assert [(e.name, e.text) for e in events if e.name == "geometry_mismatch"] == [("geometry_mismatch", "Lc 30 mm here, 42 mm on the rig")]
+    assert events[0].name == "geometry_mismatch"
