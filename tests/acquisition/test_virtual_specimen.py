@@ -20,6 +20,7 @@ from flowcurve.rig.config import load_config, to_toml
 from flowcurve.rig.virtual.physics import Specimen
 from flowcurve.services.run import RunRequest, prepare
 
+from .test_fault_drills import RigProcess, env, rig_process, run_test  # noqa: F401 - env and rig_process are fixtures
 
 
 class Built(Exception):
@@ -145,3 +146,70 @@ def test_the_opening_events_reach_the_record(tmp_path):
     events = read_record(run.outcome.path).events
     assert [(e.name, e.text) for e in events if e.name == "geometry_mismatch"] == [("geometry_mismatch", "Lc 30 mm here, 42 mm on the rig")]
     assert events[0].name == "geometry_mismatch"
+
+
+# -- the process path: 'rig virtual' simulates the bar it was told --------------------------------
+
+SPEED, TARGET, SCALE = "0.05", 1.0, 10.0
+
+
+def truth(tmp_path, lc: float):
+    """The in-process virtual rig's record of the same test on a bar of parallel length ``lc``."""
+    from flowcurve.acquisition.session import run_virtual_test
+    from flowcurve.record.format import read_record
+
+    setup = prepare(RunRequest("tension", material="steel45", d0=6.0, l0=30.0, lc=lc, speed=float(SPEED), target=TARGET,
+                               time_scale=SCALE, tension_response="bridgman"))
+    run = run_virtual_test(setup.spec, tmp_path / f"truth-{lc:g}.csv", material="steel45", time_scale=SCALE, clock=ModelClock(),
+                           link="inprocess", tension_response="bridgman")
+    return read_record(run.outcome.path)
+
+
+def crosshead_at(record, forces_N) -> np.ndarray:
+    """Where the crosshead first was when the rising force reached ``forces_N`` (its running maximum)."""
+    force, cross = np.asarray(record.column("force_N"), float), np.asarray(record.column("crosshead_mm"), float)
+    top = int(np.argmax(force))
+    rising = np.maximum.accumulate(force[: top + 1])
+    return np.array([np.interp(f, rising, cross[: top + 1]) for f in forces_N])
+
+
+def elastic_compliance(record) -> float:
+    """mm/N: the crosshead against the force over the straight part (2 to 8 kN) — the frame's 1/C
+    and the bar's Lc/(E·A)."""
+    force, cross = np.asarray(record.column("force_N"), float), np.asarray(record.column("crosshead_mm"), float)
+    top = int(np.argmax(force))
+    keep = (force[:top] > 2000.0) & (force[:top] < 8000.0)
+    return float(np.polyfit(force[:top][keep], cross[:top][keep], 1)[0])
+
+
+@pytest.mark.pty
+def test_rig_virtual_simulates_the_parallel_length_it_is_given(tmp_path, env, rig_process):
+    """A 42 mm Lc bar in 'rig virtual', a test of the same geometry through 'run --config': the
+    record is the in-process rig's 42 mm bar's (the truth), not the default 30 mm one's — the
+    elastic line's compliance 1/C + Lc/(E·A) and, past yield, the crosshead at a force (plastic
+    strain over Lc). Failed before: 'rig virtual' took no geometry and simulated its 30 mm bar."""
+    rig = rig_process(time_scale=SCALE, options=("--material", "steel45", "--speed", SPEED, "--lc", "42"))
+    assert any(line.startswith("specimen: tension bar d0 6 mm, l0 30 mm, Lc 42 mm") for line in rig.lines), rig.lines
+    assert load_config(rig.config).virtual.parallel_length_mm == 42.0
+    run = run_test(tmp_path, env, rig, "--lc", "42", "--speed", SPEED, "--target", TARGET)
+    assert run.code in (0, 5), run.err
+    assert "geometry_mismatch" not in [e.name for e in run.record.events] and "simulates another" not in run.err
+    assert run.record.meta["specimen.parallel_length_mm"] == "42.0"
+    t42, t30 = truth(tmp_path, 42.0), truth(tmp_path, 30.0)
+    c, c42, c30 = elastic_compliance(run.record), elastic_compliance(t42), elastic_compliance(t30)
+    assert abs(c - c42) < 0.3 * abs(c30 - c42), (c, c42, c30)
+    levels = np.array([0.985, 0.995]) * float(np.max(t42.column("force_N")))  # past yield, below the target's force
+    x, x42, x30 = crosshead_at(run.record, levels), crosshead_at(t42, levels), crosshead_at(t30, levels)
+    assert np.all(np.abs(x - x42) < 0.3 * np.abs(x30 - x42)), (x, x42, x30)
+
+
+@pytest.mark.pty
+def test_run_config_against_another_bar_warns_and_records_it(tmp_path, env, rig_process):
+    """The same 42 mm bar, a test stating Lc 30 (no --lc): one warning line naming both, the
+    ``geometry_mismatch`` event in the record — and the numbers are the rig's bar's."""
+    rig = rig_process(time_scale=SCALE, options=("--material", "steel45", "--speed", SPEED, "--lc", "42"))
+    run = run_test(tmp_path, env, rig, "--speed", SPEED, "--target", "0.3")
+    assert run.code in (0, 5), run.err
+    warned = [line for line in run.err.splitlines() if line.startswith("flowcurve: warning: the virtual rig")]
+    assert len(warned) == 1 and "Lc 30 mm here, 42 mm on the rig" in warned[0], run.err
+    assert [e.name for e in run.record.events if e.name == "geometry_mismatch"] == ["geometry_mismatch"]
