@@ -4,7 +4,8 @@
 settings and one reading, or a diagnosis (port missing, silent — wrong baud, parity or
 address?, garbled replies); exit code 0 when every device answered, 3 otherwise.
 'rig virtual' starts the virtual rig on pseudo-terminals, prints each device's port and a
-configuration file written for it, and runs until Ctrl-C. 'rig recover-loadcell' brings an
+configuration file written for it (its [virtual] table states the bar simulated: --d0, --l0,
+--lc, --h0 as 'run' takes them), and runs until Ctrl-C. 'rig recover-loadcell' brings an
 amplifier left at an unknown baud rate back to the configured one.
 """
 
