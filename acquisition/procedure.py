@@ -121,6 +121,9 @@ class TestSpec:
         When loading stops (fracture, target, force limit).
     post, extra_meta : dict
         Post-test measurements given up front (mm); more header values.
+    opening_events : list of (name, text)
+        Events written as the record opens: what was found before the test (a geometry other
+        than the one the virtual rig simulates: ``geometry_mismatch``).
     """
 
     __test__ = False  # not a pytest test class
@@ -138,6 +141,7 @@ class TestSpec:
     stop: StopCriteria = field(default_factory=StopCriteria)
     post: dict[str, float] = field(default_factory=dict)  # post-test measurements given up front
     extra_meta: dict[str, str] = field(default_factory=dict)
+    opening_events: list[tuple[str, str]] = field(default_factory=list)
 
     def check(self) -> None:
         """ProcedureError unless the test, geometry (specimen_geometry.geometry_problem) and speed (> 0 mm/s) are valid."""
@@ -385,6 +389,8 @@ class Procedure(StreamNotes):
             raise RecordWriteError(f"{self.path}: cannot create the record ({_os_reason(exc)}) — the test was not "
                                    "started; give --out a folder you can write to, with free space") from None
         self._writing = True
+        for name, text in self.spec.opening_events:
+            self._event(name, text)
 
     def _let_streams_finish(self, sampler: Sampler | None, error: FlowcurveError | None) -> None:
         """At the stop, before the heater goes off: the frames still on the line, or the crosshead's

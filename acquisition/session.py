@@ -412,9 +412,7 @@ def run_virtual_test(spec, path, *, material: str, time_scale: float, view=None,
     from flowcurve.rig.virtual.physics import Specimen
     from flowcurve.rig.virtual.rig import VirtualRig
 
-    g = spec.geometry_mm
-    specimen = (Specimen.tension(g["d0_mm"], g["l0_mm"], parallel_length_mm=g.get("parallel_length_mm")) if spec.test == "tension"
-                else Specimen.compression(g["d0_mm"], g["h0_mm"]))
+    specimen = Specimen.from_geometry(spec.test, spec.geometry_mm)
     with VirtualRig(material, test=spec.test, specimen=specimen, speed_mm_per_s=spec.speed_mm_per_s, time_scale=time_scale, friction_mu=friction_mu, temperature_C=initial_temperature_C, clock=clock, link=link, compression_response=compression_response, tension_response=tension_response) as vr:
         response = compression_response if spec.test == "compression" else tension_response
         spec.extra_meta.setdefault("rig.virtual", f"{vr.model.material.name}, time scale {time_scale:g}, {spec.test} response {response}")

@@ -22,3 +22,37 @@ def geometry_problem(test: str, required, geometry_mm: dict) -> str | None:
     if lc is not None and not (math.isfinite(lc) and lc >= geometry_mm["l0_mm"]):
         return f"specimen parallel length {lc:g} mm must be at least l0 {geometry_mm['l0_mm']:g} mm (the gauge marks lie on it; give --lc ≥ --l0)"
     return None
+
+
+NAMES = {"d0_mm": "d0", "l0_mm": "l0", "parallel_length_mm": "Lc", "h0_mm": "h0"}  # in run's option words
+
+
+def _stated(geometry_mm: dict) -> dict:
+    """The lengths that make a bar: the parallel length is l0 where none is stated."""
+    g = dict(geometry_mm)
+    if "l0_mm" in g:
+        g.setdefault("parallel_length_mm", g["l0_mm"])
+    return g
+
+
+def virtual_geometry_mismatch(test: str, geometry_mm: dict, rig_test: str, rig_geometry_mm: dict,
+                              rig: str = "the virtual rig") -> str | None:
+    """Where a test's geometry (mm, the record's keys) differs from the bar a virtual rig in its
+    own process simulates (its configuration's ``[virtual]``; ``rig`` names it), in one line naming
+    both values; None when they agree. The record would state the test's geometry over the rig's
+    bar's numbers."""
+    if test != rig_test:
+        return f"{rig} simulates a {rig_test} specimen, not a {test} one ({geometry_words(_stated(rig_geometry_mm))})"
+    ours, theirs = _stated(geometry_mm), _stated(rig_geometry_mm)
+    differ = [key for key in NAMES if key in ours and key in theirs and not math.isclose(ours[key], theirs[key], rel_tol=1e-9)]
+    if not differ:
+        return None
+    return (f"{rig} simulates another specimen than this test states: " +
+            ", ".join(f"{NAMES[k]} {ours[k]:g} mm here, {theirs[k]:g} mm on the rig" for k in differ) +
+            " — the record would give this geometry to the rig's bar's forces and travel; restart 'flowcurve rig virtual' "
+            "with this geometry, or give run the rig's")
+
+
+def geometry_words(geometry_mm: dict) -> str:
+    """``d0 6 mm, l0 30 mm, Lc 42 mm``: a geometry (mm, the record's keys) in run's option words."""
+    return ", ".join(f"{NAMES[k]} {v:g} mm" for k, v in geometry_mm.items() if k in NAMES)

@@ -5,7 +5,8 @@ Unknown keys, wrong types and out-of-range values raise :class:`ConfigError` nam
 and the key (``rig.toml: [furnace] max_temperature_C: must be in 0 < x <= 1370, got 2000``).
 ``[furnace]`` is optional (a rig without a furnace); the others are required. Each device
 section may name its ``model`` (:data:`rig.roles.MODELS`; default the drivers this rig was built
-with). See ``rig/example-rig.toml`` for every key with its meaning.
+with). See ``rig/example-rig.toml`` for every key with its meaning. ``[virtual]`` is written by
+``flowcurve rig virtual`` alone: the specimen its twins simulate (:class:`VirtualConfig`).
 """
 
 from __future__ import annotations
@@ -185,6 +186,27 @@ class InstrumentsConfig:
 
 
 @dataclass(frozen=True)
+class VirtualConfig:
+    """``[virtual]``: written by ``flowcurve rig virtual`` alone — the specimen its twins simulate
+    (mm, the record's geometry keys), so that ``flowcurve run --config`` can tell a test stating
+    another geometry. A real rig's file has no such table."""
+
+    test: str = "tension"
+    d0_mm: float | None = None
+    l0_mm: float | None = None
+    parallel_length_mm: float | None = None  # the parallel length Lc (tension): l0 when not given
+    h0_mm: float | None = None
+
+    @property
+    def geometry_mm(self) -> dict[str, float]:
+        """The geometry given (key → mm)."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "test" and getattr(self, f.name) is not None}
+
+
+VIRTUAL_GEOMETRY = {"tension": ("d0_mm", "l0_mm"), "compression": ("d0_mm", "h0_mm")}  # [virtual]'s keys each test needs
+
+
+@dataclass(frozen=True)
 class RigConfig:
     """The whole rig, as its TOML file configures it.
 
@@ -200,6 +222,8 @@ class RigConfig:
         The file read ("<virtual>" for the virtual rig's).
     instruments : InstrumentsConfig
         Classes, certificates and resolutions of the instruments (uncertainty budgets).
+    virtual : VirtualConfig or None
+        The specimen the virtual rig simulates (``flowcurve rig virtual``'s file only).
     """
 
     loadcell: LoadCellConfig
@@ -208,6 +232,7 @@ class RigConfig:
     frame: FrameConfig
     source: str = "<virtual>"
     instruments: InstrumentsConfig = InstrumentsConfig()  # [instruments] is optional: the defaults
+    virtual: VirtualConfig | None = None
 
 
 _SERIAL_CHECKS = {
@@ -273,6 +298,11 @@ SCHEMA: dict[str, tuple[type, dict[str, tuple[type, Any]]]] = {
            for i in ("force", "extensometer", "micrometer", "caliper", "thermocouple")},
         **{f"{i}_due_date": (str, _iso_date) for i in ("force", "extensometer", "micrometer", "caliper", "thermocouple")},
     }),
+    "virtual": (VirtualConfig, {
+        "test": (str, _one_of(tuple(VIRTUAL_GEOMETRY))),
+        "d0_mm": (float, _in(0.0, 1000.0, lo_open=True)),
+        **{key: (float, _in(0.0, 10_000.0, lo_open=True)) for key in ("l0_mm", "parallel_length_mm", "h0_mm")},
+    }),
 }
 REQUIRED_SECTIONS = ("loadcell", "encoder", "frame")
 
@@ -327,6 +357,13 @@ def _section(origin: str, name: str, table: Any):
         raise ConfigError(f"{where} port: missing (a device path, e.g. /dev/ttyUSB0, or a pyserial URL)")
     if name == "frame" and values.get("min_speed_mm_per_s", FrameConfig.min_speed_mm_per_s) > values.get("max_speed_mm_per_s", FrameConfig.max_speed_mm_per_s):
         raise ConfigError(f"{where} min_speed_mm_per_s: must not be above max_speed_mm_per_s")
+    if name == "virtual":
+        test = values.get("test", VirtualConfig.test)
+        needs, may = VIRTUAL_GEOMETRY[test], VIRTUAL_GEOMETRY[test] + (("parallel_length_mm",) if test == "tension" else ())
+        for key in [k for k in needs if k not in values] + [k for k in values if k != "test" and k not in may]:
+            raise ConfigError(f"{where} {key}: " + (f"missing (a {test} specimen's)" if key in needs else f"not a {test} specimen's length"))
+        if values.get("parallel_length_mm", math.inf) < values.get("l0_mm", 0.0):
+            raise ConfigError(f"{where} parallel_length_mm: must be at least l0_mm (the gauge marks lie on it)")
     if name == "loadcell":
         given = [k for k in ("nominal_load_N", "calibration_N_per_count") if k in values]
         if len(given) != 1:
@@ -352,7 +389,7 @@ def parse_config(data: dict, origin: str = "<config>") -> RigConfig:
             raise ConfigError(f"{origin}: [{name}]: missing section")
     sections = {name: _section(origin, name, data[name]) for name in data}
     config = RigConfig(sections["loadcell"], sections["encoder"], sections.get("furnace"),
-                       sections["frame"], origin, sections.get("instruments", InstrumentsConfig()))
+                       sections["frame"], origin, sections.get("instruments", InstrumentsConfig()), sections.get("virtual"))
     ports = [s.port for s in (config.loadcell, config.encoder, config.furnace)
              if s is not None and not s.port.startswith("loop://")]
     if len(set(ports)) != len(ports):
@@ -439,7 +476,7 @@ def _toml_value(v) -> str:
 def to_toml(config: RigConfig) -> str:
     """The configuration as a TOML document that :func:`load_config` reads back identically."""
     lines = [f"# flowcurve rig configuration (written from {config.source})"]
-    for name in ("loadcell", "encoder", "furnace", "frame", "instruments"):
+    for name in ("loadcell", "encoder", "furnace", "frame", "instruments", "virtual"):
         section = getattr(config, name)
         if section is None:
             continue

@@ -192,6 +192,8 @@ def cmd_run(args) -> int:
     if unused:
         print(f"flowcurve: note: {unused}", file=sys.stderr)
     setup = prepare(run_request(args), config=config, ask=_ask if interactive else None)
+    for warning in setup.warnings:
+        print(f"flowcurve: warning: {warning}", file=sys.stderr)
     outcome = run_test(setup, out_path, config=config, view=view, interactive=interactive, stream=not args.poll)
     return report_outcome(outcome, view)
 

@@ -4,7 +4,8 @@
 settings and one reading, or a diagnosis (port missing, silent — wrong baud, parity or
 address?, garbled replies); exit code 0 when every device answered, 3 otherwise.
 'rig virtual' starts the virtual rig on pseudo-terminals, prints each device's port and a
-configuration file written for it, and runs until Ctrl-C. 'rig recover-loadcell' brings an
+configuration file written for it (its [virtual] table states the bar simulated: --d0, --l0,
+--lc, --h0 as 'run' takes them), and runs until Ctrl-C. 'rig recover-loadcell' brings an
 amplifier left at an unknown baud rate back to the configured one.
 """
 
@@ -19,7 +20,8 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from flowcurve.cli.acquisition import add_fault_option, add_virtual_response_options, virtual_faults, virtual_responses
+from flowcurve.cli.acquisition import add_fault_option, add_virtual_response_options, unused_geometry, virtual_faults, virtual_responses
+from flowcurve.cli.specimen import add_geometry_options
 from flowcurve.errors import DeviceError, FlowcurveError
 from flowcurve.rig.config import RigConfig, load_config, to_toml
 
@@ -50,6 +52,10 @@ def register(subparsers) -> None:
                               "(default: a file in a temporary folder)")
     virtual.add_argument("--material", default="12Kh18N12M3TL", help="virtual specimen material")
     virtual.add_argument("--test", choices=("tension", "compression"), default="tension")
+    add_geometry_options(virtual.add_argument_group(
+        "virtual specimen", "the bar the virtual rig simulates, as 'flowcurve run' takes it (give 'run --config' the same "
+        "values; the configuration file states them in [virtual]); default the rig's own: tension d0 6, l0 30 (Lc l0), "
+        "compression d0 5.989, h0 6.982"))
     virtual.add_argument("--temperature", type=float, default=None, metavar="C",
                          help="initial furnace temperature, C (default: ambient)")
     virtual.add_argument("--time-scale", type=float, default=1.0,
@@ -183,7 +189,8 @@ def run_virtual(args) -> int:
             raise FlowcurveError(f"{option} must be a positive number, got {value}")
     responses = virtual_responses(args)
     faults = virtual_faults(args)
-    with VirtualRig(args.material, test=args.test, temperature_C=args.temperature, speed_mm_per_s=args.speed,
+    specimen = virtual_specimen(args)
+    with VirtualRig(args.material, test=args.test, specimen=specimen, temperature_C=args.temperature, speed_mm_per_s=args.speed,
                     time_scale=args.time_scale, checksum=args.checksum, **responses) as rig:
         path = args.config
         if path is None:
@@ -196,6 +203,7 @@ def run_virtual(args) -> int:
         for fault in faults:
             print(f"fault: {fault.describe()} " + ("from now" if fault.at_s is None else "after the crosshead starts"))
         print(f"{args.test} response: {responses[args.test + '_response']}")
+        print(f"specimen: {specimen_line(specimen)} (give 'flowcurve run --config' the same)")
         print(f"crosshead speed: {args.speed:g} mm/s (time scale {args.time_scale:g}: give 'flowcurve run' the same --speed and --time-scale)")
         print(f"configuration: {path}")
         print(f"try: flowcurve rig check --config {path}")
@@ -211,6 +219,27 @@ def run_virtual(args) -> int:
         finally:
             signal.signal(signal.SIGTERM, previous)
     return 0
+
+
+def virtual_specimen(args):
+    """The bar ``rig virtual``'s options ask for (rig.virtual.physics.Specimen), made as ``run``
+    makes it on the virtual rig in its own process: the same options, checks and defaults
+    (services.run.virtual_specimen_geometry; FieldError in one line, e.g. an Lc shorter than l0)."""
+    from flowcurve.rig.virtual.physics import Specimen
+    from flowcurve.services.run import RunRequest, virtual_specimen_geometry
+
+    unused = unused_geometry(args)
+    if unused:
+        print(f"flowcurve: note: {unused}", file=sys.stderr)
+    request = RunRequest(args.test, d0=args.d0, l0=args.l0, lc=args.lc, h0=args.h0)
+    return Specimen.from_geometry(args.test, virtual_specimen_geometry(request))
+
+
+def specimen_line(specimen) -> str:
+    """``tension bar d0 6 mm, l0 30 mm, Lc 42 mm`` (in run's option names)."""
+    from flowcurve.acquisition.specimen_geometry import geometry_words
+
+    return f"{specimen.test} {'bar' if specimen.test == 'tension' else 'cylinder'} {geometry_words(specimen.geometry_mm)}"
 
 
 def _report_rig(rig, seen: dict) -> None:

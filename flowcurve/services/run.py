@@ -87,6 +87,7 @@ class RunSetup:
     time_scale: float
     faults: tuple = ()  # rig.virtual.fault_spec.FaultSpec drills (virtual rig only)
     responses: dict = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()  # for the operator before the test (also events in the record)
 
 
 def parse_assignments(items: list[str], *, numeric_prefix: str = "post.", known=None, option: str = "--set") -> dict[str, str | None]:
@@ -238,6 +239,25 @@ def build_spec(req: RunRequest, geometry_default: dict[str, float] | None = None
     )
 
 
+def virtual_bar(test: str) -> dict[str, float]:
+    """The virtual rig's own bar of a ``test`` (mm, the record's geometry keys: d0 with l0 or h0):
+    what it simulates where no geometry is given."""
+    from flowcurve.rig.virtual.physics import Specimen
+
+    base = Specimen.tension() if test == "tension" else Specimen.compression()
+    return {"d0_mm": base.d0_mm, "l0_mm" if test == "tension" else "h0_mm": base.length0_mm}
+
+
+def virtual_specimen_geometry(req: RunRequest) -> dict[str, float]:
+    """The geometry (mm, the record's keys) of the bar the virtual rig makes of ``req``'s d0, l0,
+    lc, h0 — its own bar's where one is not given — checked as ``run`` on the virtual rig checks it
+    (:func:`check_ranges` with the frame's defaults, then :func:`build_spec`: FieldError naming the
+    option, e.g. an Lc shorter than l0). For ``flowcurve rig virtual``, whose bar is the one
+    ``run`` would make in its own process of the same options."""
+    check_ranges(req)
+    return build_spec(req, virtual_bar(req.test)).geometry_mm
+
+
 def prepare(req: RunRequest, *, virtual: bool | None = None, config=None, ask: Callable | None = None) -> RunSetup:
     """Check ``req`` in ``run``'s order and set the test up.
 
@@ -266,15 +286,19 @@ def prepare(req: RunRequest, *, virtual: bool | None = None, config=None, ask: C
     FieldError
         Naming each refused field.
     """
+    warnings: tuple[str, ...] = ()
     if not (config is None if virtual is None else virtual):
         scale = 1.0 if req.time_scale is None else req.time_scale
         measured("time_scale", OPTIONS["time_scale"], scale)
         req.speed = 0.01 if req.speed is None else req.speed
         check_ranges(req, config)
         spec, material, drills, responses = build_spec(req, ask=ask), None, (), {}
+        mismatch = virtual_mismatch(spec, config)
+        if mismatch:
+            spec.opening_events.append(("geometry_mismatch", mismatch))
+            warnings = (mismatch,)
     else:
         from flowcurve.rig.virtual.materials import get_material
-        from flowcurve.rig.virtual.physics import Specimen
 
         drills = faults(req)
         scale = 15.0 if req.time_scale is None else req.time_scale
@@ -285,13 +309,24 @@ def prepare(req: RunRequest, *, virtual: bool | None = None, config=None, ask: C
         except FlowcurveError as exc:
             raise FieldError("material", f"--material: {str(exc).split(': ', 1)[-1]} — the virtual rig makes its specimen of the "
                              "material the record names") from None
-        base = Specimen.tension() if req.test == "tension" else Specimen.compression()
-        geometry = {"d0_mm": base.d0_mm, "l0_mm" if req.test == "tension" else "h0_mm": base.length0_mm}
         req.material = req.material or material
         check_ranges(req)
-        spec, responses = build_spec(req, geometry, ask=ask), req.responses()
+        spec, responses = build_spec(req, virtual_bar(req.test), ask=ask), req.responses()
     spec.check()
-    return RunSetup(spec, material, scale, drills, responses)
+    return RunSetup(spec, material, scale, drills, responses, warnings)
+
+
+def virtual_mismatch(spec, config) -> str | None:
+    """Where ``spec``'s geometry differs from the bar the virtual rig in its own process simulates
+    (``config``'s ``[virtual]``, which ``flowcurve rig virtual`` writes): one line naming both
+    values, with the configuration file; None when they agree or the rig is not a virtual one."""
+    from flowcurve.acquisition.specimen_geometry import virtual_geometry_mismatch
+
+    virtual = getattr(config, "virtual", None)
+    if virtual is None:
+        return None
+    return virtual_geometry_mismatch(spec.test, spec.geometry_mm, virtual.test, virtual.geometry_mm,
+                                     f"the virtual rig ({config.source} [virtual])")
 
 
 def run_test(setup: RunSetup, record: Path, *, config=None, view=None, interactive: bool = False, stream: bool = True,

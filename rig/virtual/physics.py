@@ -153,6 +153,23 @@ class Specimen:
         """GOST 25.503 type III cylinder of the seed's worked example."""
         return cls("compression", d0_mm=d0_mm, h0_mm=h0_mm)
 
+    @classmethod
+    def from_geometry(cls, test: str, geometry_mm: dict[str, float]) -> "Specimen":
+        """The bar of a test's geometry (mm, the record's keys: ``d0_mm`` with ``l0_mm`` and
+        optionally ``parallel_length_mm``, or ``h0_mm``): what the virtual rig simulates, in the
+        host's process (``flowcurve run``) and in its own (``flowcurve rig virtual``)."""
+        g = geometry_mm
+        if test == "tension":
+            return cls.tension(g["d0_mm"], g["l0_mm"], parallel_length_mm=g.get("parallel_length_mm"))
+        return cls.compression(g["d0_mm"], g["h0_mm"])
+
+    @property
+    def geometry_mm(self) -> dict[str, float]:
+        """The bar's geometry (mm, the record's keys), the parallel length always stated in tension."""
+        if self.test == "tension":
+            return {"d0_mm": self.d0_mm, "l0_mm": self.l0_mm, "parallel_length_mm": self.parallel_mm}
+        return {"d0_mm": self.d0_mm, "h0_mm": self.h0_mm}
+
 
 @dataclass
 class SpecimenState:

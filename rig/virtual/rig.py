@@ -318,4 +318,6 @@ class VirtualRig:
             "furnace_address": self.devices["furnace"].address,
             "encoder_address": self.devices["encoder"].address,
             "checksum": self.checksum,
+            "virtual_test": self.model.test,  # [virtual]: the bar simulated, for a host to compare its test's with
+            **{f"virtual_{key}": value for key, value in self.model.specimen.geometry_mm.items()},
         }

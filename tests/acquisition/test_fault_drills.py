@@ -53,10 +53,10 @@ class RigProcess:
     """``flowcurve rig virtual`` in its own process; its stdout lines collected."""
 
     def __init__(self, tmp_path: Path, env: dict, *faults: str, time_scale: float = 60.0, test: str = "tension",
-                 temperature: float | None = None):
+                 temperature: float | None = None, options: tuple = ()):
         self.config = tmp_path / "v.toml"
         cmd = flowcurve("rig", "virtual", "--config", self.config, "--time-scale", time_scale, "--test", test,
-                        "--tension-response", "bridgman", "--compression-response", "slab")
+                        "--tension-response", "bridgman", "--compression-response", "slab", *options)
         if temperature is not None:
             cmd += ["--temperature", str(temperature)]
         for fault in faults:

@@ -62,6 +62,12 @@ def test_minimal_file_takes_defaults_and_no_furnace(tmp_path):
     ("[furnace]\nmax_temperature_C = 800", r"\[furnace\] port: missing"),
     ("[loadcell]\ncalibration_N_per_count = 0.01", r"give exactly one of nominal_load_N and calibration"),
     ("[heater]\nx = 1", r"\[heater\]: unknown section"),
+    # [virtual]: 'rig virtual' states the bar it simulates; a hand-edited one is checked too
+    ("[virtual]\nd0_mm = 6", r"\[virtual\] l0_mm: missing \(a tension specimen's\)"),
+    ("[virtual]\ntest = \"compression\"\nd0_mm = 6\nh0_mm = 9\nl0_mm = 30", r"\[virtual\] l0_mm: not a compression specimen's length"),
+    ("[virtual]\nd0_mm = 6\nl0_mm = 30\nparallel_length_mm = 25", r"\[virtual\] parallel_length_mm: must be at least l0_mm"),
+    ("[virtual]\ntest = \"torsion\"\nd0_mm = 6", r"\[virtual\] test: must be one of tension, compression"),
+    ("[virtual]\nd0_mm = 0\nl0_mm = 30", r"\[virtual\] d0_mm: must be in 0.0 < x"),
 ])
 def test_mistakes_name_file_and_key(tmp_path, edit, message):
     # merge the edit into the minimal file, section by section
@@ -81,6 +87,14 @@ def to_toml_like(doc):
         for k, v in table.items():
             out.append(f"{k} = " + (f'"{v}"' if isinstance(v, str) else str(v).lower() if isinstance(v, bool) else repr(v)))
     return "\n".join(out) + "\n"
+
+
+def test_the_virtual_table_round_trips_and_a_real_rig_has_none(tmp_path):
+    doc = tomllib.loads(MINIMAL + "[virtual]\ntest = \"tension\"\nd0_mm = 6\nl0_mm = 30\nparallel_length_mm = 42\n")
+    c = parse_config(doc, "v.toml")
+    assert c.virtual.geometry_mm == {"d0_mm": 6.0, "l0_mm": 30.0, "parallel_length_mm": 42.0}
+    assert parse_config(tomllib.loads(to_toml(c)), "v.toml") == c
+    assert load_config(EXAMPLE).virtual is None and "[virtual]" not in to_toml(load_config(EXAMPLE))
 
 
 def test_missing_section_and_file_and_bad_toml(tmp_path):
