@@ -25,12 +25,18 @@ is a one-sample spike at any size when
 
 * it is out of the band its two neighbours span by more than ``spike_sigmas`` σ (it leaves
   the band and comes back: a knee, a step or a fall stays within it), and
-* it lies on neither side's trend: not between the sample before it and the line through the
-  two samples before it (the approach) extended to its time, nor between the sample after it and
-  the line through the two after it (the departure) extended back — each widened by twice that
-  tolerance (a line extended one step carries about twice the chord's noise), and
-* for a force (``falls_freely``), it is no dip whose rise back the machine could make in that
-  time (``max_rate``): a serration reloading faster than the samples resolve its reload.
+* it lies on no trend that excuses it. For a force (``falls_freely``) a **rise** away from zero
+  is excused only by the approach: lying between the sample before it and the approach's trend
+  extended to its time — the least-squares line through the last :data:`APPROACH_SAMPLES`
+  accepted samples where they lie on one (χ²/dof under :data:`SMOOTH_CHI2`), widened by that
+  tolerance × the line's prediction noise in chord residuals (:func:`line_prediction_factor`,
+  about 1.1), else the line through the two samples before, widened by twice the tolerance (a
+  line extended one step carries about twice the chord's noise). A **fall** toward zero (and
+  either change of a channel that does not fall freely) is excused by the two-sample approach or
+  by the departure (between the sample after it and the line through the two after it extended
+  back, widened alike), and
+* for a force, a fall is no dip whose rise back the machine could make in that time
+  (``max_rate``): a serration reloading faster than the samples resolve its reload.
 
 A physical event does not return, so one of these fails: at a **yield drop**, a **serration**
 (Portevin–Le Chatelier) or a **fracture** the sample at the bottom lies on the departure's
@@ -41,13 +47,17 @@ can tell: a spike smaller than the signal's climb between two samples (it stays 
 neighbours' band, like a knee: a sparse record of a steep curve), a serration whose rise to its
 peak takes a single sample, and (for a force) a dip smaller than ``max_rate`` × the sampling
 interval (2 kN at 0.05 mm/s on a 136 N/µm frame and 0.15 s apart, the virtual rig at time scale
-15). The guard holds two samples with this rule (one
-without). Rejections by the noise rule are named like the others but never stop the channel
-(``persist`` counts the rules above): they are single readings judged against the signal, not a
-broken channel; the noise window takes every judged sample, rejected or not, so a channel whose
-noise really grows is followed within half a window. Before ``noise_min`` residuals (the first
-samples), and for a sample without two neighbours after it (the last ones), only the rules above
-judge.
+15). The guard holds two samples with this rule (one without). Rejections by the noise rule are
+named like the others but never stop the channel (``persist`` counts the rules above): they are
+single readings judged against the signal, not a broken channel; the noise window takes every
+judged sample, rejected or not, so a channel whose noise really grows is followed within half a
+window. Before ``noise_min`` residuals (the first samples) only the rules above judge. At the
+**end of the stream** (:meth:`RateGuard.flush`) the last two samples lack the samples after them:
+a force's rise out of the band (the last sample's band is the sample before it) is judged by the
+approach alone (the last sample may also be a reload after a fall: back by at most that fall and
+what the machine can make), a fall
+toward zero is kept (a fracture, as far as anything can tell) unless it lands beyond zero by more
+than ``tolerance`` (a garbled sign: a fracture reads the broken specimen's zero).
 
 Every rejection is kept in :attr:`RateGuard.rejected` (time, value, why) for the record's events.
 """
@@ -186,9 +196,9 @@ class RateGuard:
         if self.falls_freely and above > tol:  # a rise out of the band: only as the peak of the rise that led to it
             if self._on_approach(tc, vc, tol):
                 return ""  # on the rise (or fall) that led to it, not beyond: a peak before a drop, the upper yield point
-            if n is None and self._before_last is not None and sign * (self._before_last[1] - vp) > tol \
-                    and sign * (vc - vp) <= self.max_rate * (tc - tp) + tol:
-                return ""  # the last sample: a rise the machine can make after a fall (a serration's reload)
+            fell = sign * (self._before_last[1] - vp) if self._before_last is not None else 0.0
+            if n is None and fell > tol and sign * (vc - vp) <= min(fell, self.max_rate * (tc - tp)) + tol:
+                return ""  # the last sample: a rise back after a fall, no higher and no faster than the machine (a reload)
             return self._spike_text(off, sigma)
         if nn is None:  # the end of the stream: a fall is a fracture's, down to the broken specimen's zero
             return self._spike_text(off, sigma) if self.falls_freely and sign * vc < -self.tolerance else ""

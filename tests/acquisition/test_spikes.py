@@ -112,6 +112,18 @@ def test_a_garbled_frame_at_the_end_of_the_stream_never_becomes_fm(where, from_e
     assert kept.max() == pytest.approx(truth_fm)
 
 
+def test_a_garbled_last_frame_on_a_necking_fall_is_no_reload():
+    """A serration's reload rises back by at most the fall it follows: the last frame garbled 1 kN up
+    on a necking stream (falling 80 N a sample, the machine could make 2 kN in one) is rejected."""
+    dt = SPACINGS["time scale 15"]
+    t = np.arange(int(19.0 / dt)) * dt
+    f = 9000.0 + 300.0 * np.sqrt(t) - 40.0 * np.maximum(t - 12.0, 0.0) ** 2 + np.random.default_rng(14).normal(0, NOISE_N, t.size)
+    assert f[-2] - f[-1] > 60.0  # the necking falls
+    f[-1] += 1000.0
+    g, kept = judged(t, f, dt)
+    assert [r[0] for r in g.rejected] == [t[-1]], g.rejected
+
+
 def test_a_sign_flipped_last_frame_is_no_fracture():
     """A fracture falls to the broken specimen's zero, not to −Fm: the last frame's sign garbled is rejected."""
     dt = SPACINGS["time scale 15"]
