@@ -28,11 +28,11 @@ import numpy as np
 from flowcurve.acquisition.live import LiveView, Snapshot
 from flowcurve.record.format import STATUS_ABORTED, STATUS_COMPLETE, RecordWriter, amend_record
 from flowcurve.record.summary import MEASURED_SPEED_KEY, speed_mismatch
-from flowcurve.acquisition.plausibility import RateGuard
 from flowcurve.acquisition.safety import HeaterSafety, Interrupted, check_temperature
 from flowcurve.acquisition.keys import KeyWatcher
 from flowcurve.acquisition.rig_io import RigIO  # noqa: F401  (procedure.RigIO, as before)
 from flowcurve.acquisition.sampler import Sampler
+from flowcurve.acquisition.channel_guards import install_guards
 from flowcurve.acquisition.specimen_geometry import geometry_problem
 from flowcurve.acquisition.stream_notes import StreamNotes
 from flowcurve.clock import WALL, Clock
@@ -40,13 +40,6 @@ from flowcurve.rig.config import SETPOINT_MARGIN_C, setpoint_refusal
 from flowcurve.errors import FlowcurveError, RecordWriteError, SafetyError
 from flowcurve.acquisition.stopping import CARRY_AGREE_MM, CARRY_MAX_S, MOTION_MM, STALE_CROSSHEAD_S, STALE_WAIT_S, SpeedMeter, StopCriteria, StopState, TARGET_TICK_MIN_S, loop_tick_s, stop_reason, target_reached
 
-SPEED_MARGIN = 2.0  # readings may change at up to this multiple of the declared speed's rate
-FORCE_TOLERANCE_OF_CAPACITY = 0.01  # plus this fraction of the frame's capacity (noise, a jerk)
-FORCE_SPIKE_SIGMAS = 8.0  # ... and a one-sample spike at any size: this many of the signal's own noise σ (plausibility)
-CROSSHEAD_TOLERANCE_MM = 0.05
-FURNACE_MAX_RATE_C_PER_S = 10.0  # a furnace's thermocouple changes no faster than this ...
-FURNACE_TOLERANCE_C = 20.0  # ... plus this (noise, a draught)
-STAMP_SLACK_S = 0.05  # host seconds two time stamps may be off by (thread scheduling)
 WATCH_COOLING_S = 45.0  # test seconds the furnace is watched after an over-temperature
 WATCH_UNHEATED_S = 15.0  # ... and after a test it did not heat (no stored heat to wait out: a stuck relay shows in ~12 s)
 # ... and on while the furnace still rises, up to this (then named): four times the 30 s allowed for stored heat to reach
@@ -349,7 +342,7 @@ class Procedure(StreamNotes):
                     rig.tare()
                     self._event("tare")
                     sampler = Sampler(rig.channels(self.clock, self.to_clock))
-                    self._guard(sampler)
+                    install_guards(sampler, self.rig, self.spec.speed_mm_per_s)
                     if rig.has_furnace:  # keep holding the set-point (or just read), feed the watchdog
                         furnace = sampler.channels["temperature_C"]
                         furnace.read = self._furnace_read(lambda exc: furnace.on_fault(furnace.device, str(exc), exc))
@@ -643,33 +636,6 @@ class Procedure(StreamNotes):
             self._event("fault", f"crosshead stop failed: {exc}")
 
     # plausibility and losses ------------------------------------------------------------------
-    def _guard(self, sampler: Sampler) -> None:
-        """Readings no machine makes are rejected (acquisition.plausibility): force rises at most
-        at frame stiffness × speed, the crosshead moves at most at its speed (both × SPEED_MARGIN)."""
-        speed = self.spec.speed_mm_per_s * SPEED_MARGIN
-        capacity = getattr(self.rig, "max_force_N", None) or 100e3
-        stiffness = (self.rig.frame_stiffness_N_per_um or 0.0) * 1000.0  # N/mm
-        slack = STAMP_SLACK_S * self.rig.time_scale  # stamps are host times: jitter scales with the rig's time
-        force = sampler.channels.get("force_N")
-        if force is not None and stiffness > 0:
-            force.guard = RateGuard(force.device, max_rate=stiffness * speed, tolerance=FORCE_TOLERANCE_OF_CAPACITY * capacity,
-                                    unit="N", falls_freely=True, advice="check the amplifier, its cable and the load cell",
-                                    time_slack=max(slack, 2 * self.rig.loadcell_period_s * self.rig.time_scale),
-                                    spike_sigmas=FORCE_SPIKE_SIGMAS, noise_floor=self._force_resolution_N())
-        temp = sampler.channels.get("temperature_C")
-        if temp is not None:
-            temp.guard = RateGuard(temp.device, max_rate=FURNACE_MAX_RATE_C_PER_S, tolerance=FURNACE_TOLERANCE_C, unit="C",
-                                   advice="check the thermocouple and its cable", time_slack=slack)
-        cross = sampler.channels.get("crosshead_mm")
-        if cross is not None:
-            cross.guard = RateGuard(cross.device, max_rate=speed, tolerance=CROSSHEAD_TOLERANCE_MM, unit="mm",
-                                    advice="the counter lost or gained counts: check the encoder and its cable", time_slack=slack)
-
-    def _force_resolution_N(self) -> float:
-        """One count of the load cell's output format (the noise σ's floor), 0 when unknown."""
-        cell = getattr(self.rig, "loadcell", None)  # a ForceDevice (rig/roles.py)
-        return float(cell.resolution_N()) if cell is not None and hasattr(cell, "resolution_N") else 0.0
-
     def _await_reading(self, channel, after_s: float) -> None:
         """Wait (up to STALE_WAIT_S host seconds) for ``channel``'s first reading after ``after_s`` (test s)."""
         deadline = self.timebase.now() + STALE_WAIT_S

@@ -7,7 +7,7 @@ not reject the physics (yield drops, serrations, fractures) of a fault-free stre
 
 Force histories: the stream-gap bench's (bench/stream_gap_rule.py ``histories``: the virtual rig's
 physics frame by frame, every test × temperature × speed × material, the AED's low-pass). The
-guard is built as ``Procedure._guard`` builds it (frame 136 N/µm, 100 kN capacity, the matrix's
+guard is the one a test gets (acquisition/channel_guards.py: frame 136 N/µm, 100 kN capacity, the matrix's
 time scale). For each history:
 
 * the fault-free stream through the guard: its rejections are false ones;
@@ -32,9 +32,9 @@ from collections import Counter
 import numpy as np
 
 from bench.stream_gap_rule import histories
-from flowcurve.acquisition.procedure import FORCE_SPIKE_SIGMAS, FORCE_TOLERANCE_OF_CAPACITY, SPEED_MARGIN, STAMP_SLACK_S
+from flowcurve.acquisition import channel_guards
 
-STIFFNESS_N_PER_MM = 136e3
+STIFFNESS_N_PER_UM = 136.0
 CAPACITY_N = 100e3
 COUNT_N = 0.1  # COF 3 at 100 kN nominal: 1 000 000 counts
 WINDOW_BEFORE = 260  # the guard's noise window (200) and its approach, filled before the garbled frame
@@ -59,13 +59,17 @@ def label_parts(label: str) -> tuple[float, float, float]:
 
 
 def make_guard(module, label: str):
-    """The force guard as Procedure._guard builds it for this history's speed, rate and time scale."""
+    """The force guard a test gets (acquisition/channel_guards.py) for this history's speed, rate and time scale,
+    of ``module``'s RateGuard; and the frames' spacing in test seconds."""
     temp, speed, rate = label_parts(label)
     scale = min(1.0 / speed, 50.0) if temp > 20.0 else 1.0 / speed
-    guard = module.RateGuard("load cell", max_rate=STIFFNESS_N_PER_MM * speed * SPEED_MARGIN,
-                             tolerance=FORCE_TOLERANCE_OF_CAPACITY * CAPACITY_N, unit="N", falls_freely=True,
-                             time_slack=max(STAMP_SLACK_S * scale, 2.0 * scale / rate), spike_sigmas=FORCE_SPIKE_SIGMAS,
-                             noise_floor=COUNT_N)
+    product = channel_guards.RateGuard
+    channel_guards.RateGuard = module.RateGuard
+    try:
+        guard = channel_guards.force_guard("load cell", speed_mm_per_s=speed, frame_stiffness_N_per_um=STIFFNESS_N_PER_UM,
+                                           capacity_N=CAPACITY_N, time_scale=scale, period_s=1.0 / rate, resolution_N=COUNT_N)
+    finally:
+        channel_guards.RateGuard = product
     return guard, scale / rate
 
 

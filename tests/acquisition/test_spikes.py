@@ -3,7 +3,7 @@
 A one-sample excursion that returns is rejected and named at any size above the signal's own
 noise, even below the 1 % of the frame's capacity the rate rules tolerate (a +900 N frame at
 100 kN went into the record and could become Fm); a yield drop, serrations and a fracture do not
-return and are kept. The unit tests build the guard as ``Procedure._guard`` does; the in-process
+return and are kept. The unit tests build the guard a test gets (acquisition/channel_guards.py); the in-process
 runs put a +900 N frame into a tension test (``--fault loadcell:spike``) and compare what was
 recorded with the fault-free run of the same test, crosshead position by crosshead position.
 """
@@ -15,8 +15,8 @@ import re
 import numpy as np
 import pytest
 
+from flowcurve.acquisition.channel_guards import SPEED_MARGIN, force_guard as product_force_guard
 from flowcurve.acquisition.plausibility import RateGuard
-from flowcurve.acquisition.procedure import FORCE_SPIKE_SIGMAS, FORCE_TOLERANCE_OF_CAPACITY, SPEED_MARGIN
 from tests.acquisition.conftest import run_logged
 
 CAPACITY_N = 100e3
@@ -29,10 +29,9 @@ SPACINGS = {"real time": 0.01, "time scale 3": 0.03, "time scale 15": 0.15}
 
 
 def force_guard(dt: float) -> RateGuard:
-    """The force guard as Procedure._guard builds it for a 100 kN frame (1 kN tolerance)."""
-    return RateGuard("load cell", max_rate=STIFFNESS_N_PER_MM * SPEED * SPEED_MARGIN,
-                     tolerance=FORCE_TOLERANCE_OF_CAPACITY * CAPACITY_N, unit="N", falls_freely=True,
-                     time_slack=max(0.05, 2 * dt), spike_sigmas=FORCE_SPIKE_SIGMAS, noise_floor=0.1)
+    """The force guard a test gets (acquisition/channel_guards.py) for a 100 kN frame (1 kN tolerance), samples ``dt`` apart."""
+    return product_force_guard("load cell", speed_mm_per_s=SPEED, frame_stiffness_N_per_um=STIFFNESS_N_PER_MM / 1000.0,
+                               capacity_N=CAPACITY_N, time_scale=1.0, period_s=dt, resolution_N=0.1)
 
 
 def judged(t, f, dt):
