@@ -290,7 +290,19 @@ def v_before(x, f, nxt, periods, min_periods=2):
 
 # -- does the line hold? (the step rule decides only where its frames lie on a line within the force's noise) --
 
-DRIVER = lc.step_rule_verdict  # today's rule (rig/loadcell.py), taken before any variant patches it
+_STEP_RULE = lc.step_rule_verdict  # rig/loadcell.py's rule, taken before any variant patches it
+
+
+def v_se_margin(x, f, nxt, periods, min_periods=2):
+    """The driver's rule before its bend gate (main 9e93273: the 2·se margin, no LATENCY_BEND_CHI2)."""
+    old, lc.LATENCY_BEND_CHI2 = lc.LATENCY_BEND_CHI2, math.inf
+    try:
+        return _STEP_RULE(x, f, nxt, periods, min_periods)
+    finally:
+        lc.LATENCY_BEND_CHI2 = old
+
+
+DRIVER = v_se_margin  # the gates below are measured against it (chi2_far_16 is the driver's rule now)
 
 
 def _curvature(x, f, noise="third"):
@@ -361,7 +373,7 @@ GATES.update({f"chi2_lat_named_{lim:g}": _named_directly((lambda lim: lambda *a:
               for lim in (4, 16, 32)})
 GATES.update({f"chi2_far_{lim:g}": (lambda lim: lambda x, f, n, j, mp=2: _line_gate(x, f, n, j, mp, limit=lim, latency_only=True)
                                        if j - 1 > np.ptp(np.asarray(x, dtype=float)) else DRIVER(x, f, n, j, mp))(lim) for lim in (16,)})
-GATES.update({"quad_se": _quad_se, "quad_se_at1": lambda *a: _quad_se(*a, at_j=False),
+GATES.update({"se_margin": v_se_margin, "quad_se": _quad_se, "quad_se_at1": lambda *a: _quad_se(*a, at_j=False),
               "quad_se1_at1": lambda *a: _quad_se(*a, at_j=False, k_se=1.0)})
 
 
