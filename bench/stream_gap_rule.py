@@ -288,6 +288,95 @@ def v_before(x, f, nxt, periods, min_periods=2):
     return None
 
 
+# -- does the line hold? (the step rule decides only where its frames lie on a line within the force's noise) --
+
+_STEP_RULE = lc.step_rule_verdict  # rig/loadcell.py's rule, taken before any variant patches it
+
+
+def v_se_margin(x, f, nxt, periods, min_periods=2):
+    """The driver's rule before its bend gate (main 9e93273: the 2·se margin, no LATENCY_BEND_CHI2)."""
+    old, lc.LATENCY_BEND_CHI2 = lc.LATENCY_BEND_CHI2, math.inf
+    try:
+        return _STEP_RULE(x, f, nxt, periods, min_periods)
+    finally:
+        lc.LATENCY_BEND_CHI2 = old
+
+
+DRIVER = v_se_margin  # the gates below are measured against it (chi2_far_16 is the driver's rule now)
+
+
+def _curvature(x, f, noise="third"):
+    """How far the frames bend off their line: χ²/dof of the line against the force's noise σ_n
+    (σ_line²/σ_n², σ_n from the third differences: ``noise="third"``), or the F statistic of a quadratic
+    term, (RSS_line − RSS_quad)/(RSS_quad/(n − 3)) (``noise="ftest"``: no outside σ needed)."""
+    x, f, a, b, s = _line(x, f)
+    if noise == "third":
+        sn = lc._noise_from_third_differences(f)
+        return s * s / max(sn * sn, 1e-12)
+    rss2 = float(np.sum((f - np.polyval(np.polyfit(x, f, 2), x)) ** 2))
+    return (s * s * (f.size - 2) - rss2) / max(rss2 / (f.size - 3), 1e-12)
+
+
+_GATED = [False]  # the last step-rule call withheld the driver's verdict (a bent line): read by _named_directly
+
+
+def _line_gate(x, f, nxt, periods, min_periods=2, limit=4.0, noise="third", latency_only=False):
+    """The driver's verdict only where the frames lie on their line (:func:`_curvature` < ``limit``);
+    else None (the driver defers the gap to the frames after it, or — :func:`_named_directly` — names it)."""
+    _GATED[0] = False
+    v = DRIVER(x, f, nxt, periods, min_periods)
+    if v is None or (latency_only and v == "loss") or np.asarray(f).size < 6:
+        return v
+    if _curvature(x, f, noise) < limit:
+        return v
+    _GATED[0] = True
+    return None
+
+
+def _named_directly(rule):
+    """A gap whose line the gate rejected is named undecided at once (stamped as lost), not handed to the
+    deferred rule: ``variant()`` patches ``gap_after_verdict`` to answer None for it."""
+    rule.names_directly = True
+    return rule
+
+
+def _quad_se(x, f, nxt, periods, min_periods=2, at_j=True, k_se=2.0):
+    """The driver's rule with the quadratic's departure from the line at the extrapolation points added
+    to se: se(x)² = σ²·(1/n + (x − x̄)²/Sxx) + (q(x) − a − b·x)², max over x ∈ {1, j} (``at_j``) or x = 1."""
+    x, f = np.asarray(x, dtype=float), np.asarray(f, dtype=float)
+    if periods < max(2, min_periods) or f.size < 4:
+        return None
+    x, f, a, b, s = _line(x, f)
+    apart = abs((periods - 1) * b)
+    if apart <= lc.LATENCY_NOISE_SIGMAS * s:
+        return None
+    sxx = float(np.sum((x - x.mean()) ** 2))
+    q = np.polyfit(x, f, 2) if f.size >= 5 else None
+    def se(at):  # noqa: E306
+        bend = float(np.polyval(q, at) - a - b * at) if q is not None else 0.0
+        return math.sqrt(s * s * (1.0 / f.size + (at - x.mean()) ** 2 / sxx) + bend * bend)
+    e = max(se(at) for at in ((1.0, float(periods)) if at_j else (1.0,)))
+    if abs(nxt - a - b) + k_se * e < lc.LATENCY_FIT * apart:
+        return "latency"
+    if abs(nxt - a - b * periods) < lc.LATENCY_FIT * apart:
+        return "loss"
+    return None
+
+
+GATES = {f"chi2_{lim:g}": (lambda lim: lambda *a: _line_gate(*a, limit=lim))(lim) for lim in (2, 4, 8, 16)}
+GATES.update({f"chi2_lat_{lim:g}": (lambda lim: lambda *a: _line_gate(*a, limit=lim, latency_only=True))(lim) for lim in (2, 4, 8, 16)})
+GATES.update({f"ftest_{lim:g}": (lambda lim: lambda *a: _line_gate(*a, limit=lim, noise="ftest"))(lim) for lim in (6.61, 16.3, 47.2)})
+GATES.update({f"ftest_lat_{lim:g}": (lambda lim: lambda *a: _line_gate(*a, limit=lim, noise="ftest", latency_only=True))(lim)
+              for lim in (6.61, 16.3, 47.2)})
+GATES.update({f"chi2_named_{lim:g}": _named_directly((lambda lim: lambda *a: _line_gate(*a, limit=lim))(lim)) for lim in (4, 16, 32)})
+GATES.update({f"chi2_lat_named_{lim:g}": _named_directly((lambda lim: lambda *a: _line_gate(*a, limit=lim, latency_only=True))(lim))
+              for lim in (4, 16, 32)})
+GATES.update({f"chi2_far_{lim:g}": (lambda lim: lambda x, f, n, j, mp=2: _line_gate(x, f, n, j, mp, limit=lim, latency_only=True)
+                                       if j - 1 > np.ptp(np.asarray(x, dtype=float)) else DRIVER(x, f, n, j, mp))(lim) for lim in (16,)})
+GATES.update({"se_margin": v_se_margin, "quad_se": _quad_se, "quad_se_at1": lambda *a: _quad_se(*a, at_j=False),
+              "quad_se1_at1": lambda *a: _quad_se(*a, at_j=False, k_se=1.0)})
+
+
 ORIGINAL = v_before
 MORE = {"se_latency_only": lambda *a: _exclude_se(*a, k_se=2.0, both=False),
         "se1_latency_only": lambda *a: _exclude_se(*a, k_se=1.0, both=False),
@@ -298,18 +387,20 @@ MORE = {"se_latency_only": lambda *a: _exclude_se(*a, k_se=2.0, both=False),
         "exclude_only_latency": lambda *a: _exclude_se(*a, k_se=0.0, both=False),
         "se_latency_and_quadratic": v_combined}
 VARIANTS = {"before": v_before, "exclude_se": v_exclude_se, "noise_floor": v_noise_floor, "local_slope": v_local_slope,
-            "quadratic": v_quadratic, "quadratic_latency": v_quadratic_latency, **MORE}
+            "quadratic": v_quadratic, "quadratic_latency": v_quadratic_latency, **MORE, **GATES}
 
 
 @contextlib.contextmanager
 def variant(rule):
-    old = lc.step_rule_verdict, lc.gap_is_latency
+    old = lc.step_rule_verdict, lc.gap_is_latency, lc.gap_after_verdict
     lc.step_rule_verdict = rule
     lc.gap_is_latency = lambda *a, **kw: rule(*a, **kw) == "latency"
+    if getattr(rule, "names_directly", False):
+        lc.gap_after_verdict = lambda *a, **kw: None if _GATED[0] else old[2](*a, **kw)
     try:
         yield
     finally:
-        lc.step_rule_verdict, lc.gap_is_latency = old
+        lc.step_rule_verdict, lc.gap_is_latency, lc.gap_after_verdict = old
 
 
 def main(argv=None):

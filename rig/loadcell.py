@@ -32,6 +32,7 @@ LATENCY_NOISE_SIGMAS = 6.0  # the two predictions must differ by this many σ of
 LATENCY_MIN_S = 0.2  # host s: a gap's extra time under this is taken as lost frames (a run of them at 100 Hz, or host jitter the chain heals; a latency that small costs little force)
 LATENCY_FIT = 0.25  # ... and the step must lie within this share of their difference from one frame's change
 LATENCY_SE_MARGIN = 2.0  # ... a latency even with the line off by this many of its extrapolation errors (step_rule_verdict)
+LATENCY_BEND_CHI2 = 16.0  # ... and, for a gap longer than the frames' span, their line's χ²/dof against the force's noise under this
 DEFER_FRAMES = 3  # a gap with too few good frames before it for the step rule: decided with this many frames after it
 DEFER_CLEAR = 0.1  # ... the hypothesis that fits must leave under this share of the other's squared residual
 DEFER_FIT = 0.25  # ... and its residual must be within this share of one frame's change times the gap's extra periods
@@ -93,13 +94,16 @@ def step_rule_verdict(recent_periods, recent_N, next_N: float, periods: int, min
         loss predicts next ≈ a + b·j, a latency jump next ≈ a + b;  apart = |(j − 1)·b|
         se = max over x ∈ {1, j} of σ·√(1/n + (x − x̄)²/Σ(x_i − x̄)²)   the line's extrapolation error
         latency ⇔ j ≥ min_periods, apart > k·σ  and  |next − a − b| + 2·se < LATENCY_FIT·apart
+                  and, where j − 1 > x_n − x_1 (n ≥ 6), σ²/σ_n² < 16,  σ_n = med|Δ³f|/(0.6745·√20)
         loss    ⇔ j ≥ min_periods, apart > k·σ  and  |next − a − b·j| < LATENCY_FIT·apart
 
-    k = LATENCY_NOISE_SIGMAS, 2 = LATENCY_SE_MARGIN. "latency" moves every later stamp, so the frame
-    must lie in its window even with the line off by twice its own extrapolation error over the gap: a
-    force bending within the frames (the hardening slowing towards Fm) gives the line their mean slope,
-    not the one at the gap, where a lost frame's step can fall near a + b (bench/stream_gap_rule.py
-    measures both kinds of wrong verdict). Else None — too few frames, σ swollen by a bending
+    k = LATENCY_NOISE_SIGMAS, 2 = LATENCY_SE_MARGIN, 16 = LATENCY_BEND_CHI2. "latency" moves every later
+    stamp, so the frame must lie in its window even with the line off by twice its own extrapolation
+    error over the gap: a force bending within the frames (the hardening slowing towards Fm) gives the
+    line their mean slope, not the one at the gap, where a lost frame's step can fall near a + b
+    (bench/stream_gap_rule.py measures both kinds of wrong verdict). Extrapolated beyond the frames' own
+    span (a 0.5 s gap at 50 Hz), a line whose frames bend off it by more than the force's noise (the
+    elastic rise's knee, the frames starting at standstill) is no measurement: no "latency". Else None — too few frames, σ swollen by a bending
     force (the elastic rise's knee, the hardening within the frames at 2 Hz), a frame far from both
     (the line's curvature or a fracture), or a latency the line cannot vouch for. The driver then
     decides on the frames after the gap (:func:`gap_after_verdict`); a gap under ``min_periods`` is
@@ -116,6 +120,10 @@ def step_rule_verdict(recent_periods, recent_N, next_N: float, periods: int, min
     sxx = float(np.sum((x - x.mean()) ** 2))
     se = sigma * math.sqrt(1.0 / f.size + max((1.0 - x.mean()) ** 2, (periods - x.mean()) ** 2) / sxx)
     if abs(next_N - a - b) + LATENCY_SE_MARGIN * se < LATENCY_FIT * apart:
+        if periods - 1 > -x[0] and f.size >= 6:  # extrapolated beyond the frames' span: they must lie on their line
+            noise = _noise_from_third_differences(f)
+            if sigma * sigma >= LATENCY_BEND_CHI2 * max(noise * noise, 1e-12):
+                return None
         return "latency"
     if abs(next_N - a - b * periods) < LATENCY_FIT * apart:
         return "loss"

@@ -236,3 +236,43 @@ def test_frames_lost_on_the_hardening_stay_lost_and_a_latency_there_shifts_no_st
     cell, stamps = stream_at(rate_Hz, sent, force, sent + LINE_S + np.where(k >= 8, lost * T, 0.0))
     assert np.max(np.abs(stamps - sent)) <= LINE_S + 1e-9 or cell.gaps_undecided or cell.gaps_in_doubt  # never silently lost
     assert cell.frames_lost == 0 or cell.gaps_undecided or cell.gaps_in_doubt
+
+
+# -- a 0.5 s gap at 50 Hz across the elastic rise's knee: the 8 frames before it start at standstill (bench/stream_gap_rule.py)
+
+
+def knee_history_50hz(n_frames):
+    """bench/stream_gap_rule.py's tension 300 °C 0.5 mm/s steel 45 history at 50 Hz: the virtual rig's physics at the
+    matrix's time scale, the furnace held, three standstill frames, the AED's ASF2 low-pass at the frames (seed 1015)."""
+    import math
+
+    from flowcurve.rig.codecs.aed import ASF_CUTOFF_HZ
+    from flowcurve.rig.virtual.physics import RigModel
+
+    rate_Hz, speed = 50.0, 0.5
+    m = RigModel("steel45", "tension", speed_mm_per_s=speed, initial_temperature_C=300.0, seed=1015)
+    alpha = 1.0 - math.exp(-2.0 * math.pi * ASF_CUTOFF_HZ[2] / rate_Hz)
+    out, y = [], None
+    for i in range(n_frames):
+        if i == 3:
+            m.start_crosshead()
+        m.furnace.temperature_C = 300.0
+        m.step(min(1.0 / speed, 50.0) / rate_Hz)
+        f = m.measured_force_N()
+        y = f if y is None else y + alpha * (f - y)
+        out.append(y)
+    return np.array(out)
+
+
+def test_a_50hz_run_lost_across_the_knee_is_not_taken_as_latency():
+    j, k = 26, 10  # frames 10-34 lost: a 0.5 s gap, 25 periods beyond the 7 the frames before it span
+    force = knee_history_50hz(k + j + 8)
+    x8, f8 = np.arange(k - 8.0, k), force[k - 8:k]
+    # the line through the standstill and the rise predicts a + b near the frame after the loss (the rule before: "latency")
+    assert step_rule_verdict(x8, f8, force[k + j - 1], j, 11) != "latency"
+    assert step_rule_verdict(x8, f8, force[k], j, 11) is None  # a latency there: undecided too, the frames after decide
+    idx = np.array([i for i in range(force.size) if not k <= i < k + j - 1])
+    sent = idx / 50.0
+    cell, stamps = stream_at(50.0, sent, force[idx], sent + LINE_S)
+    assert cell.latency_jumps == 0 and cell.latency_s == 0.0  # no later force a gap early
+    assert np.max(np.abs(stamps - sent)) <= LINE_S + 1e-9 or cell.gaps_undecided or cell.gaps_in_doubt
