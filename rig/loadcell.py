@@ -103,11 +103,11 @@ def step_rule_verdict(recent_periods, recent_N, next_N: float, periods: int, min
     line their mean slope, not the one at the gap, where a lost frame's step can fall near a + b
     (bench/stream_gap_rule.py measures both kinds of wrong verdict). Extrapolated beyond the frames' own
     span (a 0.5 s gap at 50 Hz), a line whose frames bend off it by more than the force's noise (the
-    elastic rise's knee, the frames starting at standstill) is no measurement: no "latency". Else None — too few frames, σ swollen by a bending
-    force (the elastic rise's knee, the hardening within the frames at 2 Hz), a frame far from both
-    (the line's curvature or a fracture), or a latency the line cannot vouch for. The driver then
-    decides on the frames after the gap (:func:`gap_after_verdict`); a gap under ``min_periods`` is
-    a loss either way."""
+    elastic rise's knee, the frames starting at standstill) is no measurement: no "latency". Else
+    None — too few frames, σ swollen by a bending force (the elastic rise's knee, the hardening within
+    the frames at 2 Hz), a frame far from both (the line's curvature or a fracture), or a latency the
+    line cannot vouch for. The driver then decides on the frames after the gap
+    (:func:`gap_after_verdict`); a gap under ``min_periods`` is a loss either way."""
     x, f = np.asarray(recent_periods, dtype=float), np.asarray(recent_N, dtype=float)
     if periods < max(2, min_periods) or f.size < 4:
         return None
