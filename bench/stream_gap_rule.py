@@ -272,15 +272,23 @@ def v_combined(x, f, nxt, periods, min_periods=2):
     return v_quadratic(x, f, nxt, periods, min_periods) if v == "latency" else v
 
 
-def v_before(x, f, nxt, periods, min_periods=2):
-    """The step rule before bench/stream_gap_rule.py (main eac9177): no extrapolation margin on "latency"."""
+def _told_apart(x, f, periods, min_periods):
+    """(x, f, a, b, σ, apart) of the line through the frames before the gap where the two hypotheses'
+    predictions lie apart by more than LATENCY_NOISE_SIGMAS·σ (the step rule's first test), else None."""
     x, f = np.asarray(x, dtype=float), np.asarray(f, dtype=float)
     if periods < max(2, min_periods) or f.size < 4:
         return None
     x, f, a, b, sigma = _line(x, f)
     apart = abs((periods - 1) * b)
-    if apart <= lc.LATENCY_NOISE_SIGMAS * sigma:
+    return None if apart <= lc.LATENCY_NOISE_SIGMAS * sigma else (x, f, a, b, sigma, apart)
+
+
+def v_before(x, f, nxt, periods, min_periods=2):
+    """The step rule before bench/stream_gap_rule.py (main eac9177): no extrapolation margin on "latency"."""
+    told = _told_apart(x, f, periods, min_periods)
+    if told is None:
         return None
+    x, f, a, b, sigma, apart = told
     if abs(nxt - a - b) < lc.LATENCY_FIT * apart:
         return "latency"
     if abs(nxt - a - b * periods) < lc.LATENCY_FIT * apart:
@@ -343,13 +351,10 @@ def _named_directly(rule):
 def _quad_se(x, f, nxt, periods, min_periods=2, at_j=True, k_se=2.0):
     """The driver's rule with the quadratic's departure from the line at the extrapolation points added
     to se: se(x)² = σ²·(1/n + (x − x̄)²/Sxx) + (q(x) − a − b·x)², max over x ∈ {1, j} (``at_j``) or x = 1."""
-    x, f = np.asarray(x, dtype=float), np.asarray(f, dtype=float)
-    if periods < max(2, min_periods) or f.size < 4:
+    told = _told_apart(x, f, periods, min_periods)
+    if told is None:
         return None
-    x, f, a, b, s = _line(x, f)
-    apart = abs((periods - 1) * b)
-    if apart <= lc.LATENCY_NOISE_SIGMAS * s:
-        return None
+    x, f, a, b, s, apart = told
     sxx = float(np.sum((x - x.mean()) ** 2))
     q = np.polyfit(x, f, 2) if f.size >= 5 else None
     def se(at):  # noqa: E306
